@@ -1,0 +1,429 @@
+//! One PLC cycle, one function: inputs → observers → control → filter → outputs →
+//! recorder (the diagnosers slot in after the filter, see `ARCHITECTURE.md`).
+
+use crate::bits::Bits;
+use crate::bundle::PlantBundle;
+use crate::constraints::Class;
+use crate::filter::{Filter, SpecError};
+use crate::frame::Frame;
+use crate::history::History;
+use crate::observers::Observers;
+use crate::symbols::{Space, Symbols};
+use crate::time::Millis;
+use serde::Serialize;
+
+/// The control program seen from the engine: it reads the frame (inputs at t, at t-1,
+/// observers) and writes the outputs it commands.
+pub trait Control {
+    /// One scan of the program at time `now`.
+    fn scan(&mut self, now: Millis, frame: &Frame, outputs: &mut Bits);
+}
+
+/// A control whose outputs come from outside (a live PLC, a recorded trace).
+#[derive(Clone, Debug, Default)]
+pub struct Commanded(pub Bits);
+
+impl Control for Commanded {
+    fn scan(&mut self, _now: Millis, _frame: &Frame, outputs: &mut Bits) {
+        outputs.copy_from(&self.0);
+    }
+}
+
+/// What the filter does with a violation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub enum FilterMode {
+    /// Trip, latch and apply the fallback (the paper's filter).
+    Enforce,
+    /// Record violations, never change the outputs (monitor mode on a live PLC).
+    ReportOnly,
+    /// No filter (to show what the plant does without it).
+    Off,
+}
+
+/// The filter's action on one output during a trip.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Action {
+    /// Commanded OFF, held ON by the filter.
+    ForcedOn,
+    /// Commanded ON, forced OFF by the filter.
+    ForcedOff,
+    /// Left as commanded.
+    Unchanged,
+}
+
+/// One output in a trip record.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct OutputAction {
+    /// Actuator id.
+    pub output: String,
+    /// What the control program commanded.
+    pub commanded: bool,
+    /// What the filter applied.
+    pub applied: bool,
+    /// The filter's action.
+    pub action: Action,
+}
+
+/// One literal of a fired constraint with its value in the tripping cycle.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct LiteralValue {
+    /// The literal in file notation (`/A4`, `A4*`).
+    pub literal: String,
+    /// Signal, observer or auxiliary name.
+    pub name: String,
+    /// Space of the variable.
+    pub space: Space,
+    /// True for the value at t-1.
+    pub previous: bool,
+    /// The variable's value.
+    pub value: bool,
+}
+
+/// One constraint that fired.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct FiredConstraint {
+    /// Constraint id.
+    pub id: String,
+    /// Simple or combined.
+    pub class: Class,
+    /// The constraint as written.
+    pub notation: String,
+    /// Literals of the product term that was true.
+    pub literals: Vec<LiteralValue>,
+}
+
+/// A filter trip (or, in report-only mode, a reported violation).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Trip {
+    /// Time of the cycle.
+    pub time_ms: u64,
+    /// Cycle number since the start of the run.
+    pub cycle: u64,
+    /// Constraints that were true with the commanded outputs.
+    pub constraints: Vec<FiredConstraint>,
+    /// The filter's action on each output.
+    pub actions: Vec<OutputAction>,
+    /// The fallback vector (`A0=0 A1=0 …`), or everything 0 on a specification error.
+    pub fallback: Vec<(String, bool)>,
+    /// Set when no output vector satisfies every constraint.
+    pub spec_error: Option<String>,
+    /// True when the outputs were actually changed (enforce mode).
+    pub enforced: bool,
+}
+
+/// Events of a cycle, for alarms and journals.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Event {
+    /// A trip latched; index into [`Engine::trips`].
+    Trip {
+        /// Index of the trip.
+        index: usize,
+    },
+    /// A violation was reported without acting (report-only mode).
+    Violation {
+        /// Index of the record in [`Engine::trips`].
+        index: usize,
+    },
+    /// No fallback exists: every output was driven to 0.
+    SpecificationError {
+        /// The message.
+        message: String,
+    },
+    /// The operator reset the latched trip.
+    Reset,
+}
+
+/// Why a reset was refused.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ResetRefused {
+    /// Nothing to reset.
+    #[error("the filter has not tripped")]
+    NotTripped,
+    /// Constraints would be violated again by the current commands.
+    #[error("reset refused: {} still violated by the commanded outputs", constraints.join(", "))]
+    StillViolated {
+        /// Ids of the constraints.
+        constraints: Vec<String>,
+    },
+}
+
+/// The engine of one plant run: observers, filter and recorder around a control program.
+pub struct Engine {
+    /// Names of all variables.
+    pub symbols: Symbols,
+    /// Observers and their state.
+    pub observers: Observers,
+    filter: Filter,
+    notation: Vec<String>,
+    mode: FilterMode,
+    frame: Frame,
+    commanded: Bits,
+    scratch: Vec<usize>,
+    previous_violations: Vec<usize>,
+    latched: bool,
+    cycles: u64,
+    now: Millis,
+    /// Every trip and reported violation of the run, in order.
+    pub trips: Vec<Trip>,
+    /// Events not yet taken by [`Engine::drain_events`].
+    events: Vec<Event>,
+    /// The recorder.
+    pub history: History,
+}
+
+impl Engine {
+    /// Builds an engine for a loaded plant folder.
+    pub fn new(bundle: &PlantBundle, mode: FilterMode, history_cycles: usize) -> Self {
+        let n_out = bundle.plant.outputs.len();
+        Self {
+            symbols: bundle.symbols.clone(),
+            observers: bundle.observers.clone(),
+            filter: Filter::new(&bundle.constraints, n_out),
+            notation: bundle
+                .constraints
+                .constraints
+                .iter()
+                .map(|c| c.source.clone())
+                .collect(),
+            mode,
+            frame: Frame::new(bundle.symbols.sizes()),
+            commanded: Bits::zeros(n_out),
+            scratch: Vec::new(),
+            previous_violations: Vec::new(),
+            latched: false,
+            cycles: 0,
+            now: Millis::ZERO,
+            trips: Vec::new(),
+            events: Vec::new(),
+            history: History::new(history_cycles),
+        }
+    }
+
+    /// The filter mode.
+    pub fn mode(&self) -> FilterMode {
+        self.mode
+    }
+
+    /// Changes the filter mode (an operator or trainer decision, journaled by the caller).
+    pub fn set_mode(&mut self, mode: FilterMode) {
+        self.mode = mode;
+        if mode != FilterMode::Enforce {
+            self.latched = false;
+        }
+    }
+
+    /// True while a trip is latched.
+    pub fn is_tripped(&self) -> bool {
+        self.latched
+    }
+
+    /// The compiled filter.
+    pub fn filter(&self) -> &Filter {
+        &self.filter
+    }
+
+    /// Values of the last cycle (at t) and the one before (at t-1).
+    pub fn frame(&self) -> &Frame {
+        &self.frame
+    }
+
+    /// Mutable frame, for engines that publish auxiliary variables (diagnosers).
+    pub fn frame_mut(&mut self) -> &mut Frame {
+        &mut self.frame
+    }
+
+    /// The outputs commanded by the control program in the last cycle.
+    pub fn commanded(&self) -> &Bits {
+        &self.commanded
+    }
+
+    /// The outputs applied to the plant in the last cycle.
+    pub fn applied(&self) -> &Bits {
+        self.frame.now(Space::Output)
+    }
+
+    /// Time of the last cycle.
+    pub fn now(&self) -> Millis {
+        self.now
+    }
+
+    /// Number of cycles run.
+    pub fn cycles(&self) -> u64 {
+        self.cycles
+    }
+
+    /// Takes the events produced since the last call.
+    pub fn drain_events(&mut self) -> Vec<Event> {
+        std::mem::take(&mut self.events)
+    }
+
+    /// Runs one PLC cycle: reads `inputs`, updates the observers, scans `control`,
+    /// filters its outputs and records the cycle. Returns the outputs to apply.
+    pub fn cycle(&mut self, now: Millis, inputs: &Bits, control: &mut dyn Control) -> &Bits {
+        self.now = now;
+        self.cycles += 1;
+        self.frame.shift();
+        self.frame.now_mut(Space::Input).copy_from(inputs);
+        self.observers.update(&mut self.frame);
+        control.scan(now, &self.frame, &mut self.commanded);
+        self.frame.now_mut(Space::Output).copy_from(&self.commanded);
+
+        if self.mode != FilterMode::Off {
+            let mut violations = std::mem::take(&mut self.scratch);
+            self.filter.violations_into(&self.frame, &mut violations);
+            match self.mode {
+                FilterMode::Enforce => {
+                    if !violations.is_empty() && !self.latched {
+                        self.latched = true;
+                        let trip = self.trip_record(&violations, true);
+                        self.trips.push(trip);
+                        self.events.push(Event::Trip {
+                            index: self.trips.len() - 1,
+                        });
+                    }
+                    if self.latched {
+                        self.apply_fallback();
+                    }
+                }
+                FilterMode::ReportOnly => {
+                    if !violations.is_empty() && violations != self.previous_violations {
+                        let trip = self.trip_record(&violations, false);
+                        self.trips.push(trip);
+                        self.events.push(Event::Violation {
+                            index: self.trips.len() - 1,
+                        });
+                    }
+                }
+                FilterMode::Off => {}
+            }
+            std::mem::swap(&mut self.previous_violations, &mut violations);
+            self.scratch = violations;
+        }
+
+        let tripped = self.latched;
+        let frame = &self.frame;
+        let commanded = &self.commanded;
+        self.history.push_with(|r| {
+            r.time = now;
+            r.inputs.copy_from(frame.now(Space::Input));
+            r.commanded.copy_from(commanded);
+            r.applied.copy_from(frame.now(Space::Output));
+            r.observers.copy_from(frame.now(Space::Observer));
+            r.aux.copy_from(frame.now(Space::Aux));
+            r.tripped = tripped;
+        });
+        self.frame.now(Space::Output)
+    }
+
+    fn apply_fallback(&mut self) {
+        match self.filter.fallback(&self.frame) {
+            Ok(out) => self.frame.now_mut(Space::Output).copy_from(&out),
+            Err(err) => {
+                self.frame.now_mut(Space::Output).clear();
+                self.report_spec_error(&err);
+            }
+        }
+    }
+
+    fn report_spec_error(&mut self, err: &SpecError) {
+        let message = err.to_string();
+        let already = self.events.iter().any(
+            |e| matches!(e, Event::SpecificationError { message: m } if *m == message),
+        );
+        if !already {
+            if let Some(last) = self.trips.last_mut() {
+                if last.spec_error.is_none() {
+                    last.spec_error = Some(message.clone());
+                }
+            }
+            self.events.push(Event::SpecificationError { message });
+        }
+    }
+
+    fn trip_record(&self, violations: &[usize], enforced: bool) -> Trip {
+        let fallback = self.filter.fallback(&self.frame);
+        let n_out = self.commanded.len();
+        let applied_bits = match (&fallback, enforced) {
+            (Ok(b), true) => b.clone(),
+            (Err(_), true) => Bits::zeros(n_out),
+            (_, false) => self.commanded.clone(),
+        };
+        let fallback_bits = fallback.as_ref().map_or_else(|_| Bits::zeros(n_out), Clone::clone);
+        let out_name = |k: usize| self.symbols.name(Space::Output, u32::try_from(k).unwrap_or(0)).to_string();
+        let actions = (0..n_out)
+            .map(|k| {
+                let c = self.commanded.get(k);
+                let a = applied_bits.get(k);
+                OutputAction {
+                    output: out_name(k),
+                    commanded: c,
+                    applied: a,
+                    action: match (c, a) {
+                        (false, true) => Action::ForcedOn,
+                        (true, false) => Action::ForcedOff,
+                        _ => Action::Unchanged,
+                    },
+                }
+            })
+            .collect();
+        Trip {
+            time_ms: self.now.0,
+            cycle: self.cycles,
+            constraints: violations
+                .iter()
+                .map(|&ci| self.fired(ci))
+                .collect(),
+            actions,
+            fallback: (0..n_out).map(|k| (out_name(k), fallback_bits.get(k))).collect(),
+            spec_error: fallback.err().map(|e| e.to_string()),
+            enforced,
+        }
+    }
+
+    fn fired(&self, ci: usize) -> FiredConstraint {
+        let literals = self
+            .filter
+            .true_term(ci, &self.frame)
+            .unwrap_or_default()
+            .into_iter()
+            .map(|l| LiteralValue {
+                literal: self.symbols.render_literal(l),
+                name: self.symbols.name(l.var.space, l.var.index).to_string(),
+                space: l.var.space,
+                previous: l.var.prev,
+                value: self.frame.get(l.var),
+            })
+            .collect();
+        FiredConstraint {
+            id: self.filter.id(ci).to_string(),
+            class: self.filter.class(ci),
+            notation: self.notation.get(ci).cloned().unwrap_or_default(),
+            literals,
+        }
+    }
+
+    /// The operator's reset after a trip. Refused while a constraint is still violated
+    /// by the outputs the control program commands.
+    pub fn reset(&mut self) -> Result<(), ResetRefused> {
+        if !self.latched {
+            return Err(ResetRefused::NotTripped);
+        }
+        let applied = self.frame.now(Space::Output).clone();
+        self.frame.now_mut(Space::Output).copy_from(&self.commanded);
+        let violations = self.filter.violations(&self.frame);
+        self.frame.now_mut(Space::Output).copy_from(&applied);
+        if !violations.is_empty() {
+            return Err(ResetRefused::StillViolated {
+                constraints: violations
+                    .iter()
+                    .map(|&i| self.filter.id(i).to_string())
+                    .collect(),
+            });
+        }
+        self.latched = false;
+        self.events.push(Event::Reset);
+        Ok(())
+    }
+}

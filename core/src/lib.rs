@@ -1,0 +1,31 @@
+//! Vigie's core: everything that keeps a PLC-controlled machine safe and understandable,
+//! with no user interface and no wall clock.
+//!
+//! - [`plant`]: the I/O model (sensors C0..C10, actuators A0..A6 for the sorting station).
+//! - [`expr`], [`symbols`]: the logic notation of the paper and its name table.
+//! - [`constraints`]: safety constraints, classification and static checks.
+//! - [`observers`]: sequential rebuilders of unobservable state (P36, P67, 2P).
+//! - [`filter`]: constraint evaluation and the fallback with priority to zero.
+//! - [`engine`]: one PLC cycle, one function; [`history`]: the recorder.
+//! - [`trace`]: the per-cycle CSV trace format.
+//!
+//! See `ARCHITECTURE.md` at the repository root for the data flow and the invariants.
+
+pub mod bits;
+pub mod bundle;
+pub mod constraints;
+pub mod diag;
+pub mod engine;
+pub mod expr;
+pub mod filter;
+pub mod frame;
+pub mod history;
+pub mod observers;
+pub mod plant;
+pub mod symbols;
+pub mod synthetic;
+pub mod time;
+pub mod trace;
+
+pub use bits::Bits;
+pub use time::Millis;

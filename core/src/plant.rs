@@ -1,0 +1,186 @@
+//! The plant's I/O model: every sensor and actuator with the paper's identifiers.
+//!
+//! Loaded from `plant.ron` in a plant folder (for the sorting station,
+//! `layouts/sorting-station/plant.ron`).
+
+use crate::diag::{Location, Problem, ron_problem};
+use crate::symbols::{Space, Symbols};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
+use std::path::Path;
+
+/// Direction of a signal, seen from the PLC.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SignalKind {
+    /// A PLC input (a sensor, `C…`).
+    Sensor,
+    /// A PLC output (an actuator, `A…`).
+    Actuator,
+}
+
+/// A fieldbus address, for display and for the default I/O map.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Address {
+    /// Modbus discrete input, 0-based.
+    DiscreteInput(u16),
+    /// Modbus coil, 0-based.
+    Coil(u16),
+    /// Bit of a Modbus input register.
+    InputRegisterBit(u16, u8),
+    /// Bit of a Modbus holding register.
+    HoldingRegisterBit(u16, u8),
+}
+
+impl std::fmt::Display for Address {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Address::DiscreteInput(a) => write!(f, "discrete input {a}"),
+            Address::Coil(a) => write!(f, "coil {a}"),
+            Address::InputRegisterBit(r, b) => write!(f, "input register {r} bit {b}"),
+            Address::HoldingRegisterBit(r, b) => write!(f, "holding register {r} bit {b}"),
+        }
+    }
+}
+
+/// One signal of the plant.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Signal {
+    /// The paper's identifier (`C0`, `A4`).
+    pub id: String,
+    /// Sensor or actuator.
+    pub kind: SignalKind,
+    /// What it tells or does.
+    pub description: String,
+    /// The plant element it belongs to.
+    #[serde(default)]
+    pub element: String,
+    /// Optional fieldbus address.
+    #[serde(default)]
+    pub address: Option<Address>,
+}
+
+/// The plant file as written.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlantFile {
+    /// Display name.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Signals in any order; inputs and outputs are numbered in file order.
+    pub signals: Vec<Signal>,
+}
+
+/// A loaded plant: sensors and actuators, each numbered from 0 in file order.
+#[derive(Clone, Debug)]
+pub struct Plant {
+    /// Display name.
+    pub name: String,
+    /// Free text.
+    pub description: String,
+    /// Sensors, indexed by input number.
+    pub inputs: Vec<Signal>,
+    /// Actuators, indexed by output number.
+    pub outputs: Vec<Signal>,
+}
+
+impl Plant {
+    /// Parses a plant from RON text; `file` is used in messages only.
+    pub fn from_ron(text: &str, file: &Path) -> Result<Self, Vec<Problem>> {
+        let parsed: PlantFile = ron::from_str(text).map_err(|e| vec![ron_problem(file, &e)])?;
+        Self::from_file(parsed, file)
+    }
+
+    /// Loads `plant.ron` from disk.
+    pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            vec![Problem::error(
+                "V0002",
+                format!("cannot read {}: {e}", path.display()),
+                None,
+            )]
+        })?;
+        Self::from_ron(&text, path)
+    }
+
+    /// Validates a parsed file.
+    pub fn from_file(file: PlantFile, path: &Path) -> Result<Self, Vec<Problem>> {
+        let mut problems = Vec::new();
+        let mut seen = BTreeSet::new();
+        for s in &file.signals {
+            if !is_valid_name(&s.id) {
+                problems.push(Problem::error(
+                    "V0010",
+                    format!("signal id `{}` must be letters, digits and `_`", s.id),
+                    Some(Location::new(path, 1, 1)),
+                ));
+            }
+            if !seen.insert(s.id.clone()) {
+                problems.push(Problem::error(
+                    "V0011",
+                    format!("signal `{}` is declared twice", s.id),
+                    Some(Location::new(path, 1, 1)),
+                ));
+            }
+        }
+        if !problems.is_empty() {
+            return Err(problems);
+        }
+        let (inputs, outputs) = file
+            .signals
+            .into_iter()
+            .partition(|s| s.kind == SignalKind::Sensor);
+        Ok(Self {
+            name: file.name,
+            description: file.description,
+            inputs,
+            outputs,
+        })
+    }
+
+    /// A plant built in code (tests, synthetic benchmarks).
+    pub fn new(name: &str, inputs: Vec<Signal>, outputs: Vec<Signal>) -> Self {
+        Self {
+            name: name.to_string(),
+            description: String::new(),
+            inputs,
+            outputs,
+        }
+    }
+
+    /// A symbol table with the inputs and outputs declared, in index order.
+    pub fn symbols(&self) -> Symbols {
+        let mut symbols = Symbols::new();
+        for s in &self.inputs {
+            let _ = symbols.declare(&s.id, Space::Input);
+        }
+        for s in &self.outputs {
+            let _ = symbols.declare(&s.id, Space::Output);
+        }
+        symbols
+    }
+
+    /// Input number of a sensor id.
+    pub fn input(&self, id: &str) -> Option<usize> {
+        self.inputs.iter().position(|s| s.id == id)
+    }
+
+    /// Output number of an actuator id.
+    pub fn output(&self, id: &str) -> Option<usize> {
+        self.outputs.iter().position(|s| s.id == id)
+    }
+
+    /// A signal by id.
+    pub fn signal(&self, id: &str) -> Option<&Signal> {
+        self.inputs.iter().chain(&self.outputs).find(|s| s.id == id)
+    }
+}
+
+/// Names are ASCII letters, digits and `_`, not all digits.
+pub fn is_valid_name(name: &str) -> bool {
+    !name.is_empty()
+        && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && !name.chars().all(|c| c.is_ascii_digit())
+}
