@@ -1,5 +1,16 @@
-//! The `vigie` binary: command-line entry point.
+//! The `vigie` binary: the operator console and its headless subcommands.
 
-fn main() {
-    println!("vigie: work in progress");
+mod cli;
+
+use clap::Parser as _;
+
+fn main() -> std::process::ExitCode {
+    let args = cli::Cli::parse();
+    match cli::run(args) {
+        Ok(code) => code,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            std::process::ExitCode::from(2)
+        }
+    }
 }

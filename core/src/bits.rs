@@ -45,6 +45,12 @@ impl Bits {
             .is_some_and(|w| (w >> (i % 64)) & 1 == 1)
     }
 
+    /// The packed 64-bit words, bit `i` at `words()[i / 64] >> (i % 64)`.
+    #[inline]
+    pub fn words(&self) -> &[u64] {
+        &self.words
+    }
+
     /// Sets bit `i`; writes past the end are ignored.
     #[inline]
     pub fn set(&mut self, i: usize, value: bool) {
@@ -83,6 +89,21 @@ impl Bits {
     /// The bits as booleans.
     pub fn to_bools(&self) -> Vec<bool> {
         (0..self.len).map(|i| self.get(i)).collect()
+    }
+
+    /// Indices of the bits set, ascending, skipping zero words.
+    pub fn ones_fast(&self) -> impl Iterator<Item = usize> + '_ {
+        self.words.iter().enumerate().flat_map(|(w, &word)| {
+            let mut rest = word;
+            std::iter::from_fn(move || {
+                if rest == 0 {
+                    return None;
+                }
+                let b = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
+                Some(w * 64 + b)
+            })
+        })
     }
 
     /// Indices of the bits set, ascending.

@@ -21,6 +21,10 @@ pub struct PlantBundle {
     pub observers: Observers,
     /// Safety constraints.
     pub constraints: ConstraintSet,
+    /// Situations the plant cannot reach under the filter (`invariants.txt`).
+    pub invariants: ConstraintSet,
+    /// Property (6) conflicts shown unreachable by an invariant.
+    pub discharged: Vec<crate::constraints::Discharged>,
 }
 
 impl PlantBundle {
@@ -44,7 +48,21 @@ impl PlantBundle {
         problems.append(&mut p);
         let (constraints, mut p) = ConstraintSet::load(&dir.join("constraints.txt"), &symbols);
         problems.append(&mut p);
-        problems.extend(constraints.check_property_6(&symbols));
+        let (invariants, mut p) =
+            ConstraintSet::load_invariants(&dir.join("invariants.txt"), &symbols);
+        problems.append(&mut p);
+        let (mut p, discharged) = constraints.check_property_6(&symbols, &invariants);
+        problems.append(&mut p);
+        let filter = crate::filter::Filter::new(&constraints, plant.outputs.len());
+        if let Err((err, witness)) =
+            crate::filter::check_fallback_exists(&filter, &symbols, &invariants)
+        {
+            problems.push(Problem::error(
+                "V0107",
+                format!("{err} when {witness}"),
+                Some(crate::diag::Location::new(&dir.join("constraints.txt"), 1, 1)),
+            ));
+        }
         (
             Self {
                 dir: dir.to_path_buf(),
@@ -52,6 +70,8 @@ impl PlantBundle {
                 symbols,
                 observers,
                 constraints,
+                invariants,
+                discharged,
             },
             problems,
         )

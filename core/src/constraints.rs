@@ -51,6 +51,17 @@ impl ConstraintSet {
     /// Parses a constraint file. Lines with errors are reported and skipped; the rest
     /// is returned, so one bad line does not hide the others.
     pub fn parse(text: &str, file: &Path, symbols: &Symbols) -> (Self, Vec<Problem>) {
+        Self::parse_kind(text, file, symbols, SetKind::Constraints)
+    }
+
+    /// Parses an invariants file (same notation): situations the plant cannot reach, each
+    /// an expression that is 0 in every reachable state. They read inputs, observers,
+    /// auxiliaries and previous outputs, never outputs at t.
+    pub fn parse_invariants(text: &str, file: &Path, symbols: &Symbols) -> (Self, Vec<Problem>) {
+        Self::parse_kind(text, file, symbols, SetKind::Invariants)
+    }
+
+    fn parse_kind(text: &str, file: &Path, symbols: &Symbols, kind: SetKind) -> (Self, Vec<Problem>) {
         let mut set = Self::default();
         let mut problems = Vec::new();
         let mut seen: BTreeMap<String, usize> = BTreeMap::new();
@@ -115,7 +126,7 @@ impl ConstraintSet {
             };
             seen.insert(id.to_string(), line_no);
             let location = Location::new(file, line_no, id_col);
-            match Constraint::build(id, source, expr, &raw_dnf, location, symbols) {
+            match Constraint::build(id, source, expr, &raw_dnf, location, symbols, kind) {
                 Ok((c, mut warnings)) => {
                     problems.append(&mut warnings);
                     set.constraints.push(c);
@@ -128,8 +139,20 @@ impl ConstraintSet {
 
     /// Loads and parses a constraint file from disk.
     pub fn load(path: &Path, symbols: &Symbols) -> (Self, Vec<Problem>) {
+        Self::load_kind(path, symbols, SetKind::Constraints)
+    }
+
+    /// Loads an invariants file; a missing file means no invariant.
+    pub fn load_invariants(path: &Path, symbols: &Symbols) -> (Self, Vec<Problem>) {
+        if !path.exists() {
+            return (Self::default(), Vec::new());
+        }
+        Self::load_kind(path, symbols, SetKind::Invariants)
+    }
+
+    fn load_kind(path: &Path, symbols: &Symbols, kind: SetKind) -> (Self, Vec<Problem>) {
         match std::fs::read_to_string(path) {
-            Ok(text) => Self::parse(&text, path, symbols),
+            Ok(text) => Self::parse_kind(&text, path, symbols, kind),
             Err(e) => (
                 Self::default(),
                 vec![Problem::error(
@@ -146,9 +169,16 @@ impl ConstraintSet {
         self.constraints.iter().find(|c| c.id == id)
     }
 
-    /// Static checks that need the whole set: property (6) of the paper for every output.
-    pub fn check_property_6(&self, symbols: &Symbols) -> Vec<Problem> {
+    /// Property (6) of the paper for every output: no two simple constraints force an
+    /// output to 0 and to 1 in the same situation. A conflict whose situation is excluded
+    /// by `invariants` (unreachable situations) is *discharged*; the others are errors.
+    pub fn check_property_6(
+        &self,
+        symbols: &Symbols,
+        invariants: &ConstraintSet,
+    ) -> (Vec<Problem>, Vec<Discharged>) {
         let mut problems = Vec::new();
+        let mut discharged = Vec::new();
         // For each output k, the terms that force it to 0 (s_k . h0) and to 1 (/s_k . h1).
         let mut forcing: BTreeMap<u32, (Vec<(usize, Vec<Literal>)>, Vec<(usize, Vec<Literal>)>)> =
             BTreeMap::new();
@@ -187,6 +217,11 @@ impl ConstraintSet {
                     }
                     let a = &self.constraints[*c0];
                     let b = &self.constraints[*c1];
+                    let excluded_by = invariants
+                        .constraints
+                        .iter()
+                        .find(|inv| implies(&both, &inv.dnf))
+                        .map(|inv| inv.id.clone());
                     let witness = if both.is_empty() {
                         "any state".to_string()
                     } else {
@@ -202,6 +237,16 @@ impl ConstraintSet {
                             .collect::<Vec<_>>()
                             .join(", ")
                     };
+                    if let Some(invariant) = excluded_by {
+                        discharged.push(Discharged {
+                            output: symbols.name(Space::Output, *k).to_string(),
+                            forces_zero: a.id.clone(),
+                            forces_one: b.id.clone(),
+                            witness,
+                            invariant,
+                        });
+                        continue;
+                    }
                     problems.push(Problem::error(
                         "V0106",
                         format!(
@@ -216,8 +261,64 @@ impl ConstraintSet {
                 }
             }
         }
-        problems
+        (problems, discharged)
     }
+}
+
+/// A logical conflict of property (6) that an invariant shows unreachable.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Discharged {
+    /// The output.
+    pub output: String,
+    /// The constraint forcing it to 0.
+    pub forces_zero: String,
+    /// The constraint forcing it to 1.
+    pub forces_one: String,
+    /// The situation where both act.
+    pub witness: String,
+    /// The invariant that excludes the situation.
+    pub invariant: String,
+}
+
+/// Whether the product `term` implies the sum of products `dnf` (every assignment that
+/// makes `term` true makes `dnf` true). Decided by enumerating the variables of `dnf`
+/// that `term` leaves free (at most 16; beyond, answers false).
+pub fn implies(term: &[Literal], dnf: &Dnf) -> bool {
+    let mut free: Vec<crate::symbols::Var> = dnf
+        .iter()
+        .flatten()
+        .map(|l| l.var)
+        .filter(|v| !term.iter().any(|l| l.var == *v))
+        .collect();
+    free.sort();
+    free.dedup();
+    if free.len() > 16 || dnf.is_empty() {
+        return false;
+    }
+    (0u32..(1u32 << free.len())).all(|assignment| {
+        dnf.iter().any(|t| {
+            t.iter().all(|l| {
+                let value = term
+                    .iter()
+                    .find(|x| x.var == l.var)
+                    .map(|x| x.positive)
+                    .or_else(|| {
+                        free.iter()
+                            .position(|v| *v == l.var)
+                            .map(|i| (assignment >> i) & 1 == 1)
+                    })
+                    .unwrap_or(false);
+                value == l.positive
+            })
+        })
+    })
+}
+
+/// Which kind of file is being parsed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum SetKind {
+    Constraints,
+    Invariants,
 }
 
 impl Constraint {
@@ -228,9 +329,31 @@ impl Constraint {
         raw: &Dnf,
         location: Location,
         symbols: &Symbols,
+        kind: SetKind,
     ) -> Result<(Self, Vec<Problem>), Problem> {
         let mut warnings = Vec::new();
         let dnf = expr::simplify(raw);
+        if kind == SetKind::Invariants {
+            if dnf.iter().flatten().any(|l| l.var.space == Space::Output && !l.var.prev) {
+                return Err(Problem::error(
+                    "V0109",
+                    format!("invariant `{id}` reads an output at t; invariants describe situations of the plant (inputs, observers, previous outputs)"),
+                    Some(location),
+                ));
+            }
+            return Ok((
+                Self {
+                    id: id.to_string(),
+                    source,
+                    expr,
+                    dnf,
+                    class: Class::Simple,
+                    outputs: Vec::new(),
+                    location,
+                },
+                warnings,
+            ));
+        }
         if dnf.is_empty() {
             warnings.push(Problem::warning(
                 "V0104",

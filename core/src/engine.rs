@@ -4,7 +4,7 @@
 use crate::bits::Bits;
 use crate::bundle::PlantBundle;
 use crate::constraints::Class;
-use crate::filter::{Filter, SpecError};
+use crate::filter::{Filter, FilterState, SpecError};
 use crate::frame::Frame;
 use crate::history::History;
 use crate::observers::Observers;
@@ -156,6 +156,7 @@ pub struct Engine {
     /// Observers and their state.
     pub observers: Observers,
     filter: Filter,
+    filter_state: FilterState,
     notation: Vec<String>,
     mode: FilterMode,
     frame: Frame,
@@ -180,6 +181,7 @@ impl Engine {
         Self {
             symbols: bundle.symbols.clone(),
             observers: bundle.observers.clone(),
+            filter_state: Filter::new(&bundle.constraints, n_out).new_state(),
             filter: Filter::new(&bundle.constraints, n_out),
             notation: bundle
                 .constraints
@@ -272,7 +274,9 @@ impl Engine {
 
         if self.mode != FilterMode::Off {
             let mut violations = std::mem::take(&mut self.scratch);
-            self.filter.violations_into(&self.frame, &mut violations);
+            self.filter.sync(&mut self.filter_state, &self.frame);
+            self.filter
+                .violations_synced(&self.filter_state, &self.frame, &mut violations);
             match self.mode {
                 FilterMode::Enforce => {
                     if !violations.is_empty() && !self.latched {
@@ -318,7 +322,7 @@ impl Engine {
     }
 
     fn apply_fallback(&mut self) {
-        match self.filter.fallback(&self.frame) {
+        match self.filter.fallback_synced(&self.filter_state) {
             Ok(out) => self.frame.now_mut(Space::Output).copy_from(&out),
             Err(err) => {
                 self.frame.now_mut(Space::Output).clear();

@@ -27,10 +27,43 @@ struct Term {
     outputs: Vec<(u32, bool)>,
 }
 
+/// A literal compiled to a word and bit of one of the frame's eight tables.
+#[derive(Clone, Copy, Debug)]
+struct Packed {
+    table: u8,
+    bit: u8,
+    positive: bool,
+    word: u32,
+}
+
+impl Packed {
+    fn new(l: Literal) -> Self {
+        Self {
+            table: l.var.space as u8 + if l.var.prev { 4 } else { 0 },
+            bit: (l.var.index % 64) as u8,
+            positive: l.positive,
+            word: l.var.index / 64,
+        }
+    }
+
+    #[inline]
+    fn holds(self, tables: &[&[u64]; 8]) -> bool {
+        let word = tables[usize::from(self.table & 7)]
+            .get(self.word as usize)
+            .copied()
+            .unwrap_or(0);
+        ((word >> self.bit) & 1 == 1) == self.positive
+    }
+}
+
 /// The constraint set compiled for evaluation.
 #[derive(Clone, Debug)]
 pub struct Filter {
     terms: Vec<Term>,
+    /// Every term's literals, outputs at t first (they reject most terms at once).
+    packed: Vec<Packed>,
+    /// Per term: start in `packed`, number of output literals, total length.
+    spans: Vec<(u32, u16, u16)>,
     /// (id, class) per constraint, in file order.
     ids: Vec<(String, Class)>,
     n_outputs: usize,
@@ -69,8 +102,29 @@ impl Filter {
                 });
             }
         }
+        let mut packed = Vec::new();
+        let mut spans = Vec::with_capacity(terms.len());
+        for t in &terms {
+            let start = u32::try_from(packed.len()).unwrap_or(u32::MAX);
+            for &(k, v) in &t.outputs {
+                packed.push(Packed::new(Literal {
+                    var: crate::symbols::Var {
+                        space: Space::Output,
+                        index: k,
+                        prev: false,
+                    },
+                    positive: v,
+                }));
+            }
+            packed.extend(t.context.iter().map(|&l| Packed::new(l)));
+            let n_out = u16::try_from(t.outputs.len()).unwrap_or(u16::MAX);
+            let len = u16::try_from(t.outputs.len() + t.context.len()).unwrap_or(u16::MAX);
+            spans.push((start, n_out, len));
+        }
         Self {
             terms,
+            packed,
+            spans,
             ids: set
                 .constraints
                 .iter()
@@ -105,15 +159,18 @@ impl Filter {
     /// `frame.now[Output]`), ascending, appended to `out`.
     pub fn violations_into(&self, frame: &Frame, out: &mut Vec<usize>) {
         out.clear();
-        let outs = frame.now(Space::Output);
-        for t in &self.terms {
+        let tables = frame.tables();
+        for (t, &(start, _, len)) in self.terms.iter().zip(&self.spans) {
             let ci = t.constraint as usize;
             if out.last() == Some(&ci) {
                 continue;
             }
-            if t.outputs.iter().all(|&(k, v)| outs.get(k as usize) == v)
-                && t.context.iter().all(|&l| frame.literal(l))
-            {
+            let start = start as usize;
+            let lits = self
+                .packed
+                .get(start..start + usize::from(len))
+                .unwrap_or(&[]);
+            if lits.iter().all(|p| p.holds(&tables)) {
                 out.push(ci);
             }
         }
@@ -154,12 +211,23 @@ impl Filter {
     /// The fallback output vector for the context of `frame` (its outputs at t are
     /// ignored), see the module documentation.
     pub fn fallback(&self, frame: &Frame) -> Result<Bits, SpecError> {
-        let active: Vec<&Term> = self
-            .terms
-            .iter()
-            .filter(|t| t.context.iter().all(|&l| frame.literal(l)))
-            .collect();
-        solve_min_ones(self.n_outputs, &active, self.search_budget).ok_or_else(|| {
+        let tables = frame.tables();
+        let mut active: Vec<&Term> = Vec::new();
+        for (t, &(start, n_out, len)) in self.terms.iter().zip(&self.spans) {
+            let from = start as usize + usize::from(n_out);
+            let to = start as usize + usize::from(len);
+            let context = self.packed.get(from..to).unwrap_or(&[]);
+            // Branch-free conjunction: context literals are unpredictable, so one branch
+            // per term beats one per literal.
+            if context.iter().fold(true, |acc, p| acc & p.holds(&tables)) {
+                active.push(t);
+            }
+        }
+        self.solve(&active)
+    }
+
+    fn solve(&self, active: &[&Term]) -> Result<Bits, SpecError> {
+        solve_min_ones(self.n_outputs, active, self.search_budget).ok_or_else(|| {
             let mut ids: Vec<String> = active
                 .iter()
                 .map(|t| self.id(t.constraint as usize).to_string())
@@ -171,66 +239,328 @@ impl Filter {
     }
 }
 
-/// Minimum-ones assignment avoiding every nogood; `None` when none exists.
-fn solve_min_ones(n_outputs: usize, active: &[&Term], budget: usize) -> Option<Bits> {
-    let mut fixed: Vec<Option<bool>> = vec![None; n_outputs];
-    // Unit nogoods first: they fix outputs directly.
-    for t in active {
-        if let [(k, v)] = t.outputs.as_slice() {
-            let k = *k as usize;
-            let want = !*v;
-            match fixed.get(k).copied().flatten() {
-                Some(prev) if prev != want => return None,
-                _ => {
-                    if let Some(slot) = fixed.get_mut(k) {
-                        *slot = Some(want);
+/// Incremental evaluation state for one [`Filter`]: the number of false context literals
+/// of every term, updated from the bits that changed since the last cycle. A PLC cycle
+/// changes few inputs, so large constraint sets cost what changed, not what exists.
+#[derive(Clone, Debug, Default)]
+pub struct FilterState {
+    /// Copy of the frame's context tables (all but outputs at t) at the last sync.
+    cache: [Vec<u64>; 8],
+    /// Per term, the number of its context literals that are false.
+    unsat: Vec<u16>,
+    /// Terms whose context holds (unsat == 0), one bit per term.
+    active: Bits,
+    /// Occurrences of each context variable: per table, per variable index, the terms
+    /// (and polarity) that read it.
+    occurrences: [Vec<Vec<(u32, bool)>>; 8],
+    ready: bool,
+}
+
+/// Index of the outputs-at-t table in [`Frame::tables`]; it is not context.
+const OUTPUTS_NOW: usize = Space::Output as usize;
+
+impl Filter {
+    /// A fresh incremental state for this filter.
+    pub fn new_state(&self) -> FilterState {
+        let mut state = FilterState {
+            unsat: vec![0; self.terms.len()],
+            active: Bits::zeros(self.terms.len()),
+            ..FilterState::default()
+        };
+        for (ti, t) in self.terms.iter().enumerate() {
+            for l in &t.context {
+                let table = l.var.space as usize + if l.var.prev { 4 } else { 0 };
+                let occ = &mut state.occurrences[table];
+                let i = l.var.index as usize;
+                if occ.len() <= i {
+                    occ.resize(i + 1, Vec::new());
+                }
+                occ[i].push((u32::try_from(ti).unwrap_or(u32::MAX), l.positive));
+            }
+        }
+        state
+    }
+
+    /// Brings `state` up to date with the context of `frame` (everything but the
+    /// outputs at t).
+    pub fn sync(&self, state: &mut FilterState, frame: &Frame) {
+        let tables = frame.tables();
+        if !state.ready {
+            for (ti, &(start, n_out, len)) in self.spans.iter().enumerate() {
+                let from = start as usize + usize::from(n_out);
+                let to = start as usize + usize::from(len);
+                let false_count = self
+                    .packed
+                    .get(from..to)
+                    .unwrap_or(&[])
+                    .iter()
+                    .filter(|p| !p.holds(&tables))
+                    .count();
+                state.unsat[ti] = u16::try_from(false_count).unwrap_or(u16::MAX);
+                state.active.set(ti, false_count == 0);
+            }
+            for (t, words) in tables.iter().enumerate() {
+                state.cache[t] = words.to_vec();
+            }
+            state.ready = true;
+            return;
+        }
+        for (t, words) in tables.iter().enumerate() {
+            if t == OUTPUTS_NOW {
+                continue;
+            }
+            let cache = &mut state.cache[t];
+            if cache.len() != words.len() {
+                cache.resize(words.len(), 0);
+            }
+            for (w, (&new, old)) in words.iter().zip(cache.iter_mut()).enumerate() {
+                let mut diff = new ^ *old;
+                *old = new;
+                while diff != 0 {
+                    let b = diff.trailing_zeros() as usize;
+                    diff &= diff - 1;
+                    let index = w * 64 + b;
+                    let value = (new >> b) & 1 == 1;
+                    let Some(occ) = state.occurrences[t].get(index) else {
+                        continue;
+                    };
+                    for &(term, positive) in occ {
+                        let term = term as usize;
+                        let Some(u) = state.unsat.get_mut(term) else {
+                            continue;
+                        };
+                        if value == positive {
+                            *u = u.saturating_sub(1);
+                        } else {
+                            *u = u.saturating_add(1);
+                        }
+                        state.active.set(term, *u == 0);
                     }
                 }
             }
         }
     }
-    // Remaining nogoods not already satisfied by the fixed outputs.
-    let rest: Vec<&[(u32, bool)]> = active
+
+    /// [`Filter::violations_into`] using a synced state.
+    pub fn violations_synced(&self, state: &FilterState, frame: &Frame, out: &mut Vec<usize>) {
+        out.clear();
+        let tables = frame.tables();
+        for ti in state.active.ones_fast() {
+            let (Some(t), Some(&(start, n_out, _))) = (self.terms.get(ti), self.spans.get(ti))
+            else {
+                continue;
+            };
+            let ci = t.constraint as usize;
+            if out.last() == Some(&ci) {
+                continue;
+            }
+            let start = start as usize;
+            let outs = self
+                .packed
+                .get(start..start + usize::from(n_out))
+                .unwrap_or(&[]);
+            if outs.iter().all(|p| p.holds(&tables)) {
+                out.push(ci);
+            }
+        }
+    }
+
+    /// [`Filter::fallback`] using a synced state.
+    pub fn fallback_synced(&self, state: &FilterState) -> Result<Bits, SpecError> {
+        let active: Vec<&Term> = state
+            .active
+            .ones_fast()
+            .filter_map(|ti| self.terms.get(ti))
+            .collect();
+        self.solve(&active)
+    }
+}
+
+/// Largest support (number of context variables) for which [`check_fallback_exists`]
+/// enumerates every context.
+pub const EXHAUSTIVE_SUPPORT_LIMIT: usize = 22;
+
+/// The context variables (everything but outputs at t) read by the constraints, sorted.
+pub fn support(filter: &Filter) -> Vec<crate::symbols::Var> {
+    let mut vars: Vec<_> = filter
+        .terms
+        .iter()
+        .flat_map(|t| t.context.iter().map(|l| l.var))
+        .collect();
+    vars.sort();
+    vars.dedup();
+    vars
+}
+
+/// Static check: a fallback exists in every reachable context. Enumerates every
+/// assignment of the support when it has at most [`EXHAUSTIVE_SUPPORT_LIMIT`] variables,
+/// skipping the situations an invariant excludes; returns the number of contexts checked
+/// and the first failing context rendered as a witness.
+pub fn check_fallback_exists(
+    filter: &Filter,
+    symbols: &crate::symbols::Symbols,
+    invariants: &ConstraintSet,
+) -> Result<u64, (SpecError, String)> {
+    let vars = support(filter);
+    if vars.len() > EXHAUSTIVE_SUPPORT_LIMIT {
+        return Ok(0);
+    }
+    let mut frame = Frame::new(symbols.sizes());
+    let total = 1u64 << vars.len();
+    let mut checked = 0;
+    for assignment in 0..total {
+        for (i, v) in vars.iter().enumerate() {
+            let table = if v.prev { &mut frame.prev } else { &mut frame.now };
+            table[v.space as usize].set(v.index as usize, (assignment >> i) & 1 == 1);
+        }
+        if invariants
+            .constraints
+            .iter()
+            .any(|inv| crate::expr::eval_dnf(&inv.dnf, &frame))
+        {
+            continue;
+        }
+        checked += 1;
+        if let Err(e) = filter.fallback(&frame) {
+            let witness = vars
+                .iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    format!(
+                        "{}={}",
+                        symbols.render_literal(Literal {
+                            var: *v,
+                            positive: true
+                        }),
+                        (assignment >> i) & 1
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(" ");
+            return Err((e, witness));
+        }
+    }
+    Ok(checked)
+}
+
+/// Minimum-ones assignment avoiding every nogood; `None` when none exists.
+fn solve_min_ones(n_outputs: usize, active: &[&Term], budget: usize) -> Option<Bits> {
+    let mut fixed: Vec<Option<bool>> = vec![None; n_outputs];
+    // Unit nogoods fix their output to the opposite value.
+    for t in active {
+        if let [(k, v)] = t.outputs.as_slice() {
+            match fixed.get_mut(*k as usize) {
+                Some(Some(x)) if *x == *v => return None,
+                Some(slot) => *slot = Some(!*v),
+                None => {}
+            }
+        }
+    }
+    let mut open: Vec<&[(u32, bool)]> = active
         .iter()
         .filter(|t| t.outputs.len() > 1)
         .map(|t| t.outputs.as_slice())
-        .filter(|ng| {
-            !ng.iter()
-                .any(|&(k, v)| fixed.get(k as usize).copied().flatten() == Some(!v))
-        })
         .collect();
-    let mut result = Bits::zeros(n_outputs);
-    if rest.is_empty() {
-        for (k, f) in fixed.iter().enumerate() {
-            result.set(k, f.unwrap_or(false));
+    // Propagate to a fixpoint: drop satisfied nogoods; one whose literals are all
+    // matched by fixed outputs is a conflict; one with a single free literal fixes it.
+    loop {
+        let mut changed = false;
+        let mut conflict = false;
+        open.retain(|ng| {
+            let mut free = None;
+            let mut n_free = 0;
+            for &(k, v) in *ng {
+                match fixed.get(k as usize).copied().flatten() {
+                    Some(x) if x != v => return false,
+                    Some(_) => {}
+                    None => {
+                        n_free += 1;
+                        free = Some((k, v));
+                    }
+                }
+            }
+            match (n_free, free) {
+                (0, _) => {
+                    conflict = true;
+                    false
+                }
+                (1, Some((k, v))) => {
+                    if let Some(slot) = fixed.get_mut(k as usize) {
+                        *slot = Some(!v);
+                    }
+                    changed = true;
+                    false
+                }
+                _ => true,
+            }
+        });
+        if conflict {
+            return None;
         }
+        if !changed {
+            break;
+        }
+    }
+    let mut result = Bits::zeros(n_outputs);
+    for (k, f) in fixed.iter().enumerate() {
+        result.set(k, f.unwrap_or(false));
+    }
+    if open.is_empty() {
         return Some(result);
     }
+    // Free outputs default to 0: if no open nogood is made only of `= 0` literals on free
+    // outputs, that completion satisfies them all and adds no ON, so it is optimal.
+    let zero_completion_ok = open.iter().all(|ng| {
+        ng.iter()
+            .any(|&(k, v)| v && fixed.get(k as usize).copied().flatten().is_none())
+    });
+    if zero_completion_ok {
+        return Some(result);
+    }
+    // The remaining nogoods only name free outputs: search over those, renumbered.
+    let is_free = |k: u32| fixed.get(k as usize).copied().flatten().is_none();
+    let mut vars: Vec<u32> = open
+        .iter()
+        .flat_map(|ng| ng.iter())
+        .map(|&(k, _)| k)
+        .filter(|&k| is_free(k))
+        .collect();
+    vars.sort_unstable();
+    vars.dedup();
+    let local: Vec<Vec<(usize, bool)>> = open
+        .iter()
+        .map(|ng| {
+            ng.iter()
+                .filter(|&&(k, _)| is_free(k))
+                .map(|&(k, v)| (vars.binary_search(&k).unwrap_or(0), v))
+                .collect()
+        })
+        .collect();
     let mut search = Search {
-        nogoods: rest,
+        nogoods: local,
         best: None,
         best_ones: usize::MAX,
         nodes: 0,
         budget,
     };
-    search.dfs(&mut fixed);
+    search.dfs(&mut vec![None; vars.len()]);
     let best = search.best?;
-    for (k, f) in best.iter().enumerate() {
-        result.set(k, f.unwrap_or(false));
+    for (i, v) in best.iter().enumerate() {
+        result.set(vars[i] as usize, v.unwrap_or(false));
     }
     Some(result)
 }
 
-struct Search<'a> {
-    nogoods: Vec<&'a [(u32, bool)]>,
+struct Search {
+    nogoods: Vec<Vec<(usize, bool)>>,
     best: Option<Vec<Option<bool>>>,
     best_ones: usize,
     nodes: usize,
     budget: usize,
 }
 
-impl Search<'_> {
-    /// Unit propagation; returns false on conflict. Unassigned outputs not named in any
+impl Search {
+    /// Unit propagation; returns false on conflict. Unassigned variables not named in any
     /// open nogood are left unassigned (they default to 0).
     fn propagate(&self, a: &mut [Option<bool>]) -> bool {
         loop {
@@ -239,8 +569,8 @@ impl Search<'_> {
                 let mut unassigned = None;
                 let mut open = 0;
                 let mut satisfied = false;
-                for &(k, v) in *ng {
-                    match a.get(k as usize).copied().flatten() {
+                for &(k, v) in ng {
+                    match a.get(k).copied().flatten() {
                         Some(x) if x != v => {
                             satisfied = true;
                             break;
@@ -258,7 +588,7 @@ impl Search<'_> {
                 match (open, unassigned) {
                     (0, _) => return false,
                     (1, Some((k, v))) => {
-                        if let Some(slot) = a.get_mut(k as usize) {
+                        if let Some(slot) = a.get_mut(k) {
                             *slot = Some(!v);
                             changed = true;
                         }
@@ -273,39 +603,34 @@ impl Search<'_> {
     }
 
     fn dfs(&mut self, a: &mut [Option<bool>]) {
-        let a: &[Option<bool>] = a;
         self.nodes += 1;
         if self.nodes > self.budget && self.best.is_some() {
             return;
         }
-        let mut local = a.to_vec();
-        if !self.propagate(&mut local) {
+        if !self.propagate(a) {
             return;
         }
-        let ones = local.iter().filter(|x| **x == Some(true)).count();
+        let ones = a.iter().filter(|x| **x == Some(true)).count();
         if ones >= self.best_ones {
             return;
         }
-        // Branch on the lowest output named by a nogood that is still open.
+        // Branch on the lowest variable named by a nogood that is still open.
         let next = self
             .nogoods
             .iter()
-            .filter(|ng| {
-                !ng.iter()
-                    .any(|&(k, v)| local.get(k as usize).copied().flatten() == Some(!v))
-            })
-            .flat_map(|ng| ng.iter().map(|&(k, _)| k as usize))
-            .filter(|&k| local.get(k).copied().flatten().is_none())
+            .filter(|ng| !ng.iter().any(|&(k, v)| a.get(k).copied().flatten() == Some(!v)))
+            .flat_map(|ng| ng.iter().map(|&(k, _)| k))
+            .filter(|&k| a.get(k).copied().flatten().is_none())
             .min();
         let Some(k) = next else {
-            // Every nogood is satisfied: unassigned outputs default to 0, which cannot
-            // complete an open nogood since none is open.
+            // Every nogood is satisfied; unassigned variables default to 0, which cannot
+            // complete a nogood since none is open.
             self.best_ones = ones;
-            self.best = Some(local);
+            self.best = Some(a.to_vec());
             return;
         };
         for value in [false, true] {
-            let mut branch = local.clone();
+            let mut branch = a.to_vec();
             branch[k] = Some(value);
             self.dfs(&mut branch);
         }

@@ -34,6 +34,21 @@ impl Frame {
         self.get(lit.var) == lit.positive
     }
 
+    /// The eight tables as word slices: spaces at t (0..4) then at t-1 (4..8).
+    #[inline]
+    pub fn tables(&self) -> [&[u64]; 8] {
+        [
+            self.now[0].words(),
+            self.now[1].words(),
+            self.now[2].words(),
+            self.now[3].words(),
+            self.prev[0].words(),
+            self.prev[1].words(),
+            self.prev[2].words(),
+            self.prev[3].words(),
+        ]
+    }
+
     /// Values at t of a space.
     pub fn now(&self, space: Space) -> &Bits {
         &self.now[space as usize]

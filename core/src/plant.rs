@@ -63,6 +63,7 @@ pub struct Signal {
 /// The plant file as written.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+#[serde(rename = "Plant")]
 pub struct PlantFile {
     /// Display name.
     pub name: String,

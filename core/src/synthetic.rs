@@ -53,10 +53,12 @@ pub struct Synthetic {
 }
 
 /// Generates a plant with `signals` signals (half sensors, half actuators) and
-/// `constraints` constraints from `seed`. The constraint set satisfies property (6)
-/// by construction: every simple constraint forces its output to 0, except those written
-/// on a falling edge of the output (`FE(A) = A* . /A`), which force it to 1 only when
-/// it was 1 and so cannot meet a rising-edge constraint.
+/// `constraints` constraints from `seed`. The constraint set satisfies property (6) and
+/// always has a fallback, by construction: one output in ten is *monostable* (like A4)
+/// and is constrained only with edges, `RE(A)` forcing it to stay 0 and `FE(A)` forcing
+/// it to stay 1 (the paper's sufficient condition); the others are only ever forced to 0;
+/// combined constraints `A_k . /A_m` take a non-monostable `A_k`, so `A_k = 0` always
+/// satisfies them.
 pub fn generate(signals: usize, constraints: usize, seed: u64) -> Synthetic {
     let mut rng = SplitMix64::new(seed);
     let n_in = signals / 2;
@@ -95,15 +97,20 @@ pub fn generate(signals: usize, constraints: usize, seed: u64) -> Synthetic {
             })
             .collect();
         let k = rng.below(n_out as u64);
-        if rng.chance(1, 10) {
+        let monostable = |k: u64| k % 10 == 0;
+        if monostable(k) {
+            lits.push(if rng.chance(1, 2) {
+                format!("RE(A{k})")
+            } else {
+                format!("FE(A{k})")
+            });
+            let _ = writeln!(text, "CSs{c} = {}", lits.join(" . "));
+        } else if rng.chance(1, 10) {
             // Combined: A_k . /A_m (pushing a box onto a stopped conveyor).
             let m = (k + 1 + rng.below(n_out as u64 - 1)) % n_out as u64;
             lits.push(format!("A{k}"));
             lits.push(format!("/A{m}"));
             let _ = writeln!(text, "CSc{c} = {}", lits.join(" . "));
-        } else if rng.chance(1, 10) {
-            lits.push(format!("FE(A{k})"));
-            let _ = writeln!(text, "CSs{c} = {}", lits.join(" . "));
         } else {
             lits.push(format!("A{k}"));
             let _ = writeln!(text, "CSs{c} = {}", lits.join(" . "));

@@ -1,0 +1,175 @@
+//! `vigie bench`: the figures the issues ask for, measured on this machine.
+//!
+//! Each figure is the median over batches of the mean time per iteration in a batch.
+
+use std::hint::black_box;
+use std::io::Write as _;
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Instant;
+use vigie_core::filter::Filter;
+use vigie_core::frame::Frame;
+use vigie_core::symbols::Space;
+
+/// Median of per-iteration nanoseconds over `batches` batches of `per_batch` calls.
+pub(crate) fn median_ns(batches: u32, per_batch: u32, mut f: impl FnMut()) -> f64 {
+    let mut samples: Vec<f64> = (0..batches.max(1))
+        .map(|_| {
+            let start = Instant::now();
+            for _ in 0..per_batch.max(1) {
+                f();
+            }
+            start.elapsed().as_secs_f64() * 1e9 / f64::from(per_batch.max(1))
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    samples[samples.len() / 2]
+}
+
+fn set(frame: &mut Frame, symbols: &vigie_core::symbols::Symbols, name: &str, prev: bool, v: bool) {
+    if let Some((space, index)) = symbols.lookup(name) {
+        let table = if prev { &mut frame.prev } else { &mut frame.now };
+        table[space as usize].set(index as usize, v);
+    }
+}
+
+pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode> {
+    let mut out = std::io::stdout().lock();
+    let (bundle, _) = super::load_bundle(plant_dir)?;
+    let filter = Filter::new(&bundle.constraints, bundle.plant.outputs.len());
+    let symbols = &bundle.symbols;
+    let batches = 101;
+    let per_batch = (iterations / batches).max(1);
+
+    // Sorting station, production without trip: a box on A1, the table waiting at C4.
+    let mut frame = Frame::new(symbols.sizes());
+    for (n, v) in [("C1", true), ("C4", true), ("A0", true), ("A1", true), ("A5", true), ("A6", true)] {
+        set(&mut frame, symbols, n, false, v);
+    }
+    let mut observers = bundle.observers.clone();
+    let mut violations = Vec::new();
+    let mut state = filter.new_state();
+    let no_trip = median_ns(batches, per_batch, || {
+        observers.update(black_box(&mut frame));
+        filter.sync(&mut state, black_box(&frame));
+        filter.violations_synced(&state, black_box(&frame), &mut violations);
+        black_box(&violations);
+    });
+    anyhow::ensure!(violations.is_empty(), "benchmark state unexpectedly violates {violations:?}");
+
+    // The paper's CSs10 trip: box at C7, A4 released at C5.
+    let mut trip = Frame::new(symbols.sizes());
+    for (n, v) in [("C5", true), ("C7", true), ("A3", true), ("A5", true), ("A6", true)] {
+        set(&mut trip, symbols, n, false, v);
+    }
+    set(&mut trip, symbols, "A4", true, true);
+    let mut state = filter.new_state();
+    let with_trip = median_ns(batches, per_batch, || {
+        observers.update(black_box(&mut trip));
+        filter.sync(&mut state, black_box(&trip));
+        filter.violations_synced(&state, black_box(&trip), &mut violations);
+        let fb = filter.fallback_synced(&state);
+        black_box(&fb);
+    });
+    let fb = filter.fallback(&trip).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let a4 = bundle.plant.output("A4").unwrap_or(0);
+    anyhow::ensure!(fb.get(a4), "CSs10 fallback must hold A4 ON");
+
+    writeln!(out, "sorting station (11 sensors, 7 actuators, 3 observers, 17 constraints)")?;
+    writeln!(out, "  filter cycle, no trip (observers + constraints): {no_trip:>10.1} ns   goal <= 1000 ns")?;
+    writeln!(out, "  filter cycle with CSs10 trip (+ fallback):       {with_trip:>10.1} ns   goal <= 1000 ns")?;
+
+    // Synthetic plant: 10,000 signals, 10,000 constraints.
+    let synth = vigie_core::synthetic::generate(10_000, 10_000, 42);
+    let sfilter = Filter::new(&synth.constraints, synth.plant.outputs.len());
+    let mut sframe = Frame::new(synth.symbols.sizes());
+    let mut rng = vigie_core::synthetic::SplitMix64::new(7);
+    // Random sensors and previous outputs; the outputs at t are the control's commands
+    // in normal production: compliant (the fallback of this context with every output that
+    // no constraint forces kept ON, as a running plant would have them).
+    for space in [Space::Input, Space::Output] {
+        for i in 0..synth.symbols.len(space) {
+            sframe.now[space as usize].set(i, rng.chance(1, 2));
+            sframe.prev[space as usize].set(i, rng.chance(1, 2));
+        }
+    }
+    let compliant = sfilter
+        .fallback(&sframe)
+        .map_err(|e| anyhow::anyhow!("synthetic plant has no fallback: {e}"))?;
+    sframe.now[Space::Output as usize].copy_from(&compliant);
+    let heavy = (iterations / 1000).max(10);
+    // Each measured cycle changes 10 random sensors (a PLC cycle changes few inputs) and
+    // runs the incremental evaluation, as the engine does.
+    let mut sstate = sfilter.new_state();
+    sfilter.sync(&mut sstate, &sframe);
+    let n_in = synth.plant.inputs.len();
+    let s_cycle = median_ns(21, heavy.min(200), || {
+        for _ in 0..10 {
+            let i = usize::try_from(rng.below(n_in as u64)).unwrap_or(0);
+            let v = sframe.now[Space::Input as usize].get(i);
+            sframe.now[Space::Input as usize].set(i, !v);
+        }
+        sfilter.sync(&mut sstate, black_box(&sframe));
+        sfilter.violations_synced(&sstate, black_box(&sframe), &mut violations);
+        black_box(&violations);
+    });
+    let s_full = median_ns(21, heavy.min(200), || {
+        sfilter.violations_into(black_box(&sframe), &mut violations);
+        black_box(&violations);
+    });
+    // Back to the compliant state for the trip measurements.
+    let compliant = sfilter
+        .fallback(&sframe)
+        .map_err(|e| anyhow::anyhow!("synthetic plant has no fallback: {e}"))?;
+    sframe.now[Space::Output as usize].copy_from(&compliant);
+    let n_viol_after_changes = violations.len();
+    // A trip: one forced-OFF output commanded ON.
+    let mut tripping = sframe.clone();
+    sfilter.violations_into(&tripping, &mut violations);
+    for k in 0..synth.plant.outputs.len() {
+        let before = tripping.now[Space::Output as usize].get(k);
+        tripping.now[Space::Output as usize].set(k, !before);
+        sfilter.violations_into(&tripping, &mut violations);
+        if !violations.is_empty() {
+            break;
+        }
+        tripping.now[Space::Output as usize].set(k, before);
+    }
+    let n_trip = violations.len();
+    sfilter.sync(&mut sstate, &tripping);
+    let s_trip_cycle = median_ns(21, heavy.min(200), || {
+        sfilter.sync(&mut sstate, black_box(&tripping));
+        sfilter.violations_synced(&sstate, black_box(&tripping), &mut violations);
+        black_box(&violations);
+    });
+    let s_fallback = median_ns(21, heavy.min(200), || {
+        let fb = sfilter.fallback_synced(black_box(&sstate));
+        black_box(&fb);
+    });
+    let s_fallback_full = median_ns(21, heavy.min(200), || {
+        let fb = sfilter.fallback(black_box(&tripping));
+        black_box(&fb);
+    });
+    let ok = sfilter.fallback_synced(&sstate).is_ok();
+    writeln!(
+        out,
+        "synthetic plant (seed 42: {} signals, {} constraints)",
+        synth.plant.inputs.len() + synth.plant.outputs.len(),
+        synth.constraints.constraints.len(),
+    )?;
+    writeln!(
+        out,
+        "  filter cycle, 10 inputs changed per cycle:       {:>10.1} µs   goal <= 100 µs ({n_viol_after_changes} constraints true at the end)",
+        s_cycle / 1000.0
+    )?;
+    writeln!(out, "  filter cycle, {n_trip} constraint(s) true:             {:>10.1} µs   goal <= 100 µs", s_trip_cycle / 1000.0)?;
+    writeln!(out, "  (full re-evaluation of every term, no state:     {:>10.1} µs)", s_full / 1000.0)?;
+    writeln!(
+        out,
+        "  fallback ({}):                              {:>10.1} µs   goal <= 50 µs",
+        if ok { "found" } else { "spec error" },
+        s_fallback / 1000.0
+    )?;
+    writeln!(out, "  (fallback re-evaluating every term:              {:>10.1} µs)", s_fallback_full / 1000.0)?;
+    Ok(ExitCode::SUCCESS)
+}

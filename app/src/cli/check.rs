@@ -1,0 +1,141 @@
+//! `vigie check`: validate a plant folder.
+
+use std::io::Write as _;
+use std::path::Path;
+use std::process::ExitCode;
+use vigie_core::constraints::Class;
+use vigie_core::diag::Problem;
+
+#[derive(serde::Serialize)]
+struct ConstraintRow<'a> {
+    id: &'a str,
+    class: Class,
+    notation: &'a str,
+    outputs: Vec<&'a str>,
+    line: usize,
+}
+
+#[derive(serde::Serialize)]
+struct Report<'a> {
+    plant: &'a str,
+    inputs: usize,
+    outputs: usize,
+    observers: Vec<&'a str>,
+    constraints: Vec<ConstraintRow<'a>>,
+    invariants: Vec<&'a str>,
+    property6_discharged: &'a [vigie_core::constraints::Discharged],
+    problems: &'a [Problem],
+}
+
+pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
+    let (bundle, problems) = match vigie_core::bundle::PlantBundle::load(dir) {
+        Ok(v) => v,
+        Err(problems) => {
+            if json {
+                let out = serde_json::json!({ "constraints": [], "problems": problems });
+                writeln!(std::io::stdout(), "{}", serde_json::to_string_pretty(&out)?)?;
+            } else {
+                eprintln!("{}", vigie_core::diag::render(&problems));
+            }
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    let symbols = &bundle.symbols;
+    let rows: Vec<ConstraintRow<'_>> = bundle
+        .constraints
+        .constraints
+        .iter()
+        .map(|c| ConstraintRow {
+            id: &c.id,
+            class: c.class,
+            notation: &c.source,
+            outputs: c
+                .outputs
+                .iter()
+                .map(|&k| symbols.name(vigie_core::symbols::Space::Output, k))
+                .collect(),
+            line: c.location.line,
+        })
+        .collect();
+    let report = Report {
+        plant: &bundle.plant.name,
+        inputs: bundle.plant.inputs.len(),
+        outputs: bundle.plant.outputs.len(),
+        observers: bundle.observers.defs.iter().map(|d| d.id.as_str()).collect(),
+        constraints: rows,
+        invariants: bundle.invariants.constraints.iter().map(|c| c.id.as_str()).collect(),
+        property6_discharged: &bundle.discharged,
+        problems: &problems,
+    };
+    let mut out = std::io::stdout().lock();
+    if json {
+        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+    } else {
+        writeln!(
+            out,
+            "{}: {} sensors, {} actuators, observers {}",
+            report.plant,
+            report.inputs,
+            report.outputs,
+            report.observers.join(", ")
+        )?;
+        writeln!(out)?;
+        writeln!(out, "{:<8} {:<9} {:<10} notation", "id", "class", "outputs")?;
+        for r in &report.constraints {
+            let class = match r.class {
+                Class::Simple => "simple",
+                Class::Combined => "combined",
+            };
+            writeln!(
+                out,
+                "{:<8} {:<9} {:<10} {}",
+                r.id,
+                class,
+                r.outputs.join(","),
+                r.notation
+            )?;
+        }
+        writeln!(out)?;
+        let simple = report
+            .constraints
+            .iter()
+            .filter(|r| r.class == Class::Simple)
+            .count();
+        writeln!(
+            out,
+            "{} constraints: {} simple, {} combined",
+            report.constraints.len(),
+            simple,
+            report.constraints.len() - simple
+        )?;
+        if !bundle.discharged.is_empty() {
+            writeln!(
+                out,
+                "property (6): {} logical conflicts, each in a situation an invariant excludes:",
+                bundle.discharged.len()
+            )?;
+            for d in &bundle.discharged {
+                writeln!(
+                    out,
+                    "  {}: {} forces 0, {} forces 1 when {}; unreachable by {}",
+                    d.output, d.forces_zero, d.forces_one, d.witness, d.invariant
+                )?;
+            }
+        }
+        if problems.is_empty() {
+            writeln!(
+                out,
+                "static checks passed: property (6) holds for every output in every reachable situation \
+                 ({} invariants), a fallback exists in every reachable context, every name is known",
+                report.invariants.len()
+            )?;
+        } else {
+            writeln!(out, "{}", vigie_core::diag::render(&problems))?;
+        }
+    }
+    Ok(if problems.iter().any(Problem::is_error) {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}

@@ -1,0 +1,38 @@
+//! `vigie filter`: replay a recorded trace through observers and the filter.
+
+use std::io::Write as _;
+use std::path::Path;
+use std::process::ExitCode;
+use vigie_core::engine::{Commanded, Engine, FilterMode};
+
+pub(crate) fn run(dir: &Path, trace_path: &Path, reset_after_trip: bool) -> anyhow::Result<ExitCode> {
+    let (bundle, problems) = super::load_bundle(dir)?;
+    if problems.iter().any(vigie_core::diag::Problem::is_error) {
+        anyhow::bail!(
+            "plant {} has errors:\n{}",
+            dir.display(),
+            vigie_core::diag::render(&problems)
+        );
+    }
+    let text = std::fs::read_to_string(trace_path)
+        .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", trace_path.display()))?;
+    let rows = vigie_core::trace::parse(&text, trace_path, &bundle.plant)
+        .map_err(|p| anyhow::anyhow!("{p}"))?;
+    let mut engine = Engine::new(&bundle, FilterMode::Enforce, 1);
+    let mut control = Commanded::default();
+    let mut out = std::io::stdout().lock();
+    for row in &rows {
+        control.0.clone_from(&row.outputs);
+        if reset_after_trip && engine.is_tripped() {
+            // The reset is checked against the commands of the previous cycle.
+            let _ = engine.reset();
+        }
+        engine.cycle(row.time, &row.inputs, &mut control);
+        for event in engine.drain_events() {
+            if let vigie_core::engine::Event::Trip { index } = event {
+                writeln!(out, "{}", serde_json::to_string(&engine.trips[index])?)?;
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
