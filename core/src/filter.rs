@@ -208,6 +208,36 @@ impl Filter {
             })
     }
 
+    /// The simple constraints that force output `k` ON in the context of `frame`, each
+    /// rendered with the literals that make it act, e.g. `CSs10 (C7=1)`.
+    pub fn forcing_on(&self, k: usize, frame: &Frame, symbols: &crate::symbols::Symbols) -> Vec<String> {
+        let mut out = Vec::new();
+        for t in &self.terms {
+            if t.outputs.as_slice() != [(u32::try_from(k).unwrap_or(u32::MAX), false)] {
+                continue;
+            }
+            if !t.context.iter().all(|&l| frame.literal(l)) {
+                continue;
+            }
+            let why: Vec<String> = t
+                .context
+                .iter()
+                .map(|l| {
+                    let name = symbols.render_literal(Literal {
+                        positive: true,
+                        ..*l
+                    });
+                    format!("{name}={}", u8::from(l.positive))
+                })
+                .collect();
+            let text = format!("{} ({})", self.id(t.constraint as usize), why.join(", "));
+            if !out.contains(&text) {
+                out.push(text);
+            }
+        }
+        out
+    }
+
     /// The fallback output vector for the context of `frame` (its outputs at t are
     /// ignored), see the module documentation.
     pub fn fallback(&self, frame: &Frame) -> Result<Bits, SpecError> {

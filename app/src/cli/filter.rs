@@ -5,7 +5,12 @@ use std::path::Path;
 use std::process::ExitCode;
 use vigie_core::engine::{Commanded, Engine, FilterMode};
 
-pub(crate) fn run(dir: &Path, trace_path: &Path, reset_after_trip: bool) -> anyhow::Result<ExitCode> {
+pub(crate) fn run(
+    dir: &Path,
+    trace_path: &Path,
+    reset_after_trip: bool,
+    explain: bool,
+) -> anyhow::Result<ExitCode> {
     let (bundle, problems) = super::load_bundle(dir)?;
     if problems.iter().any(vigie_core::diag::Problem::is_error) {
         anyhow::bail!(
@@ -18,7 +23,7 @@ pub(crate) fn run(dir: &Path, trace_path: &Path, reset_after_trip: bool) -> anyh
         .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", trace_path.display()))?;
     let rows = vigie_core::trace::parse(&text, trace_path, &bundle.plant)
         .map_err(|p| anyhow::anyhow!("{p}"))?;
-    let mut engine = Engine::new(&bundle, FilterMode::Enforce, 1);
+    let mut engine = Engine::new(&bundle, FilterMode::Enforce, 6000);
     let mut control = Commanded::default();
     let mut out = std::io::stdout().lock();
     for row in &rows {
@@ -30,7 +35,13 @@ pub(crate) fn run(dir: &Path, trace_path: &Path, reset_after_trip: bool) -> anyh
         engine.cycle(row.time, &row.inputs, &mut control);
         for event in engine.drain_events() {
             if let vigie_core::engine::Event::Trip { index } = event {
-                writeln!(out, "{}", serde_json::to_string(&engine.trips[index])?)?;
+                let mut line = serde_json::to_value(&engine.trips[index])?;
+                if explain {
+                    if let Some(ex) = vigie_core::explain::explain(&engine, index) {
+                        line["explanation"] = serde_json::to_value(ex)?;
+                    }
+                }
+                writeln!(out, "{line}")?;
             }
         }
     }

@@ -41,6 +41,10 @@ pub(crate) enum Command {
         /// latches for the rest of the trace.
         #[arg(long)]
         reset_after_trip: bool,
+        /// Add the explanation levels 0, 2, 3 and 4 to each trip line (level 1, the
+        /// projection, needs the plant emulator: see `vigie run`).
+        #[arg(long)]
+        explain: bool,
     },
     /// Measure the engines and print the figures.
     Bench {
@@ -58,7 +62,8 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             dir,
             trace,
             reset_after_trip,
-        }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip),
+            explain,
+        }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
         None => {
             use clap::CommandFactory as _;

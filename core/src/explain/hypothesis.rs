@@ -1,0 +1,314 @@
+//! Level 4, the hypothesis: what the control should have done and what may have made it
+//! do otherwise, derived from the fired constraint and the recorded cycles only.
+//!
+//! For each fired constraint, with R(t) the stopping cycle and R(t-1) the one before:
+//! - (a) `X401`: sensors of the constraint that changed in the stopping cycle: the control
+//!   did not evolve its outputs as that change required;
+//! - (b) `X402`: when an actuator of the constraint changed in the stopping cycle, the
+//!   sensors outside the constraint that changed in the same cycle, listed one by one:
+//!   a receptivity or an output equation using one of them may have driven it;
+//! - (c) `X403`: the expected action on each actuator of the constraint (stay / be ON or
+//!   OFF, or for a combined constraint, one of several alternatives);
+//! - (d) `X404`: an actuator of the constraint changed while no input changed at all: an
+//!   internal timer or memory of the program is suspected;
+//! - `X405`: nothing changed in the stopping cycle but an observer or another internal
+//!   variable (the constraint became true through it).
+//!
+//! Suspects are ordered: (a) and (b) items come first, in the order the changes appear.
+
+use super::{Highlight, Item, Level, Mark};
+use crate::constraints::ConstraintSet;
+use crate::engine::{Engine, FiredConstraint, Trip};
+use crate::history::CycleRecord;
+use crate::symbols::Space;
+
+/// What changed between two records.
+struct Delta {
+    inputs: Vec<(String, bool, bool)>,
+    outputs: Vec<(String, bool, bool)>,
+    observers: Vec<String>,
+}
+
+fn delta(symbols: &crate::symbols::Symbols, prev: &CycleRecord, cur: &CycleRecord) -> Delta {
+    let diff = |space: Space, a: &crate::bits::Bits, b: &crate::bits::Bits| {
+        symbols
+            .names(space)
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| a.get(*i) != b.get(*i))
+            .map(|(i, n)| (n.clone(), a.get(i), b.get(i)))
+            .collect::<Vec<_>>()
+    };
+    Delta {
+        inputs: diff(Space::Input, &prev.inputs, &cur.inputs),
+        outputs: diff(Space::Output, &prev.commanded, &cur.commanded),
+        observers: diff(Space::Observer, &prev.observers, &cur.observers)
+            .into_iter()
+            .map(|(n, _, _)| n)
+            .collect(),
+    }
+}
+
+fn edge(from: bool, to: bool) -> &'static str {
+    match (from, to) {
+        (false, true) => "rose (0→1)",
+        (true, false) => "fell (1→0)",
+        _ => "kept its value",
+    }
+}
+
+/// The hypothesis level for `trip`.
+pub fn hypothesis(engine: &Engine, trip: &Trip) -> Level {
+    let cur = engine.history.iter().find(|r| r.time.0 == trip.time_ms);
+    let prev = cur.and_then(|c| engine.history.iter().rev().find(|p| p.time < c.time));
+    let (Some(cur), Some(prev)) = (cur, prev) else {
+        let mut level = Level {
+            title: "Hypothesis".into(),
+            ..Level::default()
+        };
+        level.items.push(Item::new(
+            "X406",
+            "The cycles before the stop are no longer in the history: no hypothesis.".into(),
+            &[],
+        ));
+        return level;
+    };
+    hypothesis_from(&engine.symbols, trip, prev, cur)
+}
+
+/// The hypothesis level from the two cycles around the stop.
+pub fn hypothesis_from(
+    symbols: &crate::symbols::Symbols,
+    trip: &Trip,
+    prev: &CycleRecord,
+    cur: &CycleRecord,
+) -> Level {
+    let mut level = Level {
+        title: "Hypothesis".into(),
+        ..Level::default()
+    };
+    let d = delta(symbols, prev, cur);
+    for c in &trip.constraints {
+        for item in constraint_hypothesis(c, &d, prev) {
+            let (item, highlights) = item;
+            for h in highlights {
+                if !level.highlights.contains(&h) {
+                    level.highlights.push(h);
+                }
+            }
+            level.items.push(item);
+        }
+    }
+    // Suspects first, then expected actions.
+    level.items.sort_by_key(|i| match i.code {
+        "X401" | "X402" => 0,
+        "X404" | "X405" => 1,
+        _ => 2,
+    });
+    level
+}
+
+type Produced = (Item, Vec<Highlight>);
+
+fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> Vec<Produced> {
+    let mut out: Vec<Produced> = Vec::new();
+    let sensors: Vec<&str> = c
+        .literals
+        .iter()
+        .filter(|l| l.space == Space::Input)
+        .map(|l| l.name.as_str())
+        .collect();
+    let outputs: Vec<(&str, bool)> = c
+        .literals
+        .iter()
+        .filter(|l| l.space == Space::Output && !l.previous)
+        .map(|l| (l.name.as_str(), l.value))
+        .collect();
+    let observers_in: Vec<&str> = c
+        .literals
+        .iter()
+        .filter(|l| l.space == Space::Observer)
+        .map(|l| l.name.as_str())
+        .collect();
+    let outputs_changed: Vec<&(String, bool, bool)> = d
+        .outputs
+        .iter()
+        .filter(|(n, _, _)| outputs.iter().any(|(o, _)| o == n))
+        .collect();
+    let expected_text = expected_actions(&outputs, prev, &c.id);
+
+    // (a) sensors of the constraint that changed.
+    for (name, from, to) in d.inputs.iter().filter(|(n, _, _)| sensors.contains(&n.as_str())) {
+        out.push((
+            Item::new(
+                "X401",
+                format!(
+                    "{name} {} in the stopping cycle and is part of {}; the control did not make the evolution this change requires: {expected_text}.",
+                    edge(*from, *to),
+                    c.id
+                ),
+                &[
+                    ("category", "a".into()),
+                    ("constraint", c.id.clone()),
+                    ("sensor", name.clone()),
+                    ("from", u8::from(*from).to_string()),
+                    ("to", u8::from(*to).to_string()),
+                ],
+            ),
+            vec![Highlight {
+                element: name.clone(),
+                mark: Mark::Suspect,
+            }],
+        ));
+    }
+    // (b) sensors outside the constraint that changed with an actuator of it.
+    if !outputs_changed.is_empty() {
+        let acts: Vec<String> = outputs_changed
+            .iter()
+            .map(|(n, f, t)| format!("{n} {}", edge(*f, *t)))
+            .collect();
+        let outside: Vec<&(String, bool, bool)> = d
+            .inputs
+            .iter()
+            .filter(|(n, _, _)| !sensors.contains(&n.as_str()))
+            .collect();
+        for (name, from, to) in &outside {
+            out.push((
+                Item::new(
+                    "X402",
+                    format!(
+                        "{name} {} in the same cycle as {}; {name} is not part of {}: a receptivity or an output equation using {name} may have driven the actuator.",
+                        edge(*from, *to),
+                        acts.join(", "),
+                        c.id
+                    ),
+                    &[
+                        ("category", "b".into()),
+                        ("constraint", c.id.clone()),
+                        ("sensor", name.clone()),
+                        ("actuators", acts.join(",")),
+                    ],
+                ),
+                vec![Highlight {
+                    element: name.clone(),
+                    mark: Mark::Suspect,
+                }],
+            ));
+        }
+        // (d) no input change at all.
+        if d.inputs.is_empty() && d.observers.is_empty() {
+            out.push((
+                Item::new(
+                    "X404",
+                    format!(
+                        "{} while no input changed: an internal timer or memory of the program probably drove it.",
+                        acts.join(", ")
+                    ),
+                    &[
+                        ("category", "d".into()),
+                        ("constraint", c.id.clone()),
+                        ("actuators", acts.join(",")),
+                    ],
+                ),
+                outputs_changed
+                    .iter()
+                    .map(|(n, _, _)| Highlight {
+                        element: n.clone(),
+                        mark: Mark::Suspect,
+                    })
+                    .collect(),
+            ));
+        }
+    }
+    if !d.observers.is_empty() && d.inputs.is_empty() {
+        out.push((
+            Item::new(
+                "X405",
+                format!(
+                    "Observer {} changed without a direct input change; {} became true through it.",
+                    d.observers.join(", "),
+                    c.id
+                ),
+                &[("category", "e".into()), ("observers", d.observers.join(","))],
+            ),
+            observers_in
+                .iter()
+                .map(|o| Highlight {
+                    element: (*o).to_string(),
+                    mark: Mark::Suspect,
+                })
+                .collect(),
+        ));
+    }
+    // (c) expected actions.
+    let mut highlights = Vec::new();
+    for (name, value) in &outputs {
+        if outputs.len() == 1 {
+            highlights.push(Highlight {
+                element: (*name).to_string(),
+                mark: Mark::Expected { value: !value },
+            });
+        }
+    }
+    out.push((
+        Item::new(
+            "X403",
+            format!("Expected from the control: {expected_text}."),
+            &[
+                ("category", "c".into()),
+                ("constraint", c.id.clone()),
+                (
+                    "expected",
+                    outputs
+                        .iter()
+                        .map(|(n, v)| format!("{n}={}", u8::from(!v)))
+                        .collect::<Vec<_>>()
+                        .join(if outputs.len() == 1 { "" } else { " or " }),
+                ),
+            ],
+        ),
+        highlights,
+    ));
+    out
+}
+
+/// "A4 should have stayed ON", or for several outputs the alternatives.
+fn expected_actions(outputs: &[(&str, bool)], prev: &CycleRecord, _id: &str) -> String {
+    let _ = prev;
+    let phrase = |(name, value): &(&str, bool)| {
+        let want = if *value { "OFF" } else { "ON" };
+        format!("{name} should have been {want}")
+    };
+    match outputs {
+        [one] => phrase(one),
+        many => format!(
+            "one of: {}",
+            many.iter().map(phrase).collect::<Vec<_>>().join(", or ")
+        ),
+    }
+}
+
+/// Number of situations the generator distinguishes for a constraint set: for each
+/// product term, every subset of its sensors changing in the stopping cycle, every
+/// subset of its actuators changing, and whether a sensor outside it changes.
+/// (The paper studied 122 cases by hand for the sorting station.)
+pub fn case_count(set: &ConstraintSet) -> u64 {
+    set.constraints
+        .iter()
+        .flat_map(|c| &c.dnf)
+        .map(|term| {
+            let mut sensors: Vec<u32> = term
+                .iter()
+                .filter(|l| l.var.space == Space::Input || l.var.space == Space::Observer)
+                .map(|l| l.var.index + if l.var.space == Space::Observer { 1 << 20 } else { 0 })
+                .collect();
+            sensors.sort_unstable();
+            sensors.dedup();
+            let outputs = term
+                .iter()
+                .filter(|l| l.var.space == Space::Output && !l.var.prev)
+                .count();
+            1u64 << (sensors.len() + outputs + 1).min(40)
+        })
+        .sum()
+}

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Runs every test of the workspace on a fresh Debian machine: installs what is missing
+# (Debian packages, the pinned Python venv of the test peers), then runs the tests.
+# Usage: scripts/test.sh [extra cargo test args]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$(pwd)
+
+# 1. Debian packages the tests use as independent peers or renderers.
+apt_packages=()
+need() { dpkg -s "$1" >/dev/null 2>&1 || apt_packages+=("$1"); }
+need python3-venv
+if [ ${#apt_packages[@]} -gt 0 ]; then
+  echo "scripts/test.sh: installing Debian packages: ${apt_packages[*]}"
+  if [ "$(id -u)" -eq 0 ]; then SUDO=""; else SUDO="sudo"; fi
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${apt_packages[@]}" >/dev/null
+fi
+
+# 2. The pinned Python venv (test peers such as blark and pymodbus).
+venv="${VIGIE_VENV:-$root/.venv}"
+if [ -s requirements-test.txt ]; then
+  stamp="$venv/.requirements-test.txt"
+  if [ ! -x "$venv/bin/python" ] || ! cmp -s requirements-test.txt "$stamp"; then
+    echo "scripts/test.sh: creating the test venv in $venv"
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install -q --disable-pip-version-check -r requirements-test.txt
+    cp requirements-test.txt "$stamp"
+  fi
+fi
+export VIGIE_VENV="$venv"
+
+# 3. The tests.
+cargo test --workspace --locked "$@"
