@@ -11,6 +11,7 @@
 //!
 //! See `ARCHITECTURE.md` at the repository root for the data flow and the invariants.
 
+pub mod alarms;
 pub mod bits;
 pub mod bundle;
 pub mod constraints;
