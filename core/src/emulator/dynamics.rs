@@ -121,6 +121,7 @@ impl Emulator {
         }
         self.pos = pos;
         for (p, part) in self.parts.iter().enumerate() {
+            self.near[p] = 1 << p;
             for e in 0..2 {
                 let k = &part.ends[e];
                 self.links[p][e] = k.fixed.or(match pos {
@@ -128,6 +129,9 @@ impl Emulator {
                     TablePos::Unload => k.at_unload,
                     TablePos::Other => None,
                 });
+                if let Some(q) = self.links[p][e] {
+                    self.near[p] |= 1 << q.part;
+                }
             }
         }
     }
@@ -199,9 +203,10 @@ impl Emulator {
                     continue;
                 }
                 let bi = self.bodies[i];
+                let near = self.near[bi.part as usize];
                 for j in 0..n {
                     let bj = &self.bodies[j];
-                    if i == j {
+                    if i == j || near >> bj.part & 1 == 0 {
                         continue;
                     }
                     let Some((cj, _)) = self.map_into(bj.part, self.scratch[j].1, bi.part) else {

@@ -298,6 +298,9 @@ impl Layout {
         if self.sensors.len() > 64 {
             err("sensors", "at most 64 sensors".into());
         }
+        if self.conveyors.len() > 60 {
+            err("conveyors", "at most 60 conveyors".into());
+        }
         if !self.conveyors.iter().any(|c| c.id == self.source.conveyor) {
             err(
                 &self.source.conveyor,

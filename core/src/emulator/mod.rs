@@ -97,6 +97,8 @@ pub struct Emulator {
     pos: TablePos,
     links: Vec<[Option<model::Link>; 2]>,
     vel: Vec<i64>,
+    /// Per part, a bit per part joined to it (itself included).
+    near: Vec<u64>,
     source_part: Option<usize>,
     bodies: Vec<Body>,
     scratch: Vec<(i64, i64, i64)>,
@@ -208,6 +210,7 @@ impl Emulator {
             pos: TablePos::Load,
             links: vec![[None; 2]; n_parts],
             vel: vec![0; n_parts],
+            near: vec![0; n_parts],
             source_part: layout
                 .conveyors
                 .iter()
