@@ -8,6 +8,7 @@
 //! - [`filter`]: constraint evaluation and the fallback with priority to zero.
 //! - [`engine`]: one PLC cycle, one function; [`history`]: the recorder.
 //! - [`trace`]: the per-cycle CSV trace format.
+//! - [`emulator`]: the deterministic plant emulator of the sorting station.
 //!
 //! See `ARCHITECTURE.md` at the repository root for the data flow and the invariants.
 
@@ -16,6 +17,7 @@ pub mod bits;
 pub mod bundle;
 pub mod constraints;
 pub mod diag;
+pub mod emulator;
 pub mod engine;
 pub mod explain;
 pub mod expr;
