@@ -14,6 +14,7 @@
 pub mod bits;
 pub mod bundle;
 pub mod constraints;
+pub mod control;
 pub mod diag;
 pub mod engine;
 pub mod expr;
