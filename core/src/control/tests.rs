@@ -471,3 +471,74 @@ fn control_scan_speed() {
     let ns = start.elapsed().as_nanos() as f64 / n as f64;
     println!("{ns:.1} ns per scan");
 }
+
+/// Sensor script of one box (no assertion), with a 2 s rotation.
+fn script(right: bool) -> Vec<Vec<&'static str>> {
+    let (exit, far) = if right { ("C7", "C9") } else { ("C8", "C10") };
+    let mut s: Vec<Vec<&'static str>> = vec![
+        vec!["C4"], vec!["C0", "C4"], vec!["C0", "C1", "C4"], vec!["C1", "C4"], vec!["C4"],
+        vec!["C3", "C4"], vec!["C4"], vec!["C4"], vec!["C4", "C6"], vec!["C4", "C6"],
+    ];
+    s.extend(std::iter::repeat_n(vec!["C6"], 200));
+    s.push(vec!["C5", "C6"]);
+    if right {
+        s.push(vec!["C5"]);
+    } else {
+        s.push(vec!["C5", "C6", exit]);
+    }
+    s.extend([vec!["C5", exit], vec!["C5", exit], vec!["C5", far]]);
+    s.extend(std::iter::repeat_n(vec![], 200));
+    s.push(vec!["C4"]);
+    s
+}
+
+#[test]
+fn control_variants_trip_their_constraint_on_scripted_boxes() {
+    let lib = ErrorLibrary::load(&station().join("programs/errors.ron"), &plant()).unwrap();
+    // E13 and E14 need the plant's reaction (the next box's timing), not a script.
+    let mut checked = 0;
+    for v in lib.variants.iter().filter(|v| !["E13", "E14"].contains(&v.def.id.as_str())) {
+        let mut c = Closed::new(ProgramRuntime::new(Arc::new(v.compiled.clone())));
+        c.rt.press("START").unwrap();
+        for s in script(true).iter().chain(&script(false)) {
+            c.scan(s);
+        }
+        let first = c.engine.trips.first().map(|t| {
+            t.constraints.iter().map(|k| k.id.clone()).collect::<Vec<_>>()
+        });
+        let first = first.unwrap_or_default();
+        assert!(first.contains(&v.def.expected_constraint), "{}: expected {}, first violation {first:?}", v.def.id, v.def.expected_constraint);
+        checked += 1;
+    }
+    assert!(checked >= 12);
+    // And the reference on the same script: nothing.
+    let mut c = Closed::new(reference());
+    c.rt.press("START").unwrap();
+    for s in script(true).iter().chain(&script(false)) {
+        c.scan(s);
+    }
+    assert!(c.violations().is_empty(), "{:?}", c.violations());
+}
+
+#[test]
+fn control_shipped_p67_blocks_left_evacuation() {
+    // Documents the observer issue reported to the lead: with `set: "FE(C6)"`, a box
+    // leaving to the LEFT sets P67 and nothing resets it, so releasing A4 (needed to
+    // return the table) violates CSs11. Remove this test once observers.ron is fixed.
+    let (bundle, _) = PlantBundle::load(&station()).unwrap();
+    let mut engine = Engine::new(&bundle, FilterMode::ReportOnly, 4);
+    let mut rt = reference();
+    rt.press("START").unwrap();
+    let p = plant();
+    let mut t = 0;
+    for s in script(true).iter().chain(&script(false)) {
+        let mut bits = Bits::zeros(p.inputs.len());
+        for i in s {
+            bits.set(p.input(i).unwrap(), true);
+        }
+        t += 10;
+        engine.cycle(Millis(t), &bits, &mut rt);
+    }
+    let ids: Vec<&str> = engine.trips.iter().flat_map(|t| t.constraints.iter().map(|c| c.id.as_str())).collect();
+    assert_eq!(ids, vec!["CSs11"]);
+}
