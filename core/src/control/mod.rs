@@ -15,6 +15,7 @@
 
 pub mod library;
 pub mod mutation;
+mod packed;
 pub mod program;
 pub mod runtime;
 

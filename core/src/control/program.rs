@@ -4,6 +4,7 @@ use crate::diag::{Location, Problem, ron_problem};
 use crate::expr::{self, Dnf, Span};
 use crate::plant::{Plant, is_valid_name};
 use crate::symbols::{Space, Symbols};
+use super::packed::{Cond, Conds, Layout};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -245,6 +246,8 @@ pub(crate) struct TransitionInfo {
     pub(crate) from: Vec<u16>,
     pub(crate) to: Vec<u16>,
     pub(crate) condition: Dnf,
+    pub(crate) cond: Cond,
+    pub(crate) enable: Cond,
 }
 
 /// A compiled action.
@@ -269,6 +272,7 @@ pub(crate) struct TimerInfo {
 pub(crate) struct EquationInfo {
     pub(crate) slot: usize,
     pub(crate) dnf: Dnf,
+    pub(crate) cond: Cond,
 }
 
 /// A program resolved against a plant: names are variables, expressions sums of products.
@@ -287,6 +291,8 @@ pub struct CompiledProgram {
     pub(crate) memory_aux: Vec<u32>,
     pub(crate) panel_aux: Vec<u32>,
     pub(crate) equations: Vec<EquationInfo>,
+    pub(crate) layout: Layout,
+    pub(crate) conds: Conds,
 }
 
 /// Largest number of steps or transitions of a program (indices are `u16`).
@@ -490,6 +496,8 @@ impl CompiledProgram {
                             from,
                             to,
                             condition,
+                            cond: Cond::default(),
+                            enable: Cond::default(),
                         });
                     }
                 }
@@ -516,13 +524,30 @@ impl CompiledProgram {
                 ));
             }
             if let Some(dnf) = compile_expr(text, start, &what, &mut problems) {
-                equations.push(EquationInfo { slot, dnf });
+                equations.push(EquationInfo { slot, dnf, cond: Cond::default() });
             }
         }
         if !problems.is_empty() {
             return Err(problems);
         }
+        let layout = Layout::new(symbols.sizes());
+        let mut conds = Conds::default();
+        for t in &mut transitions {
+            t.cond = conds.add(&t.condition, &layout);
+            let vars: Vec<(usize, u64)> = t
+                .from
+                .iter()
+                .filter_map(|&s| steps.get(s as usize))
+                .map(|st| layout.locate(Space::Aux, st.aux as usize, false))
+                .collect();
+            t.enable = conds.add_all(&vars);
+        }
+        for e in &mut equations {
+            e.cond = conds.add(&e.dnf, &layout);
+        }
         Ok(Self {
+            layout,
+            conds,
             program: program.clone(),
             symbols,
             n_outputs,

@@ -3,7 +3,6 @@
 use super::program::{CompiledProgram, Qualifier};
 use crate::bits::Bits;
 use crate::engine::Control;
-use crate::expr::eval_dnf;
 use crate::frame::Frame;
 use crate::symbols::Space;
 use crate::time::Millis;
@@ -85,7 +84,7 @@ pub struct UnknownPanel(pub String);
 #[derive(Clone, Debug)]
 pub struct ProgramRuntime {
     program: Arc<CompiledProgram>,
-    frame: Frame,
+    state: Vec<u64>,
     activated_at: Vec<Millis>,
     just_activated: Bits,
     stored: Bits,
@@ -103,18 +102,12 @@ pub struct ProgramRuntime {
 impl ProgramRuntime {
     /// A runtime in the initial situation.
     pub fn new(program: Arc<CompiledProgram>) -> Self {
-        let sizes = [
-            program.symbols.len(Space::Input),
-            program.symbols.len(Space::Output),
-            0,
-            program.symbols.len(Space::Aux),
-        ];
         let n_slots = program.n_outputs + program.memory_aux.len();
         let n_trans = program.transitions.len();
         let n_panel = program.panel_aux.len();
         let n_steps = program.steps.len();
         let mut rt = Self {
-            frame: Frame::new(sizes),
+            state: vec![0; 2 * program.layout.half],
             activated_at: vec![Millis::ZERO; n_steps],
             just_activated: Bits::zeros(n_steps),
             stored: Bits::zeros(n_slots),
@@ -142,10 +135,10 @@ impl ProgramRuntime {
     /// Back to the initial situation: stored values, memories and history cleared,
     /// switches kept.
     pub fn reset(&mut self) {
-        self.frame.now.iter_mut().for_each(Bits::clear);
-        self.frame.prev.iter_mut().for_each(Bits::clear);
-        for s in &self.program.steps {
-            self.frame.now[Space::Aux as usize].set(s.aux as usize, s.initial);
+        self.state.iter_mut().for_each(|w| *w = 0);
+        let program = Arc::clone(&self.program);
+        for s in &program.steps {
+            self.set(Space::Aux, s.aux as usize, s.initial);
         }
         self.stored.clear();
         self.values.clear();
@@ -189,15 +182,42 @@ impl ProgramRuntime {
 
     /// The program's own frame after the last scan (inputs, outputs, and in the Aux
     /// space steps, memories, timers and panel), indexed by [`CompiledProgram::symbols`].
-    pub fn frame(&self) -> &Frame {
-        &self.frame
+    /// Built on demand.
+    pub fn frame(&self) -> Frame {
+        let sym = &self.program.symbols;
+        let mut f = Frame::new(sym.sizes());
+        for space in Space::ALL {
+            for i in 0..sym.len(space) {
+                f.now[space as usize].set(i, self.get(space, i, false));
+                f.prev[space as usize].set(i, self.get(space, i, true));
+            }
+        }
+        f
+    }
+
+    #[inline]
+    fn get(&self, space: Space, index: usize, prev: bool) -> bool {
+        let (w, m) = self.program.layout.locate(space, index, prev);
+        self.state.get(w).is_some_and(|x| x & m != 0)
+    }
+
+    #[inline]
+    fn set(&mut self, space: Space, index: usize, value: bool) {
+        let (w, m) = self.program.layout.locate(space, index, false);
+        if let Some(x) = self.state.get_mut(w) {
+            if value {
+                *x |= m;
+            } else {
+                *x &= !m;
+            }
+        }
     }
 
     /// The value after the last scan of any program name (input, output, step,
     /// memory, timer, panel input).
     pub fn value(&self, name: &str) -> Option<bool> {
         let (space, index) = self.program.symbols.lookup(name)?;
-        Some(self.frame.now[space as usize].get(index as usize))
+        Some(self.get(space, index as usize, false))
     }
 
     /// True when `step` is active.
@@ -209,7 +229,7 @@ impl ProgramRuntime {
     }
 
     fn step_active(&self, aux: u32) -> bool {
-        self.frame.now[Space::Aux as usize].get(aux as usize)
+        self.get(Space::Aux, aux as usize, false)
     }
 
     /// Ids of the active steps, in program order.
@@ -293,7 +313,7 @@ impl ProgramRuntime {
             });
         }
         for (k, eq) in p.equations.iter().enumerate() {
-            if eq.slot == slot && eval_dnf(&eq.dnf, &self.frame) {
+            if eq.slot == slot && p.conds.eval(eq.cond, &self.state) {
                 out.push(Driver::Equation {
                     expression: p.program.equations.get(k).map(|e| e.1.clone()).unwrap_or_default(),
                 });
@@ -315,66 +335,90 @@ impl ProgramRuntime {
     }
 
     fn update_timers(&mut self) {
-        let aux = Space::Aux as usize;
-        for t in &self.program.timers {
+        let program = &*self.program;
+        for t in &program.timers {
             let s = t.step as usize;
-            let active = self.program.steps.get(s).is_some_and(|st| self.frame.now[aux].get(st.aux as usize));
+            let active = program.steps.get(s).is_some_and(|st| {
+                let (w, m) = program.layout.locate(Space::Aux, st.aux as usize, false);
+                self.state.get(w).is_some_and(|x| x & m != 0)
+            });
             let on = active && self.now.saturating_sub(self.activated_at[s]).0 >= t.ms;
-            self.frame.now[aux].set(t.aux as usize, on);
+            let (w, m) = program.layout.locate(Space::Aux, t.aux as usize, false);
+            if let Some(x) = self.state.get_mut(w) {
+                if on { *x |= m } else { *x &= !m }
+            }
         }
     }
 
     fn run_scan(&mut self, now: Millis, engine: &Frame) {
-        let aux = Space::Aux as usize;
         self.now = now;
         self.scans += 1;
-        self.frame.shift();
-        self.frame.now[Space::Input as usize].copy_from(engine.now(Space::Input));
-        self.frame.prev[Space::Input as usize].copy_from(engine.prev(Space::Input));
-        for (i, &a) in self.program.panel_aux.iter().enumerate() {
+        let program = Arc::clone(&self.program);
+        let p = &*program;
+        let half = p.layout.half;
+        // Shift: values at t become values at t-1.
+        self.state.copy_within(0..half, half);
+        let n_in = p.symbols.len(Space::Input);
+        for i in 0..n_in {
+            let (w, m) = p.layout.locate(Space::Input, i, false);
+            let now_v = engine.now(Space::Input).get(i);
+            let prev_v = engine.prev(Space::Input).get(i);
+            if let Some(x) = self.state.get_mut(w) {
+                if now_v { *x |= m } else { *x &= !m }
+            }
+            if let Some(x) = self.state.get_mut(w + half) {
+                if prev_v { *x |= m } else { *x &= !m }
+            }
+        }
+        for (i, &a) in p.panel_aux.iter().enumerate() {
             let v = self.pulses.get(i) || self.switches.get(i);
-            self.frame.now[aux].set(a as usize, v);
+            self.set(Space::Aux, a as usize, v);
         }
         self.pulses.clear();
         self.just_activated.clear();
         if self.scans == 1 {
-            for (i, s) in self.program.steps.iter().enumerate() {
-                if self.frame.now[aux].get(s.aux as usize) {
+            for (i, s) in p.steps.iter().enumerate() {
+                if self.get(Space::Aux, s.aux as usize, false) {
                     self.activated_at[i] = now;
                     self.just_activated.set(i, true);
                 }
             }
         }
-        self.update_timers();
+        if !p.timers.is_empty() {
+            self.update_timers();
+        }
 
         // Evaluate every enabled transition against the situation before evolution.
         self.fired.clear();
-        for (i, t) in self.program.transitions.iter().enumerate() {
-            let enabled = t
-                .from
-                .iter()
-                .all(|&s| self.frame.now[aux].get(self.program.steps[s as usize].aux as usize));
-            if enabled && eval_dnf(&t.condition, &self.frame) {
+        for (i, t) in p.transitions.iter().enumerate() {
+            if p.conds.eval(t.enable, &self.state) && p.conds.eval(t.cond, &self.state) {
                 self.fired.push(u16::try_from(i).unwrap_or(u16::MAX));
             }
         }
         // Fire them simultaneously.
         if !self.fired.is_empty() {
             for &ti in &self.fired {
-                for &s in &self.program.transitions[ti as usize].from {
-                    let a = self.program.steps[s as usize].aux as usize;
-                    self.frame.now[aux].set(a, false);
+                for &s in &p.transitions[ti as usize].from {
+                    let a = p.steps[s as usize].aux as usize;
+                    let (w, m) = p.layout.locate(Space::Aux, a, false);
+                    if let Some(x) = self.state.get_mut(w) {
+                        *x &= !m;
+                    }
                 }
             }
             for &ti in &self.fired {
-                for &s in &self.program.transitions[ti as usize].to {
-                    let a = self.program.steps[s as usize].aux as usize;
-                    let was = self.frame.prev[aux].get(a);
-                    if !self.frame.now[aux].get(a) && !was {
+                for &s in &p.transitions[ti as usize].to {
+                    let a = p.steps[s as usize].aux as usize;
+                    let (w, m) = p.layout.locate(Space::Aux, a, false);
+                    let was = self.state.get(w + half).is_some_and(|x| x & m != 0);
+                    let is = self.state.get(w).is_some_and(|x| x & m != 0);
+                    if !is && !was {
                         self.activated_at[s as usize] = now;
                         self.just_activated.set(s as usize, true);
                     }
-                    self.frame.now[aux].set(a, true);
+                    if let Some(x) = self.state.get_mut(w) {
+                        *x |= m;
+                    }
                 }
             }
             let n = self.ring.len();
@@ -387,14 +431,15 @@ impl ProgramRuntime {
                 self.ring_head = (self.ring_head + 1) % n;
                 self.ring_len = (self.ring_len + 1).min(n);
             }
+            if !p.timers.is_empty() {
+                self.update_timers();
+            }
         }
-        self.update_timers();
 
         // Actions of the new situation.
-        let p = &*self.program;
         for pass in [Qualifier::S, Qualifier::R] {
             for a in p.actions.iter().filter(|a| a.qualifier == pass) {
-                if self.frame.now[aux].get(p.steps[a.step as usize].aux as usize) {
+                if self.get(Space::Aux, p.steps[a.step as usize].aux as usize, false) {
                     self.stored.set(a.slot, pass == Qualifier::S);
                 }
             }
@@ -405,24 +450,26 @@ impl ProgramRuntime {
                 continue;
             }
             let s = a.step as usize;
-            if self.frame.now[aux].get(p.steps[s].aux as usize) && self.action_true(s, a.qualifier) {
+            if self.get(Space::Aux, p.steps[s].aux as usize, false) && self.action_true(s, a.qualifier) {
                 self.values.set(a.slot, true);
             }
         }
         let n_out = p.n_outputs;
         for k in 0..n_out {
-            self.frame.now[Space::Output as usize].set(k, self.values.get(k));
+            let v = self.values.get(k);
+            self.set(Space::Output, k, v);
         }
         for (m, &a) in p.memory_aux.iter().enumerate() {
-            self.frame.now[aux].set(a as usize, self.values.get(n_out + m));
+            let v = self.values.get(n_out + m);
+            self.set(Space::Aux, a as usize, v);
         }
         // Equations, top-down.
         for eq in &p.equations {
-            let v = self.values.get(eq.slot) || eval_dnf(&eq.dnf, &self.frame);
+            let v = self.values.get(eq.slot) || p.conds.eval(eq.cond, &self.state);
             if eq.slot < n_out {
-                self.frame.now[Space::Output as usize].set(eq.slot, v);
+                self.set(Space::Output, eq.slot, v);
             } else if let Some(&a) = p.memory_aux.get(eq.slot - n_out) {
-                self.frame.now[aux].set(a as usize, v);
+                self.set(Space::Aux, a as usize, v);
             }
         }
     }
@@ -431,6 +478,12 @@ impl ProgramRuntime {
 impl Control for ProgramRuntime {
     fn scan(&mut self, now: Millis, frame: &Frame, outputs: &mut Bits) {
         self.run_scan(now, frame);
-        outputs.copy_from(self.frame.now(Space::Output));
+        let n_out = self.program.n_outputs;
+        if outputs.len() != n_out {
+            *outputs = Bits::zeros(n_out);
+        }
+        for k in 0..n_out {
+            outputs.set(k, self.get(Space::Output, k, false));
+        }
     }
 }
