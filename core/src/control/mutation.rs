@@ -233,10 +233,8 @@ fn find_operand(e: &Expr, target: usize, j: usize, k: &mut usize, found: &mut St
         Expr::And(v) | Expr::Or(v) => {
             let hit = *k == target;
             *k += 1;
-            if hit {
-                if let Some(x) = v.get(j) {
-                    *found = render(x);
-                }
+            if let Some(x) = v.get(j).filter(|_| hit) {
+                *found = render(x);
             }
             v.iter().for_each(|x| find_operand(x, target, j, k, found));
         }

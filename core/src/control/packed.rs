@@ -16,12 +16,13 @@ impl Layout {
     pub(crate) fn new(sizes: [usize; 4]) -> Self {
         let mut off = [[0; 4]; 2];
         let mut at = 0;
-        for s in 0..4 {
-            off[0][s] = at;
-            at += sizes[s].div_ceil(64);
+        for (o, size) in off[0].iter_mut().zip(sizes) {
+            *o = at;
+            at += size.div_ceil(64);
         }
-        for s in 0..4 {
-            off[1][s] = off[0][s] + at;
+        let now = off[0];
+        for (o, n) in off[1].iter_mut().zip(now) {
+            *o = n + at;
         }
         Self { off, half: at }
     }

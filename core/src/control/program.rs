@@ -489,17 +489,16 @@ impl CompiledProgram {
                 };
                 let from = ends(&t.from, "upstream", &mut problems);
                 let to = ends(&t.to, "downstream", &mut problems);
-                if let Some(condition) = compile_expr(&t.condition, origin.condition_start(&t.id), &what, &mut problems) {
-                    if transitions.len() < MAX_ELEMENTS {
-                        transitions.push(TransitionInfo {
-                            id: t.id.clone(),
-                            from,
-                            to,
-                            condition,
-                            cond: Cond::default(),
-                            enable: Cond::default(),
-                        });
-                    }
+                let condition = compile_expr(&t.condition, origin.condition_start(&t.id), &what, &mut problems);
+                if let Some(condition) = condition.filter(|_| transitions.len() < MAX_ELEMENTS) {
+                    transitions.push(TransitionInfo {
+                        id: t.id.clone(),
+                        from,
+                        to,
+                        condition,
+                        cond: Cond::default(),
+                        enable: Cond::default(),
+                    });
                 }
             }
         }
