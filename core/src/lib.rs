@@ -27,6 +27,7 @@ pub mod frame;
 pub mod history;
 pub mod observers;
 pub mod plant;
+pub mod sim;
 pub mod symbols;
 pub mod synthetic;
 pub mod time;

@@ -3,6 +3,7 @@
 mod bench;
 mod check;
 mod filter;
+mod run;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -46,6 +47,20 @@ pub(crate) enum Command {
         #[arg(long)]
         explain: bool,
     },
+    /// Run a scenario (emulator + control program + filter).
+    Run {
+        /// The scenario file (RON).
+        scenario: PathBuf,
+        /// Run without the console, as fast as possible, and print the JSON report.
+        #[arg(long)]
+        headless: bool,
+        /// Write the per-cycle trace (the CSV format `vigie filter` reads).
+        #[arg(long)]
+        trace: Option<PathBuf>,
+        /// Leave `wall_ms` out of the report, so that it is byte-identical across runs.
+        #[arg(long)]
+        no_timing: bool,
+    },
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -65,6 +80,18 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             explain,
         }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
+        Some(Command::Run {
+            scenario,
+            headless,
+            trace,
+            no_timing,
+        }) => {
+            if headless {
+                run::run(&scenario, trace.as_deref(), !no_timing)
+            } else {
+                anyhow::bail!("the console is not built yet: use `vigie run SCENARIO --headless`")
+            }
+        }
         None => {
             use clap::CommandFactory as _;
             Cli::command().print_help()?;

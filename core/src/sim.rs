@@ -1,0 +1,662 @@
+//! The closed loop in emulator mode and the scenario runner: the plant emulator (the
+//! "partie opérative"), the GRAFCET runtime (the "partie commande") and the engine
+//! (observers, filter, recorder), driven by a scenario file.
+//!
+//! One PLC cycle of [`Simulation::cycle`]: the operator actions due are applied, the
+//! engine runs one cycle on the emulator's sensors with the program as control, the
+//! emulator runs one cycle period with the applied outputs, and the events (trips,
+//! hazards, resets) become alarms and journal entries. A trip is explained at once, with
+//! the projection computed on clones of the emulator and of the program.
+
+use crate::alarms::{AlarmKind, AlarmList};
+use crate::bits::Bits;
+use crate::bundle::PlantBundle;
+use crate::control::{CompiledProgram, ErrorLibrary, ProgramRuntime};
+use crate::diag::{Location, Problem, ron_problem};
+use crate::emulator::{ArrivalPlan, BoxView, Emulator, FaultSpec, Hazard, Layout};
+use crate::engine::{Control as _, Engine, Event, FilterMode};
+use crate::explain::{self, Explanation, Highlight, Item, Mark};
+use crate::frame::Frame;
+use crate::symbols::Space;
+use crate::time::Millis;
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Which control program a scenario runs.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ProgramChoice {
+    /// `programs/reference.ron` of the plant.
+    Reference,
+    /// A variant of the control-error library (`programs/errors.ron`), by id.
+    Error(String),
+    /// A program file, relative to the scenario file.
+    File(String),
+}
+
+/// An operator action.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum OperatorAction {
+    /// Press the START button.
+    Start,
+    /// Press the STOP button.
+    Stop,
+    /// Reset the filter after a trip.
+    Reset,
+    /// Press a panel button of the program.
+    Press(String),
+    /// Set a panel switch of the program.
+    Switch(String, bool),
+    /// Change the filter mode.
+    Filter(FilterMode),
+}
+
+/// An operator action at a time.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimedAction {
+    /// When, ms from the start.
+    pub at_ms: u64,
+    /// What.
+    pub action: OperatorAction,
+}
+
+fn default_cycle() -> u64 {
+    10
+}
+fn default_filter() -> FilterMode {
+    FilterMode::Enforce
+}
+fn default_plant() -> String {
+    "..".into()
+}
+fn default_projection() -> u64 {
+    10_000
+}
+
+/// A scenario file (`layouts/<plant>/scenarios/*.ron`).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Scenario")]
+pub struct Scenario {
+    /// Display name.
+    pub name: String,
+    /// What it shows.
+    #[serde(default)]
+    pub description: String,
+    /// The plant folder, relative to the scenario file.
+    #[serde(default = "default_plant")]
+    pub plant: String,
+    /// The control program.
+    pub program: ProgramChoice,
+    /// Seed of the emulator.
+    pub seed: u64,
+    /// Box arrivals (default: the layout's plan).
+    #[serde(default)]
+    pub arrivals: Option<ArrivalPlan>,
+    /// Faults to inject.
+    #[serde(default)]
+    pub faults: Vec<FaultSpec>,
+    /// Operator actions.
+    #[serde(default)]
+    pub actions: Vec<TimedAction>,
+    /// Simulated duration, ms.
+    pub duration_ms: u64,
+    /// Filter mode.
+    #[serde(default = "default_filter")]
+    pub filter: FilterMode,
+    /// PLC cycle, ms.
+    #[serde(default = "default_cycle")]
+    pub cycle_ms: u64,
+    /// Projection horizon of the explanations, ms.
+    #[serde(default = "default_projection")]
+    pub projection_ms: u64,
+}
+
+impl Scenario {
+    /// Loads a scenario file.
+    pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            vec![Problem::error(
+                "V0002",
+                format!("cannot read {}: {e}", path.display()),
+                None,
+            )]
+        })?;
+        let s: Self = ron::from_str(&text).map_err(|e| vec![ron_problem(path, &e)])?;
+        if s.cycle_ms == 0 {
+            return Err(vec![Problem::error(
+                "V0401",
+                "cycle_ms must be at least 1",
+                Some(Location::new(path, 1, 1)),
+            )]);
+        }
+        Ok(s)
+    }
+}
+
+/// One entry of the run's journal (operator actions and events, in order).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct JournalEntry {
+    /// Simulated time.
+    pub time_ms: u64,
+    /// `trip`, `reset`, `reset_refused`, `hazard`, `operator`, `spec_error`, `fault`…
+    pub kind: String,
+    /// Text.
+    pub text: String,
+}
+
+/// The plant as drawn at one cycle, for the synoptic's replay.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlantSnapshot {
+    /// Time of the cycle.
+    pub time: Millis,
+    /// Boxes.
+    pub boxes: Vec<BoxView>,
+    /// Turntable angle.
+    pub table_angle_mdeg: i32,
+}
+
+/// The state the plant would have reached without the filter (explanation level 1).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ProjectedPlant {
+    /// Time of the projected picture (the first predicted hazard, or the horizon).
+    pub at_ms: u64,
+    /// Boxes at that time.
+    #[serde(skip)]
+    pub boxes: Vec<BoxView>,
+    /// Turntable angle at that time.
+    pub table_angle_mdeg: i32,
+    /// Hazards predicted within the horizon.
+    pub hazards: Vec<Hazard>,
+}
+
+/// Options of a simulation beyond the scenario file.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Cycles kept by the recorder (and plant snapshots for the replay).
+    pub history_cycles: usize,
+    /// Compute explanations (with projection) at each trip.
+    pub explain: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            history_cycles: 30_000,
+            explain: true,
+        }
+    }
+}
+
+/// The closed loop.
+pub struct Simulation {
+    /// Plant, observers, constraints.
+    pub bundle: PlantBundle,
+    /// The geometry.
+    pub layout: Layout,
+    /// Observers, filter, recorder.
+    pub engine: Engine,
+    /// The plant.
+    pub emulator: Emulator,
+    /// The control program.
+    pub program: ProgramRuntime,
+    /// Alarms.
+    pub alarms: AlarmList,
+    /// Explanations of the trips, by trip index.
+    pub explanations: BTreeMap<usize, Explanation>,
+    /// Projections of the trips, by trip index.
+    pub projections: BTreeMap<usize, ProjectedPlant>,
+    journal: Vec<JournalEntry>,
+    journal_taken: usize,
+    pending: VecDeque<TimedAction>,
+    cycle: Millis,
+    projection: Millis,
+    hazards_seen: usize,
+    snapshots: VecDeque<PlantSnapshot>,
+    options: Options,
+    name: String,
+}
+
+/// A serialisable summary of a run (the `vigie run --headless` report, without the
+/// wall-clock time that only the binary knows).
+#[derive(Clone, Debug, Serialize)]
+pub struct RunReport {
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed.
+    pub seed: u64,
+    /// Filter mode.
+    pub filter: FilterMode,
+    /// Trips (and reported violations), in order.
+    pub trips: Vec<TripSummary>,
+    /// Hazards, in order.
+    pub hazards: Vec<Hazard>,
+    /// Box counts.
+    pub boxes: crate::emulator::BoxStats,
+    /// Explanations of the trips, in order.
+    pub explanations: Vec<Explanation>,
+    /// Simulated time, ms.
+    pub sim_ms: u64,
+    /// PLC cycles run.
+    pub cycles: u64,
+}
+
+/// A trip in the run report.
+#[derive(Clone, Debug, Serialize)]
+pub struct TripSummary {
+    /// Time.
+    pub time_ms: u64,
+    /// Constraint ids.
+    pub constraints: Vec<String>,
+    /// The fallback vector, output id → value.
+    pub fallback: BTreeMap<String, bool>,
+    /// The full record.
+    pub record: crate::engine::Trip,
+}
+
+impl Simulation {
+    /// Builds the closed loop for `scenario` (read from `scenario_path`).
+    pub fn from_scenario(
+        scenario: &Scenario,
+        scenario_path: &Path,
+        options: Options,
+    ) -> Result<Self, Vec<Problem>> {
+        let base = scenario_path.parent().unwrap_or(Path::new("."));
+        let plant_dir = base.join(&scenario.plant);
+        let program_path: PathBuf;
+        let (bundle, problems) = PlantBundle::load(&plant_dir)?;
+        let errors: Vec<Problem> = problems.into_iter().filter(Problem::is_error).collect();
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        let program = match &scenario.program {
+            ProgramChoice::Reference => {
+                program_path = plant_dir.join("programs/reference.ron");
+                CompiledProgram::load(&program_path, &bundle.plant)?
+            }
+            ProgramChoice::Error(id) => {
+                let lib = ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &bundle.plant)?;
+                let Some(v) = lib.variants.into_iter().find(|v| &v.def.id == id) else {
+                    return Err(vec![Problem::error(
+                        "V0402",
+                        format!("no variant `{id}` in the control-error library"),
+                        Some(Location::new(scenario_path, 1, 1)),
+                    )]);
+                };
+                v.compiled
+            }
+            ProgramChoice::File(f) => {
+                program_path = base.join(f);
+                CompiledProgram::load(&program_path, &bundle.plant)?
+            }
+        };
+        let mut sim = Self::new(bundle, program, scenario.seed, options)?;
+        sim.name.clone_from(&scenario.name);
+        sim.cycle = Millis(scenario.cycle_ms);
+        sim.projection = Millis(scenario.projection_ms);
+        sim.engine.set_mode(scenario.filter);
+        if let Some(plan) = &scenario.arrivals {
+            sim.emulator.set_arrivals(plan.clone());
+        }
+        for f in &scenario.faults {
+            sim.emulator
+                .try_schedule_fault(f.clone())
+                .map_err(|p| vec![p])?;
+        }
+        let mut actions = scenario.actions.clone();
+        actions.sort_by_key(|a| a.at_ms);
+        sim.pending = actions.into();
+        Ok(sim)
+    }
+
+    /// Builds the closed loop for a loaded plant and program.
+    pub fn new(
+        bundle: PlantBundle,
+        program: CompiledProgram,
+        seed: u64,
+        options: Options,
+    ) -> Result<Self, Vec<Problem>> {
+        let layout = Layout::load(&bundle.dir.join("layout.ron"))?;
+        let emulator = Emulator::new(&layout, &bundle.plant, seed).map_err(|p| vec![p])?;
+        let engine = Engine::new(&bundle, FilterMode::Enforce, options.history_cycles);
+        Ok(Self {
+            program: ProgramRuntime::new(Arc::new(program)),
+            bundle,
+            layout,
+            engine,
+            emulator,
+            alarms: AlarmList::new(),
+            explanations: BTreeMap::new(),
+            projections: BTreeMap::new(),
+            journal: Vec::new(),
+            journal_taken: 0,
+            pending: VecDeque::new(),
+            cycle: Millis(10),
+            projection: Millis(10_000),
+            hazards_seen: 0,
+            snapshots: VecDeque::new(),
+            options,
+            name: String::new(),
+        })
+    }
+
+    /// Simulated time.
+    pub fn now(&self) -> Millis {
+        self.emulator.now()
+    }
+
+    /// The PLC cycle period.
+    pub fn cycle_period(&self) -> Millis {
+        self.cycle
+    }
+
+    /// Replaces the control program (maintenance mode: after a correction) and restarts
+    /// it from its initial steps.
+    pub fn replace_program(&mut self, program: CompiledProgram) {
+        self.program = ProgramRuntime::new(Arc::new(program));
+        self.log("operator", "control program replaced and restarted".into());
+    }
+
+    /// Applies an operator action now; the result is journaled.
+    pub fn act(&mut self, action: &OperatorAction) -> Result<(), String> {
+        let now = self.now();
+        let result = match action {
+            OperatorAction::Start => self.program.press("START").map_err(|e| e.to_string()),
+            OperatorAction::Stop => self.program.press("STOP").map_err(|e| e.to_string()),
+            OperatorAction::Press(b) => self.program.press(b).map_err(|e| e.to_string()),
+            OperatorAction::Switch(s, v) => {
+                self.program.set_switch(s, *v).map_err(|e| e.to_string())
+            }
+            OperatorAction::Filter(mode) => {
+                self.engine.set_mode(*mode);
+                Ok(())
+            }
+            OperatorAction::Reset => self.engine.reset().map_err(|e| e.to_string()),
+        };
+        match (&result, action) {
+            (Ok(()), OperatorAction::Reset) => {
+                for key in self.trip_keys() {
+                    self.alarms.clear(now, &key);
+                }
+                self.log("reset", "operator reset of the filter".into());
+            }
+            (Err(e), OperatorAction::Reset) => self.log("reset_refused", e.clone()),
+            (Ok(()), a) => self.log("operator", format!("{a:?}")),
+            (Err(e), a) => self.log("operator_refused", format!("{a:?}: {e}")),
+        }
+        result
+    }
+
+    fn trip_keys(&self) -> Vec<String> {
+        self.alarms
+            .all()
+            .iter()
+            .filter(|a| a.kind == AlarmKind::FilterTrip && a.cleared.is_none())
+            .map(|a| a.key.clone())
+            .collect()
+    }
+
+    /// Injects a fault now (training).
+    pub fn inject(&mut self, fault: FaultSpec) -> Result<(), Problem> {
+        let text = format!("{:?}", fault.fault);
+        self.emulator.try_schedule_fault(fault)?;
+        self.log("fault", format!("fault injected: {text}"));
+        Ok(())
+    }
+
+    fn log(&mut self, kind: &str, text: String) {
+        self.journal.push(JournalEntry {
+            time_ms: self.now().0,
+            kind: kind.to_string(),
+            text,
+        });
+    }
+
+    /// Journal entries not yet taken (the app appends them to disk as they come).
+    pub fn take_journal(&mut self) -> &[JournalEntry] {
+        let from = self.journal_taken;
+        self.journal_taken = self.journal.len();
+        &self.journal[from..]
+    }
+
+    /// The whole journal of the run.
+    pub fn journal(&self) -> &[JournalEntry] {
+        &self.journal
+    }
+
+    /// Plant snapshots kept for the replay, oldest first.
+    pub fn snapshots(&self) -> &VecDeque<PlantSnapshot> {
+        &self.snapshots
+    }
+
+    /// Runs one PLC cycle.
+    pub fn cycle(&mut self) {
+        let now = self.now();
+        while self.pending.front().is_some_and(|a| a.at_ms <= now.0) {
+            if let Some(a) = self.pending.pop_front() {
+                let _ = self.act(&a.action);
+            }
+        }
+        let emulator_before = self.emulator.clone();
+        let program_before = self.program.clone();
+        let applied = self
+            .engine
+            .cycle(now, self.emulator.sensors(), &mut self.program)
+            .clone();
+        let events = self.engine.drain_events();
+        let mut tripped = None;
+        for e in &events {
+            match e {
+                Event::Trip { index } | Event::Violation { index } => {
+                    let ids: Vec<String> = self.engine.trips[*index]
+                        .constraints
+                        .iter()
+                        .map(|c| c.id.clone())
+                        .collect();
+                    let key = format!("trip:{}", ids.join("+"));
+                    self.alarms.raise(
+                        now,
+                        &key,
+                        AlarmKind::FilterTrip,
+                        format!("Safety filter: {} at {} ms", ids.join(", "), now.0),
+                    );
+                    self.log("trip", format!("filter tripped on {}", ids.join(", ")));
+                    tripped = Some(*index);
+                }
+                Event::SpecificationError { message } => {
+                    self.alarms
+                        .raise(now, "spec", AlarmKind::Specification, message.clone());
+                    self.log("spec_error", message.clone());
+                }
+                Event::Reset => {}
+            }
+        }
+        if let (Some(index), true) = (tripped, self.options.explain) {
+            self.explain_trip(index, emulator_before, program_before);
+        }
+        self.emulator.step(self.cycle, &applied);
+        let hazards = self.emulator.hazards();
+        if hazards.len() > self.hazards_seen {
+            let new: Vec<Hazard> = hazards[self.hazards_seen..].to_vec();
+            self.hazards_seen = hazards.len();
+            for h in new {
+                let text = format!("{:?} of box {} at {}", h.kind, h.box_id, h.place);
+                self.alarms.raise(
+                    Millis(h.time_ms),
+                    &format!("hazard:{}:{:?}", h.box_id, h.kind),
+                    AlarmKind::Hazard,
+                    text.clone(),
+                );
+                self.log("hazard", text);
+            }
+        }
+        if self.snapshots.len() >= self.options.history_cycles.max(1) {
+            self.snapshots.pop_front();
+        }
+        self.snapshots.push_back(PlantSnapshot {
+            time: now,
+            boxes: self.emulator.boxes().to_vec(),
+            table_angle_mdeg: self.emulator.table_angle_mdeg(),
+        });
+    }
+
+    /// Runs until the simulated time reaches `end`.
+    pub fn run_until(&mut self, end: Millis) {
+        while self.now() < end {
+            self.cycle();
+        }
+    }
+
+    fn explain_trip(&mut self, index: usize, emulator: Emulator, program: ProgramRuntime) {
+        let Some(mut ex) = explain::explain(&self.engine, index) else {
+            return;
+        };
+        let projected = self.project(index, emulator, program);
+        fill_projection(&mut ex, &projected, &self.bundle);
+        self.projections.insert(index, projected);
+        self.explanations.insert(index, ex);
+    }
+
+    /// Level 1: runs clones of the emulator (as it was at the start of the tripping cycle)
+    /// and of the program (as it was before its tripping scan) forward without the
+    /// filter, for the projection horizon.
+    fn project(&self, index: usize, mut emu: Emulator, mut program: ProgramRuntime) -> ProjectedPlant {
+        let start = emu.now();
+        let known = emu.hazards().len();
+        let symbols = &self.engine.symbols;
+        let mut frame = Frame::new(symbols.sizes());
+        frame.prev[Space::Input as usize].copy_from(self.engine.frame().prev(Space::Input));
+        let mut outputs = Bits::zeros(self.bundle.plant.outputs.len());
+        let end = start + self.projection;
+        let mut first_hazard_picture: Option<(Millis, Vec<BoxView>, i32)> = None;
+        let _ = index;
+        while emu.now() < end {
+            let now = emu.now();
+            if now > start {
+                frame.shift();
+            }
+            frame.now_mut(Space::Input).copy_from(emu.sensors());
+            program.scan(now, &frame, &mut outputs);
+            emu.step(self.cycle, &outputs);
+            if first_hazard_picture.is_none() && emu.hazards().len() > known {
+                // Let the consequence show for a short while after the hazard.
+                let mut show = emu.clone();
+                let mut f = frame.clone();
+                let mut p = program.clone();
+                let mut o = outputs.clone();
+                for _ in 0..50 {
+                    let t = show.now();
+                    f.shift();
+                    f.now_mut(Space::Input).copy_from(show.sensors());
+                    p.scan(t, &f, &mut o);
+                    show.step(self.cycle, &o);
+                }
+                first_hazard_picture =
+                    Some((show.now(), show.boxes().to_vec(), show.table_angle_mdeg()));
+                break;
+            }
+        }
+        let hazards = emu.hazards()[known..].to_vec();
+        let (at, boxes, angle) = first_hazard_picture
+            .unwrap_or_else(|| (emu.now(), emu.boxes().to_vec(), emu.table_angle_mdeg()));
+        ProjectedPlant {
+            at_ms: at.0,
+            boxes,
+            table_angle_mdeg: angle,
+            hazards,
+        }
+    }
+
+    /// The report of the run so far.
+    pub fn report(&self, seed: u64) -> RunReport {
+        RunReport {
+            scenario: self.name.clone(),
+            seed,
+            filter: self.engine.mode(),
+            trips: self
+                .engine
+                .trips
+                .iter()
+                .map(|t| TripSummary {
+                    time_ms: t.time_ms,
+                    constraints: t.constraints.iter().map(|c| c.id.clone()).collect(),
+                    fallback: t.fallback.iter().cloned().collect(),
+                    record: t.clone(),
+                })
+                .collect(),
+            hazards: self.emulator.hazards().to_vec(),
+            boxes: self.emulator.stats(),
+            explanations: self.explanations.values().cloned().collect(),
+            sim_ms: self.now().0,
+            cycles: self.engine.cycles(),
+        }
+    }
+}
+
+fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundle) {
+    let level = &mut ex.projection;
+    level.title = "Projection".into();
+    if p.hazards.is_empty() {
+        level.items.push(Item {
+            code: "X102",
+            fields: [("horizon_ms".to_string(), p.at_ms.saturating_sub(ex.time_ms).to_string())]
+                .into_iter()
+                .collect(),
+            text: format!(
+                "Without the filter, no damage is predicted within {} ms; the stop prevented a situation the constraints forbid.",
+                p.at_ms.saturating_sub(ex.time_ms)
+            ),
+        });
+    }
+    for h in &p.hazards {
+        let after = h.time_ms.saturating_sub(ex.time_ms);
+        level.items.push(Item {
+            code: "X101",
+            fields: [
+                ("kind".to_string(), format!("{:?}", h.kind)),
+                ("place".to_string(), h.place.clone()),
+                ("box".to_string(), h.box_id.to_string()),
+                ("after_ms".to_string(), after.to_string()),
+                ("elements".to_string(), h.elements.join(",")),
+            ]
+            .into_iter()
+            .collect(),
+            text: format!(
+                "Without the filter, {after} ms later: box {} {} at the {} ({}).",
+                h.box_id,
+                hazard_verb(h),
+                h.place,
+                h.elements.join(", ")
+            ),
+        });
+        for e in &h.elements {
+            if bundle.plant.signal(e).is_some() {
+                let hl = Highlight {
+                    element: e.clone(),
+                    mark: Mark::Suspect,
+                };
+                if !level.highlights.contains(&hl) {
+                    level.highlights.push(hl);
+                }
+            }
+        }
+    }
+}
+
+fn hazard_verb(h: &Hazard) -> String {
+    let kind = serde_json::to_value(h.kind)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default();
+    match kind.as_str() {
+        "sheared" => "would be sheared by the rotating turntable".into(),
+        "dropped" => "would fall off".into(),
+        "collision" => "would be pushed into another box".into(),
+        "pushed_against_stopped" => "would be pushed against a stopped conveyor".into(),
+        other => format!("would suffer: {other}"),
+    }
+}
+
+#[cfg(test)]
+mod tests;
