@@ -163,6 +163,8 @@ pub struct Engine {
     scratch: Vec<usize>,
     previous_violations: Vec<usize>,
     latched: bool,
+    /// The specification error reported last, while it lasts (reported once, not every cycle).
+    spec_error: Option<String>,
     cycles: u64,
     now: Millis,
     /// Every trip and reported violation of the run, in order.
@@ -193,6 +195,7 @@ impl Engine {
             scratch: Vec::new(),
             previous_violations: Vec::new(),
             latched: false,
+            spec_error: None,
             cycles: 0,
             now: Millis::ZERO,
             trips: Vec::new(),
@@ -319,7 +322,10 @@ impl Engine {
 
     fn apply_fallback(&mut self) {
         match self.filter.fallback(&self.frame) {
-            Ok(out) => self.frame.now_mut(Space::Output).copy_from(&out),
+            Ok(out) => {
+                self.frame.now_mut(Space::Output).copy_from(&out);
+                self.spec_error = None;
+            }
             Err(err) => {
                 self.frame.now_mut(Space::Output).clear();
                 self.report_spec_error(&err);
@@ -329,11 +335,8 @@ impl Engine {
 
     fn report_spec_error(&mut self, err: &SpecError) {
         let message = err.to_string();
-        let already = self
-            .events
-            .iter()
-            .any(|e| matches!(e, Event::SpecificationError { message: m } if *m == message));
-        if !already {
+        if self.spec_error.as_ref() != Some(&message) {
+            self.spec_error = Some(message.clone());
             if let Some(last) = self.trips.last_mut() {
                 if last.spec_error.is_none() {
                     last.spec_error = Some(message.clone());
@@ -433,3 +436,6 @@ impl Engine {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests;
