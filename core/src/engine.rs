@@ -337,10 +337,10 @@ impl Engine {
         let message = err.to_string();
         if self.spec_error.as_ref() != Some(&message) {
             self.spec_error = Some(message.clone());
-            if let Some(last) = self.trips.last_mut() {
-                if last.spec_error.is_none() {
-                    last.spec_error = Some(message.clone());
-                }
+            if let Some(last) = self.trips.last_mut()
+                && last.spec_error.is_none()
+            {
+                last.spec_error = Some(message.clone());
             }
             self.events.push(Event::SpecificationError { message });
         }

@@ -194,7 +194,9 @@ impl Run {
 #[test]
 fn report_only_never_changes_outputs_and_records_each_new_violated_set() {
     let mut run = Run::new(FilterMode::ReportOnly);
-    let steps: [(&[&str], &[&str], Option<&[&str]>); 9] = [
+    // (sensors at 1, outputs commanded, constraints recorded in this cycle)
+    type Step<'a> = (&'a [&'a str], &'a [&'a str], Option<&'a [&'a str]>);
+    let steps: [Step<'_>; 9] = [
         (&["C4", "C6"], &["A4"], None),
         (&["C5", "C6"], &["A4"], None),
         (&["C5"], &["A4"], None),
