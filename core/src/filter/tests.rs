@@ -379,3 +379,38 @@ proptest! {
         }
     }
 }
+
+/// A random set of nogoods with mixed polarities (`C1 . /A0 . /A3` forces one of A0, A3
+/// ON), so that the search meets ties and backtracking that the station never needs.
+fn random_nogoods() -> impl Strategy<Value = String> {
+    let literal = |prefix: &'static str, n: usize| {
+        (0..n, any::<bool>())
+            .prop_map(move |(i, pos)| format!("{}{prefix}{i}", if pos { "" } else { "/" }))
+    };
+    let constraint = (
+        prop::collection::vec(literal("C", 3), 0..3),
+        prop::collection::vec(literal("A", 7), 1..4),
+    )
+        .prop_map(|(ctx, outs)| ctx.into_iter().chain(outs).collect::<Vec<_>>().join(" . "));
+    prop::collection::vec(constraint, 1..14).prop_map(|cs| {
+        cs.iter()
+            .enumerate()
+            .map(|(i, c)| format!("R{i} = {c}\n"))
+            .collect()
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn fallback_matches_brute_force_on_random_nogoods(text in random_nogoods()) {
+        let mut b = station();
+        let (set, problems) = ConstraintSet::parse(&text, Path::new("r.txt"), &b.symbols);
+        prop_assert!(problems.iter().all(|p| !p.is_error()), "{}", crate::diag::render(&problems));
+        b.constraints = set;
+        let filter = Filter::new(&b.constraints, b.plant.outputs.len());
+        let vars: Vec<Var> = (0..3).map(|i| Var { space: Space::Input, index: i, prev: false }).collect();
+        exhaustive(&b, &filter, &vars);
+    }
+}
