@@ -76,10 +76,7 @@ impl ConstraintSet {
                 let col = first_non_space_col(content);
                 problems.push(Problem::error(
                     "V0108",
-                    format!(
-                        "expected `ID = expression`, found `{}`",
-                        content.trim()
-                    ),
+                    format!("expected `ID = expression`, found `{}`", content.trim()),
                     at(col),
                 ));
                 continue;
@@ -116,11 +113,7 @@ impl ConstraintSet {
             let (expr, raw_dnf) = match parsed {
                 Ok(v) => v,
                 Err(err) => {
-                    problems.push(Problem::error(
-                        "V0101",
-                        err.message,
-                        at(err.span.column),
-                    ));
+                    problems.push(Problem::error("V0101", err.message, at(err.span.column)));
                     continue;
                 }
             };
@@ -364,7 +357,9 @@ impl Constraint {
         if dnf.iter().any(Vec::is_empty) || is_tautology(&dnf) {
             return Err(Problem::error(
                 "V0105",
-                format!("constraint `{id}` is always true: the filter would stop the plant at once"),
+                format!(
+                    "constraint `{id}` is always true: the filter would stop the plant at once"
+                ),
                 Some(location),
             ));
         }

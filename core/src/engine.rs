@@ -164,6 +164,8 @@ pub struct Engine {
     scratch: Vec<usize>,
     previous_violations: Vec<usize>,
     latched: bool,
+    /// The specification error reported last, while it lasts (reported once, not every cycle).
+    spec_error: Option<String>,
     cycles: u64,
     now: Millis,
     /// Every trip and reported violation of the run, in order.
@@ -195,6 +197,7 @@ impl Engine {
             scratch: Vec::new(),
             previous_violations: Vec::new(),
             latched: false,
+            spec_error: None,
             cycles: 0,
             now: Millis::ZERO,
             trips: Vec::new(),
@@ -323,7 +326,10 @@ impl Engine {
 
     fn apply_fallback(&mut self) {
         match self.filter.fallback_synced(&self.filter_state) {
-            Ok(out) => self.frame.now_mut(Space::Output).copy_from(&out),
+            Ok(out) => {
+                self.frame.now_mut(Space::Output).copy_from(&out);
+                self.spec_error = None;
+            }
             Err(err) => {
                 self.frame.now_mut(Space::Output).clear();
                 self.report_spec_error(&err);
@@ -333,14 +339,12 @@ impl Engine {
 
     fn report_spec_error(&mut self, err: &SpecError) {
         let message = err.to_string();
-        let already = self.events.iter().any(
-            |e| matches!(e, Event::SpecificationError { message: m } if *m == message),
-        );
-        if !already {
-            if let Some(last) = self.trips.last_mut() {
-                if last.spec_error.is_none() {
-                    last.spec_error = Some(message.clone());
-                }
+        if self.spec_error.as_ref() != Some(&message) {
+            self.spec_error = Some(message.clone());
+            if let Some(last) = self.trips.last_mut()
+                && last.spec_error.is_none()
+            {
+                last.spec_error = Some(message.clone());
             }
             self.events.push(Event::SpecificationError { message });
         }
@@ -354,8 +358,14 @@ impl Engine {
             (Err(_), true) => Bits::zeros(n_out),
             (_, false) => self.commanded.clone(),
         };
-        let fallback_bits = fallback.as_ref().map_or_else(|_| Bits::zeros(n_out), Clone::clone);
-        let out_name = |k: usize| self.symbols.name(Space::Output, u32::try_from(k).unwrap_or(0)).to_string();
+        let fallback_bits = fallback
+            .as_ref()
+            .map_or_else(|_| Bits::zeros(n_out), Clone::clone);
+        let out_name = |k: usize| {
+            self.symbols
+                .name(Space::Output, u32::try_from(k).unwrap_or(0))
+                .to_string()
+        };
         let actions = (0..n_out)
             .map(|k| {
                 let c = self.commanded.get(k);
@@ -375,12 +385,11 @@ impl Engine {
         Trip {
             time_ms: self.now.0,
             cycle: self.cycles,
-            constraints: violations
-                .iter()
-                .map(|&ci| self.fired(ci))
-                .collect(),
+            constraints: violations.iter().map(|&ci| self.fired(ci)).collect(),
             actions,
-            fallback: (0..n_out).map(|k| (out_name(k), fallback_bits.get(k))).collect(),
+            fallback: (0..n_out)
+                .map(|k| (out_name(k), fallback_bits.get(k)))
+                .collect(),
             spec_error: fallback.err().map(|e| e.to_string()),
             enforced,
         }
@@ -431,3 +440,6 @@ impl Engine {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests;

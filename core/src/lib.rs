@@ -33,5 +33,8 @@ pub mod synthetic;
 pub mod time;
 pub mod trace;
 
+#[cfg(test)]
+mod test_support;
+
 pub use bits::Bits;
 pub use time::Millis;

@@ -26,7 +26,10 @@ pub struct TraceRow {
 
 /// Parses a trace for `plant`. Every plant signal must have a column.
 pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Problem> {
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     let Some((_, header)) = lines.next() else {
         return Err(Problem::error(
             "V0301",
@@ -38,8 +41,8 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
     let mut columns: Vec<Option<(bool, usize)>> = Vec::new();
     let mut has_time = false;
     let mut col = 1;
-    for name in header.split(',') {
-        let name = name.trim();
+    for cell in header.split(',') {
+        let name = cell.trim();
         if name == "time_ms" {
             has_time = true;
             columns.push(None);
@@ -54,7 +57,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
                 Some(Location::new(file, 1, col)),
             ));
         }
-        col += name.chars().count() + 1;
+        col += cell.chars().count() + 1;
     }
     if !has_time {
         return Err(Problem::error(
@@ -155,3 +158,6 @@ pub fn write_row(out: &mut String, time: Millis, inputs: &Bits, outputs: &Bits) 
     }
     out.push('\n');
 }
+
+#[cfg(test)]
+mod tests;

@@ -1,1 +1,416 @@
 use super::*;
+use crate::bundle::PlantBundle;
+use crate::symbols::{Symbols, Var};
+use crate::test_support::station;
+use proptest::prelude::*;
+use std::path::Path;
+
+fn set_var(frame: &mut Frame, var: Var, value: bool) {
+    let table = if var.prev {
+        &mut frame.prev
+    } else {
+        &mut frame.now
+    };
+    table[var.space as usize].set(var.index as usize, value);
+}
+
+fn var(symbols: &Symbols, name: &str) -> Var {
+    let prev = name.ends_with('*');
+    let (space, index) = symbols.lookup(name.trim_end_matches('*')).unwrap();
+    Var { space, index, prev }
+}
+
+/// A frame with the named variables set (`A4*` for a previous value), all else 0.
+fn frame_with(symbols: &Symbols, ones: &[&str]) -> Frame {
+    let mut f = Frame::new(symbols.sizes());
+    for name in ones {
+        set_var(&mut f, var(symbols, name), true);
+    }
+    f
+}
+
+fn station_filter() -> (PlantBundle, Filter) {
+    let b = station();
+    let f = Filter::new(&b.constraints, b.plant.outputs.len());
+    (b, f)
+}
+
+fn ids(filter: &Filter, v: &[usize]) -> Vec<String> {
+    v.iter().map(|&i| filter.id(i).to_string()).collect()
+}
+
+/// The minimal violating cycle of each constraint, written out for the sorting station:
+/// the variables at 1 (everything else 0) and every constraint that fires there.
+/// `fires_on_its_minimal_cycle_only` derives the same frames from the DNFs.
+const MINIMAL_CYCLES: [(&str, &[&str], &[&str]); 17] = [
+    ("CSs1", &["2P", "A0"], &["CSs1"]),
+    ("CSs2", &["C3", "A1"], &["CSs2"]),
+    ("CSs3", &["C3", "C4", "C6", "A1"], &["CSs3", "CSc2"]),
+    ("CSs4", &["C3", "P36", "A1"], &["CSs2", "CSs4"]),
+    ("CSs5", &["A3"], &["CSs5"]),
+    ("CSs6", &["C4", "C6", "A2"], &["CSs6"]),
+    ("CSs7", &["A2"], &["CSs7"]),
+    ("CSs8", &["C5", "C6"], &["CSs8"]),
+    ("CSs9", &["C8"], &["CSs9"]),
+    ("CSs10", &["C7"], &["CSs10"]),
+    ("CSs11", &["P67"], &["CSs11"]),
+    ("CSs12", &["C5", "C7", "A2"], &["CSs10", "CSs12"]),
+    ("CSs13", &["C4", "A4"], &["CSs13"]),
+    ("CSs14", &["A4"], &["CSs14"]),
+    ("CSs15", &["A4*"], &["CSs15"]),
+    ("CSc1", &["C0", "A0"], &["CSc1"]),
+    ("CSc2", &["C3", "C4", "A1"], &["CSc2"]),
+];
+
+#[test]
+fn each_constraint_fires_on_its_minimal_cycle_and_not_on_the_nearest_compliant_one() {
+    let (b, filter) = station_filter();
+    assert_eq!(filter.len(), MINIMAL_CYCLES.len());
+    for (ci, c) in b.constraints.constraints.iter().enumerate() {
+        let (id, ones, fired) = MINIMAL_CYCLES[ci];
+        assert_eq!(c.id, id);
+        for term in &c.dnf {
+            // Only the term's literals are set to make it true.
+            let mut frame = Frame::new(b.symbols.sizes());
+            for l in term {
+                set_var(&mut frame, l.var, l.positive);
+            }
+            if term == &c.dnf[0] {
+                assert_eq!(
+                    frame,
+                    frame_with(&b.symbols, ones),
+                    "{id}: documented cycle"
+                );
+                assert_eq!(ids(&filter, &filter.violations(&frame)), fired, "{id}");
+            }
+            assert!(filter.violations(&frame).contains(&ci), "{id} must fire");
+            let true_term = filter.true_term(ci, &frame).unwrap();
+            assert_eq!(&true_term, term, "{id}: the recorded term");
+            // The nearest compliant cycle: flip one output literal at t.
+            for l in term
+                .iter()
+                .filter(|l| l.var.space == Space::Output && !l.var.prev)
+            {
+                let mut compliant = frame.clone();
+                set_var(&mut compliant, l.var, !l.positive);
+                assert!(
+                    !filter.violations(&compliant).contains(&ci),
+                    "{id} must not fire once {} is flipped",
+                    b.symbols.render_literal(*l)
+                );
+                assert_eq!(filter.true_term(ci, &compliant), None);
+            }
+        }
+    }
+    // The all-zero cycle fires nothing.
+    let zero = Frame::new(b.symbols.sizes());
+    assert!(filter.violations(&zero).is_empty());
+}
+
+/// Every output vector, as booleans, in lexicographic order (A0 first, 0 before 1).
+fn all_vectors(n: usize) -> Vec<Vec<bool>> {
+    (0..1u32 << n)
+        .map(|v| (0..n).map(|k| v >> (n - 1 - k) & 1 == 1).collect())
+        .collect()
+}
+
+/// The minimal-ones, lexicographically smallest compliant vector, by brute force.
+fn brute_force(filter: &Filter, frame: &Frame, vectors: &[Vec<bool>]) -> Option<Vec<bool>> {
+    let mut f = frame.clone();
+    let mut best: Option<Vec<bool>> = None;
+    for v in vectors {
+        f.now[Space::Output as usize] = Bits::from_bools(v);
+        if !filter.violations(&f).is_empty() {
+            continue;
+        }
+        let ones = v.iter().filter(|x| **x).count();
+        // Vectors come in lexicographic order: keep the first of each count.
+        if best
+            .as_ref()
+            .is_none_or(|b| ones < b.iter().filter(|x| **x).count())
+        {
+            best = Some(v.clone());
+        }
+    }
+    best
+}
+
+/// Checks the fallback against brute force in every assignment of `vars`; returns the
+/// number of contexts and of specification errors.
+fn exhaustive(b: &PlantBundle, filter: &Filter, vars: &[Var]) -> (usize, usize) {
+    let n_out = b.plant.outputs.len();
+    let vectors = all_vectors(n_out);
+    let mut spec_errors = 0;
+    let mut frame = Frame::new(b.symbols.sizes());
+    for assignment in 0..1u64 << vars.len() {
+        for (i, v) in vars.iter().enumerate() {
+            set_var(&mut frame, *v, assignment >> i & 1 == 1);
+        }
+        let expected = brute_force(filter, &frame, &vectors);
+        match (filter.fallback(&frame), expected) {
+            (Ok(out), Some(best)) => {
+                let mut f = frame.clone();
+                f.now[Space::Output as usize] = out.clone();
+                assert!(
+                    filter.violations(&f).is_empty(),
+                    "(a) fallback {out} violates in {assignment:b}"
+                );
+                assert_eq!(
+                    out.count_ones(),
+                    best.iter().filter(|x| **x).count(),
+                    "(b) fallback {out} is not minimal in {assignment:b}"
+                );
+                assert_eq!(out.to_bools(), best, "(c) tie-break in {assignment:b}");
+            }
+            (Err(e), None) => {
+                spec_errors += 1;
+                assert!(e.constraints.len() >= 2, "{e}");
+            }
+            (got, want) => panic!("context {assignment:b}: fallback {got:?}, brute force {want:?}"),
+        }
+    }
+    (1 << vars.len(), spec_errors)
+}
+
+/// The variables the constraints' context literals read, from the compiled terms.
+fn support(filter: &Filter) -> Vec<Var> {
+    let mut vars: Vec<Var> = filter
+        .terms
+        .iter()
+        .flat_map(|t| t.context.iter().map(|l| l.var))
+        .collect();
+    vars.sort();
+    vars.dedup();
+    vars
+}
+
+#[test]
+fn fallback_is_safe_minimal_and_lexicographic_on_the_support() {
+    let (b, filter) = station_filter();
+    let vars = support(&filter);
+    let names: Vec<String> = vars
+        .iter()
+        .map(|v| {
+            b.symbols.render_literal(crate::symbols::Literal {
+                var: *v,
+                positive: true,
+            })
+        })
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "C0", "C3", "C4", "C5", "C6", "C7", "C8", "A4*", "P36", "P67", "2P"
+        ]
+    );
+    let (contexts, spec_errors) = exhaustive(&b, &filter, &vars);
+    assert_eq!(contexts, 2048);
+    // Exactly the contexts of the property (6) pairs, where A4 is forced both ways:
+    // (C4./C6 + /C4./A4*) . (C5.C6 + C8 + C7 + P67 + /C5.A4*), true in 928 of 2048.
+    assert_eq!(spec_errors, 928);
+}
+
+#[test]
+fn fallback_exhaustive_over_all_sensors_observers_and_a4_prev() {
+    let (b, filter) = station_filter();
+    let mut vars: Vec<Var> = (0..b.plant.inputs.len())
+        .map(|i| Var {
+            space: Space::Input,
+            index: i as u32,
+            prev: false,
+        })
+        .chain((0..b.observers.len()).map(|i| Var {
+            space: Space::Observer,
+            index: i as u32,
+            prev: false,
+        }))
+        .collect();
+    vars.push(var(&b.symbols, "A4*"));
+    assert_eq!(vars.len(), 15);
+    let (contexts, spec_errors) = exhaustive(&b, &filter, &vars);
+    assert_eq!((contexts, spec_errors), (1 << 15, 928 << 4));
+}
+
+#[track_caller]
+fn check_fallback(ones: &[&str], expected_on: &[&str]) {
+    let (b, filter) = station_filter();
+    let frame = frame_with(&b.symbols, ones);
+    let out = filter.fallback(&frame).unwrap();
+    let on: Vec<&str> = out
+        .ones()
+        .map(|k| b.symbols.name(Space::Output, k as u32))
+        .collect();
+    assert_eq!(on, expected_on, "fallback with {ones:?} at 1");
+}
+
+#[test]
+fn fallback_in_the_papers_situations() {
+    // CSs10: box at C7, table in unloading position, A4 held before, A4 released now:
+    // the fallback keeps A4 ON, everything else OFF (the paper's figure 13).
+    check_fallback(&["C5", "C7", "A4*"], &["A4"]);
+    // Same with the command still given: outputs are recomputed, not copied.
+    check_fallback(&["C5", "C7", "A4*", "A4", "A0", "A2"], &["A4"]);
+    // CSs15: between positions (neither C4 nor C5) with A4 ON before: hold it.
+    check_fallback(&["A4*"], &["A4"]);
+    // Between positions with A4 OFF before: A4 stays OFF (CSs14 forbids the rising edge).
+    check_fallback(&[], &[]);
+    // CSc1 alone needs nothing ON: A0 OFF suffices.
+    check_fallback(&["C0", "A0", "A1"], &[]);
+    // A box at C0 with two boxes in the zone: A0 OFF.
+    check_fallback(&["C0", "2P"], &[]);
+}
+
+fn filter_for(text: &str) -> (PlantBundle, Filter) {
+    let mut b = station();
+    let (set, problems) = ConstraintSet::parse(text, Path::new("c.txt"), &b.symbols);
+    assert!(problems.is_empty(), "{}", crate::diag::render(&problems));
+    b.constraints = set;
+    let f = Filter::new(&b.constraints, b.plant.outputs.len());
+    (b, f)
+}
+
+#[test]
+fn combined_nogoods_are_searched_with_the_tie_break() {
+    // Either A0 or A1 must be ON: A0 stays OFF (first output), A1 ON.
+    let (b, f) = filter_for("X = C0 . /A0 . /A1");
+    let out = f.fallback(&frame_with(&b.symbols, &["C0"])).unwrap();
+    assert_eq!(out.to_string(), "0100000");
+    // A0 forced ON by a simple constraint, then A0 . /A2 forces A2 ON by propagation;
+    // one of A3, A4, A5 must be ON: the last one, so that the earlier ones stay OFF.
+    let (b, f) = filter_for("S = C0 . /A0\nX = C0 . A0 . /A2\nY = C1 . /A3 . /A4 . /A5");
+    assert_eq!(
+        f.fallback(&frame_with(&b.symbols, &["C0", "C1"]))
+            .unwrap()
+            .to_string(),
+        "1010010"
+    );
+    assert_eq!(
+        f.fallback(&frame_with(&b.symbols, &["C1"]))
+            .unwrap()
+            .to_string(),
+        "0000010"
+    );
+}
+
+#[test]
+fn conflicting_constraints_are_a_specification_error() {
+    let (b, f) = filter_for("X = C0 . /A0\nY = C0 . A0\nZ = C1 . A1");
+    let err = f
+        .fallback(&frame_with(&b.symbols, &["C0", "C1"]))
+        .unwrap_err();
+    assert_eq!(err.constraints, ["X", "Y", "Z"]);
+    assert_eq!(
+        err.to_string(),
+        "no output vector satisfies every constraint: X, Y, Z"
+    );
+    assert!(f.fallback(&frame_with(&b.symbols, &["C1"])).is_ok());
+    // Combined nogoods only: every value of (A0, A1) is forbidden.
+    let (b, f) =
+        filter_for("W = C0 . /A0 . /A1\nX = C0 . A0 . A1\nY = C0 . A0 . /A1\nZ = C0 . /A0 . A1");
+    let err = f.fallback(&frame_with(&b.symbols, &["C0"])).unwrap_err();
+    assert_eq!(err.constraints, ["W", "X", "Y", "Z"]);
+    // A unit nogood and combined ones that leave no room.
+    let (b, f) = filter_for("U = C0 . /A2\nX = C0 . A2 . A3\nY = C0 . A2 . /A3");
+    assert_eq!(
+        f.fallback(&frame_with(&b.symbols, &["C0"]))
+            .unwrap_err()
+            .constraints,
+        ["U", "X", "Y"]
+    );
+}
+
+/// Random contexts (inputs at t, outputs at t-1) of a synthetic plant.
+fn random_frame(symbols: &Symbols, seed: u64) -> Frame {
+    let mut rng = crate::synthetic::SplitMix64::new(seed);
+    let mut f = Frame::new(symbols.sizes());
+    for s in [Space::Input, Space::Output] {
+        for i in 0..symbols.len(s) {
+            f.now[s as usize].set(i, rng.chance(1, 2));
+            f.prev[s as usize].set(i, rng.chance(1, 2));
+        }
+    }
+    f
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn fallback_on_synthetic_plants(plant_seed in 0u64..40, frame_seed: u64) {
+        let syn = crate::synthetic::generate(40, 60, plant_seed);
+        let n_out = syn.plant.outputs.len();
+        let filter = Filter::new(&syn.constraints, n_out);
+        let frame = random_frame(&syn.symbols, frame_seed);
+        let result = filter.fallback(&frame);
+        if let Ok(out) = &result {
+            let mut f = frame.clone();
+            f.now[Space::Output as usize] = out.clone();
+            prop_assert!(filter.violations(&f).is_empty(), "fallback {} violates", out);
+        }
+        // Brute force over the outputs the active terms name, others at 0.
+        let active: Vec<usize> = filter
+            .terms
+            .iter()
+            .filter(|t| t.context.iter().all(|&l| frame.literal(l)))
+            .flat_map(|t| t.outputs.iter().map(|&(k, _)| k as usize))
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        if active.len() <= 12 {
+            let mut f = frame.clone();
+            let mut best: Option<Bits> = None;
+            for v in all_vectors(active.len()) {
+                let mut out = Bits::zeros(n_out);
+                for (j, &k) in active.iter().enumerate() {
+                    out.set(k, v[j]);
+                }
+                f.now[Space::Output as usize] = out.clone();
+                if filter.violations(&f).is_empty()
+                    && best.as_ref().is_none_or(|b| out.count_ones() < b.count_ones())
+                {
+                    best = Some(out);
+                }
+            }
+            match (&result, best) {
+                (Ok(out), Some(best)) => prop_assert_eq!(out, &best),
+                (Err(_), None) => {}
+                (got, want) => prop_assert!(false, "fallback {:?}, brute force {:?}", got, want),
+            }
+        }
+    }
+}
+
+/// A random set of nogoods with mixed polarities (`C1 . /A0 . /A3` forces one of A0, A3
+/// ON), so that the search meets ties and backtracking that the station never needs.
+fn random_nogoods() -> impl Strategy<Value = String> {
+    let literal = |prefix: &'static str, n: usize| {
+        (0..n, any::<bool>())
+            .prop_map(move |(i, pos)| format!("{}{prefix}{i}", if pos { "" } else { "/" }))
+    };
+    let constraint = (
+        prop::collection::vec(literal("C", 3), 0..3),
+        prop::collection::vec(literal("A", 7), 1..4),
+    )
+        .prop_map(|(ctx, outs)| ctx.into_iter().chain(outs).collect::<Vec<_>>().join(" . "));
+    prop::collection::vec(constraint, 1..14).prop_map(|cs| {
+        cs.iter()
+            .enumerate()
+            .map(|(i, c)| format!("R{i} = {c}\n"))
+            .collect()
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn fallback_matches_brute_force_on_random_nogoods(text in random_nogoods()) {
+        let mut b = station();
+        let (set, problems) = ConstraintSet::parse(&text, Path::new("r.txt"), &b.symbols);
+        prop_assert!(problems.iter().all(|p| !p.is_error()), "{}", crate::diag::render(&problems));
+        b.constraints = set;
+        let filter = Filter::new(&b.constraints, b.plant.outputs.len());
+        let vars: Vec<Var> = (0..3).map(|i| Var { space: Space::Input, index: i, prev: false }).collect();
+        exhaustive(&b, &filter, &vars);
+    }
+}

@@ -1,0 +1,308 @@
+use super::*;
+use crate::constraints::ConstraintSet;
+use crate::test_support::station;
+use std::path::Path;
+
+/// Drives an engine on the sorting station, cycle by cycle, every 10 ms.
+struct Run {
+    engine: Engine,
+    plant: crate::plant::Plant,
+    t: u64,
+}
+
+impl Run {
+    fn new(mode: FilterMode) -> Self {
+        Self::with_bundle(station(), mode)
+    }
+
+    fn with_bundle(bundle: PlantBundle, mode: FilterMode) -> Self {
+        Self {
+            engine: Engine::new(&bundle, mode, 100),
+            plant: bundle.plant,
+            t: 0,
+        }
+    }
+
+    /// One cycle with these sensors at 1 and these outputs commanded; returns the
+    /// outputs applied, by name.
+    fn cycle(&mut self, sensors: &[&str], commanded: &[&str]) -> Vec<String> {
+        self.t += 10;
+        let mut inputs = Bits::zeros(self.plant.inputs.len());
+        for s in sensors {
+            inputs.set(self.plant.input(s).unwrap(), true);
+        }
+        let mut outputs = Bits::zeros(self.plant.outputs.len());
+        for a in commanded {
+            outputs.set(self.plant.output(a).unwrap(), true);
+        }
+        let applied = self
+            .engine
+            .cycle(Millis(self.t), &inputs, &mut Commanded(outputs))
+            .clone();
+        applied
+            .ones()
+            .map(|k| self.plant.outputs[k].id.clone())
+            .collect()
+    }
+}
+
+#[test]
+fn a_trip_latches_and_records_what_happened() {
+    let mut run = Run::new(FilterMode::Enforce);
+    // Box on the table in loading position, rotation starts; table in unloading position.
+    assert_eq!(run.cycle(&["C4", "C6"], &["A4"]), ["A4"]);
+    assert_eq!(run.cycle(&["C5", "C6"], &["A4"]), ["A4"]);
+    // The box leaves C6 (P67 set) ...
+    assert_eq!(run.cycle(&["C5"], &["A4"]), ["A4"]);
+    assert!(run.engine.drain_events().is_empty());
+    // ... reaches C7 and the program releases A4 (the paper's CSs10) to start A3.
+    assert_eq!(run.cycle(&["C5", "C7"], &["A3"]), ["A4"]);
+    assert!(run.engine.is_tripped());
+    assert_eq!(run.engine.drain_events(), [Event::Trip { index: 0 }]);
+    let trip = &run.engine.trips[0];
+    assert_eq!(
+        (
+            trip.time_ms,
+            trip.cycle,
+            trip.enforced,
+            trip.spec_error.clone()
+        ),
+        (40, 4, true, None)
+    );
+    let lit = |literal: &str, name: &str, space, value| LiteralValue {
+        literal: literal.into(),
+        name: name.into(),
+        space,
+        previous: false,
+        value,
+    };
+    assert_eq!(
+        trip.constraints,
+        [FiredConstraint {
+            id: "CSs10".into(),
+            class: Class::Simple,
+            notation: "C7 . /A4".into(),
+            literals: vec![
+                lit("C7", "C7", Space::Input, true),
+                lit("/A4", "A4", Space::Output, false)
+            ],
+        }]
+    );
+    let actions: Vec<(&str, bool, bool, Action)> = trip
+        .actions
+        .iter()
+        .map(|a| (a.output.as_str(), a.commanded, a.applied, a.action))
+        .collect();
+    assert_eq!(
+        actions,
+        [
+            ("A0", false, false, Action::Unchanged),
+            ("A1", false, false, Action::Unchanged),
+            ("A2", false, false, Action::Unchanged),
+            ("A3", true, false, Action::ForcedOff),
+            ("A4", false, true, Action::ForcedOn),
+            ("A5", false, false, Action::Unchanged),
+            ("A6", false, false, Action::Unchanged),
+        ]
+    );
+    let fallback: Vec<(&str, bool)> = trip
+        .fallback
+        .iter()
+        .map(|(n, v)| (n.as_str(), *v))
+        .collect();
+    assert_eq!(
+        fallback,
+        [
+            ("A0", false),
+            ("A1", false),
+            ("A2", false),
+            ("A3", false),
+            ("A4", true),
+            ("A5", false),
+            ("A6", false)
+        ]
+    );
+    let rec = run.engine.history.last().unwrap();
+    assert_eq!((rec.time, rec.tripped), (Millis(40), true));
+    assert_eq!(
+        (rec.commanded.to_string(), rec.applied.to_string()),
+        ("0001000".into(), "0000100".into())
+    );
+
+    // Latched: compliant commands are not applied, the fallback is.
+    assert_eq!(run.cycle(&["C5", "C7"], &["A3", "A4"]), ["A4"]);
+    assert_eq!(run.cycle(&["C5", "C7"], &["A3", "A4", "A5", "A6"]), ["A4"]);
+    assert!(run.engine.drain_events().is_empty());
+    assert_eq!(run.engine.trips.len(), 1);
+    // The fallback follows the context: at C4 with an empty table A4 must drop.
+    assert_eq!(run.cycle(&["C4"], &["A4"]), Vec::<String>::new());
+}
+
+#[test]
+fn reset_is_refused_while_the_commands_still_violate() {
+    let mut run = Run::new(FilterMode::Enforce);
+    assert_eq!(run.engine.reset(), Err(ResetRefused::NotTripped));
+    run.cycle(&["C4", "C6"], &["A4"]);
+    run.cycle(&["C5", "C6"], &["A4"]);
+    run.cycle(&["C5"], &["A4"]);
+    run.cycle(&["C5", "C7"], &["A3", "A2"]);
+    let trip_constraints: Vec<&str> = run.engine.trips[0]
+        .constraints
+        .iter()
+        .map(|c| c.id.as_str())
+        .collect();
+    assert_eq!(trip_constraints, ["CSs10", "CSs12"]);
+    let refused = run.engine.reset().unwrap_err();
+    assert_eq!(
+        refused.to_string(),
+        "reset refused: CSs10, CSs12 still violated by the commanded outputs"
+    );
+    assert!(run.engine.is_tripped());
+    // The outputs applied are untouched by the refused reset.
+    assert_eq!(run.engine.applied().to_string(), "0000100");
+    run.cycle(&["C5", "C7"], &["A3"]);
+    assert_eq!(
+        run.engine.reset(),
+        Err(ResetRefused::StillViolated {
+            constraints: vec!["CSs10".into()]
+        })
+    );
+    run.drain();
+    // Commands corrected: the reset is accepted and the commands pass again.
+    assert_eq!(run.cycle(&["C5", "C7"], &["A3", "A4"]), ["A4"]);
+    assert_eq!(run.engine.reset(), Ok(()));
+    assert!(!run.engine.is_tripped());
+    assert_eq!(run.engine.drain_events(), [Event::Reset]);
+    assert_eq!(run.cycle(&["C5", "C7"], &["A3", "A4"]), ["A3", "A4"]);
+    // The filter keeps checking: a new violation trips again.
+    assert_eq!(run.cycle(&["C5", "C7"], &["A3"]), ["A4"]);
+    assert_eq!(run.engine.drain_events(), [Event::Trip { index: 1 }]);
+    assert_eq!(
+        run.engine.reset(),
+        Err(ResetRefused::StillViolated {
+            constraints: vec!["CSs10".into()]
+        })
+    );
+}
+
+impl Run {
+    fn drain(&mut self) -> Vec<Event> {
+        self.engine.drain_events()
+    }
+}
+
+#[test]
+fn report_only_never_changes_outputs_and_records_each_new_violated_set() {
+    let mut run = Run::new(FilterMode::ReportOnly);
+    // (sensors at 1, outputs commanded, constraints recorded in this cycle)
+    type Step<'a> = (&'a [&'a str], &'a [&'a str], Option<&'a [&'a str]>);
+    let steps: [Step<'_>; 9] = [
+        (&["C4", "C6"], &["A4"], None),
+        (&["C5", "C6"], &["A4"], None),
+        (&["C5"], &["A4"], None),
+        (&["C5", "C7"], &["A3"], Some(&["CSs10"])),
+        (&["C5", "C7"], &["A3"], None),
+        (&["C5", "C7"], &["A2", "A3"], Some(&["CSs10", "CSs12"])),
+        (&["C5", "C7"], &["A2", "A3"], None),
+        // Pressing A4 again away from C4 is a rising edge (CSs14).
+        (&["C5", "C7"], &["A3", "A4"], Some(&["CSs14"])),
+        (&["C5", "C7"], &[], Some(&["CSs10"])),
+    ];
+    for (i, (sensors, commanded, recorded)) in steps.iter().enumerate() {
+        let applied = run.cycle(sensors, commanded);
+        assert_eq!(
+            applied,
+            commanded.iter().map(|s| s.to_string()).collect::<Vec<_>>(),
+            "cycle {}",
+            i + 1
+        );
+        assert!(!run.engine.is_tripped());
+        let events = run.drain();
+        match recorded {
+            None => assert!(events.is_empty(), "cycle {}: {events:?}", i + 1),
+            Some(ids) => {
+                let index = run.engine.trips.len() - 1;
+                assert_eq!(events, [Event::Violation { index }], "cycle {}", i + 1);
+                let trip = &run.engine.trips[index];
+                let got: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
+                assert_eq!(&got, ids, "cycle {}", i + 1);
+                assert!(!trip.enforced);
+                assert!(
+                    trip.actions
+                        .iter()
+                        .all(|a| a.action == Action::Unchanged && a.applied == a.commanded)
+                );
+                assert_eq!(trip.time_ms, 10 * (i as u64 + 1));
+            }
+        }
+    }
+    assert_eq!(run.engine.trips.len(), 4);
+    assert_eq!(run.engine.reset(), Err(ResetRefused::NotTripped));
+}
+
+#[test]
+fn off_mode_passes_everything_and_records_nothing() {
+    let mut run = Run::new(FilterMode::Off);
+    assert_eq!(run.cycle(&["C5", "C7"], &["A3", "A2"]), ["A2", "A3"]);
+    assert_eq!(run.cycle(&["C0"], &["A0"]), ["A0"]);
+    assert!(run.drain().is_empty());
+    assert!(run.engine.trips.is_empty());
+    assert_eq!(run.engine.history.len(), 2);
+    assert!(!run.engine.history.last().unwrap().tripped);
+}
+
+#[test]
+fn leaving_enforce_mode_releases_the_latch() {
+    let mut run = Run::new(FilterMode::Enforce);
+    run.cycle(&["C7"], &[]);
+    assert!(run.engine.is_tripped());
+    run.engine.set_mode(FilterMode::ReportOnly);
+    assert!(!run.engine.is_tripped());
+    assert_eq!(run.cycle(&["C7"], &["A0"]), ["A0"]);
+}
+
+fn conflicting_bundle(text: &str) -> PlantBundle {
+    let mut b = station();
+    let (set, problems) = ConstraintSet::parse(text, Path::new("c.txt"), &b.symbols);
+    assert!(problems.is_empty());
+    b.constraints = set;
+    b
+}
+
+#[test]
+fn specification_error_drives_every_output_to_zero_once_reported() {
+    let mut run = Run::with_bundle(
+        conflicting_bundle("X = C0 . /A0\nY = C0 . A0"),
+        FilterMode::Enforce,
+    );
+    assert_eq!(run.cycle(&[], &["A0", "A1"]), ["A0", "A1"]);
+    assert_eq!(run.cycle(&["C0"], &["A0", "A1"]), Vec::<String>::new());
+    let message = "no output vector satisfies every constraint: X, Y".to_string();
+    assert_eq!(
+        run.drain(),
+        [
+            Event::Trip { index: 0 },
+            Event::SpecificationError {
+                message: message.clone()
+            }
+        ]
+    );
+    let trip = &run.engine.trips[0];
+    assert_eq!(trip.spec_error.as_deref(), Some(message.as_str()));
+    assert!(trip.fallback.iter().all(|(_, v)| !v));
+    let forced: Vec<&str> = trip
+        .actions
+        .iter()
+        .filter(|a| a.action == Action::ForcedOff)
+        .map(|a| a.output.as_str())
+        .collect();
+    assert_eq!(forced, ["A0", "A1"]);
+    // The error persists: outputs stay at 0 and the event is not repeated every cycle.
+    assert_eq!(run.cycle(&["C0"], &["A0", "A1"]), Vec::<String>::new());
+    assert_eq!(run.cycle(&["C0"], &["A1"]), Vec::<String>::new());
+    assert!(run.drain().is_empty());
+    // Once the conflict is gone the fallback applies again; a new conflict is reported.
+    assert_eq!(run.cycle(&[], &["A1"]), Vec::<String>::new());
+    run.cycle(&["C0"], &[]);
+    assert_eq!(run.drain(), [Event::SpecificationError { message }]);
+}

@@ -1,0 +1,124 @@
+use super::*;
+use crate::test_support::station;
+
+fn plant() -> Plant {
+    station().plant
+}
+
+/// A header and rows of 0s for the station, with `edit` applied to the text.
+fn trace_text(rows: usize) -> String {
+    let p = plant();
+    let mut text = header(&p);
+    text.push('\n');
+    for i in 0..rows {
+        write_row(
+            &mut text,
+            Millis(10 * (i as u64 + 1)),
+            &Bits::zeros(p.inputs.len()),
+            &Bits::zeros(p.outputs.len()),
+        );
+    }
+    text
+}
+
+#[track_caller]
+fn check_error(text: &str, expected: &str) {
+    match parse(text, Path::new("t.csv"), &plant()) {
+        Ok(rows) => panic!("expected {expected}, parsed {} rows", rows.len()),
+        Err(p) => assert_eq!(p.to_string(), expected),
+    }
+}
+
+#[test]
+fn header_lists_time_then_sensors_then_actuators() {
+    assert_eq!(
+        header(&plant()),
+        "time_ms,C0,C1,C2,C3,C4,C5,C6,C7,C8,C9,C10,A0,A1,A2,A3,A4,A5,A6"
+    );
+}
+
+#[test]
+fn round_trip() {
+    let p = plant();
+    let mut text = header(&p);
+    text.push('\n');
+    let mut rows = Vec::new();
+    let mut rng = crate::synthetic::SplitMix64::new(4);
+    for i in 0..50u64 {
+        let inputs = Bits::from_bools(
+            &(0..p.inputs.len())
+                .map(|_| rng.chance(1, 2))
+                .collect::<Vec<_>>(),
+        );
+        let outputs = Bits::from_bools(
+            &(0..p.outputs.len())
+                .map(|_| rng.chance(1, 2))
+                .collect::<Vec<_>>(),
+        );
+        write_row(&mut text, Millis(i * 7), &inputs, &outputs);
+        rows.push(TraceRow {
+            time: Millis(i * 7),
+            inputs,
+            outputs,
+        });
+    }
+    assert_eq!(parse(&text, Path::new("t.csv"), &p).unwrap(), rows);
+    // Columns in another order, spaces and blank lines are accepted.
+    let text = "A6, A5,A4,A3,A2,A1,A0,C10,C9,C8,C7,C6,C5,C4,C3,C2,C1,C0,time_ms\n\n1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0, 1 ,5\n";
+    let rows = parse(text, Path::new("t.csv"), &p).unwrap();
+    assert_eq!(rows.len(), 1);
+    assert_eq!(
+        (
+            rows[0].time,
+            rows[0].inputs.to_string(),
+            rows[0].outputs.to_string()
+        ),
+        (Millis(5), "10000000000".into(), "0000001".into())
+    );
+}
+
+#[test]
+fn errors_have_line_and_column() {
+    let good = trace_text(2);
+    // Bad value: row 3 (line 3), column of the 5th cell (C3).
+    let bad = good.replacen("20,0,0,0,0", "20,0,0,0,x", 1);
+    check_error(&bad, "t.csv:3:10: error[V0307]: `x` is not 0 or 1");
+    check_error(
+        &good.replacen("20,", "2O,", 1),
+        "t.csv:3:1: error[V0306]: `2O` is not a time in milliseconds",
+    );
+    check_error(
+        &good.replacen("20,0,", "20,", 1),
+        "t.csv:3:1: error[V0305]: expected 19 values, found 18",
+    );
+    check_error(
+        &good.replacen("\n10,", "\n\n10,0,", 1),
+        "t.csv:3:1: error[V0305]: expected 19 values, found 20",
+    );
+    // Header problems.
+    check_error(
+        &good.replacen(",C3,", ",X3,", 1),
+        "t.csv:1:18: error[V0302]: unknown signal `X3` in trace header",
+    );
+    // Columns count the spaces around names.
+    check_error(
+        "time_ms, C0,  X\n",
+        "t.csv:1:13: error[V0302]: unknown signal `X` in trace header",
+    );
+    check_error(
+        &good.replacen(",C1,", ",", 1),
+        "t.csv:1:1: error[V0304]: trace has no column for signal `C1`",
+    );
+    check_error(
+        &good.replacen("time_ms", "time", 1),
+        "t.csv:1:1: error[V0302]: unknown signal `time` in trace header",
+    );
+    check_error(
+        "C0,C1\n",
+        "t.csv:1:1: error[V0303]: trace header has no `time_ms` column",
+    );
+    check_error(
+        "\n  \n",
+        "t.csv:1:1: error[V0301]: empty trace: expected a header `time_ms,<signals>`",
+    );
+}
