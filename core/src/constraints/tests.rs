@@ -174,7 +174,7 @@ fn property_6(text: &str) -> Vec<String> {
     let b = station();
     let (set, problems) = ConstraintSet::parse(text, Path::new("c.txt"), &b.symbols);
     assert!(problems.is_empty(), "{}", crate::diag::render(&problems));
-    let found = set.check_property_6(&b.symbols);
+    let found = set.check_property_6(&b.symbols, &ConstraintSet::default()).0;
     assert!(
         found
             .iter()
@@ -229,7 +229,8 @@ fn property_6_on_the_paper_set_reports_only_physically_unreachable_pairs() {
     let b = station();
     let found: Vec<String> = b
         .constraints
-        .check_property_6(&b.symbols)
+        .check_property_6(&b.symbols, &ConstraintSet::default())
+        .0
         .iter()
         .map(|p| p.message.clone())
         .collect();
@@ -270,4 +271,34 @@ fn load_reports_a_missing_file() {
             .message
             .starts_with("cannot read /nonexistent/constraints.txt: ")
     );
+}
+
+/// With the station's invariants (`invariants.txt`: situations the plant cannot reach
+/// under the filter), every one of those logical conflicts is discharged, each by the
+/// invariant naming its situation, and no error remains.
+#[test]
+fn property_6_on_the_paper_set_holds_modulo_the_invariants() {
+    let b = station();
+    let (errors, discharged) = b.constraints.check_property_6(&b.symbols, &b.invariants);
+    assert!(errors.is_empty(), "{}", crate::diag::render(&errors));
+    let got: Vec<(String, String, String)> = discharged
+        .iter()
+        .map(|d| (d.forces_zero.clone(), d.forces_one.clone(), d.invariant.clone()))
+        .collect();
+    let want = [
+        ("CSs13", "CSs9", "INV3"),
+        ("CSs13", "CSs10", "INV2"),
+        ("CSs13", "CSs11", "INV4"),
+        ("CSs13", "CSs15", "INV5"),
+        ("CSs14", "CSs8", "INV6"),
+        ("CSs14", "CSs9", "INV8"),
+        ("CSs14", "CSs10", "INV7"),
+        ("CSs14", "CSs11", "INV9"),
+    ]
+    .map(|(a, b, c)| (a.to_string(), b.to_string(), c.to_string()));
+    assert_eq!(got, want);
+    // An invariant that reads an output at t is refused.
+    let (_, problems) =
+        ConstraintSet::parse_invariants("I = C4 . A4", Path::new("i.txt"), &b.symbols);
+    assert_eq!(problems[0].code, "V0109");
 }

@@ -442,45 +442,6 @@ fn control_runtime_clone_runs_forward_independently() {
     assert!(fork.is_active("X10"));
 }
 
-#[test]
-#[ignore = "timing; run with --release -- --ignored"]
-#[allow(clippy::disallowed_methods)]
-fn control_scan_speed() {
-    let mut o = Open::new(&std::fs::read_to_string(station().join("programs/reference.ron")).unwrap());
-    o.rt.press("START").unwrap();
-    let seq: Vec<&[&str]> = vec![
-        &["C4"], &["C0", "C4"], &["C0", "C1", "C4"], &["C1", "C4"], &["C4"], &["C3", "C4"], &["C4"],
-        &["C4", "C6"], &["C6"], &["C5", "C6"], &["C5"], &["C5", "C7"], &["C5"], &[], &["C4"],
-    ];
-    let frames: Vec<Frame> = seq
-        .iter()
-        .map(|s| {
-            let mut f = Frame::new([o.plant.inputs.len(), o.plant.outputs.len(), 0, 0]);
-            for i in *s {
-                f.now_mut(Space::Input).set(o.plant.input(i).unwrap(), true);
-            }
-            f
-        })
-        .collect();
-    // CPU time of this thread (the machine is shared: wall time overstates).
-    let cpu_ns = || -> u64 {
-        std::fs::read_to_string("/proc/thread-self/schedstat")
-            .ok()
-            .and_then(|s| s.split_whitespace().next().and_then(|x| x.parse().ok()))
-            .unwrap_or(0)
-    };
-    let n = 2_000_000u64;
-    let cpu0 = cpu_ns();
-    let start = std::time::Instant::now();
-    for k in 0..n {
-        let f = &frames[(k / 20) as usize % frames.len()];
-        o.rt.scan(Millis(k * 10), f, &mut o.out);
-    }
-    let ns = start.elapsed().as_nanos() as f64 / n as f64;
-    let cpu = (cpu_ns() - cpu0) as f64 / n as f64;
-    println!("{ns:.1} ns per scan (wall), {cpu:.1} ns per scan (thread CPU time)");
-    assert_eq!(o.rt.scans(), n);
-}
 
 /// Sensor script of one box (no assertion), with a 2 s rotation.
 fn script(right: bool) -> Vec<Vec<&'static str>> {
@@ -531,10 +492,10 @@ fn control_variants_trip_their_constraint_on_scripted_boxes() {
 }
 
 #[test]
-fn control_shipped_p67_blocks_left_evacuation() {
-    // Documents the observer issue reported to the lead: with `set: "FE(C6)"`, a box
-    // leaving to the LEFT sets P67 and nothing resets it, so releasing A4 (needed to
-    // return the table) violates CSs11. Remove this test once observers.ron is fixed.
+fn control_shipped_observers_let_the_reference_evacuate_both_ways() {
+    // With the paper's `set: "FE(C6)"`, a box leaving to the LEFT would set P67 and
+    // nothing would reset it, so releasing A4 would violate CSs11. The shipped rule
+    // `FE(C6) . /C8` (C8 is on when C6 falls on the left side) fixes it.
     let (bundle, _) = PlantBundle::load(&station()).unwrap();
     let mut engine = Engine::new(&bundle, FilterMode::ReportOnly, 4);
     let mut rt = reference();
@@ -550,5 +511,5 @@ fn control_shipped_p67_blocks_left_evacuation() {
         engine.cycle(Millis(t), &bits, &mut rt);
     }
     let ids: Vec<&str> = engine.trips.iter().flat_map(|t| t.constraints.iter().map(|c| c.id.as_str())).collect();
-    assert_eq!(ids, vec!["CSs11"]);
+    assert!(ids.is_empty(), "{ids:?}");
 }

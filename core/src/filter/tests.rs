@@ -138,6 +138,17 @@ fn brute_force(filter: &Filter, frame: &Frame, vectors: &[Vec<bool>]) -> Option<
 /// Checks the fallback against brute force in every assignment of `vars`; returns the
 /// number of contexts and of specification errors.
 fn exhaustive(b: &PlantBundle, filter: &Filter, vars: &[Var]) -> (usize, usize) {
+    exhaustive_with(b, filter, vars, true)
+}
+
+/// [`exhaustive`]; with `reachable_only`, a specification error outside the situations
+/// the station's invariants exclude fails the test.
+fn exhaustive_with(
+    b: &PlantBundle,
+    filter: &Filter,
+    vars: &[Var],
+    reachable_only: bool,
+) -> (usize, usize) {
     let n_out = b.plant.outputs.len();
     let vectors = all_vectors(n_out);
     let mut spec_errors = 0;
@@ -165,11 +176,36 @@ fn exhaustive(b: &PlantBundle, filter: &Filter, vars: &[Var]) -> (usize, usize) 
             (Err(e), None) => {
                 spec_errors += 1;
                 assert!(e.constraints.len() >= 2, "{e}");
+                // Only in situations the plant cannot reach under the filter.
+                assert!(
+                    !reachable_only
+                        || b.invariants
+                        .constraints
+                        .iter()
+                        .any(|inv| crate::expr::eval_dnf(&inv.dnf, &frame)),
+                    "specification error in a reachable context {assignment:b}: {e}"
+                );
             }
             (got, want) => panic!("context {assignment:b}: fallback {got:?}, brute force {want:?}"),
         }
     }
     (1 << vars.len(), spec_errors)
+}
+
+/// Number of assignments of `vars` that an invariant excludes.
+fn excluded(b: &PlantBundle, vars: &[Var]) -> u64 {
+    let mut frame = Frame::new(b.symbols.sizes());
+    (0..1u64 << vars.len())
+        .filter(|assignment| {
+            for (i, v) in vars.iter().enumerate() {
+                set_var(&mut frame, *v, assignment >> i & 1 == 1);
+            }
+            b.invariants
+                .constraints
+                .iter()
+                .any(|inv| crate::expr::eval_dnf(&inv.dnf, &frame))
+        })
+        .count() as u64
 }
 
 /// The variables the constraints' context literals read, from the compiled terms.
@@ -206,8 +242,13 @@ fn fallback_is_safe_minimal_and_lexicographic_on_the_support() {
     let (contexts, spec_errors) = exhaustive(&b, &filter, &vars);
     assert_eq!(contexts, 2048);
     // Exactly the contexts of the property (6) pairs, where A4 is forced both ways:
-    // (C4./C6 + /C4./A4*) . (C5.C6 + C8 + C7 + P67 + /C5.A4*), true in 928 of 2048.
+    // (C4./C6 + /C4./A4*) . (C5.C6 + C8 + C7 + P67 + /C5.A4*), true in 928 of 2048,
+    // every one excluded by an invariant (checked in `exhaustive`).
     assert_eq!(spec_errors, 928);
+    assert_eq!(
+        check_fallback_exists(&filter, &b.symbols, &b.invariants),
+        Ok(2048 - excluded(&b, &vars))
+    );
 }
 
 #[test]
@@ -411,6 +452,6 @@ proptest! {
         b.constraints = set;
         let filter = Filter::new(&b.constraints, b.plant.outputs.len());
         let vars: Vec<Var> = (0..3).map(|i| Var { space: Space::Input, index: i, prev: false }).collect();
-        exhaustive(&b, &filter, &vars);
+        exhaustive_with(&b, &filter, &vars, false);
     }
 }
