@@ -24,6 +24,7 @@ pub mod observers;
 pub mod plant;
 pub mod symbols;
 pub mod synthetic;
+pub mod tasks;
 pub mod time;
 pub mod trace;
 
