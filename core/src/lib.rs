@@ -16,6 +16,7 @@ pub mod bundle;
 pub mod constraints;
 pub mod diag;
 pub mod engine;
+pub mod export;
 pub mod expr;
 pub mod filter;
 pub mod frame;

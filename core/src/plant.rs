@@ -60,9 +60,9 @@ pub struct Signal {
     pub address: Option<Address>,
 }
 
-/// The plant file as written.
+/// The plant file as written (`Plant( … )` in RON).
 #[derive(Clone, Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "Plant", deny_unknown_fields)]
 pub struct PlantFile {
     /// Display name.
     pub name: String,
