@@ -202,7 +202,7 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
         let e = render_dnf(symbols, &c.dnf, true, &mut fil.inputs);
         let _ = writeln!(fil.body, "(* {} = {} *)\n{v} := {e};", c.id, c.source.replace("*)", "* )"));
         for l in c.dnf.iter().flatten() {
-            if !(l.var.space == Space::Output && !l.var.prev) {
+            if l.var.space != Space::Output || l.var.prev {
                 support.insert(l.var);
             }
         }

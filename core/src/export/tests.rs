@@ -180,3 +180,41 @@ fn st_conforms_to_the_native_engine() {
     assert!(task_changes > 1000, "task changes {task_changes}");
     assert!(faults > 20, "faults {faults}");
 }
+
+/// Task outputs are literals of the notation (`turn_out:infeasible`), and the monitor
+/// publishes them: a table rotation stopped (A4 released) long enough becomes infeasible.
+#[test]
+fn task_outputs_are_constraint_literals() {
+    let (bundle, set) = station();
+    let (cs, problems) = crate::constraints::ConstraintSet::parse(
+        "CSt1 = turn_out:infeasible . A4\n",
+        std::path::Path::new("extra.txt"),
+        &bundle.symbols,
+    );
+    assert!(problems.is_empty(), "{problems:#?}");
+    let ft = FrameTasks::compile(&set, &bundle.symbols).unwrap();
+    let mut monitor = Monitor::new(&set, Millis(0));
+    let mut frame = Frame::new(bundle.symbols.sizes());
+    let c4 = bundle.plant.input("C4").unwrap();
+    let a4 = bundle.plant.output("A4").unwrap();
+    // Table at C4, rotation ordered at t = 0; it leaves C4 at 100 ms; A4 released at 1 s.
+    let steps: [(u64, bool, bool); 4] = [(0, true, true), (100, false, true), (1000, false, false), (4700, false, false)];
+    let mut infeasible_at = None;
+    for (t, c4v, a4v) in steps {
+        frame.shift();
+        frame.now_mut(Space::Input).set(c4, c4v);
+        frame.now_mut(Space::Output).set(a4, a4v);
+        ft.step(&mut monitor, Millis(t), &frame);
+        ft.publish(&monitor, &mut frame);
+        frame.now_mut(Space::Output).set(a4, true);
+        if crate::expr::eval_dnf(&cs.constraints[0].dnf, &frame) && infeasible_at.is_none() {
+            infeasible_at = Some(t);
+        }
+    }
+    // Tolerance γ − α = 3.6 s of interruption from 1 s: alarm at 4.6 s, seen at 4.7 s.
+    assert_eq!(infeasible_at, Some(4700));
+    // (The first record is a T007 warning: RE(C4) at t = 0 ends turn_back, which never started.)
+    let alarm = monitor.alarms.iter().find(|a| a.severity == crate::tasks::Severity::Alarm).unwrap();
+    assert_eq!((alarm.code, alarm.time, alarm.subject.as_str()), (crate::tasks::AlarmCode::T001, Millis(4600), "turn_out"));
+    assert_eq!(alarm.earlier_by_ms, Some(1500));
+}

@@ -317,10 +317,10 @@ impl Monitor {
         let mut cross_of_task = vec![Vec::new(); set.tasks.len()];
         for (k, c) in set.cross.iter().enumerate() {
             for (task, _, _) in &c.terms {
-                if let Some(i) = set.task(task) {
-                    if !cross_of_task[i].contains(&k) {
-                        cross_of_task[i].push(k);
-                    }
+                if let Some(i) = set.task(task)
+                    && !cross_of_task[i].contains(&k)
+                {
+                    cross_of_task[i].push(k);
                 }
             }
         }
