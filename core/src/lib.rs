@@ -21,6 +21,7 @@ pub mod diag;
 pub mod emulator;
 pub mod engine;
 pub mod explain;
+pub mod export;
 pub mod expr;
 pub mod filter;
 pub mod frame;
@@ -30,6 +31,7 @@ pub mod plant;
 pub mod sim;
 pub mod symbols;
 pub mod synthetic;
+pub mod tasks;
 pub mod time;
 pub mod trace;
 

@@ -1,3 +1,4 @@
 //! Integration tests: one binary.
 
+mod export_st;
 mod fuzz_loaders;

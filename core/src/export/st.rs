@@ -1,0 +1,491 @@
+//! IEC 61131-3 Structured Text export of the observers, the safety filter with its
+//! fallback, and the task monitors.
+//!
+//! The generated program `Vigie_Safety` is meant to run **at the end of the PLC cycle**,
+//! after the control program has written its commands (`CMD_*`), as the paper's
+//! architecture places the filter. Per cycle it calls, in order:
+//! 1. `FB_Observers` — the observers of `observers.ron` (memories and counters);
+//! 2. `FB_Filter` — constraint evaluation on the commanded outputs, the trip latch and
+//!    the fallback vector (priority to zero). The fallback is exported as a function of
+//!    the context: every valuation of the variables the constraints read besides the
+//!    outputs at t is enumerated, the native fallback is computed for each, and each
+//!    output becomes a sum of products (prime implicants found greedily) of the contexts
+//!    where the fallback sets it to 1;
+//! 3. `FB_Tasks` — the task monitors, with each stopwatch stored as an offset variable
+//!    (`T_<task>_DX`, `T_<task>_DY`) and the entry time of the current state
+//!    (`T_<task>_SINCE`), as in the thesis's chapter 6: `x = δx + (NOW_MS − since)` while
+//!    the clock runs, `x = δx` while it is frozen. Violations are checked before the
+//!    cycle's events (strictly past the bounds) and after them (at the bounds), which
+//!    gives the same decisions as the native monitor sampled at the cycle times;
+//! 4. the shift of every value to its `_P` (value at t−1) copy.
+//!
+//! Names: inputs `I_<id>`, commanded outputs `CMD_<id>`, applied outputs `Q_<id>`,
+//! observers `O_<id>`, auxiliaries `X_<id>` (`:` and other characters become `_`), and
+//! `<name>_P` for the value at t−1. Time `NOW_MS` is a `LINT` in milliseconds supplied by
+//! the caller (e.g. from the PLC's system clock).
+//!
+//! Not exported: controller windows and cross-task constraints of the coordinator, the
+//! global latch variant, and unexpected-event warnings (warnings change no decision).
+
+use crate::bundle::PlantBundle;
+use crate::expr::{self, Dnf};
+use crate::filter::Filter;
+use crate::frame::Frame;
+use crate::observers::Rule;
+use crate::symbols::{Literal, Space, Symbols, Var};
+use crate::tasks::spec::{Slowdown, Unexpected};
+use crate::tasks::TaskSet;
+use std::collections::BTreeSet;
+use std::fmt::Write as _;
+
+/// Largest number of context variables for which the fallback is enumerated.
+pub const FALLBACK_SUPPORT_LIMIT: usize = 20;
+
+/// An identifier-safe rendering of a name.
+pub fn mangle(name: &str) -> String {
+    let mut out = String::new();
+    for c in name.chars() {
+        let c = if c.is_ascii_alphanumeric() { c } else { '_' };
+        if !(c == '_' && out.ends_with('_')) {
+            out.push(c);
+        }
+    }
+    out.trim_end_matches('_').to_string()
+}
+
+/// The ST identifier of a variable. `filter` selects `CMD_` for outputs at t (the
+/// commanded values the filter checks) instead of `Q_` (the applied values).
+pub fn ident(symbols: &Symbols, var: Var, filter: bool) -> String {
+    let name = mangle(symbols.name(var.space, var.index));
+    let base = match var.space {
+        Space::Input => format!("I_{name}"),
+        Space::Output if filter && !var.prev => format!("CMD_{name}"),
+        Space::Output => format!("Q_{name}"),
+        Space::Observer => format!("O_{name}"),
+        Space::Aux => format!("X_{name}"),
+    };
+    if var.prev { format!("{base}_P") } else { base }
+}
+
+fn render_lit(symbols: &Symbols, l: Literal, filter: bool, used: &mut BTreeSet<String>) -> String {
+    let id = ident(symbols, l.var, filter);
+    used.insert(id.clone());
+    if l.positive { id } else { format!("NOT {id}") }
+}
+
+/// A sum of products as an ST expression; the identifiers read go into `used`.
+pub fn render_dnf(symbols: &Symbols, dnf: &Dnf, filter: bool, used: &mut BTreeSet<String>) -> String {
+    if dnf.is_empty() {
+        return "FALSE".into();
+    }
+    let terms: Vec<String> = dnf
+        .iter()
+        .map(|t| {
+            if t.is_empty() {
+                "TRUE".to_string()
+            } else {
+                let lits: Vec<String> = t.iter().map(|l| render_lit(symbols, *l, filter, used)).collect();
+                format!("({})", lits.join(" AND "))
+            }
+        })
+        .collect();
+    terms.join(" OR ")
+}
+
+struct Fb {
+    name: String,
+    inputs: BTreeSet<String>,
+    extra_inputs: Vec<(String, &'static str)>,
+    outputs: Vec<(String, &'static str)>,
+    locals: Vec<(String, &'static str)>,
+    body: String,
+}
+
+impl Fb {
+    fn new(name: &str) -> Self {
+        Self {
+            name: name.into(),
+            inputs: BTreeSet::new(),
+            extra_inputs: Vec::new(),
+            outputs: Vec::new(),
+            locals: Vec::new(),
+            body: String::new(),
+        }
+    }
+
+    fn render(&self, out: &mut String, doc: &str) {
+        let _ = writeln!(out, "(* {doc} *)");
+        let _ = writeln!(out, "FUNCTION_BLOCK {}", self.name);
+        section(out, "VAR_INPUT", self.inputs.iter().map(|n| (n.clone(), "BOOL")).chain(self.extra_inputs.iter().cloned()));
+        section(out, "VAR_OUTPUT", self.outputs.iter().cloned());
+        section(out, "VAR", self.locals.iter().cloned());
+        out.push_str(&self.body);
+        let _ = writeln!(out, "END_FUNCTION_BLOCK\n");
+    }
+
+    fn call(&self, instance: &str) -> String {
+        let args: Vec<String> = self
+            .inputs
+            .iter()
+            .cloned()
+            .chain(self.extra_inputs.iter().map(|(n, _)| n.clone()))
+            .map(|n| format!("{n} := {n}"))
+            .collect();
+        format!("{instance}({});\n", args.join(", "))
+    }
+}
+
+fn section(out: &mut String, kind: &str, vars: impl Iterator<Item = (String, &'static str)>) {
+    let vars: Vec<_> = vars.collect();
+    if vars.is_empty() {
+        return;
+    }
+    let _ = writeln!(out, "{kind}");
+    for (n, t) in vars {
+        let _ = writeln!(out, "    {n} : {t};");
+    }
+    let _ = writeln!(out, "END_VAR");
+}
+
+/// The Structured Text of the bundle's observers and filter, and of the task monitors
+/// when `tasks` is given (their event expressions are resolved against the bundle's
+/// symbols; an expression that does not resolve is exported as `FALSE` with a comment).
+pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
+    let symbols = &bundle.symbols;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "(* Generated by Vigie from {}: observers, safety filter with fallback, task monitors.\n   Call Vigie_Safety at the end of every PLC cycle, after the control program. *)\n",
+        bundle.dir.display()
+    );
+
+    // Observers.
+    let mut obs = Fb::new("FB_Observers");
+    for (i, def) in bundle.observers.defs.iter().enumerate() {
+        let o = ident(symbols, Var { space: Space::Observer, index: u32::try_from(i).unwrap_or(0), prev: false }, false);
+        let dnf = |text: &str, used: &mut BTreeSet<String>| match expr::parse_str(text).and_then(|e| e.to_dnf(symbols)) {
+            Ok(d) => render_dnf(symbols, &expr::simplify(&d), false, used),
+            Err(_) => "FALSE (* unresolved *)".into(),
+        };
+        let _ = writeln!(obs.body, "(* {}: {} *)", def.id, def.description.replace("*)", "* )"));
+        match &def.rule {
+            Rule::Memory { set, reset } => {
+                let m = format!("M_{}", &o[2..]);
+                let s = dnf(set, &mut obs.inputs);
+                let r = dnf(reset, &mut obs.inputs);
+                let _ = writeln!(obs.body, "IF {s} THEN\n    {m} := TRUE;\nELSIF {r} THEN\n    {m} := FALSE;\nEND_IF;\n{o} := {m};");
+                obs.locals.push((m, "BOOL"));
+            }
+            Rule::Counter { up, down, clear, at_least } => {
+                let c = format!("CNT_{}", &o[2..]);
+                let u = dnf(up, &mut obs.inputs);
+                let d = dnf(down, &mut obs.inputs);
+                let cl = clear.as_deref().map_or_else(|| "FALSE".to_string(), |t| dnf(t, &mut obs.inputs));
+                let _ = writeln!(
+                    obs.body,
+                    "IF {cl} THEN\n    {c} := 0;\nELSE\n    IF {u} THEN\n        IF {c} < 1000 THEN\n            {c} := {c} + 1;\n        END_IF;\n    END_IF;\n    IF ({d}) AND {c} > 0 THEN\n        {c} := {c} - 1;\n    END_IF;\nEND_IF;\n{o} := {c} >= {at_least};"
+                );
+                obs.locals.push((c, "DINT"));
+            }
+        }
+        obs.outputs.push((o, "BOOL"));
+    }
+
+    // Filter.
+    let n_out = bundle.plant.outputs.len();
+    let filter = Filter::new(&bundle.constraints, n_out);
+    let mut fil = Fb::new("FB_Filter");
+    let mut viol = Vec::new();
+    let mut support: BTreeSet<Var> = BTreeSet::new();
+    for c in &bundle.constraints.constraints {
+        let v = format!("V_{}", mangle(&c.id));
+        let e = render_dnf(symbols, &c.dnf, true, &mut fil.inputs);
+        let _ = writeln!(fil.body, "(* {} = {} *)\n{v} := {e};", c.id, c.source.replace("*)", "* )"));
+        for l in c.dnf.iter().flatten() {
+            if l.var.space != Space::Output || l.var.prev {
+                support.insert(l.var);
+            }
+        }
+        fil.outputs.push((v.clone(), "BOOL"));
+        viol.push(v);
+    }
+    for k in 0..n_out {
+        fil.inputs.insert(ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, true));
+    }
+    let any = if viol.is_empty() { "FALSE".to_string() } else { viol.join(" OR ") };
+    let _ = writeln!(fil.body, "VIOLATION := {any};\nIF VIOLATION AND NOT LATCHED THEN\n    LATCHED := TRUE;\nEND_IF;\nIF LATCHED THEN\n    (* Fallback: fewest outputs ON in this context (priority to zero). *)");
+    let support: Vec<Var> = support.into_iter().collect();
+    let fallback = fallback_cover(&filter, symbols, &support, n_out);
+    for k in 0..n_out {
+        let q = ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, false);
+        let e = match &fallback {
+            Some(cubes) => {
+                let dnf: Dnf = cubes[k].clone();
+                render_dnf(symbols, &dnf, true, &mut fil.inputs)
+            }
+            None => "FALSE (* context too large to enumerate *)".into(),
+        };
+        let _ = writeln!(fil.body, "    {q} := {e};");
+    }
+    let _ = writeln!(fil.body, "ELSE");
+    for k in 0..n_out {
+        let v = Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false };
+        let _ = writeln!(fil.body, "    {} := {};", ident(symbols, v, false), ident(symbols, v, true));
+    }
+    let _ = writeln!(fil.body, "END_IF;\nTRIPPED := LATCHED;");
+    for k in 0..n_out {
+        let v = Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false };
+        fil.outputs.push((ident(symbols, v, false), "BOOL"));
+    }
+    fil.outputs.push(("VIOLATION".into(), "BOOL"));
+    fil.outputs.push(("TRIPPED".into(), "BOOL"));
+    fil.locals.push(("LATCHED".into(), "BOOL"));
+
+    // Tasks.
+    let tfb = tasks.map(|set| task_fb(set, symbols));
+
+    obs.render(&mut out, "Observers (seed 004, section 6.2).");
+    fil.render(&mut out, "Safety filter: constraints on the commanded outputs, latch, fallback.");
+    if let Some(t) = &tfb {
+        t.render(&mut out, "Task monitors (seed 000): two stopwatches per task as offset variables.");
+    }
+
+    // Program.
+    let mut all_vars: Vec<Var> = Vec::new();
+    for space in Space::ALL {
+        for i in 0..symbols.len(space) {
+            for prev in [false, true] {
+                all_vars.push(Var { space, index: u32::try_from(i).unwrap_or(0), prev });
+            }
+        }
+    }
+    let _ = writeln!(out, "(* One call per PLC cycle, after the control program. *)\nPROGRAM Vigie_Safety");
+    let mut inputs: Vec<(String, &'static str)> = vec![("NOW_MS".into(), "LINT")];
+    for i in 0..symbols.len(Space::Input) {
+        inputs.push((ident(symbols, Var { space: Space::Input, index: u32::try_from(i).unwrap_or(0), prev: false }, false), "BOOL"));
+    }
+    for k in 0..n_out {
+        inputs.push((ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, true), "BOOL"));
+    }
+    section(&mut out, "VAR_INPUT", inputs.into_iter());
+    let mut outputs: Vec<(String, &'static str)> = Vec::new();
+    for k in 0..n_out {
+        outputs.push((ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, false), "BOOL"));
+    }
+    outputs.push(("TRIPPED".into(), "BOOL"));
+    for space in [Space::Observer, Space::Aux] {
+        for i in 0..symbols.len(space) {
+            outputs.push((ident(symbols, Var { space, index: u32::try_from(i).unwrap_or(0), prev: false }, false), "BOOL"));
+        }
+    }
+    if let Some(t) = &tfb {
+        for (n, ty) in &t.outputs {
+            if !outputs.iter().any(|(o, _)| o == n) {
+                outputs.push((n.clone(), ty));
+            }
+        }
+    }
+    section(&mut out, "VAR_OUTPUT", outputs.iter().cloned());
+    let mut locals: Vec<(String, &'static str)> = all_vars
+        .iter()
+        .filter(|v| v.prev)
+        .map(|v| (ident(symbols, *v, false), "BOOL"))
+        .collect();
+    locals.push(("fbObservers".into(), "FB_Observers"));
+    locals.push(("fbFilter".into(), "FB_Filter"));
+    if tfb.is_some() {
+        locals.push(("fbTasks".into(), "FB_Tasks"));
+    }
+    section(&mut out, "VAR", locals.into_iter());
+    out.push_str(&obs.call("fbObservers"));
+    for (n, _) in &obs.outputs {
+        let _ = writeln!(out, "{n} := fbObservers.{n};");
+    }
+    out.push_str(&fil.call("fbFilter"));
+    for k in 0..n_out {
+        let q = ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, false);
+        let _ = writeln!(out, "{q} := fbFilter.{q};");
+    }
+    let _ = writeln!(out, "TRIPPED := fbFilter.TRIPPED;");
+    if let Some(t) = &tfb {
+        out.push_str(&t.call("fbTasks"));
+        for (n, _) in &t.outputs {
+            let _ = writeln!(out, "{n} := fbTasks.{n};");
+        }
+    }
+    let _ = writeln!(out, "(* Values at t-1 for the next cycle. *)");
+    for v in all_vars.iter().filter(|v| v.prev) {
+        let now = Var { prev: false, ..*v };
+        let _ = writeln!(out, "{} := {};", ident(symbols, *v, false), ident(symbols, now, false));
+    }
+    let _ = writeln!(out, "END_PROGRAM");
+    out
+}
+
+/// Per output, the fallback's ON-set over the context `support` as a cover of cubes, or
+/// `None` when the support is too large to enumerate.
+pub fn fallback_cover(filter: &Filter, symbols: &Symbols, support: &[Var], n_out: usize) -> Option<Vec<Dnf>> {
+    let n = support.len();
+    if n > FALLBACK_SUPPORT_LIMIT {
+        return None;
+    }
+    let mut on: Vec<Vec<bool>> = vec![vec![false; 1 << n]; n_out];
+    let mut frame = Frame::new(symbols.sizes());
+    for m in 0..(1usize << n) {
+        for (j, v) in support.iter().enumerate() {
+            let table = if v.prev { &mut frame.prev } else { &mut frame.now };
+            table[v.space as usize].set(v.index as usize, (m >> j) & 1 == 1);
+        }
+        if let Ok(bits) = filter.fallback(&frame) {
+            for (k, set) in on.iter_mut().enumerate() {
+                set[m] = bits.get(k);
+            }
+        }
+    }
+    Some(on.iter().map(|set| cover(set, n, support)).collect())
+}
+
+/// Greedy prime-implicant cover of an ON-set over `n` variables.
+fn cover(on: &[bool], n: usize, support: &[Var]) -> Dnf {
+    let mut covered = vec![false; on.len()];
+    let mut cubes: Dnf = Vec::new();
+    for m in 0..on.len() {
+        if !on[m] || covered[m] {
+            continue;
+        }
+        // A cube: `care` bits fixed to the bits of `m`.
+        let mut care: usize = (1 << n) - 1;
+        for j in 0..n {
+            let trial = care & !(1 << j);
+            if cube_members(m, trial, n).all(|x| on[x]) {
+                care = trial;
+            }
+        }
+        for x in cube_members(m, care, n) {
+            covered[x] = true;
+        }
+        let term = (0..n)
+            .filter(|j| care >> j & 1 == 1)
+            .map(|j| Literal { var: support[j], positive: m >> j & 1 == 1 })
+            .collect();
+        cubes.push(term);
+    }
+    cubes
+}
+
+fn cube_members(m: usize, care: usize, n: usize) -> impl Iterator<Item = usize> {
+    let free: Vec<usize> = (0..n).filter(|j| care >> j & 1 == 0).collect();
+    let base = m & care;
+    (0..(1usize << free.len())).map(move |s| {
+        let mut x = base;
+        for (b, j) in free.iter().enumerate() {
+            if s >> b & 1 == 1 {
+                x |= 1 << j;
+            }
+        }
+        x
+    })
+}
+
+fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
+    let mut fb = Fb::new("FB_Tasks");
+    fb.extra_inputs.push(("NOW_MS".into(), "LINT"));
+    let ev = |text: &str, used: &mut BTreeSet<String>| match expr::parse_str(text).and_then(|e| e.to_dnf(symbols)) {
+        Ok(d) => render_dnf(symbols, &expr::simplify(&d), false, used),
+        Err(_) => "FALSE (* unresolved *)".into(),
+    };
+    let mut pre = String::new();
+    let mut events = String::new();
+    let mut post = String::new();
+    for t in &set.tasks {
+        let p = format!("T_{}", mangle(&t.id));
+        let (st, x, y, dx, dy, since) = (
+            format!("{p}_STATE"),
+            format!("{p}_X"),
+            format!("{p}_Y"),
+            format!("{p}_DX"),
+            format!("{p}_DY"),
+            format!("{p}_SINCE"),
+        );
+        let clocks = format!(
+            "IF {st} = 1 THEN\n    {x} := {dx} + (NOW_MS - {since});\n    {y} := {dy} + (NOW_MS - {since});\nELSIF {st} = 2 THEN\n    {x} := {dx} + (NOW_MS - {since});\n    {y} := {dy};\nELSE\n    {x} := {dx};\n    {y} := {dy};\nEND_IF;\n"
+        );
+        let freeze = format!("{dx} := {x};\n    {dy} := {y};\n    {since} := NOW_MS;\n    {st} := 4;");
+        let (a, b, g) = (t.alpha, t.beta, t.gamma);
+        let tol = g - a;
+        // Violated strictly before NOW (pre) and at NOW (post).
+        let mut pre_c = vec![format!("{x} > {g}")];
+        let mut post_c = vec![format!("{x} >= {g}")];
+        if t.interruptible() {
+            pre_c.push(format!("{x} - {y} > {tol}"));
+            post_c.push(format!("{x} - {y} >= {tol}"));
+            if t.slowdown == Slowdown::Strict {
+                pre_c.push(format!("{y} > {b}"));
+                post_c.push(format!("{y} > {b}"));
+            }
+        }
+        let _ = writeln!(
+            pre,
+            "(* {}: [α, β] = [{a}, {b}] ms, [α, γ) = [{a}, {g}) ms *)\n{clocks}IF ({st} = 1 OR {st} = 2) AND ({}) THEN\n    {freeze}\nEND_IF;",
+            t.id,
+            pre_c.join(" OR ")
+        );
+        let _ = writeln!(post, "{clocks}IF ({st} = 1 OR {st} = 2) AND ({}) THEN\n    {freeze}\nEND_IF;", post_c.join(" OR "));
+        let end = ev(&t.end, &mut fb.inputs);
+        let start = ev(&t.start, &mut fb.inputs);
+        let strict_unexpected = set.unexpected == Unexpected::Alarm;
+        let y_max = if t.slowdown == Slowdown::Strict { b } else { g };
+        let end_bad = if t.interruptible() {
+            format!("{x} < {a} OR {y} < {a} OR {x} >= {g} OR {y} > {y_max}")
+        } else {
+            format!("{x} < {a} OR {x} >= {g}")
+        };
+        let check = if set.check_end {
+            format!("\n        IF {end_bad} THEN\n            {st} := 4;\n        END_IF;")
+        } else {
+            String::new()
+        };
+        let unexpected_end = if strict_unexpected { format!("\n    ELSE\n        {freeze}") } else { String::new() };
+        let unexpected_start = if strict_unexpected { format!("\n    ELSE\n        {freeze}") } else { String::new() };
+        let _ = writeln!(
+            events,
+            "(* {} *)\nIF {st} <> 4 AND ({end}) THEN\n    IF {st} = 1 OR {st} = 2 THEN\n        {dx} := {x};\n        {dy} := {y};\n        {since} := NOW_MS;\n        {st} := 3;{check}{unexpected_end}\n    END_IF;\nEND_IF;\nIF {st} <> 4 AND ({start}) THEN\n    IF {st} = 0 OR {st} = 3 THEN\n        {dx} := 0;\n        {dy} := 0;\n        {x} := 0;\n        {y} := 0;\n        {since} := NOW_MS;\n        {st} := 1;{unexpected_start}\n    END_IF;\nEND_IF;",
+            t.id
+        );
+        if let Some((int, res)) = &t.interruption {
+            let i = ev(int, &mut fb.inputs);
+            let r = ev(res, &mut fb.inputs);
+            let _ = writeln!(
+                events,
+                "IF {st} = 1 AND ({i}) THEN\n    {dx} := {x};\n    {dy} := {y};\n    {since} := NOW_MS;\n    {st} := 2;\nELSIF {st} = 2 AND ({r}) THEN\n    {dx} := {x};\n    {dy} := {y};\n    {since} := NOW_MS;\n    {st} := 1;\nEND_IF;"
+            );
+        }
+        fb.outputs.push((st, "INT"));
+        fb.outputs.push((x, "LINT"));
+        fb.outputs.push((y, "LINT"));
+        fb.locals.push((dx, "LINT"));
+        fb.locals.push((dy, "LINT"));
+        fb.locals.push((since, "LINT"));
+    }
+    fb.body.push_str("(* 1. Violations strictly before NOW_MS. *)\n");
+    fb.body.push_str(&pre);
+    fb.body.push_str("(* 2. Events of this cycle: end, start, interrupt, resume. *)\n");
+    fb.body.push_str(&events);
+    fb.body.push_str("(* 3. Violations at NOW_MS. *)\n");
+    fb.body.push_str(&post);
+    // Auxiliary outputs for the safety filter.
+    let aux: Vec<String> = set.aux_names();
+    for (k, t) in set.tasks.iter().enumerate() {
+        let st = format!("T_{}_STATE", mangle(&t.id));
+        for (j, code) in [1, 2, 4].into_iter().enumerate() {
+            let name = aux.get(3 * k + j).cloned().unwrap_or_default();
+            let id = format!("X_{}", mangle(&name));
+            let _ = writeln!(fb.body, "{id} := {st} = {code};");
+            fb.outputs.push((id, "BOOL"));
+        }
+    }
+    if set.unexpected == Unexpected::Warn || set.unexpected == Unexpected::Ignore {
+        fb.body.push_str("(* Unexpected events are warnings in the native monitor: no decision here. *)\n");
+    }
+    fb
+}

@@ -1,0 +1,220 @@
+use super::interp::{self, Machine, Val};
+use super::st;
+use crate::bits::Bits;
+use crate::bundle::PlantBundle;
+use crate::engine::{Commanded, Engine, FilterMode};
+use crate::filter::Filter;
+use crate::frame::Frame;
+use crate::plant::Plant;
+use crate::symbols::{Space, Var};
+use crate::tasks::{FrameTasks, Monitor, TaskSet};
+use crate::time::Millis;
+use std::path::PathBuf;
+
+fn station() -> (PlantBundle, TaskSet) {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+    let set = TaskSet::load(&dir.join("tasks.ron")).unwrap();
+    let plant = Plant::load(&dir.join("plant.ron")).unwrap();
+    let (bundle, problems) = PlantBundle::from_plant(&dir, plant, &set.aux_names());
+    // Property (6) findings (V0106) are static warnings about physically impossible
+    // contexts of the paper's constraints; the fallback there is all-zero on both sides.
+    assert!(problems.iter().all(|p| !p.is_error() || p.code == "V0106"), "{problems:#?}");
+    (bundle, set)
+}
+
+/// Deterministic xorshift generator for the traces.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn chance(&mut self, one_in: u64) -> bool {
+        self.next() % one_in == 0
+    }
+}
+
+fn b(m: &Machine, name: &str) -> bool {
+    match m.get(name) {
+        Ok(Val::Bool(v)) => v,
+        other => panic!("{name}: {other:?}"),
+    }
+}
+
+fn i(m: &Machine, name: &str) -> i64 {
+    match m.get(name) {
+        Ok(Val::Int(v)) => v,
+        other => panic!("{name}: {other:?}"),
+    }
+}
+
+#[test]
+fn generated_st_parses_with_the_interpreter() {
+    let (bundle, set) = station();
+    let text = st::generate(&bundle, Some(&set));
+    let unit = interp::parse(&text).unwrap();
+    Machine::new(unit, "Vigie_Safety").unwrap();
+    assert!(text.contains("FUNCTION_BLOCK FB_Tasks"));
+    assert!(text.contains("T_turn_out_DX"));
+    assert!(text.contains("X_turn_out_infeasible"));
+}
+
+/// The exported fallback equals the native fallback in every context (exhaustive over
+/// the constraints' support, 11 variables on the sorting station).
+#[test]
+fn fallback_is_exact_in_every_context() {
+    let (bundle, _) = station();
+    let text = st::generate(&bundle, None);
+    let unit = interp::parse(&text).unwrap();
+    let n_out = bundle.plant.outputs.len();
+    let filter = Filter::new(&bundle.constraints, n_out);
+    let mut support: Vec<Var> = bundle
+        .constraints
+        .constraints
+        .iter()
+        .flat_map(|c| c.dnf.iter().flatten())
+        .filter(|l| !(l.var.space == Space::Output && !l.var.prev))
+        .map(|l| l.var)
+        .collect();
+    support.sort();
+    support.dedup();
+    assert_eq!(support.len(), 11);
+    let mut m = Machine::new(unit, "FB_Filter").unwrap();
+    m.set("LATCHED", Val::Bool(true)).unwrap();
+    for ctx in 0..(1u32 << support.len()) {
+        let mut frame = Frame::new(bundle.symbols.sizes());
+        for (j, v) in support.iter().enumerate() {
+            let on = ctx >> j & 1 == 1;
+            let table = if v.prev { &mut frame.prev } else { &mut frame.now };
+            table[v.space as usize].set(v.index as usize, on);
+            m.set(&st::ident(&bundle.symbols, *v, true), Val::Bool(on)).unwrap();
+        }
+        m.scan().unwrap();
+        let native = filter.fallback(&frame).unwrap_or_else(|_| Bits::zeros(n_out));
+        for k in 0..n_out {
+            let q = st::ident(&bundle.symbols, Var { space: Space::Output, index: k as u32, prev: false }, false);
+            assert_eq!(b(&m, &q), native.get(k), "context {ctx:#b}, output {q}");
+        }
+    }
+}
+
+/// Random input/command traces (seeded) through the native engine + task monitor and
+/// through the interpreted ST: identical decisions cycle by cycle.
+#[test]
+fn st_conforms_to_the_native_engine() {
+    let (bundle, set) = station();
+    let text = st::generate(&bundle, Some(&set));
+    let unit = interp::parse(&text).unwrap();
+    let sym = &bundle.symbols;
+    let n_in = bundle.plant.inputs.len();
+    let n_out = bundle.plant.outputs.len();
+    let frame_tasks = FrameTasks::compile(&set, sym).unwrap();
+    let name = |space, k: usize, filter| st::ident(sym, Var { space, index: k as u32, prev: false }, filter);
+    let (mut trips, mut task_changes, mut faults) = (0, 0, 0);
+    for seed in 1..=120u64 {
+        let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+        let mut engine = Engine::new(&bundle, FilterMode::Enforce, 1);
+        let mut monitor = Monitor::new(&set, Millis(0));
+        let mut m = Machine::new(unit.clone(), "Vigie_Safety").unwrap();
+        let mut inputs = Bits::zeros(n_in);
+        let mut cmd = Bits::zeros(n_out);
+        let mut now = 0u64;
+        // Quiet traces trip later, so the pre-trip behaviour is covered too.
+        let (p_in, p_out) = if seed % 2 == 0 { (6, 5) } else { (12, 25) };
+        let mut last_states = vec![0i64; set.tasks.len()];
+        for cycle in 0..400 {
+            now += 1 + rng.next() % 400;
+            for k in 0..n_in {
+                if rng.chance(p_in) {
+                    inputs.set(k, !inputs.get(k));
+                }
+            }
+            for k in 0..n_out {
+                if rng.chance(p_out) {
+                    cmd.set(k, !cmd.get(k));
+                }
+            }
+            engine.cycle(Millis(now), &inputs, &mut Commanded(cmd.clone()));
+            frame_tasks.step(&mut monitor, Millis(now), engine.frame());
+            frame_tasks.publish(&monitor, engine.frame_mut());
+
+            m.set("NOW_MS", Val::Int(now as i64)).unwrap();
+            for k in 0..n_in {
+                m.set(&name(Space::Input, k, false), Val::Bool(inputs.get(k))).unwrap();
+            }
+            for k in 0..n_out {
+                m.set(&name(Space::Output, k, true), Val::Bool(cmd.get(k))).unwrap();
+            }
+            m.scan().unwrap();
+
+            let at = format!("seed {seed}, cycle {cycle}, t = {now} ms");
+            for k in 0..n_out {
+                assert_eq!(b(&m, &name(Space::Output, k, false)), engine.applied().get(k), "{at}: output {k}");
+            }
+            assert_eq!(b(&m, "TRIPPED"), engine.is_tripped(), "{at}: trip");
+            for k in 0..sym.len(Space::Observer) {
+                assert_eq!(b(&m, &name(Space::Observer, k, false)), engine.frame().now(Space::Observer).get(k), "{at}: observer {k}");
+            }
+            for (ti, t) in set.tasks.iter().enumerate() {
+                let code = i(&m, &format!("T_{}_STATE", st::mangle(&t.id)));
+                let native = monitor.tasks[ti].state.st_code();
+                assert_eq!(code, native, "{at}: task {} ({:?})", t.id, monitor.tasks[ti]);
+                if code != last_states[ti] {
+                    task_changes += 1;
+                    if code == 4 {
+                        faults += 1;
+                    }
+                }
+                last_states[ti] = code;
+            }
+            for k in 0..sym.len(Space::Aux) {
+                assert_eq!(b(&m, &name(Space::Aux, k, false)), engine.frame().now(Space::Aux).get(k), "{at}: aux {k}");
+            }
+        }
+        trips += usize::from(engine.is_tripped());
+    }
+    // The traces exercise what they claim to.
+    assert!(trips > 30, "trips {trips}");
+    assert!(task_changes > 1000, "task changes {task_changes}");
+    assert!(faults > 20, "faults {faults}");
+}
+
+/// Task outputs are literals of the notation (`turn_out:infeasible`), and the monitor
+/// publishes them: a table rotation stopped (A4 released) long enough becomes infeasible.
+#[test]
+fn task_outputs_are_constraint_literals() {
+    let (bundle, set) = station();
+    let (cs, problems) = crate::constraints::ConstraintSet::parse(
+        "CSt1 = turn_out:infeasible . A4\n",
+        std::path::Path::new("extra.txt"),
+        &bundle.symbols,
+    );
+    assert!(problems.is_empty(), "{problems:#?}");
+    let ft = FrameTasks::compile(&set, &bundle.symbols).unwrap();
+    let mut monitor = Monitor::new(&set, Millis(0));
+    let mut frame = Frame::new(bundle.symbols.sizes());
+    let c4 = bundle.plant.input("C4").unwrap();
+    let a4 = bundle.plant.output("A4").unwrap();
+    // Table at C4, rotation ordered at t = 0; it leaves C4 at 100 ms; A4 released at 1 s.
+    let steps: [(u64, bool, bool); 4] = [(0, true, true), (100, false, true), (1000, false, false), (4700, false, false)];
+    let mut infeasible_at = None;
+    for (t, c4v, a4v) in steps {
+        frame.shift();
+        frame.now_mut(Space::Input).set(c4, c4v);
+        frame.now_mut(Space::Output).set(a4, a4v);
+        ft.step(&mut monitor, Millis(t), &frame);
+        ft.publish(&monitor, &mut frame);
+        frame.now_mut(Space::Output).set(a4, true);
+        if crate::expr::eval_dnf(&cs.constraints[0].dnf, &frame) && infeasible_at.is_none() {
+            infeasible_at = Some(t);
+        }
+    }
+    // Tolerance γ − α = 3.6 s of interruption from 1 s: alarm at 4.6 s, seen at 4.7 s.
+    assert_eq!(infeasible_at, Some(4700));
+    // (The first record is a T007 warning: RE(C4) at t = 0 ends turn_back, which never started.)
+    let alarm = monitor.alarms.iter().find(|a| a.severity == crate::tasks::Severity::Alarm).unwrap();
+    assert_eq!((alarm.code, alarm.time, alarm.subject.as_str()), (crate::tasks::AlarmCode::T001, Millis(4600), "turn_out"));
+    assert_eq!(alarm.earlier_by_ms, Some(1500));
+}

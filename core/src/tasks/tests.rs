@@ -1,0 +1,219 @@
+use super::monitor::crossing;
+use super::spec::TaskFile;
+use super::*;
+use crate::time::Millis;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Fixtures {
+    specs: BTreeMap<String, TaskFile>,
+    cases: Vec<Case>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Case {
+    name: String,
+    spec: String,
+    events: Vec<(u64, String)>,
+    until_ms: u64,
+    /// (time, code, subject, x, y, watchdog)
+    alarms: Vec<(u64, AlarmCode, String, Option<u64>, Option<u64>, Option<u64>)>,
+    #[serde(default)]
+    texts: Vec<(usize, String)>,
+    /// (at, task, state, x, y, interruptions, slack, predicted alarm)
+    #[serde(default)]
+    status: Vec<(u64, String, TaskState, u64, u64, u32, i64, Option<u64>)>,
+}
+
+fn load_fixtures() -> Fixtures {
+    ron::from_str(include_str!("fixtures.ron")).unwrap()
+}
+
+fn spec_of(f: &Fixtures, name: &str) -> TaskSet {
+    let file = f.specs.get(name).unwrap_or_else(|| panic!("no spec {name}"));
+    TaskSet::from_file(file.clone(), Path::new(name), None).unwrap()
+}
+
+#[test]
+fn thesis_fixtures() {
+    let f = load_fixtures();
+    assert!(f.cases.len() >= 20);
+    for case in &f.cases {
+        let set = spec_of(&f, &case.spec);
+        let mut m = Monitor::new(&set, Millis::ZERO);
+        let mut statuses = Vec::new();
+        let mut checks = case.status.iter().peekable();
+        for (t, e) in &case.events {
+            while let Some(c) = checks.next_if(|c| c.0 < *t) {
+                m.advance(Millis(c.0));
+                statuses.push((c, m.status(Millis(c.0))));
+            }
+            m.on_event(Millis(*t), e);
+        }
+        for c in checks {
+            m.advance(Millis(c.0));
+            statuses.push((c, m.status(Millis(c.0))));
+        }
+        m.advance(Millis(case.until_ms));
+        let got: Vec<_> = m
+            .alarms
+            .iter()
+            .map(|a| {
+                (
+                    a.time.0,
+                    a.code,
+                    a.subject.clone(),
+                    a.x_ms,
+                    a.y_ms,
+                    a.watchdog.map(|w| w.0),
+                )
+            })
+            .collect();
+        assert_eq!(got, case.alarms, "case `{}`: {:#?}", case.name, m.alarms);
+        for (i, text) in &case.texts {
+            assert_eq!(&m.alarms[*i].text, text, "case `{}`", case.name);
+        }
+        for (c, st) in statuses {
+            let s = st.iter().find(|s| s.id == c.1).unwrap();
+            let got = (s.state, s.x_ms, s.y_ms, s.interruptions, s.slack_ms, s.predicted_alarm.map(|p| p.0));
+            assert_eq!(got, (c.2, c.3, c.4, c.5, c.6, c.7), "case `{}` status at {}", case.name, c.0);
+        }
+    }
+}
+
+#[test]
+fn watchdog_gains() {
+    let f = load_fixtures();
+    let gain = |name: &str| {
+        let case = f.cases.iter().find(|c| c.name == name).unwrap();
+        let set = spec_of(&f, &case.spec);
+        let mut m = Monitor::new(&set, Millis::ZERO);
+        for (t, e) in &case.events {
+            m.on_event(Millis(*t), e);
+        }
+        m.advance(Millis(case.until_ms));
+        m.alarms[0].earlier_by_ms
+    };
+    assert_eq!(gain("workshop scenario 1"), Some(3000));
+    assert_eq!(gain("workshop scenario 3"), Some(500));
+    assert_eq!(gain("liquid, d at 0"), Some(2000));
+    assert_eq!(gain("conveyor: permanent block at 4"), Some(6000));
+}
+
+#[test]
+fn next_deadline_predicts_the_alarm() {
+    let f = load_fixtures();
+    let set = spec_of(&f, "workshop");
+    let mut m = Monitor::new(&set, Millis::ZERO);
+    for (t, e) in [(0, "d"), (3000, "b"), (3000, "e"), (3500, "d"), (4000, "s_R"), (4500, "r_R"), (5000, "s_R")] {
+        m.on_event(Millis(t), e);
+    }
+    // Robot interrupted at 5 with x - y = 0.5: tolerance 2 used up at 6.5.
+    assert_eq!(m.next_deadline(), Some(Deadline { at: Millis(6500), after: false }));
+    assert!(m.advance(Millis(6499)).is_empty());
+    assert_eq!(m.advance(Millis(6500)).len(), 1);
+}
+
+#[test]
+fn invalid_specs_are_rejected_with_a_location() {
+    let text = "(tasks: [\n  (id: \"a\", start: \"s\", end: \"e\", alpha_ms: 5, beta_ms: 4, gamma_ms: 9),\n  (id: \"b\", start: \"s\", end: \"e\", alpha_ms: 1, beta_ms: 4, gamma_ms: 4),\n  (id: \"c\", start: \"s\", end: \"e\", interrupt: Some(\"i\"), alpha_ms: 1, beta_ms: 2, gamma_ms: 4),\n])";
+    let err = TaskSet::from_ron(text, Path::new("tasks.ron")).unwrap_err();
+    let msgs: Vec<String> = err.iter().map(ToString::to_string).collect();
+    assert_eq!(msgs.len(), 3, "{msgs:#?}");
+    assert!(msgs[0].starts_with("tasks.ron:2:8: error[V0303]: task `a`: α = 5 ms is greater than β = 4 ms"), "{}", msgs[0]);
+    assert!(msgs[1].starts_with("tasks.ron:3:8: error[V0304]: task `b`: β = 4 ms must be less than γ = 4 ms"), "{}", msgs[1]);
+    assert!(msgs[2].contains("V0305"), "{}", msgs[2]);
+    let bad = TaskSet::from_ron("(tasks: [(id: \"a\", bogus: 1)])", Path::new("t.ron")).unwrap_err();
+    assert!(bad[0].to_string().starts_with("t.ron:1:"), "{}", bad[0]);
+    // Without interrupt events the task is non-interruptible.
+    let ok = TaskSet::from_ron("(tasks: [(id: \"a\", start: \"s\", end: \"e\", alpha_ms: 1, beta_ms: 2, gamma_ms: 3)])", Path::new("t.ron")).unwrap();
+    assert!(!ok.tasks[0].interruptible());
+}
+
+#[test]
+fn crossing_is_exact_for_every_slope() {
+    // v(t) = v0 + s·t against a bound: brute force over integer instants.
+    for v0 in -5i64..6 {
+        for s in 0i64..4 {
+            for bound in -3i64..8 {
+                for strict in [true, false] {
+                    let d = crossing(v0, s, bound, strict, Millis(0));
+                    let first = (0u64..50).find(|&t| {
+                        let v = v0 + s * i64::try_from(t).unwrap();
+                        if strict { v >= bound } else { v > bound }
+                    });
+                    assert_eq!(d.map(|d| d.first_violating_ms().0), first, "{v0} {s} {bound} {strict}");
+                }
+            }
+        }
+    }
+}
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The event-driven monitor and a brute-force millisecond simulation of the closed
+        /// form agree on the first alarm of a single interruptible task.
+        #[test]
+        fn matches_brute_force(alpha in 1u64..20, extra_b in 0u64..10, extra_g in 1u64..10,
+                               gaps in proptest::collection::vec(1u64..8, 0..8)) {
+            let (a, b, g) = (alpha, alpha + extra_b, alpha + extra_b + extra_g);
+            let file = TaskFile {
+                tasks: vec![spec::TaskDef { id: "t".into(), description: String::new(), start: "d".into(), end: "b".into(),
+                    interrupt: Some("s".into()), resume: Some("r".into()), alpha_ms: a, beta_ms: b, gamma_ms: g,
+                    slowdown: spec::Slowdown::Strict }],
+                windows: vec![], cross: vec![], unexpected: spec::Unexpected::Ignore, latch: spec::Latch::PerTask,
+                repair: None, check_end: true,
+            };
+            let set = TaskSet::from_file(file, Path::new("p"), None).unwrap();
+            let mut m = Monitor::new(&set, Millis(0));
+            m.on_event(Millis(0), "d");
+            let mut t = 0;
+            let mut times = Vec::new();
+            for (k, gap) in gaps.iter().enumerate() {
+                t += gap;
+                times.push((t, if k % 2 == 0 { "s" } else { "r" }));
+                m.on_event(Millis(t), if k % 2 == 0 { "s" } else { "r" });
+            }
+            m.advance(Millis(200));
+            // Brute force: step 1 ms; events first at each instant, then the check.
+            let (mut x, mut y, mut running) = (0u64, 0u64, true);
+            let mut first = None;
+            for now in 0..=200u64 {
+                if now > 0 { x += 1; if running { y += 1; } }
+                for (et, e) in &times { if *et == now { running = *e == "r"; } }
+                let violated = x - y >= g - a || x >= g || y > b;
+                if violated { first = Some(now); break; }
+            }
+            let got = m.alarms.first().map(|a| a.deadline_ms());
+            prop_assert_eq!(got, first);
+        }
+    }
+}
+
+impl Alarm {
+    /// First integer ms at which the alarm's condition holds (the crossing instant, or one
+    /// ms later for a bound that is exceeded rather than reached).
+    fn deadline_ms(&self) -> u64 {
+        if self.code == AlarmCode::T002 { self.time.0 + 1 } else { self.time.0 }
+    }
+}
+
+#[test]
+fn synthetic_scales() {
+    let set = synthetic(1000);
+    let mut m = Monitor::new(&set, Millis(0));
+    for i in 0..1000 {
+        m.on_event(Millis(i), &format!("s{i}"));
+    }
+    assert_eq!(m.next_deadline(), Some(Deadline { at: Millis(4000), after: true }));
+    m.on_event(Millis(1000), "i0");
+    assert_eq!(m.next_deadline(), Some(Deadline { at: Millis(3000), after: false }));
+    assert_eq!(m.advance(Millis(3000)).len(), 1);
+}
