@@ -8,6 +8,7 @@
 //! - [`filter`]: constraint evaluation and the fallback with priority to zero.
 //! - [`engine`]: one PLC cycle, one function; [`history`]: the recorder.
 //! - [`trace`]: the per-cycle CSV trace format.
+//! - [`live`]: the pure half of the Modbus live link (I/O map, data age, stale inputs).
 //!
 //! See `ARCHITECTURE.md` at the repository root for the data flow and the invariants.
 
@@ -21,6 +22,7 @@ pub mod expr;
 pub mod filter;
 pub mod frame;
 pub mod history;
+pub mod live;
 pub mod observers;
 pub mod plant;
 pub mod symbols;
