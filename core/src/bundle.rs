@@ -60,11 +60,7 @@ impl PlantBundle {
             problems.push(Problem::error(
                 "V0107",
                 format!("{err} when {witness}"),
-                Some(crate::diag::Location::new(
-                    &dir.join("constraints.txt"),
-                    1,
-                    1,
-                )),
+                Some(crate::diag::Location::new(&dir.join("constraints.txt"), 1, 1)),
             ));
         }
         (

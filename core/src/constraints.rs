@@ -61,12 +61,7 @@ impl ConstraintSet {
         Self::parse_kind(text, file, symbols, SetKind::Invariants)
     }
 
-    fn parse_kind(
-        text: &str,
-        file: &Path,
-        symbols: &Symbols,
-        kind: SetKind,
-    ) -> (Self, Vec<Problem>) {
+    fn parse_kind(text: &str, file: &Path, symbols: &Symbols, kind: SetKind) -> (Self, Vec<Problem>) {
         let mut set = Self::default();
         let mut problems = Vec::new();
         let mut seen: BTreeMap<String, usize> = BTreeMap::new();
@@ -81,7 +76,10 @@ impl ConstraintSet {
                 let col = first_non_space_col(content);
                 problems.push(Problem::error(
                     "V0108",
-                    format!("expected `ID = expression`, found `{}`", content.trim()),
+                    format!(
+                        "expected `ID = expression`, found `{}`",
+                        content.trim()
+                    ),
                     at(col),
                 ));
                 continue;
@@ -118,7 +116,11 @@ impl ConstraintSet {
             let (expr, raw_dnf) = match parsed {
                 Ok(v) => v,
                 Err(err) => {
-                    problems.push(Problem::error("V0101", err.message, at(err.span.column)));
+                    problems.push(Problem::error(
+                        "V0101",
+                        err.message,
+                        at(err.span.column),
+                    ));
                     continue;
                 }
             };
@@ -332,16 +334,10 @@ impl Constraint {
         let mut warnings = Vec::new();
         let dnf = expr::simplify(raw);
         if kind == SetKind::Invariants {
-            if dnf
-                .iter()
-                .flatten()
-                .any(|l| l.var.space == Space::Output && !l.var.prev)
-            {
+            if dnf.iter().flatten().any(|l| l.var.space == Space::Output && !l.var.prev) {
                 return Err(Problem::error(
                     "V0109",
-                    format!(
-                        "invariant `{id}` reads an output at t; invariants describe situations of the plant (inputs, observers, previous outputs)"
-                    ),
+                    format!("invariant `{id}` reads an output at t; invariants describe situations of the plant (inputs, observers, previous outputs)"),
                     Some(location),
                 ));
             }
@@ -368,9 +364,7 @@ impl Constraint {
         if dnf.iter().any(Vec::is_empty) || is_tautology(&dnf) {
             return Err(Problem::error(
                 "V0105",
-                format!(
-                    "constraint `{id}` is always true: the filter would stop the plant at once"
-                ),
+                format!("constraint `{id}` is always true: the filter would stop the plant at once"),
                 Some(location),
             ));
         }

@@ -56,11 +56,7 @@ pub struct Problem {
 
 impl Problem {
     /// An error at `location`.
-    pub fn error(
-        code: &'static str,
-        message: impl Into<String>,
-        location: Option<Location>,
-    ) -> Self {
+    pub fn error(code: &'static str, message: impl Into<String>, location: Option<Location>) -> Self {
         Self {
             severity: Severity::Error,
             code,

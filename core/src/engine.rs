@@ -333,10 +333,9 @@ impl Engine {
 
     fn report_spec_error(&mut self, err: &SpecError) {
         let message = err.to_string();
-        let already = self
-            .events
-            .iter()
-            .any(|e| matches!(e, Event::SpecificationError { message: m } if *m == message));
+        let already = self.events.iter().any(
+            |e| matches!(e, Event::SpecificationError { message: m } if *m == message),
+        );
         if !already {
             if let Some(last) = self.trips.last_mut() {
                 if last.spec_error.is_none() {
@@ -355,14 +354,8 @@ impl Engine {
             (Err(_), true) => Bits::zeros(n_out),
             (_, false) => self.commanded.clone(),
         };
-        let fallback_bits = fallback
-            .as_ref()
-            .map_or_else(|_| Bits::zeros(n_out), Clone::clone);
-        let out_name = |k: usize| {
-            self.symbols
-                .name(Space::Output, u32::try_from(k).unwrap_or(0))
-                .to_string()
-        };
+        let fallback_bits = fallback.as_ref().map_or_else(|_| Bits::zeros(n_out), Clone::clone);
+        let out_name = |k: usize| self.symbols.name(Space::Output, u32::try_from(k).unwrap_or(0)).to_string();
         let actions = (0..n_out)
             .map(|k| {
                 let c = self.commanded.get(k);
@@ -382,11 +375,12 @@ impl Engine {
         Trip {
             time_ms: self.now.0,
             cycle: self.cycles,
-            constraints: violations.iter().map(|&ci| self.fired(ci)).collect(),
-            actions,
-            fallback: (0..n_out)
-                .map(|k| (out_name(k), fallback_bits.get(k)))
+            constraints: violations
+                .iter()
+                .map(|&ci| self.fired(ci))
                 .collect(),
+            actions,
+            fallback: (0..n_out).map(|k| (out_name(k), fallback_bits.get(k))).collect(),
             spec_error: fallback.err().map(|e| e.to_string()),
             enforced,
         }

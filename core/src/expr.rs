@@ -223,7 +223,10 @@ impl Parser {
             }
             Tok::Name(name) => self.name(name, span),
             other => Err(ExprError {
-                message: format!("expected a name, `/` or `(`, found {}", other.describe()),
+                message: format!(
+                    "expected a name, `/` or `(`, found {}",
+                    other.describe()
+                ),
                 span,
             }),
         }
@@ -264,10 +267,7 @@ impl Parser {
             let (tok, inner_span) = self.bump();
             let Tok::Name(inner) = tok else {
                 return Err(ExprError {
-                    message: format!(
-                        "expected a name inside `{name}(…)`, found {}",
-                        tok.describe()
-                    ),
+                    message: format!("expected a name inside `{name}(…)`, found {}", tok.describe()),
                     span: inner_span,
                 });
             };
@@ -304,10 +304,7 @@ pub fn parse(text: &str, first: Span) -> Result<Expr, ExprError> {
     let (tok, span) = p.bump();
     if tok != Tok::End {
         return Err(ExprError {
-            message: format!(
-                "expected `.`, `+` or end of expression, found {}",
-                tok.describe()
-            ),
+            message: format!("expected `.`, `+` or end of expression, found {}", tok.describe()),
             span,
         });
     }
@@ -359,26 +356,14 @@ impl Expr {
                         if positive {
                             // RE(x) = /x* . x ; FE(x) = x* . /x
                             vec![vec![
-                                Literal {
-                                    var: prev,
-                                    positive: !rise,
-                                },
-                                Literal {
-                                    var: now,
-                                    positive: rise,
-                                },
+                                Literal { var: prev, positive: !rise },
+                                Literal { var: now, positive: rise },
                             ]]
                         } else {
                             // /RE(x) = x* + /x ; /FE(x) = /x* + x
                             vec![
-                                vec![Literal {
-                                    var: prev,
-                                    positive: rise,
-                                }],
-                                vec![Literal {
-                                    var: now,
-                                    positive: !rise,
-                                }],
+                                vec![Literal { var: prev, positive: rise }],
+                                vec![Literal { var: now, positive: !rise }],
                             ]
                         }
                     }
@@ -453,11 +438,7 @@ pub fn is_contradictory(term: &[Literal]) -> bool {
 
 /// Drops contradictory terms and terms absorbed by a shorter one.
 pub fn simplify(dnf: &Dnf) -> Dnf {
-    let mut terms: Dnf = dnf
-        .iter()
-        .filter(|t| !is_contradictory(t))
-        .cloned()
-        .collect();
+    let mut terms: Dnf = dnf.iter().filter(|t| !is_contradictory(t)).cloned().collect();
     terms.sort_by_key(Vec::len);
     let mut kept: Dnf = Vec::new();
     for t in terms {

@@ -69,10 +69,7 @@ pub struct ObserversFile {
 
 #[derive(Clone, Debug)]
 enum Compiled {
-    Memory {
-        set: Dnf,
-        reset: Dnf,
-    },
+    Memory { set: Dnf, reset: Dnf },
     Counter {
         up: Dnf,
         down: Dnf,
@@ -144,10 +141,10 @@ impl Observers {
             let dnf = expr::parse_str(text).and_then(|e| e.to_dnf(symbols));
             match dnf {
                 Ok(d) => {
-                    if d.iter().flatten().any(|l| {
-                        (l.var.space == Space::Output && !l.var.prev)
-                            || l.var.space == Space::Observer
-                    }) {
+                    if d.iter()
+                        .flatten()
+                        .any(|l| (l.var.space == Space::Output && !l.var.prev) || l.var.space == Space::Observer)
+                    {
                         problems.push(Problem::error(
                             "V0201",
                             format!("observer `{id}`: `{what}` may read inputs, previous outputs and auxiliaries only"),
@@ -161,10 +158,7 @@ impl Observers {
                 Err(e) => {
                     problems.push(Problem::error(
                         "V0202",
-                        format!(
-                            "observer `{id}`: `{what}`: {} (column {})",
-                            e.message, e.span.column
-                        ),
+                        format!("observer `{id}`: `{what}`: {} (column {})", e.message, e.span.column),
                         Some(Location::new(file, 1, 1)),
                     ));
                     None

@@ -26,10 +26,7 @@ pub struct TraceRow {
 
 /// Parses a trace for `plant`. Every plant signal must have a column.
 pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Problem> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
     let Some((_, header)) = lines.next() else {
         return Err(Problem::error(
             "V0301",

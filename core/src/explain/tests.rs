@@ -21,9 +21,7 @@ fn run(bundle: &PlantBundle, cycles: &[(u64, &[&str], &[&str])]) -> Engine {
         }
         control.0.clear();
         for a in *outs {
-            control
-                .0
-                .set(bundle.plant.output(a).expect("actuator"), true);
+            control.0.set(bundle.plant.output(a).expect("actuator"), true);
         }
         engine.cycle(crate::Millis(*t), &inputs, &mut control);
     }
@@ -56,17 +54,8 @@ fn cs10_matches_the_paper_figures() {
     let ex = explain(&engine, 0).expect("explanation");
 
     // Level 0: A4 held ON by CSs10, everything else stopped.
-    let held = &ex
-        .current_state
-        .items
-        .iter()
-        .find(|i| i.code == "X002")
-        .expect("held")
-        .text;
-    assert!(
-        held.contains("A4 is held ON by the filter: CSs10 (C7=1)"),
-        "{held}"
-    );
+    let held = &ex.current_state.items.iter().find(|i| i.code == "X002").expect("held").text;
+    assert!(held.contains("A4 is held ON by the filter: CSs10 (C7=1)"), "{held}");
 
     // Level 2: C7 and A4 circled, A4 held ON, A3 forced OFF.
     let circled: Vec<&str> = ex
@@ -77,51 +66,29 @@ fn cs10_matches_the_paper_figures() {
         .map(|h| h.element.as_str())
         .collect();
     assert_eq!(circled, vec!["C7", "A4"]);
-    assert!(ex.before_stop.highlights.contains(&Highlight {
-        element: "A4".into(),
-        mark: Mark::ForcedOn
-    }));
-    assert!(ex.before_stop.highlights.contains(&Highlight {
-        element: "A3".into(),
-        mark: Mark::ForcedOff
-    }));
+    assert!(ex.before_stop.highlights.contains(&Highlight { element: "A4".into(), mark: Mark::ForcedOn }));
+    assert!(ex.before_stop.highlights.contains(&Highlight { element: "A3".into(), mark: Mark::ForcedOff }));
 
     // Level 3: C7 0→1, A3 stays ON, A6 0→1, A4 1→0.
     let marks = &ex.advanced.highlights;
-    let change = |e: &str, from, to| Highlight {
-        element: e.into(),
-        mark: Mark::Change { from, to },
-    };
+    let change = |e: &str, from, to| Highlight { element: e.into(), mark: Mark::Change { from, to } };
     assert!(marks.contains(&change("C7", false, true)), "{marks:?}");
     assert!(marks.contains(&change("A6", false, true)), "{marks:?}");
     assert!(marks.contains(&change("A4", true, false)), "{marks:?}");
-    assert!(marks.contains(&Highlight {
-        element: "A3".into(),
-        mark: Mark::Steady { value: true }
-    }));
+    assert!(marks.contains(&Highlight { element: "A3".into(), mark: Mark::Steady { value: true } }));
 
     // Level 4: first suspect is C7 (category a), A4 should have been ON.
     let first = &ex.hypothesis.items[0];
     assert_eq!(first.code, "X401");
     assert_eq!(first.fields["sensor"], "C7");
-    assert!(
-        first.text.contains("A4 should have been ON"),
-        "{}",
-        first.text
-    );
-    assert!(ex.hypothesis.highlights.contains(&Highlight {
-        element: "A4".into(),
-        mark: Mark::Expected { value: true }
-    }));
+    assert!(first.text.contains("A4 should have been ON"), "{}", first.text);
+    assert!(ex.hypothesis.highlights.contains(&Highlight { element: "A4".into(), mark: Mark::Expected { value: true } }));
 }
 
 #[test]
 fn overbars_follow_the_paper_notation() {
     assert_eq!(overbar_notation("C7 . /A4"), "C7 · A\u{305}4\u{305}");
-    assert_eq!(
-        overbar_notation("/C4 . RE(A4)"),
-        "C\u{305}4\u{305} · RE(A4)"
-    );
+    assert_eq!(overbar_notation("/C4 . RE(A4)"), "C\u{305}4\u{305} · RE(A4)");
 }
 
 #[test]
@@ -138,19 +105,8 @@ fn timer_suspected_when_no_input_changes() {
     assert_eq!(engine.trips[0].constraints[0].id, "CSc1");
     let ex = explain(&engine, 0).expect("explanation");
     assert_eq!(ex.hypothesis.items[0].code, "X404");
-    let expected = ex
-        .hypothesis
-        .items
-        .iter()
-        .find(|i| i.code == "X403")
-        .expect("expected");
-    assert!(
-        expected
-            .text
-            .contains("one of: A0 should have been OFF, or A1 should have been ON"),
-        "{}",
-        expected.text
-    );
+    let expected = ex.hypothesis.items.iter().find(|i| i.code == "X403").expect("expected");
+    assert!(expected.text.contains("one of: A0 should have been OFF, or A1 should have been ON"), "{}", expected.text);
 }
 
 #[test]
@@ -192,23 +148,14 @@ fn every_hypothesis_case_of_the_station() {
             .filter(|l| l.var.space == Space::Input && !l.var.prev)
             .map(|l| l.var.index as usize)
             .collect();
-        let observers = term
-            .iter()
-            .filter(|l| l.var.space == Space::Observer)
-            .count();
+        let observers = term.iter().filter(|l| l.var.space == Space::Observer).count();
         let outputs: Vec<usize> = term
             .iter()
             .filter(|l| l.var.space == Space::Output && !l.var.prev)
             .map(|l| l.var.index as usize)
             .collect();
         // A sensor that no constraint term of `c` reads.
-        let outside = (0..n_in)
-            .find(|i| {
-                !term
-                    .iter()
-                    .any(|l| l.var.space == Space::Input && l.var.index as usize == *i)
-            })
-            .expect("outside sensor");
+        let outside = (0..n_in).find(|i| !term.iter().any(|l| l.var.space == Space::Input && l.var.index as usize == *i)).expect("outside sensor");
         let n = sensors.len() + observers + outputs.len() + 1;
         for mask in 0u32..(1 << n) {
             cases += 1;
@@ -232,12 +179,7 @@ fn every_hypothesis_case_of_the_station() {
             let mut prev = cur.clone();
             prev.time = crate::Millis(90);
             let bit = |i: usize| mask >> i & 1 == 1;
-            let changed_sensors: Vec<usize> = sensors
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| bit(*i))
-                .map(|(_, s)| *s)
-                .collect();
+            let changed_sensors: Vec<usize> = sensors.iter().enumerate().filter(|(i, _)| bit(*i)).map(|(_, s)| *s).collect();
             for &s in &changed_sensors {
                 prev.inputs.set(s, !cur.inputs.get(s));
             }
@@ -245,12 +187,7 @@ fn every_hypothesis_case_of_the_station() {
             if obs_changed {
                 prev.observers.clear();
             }
-            let changed_outputs: Vec<usize> = outputs
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| bit(sensors.len() + observers + i))
-                .map(|(_, k)| *k)
-                .collect();
+            let changed_outputs: Vec<usize> = outputs.iter().enumerate().filter(|(i, _)| bit(sensors.len() + observers + i)).map(|(_, k)| *k).collect();
             for &k in &changed_outputs {
                 prev.commanded.set(k, !cur.commanded.get(k));
             }
@@ -271,12 +208,7 @@ fn every_hypothesis_case_of_the_station() {
             let trip = Trip {
                 time_ms: 100,
                 cycle: 10,
-                constraints: vec![FiredConstraint {
-                    id: c.id.clone(),
-                    class: c.class,
-                    notation: c.source.clone(),
-                    literals,
-                }],
+                constraints: vec![FiredConstraint { id: c.id.clone(), class: c.class, notation: c.source.clone(), literals }],
                 actions: Vec::new(),
                 fallback: Vec::new(),
                 spec_error: None,
@@ -289,21 +221,10 @@ fn every_hypothesis_case_of_the_station() {
             if !changed_sensors.is_empty() {
                 assert_eq!(first.code, "X401", "{ctx}");
                 let named = symbols.name(Space::Input, changed_sensors[0] as u32);
-                assert!(
-                    level
-                        .items
-                        .iter()
-                        .filter(|i| i.code == "X401")
-                        .any(|i| i.fields["sensor"] == named),
-                    "{ctx}"
-                );
+                assert!(level.items.iter().filter(|i| i.code == "X401").any(|i| i.fields["sensor"] == named), "{ctx}");
             } else if !changed_outputs.is_empty() && outside_changed {
                 assert_eq!(first.code, "X402", "{ctx}");
-                assert_eq!(
-                    first.fields["sensor"],
-                    symbols.name(Space::Input, outside as u32),
-                    "{ctx}"
-                );
+                assert_eq!(first.fields["sensor"], symbols.name(Space::Input, outside as u32), "{ctx}");
             } else if !changed_outputs.is_empty() && !obs_changed {
                 assert_eq!(first.code, "X404", "{ctx}");
             } else if obs_changed && !outside_changed {
