@@ -8,14 +8,18 @@
 //! - [`filter`]: constraint evaluation and the fallback with priority to zero.
 //! - [`engine`]: one PLC cycle, one function; [`history`]: the recorder.
 //! - [`trace`]: the per-cycle CSV trace format.
+//! - [`emulator`]: the deterministic plant emulator of the sorting station.
 //! - [`live`]: the pure half of the Modbus live link (I/O map, data age, stale inputs).
 //!
 //! See `ARCHITECTURE.md` at the repository root for the data flow and the invariants.
 
+pub mod alarms;
 pub mod bits;
 pub mod bundle;
 pub mod constraints;
+pub mod control;
 pub mod diag;
+pub mod emulator;
 pub mod engine;
 pub mod explain;
 pub mod expr;

@@ -1,0 +1,593 @@
+//! The program format (`programs/*.ron`) and its compilation against a plant.
+
+use crate::diag::{Location, Problem, ron_problem};
+use crate::expr::{self, Dnf, Span};
+use crate::plant::{Plant, is_valid_name};
+use crate::symbols::{Space, Symbols};
+use super::packed::{Cond, Conds, Layout};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// How a step action drives its target (IEC 60848 / 61131-3 qualifiers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum Qualifier {
+    /// Non-stored: true while the step is active.
+    N,
+    /// Set (stored): the target stays true after the step, until an `R` action.
+    S,
+    /// Reset of a stored target; reset wins over set in the same scan.
+    R,
+    /// Time-limited: true while the step is active and for at most this many ms.
+    L(u64),
+    /// Delayed: true while the step has been active for at least this many ms.
+    D(u64),
+    /// Pulse: true during the single scan in which the step is activated.
+    P,
+}
+
+impl std::fmt::Display for Qualifier {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Qualifier::N => f.write_str("N"),
+            Qualifier::S => f.write_str("S"),
+            Qualifier::R => f.write_str("R"),
+            Qualifier::L(ms) => write!(f, "L({ms})"),
+            Qualifier::D(ms) => write!(f, "D({ms})"),
+            Qualifier::P => f.write_str("P"),
+        }
+    }
+}
+
+/// One action of a step: drives an output or a memory.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Action {
+    /// How.
+    pub qualifier: Qualifier,
+    /// An actuator (`A4`) or a memory of the program.
+    pub target: String,
+}
+
+/// One GRAFCET step.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Step {
+    /// Identifier, unique in the program; also the name of the step variable (`X24`).
+    pub id: String,
+    /// Active in the initial situation.
+    #[serde(default)]
+    pub initial: bool,
+    /// Actions associated with the step.
+    #[serde(default)]
+    pub actions: Vec<Action>,
+}
+
+/// One GRAFCET transition.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Transition {
+    /// Identifier, unique in the program.
+    pub id: String,
+    /// Upstream steps (all must be active for the transition to be enabled).
+    pub from: Vec<String>,
+    /// Downstream steps, activated when it fires.
+    pub to: Vec<String>,
+    /// The receptivity, in the logic notation of [`crate::expr`].
+    pub condition: String,
+}
+
+/// One chart (a GRAFCET / SFC).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Chart {
+    /// Name, unique in the program.
+    pub name: String,
+    /// Steps.
+    pub steps: Vec<Step>,
+    /// Transitions between steps of this chart.
+    pub transitions: Vec<Transition>,
+}
+
+/// A control program as written in `programs/*.ron`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Program {
+    /// Display name.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Operator buttons and switches (`START`, `STOP`, `BY_SIZE`).
+    #[serde(default)]
+    pub panel: Vec<String>,
+    /// Internal memories (set by `S`/`R` actions or by equations).
+    #[serde(default)]
+    pub memories: Vec<String>,
+    /// Step timers `(id, step, ms)`: `id` is true while `step` has been active ≥ `ms`.
+    #[serde(default)]
+    pub timers: Vec<(String, String, u64)>,
+    /// GRAFCET charts.
+    pub charts: Vec<Chart>,
+    /// Ladder-like equations `(target, expression)`, evaluated top-down after the
+    /// actions; a target is the OR of its actions and its equation.
+    #[serde(default)]
+    pub equations: Vec<(String, String)>,
+}
+
+impl Program {
+    /// Parses program text; `file` is used in messages only.
+    pub fn from_ron(text: &str, file: &Path) -> Result<Self, Vec<Problem>> {
+        ron::from_str(text).map_err(|e| vec![ron_problem(file, &e)])
+    }
+
+    /// Every step of every chart with its chart name.
+    pub fn steps(&self) -> impl Iterator<Item = (&str, &Step)> {
+        self.charts
+            .iter()
+            .flat_map(|c| c.steps.iter().map(move |s| (c.name.as_str(), s)))
+    }
+
+    /// Every transition of every chart with its chart name.
+    pub fn transitions(&self) -> impl Iterator<Item = (&str, &Transition)> {
+        self.charts
+            .iter()
+            .flat_map(|c| c.transitions.iter().map(move |t| (c.name.as_str(), t)))
+    }
+}
+
+/// Where a program came from, to place problems in its file.
+#[derive(Clone, Debug, Default)]
+pub struct Origin {
+    /// The file, as given to the loader.
+    pub file: PathBuf,
+    /// Its text (empty when the program was built in code).
+    pub text: String,
+}
+
+impl Origin {
+    /// An origin for a file and its text.
+    pub fn new(file: &Path, text: &str) -> Self {
+        Self {
+            file: file.to_path_buf(),
+            text: text.to_string(),
+        }
+    }
+
+    fn location(&self, offset: Option<usize>) -> Location {
+        match offset {
+            Some(off) => {
+                let (line, column) = line_col(&self.text, off);
+                Location::new(&self.file, line, column)
+            }
+            None => Location::new(&self.file, 1, 1),
+        }
+    }
+
+    /// Byte offset of the string literal `"id"` written after `id:`.
+    fn find_id(&self, id: &str) -> Option<usize> {
+        let needle = format!("\"{id}\"");
+        let mut from = 0;
+        while let Some(pos) = self.text.get(from..).and_then(|t| t.find(&needle)) {
+            let at = from + pos;
+            if self.text[..at].trim_end().ends_with("id:") {
+                return Some(at);
+            }
+            from = at + needle.len();
+        }
+        None
+    }
+
+    /// Byte offset of the first string literal `"name"`, optionally after `after`.
+    fn find_quoted(&self, name: &str, after: usize) -> Option<usize> {
+        let needle = format!("\"{name}\"");
+        self.text.get(after..)?.find(&needle).map(|p| p + after)
+    }
+
+    /// Byte offset of the first character of a transition's condition text.
+    fn condition_start(&self, transition: &str) -> Option<usize> {
+        let at = self.find_id(transition)?;
+        let rest = self.text.get(at..)?;
+        let key = rest.find("condition")?;
+        let quote = rest.get(key..)?.find('"')?;
+        Some(at + key + quote + 1)
+    }
+
+    /// Byte offset of the first character of an equation's expression text.
+    fn equation_start(&self, target: &str) -> Option<usize> {
+        let eqs = self.text.find("equations")?;
+        let needle = format!("\"{target}\"");
+        let mut from = eqs;
+        while let Some(pos) = self.text.get(from..).and_then(|t| t.find(&needle)) {
+            let at = from + pos;
+            if self.text[..at].trim_end().ends_with('(') {
+                let rest = self.text.get(at + needle.len()..)?;
+                let quote = rest.find('"')?;
+                return Some(at + needle.len() + quote + 1);
+            }
+            from = at + needle.len();
+        }
+        None
+    }
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = text.get(..offset).unwrap_or("");
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |p| p + 1);
+    let column = before.get(line_start..).unwrap_or("").chars().count() + 1;
+    (line, column)
+}
+
+/// What an action or an equation drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Target {
+    /// An actuator, by output number.
+    Output(u32),
+    /// A memory, by memory number (its variable is `memory_aux[m]` in the Aux space).
+    Memory(u32),
+}
+
+/// A compiled step.
+#[derive(Clone, Debug)]
+pub(crate) struct StepInfo {
+    pub(crate) id: String,
+    pub(crate) chart: usize,
+    pub(crate) initial: bool,
+    pub(crate) aux: u32,
+}
+
+/// A compiled transition.
+#[derive(Clone, Debug)]
+pub(crate) struct TransitionInfo {
+    pub(crate) id: String,
+    pub(crate) from: Vec<u16>,
+    pub(crate) to: Vec<u16>,
+    pub(crate) condition: Dnf,
+    pub(crate) cond: Cond,
+    pub(crate) enable: Cond,
+}
+
+/// A compiled action.
+#[derive(Clone, Debug)]
+pub(crate) struct ActionInfo {
+    pub(crate) step: u16,
+    pub(crate) qualifier: Qualifier,
+    /// Index in the combined target space: outputs, then memories.
+    pub(crate) slot: usize,
+}
+
+/// A compiled timer.
+#[derive(Clone, Debug)]
+pub(crate) struct TimerInfo {
+    pub(crate) step: u16,
+    pub(crate) ms: u64,
+    pub(crate) aux: u32,
+}
+
+/// A compiled equation.
+#[derive(Clone, Debug)]
+pub(crate) struct EquationInfo {
+    pub(crate) slot: usize,
+    pub(crate) dnf: Dnf,
+    pub(crate) cond: Cond,
+}
+
+/// A program resolved against a plant: names are variables, expressions sums of products.
+#[derive(Clone, Debug)]
+pub struct CompiledProgram {
+    /// The source program.
+    pub program: Program,
+    /// The program-local name table: plant inputs and outputs, then (Aux) steps,
+    /// memories, timers and panel inputs.
+    pub symbols: Symbols,
+    pub(crate) n_outputs: usize,
+    pub(crate) steps: Vec<StepInfo>,
+    pub(crate) transitions: Vec<TransitionInfo>,
+    pub(crate) actions: Vec<ActionInfo>,
+    pub(crate) timers: Vec<TimerInfo>,
+    pub(crate) memory_aux: Vec<u32>,
+    pub(crate) panel_aux: Vec<u32>,
+    pub(crate) equations: Vec<EquationInfo>,
+    pub(crate) layout: Layout,
+    pub(crate) conds: Conds,
+}
+
+/// Largest number of steps or transitions of a program (indices are `u16`).
+pub const MAX_ELEMENTS: usize = 60_000;
+
+impl CompiledProgram {
+    /// Compiles `program` for `plant`. Every problem found is returned, placed in
+    /// `origin` (the element's id or the expression column when the text is known).
+    pub fn new(program: &Program, plant: &Plant, origin: &Origin) -> Result<Self, Vec<Problem>> {
+        let mut problems = Vec::new();
+        let mut symbols = plant.symbols();
+        let n_outputs = plant.outputs.len();
+        let at_id = |id: &str| Some(origin.location(origin.find_id(id)));
+
+        // Declarations: steps, memories, timers, panel.
+        let mut step_index: BTreeMap<String, u16> = BTreeMap::new();
+        let mut steps = Vec::new();
+        let declare = |name: &str, what: &str, loc: Option<Location>, problems: &mut Vec<Problem>, symbols: &mut Symbols| -> Option<u32> {
+            if !is_valid_name(name) {
+                problems.push(Problem::error(
+                    "V0301",
+                    format!("{what} `{name}`: names are letters, digits and `_`"),
+                    loc,
+                ));
+                return None;
+            }
+            match symbols.declare(name, Space::Aux) {
+                Ok(i) => Some(i),
+                Err((space, _)) => {
+                    let other = if space == Space::Aux { "another step, memory, timer or panel input" } else { "a plant signal" };
+                    problems.push(Problem::error(
+                        "V0302",
+                        format!("{what} `{name}` has the name of {other}"),
+                        loc,
+                    ));
+                    None
+                }
+            }
+        };
+        let mut chart_names = BTreeMap::new();
+        for (ci, chart) in program.charts.iter().enumerate() {
+            if chart_names.insert(chart.name.clone(), ci).is_some() {
+                problems.push(Problem::error(
+                    "V0303",
+                    format!("chart `{}` is declared twice", chart.name),
+                    Some(origin.location(origin.find_quoted(&chart.name, 0))),
+                ));
+            }
+            if !chart.steps.iter().any(|s| s.initial) {
+                problems.push(Problem::error(
+                    "V0304",
+                    format!("chart `{}` has no initial step", chart.name),
+                    Some(origin.location(origin.find_quoted(&chart.name, 0))),
+                ));
+            }
+            for step in &chart.steps {
+                if let Some(aux) = declare(&step.id, &format!("chart `{}`: step", chart.name), at_id(&step.id), &mut problems, &mut symbols) {
+                    if steps.len() >= MAX_ELEMENTS {
+                        continue;
+                    }
+                    step_index.insert(step.id.clone(), u16::try_from(steps.len()).unwrap_or(u16::MAX));
+                    steps.push(StepInfo {
+                        id: step.id.clone(),
+                        chart: ci,
+                        initial: step.initial,
+                        aux,
+                    });
+                }
+            }
+        }
+        let mut memory_aux = Vec::new();
+        let mut memory_index = BTreeMap::new();
+        for m in &program.memories {
+            let loc = Some(origin.location(origin.find_quoted(m, 0)));
+            if let Some(aux) = declare(m, "memory", loc, &mut problems, &mut symbols) {
+                memory_index.insert(m.clone(), u32::try_from(memory_aux.len()).unwrap_or(u32::MAX));
+                memory_aux.push(aux);
+            }
+        }
+        let mut timers = Vec::new();
+        for (id, step, ms) in &program.timers {
+            let loc = Some(origin.location(origin.find_quoted(id, 0)));
+            let Some(aux) = declare(id, "timer", loc.clone(), &mut problems, &mut symbols) else {
+                continue;
+            };
+            match step_index.get(step) {
+                Some(&s) => timers.push(TimerInfo { step: s, ms: *ms, aux }),
+                None => problems.push(Problem::error(
+                    "V0305",
+                    format!("timer `{id}`: unknown step `{step}`"),
+                    loc,
+                )),
+            }
+        }
+        let mut panel_aux = Vec::new();
+        for p in &program.panel {
+            let loc = Some(origin.location(origin.find_quoted(p, 0)));
+            if let Some(aux) = declare(p, "panel input", loc, &mut problems, &mut symbols) {
+                panel_aux.push(aux);
+            }
+        }
+
+        let target_slot = |name: &str| -> Option<usize> {
+            if let Some(o) = plant.output(name) {
+                return Some(o);
+            }
+            memory_index.get(name).map(|&m| n_outputs + m as usize)
+        };
+
+        // Actions.
+        let mut actions = Vec::new();
+        for (chart, step) in program.steps() {
+            let Some(&si) = step_index.get(&step.id) else { continue };
+            for a in &step.actions {
+                match target_slot(&a.target) {
+                    Some(slot) => actions.push(ActionInfo {
+                        step: si,
+                        qualifier: a.qualifier,
+                        slot,
+                    }),
+                    None => problems.push(Problem::error(
+                        "V0306",
+                        format!(
+                            "chart `{chart}`, step `{}`: action target `{}` is neither an actuator nor a memory",
+                            step.id, a.target
+                        ),
+                        at_id(&step.id),
+                    )),
+                }
+            }
+        }
+
+        // Expressions.
+        let compile_expr = |text: &str, start: Option<usize>, what: &str, problems: &mut Vec<Problem>| -> Option<Dnf> {
+            let (line, column) = start.map_or((1, 1), |s| line_col(&origin.text, s));
+            let span = Span { line, column };
+            match expr::parse(text, span).and_then(|e| e.to_dnf(&symbols)) {
+                Ok(d) => {
+                    if let Some(l) = d.iter().flatten().find(|l| l.var.space == Space::Observer) {
+                        problems.push(Problem::error(
+                            "V0308",
+                            format!("{what}: a program cannot read the observer `{}`", symbols.name(l.var.space, l.var.index)),
+                            Some(Location::new(&origin.file, line, column)),
+                        ));
+                        return None;
+                    }
+                    Some(d)
+                }
+                Err(e) => {
+                    problems.push(Problem::error(
+                        "V0307",
+                        format!("{what}: {}", e.message),
+                        Some(Location::new(&origin.file, e.span.line, e.span.column)),
+                    ));
+                    None
+                }
+            }
+        };
+        let mut transitions = Vec::new();
+        let mut transition_ids = BTreeMap::new();
+        for (ci, chart) in program.charts.iter().enumerate() {
+            for t in &chart.transitions {
+                let what = format!("chart `{}`, transition `{}`", chart.name, t.id);
+                if transition_ids.insert(t.id.clone(), ()).is_some() || step_index.contains_key(&t.id) {
+                    problems.push(Problem::error(
+                        "V0309",
+                        format!("{what}: the id is used twice"),
+                        at_id(&t.id),
+                    ));
+                }
+                let ends = |list: &[String], dir: &str, problems: &mut Vec<Problem>| -> Vec<u16> {
+                    let mut out = Vec::new();
+                    if list.is_empty() {
+                        problems.push(Problem::error("V0310", format!("{what}: no {dir} step"), at_id(&t.id)));
+                    }
+                    for s in list {
+                        match step_index.get(s) {
+                            Some(&i) if steps.get(i as usize).is_some_and(|st: &StepInfo| st.chart == ci) => out.push(i),
+                            Some(_) => problems.push(Problem::error(
+                                "V0311",
+                                format!("{what}: {dir} step `{s}` belongs to another chart"),
+                                at_id(&t.id),
+                            )),
+                            None => problems.push(Problem::error(
+                                "V0312",
+                                format!("{what}: unknown {dir} step `{s}`"),
+                                at_id(&t.id),
+                            )),
+                        }
+                    }
+                    out.sort_unstable();
+                    out.dedup();
+                    out
+                };
+                let from = ends(&t.from, "upstream", &mut problems);
+                let to = ends(&t.to, "downstream", &mut problems);
+                let condition = compile_expr(&t.condition, origin.condition_start(&t.id), &what, &mut problems);
+                if let Some(condition) = condition.filter(|_| transitions.len() < MAX_ELEMENTS) {
+                    transitions.push(TransitionInfo {
+                        id: t.id.clone(),
+                        from,
+                        to,
+                        condition,
+                        cond: Cond::default(),
+                        enable: Cond::default(),
+                    });
+                }
+            }
+        }
+        let mut equations = Vec::new();
+        let mut eq_targets = BTreeMap::new();
+        for (target, text) in &program.equations {
+            let what = format!("equation `{target}`");
+            let start = origin.equation_start(target);
+            let Some(slot) = target_slot(target) else {
+                problems.push(Problem::error(
+                    "V0313",
+                    format!("{what}: `{target}` is neither an actuator nor a memory"),
+                    Some(origin.location(start)),
+                ));
+                continue;
+            };
+            if eq_targets.insert(slot, ()).is_some() {
+                problems.push(Problem::error(
+                    "V0314",
+                    format!("{what}: `{target}` has two equations"),
+                    Some(origin.location(start)),
+                ));
+            }
+            if let Some(dnf) = compile_expr(text, start, &what, &mut problems) {
+                equations.push(EquationInfo { slot, dnf, cond: Cond::default() });
+            }
+        }
+        if !problems.is_empty() {
+            return Err(problems);
+        }
+        let layout = Layout::new(symbols.sizes());
+        let mut conds = Conds::default();
+        for t in &mut transitions {
+            t.cond = conds.add(&t.condition, &layout);
+            let vars: Vec<(usize, u64)> = t
+                .from
+                .iter()
+                .filter_map(|&s| steps.get(s as usize))
+                .map(|st| layout.locate(Space::Aux, st.aux as usize, false))
+                .collect();
+            t.enable = conds.add_all(&vars);
+        }
+        for e in &mut equations {
+            e.cond = conds.add(&e.dnf, &layout);
+        }
+        Ok(Self {
+            layout,
+            conds,
+            program: program.clone(),
+            symbols,
+            n_outputs,
+            steps,
+            transitions,
+            actions,
+            timers,
+            memory_aux,
+            panel_aux,
+            equations,
+        })
+    }
+
+    /// Loads and compiles a program file.
+    pub fn load(path: &Path, plant: &Plant) -> Result<Self, Vec<Problem>> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            vec![Problem::error("V0002", format!("cannot read {}: {e}", path.display()), None)]
+        })?;
+        let program = Program::from_ron(&text, path)?;
+        Self::new(&program, plant, &Origin::new(path, &text))
+    }
+
+    /// Number of steps.
+    pub fn step_count(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// Number of transitions.
+    pub fn transition_count(&self) -> usize {
+        self.transitions.len()
+    }
+
+    /// The target slot of an output or a memory name.
+    pub(crate) fn slot_name(&self, slot: usize) -> &str {
+        if slot < self.n_outputs {
+            self.symbols.name(Space::Output, u32::try_from(slot).unwrap_or(u32::MAX))
+        } else {
+            let m = slot - self.n_outputs;
+            self.memory_aux
+                .get(m)
+                .map_or("?", |&aux| self.symbols.name(Space::Aux, aux))
+        }
+    }
+}

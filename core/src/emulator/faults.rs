@@ -1,0 +1,223 @@
+//! Fault injection: what can go wrong in the plant, and when.
+//!
+//! Faults are data (they appear in scenario RON files). A fault starts at a time
+//! (`At(ms)`) or the first time a condition in the logic notation holds over the plant
+//! signals (`When("C3 . /C4")`), and lasts `duration_ms` (forever when `None`).
+
+use crate::diag::Problem;
+use crate::expr::{Dnf, eval_dnf, parse_str, simplify};
+use crate::frame::Frame;
+use crate::symbols::Symbols;
+use serde::{Deserialize, Serialize};
+
+/// When a fault starts.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Trigger {
+    /// At this simulated time, ms.
+    At(u64),
+    /// The first internal step where this expression over sensors and actuators holds.
+    When(String),
+}
+
+/// What goes wrong.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FaultKind {
+    /// The sensor reads 0 whatever happens.
+    SensorStuckAt0(String),
+    /// The sensor reads 1 whatever happens.
+    SensorStuckAt1(String),
+    /// The sensor reads 1 for `pulse_ms`.
+    SpuriousRise {
+        /// Sensor id.
+        sensor: String,
+        /// Pulse length, ms.
+        pulse_ms: u64,
+    },
+    /// The sensor reads 0 for `pulse_ms`.
+    SpuriousFall {
+        /// Sensor id.
+        sensor: String,
+        /// Pulse length, ms.
+        pulse_ms: u64,
+    },
+    /// The actuator does nothing even when commanded.
+    ActuatorStuckOff(String),
+    /// The actuator acts even when not commanded.
+    ActuatorStuckOn(String),
+    /// The table cannot leave the loading angle.
+    TableBlockedAtC4,
+    /// The table cannot leave the unloading angle.
+    TableBlockedAtC5,
+    /// The table stops wherever it is.
+    TableBlockedBetween,
+    /// The surface driven by `actuator` runs at `percent` of its speed.
+    ConveyorSlowed {
+        /// Actuator id of the conveyor or rollers.
+        actuator: String,
+        /// Remaining speed, percent.
+        percent: u8,
+    },
+}
+
+/// A fault and its schedule.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultSpec {
+    /// When it starts.
+    pub trigger: Trigger,
+    /// What it does.
+    pub fault: FaultKind,
+    /// How long it lasts, ms; `None` for ever (spurious pulses use `pulse_ms`).
+    #[serde(default)]
+    pub duration_ms: Option<u64>,
+}
+
+/// A fault resolved against the layout: indices instead of ids.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Effect {
+    /// Force layout sensor `.0` to `.1`.
+    Sensor(u8, bool),
+    /// Force actuator role `.0` to `.1`.
+    Actuator(u8, bool),
+    /// Table blocked: 0 at loading, 1 at unloading, 2 anywhere.
+    Table(u8),
+    /// Drive role `.0` slowed to `.1` percent.
+    Slow(u8, u8),
+}
+
+/// State of a scheduled fault.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Phase {
+    Pending,
+    Active { until: Option<u64> },
+    Over,
+}
+
+/// A scheduled fault.
+#[derive(Clone, Debug)]
+pub(crate) struct Scheduled {
+    pub(crate) spec: FaultSpec,
+    pub(crate) effect: Effect,
+    pub(crate) condition: Option<Dnf>,
+    pub(crate) length: Option<u64>,
+    pub(crate) phase: Phase,
+}
+
+/// The combined effect of the active faults, recomputed when a fault starts or ends.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Overrides {
+    pub(crate) sensor_on: u64,
+    pub(crate) sensor_off: u64,
+    pub(crate) act_on: u64,
+    pub(crate) act_off: u64,
+    /// Bit 0: blocked at loading, bit 1: at unloading, bit 2: anywhere.
+    pub(crate) table: u8,
+}
+
+impl Scheduled {
+    /// Resolves ids with `sensor_index` / `actuator_role` and parses a condition.
+    pub(crate) fn new(
+        spec: FaultSpec,
+        sensor_index: impl Fn(&str) -> Option<u8>,
+        actuator_role: impl Fn(&str) -> Option<u8>,
+        symbols: &Symbols,
+    ) -> Result<Self, Problem> {
+        let unknown = |what: &str, id: &str| {
+            Problem::error("V0303", format!("fault names unknown {what} `{id}`"), None)
+        };
+        let sensor = |id: &str| sensor_index(id).ok_or_else(|| unknown("sensor", id));
+        let actuator = |id: &str| actuator_role(id).ok_or_else(|| unknown("actuator", id));
+        let (effect, length) = match &spec.fault {
+            FaultKind::SensorStuckAt0(s) => (Effect::Sensor(sensor(s)?, false), spec.duration_ms),
+            FaultKind::SensorStuckAt1(s) => (Effect::Sensor(sensor(s)?, true), spec.duration_ms),
+            FaultKind::SpuriousRise {
+                sensor: s,
+                pulse_ms,
+            } => (Effect::Sensor(sensor(s)?, true), Some(*pulse_ms)),
+            FaultKind::SpuriousFall {
+                sensor: s,
+                pulse_ms,
+            } => (Effect::Sensor(sensor(s)?, false), Some(*pulse_ms)),
+            FaultKind::ActuatorStuckOff(a) => {
+                (Effect::Actuator(actuator(a)?, false), spec.duration_ms)
+            }
+            FaultKind::ActuatorStuckOn(a) => {
+                (Effect::Actuator(actuator(a)?, true), spec.duration_ms)
+            }
+            FaultKind::TableBlockedAtC4 => (Effect::Table(0), spec.duration_ms),
+            FaultKind::TableBlockedAtC5 => (Effect::Table(1), spec.duration_ms),
+            FaultKind::TableBlockedBetween => (Effect::Table(2), spec.duration_ms),
+            FaultKind::ConveyorSlowed {
+                actuator: a,
+                percent,
+            } => (Effect::Slow(actuator(a)?, *percent), spec.duration_ms),
+        };
+        let condition = match &spec.trigger {
+            Trigger::At(_) => None,
+            Trigger::When(text) => {
+                let bad = |e: crate::expr::ExprError| {
+                    Problem::error(
+                        "V0304",
+                        format!(
+                            "fault condition `{text}`, column {}: {}",
+                            e.span.column, e.message
+                        ),
+                        None,
+                    )
+                };
+                let expr = parse_str(text).map_err(bad)?;
+                Some(simplify(&expr.to_dnf(symbols).map_err(bad)?))
+            }
+        };
+        Ok(Self {
+            spec,
+            effect,
+            condition,
+            length,
+            phase: Phase::Pending,
+        })
+    }
+
+    /// Advances the phase at time `now`; true when it changed.
+    pub(crate) fn update(&mut self, now: u64, frame: &Frame) -> bool {
+        match self.phase {
+            Phase::Pending => {
+                let start = match (&self.spec.trigger, &self.condition) {
+                    (Trigger::At(t), _) => now >= *t,
+                    (Trigger::When(_), Some(dnf)) => eval_dnf(dnf, frame),
+                    (Trigger::When(_), None) => false,
+                };
+                if start {
+                    self.phase = Phase::Active {
+                        until: self.length.map(|l| now.saturating_add(l)),
+                    };
+                }
+                start
+            }
+            Phase::Active { until: Some(u) } if now >= u => {
+                self.phase = Phase::Over;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Adds this fault's effect when active; `slow` is indexed by drive role.
+    pub(crate) fn apply(&self, o: &mut Overrides, slow: &mut [u8]) {
+        if !matches!(self.phase, Phase::Active { .. }) {
+            return;
+        }
+        match self.effect {
+            Effect::Sensor(i, true) => o.sensor_on |= 1 << i,
+            Effect::Sensor(i, false) => o.sensor_off |= 1 << i,
+            Effect::Actuator(i, true) => o.act_on |= 1 << i,
+            Effect::Actuator(i, false) => o.act_off |= 1 << i,
+            Effect::Table(k) => o.table |= 1 << k,
+            Effect::Slow(i, p) => {
+                if let Some(s) = slow.get_mut(i as usize) {
+                    *s = (*s).min(p);
+                }
+            }
+        }
+    }
+}

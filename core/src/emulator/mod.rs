@@ -1,0 +1,495 @@
+//! The deterministic plant emulator ("partie opérative") of the box-sorting station.
+//!
+//! The geometry comes from `layouts/sorting-station/layout.ron` ([`Layout`]), the one
+//! source of truth shared with the synoptic. Time is integer milliseconds passed in by
+//! the caller; positions are integer micrometres along each part; randomness (arrival
+//! jitter, size mix, ±0.3 % turntable speed per rotation) comes from the seed.
+//!
+//! # Model
+//!
+//! Every conveyor and the turntable is a 1-D axis; ends closer than 1 mm are joined
+//! (the table's ends only while it stands exactly at the loading or unloading angle).
+//! A box moves with the drive of the surface under its centre (or, if that one is
+//! stopped, with the other surface it lies on by more than `straddle_margin_mm`); boxes
+//! on the table turn with it. Boxes block each other on contact. A box whose centre
+//! passes an end where nothing continues falls; one passing an exit end is delivered.
+//! The corners of the table sweeping over the exit conveyors are not modelled.
+//!
+//! # Geometry of the sorting station, and why (seed 004, section 6)
+//!
+//! Boxes are 300 mm (small, 200 mm high) and 380 mm (large, 320 mm high) square; the
+//! high beam is at 250 mm. All surfaces run at 300 mm/s (0.3 mm/ms).
+//!
+//! - Entry conveyor A0, x 0→1200 at y = 0; C0 at 1180 mm: a box front reaches C0 67 ms
+//!   (more than two 10 ms PLC cycles) before the joint, so CSc1 stops A0 in time.
+//! - Intermediate conveyor A1, x 1200→2400; C1 (low) and C2 (high) at 100 mm,
+//!   so C0–C1 = 120 mm < 300 mm (observer 2P); C3 at 1180 mm (CSs2, CSc2 act 67 ms
+//!   before the joint).
+//! - Turntable centred at (2650, 0), u ∈ [−250, 250]; at 0° its −u end meets A1's end
+//!   and +u points at nothing; at 90° +u meets the left exit A5 (y 250→1600) and −u the
+//!   right exit A6 (y −250→−1600). C6 is on the table at u = +150: a box stops with its
+//!   front there, fully on the table (large: rear at u = −230).
+//! - C7 (right) and C8 (left) at 20 mm along their exits; C9 and C10 at 1330 mm.
+//!   [C3, C6] = 420 mm and [C6, C7] = 420 mm exceed the largest box (observers P36, P67);
+//!   [C6, C8] = 120 mm is shorter than the smallest box. When C7/C8 falls the box rear
+//!   is 20 mm past the table edge.
+//! - Rotation: 30 mdeg/ms out, 29.7 mdeg/ms back (±0.3 % per rotation); C4 = angle ≤ 3.6°,
+//!   C5 = angle ≥ 87.75°. After A4 rises, C4 falls at ~120 ms and C5 rises at ~2925 ms;
+//!   after A4 falls, C5 falls at ~76 ms and C4 rises at ~2909 ms (intervals I2, I4, I7, I9).
+//! - Hazard margins: a box is pushed against a stopped surface when it lies more than
+//!   25 mm on each (so a box whose rear just left C0 or C3 is not), and is sheared when
+//!   it passes the table edge by more than 2 mm while the table turns.
+
+mod dynamics;
+mod faults;
+mod layout;
+mod model;
+
+pub use faults::{FaultKind, FaultSpec, Trigger};
+pub use layout::{
+    ArrivalPlan, Beam, BoxDims, BoxSize, Conveyor, Elevator, Layout, Point, SensorDef, SensorKind,
+    Side, SizeMix, Source, Turntable,
+};
+pub use model::{BoxState, BoxStats, BoxView, Hazard, HazardKind};
+
+use crate::bits::Bits;
+use crate::diag::Problem;
+use crate::frame::Frame;
+use crate::plant::Plant;
+use crate::symbols::Symbols;
+use crate::synthetic::SplitMix64;
+use crate::time::Millis;
+use faults::{Overrides, Scheduled};
+use model::{Body, Part, TablePos};
+use std::collections::VecDeque;
+
+/// A presence sensor, precomputed: layout sensor index, position (µm), least height.
+#[derive(Clone, Copy, Debug)]
+struct Probe {
+    sensor: u8,
+    at: i64,
+    min_height: i64,
+}
+
+/// The plant emulator. Cheap to clone (the explanation engine projects forward on copies).
+#[derive(Clone, Debug)]
+pub struct Emulator {
+    layout: Layout,
+    parts: Vec<Part>,
+    table: usize,
+    /// Presence probes per part.
+    probes: Vec<Vec<Probe>>,
+    /// Angle sensors: layout sensor index, window in µdeg.
+    angles: Vec<(u8, i64, i64)>,
+    /// Plant input index of each layout sensor.
+    sensor_plant: Vec<usize>,
+    /// Plant output index of each actuator role: conveyors, then A2, A3, A4.
+    role_plant: Vec<usize>,
+    symbols: Symbols,
+    step_ms: u64,
+    now: u64,
+    carry: u64,
+    cmd: u64,
+    angle: i64,
+    rot_speed: i64,
+    rot_dir: i64,
+    moving: bool,
+    pos: TablePos,
+    links: Vec<[Option<model::Link>; 2]>,
+    vel: Vec<i64>,
+    /// Per part, a bit per part joined to it (itself included).
+    near: Vec<u64>,
+    source_part: Option<usize>,
+    bodies: Vec<Body>,
+    scratch: Vec<(i64, i64, i64)>,
+    done: Vec<(BoxView, u64)>,
+    views: Vec<BoxView>,
+    sensor_raw: u64,
+    sensor_mask: u64,
+    sensors: Bits,
+    hazards: Vec<Hazard>,
+    stats: BoxStats,
+    next_id: u32,
+    rng_arrivals: SplitMix64,
+    rng_table: SplitMix64,
+    plan: ArrivalPlan,
+    arrival_k: u64,
+    plan_origin: u64,
+    next_arrival: Option<(u64, BoxSize)>,
+    pending: VecDeque<BoxSize>,
+    faults: Vec<Scheduled>,
+    fault_problems: Vec<Problem>,
+    overrides: Overrides,
+    slow: Vec<u8>,
+    frame: Frame,
+    has_conditions: bool,
+}
+
+impl Emulator {
+    /// Builds an emulator at time 0, table at the loading angle, no box; arrivals follow
+    /// the layout's plan. Fails when the layout names a signal the plant lacks.
+    pub fn new(layout: &Layout, plant: &Plant, seed: u64) -> Result<Self, Problem> {
+        if let Some(p) = layout
+            .check()
+            .into_iter()
+            .chain(layout.check_signals(plant))
+            .next()
+        {
+            return Err(p);
+        }
+        let parts = model::build_parts(layout);
+        let table = parts.len() - 1;
+        let part_index = |id: &str| {
+            if id == layout.table.id {
+                Some(table)
+            } else {
+                layout.conveyors.iter().position(|c| c.id == id)
+            }
+        };
+        let mut probes = vec![Vec::new(); parts.len()];
+        let mut angles = Vec::new();
+        let mut sensor_plant = Vec::new();
+        for (k, s) in layout.sensors.iter().enumerate() {
+            sensor_plant.push(plant.input(&s.id).unwrap_or(usize::MAX));
+            match &s.kind {
+                SensorKind::Presence { part, at_mm, beam } => {
+                    let Some(p) = part_index(part) else { continue };
+                    let at = if p == table {
+                        (at_mm + layout.table.half_length_mm) * 1000
+                    } else {
+                        at_mm * 1000
+                    };
+                    let min_height = match beam {
+                        Beam::Low => 0,
+                        Beam::High => layout.high_beam_mm,
+                    };
+                    probes[p].push(Probe {
+                        sensor: k as u8,
+                        at,
+                        min_height,
+                    });
+                }
+                SensorKind::Angle { min_mdeg, max_mdeg } => {
+                    angles.push((k as u8, *min_mdeg as i64 * 1000, *max_mdeg as i64 * 1000));
+                }
+            }
+        }
+        let t = &layout.table;
+        let role_plant = layout
+            .conveyors
+            .iter()
+            .map(|c| c.actuator.as_str())
+            .chain([
+                t.plus_actuator.as_str(),
+                t.minus_actuator.as_str(),
+                t.rotate_actuator.as_str(),
+            ])
+            .map(|a| plant.output(a).unwrap_or(usize::MAX))
+            .collect::<Vec<_>>();
+        let symbols = plant.symbols();
+        let frame = Frame::new(symbols.sizes());
+        let n_roles = role_plant.len();
+        let n_parts = parts.len();
+        let mut emu = Self {
+            layout: layout.clone(),
+            parts,
+            table,
+            probes,
+            angles,
+            sensor_plant,
+            role_plant,
+            symbols,
+            step_ms: layout.step_ms.max(1),
+            now: 0,
+            carry: 0,
+            cmd: 0,
+            angle: t.loading_mdeg as i64 * 1000,
+            rot_speed: t.out_speed_udeg_ms,
+            rot_dir: 0,
+            moving: false,
+            pos: TablePos::Load,
+            links: vec![[None; 2]; n_parts],
+            vel: vec![0; n_parts],
+            near: vec![0; n_parts],
+            source_part: layout
+                .conveyors
+                .iter()
+                .position(|c| c.id == layout.source.conveyor),
+            bodies: Vec::with_capacity(16),
+            scratch: Vec::with_capacity(16),
+            done: Vec::new(),
+            views: Vec::with_capacity(16),
+            sensor_raw: 0,
+            sensor_mask: 0,
+            sensors: Bits::zeros(plant.inputs.len()),
+            hazards: Vec::new(),
+            stats: BoxStats::default(),
+            next_id: 1,
+            rng_arrivals: SplitMix64::new(seed),
+            rng_table: SplitMix64::new(seed ^ 0x5EED_7AB1_E000_0001),
+            plan: ArrivalPlan::Off,
+            arrival_k: 0,
+            plan_origin: 0,
+            next_arrival: None,
+            pending: VecDeque::with_capacity(8),
+            faults: Vec::new(),
+            fault_problems: Vec::new(),
+            overrides: Overrides::default(),
+            slow: vec![100; n_roles],
+            frame,
+            has_conditions: false,
+        };
+        emu.update_links(true);
+        emu.set_arrivals(layout.source.arrivals.clone());
+        emu.compute_sensors();
+        emu.publish();
+        Ok(emu)
+    }
+
+    /// Runs `dt` with the given PLC outputs (by plant output index), in fixed internal steps.
+    pub fn step(&mut self, dt: Millis, outputs: &Bits) {
+        let mut cmd = 0u64;
+        for (r, &o) in self.role_plant.iter().enumerate() {
+            if outputs.get(o) {
+                cmd |= 1 << r;
+            }
+        }
+        self.cmd = cmd;
+        self.carry += dt.0;
+        while self.carry >= self.step_ms {
+            self.carry -= self.step_ms;
+            self.tick();
+        }
+        self.publish();
+    }
+
+    /// Sensor values by plant input index, faults applied.
+    pub fn sensors(&self) -> &Bits {
+        &self.sensors
+    }
+
+    /// Simulated time.
+    pub fn now(&self) -> Millis {
+        Millis(self.now)
+    }
+
+    /// Every hazard so far, in time order.
+    pub fn hazards(&self) -> &[Hazard] {
+        &self.hazards
+    }
+
+    /// Boxes in transit, fallen, and delivered during the last second.
+    pub fn boxes(&self) -> &[BoxView] {
+        &self.views
+    }
+
+    /// Box counts.
+    pub fn stats(&self) -> BoxStats {
+        self.stats
+    }
+
+    /// Table angle, millidegrees.
+    pub fn table_angle_mdeg(&self) -> i32 {
+        (self.angle / 1000) as i32
+    }
+
+    /// Schedules a fault; a fault naming an unknown signal or with a bad condition is
+    /// dropped and kept in [`Emulator::fault_problems`].
+    pub fn schedule_fault(&mut self, fault: FaultSpec) {
+        if let Err(p) = self.try_schedule_fault(fault) {
+            self.fault_problems.push(p);
+        }
+    }
+
+    /// Schedules a fault or says why it cannot be.
+    pub fn try_schedule_fault(&mut self, fault: FaultSpec) -> Result<(), Problem> {
+        let layout = &self.layout;
+        let sensor = |id: &str| {
+            layout
+                .sensors
+                .iter()
+                .position(|s| s.id == id)
+                .map(|i| i as u8)
+        };
+        let t = &layout.table;
+        let role = |id: &str| {
+            layout
+                .conveyors
+                .iter()
+                .map(|c| c.actuator.as_str())
+                .chain([
+                    t.plus_actuator.as_str(),
+                    t.minus_actuator.as_str(),
+                    t.rotate_actuator.as_str(),
+                ])
+                .position(|a| a == id)
+                .map(|i| i as u8)
+        };
+        let s = Scheduled::new(fault, sensor, role, &self.symbols)?;
+        self.has_conditions |= s.condition.is_some();
+        self.faults.push(s);
+        Ok(())
+    }
+
+    /// Faults that could not be scheduled.
+    pub fn fault_problems(&self) -> &[Problem] {
+        &self.fault_problems
+    }
+
+    /// Replaces the arrival plan; a periodic plan restarts its period from now.
+    pub fn set_arrivals(&mut self, plan: ArrivalPlan) {
+        self.plan = plan;
+        self.arrival_k = 0;
+        self.plan_origin = self.now;
+        self.next_arrival = None;
+        if let ArrivalPlan::List(list) = &mut self.plan {
+            list.sort();
+        }
+        self.plan_next();
+    }
+
+    /// The layout the emulator was built from.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// Puts a box with its centre at `position_mm` along `part` (conveyor id from its
+    /// start, or the table id with the table coordinate `u`). Unknown parts are ignored.
+    pub fn place_box(&mut self, part: &str, position_mm: i64, size: BoxSize) {
+        let _ = self.try_place_box(part, position_mm, size);
+    }
+
+    /// Like [`Emulator::place_box`], returning the new box id or why it was refused.
+    pub fn try_place_box(
+        &mut self,
+        part: &str,
+        position_mm: i64,
+        size: BoxSize,
+    ) -> Result<u32, Problem> {
+        let p = if part == self.layout.table.id {
+            Some(self.table)
+        } else {
+            self.layout.conveyors.iter().position(|c| c.id == part)
+        };
+        let Some(p) = p else {
+            return Err(Problem::error(
+                "V0305",
+                format!("no part `{part}` in the layout"),
+                None,
+            ));
+        };
+        let c = if p == self.table {
+            (position_mm + self.layout.table.half_length_mm) * 1000
+        } else {
+            position_mm * 1000
+        };
+        let id = self.spawn(p, c, size);
+        self.compute_sensors();
+        self.publish();
+        Ok(id)
+    }
+
+    /// Sets the table angle (live-mode initialisation), millidegrees.
+    pub fn set_table_angle_mdeg(&mut self, a: i32) {
+        self.angle = a as i64 * 1000;
+        self.update_links(true);
+        self.compute_sensors();
+        self.publish();
+    }
+
+    fn spawn(&mut self, part: usize, c: i64, size: BoxSize) -> u32 {
+        let d = self.layout.dims(size);
+        let id = self.next_id;
+        self.next_id += 1;
+        self.stats.created += 1;
+        self.bodies.push(Body {
+            id,
+            size,
+            half: d.length_mm * 500,
+            height_mm: d.height_mm,
+            part: part as u8,
+            c,
+            damaged: false,
+            reported: 0,
+        });
+        id
+    }
+
+    /// Writes the sensor bits and the box views.
+    fn publish(&mut self) {
+        for (k, &i) in self.sensor_plant.iter().enumerate() {
+            self.sensors.set(i, self.sensor_mask >> k & 1 == 1);
+        }
+        self.views.clear();
+        for b in &self.bodies {
+            let v = self.view(b, BoxState::Transit);
+            self.views.push(v);
+        }
+        let now = self.now;
+        self.done
+            .retain(|(v, t)| v.state == BoxState::Fallen || now.saturating_sub(*t) < 1000);
+        self.views.extend(self.done.iter().map(|(v, _)| *v));
+    }
+
+    fn view(&self, b: &Body, state: BoxState) -> BoxView {
+        let d = self.layout.dims(b.size);
+        let p = &self.parts[b.part as usize];
+        let (x, y, angle) = if b.part as usize == self.table {
+            let a = (self.angle as f64 / 1e6).to_radians();
+            let u = (b.c - p.len / 2) as f64 / 1000.0;
+            (
+                p.origin.0 + u * a.cos(),
+                p.origin.1 + u * a.sin(),
+                (self.angle / 1000) as i32,
+            )
+        } else {
+            let s = b.c as f64 / 1000.0;
+            (
+                p.origin.0 + s * p.dir.0,
+                p.origin.1 + s * p.dir.1,
+                p.angle_mdeg,
+            )
+        };
+        BoxView {
+            id: b.id,
+            size: b.size,
+            length_mm: d.length_mm,
+            width_mm: d.width_mm,
+            x_mm: x as f32,
+            y_mm: y as f32,
+            angle_mdeg: angle,
+            damaged: b.damaged,
+            state,
+        }
+    }
+
+    fn plan_next(&mut self) {
+        self.next_arrival = match &self.plan {
+            ArrivalPlan::Off => None,
+            ArrivalPlan::List(list) => list.get(self.arrival_k as usize).map(|&(t, s)| (t, s)),
+            ArrivalPlan::Periodic {
+                period_ms,
+                jitter_ms,
+                mix,
+            } => {
+                let base = self.plan_origin + self.arrival_k.saturating_mul((*period_ms).max(1));
+                let t = base + self.rng_arrivals.below(jitter_ms + 1);
+                let size = match mix {
+                    SizeMix::Alternate if self.arrival_k.is_multiple_of(2) => BoxSize::Small,
+                    SizeMix::Alternate => BoxSize::Large,
+                    SizeMix::RandomLarge(p) => {
+                        if self.rng_arrivals.below(100) < u64::from(*p) {
+                            BoxSize::Large
+                        } else {
+                            BoxSize::Small
+                        }
+                    }
+                };
+                Some((t, size))
+            }
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests;

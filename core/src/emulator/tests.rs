@@ -1,0 +1,561 @@
+//! Emulator tests: geometry and timing against the paper, hazards, faults, determinism.
+
+use super::*;
+use std::path::{Path, PathBuf};
+
+fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
+}
+
+/// The station's plant. `plant.ron` opens with `Plant(` while its struct is `PlantFile`,
+/// which `ron` 0.12 refuses (reported to the lead): drop the name before parsing.
+fn plant() -> Plant {
+    static PLANT: std::sync::OnceLock<Plant> = std::sync::OnceLock::new();
+    PLANT.get_or_init(load_plant).clone()
+}
+
+fn load_plant() -> Plant {
+    let path = dir().join("plant.ron");
+    let text = std::fs::read_to_string(&path).expect("plant.ron");
+    Plant::from_ron(&text.replacen("\nPlant(", "\n(", 1), &path).expect("plant")
+}
+
+fn layout() -> Layout {
+    Layout::load(&dir().join("layout.ron")).expect("layout")
+}
+
+/// An emulator with no arrivals.
+fn emu(seed: u64) -> Emulator {
+    let mut e = Emulator::new(&layout(), &plant(), seed).expect("emulator");
+    e.set_arrivals(ArrivalPlan::Off);
+    e
+}
+
+fn outs(on: &[&str]) -> Bits {
+    let p = plant();
+    let mut b = Bits::zeros(p.outputs.len());
+    for a in on {
+        b.set(p.output(a).expect("actuator"), true);
+    }
+    b
+}
+
+fn sensor(e: &Emulator, id: &str) -> bool {
+    e.sensors().get(plant().input(id).expect("sensor"))
+}
+
+/// Steps 1 ms at a time until `pred` holds; the time it held, if within `max_ms`.
+fn until(e: &mut Emulator, o: &Bits, max_ms: u64, pred: impl Fn(&Emulator) -> bool) -> Option<u64> {
+    for _ in 0..max_ms {
+        e.step(Millis(1), o);
+        if pred(e) {
+            return Some(e.now().0);
+        }
+    }
+    None
+}
+
+#[test]
+fn loads_the_station_layout() {
+    let l = layout();
+    assert_eq!(l.sensors.len(), 11);
+    let e = emu(1);
+    assert!(sensor(&e, "C4") && !sensor(&e, "C5"));
+    assert_eq!(e.table_angle_mdeg(), 0);
+}
+
+#[test]
+fn turntable_timings_match_the_learned_intervals() {
+    for seed in 0..20 {
+        let mut e = emu(seed);
+        let on = outs(&["A4"]);
+        let c4_fall = until(&mut e, &on, 500, |e| !sensor(e, "C4")).expect("C4 falls");
+        let c5_rise = until(&mut e, &on, 4000, |e| sensor(e, "C5")).expect("C5 rises");
+        assert!((100..130).contains(&c4_fall), "C4 fell at {c4_fall}");
+        assert!((2900..2950).contains(&c5_rise), "C5 rose at {c5_rise}");
+        until(&mut e, &on, 200, |e| e.table_angle_mdeg() == 90_000).expect("reaches 90");
+        let t0 = e.now().0;
+        let off = outs(&[]);
+        let c5_fall = until(&mut e, &off, 500, |e| !sensor(e, "C5")).expect("C5 falls") - t0;
+        let c4_rise = until(&mut e, &off, 4000, |e| sensor(e, "C4")).expect("C4 rises") - t0;
+        assert!(c5_fall < 150, "C5 fell after {c5_fall}");
+        assert!((2880..2970).contains(&c4_rise), "C4 rose after {c4_rise}");
+        if seed == 0 {
+            eprintln!(
+                "timings: C4 fall {c4_fall}, C5 rise {c5_rise}, C5 fall {c5_fall}, C4 rise {c4_rise}"
+            );
+        }
+    }
+}
+
+/// A correct open-loop-by-phases controller sending one box to `side`.
+fn drive_one(e: &mut Emulator, side: Side, max_ms: u64) -> Vec<String> {
+    let p = plant();
+    let mut rises = Vec::new();
+    let mut prev = e.sensors().clone();
+    let mut phase = 0;
+    let mut released = false;
+    for _ in 0..max_ms {
+        let s = |id: &str| e.sensors().get(p.input(id).expect("id"));
+        let (exit_sensor, rollers) = match side {
+            Side::Left => ("C8", "A2"),
+            Side::Right => ("C7", "A3"),
+        };
+        let mut on = vec!["A5", "A6"];
+        match phase {
+            0 => {
+                on.extend(["A0", "A1", "A2"]);
+                if s("C6") {
+                    phase = 1;
+                    on.clear();
+                    on.extend(["A5", "A6", "A4"]);
+                }
+            }
+            1 => {
+                on.push("A4");
+                if s("C5") {
+                    phase = 2;
+                    on.push(rollers);
+                }
+            }
+            2 => {
+                on.push(rollers);
+                if s(exit_sensor) {
+                    released = true;
+                }
+                if !released || s(exit_sensor) {
+                    on.push("A4");
+                } else {
+                    phase = 3;
+                }
+            }
+            _ => {}
+        }
+        e.step(Millis(1), &outs(&on));
+        let now = e.sensors().clone();
+        for (i, sig) in p.inputs.iter().enumerate() {
+            if now.get(i) && !prev.get(i) {
+                rises.push(sig.id.clone());
+            }
+        }
+        prev = now;
+        if e.stats().delivered_left + e.stats().delivered_right > 0 {
+            break;
+        }
+    }
+    rises
+}
+
+fn order_of(rises: &[String], ids: &[&str]) -> Vec<String> {
+    rises
+        .iter()
+        .filter(|r| ids.contains(&r.as_str()))
+        .cloned()
+        .collect()
+}
+
+#[test]
+fn a_box_goes_right_without_hazard() {
+    for size in [BoxSize::Small, BoxSize::Large] {
+        let mut e = emu(3);
+        e.place_box("entry", 200, size);
+        let rises = drive_one(&mut e, Side::Right, 30_000);
+        let ids = ["C0", "C1", "C3", "C6", "C5", "C7", "C9"];
+        assert_eq!(order_of(&rises, &ids), ids, "{rises:?}");
+        assert_eq!(rises.contains(&"C2".to_string()), size == BoxSize::Large);
+        assert!(e.hazards().is_empty(), "{:?}", e.hazards());
+        assert_eq!(e.stats().delivered_right, 1);
+        assert_eq!(e.boxes()[0].state, BoxState::Delivered(Side::Right));
+    }
+}
+
+#[test]
+fn a_box_goes_left_without_hazard() {
+    let mut e = emu(4);
+    e.place_box("entry", 200, BoxSize::Large);
+    let rises = drive_one(&mut e, Side::Left, 30_000);
+    let ids = ["C0", "C1", "C3", "C6", "C5", "C8", "C10"];
+    assert_eq!(order_of(&rises, &ids), ids, "{rises:?}");
+    assert!(e.hazards().is_empty(), "{:?}", e.hazards());
+    assert_eq!(e.stats().delivered_left, 1);
+}
+
+fn kinds(e: &Emulator) -> Vec<HazardKind> {
+    e.hazards().iter().map(|h| h.kind).collect()
+}
+
+#[test]
+fn a1_onto_a_rotated_table_drops_the_box() {
+    let mut e = emu(1);
+    e.set_table_angle_mdeg(90_000);
+    e.place_box("intermediate", 1000, BoxSize::Small);
+    // A4 held: the table stays at 90 degrees, nothing continues A1.
+    until(&mut e, &outs(&["A1", "A4"]), 3000, |e| {
+        !e.hazards().is_empty()
+    })
+    .expect("hazard");
+    let h = &e.hazards()[0];
+    assert_eq!(h.kind, HazardKind::Dropped);
+    assert!(h.elements.contains(&"A1".to_string()));
+    assert_eq!(e.boxes()[0].state, BoxState::Fallen);
+    // A fallen box lies still.
+    let at = e.boxes()[0].x_mm;
+    e.step(Millis(1000), &outs(&["A1", "A4"]));
+    assert_eq!(e.boxes()[0].x_mm, at);
+    assert_eq!(e.stats().damaged, 1);
+}
+
+#[test]
+fn rollers_at_loading_push_the_box_off_the_far_end() {
+    let mut e = emu(1);
+    e.place_box("table", 100, BoxSize::Small);
+    until(&mut e, &outs(&["A2"]), 3000, |e| !e.hazards().is_empty()).expect("hazard");
+    assert_eq!(kinds(&e), vec![HazardKind::Dropped]);
+}
+
+#[test]
+fn a0_onto_stopped_a1_pushes_the_box() {
+    let mut e = emu(1);
+    e.place_box("entry", 1000, BoxSize::Small);
+    until(&mut e, &outs(&["A0"]), 3000, |e| !e.hazards().is_empty()).expect("hazard");
+    let h = &e.hazards()[0];
+    assert_eq!(h.kind, HazardKind::PushedAgainstStopped);
+    assert_eq!(h.elements, vec!["A0".to_string(), "A1".to_string()]);
+    // The same box does not report the same kind twice.
+    e.step(Millis(2000), &outs(&["A0"]));
+    assert_eq!(kinds(&e), vec![HazardKind::PushedAgainstStopped]);
+}
+
+#[test]
+fn a1_onto_stopped_rollers_pushes_the_box() {
+    let mut e = emu(1);
+    e.place_box("intermediate", 1000, BoxSize::Large);
+    until(&mut e, &outs(&["A1"]), 3000, |e| !e.hazards().is_empty()).expect("hazard");
+    assert_eq!(kinds(&e), vec![HazardKind::PushedAgainstStopped]);
+}
+
+#[test]
+fn releasing_a4_while_a_box_straddles_c7_shears_it() {
+    let mut e = emu(1);
+    e.set_table_angle_mdeg(90_000);
+    e.place_box("table", 0, BoxSize::Small);
+    until(&mut e, &outs(&["A4", "A3", "A6"]), 3000, |e| {
+        sensor(e, "C7")
+    })
+    .expect("C7");
+    assert!(e.hazards().is_empty());
+    until(&mut e, &outs(&["A3", "A6"]), 100, |e| {
+        !e.hazards().is_empty()
+    })
+    .expect("hazard");
+    assert_eq!(kinds(&e), vec![HazardKind::Sheared]);
+}
+
+#[test]
+fn rollers_on_with_a_stopped_exit_push_the_box() {
+    let mut e = emu(1);
+    e.set_table_angle_mdeg(90_000);
+    e.place_box("table", 0, BoxSize::Small);
+    until(&mut e, &outs(&["A4", "A2"]), 3000, |e| {
+        !e.hazards().is_empty()
+    })
+    .expect("hazard");
+    assert_eq!(kinds(&e), vec![HazardKind::PushedAgainstStopped]);
+}
+
+#[test]
+fn a_fast_box_catching_a_slow_one_collides() {
+    let mut e = emu(1);
+    e.schedule_fault(FaultSpec {
+        trigger: Trigger::At(0),
+        fault: FaultKind::ConveyorSlowed {
+            actuator: "A1".into(),
+            percent: 30,
+        },
+        duration_ms: None,
+    });
+    // Box 2 touches box 1 while its centre is still on the faster A0.
+    e.place_box("intermediate", 200, BoxSize::Small);
+    e.place_box("entry", 920, BoxSize::Small);
+    until(&mut e, &outs(&["A0", "A1"]), 5000, |e| {
+        !e.hazards().is_empty()
+    })
+    .expect("hazard");
+    let h = &e.hazards()[0];
+    assert_eq!(h.kind, HazardKind::Collision);
+    assert_eq!(h.box_id, 2);
+}
+
+#[test]
+fn boxes_in_a_train_do_not_collide() {
+    let mut e = emu(1);
+    e.place_box("entry", 400, BoxSize::Small);
+    e.place_box("entry", 700, BoxSize::Small);
+    e.step(Millis(3000), &outs(&["A0", "A1"]));
+    assert!(e.hazards().is_empty(), "{:?}", e.hazards());
+}
+
+fn fault(trigger: Trigger, fault: FaultKind, duration_ms: Option<u64>) -> FaultSpec {
+    FaultSpec {
+        trigger,
+        fault,
+        duration_ms,
+    }
+}
+
+#[test]
+fn sensor_faults_change_the_sensors() {
+    let mut e = emu(1);
+    e.schedule_fault(fault(
+        Trigger::At(10),
+        FaultKind::SensorStuckAt0("C4".into()),
+        Some(100),
+    ));
+    e.schedule_fault(fault(
+        Trigger::At(10),
+        FaultKind::SensorStuckAt1("C5".into()),
+        None,
+    ));
+    e.schedule_fault(fault(
+        Trigger::At(300),
+        FaultKind::SpuriousRise {
+            sensor: "C3".into(),
+            pulse_ms: 50,
+        },
+        None,
+    ));
+    e.schedule_fault(fault(
+        Trigger::At(500),
+        FaultKind::SpuriousFall {
+            sensor: "C4".into(),
+            pulse_ms: 30,
+        },
+        None,
+    ));
+    let off = outs(&[]);
+    e.step(Millis(20), &off);
+    assert!(!sensor(&e, "C4") && sensor(&e, "C5"));
+    e.step(Millis(100), &off);
+    assert!(sensor(&e, "C4"));
+    e.step(Millis(200), &off);
+    assert!(sensor(&e, "C3"));
+    e.step(Millis(50), &off);
+    assert!(!sensor(&e, "C3"));
+    e.step(Millis(140), &off);
+    assert!(!sensor(&e, "C4"));
+    e.step(Millis(40), &off);
+    assert!(sensor(&e, "C4"));
+}
+
+#[test]
+fn actuator_faults_change_the_plant() {
+    let mut e = emu(1);
+    e.schedule_fault(fault(
+        Trigger::At(0),
+        FaultKind::ActuatorStuckOff("A4".into()),
+        Some(1000),
+    ));
+    e.step(Millis(500), &outs(&["A4"]));
+    assert!(sensor(&e, "C4"));
+    let mut e = emu(1);
+    e.schedule_fault(fault(
+        Trigger::At(0),
+        FaultKind::ActuatorStuckOn("A4".into()),
+        None,
+    ));
+    e.step(Millis(500), &outs(&[]));
+    assert!(!sensor(&e, "C4"));
+}
+
+#[test]
+fn table_faults_block_the_rotation() {
+    let mut e = emu(1);
+    e.schedule_fault(fault(Trigger::At(0), FaultKind::TableBlockedAtC4, None));
+    e.step(Millis(4000), &outs(&["A4"]));
+    assert!(sensor(&e, "C4") && !sensor(&e, "C5"));
+
+    let mut e = emu(1);
+    e.schedule_fault(fault(Trigger::At(3500), FaultKind::TableBlockedAtC5, None));
+    e.step(Millis(3500), &outs(&["A4"]));
+    e.step(Millis(4000), &outs(&[]));
+    assert!(sensor(&e, "C5") && !sensor(&e, "C4"));
+
+    let mut e = emu(1);
+    e.schedule_fault(fault(
+        Trigger::At(1000),
+        FaultKind::TableBlockedBetween,
+        Some(2000),
+    ));
+    e.step(Millis(2900), &outs(&["A4"]));
+    assert!(!sensor(&e, "C4") && !sensor(&e, "C5"));
+    assert_eq!(e.table_angle_mdeg() / 1000, 29);
+    e.step(Millis(3000), &outs(&["A4"]));
+    assert!(sensor(&e, "C5"));
+}
+
+#[test]
+fn a_slowed_conveyor_takes_longer() {
+    let time_to_c0 = |percent: Option<u8>| {
+        let mut e = emu(1);
+        if let Some(p) = percent {
+            e.schedule_fault(fault(
+                Trigger::At(0),
+                FaultKind::ConveyorSlowed {
+                    actuator: "A0".into(),
+                    percent: p,
+                },
+                None,
+            ));
+        }
+        e.place_box("entry", 500, BoxSize::Small);
+        until(&mut e, &outs(&["A0", "A1"]), 10_000, |e| sensor(e, "C0")).expect("C0")
+    };
+    let (normal, slow) = (time_to_c0(None), time_to_c0(Some(50)));
+    assert!(slow > normal * 19 / 10, "{normal} vs {slow}");
+}
+
+#[test]
+fn condition_triggered_fault_starts_when_the_condition_holds() {
+    let mut e = emu(1);
+    e.schedule_fault(fault(
+        Trigger::When("RE(C0) . A0".into()),
+        FaultKind::SensorStuckAt1("C9".into()),
+        None,
+    ));
+    e.place_box("entry", 800, BoxSize::Small);
+    let on = outs(&["A0", "A1"]);
+    let c0 = until(&mut e, &on, 5000, |e| sensor(e, "C0")).expect("C0");
+    assert!(!sensor(&e, "C9"));
+    let c9 = until(&mut e, &on, 10, |e| sensor(e, "C9")).expect("C9");
+    assert!(c9 - c0 <= 2, "{c0} {c9}");
+}
+
+#[test]
+fn bad_faults_are_reported_not_panicked() {
+    let mut e = emu(1);
+    e.schedule_fault(fault(
+        Trigger::At(0),
+        FaultKind::SensorStuckAt0("C99".into()),
+        None,
+    ));
+    e.schedule_fault(fault(
+        Trigger::When("C3 . ".into()),
+        FaultKind::TableBlockedAtC4,
+        None,
+    ));
+    e.schedule_fault(fault(
+        Trigger::When("C3 . X7".into()),
+        FaultKind::TableBlockedAtC4,
+        None,
+    ));
+    assert_eq!(e.fault_problems().len(), 3);
+    assert!(e.fault_problems()[0].message.contains("C99"));
+    assert!(e.fault_problems()[2].message.contains("X7"));
+}
+
+#[test]
+fn faults_read_from_ron() {
+    let text = r#"[
+        (trigger: At(1200), fault: SensorStuckAt0("C4"), duration_ms: Some(500)),
+        (trigger: When("C3 . /C4"), fault: ConveyorSlowed(actuator: "A1", percent: 50)),
+        (trigger: At(0), fault: SpuriousRise(sensor: "C7", pulse_ms: 20)),
+    ]"#;
+    let faults: Vec<FaultSpec> = ron::from_str(text).expect("faults");
+    assert_eq!(faults.len(), 3);
+    assert_eq!(faults[1].duration_ms, None);
+}
+
+/// Runs `ms` with periodic arrivals and a crude controller; returns the sensor trace.
+fn closed_loop(seed: u64, ms: u64) -> (Vec<String>, Vec<Hazard>, Vec<u64>) {
+    let mut e = Emulator::new(&layout(), &plant(), seed).expect("emulator");
+    e.set_arrivals(ArrivalPlan::Periodic {
+        period_ms: 3000,
+        jitter_ms: 1500,
+        mix: SizeMix::RandomLarge(50),
+    });
+    let mut trace = Vec::new();
+    let mut created = Vec::new();
+    let mut last = String::new();
+    for t in 0..ms {
+        // Conveyors always on, table toggling every 4 s: hazards are expected.
+        let on = if (t / 4000) % 2 == 0 {
+            outs(&["A0", "A1", "A5", "A6"])
+        } else {
+            outs(&["A0", "A1", "A4", "A3", "A6"])
+        };
+        let before = e.stats().created;
+        e.step(Millis(1), &on);
+        if e.stats().created > before {
+            created.push(e.now().0);
+        }
+        let s = e.sensors().to_string();
+        if s != last {
+            trace.push(format!("{} {s}", e.now().0));
+            last = s;
+        }
+    }
+    (trace, e.hazards().to_vec(), created)
+}
+
+#[test]
+fn same_seed_same_run_other_seed_other_arrivals() {
+    let a = closed_loop(7, 30_000);
+    let b = closed_loop(7, 30_000);
+    assert_eq!(a, b);
+    assert!(!a.1.is_empty());
+    let c = closed_loop(8, 30_000);
+    assert_ne!(a.2, c.2);
+}
+
+#[test]
+fn ron_errors_carry_line_and_column() {
+    let text = std::fs::read_to_string(dir().join("layout.ron")).expect("read");
+    let broken = text.replacen("step_ms: 1,", "step_ms: 1,\n    bogus: 3,", 1);
+    let err = Layout::from_ron(&broken, Path::new("layout.ron")).expect_err("unknown field");
+    let loc = err[0].location.clone().expect("location");
+    assert_eq!((loc.line, loc.column > 1), (7, true), "{}", err[0]);
+    let broken = text.replacen("width_mm: 450,", "width_mm: 450 450,", 1);
+    let err = Layout::from_ron(&broken, Path::new("layout.ron")).expect_err("syntax");
+    assert!(
+        err[0].location.as_ref().is_some_and(|l| l.line > 5),
+        "{}",
+        err[0]
+    );
+}
+
+#[test]
+fn unknown_signal_or_part_is_a_clear_problem() {
+    let text = std::fs::read_to_string(dir().join("layout.ron")).expect("read");
+    let broken = text.replace("actuator: \"A1\"", "actuator: \"A9\"");
+    let l = Layout::from_ron(&broken, Path::new("layout.ron")).expect("parses");
+    let p = Emulator::new(&l, &plant(), 1).expect_err("unknown A9");
+    assert!(p.message.contains("`A9`"), "{p}");
+    assert!(p.location.is_some_and(|l| l.line > 1));
+    let broken = text.replace("part: \"table\"", "part: \"tabel\"");
+    let err = Layout::from_ron(&broken, Path::new("layout.ron")).expect_err("unknown part");
+    assert!(err[0].message.contains("tabel"), "{}", err[0]);
+}
+
+#[test]
+fn hazards_serialise_with_snake_case_kinds() {
+    let mut e = emu(1);
+    e.place_box("entry", 1000, BoxSize::Small);
+    e.step(Millis(1000), &outs(&["A0"]));
+    let json = serde_json::to_string(e.hazards()).expect("json");
+    assert!(json.contains("\"pushed_against_stopped\""), "{json}");
+    assert!(
+        serde_json::to_string(&e.stats())
+            .expect("json")
+            .contains("\"damaged\":1")
+    );
+}
+
+#[test]
+fn clones_project_forward_independently() {
+    let mut e = emu(1);
+    e.place_box("entry", 100, BoxSize::Large);
+    let mut f = e.clone();
+    f.step(Millis(1000), &outs(&["A0"]));
+    assert_eq!(e.now(), Millis(0));
+    assert!(f.boxes()[0].x_mm > e.boxes()[0].x_mm + 250.0);
+}
