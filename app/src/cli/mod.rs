@@ -3,6 +3,7 @@
 mod bench;
 mod check;
 mod filter;
+mod gateway;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -46,6 +47,8 @@ pub(crate) enum Command {
         #[arg(long)]
         explain: bool,
     },
+    /// Run the live link headless (monitor, gateway or emulator mode, from CONFIG).
+    Gateway(gateway::GatewayArgs),
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -64,6 +67,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             reset_after_trip,
             explain,
         }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
+        Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
         None => {
             use clap::CommandFactory as _;

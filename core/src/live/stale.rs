@@ -176,6 +176,26 @@ impl StaleGuard {
         }
     }
 
+    fn filter_for(&mut self, stale_inputs: &Bits) -> Option<&Filter> {
+        let stale = self.stale(stale_inputs);
+        if self.cached.as_ref().is_none_or(|(s, _)| *s != stale) {
+            let filter = Filter::new(&quantify(&self.set, &stale), self.n_outputs);
+            self.cached = Some((stale, filter));
+        }
+        self.cached.as_ref().map(|(_, f)| f)
+    }
+
+    /// The safe outputs for the frame's context whatever the PLC commands (the outputs at
+    /// t are ignored) and whatever the stale inputs are: the fallback of the quantified
+    /// set. Used when the PLC is lost. On a specification error the caller drives every
+    /// output to 0.
+    pub fn safe_outputs(&mut self, frame: &Frame, stale_inputs: &Bits) -> Result<Bits, SpecError> {
+        match self.filter_for(stale_inputs) {
+            Some(f) => f.fallback(frame),
+            None => Ok(Bits::zeros(self.n_outputs)),
+        }
+    }
+
     /// Checks the frame's outputs at t against the quantified constraints. With no stale
     /// input the verdict is empty (the engine's own filter is exact then).
     pub fn check(&mut self, frame: &Frame, stale_inputs: &Bits) -> Verdict {
@@ -185,13 +205,7 @@ impl StaleGuard {
                 fallback: None,
             };
         }
-        let stale = self.stale(stale_inputs);
-        let rebuild = self.cached.as_ref().is_none_or(|(s, _)| *s != stale);
-        if rebuild {
-            let filter = Filter::new(&quantify(&self.set, &stale), self.n_outputs);
-            self.cached = Some((stale, filter));
-        }
-        let Some((_, filter)) = self.cached.as_ref() else {
+        let Some(filter) = self.filter_for(stale_inputs) else {
             return Verdict {
                 potentially_violated: Vec::new(),
                 fallback: None,
