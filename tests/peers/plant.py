@@ -3,6 +3,7 @@
 Sensors are discrete inputs 0..15, actuators coils 0..15 (unit 1), like the sorting
 station's io-map. Driven line by line on stdin, answers on stdout:
   di ADDR 0|1     set a discrete input            -> "ok"
+  co ADDR 0|1     set a coil (a plant that exposes commanded outputs) -> "ok"
   coils           the first 16 coils              -> "coils 0100..."
   quit            stop
 Prints "listening PORT" once serving. `--port N` reuses a port (restart after a kill).
@@ -57,6 +58,9 @@ async def main() -> None:
             break
         if words[0] == "di":
             await server.async_setValues(1, 2, int(words[1]), [words[2] == "1"])
+            print("ok", flush=True)
+        elif words[0] == "co":
+            await server.async_setValues(1, 5, int(words[1]), [words[2] == "1"])
             print("ok", flush=True)
         elif words[0] == "coils":
             values = await server.async_getValues(1, 1, 0, 16)

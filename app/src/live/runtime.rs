@@ -190,12 +190,22 @@ impl AlarmBoard {
     }
 }
 
-fn emit_engine_events(engine: &mut Engine, emit: Emit<'_>, explain: bool) {
-    for event in engine.drain_events() {
+/// Reports the engine's events; a specification error is reported when it changes only
+/// (the engine repeats it every cycle while it lasts).
+fn emit_engine_events(engine: &mut Engine, emit: Emit<'_>, explain: bool, last_spec: &mut Option<String>) {
+    let events = engine.drain_events();
+    if !events.iter().any(|e| matches!(e, Event::SpecificationError { .. })) {
+        *last_spec = None;
+    }
+    for event in events {
         let (kind, index) = match event {
             Event::Trip { index } => ("trip", index),
             Event::Violation { index } => ("violation", index),
             Event::SpecificationError { message } => {
+                if last_spec.as_ref() == Some(&message) {
+                    continue;
+                }
+                *last_spec = Some(message.clone());
                 tracing::error!("specification error: {message}");
                 emit(json!({"event": "specification_error", "message": message}));
                 continue;
@@ -249,6 +259,7 @@ async fn monitor(
         alarms: AlarmList::new(),
     };
     let mut last_potential: Vec<String> = Vec::new();
+    let mut last_spec = None;
     emit(json!({"event": "monitoring", "peer": peer.to_string()}));
     let mut interval = ticker(config.cycle_ms);
     tokio::pin!(shutdown);
@@ -268,7 +279,7 @@ async fn monitor(
         board.watch(emit, now, "link:peer", &format!("monitored peer {peer}"), t);
         control.0.copy_from(outputs.values());
         engine.cycle(now, inputs.values(), &mut control);
-        emit_engine_events(&mut engine, emit, true);
+        emit_engine_events(&mut engine, emit, true, &mut last_spec);
         let stale = inputs.stale(now, &bounds);
         let verdict = guard.check(engine.frame(), &stale);
         if verdict.potentially_violated != last_potential {
@@ -347,6 +358,7 @@ async fn gateway(
         alarms: AlarmList::new(),
     };
     let mut safe_reason: Option<String> = None;
+    let mut last_spec = None;
     let mut interval = ticker(config.cycle_ms);
     tokio::pin!(shutdown);
     loop {
@@ -384,7 +396,7 @@ async fn gateway(
             let _ = engine.reset();
         }
         engine.cycle(now, inputs.values(), &mut control);
-        emit_engine_events(&mut engine, emit, false);
+        emit_engine_events(&mut engine, emit, false, &mut last_spec);
         // 4. Safe outputs.
         let stale = inputs.stale(now, &bounds);
         let mut applied = engine.applied().clone();
