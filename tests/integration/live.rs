@@ -147,7 +147,9 @@ impl Plant {
 
     fn coils(&mut self) -> String {
         let line = self.peer.ask("coils");
-        line.strip_prefix("coils ").unwrap_or_else(|| panic!("plant: {line}"))[..7].to_string()
+        line.strip_prefix("coils ")
+            .unwrap_or_else(|| panic!("plant: {line}"))[..7]
+            .to_string()
     }
 }
 
@@ -157,8 +159,12 @@ struct Plc(Peer);
 impl Plc {
     fn start(server: SocketAddr, source: Option<&str>) -> Self {
         let mut cmd = Command::new(python());
-        cmd.arg(repo().join("tests/peers/plc.py"))
-            .args(["--port", &server.port().to_string(), "--period-ms", "5"]);
+        cmd.arg(repo().join("tests/peers/plc.py")).args([
+            "--port",
+            &server.port().to_string(),
+            "--period-ms",
+            "5",
+        ]);
         if let Some(s) = source {
             cmd.args(["--source", s]);
         }
@@ -178,7 +184,11 @@ impl Plc {
     fn status(&mut self) -> (u64, u64, String) {
         let line = self.0.ask("status");
         let w: Vec<&str> = line.split_whitespace().collect();
-        (w[1].parse().unwrap(), w[2].parse().unwrap(), w[3].to_string())
+        (
+            w[1].parse().unwrap(),
+            w[2].parse().unwrap(),
+            w[3].to_string(),
+        )
     }
 }
 
@@ -210,8 +220,14 @@ impl Drop for TempDir {
 impl Gateway {
     fn start(config_body: &str) -> Self {
         let dir = TempDir::new("gw");
-        let station = repo().join("layouts/sorting-station").canonicalize().unwrap();
-        let text = format!("Gateway(plant: {:?}, {config_body})", station.display().to_string());
+        let station = repo()
+            .join("layouts/sorting-station")
+            .canonicalize()
+            .unwrap();
+        let text = format!(
+            "Gateway(plant: {:?}, {config_body})",
+            station.display().to_string()
+        );
         let path = dir.0.join("gateway.ron");
         std::fs::write(&path, text).unwrap();
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_vigie"));
@@ -233,22 +249,29 @@ impl Gateway {
 
     /// Waits for an event matching `pred` (events seen before count too).
     #[track_caller]
-    fn event(&mut self, what: &str, pred: impl Fn(&serde_json::Value) -> bool) -> serde_json::Value {
+    fn event(
+        &mut self,
+        what: &str,
+        pred: impl Fn(&serde_json::Value) -> bool,
+    ) -> serde_json::Value {
         if let Some(e) = self.events.iter().find(|e| pred(e)) {
             return e.clone();
         }
         let deadline = Instant::now() + WAIT;
         while Instant::now() < deadline {
             if let Ok(line) = self.peer.lines.recv_timeout(Duration::from_millis(50)) {
-                let v: serde_json::Value =
-                    serde_json::from_str(&line).unwrap_or_else(|e| panic!("not JSON ({e}): {line}"));
+                let v: serde_json::Value = serde_json::from_str(&line)
+                    .unwrap_or_else(|e| panic!("not JSON ({e}): {line}"));
                 self.events.push(v.clone());
                 if pred(&v) {
                     return v;
                 }
             }
         }
-        panic!("timed out waiting for event {what}; events: {:#?}", self.events);
+        panic!(
+            "timed out waiting for event {what}; events: {:#?}",
+            self.events
+        );
     }
 
     fn kind(kind: &'static str) -> impl Fn(&serde_json::Value) -> bool {
@@ -294,16 +317,27 @@ fn gateway_round_trip_with_pymodbus() {
     let mut plc = Plc::start(server, Some("127.0.0.2"));
     // Sensors: plant → Vigie → PLC.
     plant.set_inputs(&[(0, true), (C7, true), (10, true)]);
-    wait_until("the PLC to read C0, C7 and C10", || plc.sensors() == "di 10000001001");
+    wait_until("the PLC to read C0, C7 and C10", || {
+        plc.sensors() == "di 10000001001"
+    });
     plant.set_inputs(&[(0, false), (C7, false), (10, false)]);
-    wait_until("the PLC to read all sensors 0", || plc.sensors() == "di 00000000000");
+    wait_until("the PLC to read all sensors 0", || {
+        plc.sensors() == "di 00000000000"
+    });
     // Outputs: PLC → Vigie (allowed by the filter) → plant.
     plc.command("1100011");
-    wait_until("the plant to receive A0 A1 A5 A6", || plant.coils() == "1100011");
+    wait_until("the plant to receive A0 A1 A5 A6", || {
+        plant.coils() == "1100011"
+    });
     plc.command("0000000");
-    wait_until("the plant to receive all outputs 0", || plant.coils() == "0000000");
+    wait_until("the plant to receive all outputs 0", || {
+        plant.coils() == "0000000"
+    });
     let (scans, errors, last) = plc.status();
-    assert!(scans > 0 && errors == 0, "PLC scans {scans}, errors {errors} ({last})");
+    assert!(
+        scans > 0 && errors == 0,
+        "PLC scans {scans}, errors {errors} ({last})"
+    );
     let stopped = gw.stop();
     assert_eq!(stopped["written"], true);
 }
@@ -322,13 +356,18 @@ fn gateway_enforces_the_hold_of_a4() {
     // It reaches the unloading position; the box leaves the table (C6, then C7 on the
     // right exit), and the PLC releases A4 too early (CSs10 = C7 . /A4).
     plant.set_inputs(&[(C4, false), (C5, true)]);
+    wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
+    // One edge per cycle, as on a real plant (P67 is set by FE(C6), reset by RE(C7)).
     plant.set_inputs(&[(C6, false)]);
+    wait_until("the PLC to see C5", || plc.sensors() == "di 00000100000");
     plant.set_inputs(&[(C7, true)]);
     wait_until("the PLC to see C5 C7", || plc.sensors() == "di 00000101000");
     plc.command("0000000");
     let trip = gw.event("trip on CSs10", |e| {
         e["event"] == "trip"
-            && e["record"]["constraints"].as_array().is_some_and(|c| c.iter().any(|c| c["id"] == "CSs10"))
+            && e["record"]["constraints"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|c| c["id"] == "CSs10"))
     });
     assert_eq!(trip["record"]["enforced"], true);
     // The plant keeps A4 ON for as long as C7 is there.
@@ -358,17 +397,25 @@ fn plc_killed_gives_safe_outputs_then_recovers() {
     wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
     gw.forget();
     plc.0.kill();
-    let alarm = gw.event("PLC lost alarm", |e| e["event"] == "alarm" && e["key"] == "link:plc");
+    let alarm = gw.event("PLC lost alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "link:plc"
+    });
     let safe = gw.event("safe outputs", |e| e["event"] == "safe_outputs");
     // The fallback: fewest outputs ON that keep every constraint false: A4 only.
     assert_eq!(safe["outputs"], "0000100");
     assert!(safe["time_ms"].as_u64() >= alarm["time_ms"].as_u64());
-    wait_until("the plant to hold the fallback", || plant.coils() == "0000100");
+    wait_until("the plant to hold the fallback", || {
+        plant.coils() == "0000100"
+    });
     // A PLC comes back.
     let mut plc = Plc::start(server, Some("127.0.0.2"));
     plc.command("0100100");
-    gw.event("PLC alarm cleared", |e| e["event"] == "alarm_cleared" && e["key"] == "link:plc");
-    wait_until("the plant to follow the PLC again", || plant.coils() == "0100100");
+    gw.event("PLC alarm cleared", |e| {
+        e["event"] == "alarm_cleared" && e["key"] == "link:plc"
+    });
+    wait_until("the plant to follow the PLC again", || {
+        plant.coils() == "0100100"
+    });
     // Shutdown with the PLC still commanding A1: the plant gets the safe state.
     let stopped = gw.stop();
     assert_eq!(stopped["outputs"], "0000100");
@@ -386,7 +433,9 @@ fn plant_killed_raises_the_alarm_and_reconnects() {
     wait_until("the plant to receive A0 A1", || plant.coils() == "1100000");
     gw.forget();
     plant.peer.kill();
-    gw.event("plant lost alarm", |e| e["event"] == "alarm" && e["key"] == "link:plant");
+    gw.event("plant lost alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "link:plant"
+    });
     // Every input is stale now: the outputs the PLC commands are held only if no value
     // of the sensors can make a constraint true (CSc1 = C0 . A0 . /A1 cannot with A1 ON,
     // CSs2 = C3 . /C4 . A1 can): the safe fallback is applied.
@@ -395,9 +444,16 @@ fn plant_killed_raises_the_alarm_and_reconnects() {
     // The plant returns on the same port (a fresh process, all coils 0).
     gw.forget();
     let mut plant = Plant::start(Some(port));
-    gw.event("plant alarm cleared", |e| e["event"] == "alarm_cleared" && e["key"] == "link:plant");
-    gw.event("safe outputs released", Gateway::kind("safe_outputs_released"));
-    wait_until("the plant to receive A0 A1 again", || plant.coils() == "1100000");
+    gw.event("plant alarm cleared", |e| {
+        e["event"] == "alarm_cleared" && e["key"] == "link:plant"
+    });
+    gw.event(
+        "safe outputs released",
+        Gateway::kind("safe_outputs_released"),
+    );
+    wait_until("the plant to receive A0 A1 again", || {
+        plant.coils() == "1100000"
+    });
     gw.stop();
 }
 
@@ -423,7 +479,11 @@ fn illegal_requests_get_exceptions_and_nothing_crashes() {
     drop(other);
     // Garbage and a truncated frame on raw sockets: the connection is dropped, the
     // server lives on.
-    for bytes in [&b"\x00\x01\x00\x00\x00\x06\x01\x2b\xff\xff\xff"[..], b"hello modbus\r\n\r\n", b"\x00\x01\x00\x00\xff\xff"] {
+    for bytes in [
+        &b"\x00\x01\x00\x00\x00\x06\x01\x2b\xff\xff\xff"[..],
+        b"hello modbus\r\n\r\n",
+        b"\x00\x01\x00\x00\xff\xff",
+    ] {
         let mut s = std::net::TcpStream::connect(server).unwrap();
         s.set_read_timeout(Some(Duration::from_secs(2))).unwrap();
         let _ = s.write_all(bytes);
@@ -472,7 +532,9 @@ fn monitor_reports_with_explanations_and_never_writes() {
     assert_eq!(plant.peer.ask("co 4 0"), "ok");
     let v = gw.event("violation of CSs10", |e| {
         e["event"] == "violation"
-            && e["record"]["constraints"].as_array().is_some_and(|c| c.iter().any(|c| c["id"] == "CSs10"))
+            && e["record"]["constraints"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|c| c["id"] == "CSs10"))
     });
     assert_eq!(v["record"]["enforced"], false);
     assert!(v["explanation"].is_object(), "{v}");
@@ -483,15 +545,23 @@ fn monitor_reports_with_explanations_and_never_writes() {
     // The peer dies: link alarm, and it comes back.
     let port = plant.port;
     plant.peer.kill();
-    gw.event("link alarm", |e| e["event"] == "alarm" && e["key"] == "link:peer");
+    gw.event("link alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "link:peer"
+    });
     let _plant = Plant::start(Some(port));
-    gw.event("link alarm cleared", |e| e["event"] == "alarm_cleared" && e["key"] == "link:peer");
+    gw.event("link alarm cleared", |e| {
+        e["event"] == "alarm_cleared" && e["key"] == "link:peer"
+    });
     gw.stop();
 }
 
 fn mbpoll_run(args: &[&str]) -> String {
     let out = Command::new(mbpoll()).args(args).output().unwrap();
-    format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr))
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
 }
 
 #[test]
@@ -519,7 +589,9 @@ fn emulator_served_to_pymodbus_and_mbpoll() {
         out.contains("[0]: \t1") && out.contains("[1]: \t0")
     });
     // The emulated plant moves: a box reaches the end of the entry conveyor (C0).
-    wait_until("the emulator to raise C0", || plc.sensors().starts_with("di 1"));
+    wait_until("the emulator to raise C0", || {
+        plc.sensors().starts_with("di 1")
+    });
     // mbpoll is not the PLC: its write is refused; past the image is an illegal address.
     let mut args = base.to_vec();
     args.extend(["-t", "0", "-r", "3", "127.0.0.1", "1"]);

@@ -67,3 +67,42 @@ pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
     rt.block_on(runtime::run(setup, stop_signal(), &mut emit, &mut stats))?;
     Ok(ExitCode::SUCCESS)
 }
+
+/// Arguments of `vigie gateway-bench`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct BenchArgs {
+    /// Sensor edges to time.
+    #[arg(long, default_value_t = 200)]
+    pub(crate) edges: usize,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+/// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
+pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result<ExitCode> {
+    init_tracing("error");
+    let f = crate::live::bench::run(plant, args.edges)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&f)?);
+    } else {
+        println!(
+            "gateway against pymodbus on loopback, 10 ms cycle, {} cycles",
+            f.cycles
+        );
+        println!("  cycle rate            {:.2} Hz", f.rate_hz);
+        println!(
+            "  period jitter (ms)    p50 {:.3}  p99 {:.3}  max {:.3}",
+            f.jitter_ms[0], f.jitter_ms[1], f.jitter_ms[2]
+        );
+        println!(
+            "  cycle work (ms)       p50 {:.3}  p99 {:.3}  max {:.3}",
+            f.busy_ms[0], f.busy_ms[1], f.busy_ms[2]
+        );
+        println!(
+            "  sensor -> output (ms) p50 {:.2}  p99 {:.2}  max {:.2}  ({} edges)",
+            f.latency_ms[0], f.latency_ms[1], f.latency_ms[2], f.edges
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -49,6 +49,9 @@ pub(crate) enum Command {
     },
     /// Run the live link headless (monitor, gateway or emulator mode, from CONFIG).
     Gateway(gateway::GatewayArgs),
+    /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
+    /// sensor-to-output latency).
+    GatewayBench(gateway::BenchArgs),
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -68,6 +71,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             explain,
         }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
         Some(Command::Gateway(args)) => gateway::run(&args),
+        Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
         None => {
             use clap::CommandFactory as _;

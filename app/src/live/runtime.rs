@@ -192,9 +192,17 @@ impl AlarmBoard {
 
 /// Reports the engine's events; a specification error is reported when it changes only
 /// (the engine repeats it every cycle while it lasts).
-fn emit_engine_events(engine: &mut Engine, emit: Emit<'_>, explain: bool, last_spec: &mut Option<String>) {
+fn emit_engine_events(
+    engine: &mut Engine,
+    emit: Emit<'_>,
+    explain: bool,
+    last_spec: &mut Option<String>,
+) {
     let events = engine.drain_events();
-    if !events.iter().any(|e| matches!(e, Event::SpecificationError { .. })) {
+    if !events
+        .iter()
+        .any(|e| matches!(e, Event::SpecificationError { .. }))
+    {
         *last_spec = None;
     }
     for event in events {
