@@ -7,6 +7,8 @@
 //! The venv python is `$VIGIE_VENV/bin/python` or `<repo>/.venv/bin/python`; without it
 //! these tests fail with the command that creates it.
 
+#![allow(clippy::unwrap_used)] // test helpers: a failure is a test failure
+
 use std::io::{BufRead as _, BufReader, Write as _};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};

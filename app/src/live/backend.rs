@@ -25,7 +25,7 @@ impl IoBackend for EmulatorBackend {
 }
 
 /// Inputs set from outside, outputs recorded (tests).
-#[cfg_attr(not(test), allow(dead_code))]
+#[cfg_attr(not(test), expect(dead_code, reason = "served in the unit tests"))]
 #[derive(Clone, Debug, Default)]
 pub(crate) struct MemoryBackend {
     /// Sensors to serve.

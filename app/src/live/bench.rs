@@ -108,10 +108,10 @@ pub(crate) fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<F
         .spawn(move || {
             let mut stats = CycleStats::default();
             let mut emit = move |e: serde_json::Value| {
-                if e["event"] == "listening" {
-                    if let Some(a) = e["address"].as_str().and_then(|a| a.parse().ok()) {
-                        let _ = addr_tx.send(a);
-                    }
+                if e["event"] == "listening"
+                    && let Some(a) = e["address"].as_str().and_then(|a| a.parse().ok())
+                {
+                    let _ = addr_tx.send(a);
                 }
             };
             let rt = tokio::runtime::Builder::new_current_thread()

@@ -191,11 +191,11 @@ impl Link {
                 }
                 Err(e @ LinkError::Exception { .. }) => {
                     // The device answered: keep the connection, let the values age.
-                    if let Some(f) = self.failing_blocks.get_mut(b) {
-                        if !*f {
-                            tracing::warn!("{e}");
-                            *f = true;
-                        }
+                    if let Some(f) = self.failing_blocks.get_mut(b)
+                        && !*f
+                    {
+                        tracing::warn!("{e}");
+                        *f = true;
                     }
                     all_ok = false;
                 }

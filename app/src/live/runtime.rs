@@ -229,10 +229,8 @@ fn emit_engine_events(
         let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
         tracing::warn!(cycle = trip.cycle, "{kind}: {}", ids.join(", "));
         let mut line = json!({"event": kind, "record": trip});
-        if explain {
-            if let Some(ex) = vigie_core::explain::explain(engine, index) {
-                line["explanation"] = serde_json::to_value(ex).unwrap_or_default();
-            }
+        if explain && let Some(ex) = vigie_core::explain::explain(engine, index) {
+            line["explanation"] = serde_json::to_value(ex).unwrap_or_default();
         }
         emit(line);
     }

@@ -180,8 +180,10 @@ impl GatewayConfig {
             }
             _ => {}
         }
-        if let Some((s, plc)) = config.server.as_ref().and_then(|s| s.plc.map(|p| (s, p))) {
-            if !s.allow.contains(&plc) {
+        if let Some((s, plc)) = config.server.as_ref().and_then(|s| s.plc.map(|p| (s, p)))
+            && !s.allow.contains(&plc)
+        {
+            {
                 problems.push(Problem::error(
                     "V0624",
                     format!("the PLC address {plc} is not in the allow-list"),
