@@ -9,6 +9,7 @@
 //! - [`engine`]: one PLC cycle, one function; [`history`]: the recorder.
 //! - [`trace`]: the per-cycle CSV trace format.
 //! - [`emulator`]: the deterministic plant emulator of the sorting station.
+//! - [`live`]: the pure half of the Modbus live link (I/O map, data age, stale inputs).
 //!
 //! See `ARCHITECTURE.md` at the repository root for the data flow and the invariants.
 
@@ -26,6 +27,7 @@ pub mod expr;
 pub mod filter;
 pub mod frame;
 pub mod history;
+pub mod live;
 pub mod observers;
 pub mod plant;
 pub mod sim;

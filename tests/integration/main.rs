@@ -2,3 +2,4 @@
 
 mod export_st;
 mod fuzz_loaders;
+mod live;

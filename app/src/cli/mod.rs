@@ -3,6 +3,7 @@
 mod bench;
 mod check;
 mod filter;
+mod gateway;
 mod run;
 
 use std::path::PathBuf;
@@ -61,6 +62,11 @@ pub(crate) enum Command {
         #[arg(long)]
         no_timing: bool,
     },
+    /// Run the live link headless (monitor, gateway or emulator mode, from CONFIG).
+    Gateway(gateway::GatewayArgs),
+    /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
+    /// sensor-to-output latency).
+    GatewayBench(gateway::BenchArgs),
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -79,6 +85,8 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             reset_after_trip,
             explain,
         }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
+        Some(Command::Gateway(args)) => gateway::run(&args),
+        Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
         Some(Command::Run {
             scenario,

@@ -1,0 +1,108 @@
+//! `vigie gateway CONFIG`: the live link as a headless service (monitor, gateway or
+//! emulator mode, from the configuration file). Logs go to stderr through `tracing`
+//! (`RUST_LOG`-style level with `--log`); events go to stdout as JSON lines. SIGINT and
+//! SIGTERM stop it cleanly, with the outputs driven to the safe state first.
+
+use crate::live::runtime::{self, CycleStats};
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Arguments of `vigie gateway`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct GatewayArgs {
+    /// The gateway configuration (RON), e.g. layouts/sorting-station/gateway-monitor.ron.
+    pub(crate) config: PathBuf,
+    /// Log level: error, warn, info, debug or trace.
+    #[arg(long, default_value = "info")]
+    pub(crate) log: String,
+}
+
+pub(crate) fn init_tracing(level: &str) {
+    let level = level.parse().unwrap_or(tracing::Level::INFO);
+    let _ = tracing_subscriber::fmt()
+        .with_max_level(level)
+        .with_writer(std::io::stderr)
+        .with_ansi(false)
+        .try_init();
+}
+
+/// Resolves on SIGINT or SIGTERM.
+async fn stop_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = term.recv() => {}
+                }
+            }
+            Err(e) => {
+                tracing::warn!("cannot watch SIGTERM: {e}");
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
+    tracing::info!("stop requested");
+}
+
+pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
+    init_tracing(&args.log);
+    let setup = runtime::load(&args.config)?;
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()?;
+    let mut emit = |line: serde_json::Value| {
+        let mut out = std::io::stdout().lock();
+        let _ = writeln!(out, "{line}");
+        let _ = out.flush();
+    };
+    let mut stats = CycleStats::default();
+    rt.block_on(runtime::run(setup, stop_signal(), &mut emit, &mut stats))?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Arguments of `vigie gateway-bench`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct BenchArgs {
+    /// Sensor edges to time.
+    #[arg(long, default_value_t = 200)]
+    pub(crate) edges: usize,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+/// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
+pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result<ExitCode> {
+    init_tracing("error");
+    let f = crate::live::bench::run(plant, args.edges)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&f)?);
+    } else {
+        println!(
+            "gateway against pymodbus on loopback, 10 ms cycle, {} cycles",
+            f.cycles
+        );
+        println!("  cycle rate            {:.2} Hz", f.rate_hz);
+        println!(
+            "  period jitter (ms)    p50 {:.3}  p99 {:.3}  max {:.3}",
+            f.jitter_ms[0], f.jitter_ms[1], f.jitter_ms[2]
+        );
+        println!(
+            "  cycle work (ms)       p50 {:.3}  p99 {:.3}  max {:.3}",
+            f.busy_ms[0], f.busy_ms[1], f.busy_ms[2]
+        );
+        println!(
+            "  sensor -> output (ms) p50 {:.2}  p99 {:.2}  max {:.2}  ({} edges)",
+            f.latency_ms[0], f.latency_ms[1], f.latency_ms[2], f.edges
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

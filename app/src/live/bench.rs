@@ -1,0 +1,218 @@
+//! `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
+//!
+//! Measures the sustained cycle rate and period jitter of the gateway loop, and the
+//! latency from a sensor change at the plant to the filtered output at the plant: with
+//! the PLC commanding the intermediate conveyor (A1), C3 rises at the plant
+//! (CSs2 = C3 . /C4 . A1), the filter trips and the plant's A1 falls; C3 falls, the
+//! trip resets (auto reset) and A1 returns. Both edges are timed from the moment the
+//! plant peer is asked to change C3 until a probe client reads the new coil.
+
+use super::runtime::{self, CycleStats, Setup};
+use anyhow::Context as _;
+use std::io::{BufRead as _, BufReader, Write as _};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+use tokio_modbus::client::{Reader as _, Writer as _};
+use vigie_core::bundle::PlantBundle;
+use vigie_core::live::config::GatewayConfig;
+use vigie_core::live::iomap::IoMap;
+
+/// Figures of one run.
+#[derive(Debug, serde::Serialize)]
+pub(crate) struct Figures {
+    /// Cycles run.
+    pub(crate) cycles: usize,
+    /// Cycles per second over the run.
+    pub(crate) rate_hz: f64,
+    /// Period jitter |period − cycle| percentiles in ms: p50, p99, max.
+    pub(crate) jitter_ms: [f64; 3],
+    /// Work per cycle (poll, engine, write) percentiles in ms: p50, p99, max.
+    pub(crate) busy_ms: [f64; 3],
+    /// Sensor change → filtered output at the plant, percentiles in ms: p50, p99, max.
+    pub(crate) latency_ms: [f64; 3],
+    /// Edges timed.
+    pub(crate) edges: usize,
+}
+
+fn percentiles(mut v: Vec<f64>) -> [f64; 3] {
+    if v.is_empty() {
+        return [f64::NAN; 3];
+    }
+    v.sort_by(f64::total_cmp);
+    let at = |q: f64| {
+        let i = ((v.len() - 1) as f64 * q).round() as usize;
+        v.get(i).copied().unwrap_or(f64::NAN)
+    };
+    [at(0.5), at(0.99), at(1.0)]
+}
+
+fn repo_root() -> PathBuf {
+    let here = PathBuf::from(".");
+    if here.join("tests/peers/plant.py").is_file() {
+        return here;
+    }
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// Runs the benchmark: `edges` timed sensor edges, then the cycle figures.
+pub(crate) fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<Figures> {
+    let root = repo_root();
+    let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| root.join(".venv"), PathBuf::from);
+    let python = venv.join("bin/python");
+    anyhow::ensure!(
+        python.is_file(),
+        "{} not found: create the venv with `scripts/test.sh` (or python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt)",
+        python.display()
+    );
+    let mut plant = Command::new(&python)
+        .arg(root.join("tests/peers/plant.py"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .context("cannot start the pymodbus plant")?;
+    let mut plant_in = plant.stdin.take().context("plant stdin")?;
+    let mut plant_out = BufReader::new(plant.stdout.take().context("plant stdout")?);
+    let mut line = String::new();
+    plant_out.read_line(&mut line)?;
+    let port: u16 = line
+        .trim()
+        .strip_prefix("listening ")
+        .and_then(|p| p.parse().ok())
+        .with_context(|| format!("unexpected plant output {line:?}"))?;
+    let plant_addr: SocketAddr = ([127, 0, 0, 1], port).into();
+
+    let text = format!(
+        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
+         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"))",
+        plant_dir.display().to_string()
+    );
+    let config = GatewayConfig::from_ron(&text, std::path::Path::new("bench.ron"))
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let (bundle, _) = PlantBundle::load(plant_dir)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let (map, _) = IoMap::load(&config.io_map_path(), &bundle.plant)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let setup = Setup {
+        config,
+        bundle,
+        map,
+    };
+
+    // The gateway on its own thread and runtime.
+    let (addr_tx, addr_rx) = std::sync::mpsc::channel::<SocketAddr>();
+    let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+    let gateway = std::thread::Builder::new()
+        .name("gateway".into())
+        .spawn(move || {
+            let mut stats = CycleStats::default();
+            let mut emit = move |e: serde_json::Value| {
+                if e["event"] == "listening"
+                    && let Some(a) = e["address"].as_str().and_then(|a| a.parse().ok())
+                {
+                    let _ = addr_tx.send(a);
+                }
+            };
+            let rt = tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()?;
+            rt.block_on(runtime::run(
+                setup,
+                async {
+                    let _ = stop_rx.await;
+                },
+                &mut emit,
+                &mut stats,
+            ))?;
+            anyhow::Ok(stats)
+        })?;
+    let server = addr_rx
+        .recv_timeout(Duration::from_secs(10))
+        .context("the gateway did not start")?;
+
+    // The PLC (A1 ON, every 5 ms) and the probe on a second runtime.
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()?;
+    let result = rt.block_on(async {
+        let mut plc = tokio_modbus::client::tcp::connect(server).await?;
+        let plc_task = tokio::spawn(async move {
+            loop {
+                let _ = plc.read_discrete_inputs(0, 11).await;
+                let _ = plc
+                    .write_multiple_coils(0, &[false, true, false, false, false, false, false])
+                    .await;
+                tokio::time::sleep(Duration::from_millis(5)).await;
+            }
+        });
+        let mut probe =
+            tokio_modbus::client::tcp::connect_slave(plant_addr, tokio_modbus::Slave(1)).await?;
+        let mut read_a1 = async move || -> anyhow::Result<bool> {
+            Ok(probe
+                .read_coils(1, 1)
+                .await??
+                .first()
+                .copied()
+                .unwrap_or(false))
+        };
+        // Wait for A1 at the plant.
+        let deadline = Instant::now() + Duration::from_secs(10);
+        while !read_a1().await? {
+            anyhow::ensure!(Instant::now() < deadline, "A1 never reached the plant");
+        }
+        let mut latencies = Vec::with_capacity(edges);
+        for k in 0..edges {
+            // Spread the phase of the change over the cycle.
+            tokio::time::sleep(Duration::from_micros(3000 + (k as u64 * 7919) % 10_000)).await;
+            let rising = k % 2 == 0;
+            let t0 = Instant::now();
+            writeln!(plant_in, "di 3 {}", u8::from(rising))?;
+            plant_in.flush()?;
+            let deadline = t0 + Duration::from_secs(5);
+            loop {
+                if read_a1().await? != rising {
+                    break;
+                }
+                anyhow::ensure!(
+                    Instant::now() < deadline,
+                    "edge {k}: no filtered output within 5 s"
+                );
+            }
+            latencies.push(t0.elapsed().as_secs_f64() * 1e3);
+        }
+        plc_task.abort();
+        anyhow::Ok(latencies)
+    });
+    let _ = stop_tx.send(());
+    let stats = gateway
+        .join()
+        .map_err(|_| anyhow::anyhow!("gateway thread panicked"))??;
+    let _ = writeln!(plant_in, "quit");
+    let _ = plant.kill();
+    let _ = plant.wait();
+    let latencies = result?;
+
+    let periods: Vec<f64> = stats
+        .starts
+        .windows(2)
+        .map(|w| (w[1] - w[0]).as_secs_f64() * 1e3)
+        .collect();
+    let total = stats
+        .starts
+        .last()
+        .zip(stats.starts.first())
+        .map_or(0.0, |(l, f)| (*l - *f).as_secs_f64());
+    Ok(Figures {
+        cycles: stats.starts.len(),
+        rate_hz: if total > 0.0 {
+            (stats.starts.len() - 1) as f64 / total
+        } else {
+            0.0
+        },
+        jitter_ms: percentiles(periods.iter().map(|p| (p - 10.0).abs()).collect()),
+        busy_ms: percentiles(stats.busy.iter().map(|d| d.as_secs_f64() * 1e3).collect()),
+        latency_ms: percentiles(latencies.clone()),
+        edges: latencies.len(),
+    })
+}

@@ -1,0 +1,388 @@
+//! The Modbus TCP client Vigie is to the plant (gateway) or to the monitored PLC
+//! (monitor): polls the map's read blocks when due, stamps every value with the time it
+//! was read, reconnects with backoff, and never fails the caller: exceptions, timeouts
+//! and refused connections are logged with the peer address and the values age.
+//!
+//! [`Reader`] can only read; [`Writer`] can also write outputs. Monitor mode gets a
+//! [`Reader`], so it cannot write by construction.
+
+use std::time::Duration;
+use tokio_modbus::Slave;
+use tokio_modbus::client::{Context, Reader as _, Writer as _};
+use tokio_modbus::prelude::{SlaveContext as _, tcp};
+use vigie_core::live::age::{AgedBits, Backoff};
+use vigie_core::live::config::ClientConfig;
+use vigie_core::live::image::{Raw, ReadBlock, WriteOp, plan_reads, plan_writes};
+use vigie_core::live::iomap::{Area, IoMap};
+use vigie_core::{Bits, Millis};
+
+/// Why a request failed.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum LinkError {
+    /// The peer answered with a Modbus exception.
+    #[error("{peer} answered {what} with exception {code:?}")]
+    Exception {
+        /// Peer.
+        peer: std::net::SocketAddr,
+        /// The request.
+        what: String,
+        /// The exception.
+        code: tokio_modbus::ExceptionCode,
+    },
+    /// Transport or framing error: the connection is dropped.
+    #[error("{peer}: {what} failed: {error}")]
+    Transport {
+        /// Peer.
+        peer: std::net::SocketAddr,
+        /// The request.
+        what: String,
+        /// The error.
+        error: String,
+    },
+    /// No answer in time: the connection is dropped.
+    #[error("{peer}: {what} timed out after {timeout_ms} ms")]
+    Timeout {
+        /// Peer.
+        peer: std::net::SocketAddr,
+        /// The request.
+        what: String,
+        /// The limit.
+        timeout_ms: u64,
+    },
+    /// Not connected.
+    #[error("{peer}: not connected")]
+    Disconnected {
+        /// Peer.
+        peer: std::net::SocketAddr,
+    },
+}
+
+/// The connection and the poll schedule.
+struct Link {
+    config: ClientConfig,
+    map: IoMap,
+    blocks: Vec<ReadBlock>,
+    last_poll: Vec<Option<Millis>>,
+    ctx: Option<Context>,
+    backoff: Backoff,
+    next_attempt: Millis,
+    /// Whether the last connection attempt failed (to log transitions only).
+    down_logged: bool,
+    failing_blocks: Vec<bool>,
+}
+
+impl Link {
+    fn new(config: ClientConfig, map: IoMap, with_outputs: bool) -> Self {
+        let blocks = plan_reads(&map, with_outputs, 8);
+        let n = blocks.len();
+        Self {
+            backoff: Backoff::new(
+                Millis(config.backoff_initial_ms),
+                Millis(config.backoff_max_ms),
+            ),
+            config,
+            map,
+            blocks,
+            last_poll: vec![None; n],
+            ctx: None,
+            next_attempt: Millis::ZERO,
+            down_logged: false,
+            failing_blocks: vec![false; n],
+        }
+    }
+
+    fn peer(&self) -> std::net::SocketAddr {
+        self.config.address
+    }
+
+    fn timeout(&self) -> Duration {
+        Duration::from_millis(self.config.timeout_ms)
+    }
+
+    fn is_connected(&self) -> bool {
+        self.ctx.is_some()
+    }
+
+    async fn ensure_connected(&mut self, now: Millis) -> bool {
+        if self.ctx.is_some() {
+            return true;
+        }
+        if now < self.next_attempt {
+            return false;
+        }
+        let peer = self.peer();
+        match tokio::time::timeout(self.timeout(), tcp::connect(peer)).await {
+            Ok(Ok(ctx)) => {
+                tracing::info!(%peer, "connected");
+                self.ctx = Some(ctx);
+                self.backoff.reset();
+                self.down_logged = false;
+                self.last_poll.iter_mut().for_each(|t| *t = None);
+                true
+            }
+            Ok(Err(e)) => {
+                self.retry_later(now, &format!("cannot connect: {e}"));
+                false
+            }
+            Err(_) => {
+                self.retry_later(
+                    now,
+                    &format!("cannot connect: no answer in {} ms", self.config.timeout_ms),
+                );
+                false
+            }
+        }
+    }
+
+    fn retry_later(&mut self, now: Millis, why: &str) {
+        let delay = self.backoff.failed();
+        self.next_attempt = now + delay;
+        if !self.down_logged {
+            tracing::warn!(peer = %self.peer(), "{why}; retrying with backoff (next in {delay})");
+            self.down_logged = true;
+        } else {
+            tracing::debug!(peer = %self.peer(), "{why}; next attempt in {delay}");
+        }
+    }
+
+    fn drop_connection(&mut self, now: Millis, err: &LinkError) {
+        tracing::warn!("{err}; connection dropped");
+        self.ctx = None;
+        self.down_logged = true;
+        self.next_attempt = now + self.backoff.failed();
+    }
+
+    /// Reads every block that is due; true when all of them were read.
+    async fn poll(&mut self, now: Millis, inputs: &mut AgedBits, outputs: &mut AgedBits) -> bool {
+        if !self.ensure_connected(now).await {
+            return false;
+        }
+        let mut all_ok = true;
+        for b in 0..self.blocks.len() {
+            let due = match (self.last_poll.get(b).copied().flatten(), self.blocks.get(b)) {
+                (None, Some(_)) => true,
+                (Some(t), Some(block)) => now.saturating_sub(t) >= block.poll,
+                _ => false,
+            };
+            if !due {
+                continue;
+            }
+            match self.read_block(b).await {
+                Ok(raw) => {
+                    if let Some(slot) = self.last_poll.get_mut(b) {
+                        *slot = Some(now);
+                    }
+                    let Some(block) = self.blocks.get(b) else {
+                        continue;
+                    };
+                    let decoded = match &raw {
+                        RawOwned::Bits(v) => block.decode(Raw::Bits(v), now, inputs, outputs),
+                        RawOwned::Words(v) => block.decode(Raw::Words(v), now, inputs, outputs),
+                    };
+                    if let Err(e) = decoded {
+                        tracing::warn!(peer = %self.peer(), "{e}");
+                        all_ok = false;
+                    } else if self.failing_blocks.get(b).copied().unwrap_or(false) {
+                        tracing::info!(peer = %self.peer(), "{} {} read again", block.area, block.start);
+                        if let Some(f) = self.failing_blocks.get_mut(b) {
+                            *f = false;
+                        }
+                    }
+                }
+                Err(e @ LinkError::Exception { .. }) => {
+                    // The device answered: keep the connection, let the values age.
+                    if let Some(f) = self.failing_blocks.get_mut(b)
+                        && !*f
+                    {
+                        tracing::warn!("{e}");
+                        *f = true;
+                    }
+                    all_ok = false;
+                }
+                Err(e) => {
+                    self.drop_connection(now, &e);
+                    return false;
+                }
+            }
+        }
+        all_ok
+    }
+
+    async fn read_block(&mut self, b: usize) -> Result<RawOwned, LinkError> {
+        let peer = self.peer();
+        let timeout = self.timeout();
+        let timeout_ms = self.config.timeout_ms;
+        let Some(block) = self.blocks.get(b) else {
+            return Err(LinkError::Disconnected { peer });
+        };
+        let (area, start, count, unit) = (block.area, block.start, block.count, block.unit);
+        let Some(ctx) = self.ctx.as_mut() else {
+            return Err(LinkError::Disconnected { peer });
+        };
+        ctx.set_slave(Slave(unit));
+        let what = format!("read {count} {area} at {start} (unit {unit})");
+        let outcome = match area {
+            Area::DiscreteInput => {
+                tokio::time::timeout(timeout, ctx.read_discrete_inputs(start, count))
+                    .await
+                    .map(|r| r.map(|r| r.map(RawOwned::Bits)))
+            }
+            Area::Coil => tokio::time::timeout(timeout, ctx.read_coils(start, count))
+                .await
+                .map(|r| r.map(|r| r.map(RawOwned::Bits))),
+            Area::InputRegister => {
+                tokio::time::timeout(timeout, ctx.read_input_registers(start, count))
+                    .await
+                    .map(|r| r.map(|r| r.map(RawOwned::Words)))
+            }
+            Area::HoldingRegister => {
+                tokio::time::timeout(timeout, ctx.read_holding_registers(start, count))
+                    .await
+                    .map(|r| r.map(|r| r.map(RawOwned::Words)))
+            }
+        };
+        settle(peer, what, timeout_ms, outcome)
+    }
+
+    async fn write(&mut self, now: Millis, outputs: &Bits) -> bool {
+        if !self.is_connected() {
+            return false;
+        }
+        let peer = self.peer();
+        let timeout = self.timeout();
+        let timeout_ms = self.config.timeout_ms;
+        for op in plan_writes(&self.map, outputs) {
+            let Some(ctx) = self.ctx.as_mut() else {
+                return false;
+            };
+            let result = match &op {
+                WriteOp::Coils {
+                    unit,
+                    start,
+                    values,
+                } => {
+                    ctx.set_slave(Slave(*unit));
+                    let what = format!("write {} coils at {start} (unit {unit})", values.len());
+                    settle(
+                        peer,
+                        what,
+                        timeout_ms,
+                        tokio::time::timeout(timeout, ctx.write_multiple_coils(*start, values))
+                            .await,
+                    )
+                }
+                WriteOp::MaskRegister {
+                    unit,
+                    address,
+                    and_mask,
+                    or_mask,
+                } => {
+                    ctx.set_slave(Slave(*unit));
+                    let what = format!("mask write holding register {address} (unit {unit})");
+                    settle(
+                        peer,
+                        what,
+                        timeout_ms,
+                        tokio::time::timeout(
+                            timeout,
+                            ctx.masked_write_register(*address, *and_mask, *or_mask),
+                        )
+                        .await,
+                    )
+                }
+            };
+            match result {
+                Ok(()) => {}
+                Err(e @ LinkError::Exception { .. }) => {
+                    tracing::warn!("{e}");
+                    return false;
+                }
+                Err(e) => {
+                    self.drop_connection(now, &e);
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+enum RawOwned {
+    Bits(Vec<bool>),
+    Words(Vec<u16>),
+}
+
+type Outcome<T> = Result<tokio_modbus::Result<T>, tokio::time::error::Elapsed>;
+
+fn settle<T>(
+    peer: std::net::SocketAddr,
+    what: String,
+    timeout_ms: u64,
+    outcome: Outcome<T>,
+) -> Result<T, LinkError> {
+    match outcome {
+        Ok(Ok(Ok(v))) => Ok(v),
+        Ok(Ok(Err(code))) => Err(LinkError::Exception { peer, what, code }),
+        Ok(Err(e)) => Err(LinkError::Transport {
+            peer,
+            what,
+            error: e.to_string(),
+        }),
+        Err(_) => Err(LinkError::Timeout {
+            peer,
+            what,
+            timeout_ms,
+        }),
+    }
+}
+
+/// A read-only client (monitor mode): it has no way to write.
+pub(crate) struct Reader(Link);
+
+impl Reader {
+    /// A client reading the inputs and, with `with_outputs`, the outputs of `map`.
+    pub(crate) fn new(config: ClientConfig, map: IoMap, with_outputs: bool) -> Self {
+        Self(Link::new(config, map, with_outputs))
+    }
+
+    /// Reads what is due at `now`; true when every due block was read.
+    pub(crate) async fn poll(
+        &mut self,
+        now: Millis,
+        inputs: &mut AgedBits,
+        outputs: &mut AgedBits,
+    ) -> bool {
+        self.0.poll(now, inputs, outputs).await
+    }
+
+    /// True while connected.
+    pub(crate) fn is_connected(&self) -> bool {
+        self.0.is_connected()
+    }
+}
+
+/// A client that reads the inputs and writes the outputs (gateway mode).
+pub(crate) struct Writer(Link);
+
+impl Writer {
+    /// A client for `map`: reads its inputs, writes its outputs.
+    pub(crate) fn new(config: ClientConfig, map: IoMap) -> Self {
+        Self(Link::new(config, map, false))
+    }
+
+    /// Reads what is due at `now`; true when every due block was read.
+    pub(crate) async fn poll(&mut self, now: Millis, inputs: &mut AgedBits) -> bool {
+        let mut none = AgedBits::new(0);
+        self.0.poll(now, inputs, &mut none).await
+    }
+
+    /// Writes every output; true when every write was acknowledged.
+    pub(crate) async fn write(&mut self, now: Millis, outputs: &Bits) -> bool {
+        self.0.write(now, outputs).await
+    }
+
+    /// True while connected.
+    pub(crate) fn is_connected(&self) -> bool {
+        self.0.is_connected()
+    }
+}

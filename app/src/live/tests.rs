@@ -1,0 +1,101 @@
+//! The server over a memory backend, with tokio-modbus as the client (same process).
+
+use super::backend::MemoryBackend;
+use super::runtime::{CycleStats, serve_backend};
+use std::net::SocketAddr;
+use std::path::Path;
+use tokio_modbus::client::{Reader as _, Writer as _};
+use tokio_modbus::prelude::SlaveContext as _;
+use tokio_modbus::{ExceptionCode, Slave};
+use vigie_core::live::config::GatewayConfig;
+use vigie_core::live::iomap::IoMap;
+use vigie_core::plant::Plant;
+
+fn station() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
+}
+
+#[test]
+fn memory_backend_served_round_trip_and_exceptions() {
+    let plant = Plant::load(&station().join("plant.ron")).unwrap();
+    let (map, _) = IoMap::load(&station().join("io-map.ron"), &plant).unwrap();
+    let text = format!(
+        "Gateway(mode: Emulator, plant: {:?}, cycle_ms: 5, server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"))",
+        station().display().to_string()
+    );
+    let config = GatewayConfig::from_ron(&text, Path::new("t.ron")).unwrap();
+    let server_config = config.server.clone().unwrap();
+    let backend = MemoryBackend {
+        inputs: vigie_core::Bits::from_bools(&[
+            false, false, false, true, false, false, false, true, false, false, false,
+        ]),
+        outputs: vigie_core::Bits::zeros(7),
+    };
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    rt.block_on(async {
+        let (addr_tx, addr_rx) = tokio::sync::oneshot::channel::<SocketAddr>();
+        let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
+        let mut addr_tx = Some(addr_tx);
+        let served = async move {
+            let mut emit = move |e: serde_json::Value| {
+                if let Some(a) = e["address"].as_str().and_then(|a| a.parse().ok())
+                    && let Some(tx) = addr_tx.take()
+                {
+                    let _ = tx.send(a);
+                }
+            };
+            let mut stats = CycleStats::default();
+            serve_backend(
+                &config,
+                &server_config,
+                &map,
+                backend,
+                async {
+                    let _ = stop_rx.await;
+                },
+                &mut emit,
+                &mut stats,
+            )
+            .await
+            .unwrap();
+        };
+        let client = async move {
+            let addr = addr_rx.await.unwrap();
+            let mut ctx = tokio_modbus::client::tcp::connect_slave(addr, Slave(1))
+                .await
+                .unwrap();
+            let di = ctx.read_discrete_inputs(0, 11).await.unwrap().unwrap();
+            assert!(di[3] && di[7] && !di[0]);
+            ctx.write_multiple_coils(2, &[true, false, true])
+                .await
+                .unwrap()
+                .unwrap();
+            assert_eq!(
+                ctx.read_coils(0, 7).await.unwrap().unwrap(),
+                vec![false, false, true, false, true, false, false]
+            );
+            assert_eq!(
+                ctx.read_discrete_inputs(10, 2).await.unwrap(),
+                Err(ExceptionCode::IllegalDataAddress)
+            );
+            assert_eq!(
+                ctx.read_coils(0, 0).await.unwrap(),
+                Err(ExceptionCode::IllegalDataValue)
+            );
+            assert_eq!(
+                ctx.write_single_register(0, 1).await.unwrap(),
+                Err(ExceptionCode::IllegalDataAddress)
+            );
+            ctx.set_slave(Slave(9));
+            assert_eq!(
+                ctx.read_coils(0, 1).await.unwrap(),
+                Err(ExceptionCode::GatewayTargetDevice)
+            );
+            let _ = stop_tx.send(());
+        };
+        tokio::join!(served, client);
+    });
+}

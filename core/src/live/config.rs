@@ -1,0 +1,232 @@
+//! The gateway configuration (`vigie gateway CONFIG`), a RON file such as
+//! `layouts/sorting-station/gateway-monitor.ron`. Relative paths are relative to the
+//! file's folder.
+
+use super::ron_options;
+use crate::diag::{Problem, ron_problem};
+use crate::time::Millis;
+use serde::{Deserialize, Serialize};
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::path::{Path, PathBuf};
+
+/// What the service does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Mode {
+    /// Read-only: poll a PLC or plant exposing the sensors and the commanded outputs,
+    /// run observers and the filter in report-only mode; never write.
+    Monitor,
+    /// Serve the PLC (it reads sensors, writes commanded coils), poll the plant (read
+    /// sensors, write the filtered coils), enforce the filter in between.
+    Gateway,
+    /// Serve the built-in emulator to an external PLC.
+    Emulator,
+}
+
+fn default_cycle_ms() -> u64 {
+    10
+}
+fn default_timeout_cycles() -> u32 {
+    2
+}
+fn default_request_timeout_ms() -> u64 {
+    50
+}
+fn default_backoff_initial_ms() -> u64 {
+    100
+}
+fn default_backoff_max_ms() -> u64 {
+    5000
+}
+fn default_bind() -> SocketAddr {
+    SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 1502)
+}
+fn default_allow() -> Vec<IpAddr> {
+    vec![IpAddr::V4(Ipv4Addr::LOCALHOST)]
+}
+fn default_unit() -> u8 {
+    1
+}
+
+/// The Modbus TCP server Vigie is to a PLC.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServerConfig {
+    /// Address to listen on; `127.0.0.1:1502` by default (loopback only). Port 0 lets
+    /// the OS choose.
+    #[serde(default = "default_bind")]
+    pub bind: SocketAddr,
+    /// Client addresses allowed to connect (others are disconnected at once);
+    /// `[127.0.0.1]` by default.
+    #[serde(default = "default_allow")]
+    pub allow: Vec<IpAddr>,
+    /// The only address allowed to write coils or registers (the PLC); `None` makes the
+    /// server read-only.
+    #[serde(default)]
+    pub plc: Option<IpAddr>,
+    /// Unit id answered (requests to unit 0 and 255 are answered too).
+    #[serde(default = "default_unit")]
+    pub unit: u8,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        Self {
+            bind: default_bind(),
+            allow: default_allow(),
+            plc: Some(IpAddr::V4(Ipv4Addr::LOCALHOST)),
+            unit: default_unit(),
+        }
+    }
+}
+
+/// The Modbus TCP client Vigie is to the plant (or to the PLC in monitor mode).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClientConfig {
+    /// The peer's address.
+    pub address: SocketAddr,
+    /// Time allowed for one request (and for connecting).
+    #[serde(default = "default_request_timeout_ms")]
+    pub timeout_ms: u64,
+    /// First reconnection delay, doubled after each failure.
+    #[serde(default = "default_backoff_initial_ms")]
+    pub backoff_initial_ms: u64,
+    /// Largest reconnection delay.
+    #[serde(default = "default_backoff_max_ms")]
+    pub backoff_max_ms: u64,
+}
+
+/// The configuration file.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Gateway")]
+pub struct GatewayConfig {
+    /// Monitor (default), gateway or emulator.
+    #[serde(default = "default_mode")]
+    pub mode: Mode,
+    /// The plant folder.
+    pub plant: PathBuf,
+    /// The I/O map; the plant folder's `io-map.ron` when absent.
+    #[serde(default)]
+    pub io_map: Option<PathBuf>,
+    /// The cycle period.
+    #[serde(default = "default_cycle_ms")]
+    pub cycle_ms: u64,
+    /// A link silent (plant) or a PLC silent for more than this many cycles is lost:
+    /// outputs go to the safe fallback and an alarm is raised (2 by default).
+    #[serde(default = "default_timeout_cycles")]
+    pub link_timeout_cycles: u32,
+    /// The plant (gateway) or the polled PLC or plant (monitor).
+    #[serde(default)]
+    pub client: Option<ClientConfig>,
+    /// The server towards the PLC (gateway, emulator).
+    #[serde(default)]
+    pub server: Option<ServerConfig>,
+    /// Reset a latched trip as soon as the PLC's commands comply again (headless
+    /// service with no operator); by default a trip latches until restart.
+    #[serde(default)]
+    pub auto_reset: bool,
+    /// Emulator seed.
+    #[serde(default)]
+    pub seed: u64,
+}
+
+fn default_mode() -> Mode {
+    Mode::Monitor
+}
+
+impl GatewayConfig {
+    /// Parses a configuration; `file` is used in messages and to resolve relative paths.
+    pub fn from_ron(text: &str, file: &Path) -> Result<Self, Vec<Problem>> {
+        let mut config: Self = ron_options()
+            .from_str(text)
+            .map_err(|e| vec![ron_problem(file, &e)])?;
+        let base = file.parent().unwrap_or(Path::new("."));
+        if config.plant.is_relative() {
+            config.plant = base.join(&config.plant);
+        }
+        if let Some(m) = config.io_map.as_mut().filter(|m| m.is_relative()) {
+            *m = base.join(&*m);
+        }
+        let mut problems = Vec::new();
+        let at = |n: &str| Some(super::iomap::locate(text, file, n));
+        if config.cycle_ms == 0 {
+            problems.push(Problem::error(
+                "V0620",
+                "cycle_ms must be at least 1",
+                at("cycle_ms"),
+            ));
+        }
+        if config.link_timeout_cycles == 0 {
+            problems.push(Problem::error(
+                "V0621",
+                "link_timeout_cycles must be at least 1",
+                at("link_timeout_cycles"),
+            ));
+        }
+        match config.mode {
+            Mode::Monitor | Mode::Gateway if config.client.is_none() => {
+                problems.push(Problem::error(
+                    "V0622",
+                    format!("{:?} mode needs `client: (address: …)`", config.mode),
+                    at("mode"),
+                ))
+            }
+            Mode::Gateway | Mode::Emulator if config.server.is_none() => {
+                problems.push(Problem::error(
+                    "V0623",
+                    format!("{:?} mode needs `server: (…)`", config.mode),
+                    at("mode"),
+                ))
+            }
+            _ => {}
+        }
+        if let Some((s, plc)) = config.server.as_ref().and_then(|s| s.plc.map(|p| (s, p)))
+            && !s.allow.contains(&plc)
+        {
+            {
+                problems.push(Problem::error(
+                    "V0624",
+                    format!("the PLC address {plc} is not in the allow-list"),
+                    at("plc"),
+                ));
+            }
+        }
+        if problems.is_empty() {
+            Ok(config)
+        } else {
+            Err(problems)
+        }
+    }
+
+    /// Loads a configuration file.
+    pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            vec![Problem::error(
+                "V0619",
+                format!("cannot read {}: {e}", path.display()),
+                None,
+            )]
+        })?;
+        Self::from_ron(&text, path)
+    }
+
+    /// The I/O map path.
+    pub fn io_map_path(&self) -> PathBuf {
+        self.io_map
+            .clone()
+            .unwrap_or_else(|| self.plant.join("io-map.ron"))
+    }
+
+    /// The cycle period.
+    pub fn cycle(&self) -> Millis {
+        Millis(self.cycle_ms)
+    }
+
+    /// How long a silent peer may stay silent: `link_timeout_cycles` cycles.
+    pub fn link_timeout(&self) -> Millis {
+        Millis(
+            self.cycle_ms
+                .saturating_mul(u64::from(self.link_timeout_cycles)),
+        )
+    }
+}

@@ -1,0 +1,26 @@
+//! The pure half of the live link (Modbus TCP): what the networking code in the app
+//! needs that can be written and tested without sockets or clocks.
+//!
+//! - [`iomap`]: the I/O map (area, address, unit, poll period, staleness bound per
+//!   signal) and its loader.
+//! - [`image`]: the register image ↔ [`crate::Bits`] mapping for clients (read and write
+//!   plans) and servers ([`image::ServerImage`]).
+//! - [`age`]: data age (refreshment and promptness), the link watchdog, the backoff.
+//! - [`stale`]: how the filter treats stale inputs (existential quantification).
+//! - [`config`]: the gateway configuration file.
+//!
+//! Time enters only as [`crate::Millis`] parameters.
+
+pub mod age;
+pub mod config;
+pub mod image;
+pub mod iomap;
+pub mod stale;
+
+/// RON options of the live files: `Some(…)` may be left out around optional values.
+pub(crate) fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,607 @@
+//! The live link against independent real peers on 127.0.0.1 (OS-chosen ports, no fixed
+//! sleeps: every wait polls a condition with a deadline):
+//! - pymodbus (pinned in `requirements-test.txt`) as the plant server and as the PLC
+//!   client (`tests/peers/plant.py`, `tests/peers/plc.py`);
+//! - mbpoll (Debian package) as a second client of the emulator served over Modbus.
+//!
+//! The venv python is `$VIGIE_VENV/bin/python` or `<repo>/.venv/bin/python`; without it
+//! these tests fail with the command that creates it.
+
+#![allow(clippy::unwrap_used)] // test helpers: a failure is a test failure
+
+use std::io::{BufRead as _, BufReader, Write as _};
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn python() -> PathBuf {
+    let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| repo().join(".venv"), PathBuf::from);
+    let py = venv.join("bin/python");
+    assert!(
+        py.is_file(),
+        "the test venv is missing ({} not found): run `scripts/test.sh` once, or create it with \
+         `python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt` at the repository root \
+         (or point VIGIE_VENV at an existing one)",
+        py.display()
+    );
+    py
+}
+
+fn mbpoll() -> PathBuf {
+    let path = PathBuf::from("/usr/bin/mbpoll");
+    assert!(
+        path.is_file(),
+        "mbpoll is missing: run `scripts/test.sh` once (it installs the Debian package), or `apt-get install mbpoll`"
+    );
+    path
+}
+
+const WAIT: Duration = Duration::from_secs(10);
+
+/// Polls `cond` until it holds or `WAIT` passes.
+#[track_caller]
+fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
+    let deadline = Instant::now() + WAIT;
+    while Instant::now() < deadline {
+        if cond() {
+            return;
+        }
+        std::thread::yield_now();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    panic!("timed out waiting for {what}");
+}
+
+/// A child process driven by lines on stdin, answering lines on stdout.
+struct Peer {
+    name: String,
+    child: Child,
+    stdin: ChildStdin,
+    lines: Receiver<String>,
+}
+
+impl Peer {
+    fn spawn(name: &str, mut cmd: Command) -> Self {
+        let mut child = cmd
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start {name}: {e}"));
+        let stdin = child.stdin.take().unwrap();
+        let stdout = child.stdout.take().unwrap();
+        let (tx, lines) = channel();
+        std::thread::Builder::new()
+            .name(format!("{name}-stdout"))
+            .spawn(move || {
+                for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                    if tx.send(line).is_err() {
+                        break;
+                    }
+                }
+            })
+            .unwrap();
+        Self {
+            name: name.to_string(),
+            child,
+            stdin,
+            lines,
+        }
+    }
+
+    fn line(&self) -> String {
+        self.lines
+            .recv_timeout(WAIT)
+            .unwrap_or_else(|_| panic!("{}: no output within {WAIT:?}", self.name))
+    }
+
+    fn ask(&mut self, command: &str) -> String {
+        writeln!(self.stdin, "{command}").unwrap();
+        self.stdin.flush().unwrap();
+        self.line()
+    }
+
+    fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Peer {
+    fn drop(&mut self) {
+        self.kill();
+    }
+}
+
+/// The pymodbus plant.
+struct Plant {
+    peer: Peer,
+    port: u16,
+}
+
+impl Plant {
+    fn start(port: Option<u16>) -> Self {
+        let mut cmd = Command::new(python());
+        cmd.arg(repo().join("tests/peers/plant.py"));
+        if let Some(p) = port {
+            cmd.args(["--port", &p.to_string()]);
+        }
+        let peer = Peer::spawn("plant", cmd);
+        let first = peer.line();
+        let port = first
+            .strip_prefix("listening ")
+            .and_then(|p| p.parse().ok())
+            .unwrap_or_else(|| panic!("plant: unexpected first line {first:?}"));
+        Self { peer, port }
+    }
+
+    fn set_inputs(&mut self, bits: &[(u16, bool)]) {
+        for &(a, v) in bits {
+            assert_eq!(self.peer.ask(&format!("di {a} {}", u8::from(v))), "ok");
+        }
+    }
+
+    fn coils(&mut self) -> String {
+        let line = self.peer.ask("coils");
+        line.strip_prefix("coils ")
+            .unwrap_or_else(|| panic!("plant: {line}"))[..7]
+            .to_string()
+    }
+}
+
+/// The pymodbus PLC.
+struct Plc(Peer);
+
+impl Plc {
+    fn start(server: SocketAddr, source: Option<&str>) -> Self {
+        let mut cmd = Command::new(python());
+        cmd.arg(repo().join("tests/peers/plc.py")).args([
+            "--port",
+            &server.port().to_string(),
+            "--period-ms",
+            "5",
+        ]);
+        if let Some(s) = source {
+            cmd.args(["--source", s]);
+        }
+        let peer = Peer::spawn("plc", cmd);
+        assert_eq!(peer.line(), "running");
+        Self(peer)
+    }
+
+    fn command(&mut self, coils: &str) {
+        assert_eq!(self.0.ask(&format!("coils {coils}")), "ok");
+    }
+
+    fn sensors(&mut self) -> String {
+        self.0.ask("di")
+    }
+
+    fn status(&mut self) -> (u64, u64, String) {
+        let line = self.0.ask("status");
+        let w: Vec<&str> = line.split_whitespace().collect();
+        (
+            w[1].parse().unwrap(),
+            w[2].parse().unwrap(),
+            w[3].to_string(),
+        )
+    }
+}
+
+/// `vigie gateway CONFIG` with its JSON events.
+struct Gateway {
+    peer: Peer,
+    events: Vec<serde_json::Value>,
+    _dir: TempDir,
+}
+
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> Self {
+        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("vigie-it-{tag}-{}-{n}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+impl Gateway {
+    fn start(config_body: &str) -> Self {
+        let dir = TempDir::new("gw");
+        let station = repo()
+            .join("layouts/sorting-station")
+            .canonicalize()
+            .unwrap();
+        let text = format!(
+            "Gateway(plant: {:?}, {config_body})",
+            station.display().to_string()
+        );
+        let path = dir.0.join("gateway.ron");
+        std::fs::write(&path, text).unwrap();
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_vigie"));
+        cmd.args(["gateway", "--log", "warn"]).arg(&path);
+        Self {
+            peer: Peer::spawn("vigie gateway", cmd),
+            events: Vec::new(),
+            _dir: dir,
+        }
+    }
+
+    /// Forgets the events seen so far (later waits see only new ones).
+    fn forget(&mut self) {
+        while let Ok(line) = self.peer.lines.try_recv() {
+            let _ = line;
+        }
+        self.events.clear();
+    }
+
+    /// Waits for an event matching `pred` (events seen before count too).
+    #[track_caller]
+    fn event(
+        &mut self,
+        what: &str,
+        pred: impl Fn(&serde_json::Value) -> bool,
+    ) -> serde_json::Value {
+        if let Some(e) = self.events.iter().find(|e| pred(e)) {
+            return e.clone();
+        }
+        let deadline = Instant::now() + WAIT;
+        while Instant::now() < deadline {
+            if let Ok(line) = self.peer.lines.recv_timeout(Duration::from_millis(50)) {
+                let v: serde_json::Value = serde_json::from_str(&line)
+                    .unwrap_or_else(|e| panic!("not JSON ({e}): {line}"));
+                self.events.push(v.clone());
+                if pred(&v) {
+                    return v;
+                }
+            }
+        }
+        panic!(
+            "timed out waiting for event {what}; events: {:#?}",
+            self.events
+        );
+    }
+
+    fn kind(kind: &'static str) -> impl Fn(&serde_json::Value) -> bool {
+        move |e| e["event"] == kind
+    }
+
+    fn listening(&mut self) -> SocketAddr {
+        let e = self.event("listening", Self::kind("listening"));
+        e["address"].as_str().unwrap().parse().unwrap()
+    }
+
+    /// SIGTERM, then the final event.
+    fn stop(&mut self) -> serde_json::Value {
+        let pid = self.peer.child.id().to_string();
+        let status = Command::new("kill").args(["-TERM", &pid]).status().unwrap();
+        assert!(status.success());
+        let e = self.event("stopped", Self::kind("stopped"));
+        let code = self.peer.child.wait().unwrap();
+        assert!(code.success(), "vigie gateway exited with {code}");
+        e
+    }
+}
+
+fn gateway_config(plant_port: u16, extra: &str) -> String {
+    format!(
+        "mode: Gateway, cycle_ms: 10, link_timeout_cycles: 10, auto_reset: true, \
+         client: (address: \"127.0.0.1:{plant_port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
+         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), {extra}"
+    )
+}
+
+// Sensor addresses of the sorting station (discrete inputs) and actuator positions.
+const C4: u16 = 4;
+const C5: u16 = 5;
+const C6: u16 = 6;
+const C7: u16 = 7;
+
+#[test]
+fn gateway_round_trip_with_pymodbus() {
+    let mut plant = Plant::start(None);
+    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    // Sensors: plant → Vigie → PLC.
+    plant.set_inputs(&[(0, true), (C7, true), (10, true)]);
+    wait_until("the PLC to read C0, C7 and C10", || {
+        plc.sensors() == "di 10000001001"
+    });
+    plant.set_inputs(&[(0, false), (C7, false), (10, false)]);
+    wait_until("the PLC to read all sensors 0", || {
+        plc.sensors() == "di 00000000000"
+    });
+    // Outputs: PLC → Vigie (allowed by the filter) → plant.
+    plc.command("1100011");
+    wait_until("the plant to receive A0 A1 A5 A6", || {
+        plant.coils() == "1100011"
+    });
+    plc.command("0000000");
+    wait_until("the plant to receive all outputs 0", || {
+        plant.coils() == "0000000"
+    });
+    let (scans, errors, last) = plc.status();
+    assert!(
+        scans > 0 && errors == 0,
+        "PLC scans {scans}, errors {errors} ({last})"
+    );
+    let stopped = gw.stop();
+    assert_eq!(stopped["written"], true);
+}
+
+#[test]
+fn gateway_enforces_the_hold_of_a4() {
+    let mut plant = Plant::start(None);
+    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    // A loaded table in the loading position starts rotating.
+    plant.set_inputs(&[(C4, true), (C6, true)]);
+    wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
+    plc.command("0000100");
+    wait_until("the plant to rotate", || plant.coils() == "0000100");
+    // It reaches the unloading position; the box leaves the table (C6, then C7 on the
+    // right exit), and the PLC releases A4 too early (CSs10 = C7 . /A4).
+    plant.set_inputs(&[(C4, false), (C5, true)]);
+    wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
+    // One edge per cycle, as on a real plant (P67 is set by FE(C6), reset by RE(C7)).
+    plant.set_inputs(&[(C6, false)]);
+    wait_until("the PLC to see C5", || plc.sensors() == "di 00000100000");
+    plant.set_inputs(&[(C7, true)]);
+    wait_until("the PLC to see C5 C7", || plc.sensors() == "di 00000101000");
+    plc.command("0000000");
+    let trip = gw.event("trip on CSs10", |e| {
+        e["event"] == "trip"
+            && e["record"]["constraints"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|c| c["id"] == "CSs10"))
+    });
+    assert_eq!(trip["record"]["enforced"], true);
+    // The plant keeps A4 ON for as long as C7 is there.
+    for _ in 0..20 {
+        assert_eq!(plant.coils(), "0000100", "A4 must stay ON while C7 = 1");
+    }
+    // The box has left: the PLC's release is allowed again.
+    plant.set_inputs(&[(C7, false)]);
+    wait_until("the plant to release A4", || plant.coils() == "0000000");
+    gw.event("reset", Gateway::kind("reset"));
+    gw.stop();
+}
+
+#[test]
+fn plc_killed_gives_safe_outputs_then_recovers() {
+    let mut plant = Plant::start(None);
+    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    // A loaded table rotates to the unloading position (CSs8: hold A4 there), the
+    // intermediate conveyor on.
+    plant.set_inputs(&[(C4, true), (C6, true)]);
+    wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
+    plc.command("0100100");
+    wait_until("the plant to receive A1 A4", || plant.coils() == "0100100");
+    plant.set_inputs(&[(C4, false), (C5, true)]);
+    wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
+    gw.forget();
+    plc.0.kill();
+    let alarm = gw.event("PLC lost alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "link:plc"
+    });
+    let safe = gw.event("safe outputs", |e| e["event"] == "safe_outputs");
+    // The fallback: fewest outputs ON that keep every constraint false: A4 only.
+    assert_eq!(safe["outputs"], "0000100");
+    assert!(safe["time_ms"].as_u64() >= alarm["time_ms"].as_u64());
+    wait_until("the plant to hold the fallback", || {
+        plant.coils() == "0000100"
+    });
+    // A PLC comes back.
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    plc.command("0100100");
+    gw.event("PLC alarm cleared", |e| {
+        e["event"] == "alarm_cleared" && e["key"] == "link:plc"
+    });
+    wait_until("the plant to follow the PLC again", || {
+        plant.coils() == "0100100"
+    });
+    // Shutdown with the PLC still commanding A1: the plant gets the safe state.
+    let stopped = gw.stop();
+    assert_eq!(stopped["outputs"], "0000100");
+    assert_eq!(plant.coils(), "0000100");
+}
+
+#[test]
+fn plant_killed_raises_the_alarm_and_reconnects() {
+    let mut plant = Plant::start(None);
+    let port = plant.port;
+    let mut gw = Gateway::start(&gateway_config(port, ""));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    plc.command("1100000");
+    wait_until("the plant to receive A0 A1", || plant.coils() == "1100000");
+    gw.forget();
+    plant.peer.kill();
+    gw.event("plant lost alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "link:plant"
+    });
+    // Every input is stale now: the outputs the PLC commands are held only if no value
+    // of the sensors can make a constraint true (CSc1 = C0 . A0 . /A1 cannot with A1 ON,
+    // CSs2 = C3 . /C4 . A1 can): the safe fallback is applied.
+    let safe = gw.event("safe outputs", |e| e["event"] == "safe_outputs");
+    assert!(safe["reason"].as_str().unwrap().contains("stale"), "{safe}");
+    // The plant returns on the same port (a fresh process, all coils 0).
+    gw.forget();
+    let mut plant = Plant::start(Some(port));
+    gw.event("plant alarm cleared", |e| {
+        e["event"] == "alarm_cleared" && e["key"] == "link:plant"
+    });
+    gw.event(
+        "safe outputs released",
+        Gateway::kind("safe_outputs_released"),
+    );
+    wait_until("the plant to receive A0 A1 again", || {
+        plant.coils() == "1100000"
+    });
+    gw.stop();
+}
+
+#[test]
+fn illegal_requests_get_exceptions_and_nothing_crashes() {
+    let plant = Plant::start(None);
+    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    // Past the 11 discrete inputs and the 7 coils; no registers at all.
+    assert_eq!(plc.0.ask("raw 2 8 5"), "exception 2");
+    assert_eq!(plc.0.ask("raw 1 7 1"), "exception 2");
+    assert_eq!(plc.0.ask("raw 3 0 1"), "exception 2");
+    assert_eq!(plc.0.ask("raw 15 5 4"), "exception 2");
+    assert_eq!(plc.0.ask("raw 2 0 11"), "ok 00000000000");
+    // A client that is not the PLC (127.0.0.1) may read but not write.
+    let mut other = Plc::start(server, None);
+    wait_until("the other client's writes to be refused", || {
+        let (_, errors, last) = other.status();
+        errors > 0 && last == "write:1"
+    });
+    assert_eq!(other.0.ask("raw 2 0 3"), "ok 000");
+    drop(other);
+    // Garbage and a truncated frame on raw sockets: the connection is dropped, the
+    // server lives on.
+    for bytes in [
+        &b"\x00\x01\x00\x00\x00\x06\x01\x2b\xff\xff\xff"[..],
+        b"hello modbus\r\n\r\n",
+        b"\x00\x01\x00\x00\xff\xff",
+    ] {
+        let mut s = std::net::TcpStream::connect(server).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(2))).unwrap();
+        let _ = s.write_all(bytes);
+        let mut buf = [0u8; 64];
+        let _ = std::io::Read::read(&mut s, &mut buf);
+    }
+    // An unknown function code gets exception 01.
+    let mut s = std::net::TcpStream::connect(server).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    s.write_all(b"\x00\x07\x00\x00\x00\x02\x01\x41").unwrap();
+    let mut buf = [0u8; 9];
+    std::io::Read::read_exact(&mut s, &mut buf).unwrap();
+    assert_eq!(&buf, b"\x00\x07\x00\x00\x00\x03\x01\xc1\x01");
+    // A client outside the allow-list (127.0.0.3) is disconnected at once.
+    let mut s = std::net::TcpStream::connect_timeout(&server, Duration::from_secs(2));
+    if let Ok(s) = s.as_mut() {
+        // Connected from 127.0.0.1: allowed. (The allow-list check from another source
+        // address is below, through the PLC peer's --source.)
+        let _ = s;
+    }
+    let mut stranger = Plc::start(server, Some("127.0.0.3"));
+    wait_until("the stranger to be refused", || {
+        let (_, errors, last) = stranger.status();
+        errors > 0 && last != "write:1"
+    });
+    let (scans, _, _) = stranger.status();
+    assert_eq!(scans, 0, "a client outside the allow-list got answers");
+    // The PLC still works.
+    assert_eq!(plc.0.ask("raw 2 0 11"), "ok 00000000000");
+    gw.stop();
+}
+
+#[test]
+fn monitor_reports_with_explanations_and_never_writes() {
+    let mut plant = Plant::start(None);
+    let body = format!(
+        "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 10, \
+         client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
+        plant.port
+    );
+    let mut gw = Gateway::start(&body);
+    gw.event("monitoring", Gateway::kind("monitoring"));
+    // The PLC (here the pymodbus server exposing sensors and commanded coils) lets A4
+    // go while C7 = 1.
+    plant.set_inputs(&[(C5, true), (C7, true)]);
+    assert_eq!(plant.peer.ask("co 4 0"), "ok");
+    let v = gw.event("violation of CSs10", |e| {
+        e["event"] == "violation"
+            && e["record"]["constraints"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|c| c["id"] == "CSs10"))
+    });
+    assert_eq!(v["record"]["enforced"], false);
+    assert!(v["explanation"].is_object(), "{v}");
+    // Nothing was written: A4 is still OFF at the peer.
+    for _ in 0..10 {
+        assert_eq!(plant.coils(), "0000000");
+    }
+    // The peer dies: link alarm, and it comes back.
+    let port = plant.port;
+    plant.peer.kill();
+    gw.event("link alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "link:peer"
+    });
+    let _plant = Plant::start(Some(port));
+    gw.event("link alarm cleared", |e| {
+        e["event"] == "alarm_cleared" && e["key"] == "link:peer"
+    });
+    gw.stop();
+}
+
+fn mbpoll_run(args: &[&str]) -> String {
+    let out = Command::new(mbpoll()).args(args).output().unwrap();
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+#[test]
+fn emulator_served_to_pymodbus_and_mbpoll() {
+    let mut gw = Gateway::start(
+        "mode: Emulator, cycle_ms: 10, seed: 1, \
+         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\")",
+    );
+    let server = gw.listening();
+    let port = server.port().to_string();
+    let base = ["-m", "tcp", "-a", "1", "-0", "-1", "-o", "2", "-p", &port];
+    // mbpoll reads the 11 sensors.
+    let mut args = base.to_vec();
+    args.extend(["-t", "1", "-r", "0", "-c", "11", "127.0.0.1"]);
+    let out = mbpoll_run(&args);
+    assert!(out.contains("[10]:"), "{out}");
+    // The soft-PLC (pymodbus, the configured PLC address) runs the entry conveyor.
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    plc.command("1000000");
+    // mbpoll reads the coils back.
+    let mut args = base.to_vec();
+    args.extend(["-t", "0", "-r", "0", "-c", "7", "127.0.0.1"]);
+    wait_until("mbpoll to read A0 = 1", || {
+        let out = mbpoll_run(&args);
+        out.contains("[0]: \t1") && out.contains("[1]: \t0")
+    });
+    // The emulated plant moves: a box reaches the end of the entry conveyor (C0).
+    wait_until("the emulator to raise C0", || {
+        plc.sensors().starts_with("di 1")
+    });
+    // mbpoll is not the PLC: its write is refused; past the image is an illegal address.
+    let mut args = base.to_vec();
+    args.extend(["-t", "0", "-r", "3", "127.0.0.1", "1"]);
+    let out = mbpoll_run(&args);
+    assert!(out.to_lowercase().contains("illegal function"), "{out}");
+    let mut args = base.to_vec();
+    args.extend(["-t", "1", "-r", "11", "-c", "2", "127.0.0.1"]);
+    let out = mbpoll_run(&args);
+    assert!(out.to_lowercase().contains("illegal data address"), "{out}");
+    gw.stop();
+}
