@@ -9,14 +9,12 @@
 //! the projection computed on clones of the emulator and of the program.
 
 use crate::alarms::{AlarmKind, AlarmList};
-use crate::bits::Bits;
 use crate::bundle::PlantBundle;
 use crate::control::{CompiledProgram, ErrorLibrary, ProgramRuntime};
 use crate::diag::{Location, Problem, ron_problem};
 use crate::emulator::{ArrivalPlan, BoxView, Emulator, FaultSpec, Hazard, Layout};
 use crate::engine::{Control as _, Engine, Event, FilterMode};
 use crate::explain::{self, Explanation, Highlight, Item, Mark};
-use crate::frame::Frame;
 use crate::symbols::Space;
 use crate::time::Millis;
 use serde::{Deserialize, Serialize};
@@ -438,8 +436,6 @@ impl Simulation {
                 let _ = self.act(&a.action);
             }
         }
-        let emulator_before = self.emulator.clone();
-        let program_before = self.program.clone();
         let applied = self
             .engine
             .cycle(now, self.emulator.sensors(), &mut self.program)
@@ -473,7 +469,9 @@ impl Simulation {
             }
         }
         if let (Some(index), true) = (tripped, self.options.explain) {
-            self.explain_trip(index, emulator_before, program_before);
+            // The emulator is still at the start of the tripping cycle (the engine only
+            // read it); the program has just computed the erroneous command.
+            self.explain_trip(index, self.emulator.clone(), self.program.clone());
         }
         self.emulator.step(self.cycle, &applied);
         let hazards = self.emulator.hazards();
@@ -491,14 +489,21 @@ impl Simulation {
                 self.log("hazard", text);
             }
         }
-        if self.snapshots.len() >= self.options.history_cycles.max(1) {
-            self.snapshots.pop_front();
+        let mut snapshot = if self.snapshots.len() >= self.options.history_cycles.max(1) {
+            self.snapshots.pop_front()
+        } else {
+            None
         }
-        self.snapshots.push_back(PlantSnapshot {
+        .unwrap_or_else(|| PlantSnapshot {
             time: now,
-            boxes: self.emulator.boxes().to_vec(),
-            table_angle_mdeg: self.emulator.table_angle_mdeg(),
+            boxes: Vec::new(),
+            table_angle_mdeg: 0,
         });
+        snapshot.time = now;
+        snapshot.boxes.clear();
+        snapshot.boxes.extend_from_slice(self.emulator.boxes());
+        snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
+        self.snapshots.push_back(snapshot);
     }
 
     /// Runs until the simulated time reaches `end`.
@@ -512,32 +517,32 @@ impl Simulation {
         let Some(mut ex) = explain::explain(&self.engine, index) else {
             return;
         };
-        let projected = self.project(index, emulator, program);
+        let projected = self.project(emulator, program);
         fill_projection(&mut ex, &projected, &self.bundle);
         self.projections.insert(index, projected);
         self.explanations.insert(index, ex);
     }
 
     /// Level 1: runs clones of the emulator (as it was at the start of the tripping cycle)
-    /// and of the program (as it was before its tripping scan) forward without the
-    /// filter, for the projection horizon.
-    fn project(&self, index: usize, mut emu: Emulator, mut program: ProgramRuntime) -> ProjectedPlant {
+    /// and of the program (just after its tripping scan) forward without the filter, for
+    /// the projection horizon: the erroneous command is applied, then the program keeps
+    /// scanning.
+    fn project(&self, mut emu: Emulator, mut program: ProgramRuntime) -> ProjectedPlant {
         let start = emu.now();
         let known = emu.hazards().len();
-        let symbols = &self.engine.symbols;
-        let mut frame = Frame::new(symbols.sizes());
-        frame.prev[Space::Input as usize].copy_from(self.engine.frame().prev(Space::Input));
-        let mut outputs = Bits::zeros(self.bundle.plant.outputs.len());
+        let mut frame = self.engine.frame().clone();
+        let mut outputs = self.engine.commanded().clone();
         let end = start + self.projection;
         let mut first_hazard_picture: Option<(Millis, Vec<BoxView>, i32)> = None;
-        let _ = index;
+        let mut first = true;
         while emu.now() < end {
-            let now = emu.now();
-            if now > start {
+            if !first {
+                let now = emu.now();
                 frame.shift();
+                frame.now_mut(Space::Input).copy_from(emu.sensors());
+                program.scan(now, &frame, &mut outputs);
             }
-            frame.now_mut(Space::Input).copy_from(emu.sensors());
-            program.scan(now, &frame, &mut outputs);
+            first = false;
             emu.step(self.cycle, &outputs);
             if first_hazard_picture.is_none() && emu.hazards().len() > known {
                 // Let the consequence show for a short while after the hazard.

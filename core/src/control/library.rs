@@ -157,6 +157,20 @@ pub struct VariantDef {
     pub expected_constraint: String,
     /// The edit of the reference program.
     pub patch: Patch,
+    /// What happens without the filter (default: a hazard, the plant is damaged).
+    #[serde(default)]
+    pub consequence: Consequence,
+}
+
+/// What an erroneous program does to the plant when no filter stops it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Consequence {
+    /// A dangerous state: a box or the plant is damaged.
+    #[default]
+    Hazard,
+    /// No damage, but the sequence the specification wants is broken (the paper's
+    /// "contradict the desired sequencing"): production stops or goes wrong.
+    Functional,
 }
 
 /// The errors file.

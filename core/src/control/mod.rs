@@ -19,7 +19,7 @@ mod packed;
 pub mod program;
 pub mod runtime;
 
-pub use library::{ErrorLibrary, Patch, Variant, differences};
+pub use library::{Consequence, ErrorLibrary, Patch, Variant, differences};
 pub use mutation::{Mutation, mutations};
 pub use program::{Action, Chart, CompiledProgram, Origin, Program, Qualifier, Step, Transition};
 pub use runtime::{Driver, Evolution, ProgramRuntime, UnknownPanel};

@@ -23,8 +23,10 @@ fn overhang(b: &Body, e: u8, len: i64) -> i64 {
 }
 
 impl Emulator {
-    /// Advances one internal step.
-    pub(super) fn tick(&mut self) {
+    /// Advances one internal step. Sensors are computed only when `sense` is set: the
+    /// caller asks for them on the last step of a PLC period, or on every step when a
+    /// fault waits for a condition over the sensors.
+    pub(super) fn tick(&mut self, sense: bool) {
         self.now += self.step_ms;
         if !self.faults.is_empty() {
             self.update_faults();
@@ -36,7 +38,9 @@ impl Emulator {
         self.transfer();
         self.check_hazards();
         self.arrivals();
-        self.compute_sensors();
+        if sense || self.has_conditions {
+            self.compute_sensors();
+        }
     }
 
     fn update_faults(&mut self) {
@@ -109,9 +113,10 @@ impl Emulator {
     /// Recomputes which ends are joined, after the table position class changed.
     pub(super) fn update_links(&mut self, force: bool) {
         let t = &self.layout.table;
-        let pos = if self.angle == i64::from(t.loading_mdeg) * 1000 {
+        let tol = i64::from(t.dock_tolerance_mdeg.max(0)) * 1000;
+        let pos = if (self.angle - i64::from(t.loading_mdeg) * 1000).abs() <= tol {
             TablePos::Load
-        } else if self.angle == i64::from(t.unloading_mdeg) * 1000 {
+        } else if (self.angle - i64::from(t.unloading_mdeg) * 1000).abs() <= tol {
             TablePos::Unload
         } else {
             TablePos::Other
@@ -309,7 +314,9 @@ impl Emulator {
     fn check_hazards(&mut self) {
         let margin = self.layout.straddle_margin_mm * 1000;
         let shear = self.layout.shear_margin_mm * 1000;
-        let rotating = self.moving || self.pos == TablePos::Other;
+        // Within the docking tolerance the guides accept the misalignment: the table is
+        // joined to the conveyors and a straddling box is not sheared.
+        let rotating = self.pos == TablePos::Other;
         for i in 0..self.bodies.len() {
             let b = self.bodies[i];
             let p = b.part as usize;

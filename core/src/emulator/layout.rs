@@ -70,6 +70,11 @@ pub struct Turntable {
     pub back_speed_udeg_ms: i64,
     /// Seeded variation of each rotation's speed, parts per million (±).
     pub speed_variation_ppm: i64,
+    /// Misalignment the transfer guides accept, mdeg: within it of the loading or
+    /// unloading angle the table is joined to the conveyors (boxes transfer, a
+    /// straddling box is not sheared). 0 means exact alignment only.
+    #[serde(default)]
+    pub dock_tolerance_mdeg: i32,
 }
 
 /// Beam height of a presence sensor.
@@ -156,6 +161,9 @@ pub enum ArrivalPlan {
         jitter_ms: u64,
         /// Size sequence.
         mix: SizeMix,
+        /// Number of boxes, then no more arrivals (unbounded when absent).
+        #[serde(default)]
+        count: Option<u64>,
     },
     /// Explicit arrival times (ms) and sizes, in any order.
     List(Vec<(u64, BoxSize)>),

@@ -258,7 +258,7 @@ impl Emulator {
         self.carry += dt.0;
         while self.carry >= self.step_ms {
             self.carry -= self.step_ms;
-            self.tick();
+            self.tick(self.carry < self.step_ms);
         }
         self.publish();
     }
@@ -467,10 +467,12 @@ impl Emulator {
         self.next_arrival = match &self.plan {
             ArrivalPlan::Off => None,
             ArrivalPlan::List(list) => list.get(self.arrival_k as usize).map(|&(t, s)| (t, s)),
+            ArrivalPlan::Periodic { count: Some(n), .. } if self.arrival_k >= *n => None,
             ArrivalPlan::Periodic {
                 period_ms,
                 jitter_ms,
                 mix,
+                ..
             } => {
                 let base = self.plan_origin + self.arrival_k.saturating_mul((*period_ms).max(1));
                 let t = base + self.rng_arrivals.below(jitter_ms + 1);

@@ -472,6 +472,7 @@ fn closed_loop(seed: u64, ms: u64) -> (Vec<String>, Vec<Hazard>, Vec<u64>) {
         period_ms: 3000,
         jitter_ms: 1500,
         mix: SizeMix::RandomLarge(50),
+        count: None,
     });
     let mut trace = Vec::new();
     let mut created = Vec::new();

@@ -1,1 +1,165 @@
 use super::*;
+
+fn station_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
+}
+
+fn scenario(program: ProgramChoice, filter: FilterMode, arrivals: ArrivalPlan, duration_ms: u64) -> Scenario {
+    Scenario {
+        name: "test".into(),
+        description: String::new(),
+        plant: ".".into(),
+        program,
+        seed: 7,
+        arrivals: Some(arrivals),
+        faults: Vec::new(),
+        actions: vec![TimedAction {
+            at_ms: 0,
+            action: OperatorAction::Start,
+        }],
+        duration_ms,
+        filter,
+        cycle_ms: 10,
+        projection_ms: 10_000,
+    }
+}
+
+fn run(s: &Scenario) -> Simulation {
+    // The scenario path only anchors `plant` (".") on the station folder.
+    let path = station_dir().join("scenario.ron");
+    let mut sim = Simulation::from_scenario(s, &path, Options::default()).expect("scenario");
+    sim.run_until(Millis(s.duration_ms));
+    sim
+}
+
+/// Three boxes, both sides: small (right), large (left), small (right).
+fn three_boxes() -> ArrivalPlan {
+    use crate::emulator::BoxSize::{Large, Small};
+    ArrivalPlan::List(vec![(0, Small), (12_000, Large), (24_000, Small)])
+}
+
+/// Six boxes arriving faster than the table can sort them: they queue at the source and
+/// follow each other closely, as in a busy shift.
+fn busy_shift() -> ArrivalPlan {
+    use crate::emulator::BoxSize::{Large, Small};
+    ArrivalPlan::List((0..6).map(|k| (k * 4_000, if k % 2 == 0 { Small } else { Large })).collect())
+}
+
+#[test]
+fn reference_program_runs_an_hour_without_trip_or_hazard() {
+    let path = station_dir().join("scenarios/reference-hour.ron");
+    let s = Scenario::load(&path).expect("scenario loads");
+    let mut sim = Simulation::from_scenario(&s, &path, Options { history_cycles: 100, explain: true }).expect("starts");
+    sim.run_until(Millis(s.duration_ms));
+    let stats = sim.emulator.stats();
+    assert!(sim.engine.trips.is_empty(), "{:?}", sim.engine.trips.first());
+    assert!(sim.emulator.hazards().is_empty(), "{:?}", sim.emulator.hazards().first());
+    assert!(stats.created >= 200, "{stats:?}");
+    assert_eq!(stats.delivered_left + stats.delivered_right, stats.created, "{stats:?}");
+    assert_eq!(stats.damaged, 0);
+    assert!(stats.delivered_left > 0 && stats.delivered_right > 0, "{stats:?}");
+}
+
+/// Every variant of the control-error library: without the filter the plant is damaged
+/// (or, for the variants whose consequence is functional, production stops: fewer boxes
+/// delivered than by the reference program); with it the filter trips first on the
+/// variant's declared constraint and nothing is damaged.
+#[test]
+fn every_error_variant_is_caught_by_its_constraint() {
+    let lib = ErrorLibrary::load(
+        &station_dir().join("programs/errors.ron"),
+        &crate::plant::Plant::load(&station_dir().join("plant.ron")).expect("plant"),
+    )
+    .expect("library");
+    let with_hazard = lib
+        .variants
+        .iter()
+        .filter(|v| v.def.consequence == crate::control::Consequence::Hazard)
+        .count();
+    assert!(with_hazard >= 10, "{with_hazard} variants damage the plant");
+    let reference = run(&scenario(ProgramChoice::Reference, FilterMode::Off, busy_shift(), 120_000));
+    let delivered = |s: &Simulation| s.emulator.stats().delivered_left + s.emulator.stats().delivered_right;
+    let mut failures = Vec::new();
+    for v in &lib.variants {
+        let id = &v.def.id;
+        let off = run(&scenario(ProgramChoice::Error(id.clone()), FilterMode::Off, busy_shift(), 120_000));
+        match v.def.consequence {
+            crate::control::Consequence::Hazard if off.emulator.hazards().is_empty() => {
+                failures.push(format!("{id}: no hazard without the filter"));
+            }
+            crate::control::Consequence::Functional if delivered(&off) >= delivered(&reference) => {
+                failures.push(format!("{id}: production not disrupted without the filter"));
+            }
+            _ => {}
+        }
+        let on = run(&scenario(ProgramChoice::Error(id.clone()), FilterMode::Enforce, busy_shift(), 120_000));
+        let first = on.engine.trips.first().map(|t| t.constraints.iter().map(|c| c.id.clone()).collect::<Vec<_>>());
+        match &first {
+            Some(ids) if ids.contains(&v.def.expected_constraint) => {}
+            other => failures.push(format!("{id}: expected a trip on {}, got {other:?}", v.def.expected_constraint)),
+        }
+        if !on.emulator.hazards().is_empty() {
+            failures.push(format!("{id}: hazard with the filter: {:?}", on.emulator.hazards()[0]));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+#[test]
+fn reference_program_copes_with_a_busy_shift() {
+    let sim = run(&scenario(ProgramChoice::Reference, FilterMode::Enforce, busy_shift(), 120_000));
+    assert!(sim.engine.trips.is_empty(), "{:?}", sim.engine.trips.first());
+    assert!(sim.emulator.hazards().is_empty(), "{:?}", sim.emulator.hazards().first());
+    let stats = sim.emulator.stats();
+    assert_eq!(stats.delivered_left + stats.delivered_right, 6, "{stats:?}");
+}
+
+#[test]
+fn same_scenario_and_seed_give_identical_reports() {
+    let s = scenario(ProgramChoice::Error("E01".into()), FilterMode::Enforce, three_boxes(), 40_000);
+    let a = serde_json::to_string(&run(&s).report(s.seed)).expect("json");
+    let b = serde_json::to_string(&run(&s).report(s.seed)).expect("json");
+    assert_eq!(a, b);
+    let periodic = ArrivalPlan::Periodic {
+        period_ms: 9_000,
+        jitter_ms: 3_000,
+        mix: crate::emulator::SizeMix::RandomLarge(50),
+        count: None,
+    };
+    let mut s1 = scenario(ProgramChoice::Reference, FilterMode::Enforce, periodic, 60_000);
+    let r1 = serde_json::to_string(&run(&s1).report(s1.seed)).expect("json");
+    s1.seed += 1;
+    let r2 = serde_json::to_string(&run(&s1).report(s1.seed)).expect("json");
+    assert_ne!(r1, r2, "another seed gives other arrivals");
+}
+
+#[test]
+fn the_papers_cs10_case_is_explained_with_a_projection() {
+    let path = station_dir().join("scenarios/cs10-paper.ron");
+    let s = Scenario::load(&path).expect("scenario");
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(s.duration_ms));
+    assert_eq!(sim.engine.trips.len(), 1);
+    assert_eq!(sim.engine.trips[0].constraints[0].id, "CSs10");
+    assert!(sim.emulator.hazards().is_empty());
+    let ex = &sim.explanations[&0];
+    let p = &sim.projections[&0];
+    assert!(p.hazards.iter().any(|h| serde_json::to_value(h.kind).ok() == Some(serde_json::json!("sheared"))), "{:?}", p.hazards);
+    assert_eq!(ex.projection.items[0].code, "X101");
+    // The held A4 is the filter's doing; operator reset refused while C7 is still on.
+    assert!(sim.act(&OperatorAction::Reset).is_err());
+    assert!(sim.journal().iter().any(|j| j.kind == "reset_refused"));
+}
+
+#[test]
+fn bad_scenarios_are_reported() {
+    let dir = std::env::temp_dir().join(format!("vigie-sim-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let p = dir.join("bad.ron");
+    std::fs::write(&p, "Scenario(name: \"x\", program: Reference, seed: 1, duration_ms: 10, bogus: 1)").expect("write");
+    let err = Scenario::load(&p).expect_err("unknown field");
+    assert!(err[0].location.as_ref().is_some_and(|l| l.line == 1), "{err:?}");
+    let s = scenario(ProgramChoice::Error("E99".into()), FilterMode::Enforce, three_boxes(), 10);
+    let err = Simulation::from_scenario(&s, &station_dir().join("s.ron"), Options::default()).err().expect("unknown variant");
+    assert_eq!(err[0].code, "V0402");
+}
