@@ -97,6 +97,15 @@ pub struct ProgramRuntime {
     switches: Bits,
     scans: u64,
     now: Millis,
+    /// The state words (t and t-1) before the evolution of the last evaluated scan.
+    last_pre: Vec<u64>,
+    /// Stored values before the last evaluated scan.
+    last_stored: Bits,
+    /// The last evaluated scan changed nothing (no firing, same values): a scan that
+    /// starts from the same state would compute the same outputs again.
+    stable: bool,
+    /// The program has no timer and no L/D action: a scan depends on the state only.
+    time_free: bool,
 }
 
 impl ProgramRuntime {
@@ -126,10 +135,25 @@ impl ProgramRuntime {
             switches: Bits::zeros(n_panel),
             scans: 0,
             now: Millis::ZERO,
+            last_pre: vec![0; 2 * program.layout.half],
+            last_stored: Bits::zeros(n_slots),
+            stable: false,
+            time_free: program.timers.is_empty()
+                && program
+                    .actions
+                    .iter()
+                    .all(|a| !matches!(a.qualifier, Qualifier::L(_) | Qualifier::D(_))),
             program,
         };
         rt.reset();
         rt
+    }
+
+    /// Evaluates every scan, even when the quiescence rule would skip it (for tests
+    /// comparing both behaviours).
+    #[cfg(test)]
+    pub(crate) fn always_evaluate(&mut self) {
+        self.time_free = false;
     }
 
     /// Back to the initial situation: stored values, memories and history cleared,
@@ -145,6 +169,7 @@ impl ProgramRuntime {
         self.pulses.clear();
         self.ring_len = 0;
         self.ring_head = 0;
+        self.stable = false;
         self.scans = 0;
     }
 
@@ -375,6 +400,17 @@ impl ProgramRuntime {
             self.set(Space::Aux, a as usize, v);
         }
         self.pulses.clear();
+        // Quiescence: the last scan changed nothing and this one starts from the very
+        // same state (inputs at t and t-1, steps, memories, outputs, panel): its result
+        // would be identical, so it is skipped. Only for programs without time-dependent
+        // elements (timers, L and D actions).
+        if self.time_free && self.stable && self.state == self.last_pre && self.scans > 1 {
+            self.fired.clear();
+            self.just_activated.clear();
+            return;
+        }
+        self.last_pre.copy_from_slice(&self.state);
+        self.last_stored.copy_from(&self.stored);
         self.just_activated.clear();
         if self.scans == 1 {
             for (i, s) in p.steps.iter().enumerate() {
@@ -472,6 +508,11 @@ impl ProgramRuntime {
                 self.set(Space::Aux, a as usize, v);
             }
         }
+        let half = p.layout.half;
+        self.stable = self.fired.is_empty()
+            && self.just_activated.count_ones() == 0
+            && self.stored == self.last_stored
+            && self.state[..half] == self.last_pre[..half];
     }
 }
 
