@@ -25,6 +25,9 @@ pub struct PlantBundle {
     pub invariants: ConstraintSet,
     /// Property (6) conflicts shown unreachable by an invariant.
     pub discharged: Vec<crate::constraints::Discharged>,
+    /// Timed task specifications (`tasks.ron`), when the plant has them; their outputs
+    /// (`<task>:running`, `:interrupted`, `:infeasible`) are auxiliary variables.
+    pub tasks: Option<crate::tasks::TaskSet>,
 }
 
 impl PlantBundle {
@@ -32,7 +35,20 @@ impl PlantBundle {
     /// found, or only problems when the plant file itself cannot be used.
     pub fn load(dir: &Path) -> Result<(Self, Vec<Problem>), Vec<Problem>> {
         let plant = Plant::load(&dir.join("plant.ron"))?;
-        Ok(Self::from_plant(dir, plant, &[]))
+        let tasks_path = dir.join("tasks.ron");
+        let (tasks, mut problems) = if tasks_path.exists() {
+            match crate::tasks::TaskSet::load(&tasks_path) {
+                Ok(t) => (Some(t), Vec::new()),
+                Err(p) => (None, p),
+            }
+        } else {
+            (None, Vec::new())
+        };
+        let aux = tasks.as_ref().map(crate::tasks::TaskSet::aux_names).unwrap_or_default();
+        let (mut bundle, mut more) = Self::from_plant(dir, plant, &aux);
+        bundle.tasks = tasks;
+        problems.append(&mut more);
+        Ok((bundle, problems))
     }
 
     /// Builds a bundle around a loaded plant; `aux` names are declared as auxiliary
@@ -72,6 +88,7 @@ impl PlantBundle {
                 constraints,
                 invariants,
                 discharged,
+                tasks: None,
             },
             problems,
         )

@@ -164,6 +164,7 @@ pub struct Engine {
     scratch: Vec<usize>,
     previous_violations: Vec<usize>,
     latched: bool,
+    hold: bool,
     /// The specification error reported last, while it lasts (reported once, not every cycle).
     spec_error: Option<String>,
     cycles: u64,
@@ -197,6 +198,7 @@ impl Engine {
             scratch: Vec::new(),
             previous_violations: Vec::new(),
             latched: false,
+            hold: false,
             spec_error: None,
             cycles: 0,
             now: Millis::ZERO,
@@ -217,6 +219,19 @@ impl Engine {
         if mode != FilterMode::Enforce {
             self.latched = false;
         }
+    }
+
+    /// The operator's pause: while on, the outputs are the fallback (the safe stop with
+    /// priority to zero, no trip recorded); the control program keeps scanning, so the
+    /// plant resumes where it stopped when the pause ends. Ignored in report-only mode
+    /// (Vigie does not drive the outputs there).
+    pub fn set_hold(&mut self, on: bool) {
+        self.hold = on;
+    }
+
+    /// True while the operator's pause holds the plant.
+    pub fn is_held(&self) -> bool {
+        self.hold
     }
 
     /// True while a trip is latched.
@@ -308,6 +323,9 @@ impl Engine {
             std::mem::swap(&mut self.previous_violations, &mut violations);
             self.scratch = violations;
         }
+        if self.hold && !self.latched && self.mode != FilterMode::ReportOnly {
+            self.apply_fallback();
+        }
 
         let tripped = self.latched;
         let frame = &self.frame;
@@ -325,7 +343,12 @@ impl Engine {
     }
 
     fn apply_fallback(&mut self) {
-        match self.filter.fallback_synced(&self.filter_state) {
+        let fallback = if self.mode == FilterMode::Off {
+            self.filter.fallback(&self.frame)
+        } else {
+            self.filter.fallback_synced(&self.filter_state)
+        };
+        match fallback {
             Ok(out) => {
                 self.frame.now_mut(Space::Output).copy_from(&out);
                 self.spec_error = None;

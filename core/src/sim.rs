@@ -42,6 +42,11 @@ pub enum OperatorAction {
     Stop,
     /// Reset the filter after a trip.
     Reset,
+    /// Pause the plant: every actuator to its safe state (the fallback with priority to
+    /// zero) while the program keeps running.
+    Pause,
+    /// End the pause.
+    Resume,
     /// Press a panel button of the program.
     Press(String),
     /// Set a panel switch of the program.
@@ -214,6 +219,18 @@ pub struct Simulation {
     snapshots: VecDeque<PlantSnapshot>,
     options: Options,
     name: String,
+    /// Timed task monitors (seed 000), when the plant has `tasks.ron`.
+    pub tasks: Option<TaskMonitors>,
+}
+
+/// The plant's task monitors, stepped after the filter every cycle.
+#[derive(Clone, Debug)]
+pub struct TaskMonitors {
+    /// The monitor (one stopwatch pair per task, plus the coordinator).
+    pub monitor: crate::tasks::Monitor,
+    /// The event expressions.
+    pub events: crate::tasks::FrameTasks,
+    seen: usize,
 }
 
 /// A serialisable summary of a run (the `vigie run --headless` report, without the
@@ -234,6 +251,8 @@ pub struct RunReport {
     pub boxes: crate::emulator::BoxStats,
     /// Explanations of the trips, in order.
     pub explanations: Vec<Explanation>,
+    /// Task monitor alarms (not warnings), in order.
+    pub task_alarms: Vec<crate::tasks::Alarm>,
     /// Simulated time, ms.
     pub sim_ms: u64,
     /// PLC cycles run.
@@ -316,6 +335,14 @@ impl Simulation {
         options: Options,
     ) -> Result<Self, Vec<Problem>> {
         let layout = Layout::load(&bundle.dir.join("layout.ron"))?;
+        let tasks = match &bundle.tasks {
+            Some(set) => Some(TaskMonitors {
+                monitor: crate::tasks::Monitor::new(set, Millis::ZERO),
+                events: crate::tasks::FrameTasks::compile(set, &bundle.symbols)?,
+                seen: 0,
+            }),
+            None => None,
+        };
         let emulator = Emulator::new(&layout, &bundle.plant, seed).map_err(|p| vec![p])?;
         let engine = Engine::new(&bundle, FilterMode::Enforce, options.history_cycles);
         Ok(Self {
@@ -336,6 +363,7 @@ impl Simulation {
             snapshots: VecDeque::new(),
             options,
             name: String::new(),
+            tasks,
         })
     }
 
@@ -371,6 +399,14 @@ impl Simulation {
                 Ok(())
             }
             OperatorAction::Reset => self.engine.reset().map_err(|e| e.to_string()),
+            OperatorAction::Pause => {
+                self.engine.set_hold(true);
+                Ok(())
+            }
+            OperatorAction::Resume => {
+                self.engine.set_hold(false);
+                Ok(())
+            }
         };
         match (&result, action) {
             (Ok(()), OperatorAction::Reset) => {
@@ -473,6 +509,7 @@ impl Simulation {
             // read it); the program has just computed the erroneous command.
             self.explain_trip(index, self.emulator.clone(), self.program.clone());
         }
+        self.step_tasks(now);
         self.emulator.step(self.cycle, &applied);
         let hazards = self.emulator.hazards();
         if hazards.len() > self.hazards_seen {
@@ -504,6 +541,30 @@ impl Simulation {
         snapshot.boxes.extend_from_slice(self.emulator.boxes());
         snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
         self.snapshots.push_back(snapshot);
+    }
+
+    /// Task monitors: events of this cycle (on the frame after the filter), alarms, and
+    /// their outputs published for the constraints of the next cycle.
+    fn step_tasks(&mut self, now: Millis) {
+        let Some(t) = self.tasks.as_mut() else {
+            return;
+        };
+        t.events.step(&mut t.monitor, now, self.engine.frame());
+        t.events.publish(&t.monitor, self.engine.frame_mut());
+        let new: Vec<crate::tasks::Alarm> = t.monitor.alarms[t.seen..].to_vec();
+        t.seen = t.monitor.alarms.len();
+        for a in new {
+            let warning = a.severity == crate::tasks::Severity::Warning;
+            if !warning {
+                self.alarms.raise(
+                    a.time,
+                    &format!("task:{}:{:?}", a.subject, a.code),
+                    AlarmKind::Task,
+                    a.text.clone(),
+                );
+            }
+            self.log(if warning { "task_warning" } else { "task_alarm" }, a.text);
+        }
     }
 
     /// Runs until the simulated time reaches `end`.
@@ -593,6 +654,18 @@ impl Simulation {
             hazards: self.emulator.hazards().to_vec(),
             boxes: self.emulator.stats(),
             explanations: self.explanations.values().cloned().collect(),
+            task_alarms: self
+                .tasks
+                .as_ref()
+                .map(|t| {
+                    t.monitor
+                        .alarms
+                        .iter()
+                        .filter(|a| a.severity != crate::tasks::Severity::Warning)
+                        .cloned()
+                        .collect()
+                })
+                .unwrap_or_default(),
             sim_ms: self.now().0,
             cycles: self.engine.cycles(),
         }

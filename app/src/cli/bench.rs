@@ -172,7 +172,35 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
     )?;
     writeln!(out, "  (fallback re-evaluating every term:              {:>10.1} µs)", s_fallback_full / 1000.0)?;
     closed_loop(&mut out, plant_dir)?;
+    task_monitors(&mut out)?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Task monitor cost per event and per cycle against the number of tasks.
+fn task_monitors(out: &mut impl std::io::Write) -> anyhow::Result<()> {
+    use vigie_core::Millis;
+    use vigie_core::tasks::{Monitor, synthetic};
+    writeln!(out, "task monitors (stopwatches, seed 000), synthetic task sets:")?;
+    writeln!(out, "  {:>6} {:>14} {:>14}", "tasks", "per event", "per cycle")?;
+    for n in [1usize, 10, 100, 1_000, 10_000] {
+        let set = synthetic(n);
+        let starts: Vec<String> = set.tasks.iter().map(|t| t.start.clone()).collect();
+        let mut monitor = Monitor::new(&set, Millis::ZERO);
+        let mut t = 0u64;
+        let mut k = 0usize;
+        let per_event = median_ns(21, 200, || {
+            t += 1;
+            k = (k + 1) % starts.len();
+            black_box(monitor.on_event(Millis(t), &starts[k]));
+        });
+        let per_cycle = median_ns(21, 2_000, || {
+            t += 10;
+            black_box(monitor.advance(Millis(t)));
+            black_box(monitor.next_deadline());
+        });
+        writeln!(out, "  {n:>6} {:>11.0} ns {:>11.0} ns", per_event, per_cycle)?;
+    }
+    Ok(())
 }
 
 /// CPU time consumed by this thread, from `/proc/thread-self/schedstat` (Linux); `None`

@@ -2,6 +2,7 @@
 
 mod bench;
 mod check;
+mod export_st;
 mod filter;
 mod gateway;
 mod run;
@@ -67,6 +68,15 @@ pub(crate) enum Command {
     /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
     /// sensor-to-output latency).
     GatewayBench(gateway::BenchArgs),
+    /// Write the observers, the filter and the task monitors as IEC 61131-3 Structured
+    /// Text (function blocks and a program to call at the end of the PLC cycle).
+    ExportSt {
+        /// The plant folder (defaults to --plant).
+        dir: Option<PathBuf>,
+        /// Write to this file instead of the standard output.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -88,6 +98,9 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
+        Some(Command::ExportSt { dir, out }) => {
+            export_st::run(&dir.unwrap_or(cli.plant), out.as_deref())
+        }
         Some(Command::Run {
             scenario,
             headless,

@@ -163,3 +163,55 @@ fn bad_scenarios_are_reported() {
     let err = Simulation::from_scenario(&s, &station_dir().join("s.ron"), Options::default()).err().expect("unknown variant");
     assert_eq!(err[0].code, "V0402");
 }
+
+fn load_station_scenario(name: &str) -> (Scenario, Simulation) {
+    let path = station_dir().join("scenarios").join(name);
+    let s = Scenario::load(&path).expect("scenario");
+    let sim = Simulation::from_scenario(&s, &path, Options { history_cycles: 100, explain: true }).expect("starts");
+    (s, sim)
+}
+
+/// One hour with an operator pause every 5 minutes: the pauses interrupt the tasks in
+/// progress (acceptable interruptions) and no task alarm is raised.
+#[test]
+fn task_monitors_accept_operator_pauses_over_an_hour() {
+    let (s, mut sim) = load_station_scenario("tasks-hour.ron");
+    let mut interrupted_seen = 0;
+    let pauses: Vec<u64> = s
+        .actions
+        .iter()
+        .filter(|a| a.action == OperatorAction::Pause)
+        .map(|a| a.at_ms)
+        .collect();
+    assert!(pauses.len() >= 10);
+    for p in &pauses {
+        sim.run_until(Millis(p + 1_000));
+        let t = sim.tasks.as_ref().expect("tasks");
+        interrupted_seen += t
+            .monitor
+            .status(sim.now())
+            .iter()
+            .filter(|st| st.state == crate::tasks::TaskState::Interrupted)
+            .count();
+    }
+    sim.run_until(Millis(s.duration_ms));
+    assert!(interrupted_seen >= pauses.len() / 2, "pauses interrupted only {interrupted_seen} tasks");
+    let report = sim.report(s.seed);
+    assert!(report.task_alarms.is_empty(), "{:?}", report.task_alarms.first());
+    assert!(report.trips.is_empty() && report.hazards.is_empty());
+    assert_eq!(report.boxes.delivered_left + report.boxes.delivered_right, report.boxes.created);
+}
+
+/// A permanent blocking of the turntable mid-rotation: the rotation task alarms when its
+/// effective time passes β, earlier than the classical watchdog at start + γ.
+#[test]
+fn task_monitor_alarms_before_the_watchdog_on_a_blocked_table() {
+    let (s, mut sim) = load_station_scenario("table-blocked.ron");
+    sim.run_until(Millis(s.duration_ms));
+    let report = sim.report(s.seed);
+    let a = report.task_alarms.first().expect("an alarm");
+    assert_eq!(a.subject, "turn_out");
+    assert!(a.earlier_by_ms.is_some_and(|d| d > 0), "{a:?}");
+    assert!(a.text.contains("before the watchdog"), "{}", a.text);
+    assert!(sim.alarms.all().iter().any(|x| x.kind == crate::alarms::AlarmKind::Task));
+}

@@ -1,0 +1,24 @@
+//! `vigie export-st PLANT`: the observers, the filter with its fallback and the task
+//! monitors as IEC 61131-3 Structured Text, to run at the end of the PLC cycle.
+
+use std::io::Write as _;
+use std::path::Path;
+use std::process::ExitCode;
+
+pub(crate) fn run(dir: &Path, out: Option<&Path>) -> anyhow::Result<ExitCode> {
+    let (bundle, problems) = super::load_bundle(dir)?;
+    if problems.iter().any(vigie_core::diag::Problem::is_error) {
+        anyhow::bail!(
+            "plant {} has errors:\n{}",
+            dir.display(),
+            vigie_core::diag::render(&problems)
+        );
+    }
+    let st = vigie_core::export::st::generate(&bundle, bundle.tasks.as_ref());
+    match out {
+        Some(path) => std::fs::write(path, st)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?,
+        None => std::io::stdout().lock().write_all(st.as_bytes())?,
+    }
+    Ok(ExitCode::SUCCESS)
+}
