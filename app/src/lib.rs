@@ -29,7 +29,7 @@ pub fn icon() -> Option<egui::IconData> {
 
 /// Opens the console window and runs it until closed.
 pub fn run_console(opts: &ConsoleOptions) -> anyhow::Result<()> {
-    let console = Console::new(opts).map_err(|e| anyhow::anyhow!("cannot open the console:\n{e}"))?;
+    let mut console = Console::new(opts).map_err(|e| anyhow::anyhow!("cannot open the console:\n{e}"))?;
     let mut viewport = egui::ViewportBuilder::default()
         .with_title("Vigie — operator console")
         .with_inner_size([1600.0, 1000.0])
@@ -41,7 +41,10 @@ pub fn run_console(opts: &ConsoleOptions) -> anyhow::Result<()> {
         viewport,
         ..Default::default()
     };
-    eframe::run_native("vigie", native, Box::new(|_cc| Ok(Box::new(console))))
+    eframe::run_native("vigie", native, Box::new(move |cc| {
+        console.setup(&cc.egui_ctx);
+        Ok(Box::new(console))
+    }))
         .map_err(|e| anyhow::anyhow!("console: {e}"))
 }
 
@@ -95,6 +98,7 @@ pub fn bench_frames(opts: &ConsoleOptions, frames: usize, memory_hour: bool) -> 
     let mut console = Console::new(&opts).map_err(|e| anyhow::anyhow!("{e}"))?;
     console.apply(Command::Plant(vigie_core::sim::OperatorAction::Start));
     let ctx = egui::Context::default();
+    console.setup(&ctx);
     let size = egui::vec2(1600.0, 1000.0);
     let dt = 1.0 / 60.0;
     let mut t = 0.0;

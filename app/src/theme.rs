@@ -7,6 +7,30 @@
 use egui::Color32;
 use serde::Deserialize;
 
+/// DejaVu Sans, the fallback font for the glyphs egui's default font lacks (arrows,
+/// the combining overbar of the paper's notation).
+pub const FALLBACK_FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Installs the fallback font and the palette's visuals; call once on a new context.
+pub fn setup_context(ctx: &egui::Context, palette: &Palette) {
+    use egui::epaint::text::{FontInsert, FontPriority, InsertFontFamily};
+    ctx.add_font(FontInsert::new(
+        "DejaVuSans",
+        egui::FontData::from_static(FALLBACK_FONT),
+        vec![
+            InsertFontFamily {
+                family: egui::FontFamily::Proportional,
+                priority: FontPriority::Lowest,
+            },
+            InsertFontFamily {
+                family: egui::FontFamily::Monospace,
+                priority: FontPriority::Lowest,
+            },
+        ],
+    ));
+    palette.apply(ctx);
+}
+
 /// The palette file's text, compiled in.
 pub const DEFAULT_PALETTE: &str = include_str!("../../assets/palette.ron");
 

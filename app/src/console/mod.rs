@@ -432,6 +432,23 @@ impl Console {
         Ok(c)
     }
 
+    /// The maintenance draft (text of receptivities, actions, equations), if any.
+    pub fn draft_mut(&mut self) -> Option<&mut Draft> {
+        self.draft.as_mut()
+    }
+
+    /// The training score.
+    pub fn score(&self) -> &Score {
+        &self.score
+    }
+
+    /// Installs fonts and visuals on a new context (call from the app's creator, before
+    /// the first frame; `logic` does it otherwise, effective from the next frame).
+    pub fn setup(&mut self, ctx: &egui::Context) {
+        crate::theme::setup_context(ctx, &self.palette);
+        self.visuals_set = true;
+    }
+
     /// The latest explained trip, if any.
     pub fn latest_trip(&self) -> Option<usize> {
         self.sim.explanations.keys().next_back().copied()
@@ -510,7 +527,7 @@ impl Console {
                 let result = self.sim.act(&action);
                 self.status = match result {
                     Ok(()) => format!("{action:?}: done"),
-                    Err(e) => format!("{action:?} refused: {e}"),
+                    Err(e) => format!("{action:?}: {e}"),
                 };
                 self.drain_journal();
             }
@@ -654,6 +671,9 @@ impl Console {
             return;
         };
         let outcome = verify_fix(&self.source.scenario, &self.source.path, program);
+        if self.score.variant.is_none() {
+            self.score.variant = Some(self.source.scenario.name.clone());
+        }
         self.score.record(outcome.clone(), self.wall_s);
         self.status = outcome.clone();
         self.journal.push(self.now().0, "training", &outcome);
@@ -727,7 +747,7 @@ impl Console {
     /// The work of `App::logic`: advance by real time, run the report capture.
     pub fn logic(&mut self, ctx: &egui::Context) {
         if !self.visuals_set {
-            self.palette.apply(ctx);
+            crate::theme::setup_context(ctx, &self.palette);
             self.visuals_set = true;
         }
         for c in std::mem::take(&mut self.pending) {

@@ -125,7 +125,7 @@ impl Geometry {
             let mid = [(c.start[0] + c.end[0]) / 2.0, (c.start[1] + c.end[1]) / 2.0];
             actuators.insert(c.actuator.clone(), add(mid, right, c.width / 2.0 + 170.0));
         }
-        let side = t.width_mm as f32 / 2.0 + 480.0;
+        let side = t.width_mm as f32 / 2.0 + 520.0;
         actuators.insert(t.plus_actuator.clone(), [tc[0] + side, tc[1] + 170.0]);
         actuators.insert(t.rotate_actuator.clone(), [tc[0] + side, tc[1]]);
         actuators.insert(t.minus_actuator.clone(), [tc[0] + side, tc[1] - 170.0]);
@@ -141,7 +141,13 @@ impl Geometry {
                         let d = unit(c.start, c.end);
                         let left = [-d[1], d[0]];
                         let at_pt = add(c.start, d, at);
-                        let k = if high { -1.0 } else { 1.0 };
+                        // Lamps away from the turntable's corner: low beams below the
+                        // horizontal belts, beside the vertical ones.
+                        let horizontal = d[0].abs() > d[1].abs();
+                        let k = match (high, horizontal) {
+                            (false, true) | (true, false) => -1.0,
+                            _ => 1.0,
+                        };
                         let a = add(at_pt, left, c.width / 2.0 * k);
                         let b = add(at_pt, left, -c.width / 2.0 * k);
                         sensors.push(SensorGeom {
@@ -161,11 +167,12 @@ impl Geometry {
                     }
                 }
                 SensorKind::Angle { min_mdeg, max_mdeg } => {
-                    let mid = (*min_mdeg + *max_mdeg) as f32 / 2000.0 - 45.0;
-                    let a = mid.to_radians();
+                    // Right of the table, upper for angles towards +y.
+                    let mid = (*min_mdeg + *max_mdeg) as f32 / 2000.0;
+                    let y = if mid > 45.0 { 110.0 } else { -110.0 };
                     sensors.push(SensorGeom {
                         id: s.id.clone(),
-                        lamp: [tc[0] + 340.0 * a.cos(), tc[1] + 340.0 * a.sin()],
+                        lamp: [tc[0] + tw / 2.0 + 190.0, tc[1] + y],
                         beam: None,
                         high: false,
                     });
@@ -545,4 +552,46 @@ fn circle_points(c: Pos2, r: f32) -> Vec<Pos2> {
             c + vec2(r * a.cos(), r * a.sin())
         })
         .collect()
+}
+
+/// A label in the paper's notation: characters followed by U+0305 are drawn with a bar
+/// above them (egui does not compose combining marks). Its accessible name is the text.
+pub fn overbar_label(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) -> egui::Response {
+    let mut runs: Vec<(String, bool)> = Vec::new();
+    let chars: Vec<char> = text.chars().collect();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c == '\u{305}' {
+            i += 1;
+            continue;
+        }
+        let neg = chars.get(i + 1) == Some(&'\u{305}');
+        match runs.last_mut() {
+            Some((s, n)) if *n == neg => s.push(c),
+            _ => runs.push((c.to_string(), neg)),
+        }
+        i += 1;
+    }
+    let font = FontId::proportional(size);
+    let galleys: Vec<_> = runs
+        .iter()
+        .map(|(s, n)| (ui.painter().layout_no_wrap(s.clone(), font.clone(), color), *n))
+        .collect();
+    let w: f32 = galleys.iter().map(|(g, _)| g.size().x).sum();
+    let h = galleys.iter().map(|(g, _)| g.size().y).fold(size, f32::max) + 3.0;
+    let (rect, resp) = ui.allocate_exact_size(vec2(w, h), Sense::hover());
+    let label = text.to_string();
+    resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, label.clone()));
+    let mut x = rect.left();
+    for (g, neg) in galleys {
+        let gw = g.size().x;
+        if neg {
+            let y = rect.top() + 2.0;
+            ui.painter().line_segment([pos2(x + 1.0, y), pos2(x + gw - 1.0, y)], Stroke::new(1.5, color));
+        }
+        ui.painter().galley(pos2(x, rect.top() + 3.0), g, color);
+        x += gw;
+    }
+    resp
 }

@@ -77,6 +77,7 @@ pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) ->
         }
         format!("correct fix: no trip and no hazard in {} s, {delivered} boxes delivered", sim.now().0 / 1000)
     } else {
-        format!("not fixed: the re-run trips on {}", trips.join(", "))
+        let hazards: Vec<String> = sim.emulator.hazards().iter().map(|h| format!("{:?} of box {} at {} ms", h.kind, h.box_id, h.time_ms)).collect();
+        format!("not fixed: the re-run has trips [{}] and hazards [{}]", trips.join(", "), hazards.join("; "))
     }
 }

@@ -6,7 +6,6 @@ use super::{Command, Console, LEVEL_NAMES, Mode};
 use egui::{Align2, Color32, FontId, RichText, Sense, Stroke, pos2, vec2};
 use std::collections::{BTreeMap, BTreeSet};
 use vigie_core::alarms::AlarmState;
-use vigie_core::explain::overbar_notation;
 use vigie_core::sim::OperatorAction;
 use vigie_core::time::Millis;
 
@@ -67,10 +66,10 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         }
         ui.separator();
         if c.running {
-            if ui.button("⏸ Pause").clicked() {
+            if ui.button("Pause").clicked() {
                 out.push(Command::Pause);
             }
-        } else if ui.button("▶ Run").clicked() {
+        } else if ui.button("Run").clicked() {
             out.push(Command::Run);
         }
         if ui.button("Step").on_hover_text("One PLC cycle").clicked() {
@@ -178,7 +177,12 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
                 ghost = Some((p.boxes.as_slice(), p.table_angle_mdeg, p.hazards.as_slice()));
             }
         }
-        banner = Some((format!("Level {} — trip {} at {}", LEVEL_NAMES[*l], ex.constraints.join(", "), fmt_ms(ex.time_ms)), c.palette.highlight));
+        banner = Some((format!(
+                "Level {} — trip {} at {}",
+                LEVEL_NAMES[*l],
+                ex.constraints.iter().map(|k| k.split(" =").next().unwrap_or(k)).collect::<Vec<_>>().join(", "),
+                fmt_ms(ex.time_ms)
+            ), c.palette.highlight));
     }
     if let Some(r) = &replay_rec {
         banner = Some((format!("REPLAY at {} (live: {})", fmt_ms(r.time.0), fmt_ms(sim.now().0)), c.palette.highlight));
@@ -211,11 +215,11 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     };
     ui.label(RichText::new(format!("Trip at {}", fmt_ms(ex.time_ms))).strong().color(c.palette.trip));
     for k in &ex.constraints {
-        ui.label(RichText::new(k).size(18.0).strong());
+        synoptic::overbar_label(ui, k, 20.0, c.palette.text);
     }
     if let Some(t) = c.sim.engine.trips.get(trip) {
         for fc in &t.constraints {
-            ui.label(RichText::new(format!("{}: {}", fc.id, overbar_notation(&fc.notation))).color(c.palette.text_dim));
+            ui.label(RichText::new(format!("as written: {} = {}", fc.id, fc.notation)).color(c.palette.text_dim));
         }
     }
     ui.horizontal_wrapped(|ui| {
@@ -231,7 +235,11 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         for item in &level.items {
             ui.horizontal_wrapped(|ui| {
                 ui.label(RichText::new(item.code).monospace().color(c.palette.text_dim));
-                ui.label(&item.text);
+                if item.text.contains('\u{305}') {
+                    synoptic::overbar_label(ui, &item.text, 14.0, c.palette.text);
+                } else {
+                    ui.label(&item.text);
+                }
             });
         }
         if level.items.is_empty() {
@@ -242,8 +250,8 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     }
     ui.add_space(4.0);
     ui.horizontal(|ui| {
-        ui.label("Report folder");
-        ui.add(egui::TextEdit::singleline(&mut c.report_dir).desired_width(170.0));
+        let l = ui.label("Report folder");
+        ui.add(egui::TextEdit::singleline(&mut c.report_dir).desired_width(170.0)).labelled_by(l.id);
         if ui.button("Export incident report").clicked() {
             out.push(Command::ExportReport(c.report_dir.clone().into()));
         }
@@ -319,7 +327,8 @@ fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         ui.label(RichText::new(format!("{:>9}  {:<10} {}", fmt_ms(e.sim_ms), e.kind, e.text)).monospace().size(11.0));
     }
     ui.horizontal(|ui| {
-        ui.add(egui::TextEdit::singleline(&mut c.csv_path).desired_width(200.0));
+        let l = ui.label("CSV file");
+        ui.add(egui::TextEdit::singleline(&mut c.csv_path).desired_width(200.0)).labelled_by(l.id);
         if ui.button("Export CSV").clicked() {
             out.push(Command::ExportCsv(c.csv_path.clone().into()));
         }
@@ -381,7 +390,7 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             if ui.button("Discard edits").clicked() {
                 out.push(Command::DiscardEdits);
             }
-            if c.score.variant.is_some() && ui.button("Verify fix").clicked() {
+            if ui.button("Verify fix").on_hover_text("Re-run the scenario headless with the edit").clicked() {
                 out.push(Command::VerifyFix);
             }
         });
@@ -399,18 +408,18 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 egui::Grid::new(format!("steps-{}", chart.name)).striped(true).num_columns(3).show(ui, |ui| {
                     for s in &chart.steps {
                         let on = active.contains(&s.id);
-                        let txt = RichText::new(format!("{}{}", if s.initial { "▣ " } else { "□ " }, s.id)).monospace();
-                        ui.label(if on { txt.strong().color(Color32::WHITE).background_color(pal.running) } else { txt });
+                        let txt = RichText::new(format!("{}{}", if s.initial { "[init] " } else { "" }, s.id)).monospace();
+                        let l = ui.label(if on { txt.strong().color(Color32::WHITE).background_color(pal.running) } else { txt });
                         ui.label(if on { "active" } else { "" });
                         if let Some(a) = draft.actions.get_mut(&s.id) {
-                            ui.add(egui::TextEdit::singleline(a).desired_width(260.0).font(egui::TextStyle::Monospace));
+                            ui.add(egui::TextEdit::singleline(a).desired_width(260.0).font(egui::TextStyle::Monospace)).labelled_by(l.id);
                         }
                         ui.end_row();
                         for t in chart.transitions.iter().filter(|t| t.from.contains(&s.id)) {
-                            ui.label(RichText::new(format!("  ┿ {}", t.id)).monospace());
+                            let l = ui.label(RichText::new(format!("   + {}", t.id)).monospace());
                             ui.label(RichText::new(format!("→ {}", t.to.join(", "))).monospace().color(pal.text_dim));
                             if let Some(cond) = draft.conditions.get_mut(&t.id) {
-                                ui.add(egui::TextEdit::singleline(cond).desired_width(260.0).font(egui::TextStyle::Monospace));
+                                ui.add(egui::TextEdit::singleline(cond).desired_width(260.0).font(egui::TextStyle::Monospace)).labelled_by(l.id);
                             }
                             ui.end_row();
                         }
@@ -422,8 +431,8 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 ui.label(RichText::new("Equations").strong().size(16.0));
                 egui::Grid::new("equations").num_columns(2).show(ui, |ui| {
                     for (target, expr) in &mut draft.equations {
-                        ui.label(RichText::new(format!("{target} =")).monospace());
-                        ui.add(egui::TextEdit::singleline(expr).desired_width(300.0).font(egui::TextStyle::Monospace));
+                        let l = ui.label(RichText::new(format!("{target} =")).monospace());
+                        ui.add(egui::TextEdit::singleline(expr).desired_width(300.0).font(egui::TextStyle::Monospace)).labelled_by(l.id);
                         ui.end_row();
                     }
                 });
