@@ -160,4 +160,7 @@ fn snapshots_of_levels_and_modes() {
     h.get_by_label("Maintenance").click();
     h.run_steps(2);
     h.snapshot("console_maintenance");
+    h.get_by_label("Training").click();
+    h.run_steps(2);
+    h.snapshot("console_training");
 }

@@ -111,6 +111,16 @@ pub(crate) enum Command {
     /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
     /// sensor-to-output latency).
     GatewayBench(gateway::BenchArgs),
+    /// Measure the console: CPU time per frame at 1x (headless egui, no GPU) and memory
+    /// over a simulated hour at 100x.
+    BenchConsole {
+        /// Frames timed.
+        #[arg(long, default_value_t = 600)]
+        frames: usize,
+        /// Skip the simulated hour.
+        #[arg(long)]
+        no_memory: bool,
+    },
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -132,6 +142,15 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
+        Some(Command::BenchConsole { frames, no_memory }) => {
+            let opts = vigie_app::ConsoleOptions::new(&cli.plant);
+            let b = vigie_app::bench_frames(&opts, frames, !no_memory)?;
+            println!("console frame (logic + ui + tessellation, 1600x1000, 1x): median {:.2} ms, p95 {:.2} ms over {} frames   goal <= 4 ms", b.median_ms, b.p95_ms, b.frames);
+            if !no_memory {
+                println!("memory over {} s simulated at 100x: RSS {} KiB after 10 min, {} KiB at the end (growth {} KiB)", b.memory_sim_s, b.rss_warm_kib, b.rss_end_kib, b.rss_end_kib.saturating_sub(b.rss_warm_kib));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
         Some(Command::Run {
             scenario,
             headless,
