@@ -11,6 +11,11 @@ apt_packages=()
 need() { dpkg -s "$1" >/dev/null 2>&1 || apt_packages+=("$1"); }
 need python3-venv
 need mbpoll
+# console snapshots (egui_kittest renders with wgpu on Mesa lavapipe) and docs screenshots
+need mesa-vulkan-drivers
+need libgl1-mesa-dri
+need xvfb
+need imagemagick
 if [ ${#apt_packages[@]} -gt 0 ]; then
   echo "scripts/test.sh: installing Debian packages: ${apt_packages[*]}"
   if [ "$(id -u)" -eq 0 ]; then SUDO=""; else SUDO="sudo"; fi

@@ -1,5 +1,6 @@
 //! Integration tests: one binary.
 
+mod console;
 mod export_st;
 mod fuzz_loaders;
 mod live;

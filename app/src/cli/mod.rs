@@ -17,8 +17,52 @@ pub(crate) struct Cli {
     /// Plant folder to open.
     #[arg(long, global = true, default_value = "layouts/sorting-station")]
     pub(crate) plant: PathBuf,
+    #[command(flatten)]
+    pub(crate) console: ConsoleArgs,
     #[command(subcommand)]
     pub(crate) command: Option<Command>,
+}
+
+/// Options of the console (no subcommand, or `vigie run SCENARIO` without `--headless`).
+#[derive(clap::Args, Debug)]
+pub(crate) struct ConsoleArgs {
+    /// Console: initial simulation speed (0.1 to 100).
+    #[arg(long, global = true, default_value_t = 1.0)]
+    pub(crate) speed: f64,
+    /// Console: initial mode (production, maintenance, training).
+    #[arg(long, global = true, default_value = "production")]
+    pub(crate) mode: String,
+    /// Console: explanation level (0-4) to show once a trip is explained.
+    #[arg(long, global = true)]
+    pub(crate) level: Option<usize>,
+    /// Console: run the simulation to this time (ms) before the first frame.
+    #[arg(long, global = true)]
+    pub(crate) run_until: Option<u64>,
+    /// Console: start paused.
+    #[arg(long, global = true)]
+    pub(crate) paused: bool,
+    /// Console: press START at once.
+    #[arg(long, global = true)]
+    pub(crate) start: bool,
+    /// Console: load this variant of the control-error library (training).
+    #[arg(long, global = true)]
+    pub(crate) variant: Option<String>,
+}
+
+fn open_console(plant: &std::path::Path, scenario: Option<PathBuf>, args: &ConsoleArgs) -> anyhow::Result<ExitCode> {
+    let mode = vigie_app::Mode::parse(&args.mode)
+        .ok_or_else(|| anyhow::anyhow!("unknown mode `{}` (production, maintenance, training)", args.mode))?;
+    let mut opts = vigie_app::ConsoleOptions::new(plant);
+    opts.scenario = scenario;
+    opts.speed = args.speed;
+    opts.mode = mode;
+    opts.level = args.level;
+    opts.paused = args.paused;
+    opts.run_until_ms = args.run_until;
+    opts.start = args.start;
+    opts.variant.clone_from(&args.variant);
+    vigie_app::run_console(&opts)?;
+    Ok(ExitCode::SUCCESS)
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -77,6 +121,16 @@ pub(crate) enum Command {
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
+    /// Measure the console: CPU time per frame at 1x (headless egui, no GPU) and memory
+    /// over a simulated hour at 100x.
+    BenchConsole {
+        /// Frames timed.
+        #[arg(long, default_value_t = 600)]
+        frames: usize,
+        /// Skip the simulated hour.
+        #[arg(long)]
+        no_memory: bool,
+    },
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -101,6 +155,15 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::ExportSt { dir, out }) => {
             export_st::run(&dir.unwrap_or(cli.plant), out.as_deref())
         }
+        Some(Command::BenchConsole { frames, no_memory }) => {
+            let opts = vigie_app::ConsoleOptions::new(&cli.plant);
+            let b = vigie_app::bench_frames(&opts, frames, !no_memory)?;
+            println!("console frame (logic + ui + tessellation, 1600x1000, 1x): median {:.2} ms, p95 {:.2} ms over {} frames   goal <= 4 ms", b.median_ms, b.p95_ms, b.frames);
+            if !no_memory {
+                println!("memory over {} s simulated at 100x: RSS {} KiB after 10 min, {} KiB at the end (growth {} KiB)", b.memory_sim_s, b.rss_warm_kib, b.rss_end_kib, b.rss_end_kib.saturating_sub(b.rss_warm_kib));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
         Some(Command::Run {
             scenario,
             headless,
@@ -110,14 +173,10 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             if headless {
                 run::run(&scenario, trace.as_deref(), !no_timing)
             } else {
-                anyhow::bail!("the console is not built yet: use `vigie run SCENARIO --headless`")
+                open_console(&cli.plant, Some(scenario), &cli.console)
             }
         }
-        None => {
-            use clap::CommandFactory as _;
-            Cli::command().print_help()?;
-            Ok(ExitCode::SUCCESS)
-        }
+        None => open_console(&cli.plant, None, &cli.console),
     }
 }
 

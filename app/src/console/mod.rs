@@ -1,0 +1,800 @@
+//! The operator console: state, the closed set of [`Command`]s the views emit, and the
+//! one place ([`Console::apply`]) where they change the simulation.
+//!
+//! `App::logic` advances the simulation by real elapsed time × speed, in whole PLC
+//! cycles, capped per frame; `App::ui` only renders (see `views.rs`).
+
+pub mod journal;
+pub mod report;
+pub mod synoptic;
+mod training;
+mod views;
+
+use crate::theme::Palette;
+use journal::Journal;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+use vigie_core::control::{CompiledProgram, ErrorLibrary, Origin, Program};
+use vigie_core::emulator::FaultSpec;
+use vigie_core::sim::{OperatorAction, Options, ProgramChoice, Scenario, Simulation};
+use vigie_core::time::Millis;
+
+pub use training::{Score, verify_fix};
+
+/// The console's modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Mode {
+    /// Operator console.
+    #[default]
+    Production,
+    /// Control charts: active steps, receptivities, edit and recompile.
+    Maintenance,
+    /// Control-error library, fault injection and score.
+    Training,
+}
+
+impl Mode {
+    /// Parses `production`, `maintenance` or `training`.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "production" => Some(Self::Production),
+            "maintenance" => Some(Self::Maintenance),
+            "training" => Some(Self::Training),
+            _ => None,
+        }
+    }
+}
+
+/// Names of the five explanation levels, as on their buttons.
+pub const LEVEL_NAMES: [&str; 5] = [
+    "0 Current state",
+    "1 Projection",
+    "2 Before stop",
+    "3 Advanced",
+    "4 Hypothesis",
+];
+
+/// Everything the operator can ask for. Views emit commands; [`Console::apply`] is the
+/// only place that acts on them.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// Run the simulation.
+    Run,
+    /// Pause it.
+    Pause,
+    /// Run one PLC cycle (paused).
+    Step,
+    /// Simulation speed, 0.1 to 100.
+    SetSpeed(f64),
+    /// A plant action (Start, Stop, Reset…), through the filter's rules.
+    Plant(OperatorAction),
+    /// Switch mode.
+    SetMode(Mode),
+    /// Show an explanation level (or none).
+    ShowLevel(Option<usize>),
+    /// Acknowledge an alarm with a note.
+    Acknowledge {
+        /// Alarm id.
+        id: u64,
+        /// Note (may be empty).
+        note: String,
+    },
+    /// Shelve an alarm for a time.
+    Shelve {
+        /// Alarm id.
+        id: u64,
+        /// Duration, ms of plant time.
+        ms: u64,
+    },
+    /// Unshelve an alarm.
+    Unshelve(u64),
+    /// Replay the synoptic at a recorded time (`None`: live).
+    Scrub(Option<u64>),
+    /// Export the journal to CSV.
+    ExportCsv(PathBuf),
+    /// Export the incident report (Markdown + one PNG per level) into a folder.
+    ExportReport(PathBuf),
+    /// Maintenance: recompile the edited program.
+    Recompile,
+    /// Maintenance: restart the scenario with the compiled edit.
+    RestartWithEdit,
+    /// Maintenance: drop the edits.
+    DiscardEdits,
+    /// Restart the current scenario with its own program.
+    Restart,
+    /// Training: load a variant of the control-error library.
+    LoadVariant(String),
+    /// Training: inject a fault of the fault library now.
+    InjectFault(usize),
+    /// Training: re-run the scenario with the compiled edit and score it.
+    VerifyFix,
+}
+
+/// Options for opening the console.
+#[derive(Clone, Debug)]
+pub struct ConsoleOptions {
+    /// Plant folder.
+    pub plant_dir: PathBuf,
+    /// Scenario file (`None`: the reference program with the layout's arrivals).
+    pub scenario: Option<PathBuf>,
+    /// Initial speed.
+    pub speed: f64,
+    /// Initial mode.
+    pub mode: Mode,
+    /// Explanation level to show once a trip is explained.
+    pub level: Option<usize>,
+    /// Run the simulation headless up to this time before the first frame.
+    pub run_until_ms: Option<u64>,
+    /// Start paused.
+    pub paused: bool,
+    /// Journal directory (`None`: memory only).
+    pub data_dir: Option<PathBuf>,
+    /// Press START before the first frame.
+    pub start: bool,
+    /// Load this variant of the control-error library (training).
+    pub variant: Option<String>,
+}
+
+impl ConsoleOptions {
+    /// Options for `plant_dir` with defaults: reference program, 1x, production,
+    /// journal in [`journal::data_dir_from_env`].
+    pub fn new(plant_dir: &Path) -> Self {
+        Self {
+            plant_dir: plant_dir.to_path_buf(),
+            scenario: None,
+            speed: 1.0,
+            mode: Mode::Production,
+            level: None,
+            run_until_ms: None,
+            paused: false,
+            data_dir: Some(journal::data_dir_from_env()),
+            start: false,
+            variant: None,
+        }
+    }
+}
+
+/// The scenario the console runs.
+#[derive(Clone, Debug)]
+pub(crate) struct Source {
+    pub(crate) scenario: Scenario,
+    pub(crate) path: PathBuf,
+}
+
+impl Source {
+    fn free_run(plant_dir: &Path, program: ProgramChoice, name: &str) -> Self {
+        let actions = match program {
+            ProgramChoice::Error(_) => vec![vigie_core::sim::TimedAction {
+                at_ms: 0,
+                action: OperatorAction::Start,
+            }],
+            _ => Vec::new(),
+        };
+        Self {
+            scenario: Scenario {
+                name: name.to_string(),
+                description: String::new(),
+                plant: ".".into(),
+                program,
+                seed: 1,
+                arrivals: None,
+                faults: Vec::new(),
+                actions,
+                duration_ms: 120_000,
+                filter: vigie_core::engine::FilterMode::Enforce,
+                cycle_ms: 10,
+                projection_ms: 10_000,
+            },
+            path: plant_dir.join("console.ron"),
+        }
+    }
+
+    fn build(&self) -> Result<Simulation, String> {
+        Simulation::from_scenario(&self.scenario, &self.path, Options::default())
+            .map_err(|p| vigie_core::diag::render(&p))
+    }
+}
+
+/// Maintenance drafts: the text of every receptivity, step action list and equation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Draft {
+    /// Transition id → condition.
+    pub conditions: BTreeMap<String, String>,
+    /// Step id → actions (`N A0, S M1, L(500) A2`).
+    pub actions: BTreeMap<String, String>,
+    /// Equations (target, expression).
+    pub equations: Vec<(String, String)>,
+}
+
+impl Draft {
+    /// The draft of a program.
+    pub fn of(p: &Program) -> Self {
+        Self {
+            conditions: p.transitions().map(|(_, t)| (t.id.clone(), t.condition.clone())).collect(),
+            actions: p
+                .steps()
+                .map(|(_, s)| {
+                    let text: Vec<String> = s.actions.iter().map(|a| format!("{} {}", a.qualifier, a.target)).collect();
+                    (s.id.clone(), text.join(", "))
+                })
+                .collect(),
+            equations: p.equations.clone(),
+        }
+    }
+
+    /// Applies the draft to `base`.
+    pub fn apply(&self, base: &Program) -> Result<Program, String> {
+        let mut p = base.clone();
+        for chart in &mut p.charts {
+            for t in &mut chart.transitions {
+                if let Some(c) = self.conditions.get(&t.id) {
+                    t.condition.clone_from(c);
+                }
+            }
+            for s in &mut chart.steps {
+                if let Some(text) = self.actions.get(&s.id) {
+                    s.actions = parse_actions(text).map_err(|e| format!("step {}: {e}", s.id))?;
+                }
+            }
+        }
+        p.equations.clone_from(&self.equations);
+        Ok(p)
+    }
+}
+
+/// Parses `N A0, S M1, L(500) A2`.
+pub fn parse_actions(text: &str) -> Result<Vec<vigie_core::control::Action>, String> {
+    use vigie_core::control::{Action, Qualifier};
+    let mut out = Vec::new();
+    for part in text.split([',', ';']).map(str::trim).filter(|s| !s.is_empty()) {
+        let mut it = part.split_whitespace();
+        let (q, target) = match (it.next(), it.next(), it.next()) {
+            (Some(q), Some(t), None) => (q, t),
+            (Some(t), None, None) => ("N", t),
+            _ => return Err(format!("`{part}`: expected QUALIFIER TARGET")),
+        };
+        let num = |s: &str| -> Result<u64, String> {
+            s.trim_end_matches(')')
+                .parse::<u64>()
+                .map_err(|_| format!("`{part}`: bad duration"))
+        };
+        let qualifier = match q {
+            "N" => Qualifier::N,
+            "S" => Qualifier::S,
+            "R" => Qualifier::R,
+            "P" => Qualifier::P,
+            q if q.starts_with("L(") => Qualifier::L(num(&q[2..])?),
+            q if q.starts_with("D(") => Qualifier::D(num(&q[2..])?),
+            q => return Err(format!("`{q}`: unknown qualifier (N, S, R, P, L(ms), D(ms))")),
+        };
+        out.push(Action {
+            qualifier,
+            target: target.to_string(),
+        });
+    }
+    Ok(out)
+}
+
+/// A running incident-report capture (one screenshot per level).
+#[derive(Clone, Debug)]
+pub(crate) struct ReportJob {
+    pub(crate) dir: PathBuf,
+    pub(crate) level: usize,
+    pub(crate) frames: u32,
+    pub(crate) waiting: bool,
+    pub(crate) shot: std::sync::Arc<std::sync::Mutex<Option<std::sync::Arc<egui::ColorImage>>>>,
+}
+
+/// The console application.
+pub struct Console {
+    /// The closed loop.
+    pub sim: Simulation,
+    pub(crate) source: Source,
+    pub(crate) plant_dir: PathBuf,
+    /// Palette.
+    pub palette: Palette,
+    /// The journal.
+    pub journal: Journal,
+    /// Running (else paused).
+    pub running: bool,
+    /// Speed factor.
+    pub speed: f64,
+    budget_ms: f64,
+    last_time: Option<f64>,
+    /// Mode.
+    pub mode: Mode,
+    /// Explanation level shown on the synoptic.
+    pub level: Option<usize>,
+    wanted_level: Option<usize>,
+    /// Replay time (`None`: live).
+    pub replay: Option<u64>,
+    /// Synoptic zoom/pan.
+    pub view: synoptic::View,
+    /// Status line (last refusal or result).
+    pub status: String,
+    pub(crate) notes: BTreeMap<u64, String>,
+    pub(crate) csv_path: String,
+    pub(crate) report_dir: String,
+    pub(crate) report_job: Option<ReportJob>,
+    pub(crate) synoptic_rect: Option<egui::Rect>,
+    pub(crate) draft: Option<Draft>,
+    pub(crate) compiled_edit: Option<CompiledProgram>,
+    pub(crate) problems: String,
+    pub(crate) variants: Vec<(String, String, String)>,
+    pub(crate) faults: Vec<(String, FaultSpec)>,
+    pub(crate) chrono_signals: BTreeSet<String>,
+    pub(crate) chrono_window_s: u64,
+    pub(crate) score: Score,
+    pub(crate) wall_s: f64,
+    pub(crate) alarm_filter_shelved: bool,
+    visuals_set: bool,
+    /// Commands emitted by the last frame's views, applied at the next `logic`.
+    pending: Vec<Command>,
+}
+
+fn load_faults(plant_dir: &Path) -> Vec<(String, FaultSpec)> {
+    let path = plant_dir.join("faults.ron");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Vec::new();
+    };
+    ron::from_str::<Vec<(String, FaultSpec)>>(&text).unwrap_or_else(|e| {
+        tracing::warn!("{}: {e}", path.display());
+        Vec::new()
+    })
+}
+
+impl Console {
+    /// Opens the console; fails with the rendered problems when the plant or scenario
+    /// cannot be loaded.
+    pub fn new(opts: &ConsoleOptions) -> Result<Self, String> {
+        let source = match &opts.scenario {
+            Some(path) => Source {
+                scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
+                path: path.clone(),
+            },
+            None => Source::free_run(&opts.plant_dir, ProgramChoice::Reference, "Reference program"),
+        };
+        let plant_dir = source
+            .path
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(&source.scenario.plant);
+        let (source, mut sim) = match &opts.variant {
+            Some(id) => {
+                let s = Source::free_run(&plant_dir, ProgramChoice::Error(id.clone()), &format!("Training: {id}"));
+                let sim = s.build()?;
+                (s, sim)
+            }
+            None => {
+                let sim = source.build()?;
+                (source, sim)
+            }
+        };
+        let variants = sim_variants(&plant_dir, &sim);
+        let mut journal = Journal::open(opts.data_dir.as_deref());
+        journal.push(0, "session", &format!("console opened on {}", source.scenario.name));
+        if opts.start {
+            let _ = sim.act(&OperatorAction::Start);
+        }
+        if let Some(end) = opts.run_until_ms {
+            sim.run_until(Millis(end));
+        }
+        let chrono_signals = sim
+            .bundle
+            .plant
+            .inputs
+            .iter()
+            .chain(sim.bundle.plant.outputs.iter())
+            .map(|s| s.id.clone())
+            .collect();
+        let mut c = Self {
+            faults: load_faults(&plant_dir),
+            sim,
+            source,
+            plant_dir,
+            palette: Palette::default(),
+            journal,
+            running: !opts.paused,
+            speed: opts.speed.clamp(0.1, 100.0),
+            budget_ms: 0.0,
+            last_time: None,
+            mode: opts.mode,
+            level: None,
+            wanted_level: opts.level,
+            replay: None,
+            view: synoptic::View::default(),
+            status: String::new(),
+            notes: BTreeMap::new(),
+            csv_path: "vigie-journal.csv".into(),
+            report_dir: "incident-report".into(),
+            report_job: None,
+            synoptic_rect: None,
+            draft: None,
+            compiled_edit: None,
+            problems: String::new(),
+            variants,
+            chrono_signals,
+            chrono_window_s: 30,
+            score: Score {
+                variant: opts.variant.clone(),
+                ..Score::default()
+            },
+            wall_s: 0.0,
+            alarm_filter_shelved: false,
+            visuals_set: false,
+            pending: Vec::new(),
+        };
+        c.drain_journal();
+        c.follow_trip();
+        if c.mode == Mode::Maintenance {
+            c.enter_maintenance();
+        }
+        Ok(c)
+    }
+
+    /// The maintenance draft (text of receptivities, actions, equations), if any.
+    pub fn draft_mut(&mut self) -> Option<&mut Draft> {
+        self.draft.as_mut()
+    }
+
+    /// The training score.
+    pub fn score(&self) -> &Score {
+        &self.score
+    }
+
+    /// Installs fonts and visuals on a new context (call from the app's creator, before
+    /// the first frame; `logic` does it otherwise, effective from the next frame).
+    pub fn setup(&mut self, ctx: &egui::Context) {
+        crate::theme::setup_context(ctx, &self.palette);
+        self.visuals_set = true;
+    }
+
+    /// The latest explained trip, if any.
+    pub fn latest_trip(&self) -> Option<usize> {
+        self.sim.explanations.keys().next_back().copied()
+    }
+
+    fn drain_journal(&mut self) {
+        let entries: Vec<_> = self.sim.take_journal().to_vec();
+        for e in entries {
+            self.journal.push(e.time_ms, &e.kind, &e.text);
+            if e.kind == "trip" && self.score.trip_wall_s.is_none() {
+                self.score.trip_wall_s = Some(self.wall_s);
+            }
+        }
+    }
+
+    fn follow_trip(&mut self) {
+        if self.latest_trip().is_some() && self.wanted_level.is_some() && self.level.is_none() {
+            self.level = self.wanted_level;
+            if let Some(l) = self.level {
+                self.score.levels.insert(l);
+            }
+        }
+    }
+
+    /// Runs `n` PLC cycles.
+    pub fn cycles(&mut self, n: u32) {
+        for _ in 0..n {
+            self.sim.cycle();
+        }
+        self.drain_journal();
+        self.follow_trip();
+    }
+
+    /// Advances by `dt_s` seconds of real time (× speed), in whole cycles, at most
+    /// 5000 cycles per call.
+    pub fn advance(&mut self, dt_s: f64) {
+        if !self.running {
+            self.budget_ms = 0.0;
+            return;
+        }
+        let cycle = self.sim.cycle_period().0.max(1);
+        self.budget_ms += dt_s.clamp(0.0, 0.25) * 1000.0 * self.speed;
+        #[allow(clippy::cast_precision_loss)]
+        let n = (self.budget_ms / cycle as f64).floor().clamp(0.0, 5000.0);
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let whole = n as u32;
+        #[allow(clippy::cast_precision_loss)]
+        {
+            self.budget_ms = (self.budget_ms - f64::from(whole) * cycle as f64).min(cycle as f64 * 2.0);
+        }
+        self.cycles(whole);
+    }
+
+    fn now(&self) -> Millis {
+        self.sim.now()
+    }
+
+    fn enter_maintenance(&mut self) {
+        if self.draft.is_none() {
+            self.draft = Some(Draft::of(&self.sim.program.program().program));
+        }
+    }
+
+    /// Applies one command: the only place where the UI changes the simulation.
+    pub fn apply(&mut self, cmd: Command) {
+        let now = self.now().0;
+        match cmd {
+            Command::Run => self.running = true,
+            Command::Pause => self.running = false,
+            Command::Step => {
+                self.running = false;
+                self.cycles(1);
+            }
+            Command::SetSpeed(s) => self.speed = if s.is_finite() { s.clamp(0.1, 100.0) } else { 1.0 },
+            Command::Plant(action) => {
+                let result = self.sim.act(&action);
+                self.status = match result {
+                    Ok(()) => format!("{action:?}: done"),
+                    Err(e) => format!("{action:?}: {e}"),
+                };
+                self.drain_journal();
+            }
+            Command::SetMode(m) => {
+                self.mode = m;
+                if m == Mode::Maintenance {
+                    self.enter_maintenance();
+                }
+                self.journal.push(now, "operator", &format!("mode {m:?}"));
+            }
+            Command::ShowLevel(l) => {
+                self.level = l.filter(|l| *l < 5);
+                if let Some(l) = self.level {
+                    self.score.levels.insert(l);
+                }
+            }
+            Command::Acknowledge { id, note } => {
+                match self.sim.alarms.acknowledge(Millis(now), id, &note) {
+                    Ok(()) => {
+                        self.journal.push(now, "ack", &format!("alarm {id} acknowledged: {note}"));
+                        self.notes.remove(&id);
+                    }
+                    Err(e) => self.status = format!("acknowledge refused: {e}"),
+                }
+            }
+            Command::Shelve { id, ms } => match self.sim.alarms.shelve(Millis(now), id, Millis(ms)) {
+                Ok(()) => self.journal.push(now, "shelve", &format!("alarm {id} shelved for {} s", ms / 1000)),
+                Err(e) => self.status = format!("shelve refused: {e}"),
+            },
+            Command::Unshelve(id) => match self.sim.alarms.unshelve(id) {
+                Ok(()) => self.journal.push(now, "unshelve", &format!("alarm {id} unshelved")),
+                Err(e) => self.status = format!("unshelve refused: {e}"),
+            },
+            Command::Scrub(t) => self.replay = t,
+            Command::ExportCsv(path) => {
+                self.status = match self.journal.export_csv(&path) {
+                    Ok(()) => format!("journal exported to {}", path.display()),
+                    Err(e) => format!("export failed: {e}"),
+                };
+                self.journal.push(now, "operator", &self.status.clone());
+            }
+            Command::ExportReport(dir) => self.start_report(dir),
+            Command::Recompile => self.recompile(),
+            Command::RestartWithEdit => {
+                if self.compiled_edit.is_none() {
+                    self.recompile();
+                }
+                if let Some(p) = self.compiled_edit.clone() {
+                    self.restart(Some(p));
+                }
+            }
+            Command::DiscardEdits => {
+                self.draft = Some(Draft::of(&self.sim.program.program().program));
+                self.compiled_edit = None;
+                self.problems.clear();
+            }
+            Command::Restart => self.restart(None),
+            Command::LoadVariant(id) => {
+                self.source = Source::free_run(&self.plant_dir, ProgramChoice::Error(id.clone()), &format!("Training: {id}"));
+                self.score = Score::default();
+                self.score.variant = Some(id);
+                self.draft = None;
+                self.compiled_edit = None;
+                self.restart(None);
+                if self.mode == Mode::Maintenance {
+                    self.enter_maintenance();
+                }
+            }
+            Command::InjectFault(i) => {
+                if let Some((name, spec)) = self.faults.get(i).cloned() {
+                    let mut spec = spec;
+                    if let vigie_core::emulator::Trigger::At(t) = &mut spec.trigger {
+                        *t += now;
+                    }
+                    self.status = match self.sim.inject(spec) {
+                        Ok(()) => format!("fault injected: {name}"),
+                        Err(e) => format!("fault refused: {}", e.message),
+                    };
+                    self.drain_journal();
+                }
+            }
+            Command::VerifyFix => self.verify(),
+        }
+    }
+
+    fn recompile(&mut self) {
+        let Some(draft) = &self.draft else {
+            return;
+        };
+        let base = self.sim.program.program().program.clone();
+        let result = draft.apply(&base).and_then(|p| {
+            CompiledProgram::new(&p, &self.sim.bundle.plant, &Origin::default()).map_err(|e| vigie_core::diag::render(&e))
+        });
+        match result {
+            Ok(c) => {
+                let diff = vigie_core::control::differences(&base, &c.program);
+                self.problems = if diff.is_empty() {
+                    "compiled: no change".into()
+                } else {
+                    format!("compiled: {}", diff.join("; "))
+                };
+                self.compiled_edit = Some(c);
+                self.status = "program compiled".into();
+            }
+            Err(e) => {
+                self.problems = e;
+                self.compiled_edit = None;
+                self.status = "compilation failed".into();
+            }
+        }
+        let text = self.status.clone();
+        self.journal.push(self.now().0, "maintenance", &text);
+    }
+
+    fn restart(&mut self, program: Option<CompiledProgram>) {
+        match self.source.build() {
+            Ok(mut sim) => {
+                if let Some(p) = program {
+                    sim.replace_program(p);
+                }
+                self.sim = sim;
+                self.level = None;
+                self.replay = None;
+                self.budget_ms = 0.0;
+                self.running = true;
+                self.score.trip_wall_s = None;
+                self.journal.push(0, "operator", &format!("restart: {}", self.source.scenario.name));
+                self.drain_journal();
+                self.status = "restarted".into();
+            }
+            Err(e) => self.status = format!("restart failed: {e}"),
+        }
+    }
+
+    fn verify(&mut self) {
+        if self.compiled_edit.is_none() {
+            self.recompile();
+        }
+        let Some(program) = self.compiled_edit.clone() else {
+            self.status = "nothing to verify: the edit does not compile".into();
+            return;
+        };
+        let outcome = verify_fix(&self.source.scenario, &self.source.path, program);
+        if self.score.variant.is_none() {
+            self.score.variant = Some(self.source.scenario.name.clone());
+        }
+        self.score.record(outcome.clone(), self.wall_s);
+        self.status = outcome.clone();
+        self.journal.push(self.now().0, "training", &outcome);
+    }
+
+    fn start_report(&mut self, dir: PathBuf) {
+        let Some(trip) = self.latest_trip() else {
+            self.status = "no trip to report".into();
+            return;
+        };
+        match report::write_markdown(&self.sim, trip, &dir) {
+            Ok(path) => {
+                self.status = format!("report written to {}; capturing the levels…", path.display());
+                self.journal.push(self.now().0, "report", &format!("incident report {}", dir.display()));
+                self.report_job = Some(ReportJob {
+                    dir,
+                    level: 0,
+                    frames: 0,
+                    waiting: false,
+                    shot: std::sync::Arc::default(),
+                });
+                self.running = false;
+            }
+            Err(e) => self.status = format!("report failed: {e}"),
+        }
+    }
+
+    /// The report capture state machine (called from `logic`).
+    fn report_step(&mut self, ctx: &egui::Context) {
+        let Some(job) = &mut self.report_job else {
+            return;
+        };
+        let shot = job.shot.lock().ok().and_then(|mut s| s.take());
+        if let (Some(image), true) = (shot, job.waiting) {
+            let ppp = ctx.pixels_per_point();
+            let path = job.dir.join(format!("level-{}.png", job.level));
+            if let Err(e) = report::save_png(&image, self.synoptic_rect, ppp, &path) {
+                self.status = format!("PNG failed: {e}");
+            }
+            job.level += 1;
+            job.waiting = false;
+            job.frames = 0;
+        }
+        if job.level >= 5 {
+            self.status = format!("incident report complete in {}", job.dir.display());
+            self.report_job = None;
+            self.level = Some(0);
+            return;
+        }
+        self.level = Some(job.level);
+        job.frames += 1;
+        if !job.waiting && job.frames >= 3 {
+            let slot = job.shot.clone();
+            let repaint = ctx.clone();
+            ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::ScreenshotCallback::new(move |image| {
+                if let Ok(mut s) = slot.lock() {
+                    *s = Some(image);
+                }
+                repaint.request_repaint();
+            })));
+            job.waiting = true;
+            job.frames = 0;
+        } else if job.waiting && job.frames > 120 {
+            self.status = format!("report Markdown in {}; PNG capture unavailable here", job.dir.display());
+            self.report_job = None;
+            return;
+        }
+        ctx.request_repaint();
+    }
+
+    /// The work of `App::logic`: advance by real time, run the report capture.
+    pub fn logic(&mut self, ctx: &egui::Context) {
+        if !self.visuals_set {
+            crate::theme::setup_context(ctx, &self.palette);
+            self.visuals_set = true;
+        }
+        for c in std::mem::take(&mut self.pending) {
+            self.apply(c);
+        }
+        let t = ctx.input(|i| i.time);
+        let dt = self.last_time.map_or(0.0, |l| (t - l).max(0.0));
+        self.last_time = Some(t);
+        self.wall_s += dt;
+        if self.report_job.is_none() {
+            self.advance(dt);
+        }
+        self.report_step(ctx);
+        if self.running {
+            ctx.request_repaint();
+        }
+    }
+
+    /// The work of `App::ui`: renders only; the commands the views emit are queued
+    /// and applied at the next `logic`.
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let mut commands = Vec::new();
+        views::root_ui(self, ui, &mut commands);
+        if !commands.is_empty() {
+            ui.ctx().request_repaint();
+        }
+        self.pending.extend(commands);
+    }
+}
+
+fn sim_variants(plant_dir: &Path, sim: &Simulation) -> Vec<(String, String, String)> {
+    match ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &sim.bundle.plant) {
+        Ok(lib) => lib
+            .variants
+            .iter()
+            .map(|v| (v.def.id.clone(), v.def.description.clone(), v.def.expected_constraint.clone()))
+            .collect(),
+        Err(_) => Vec::new(),
+    }
+}
+
+impl eframe::App for Console {
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        Console::logic(self, ctx);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        Console::ui(self, ui);
+    }
+}

@@ -1,0 +1,597 @@
+//! The synoptic: a top view of the plant drawn from the layout (seed 004, figures 13-17).
+//!
+//! [`Geometry::new`] is the pure layout (world positions of every drawn element);
+//! [`synoptic_ui`] paints a [`Picture`] over it with the palette, handles zoom (wheel)
+//! and pan (drag) and shows a tooltip for the sensor or actuator under the pointer.
+
+use crate::theme::Palette;
+use egui::{Align2, Color32, FontId, Pos2, Rect, Sense, Shape, Stroke, Vec2, pos2, vec2};
+use std::collections::{BTreeMap, BTreeSet};
+use vigie_core::emulator::{Beam, BoxSize, BoxState, BoxView, Hazard, Layout, SensorKind};
+use vigie_core::explain::{Highlight, Mark};
+use vigie_core::plant::Plant;
+
+/// Zoom and pan of the synoptic (view state, kept across frames).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// Zoom factor over "fit to the panel".
+    pub zoom: f32,
+    /// Pan, in points.
+    pub pan: Vec2,
+}
+
+impl Default for View {
+    fn default() -> Self {
+        Self {
+            zoom: 1.0,
+            pan: Vec2::ZERO,
+        }
+    }
+}
+
+/// A drawn sensor.
+#[derive(Clone, Debug)]
+pub struct SensorGeom {
+    /// Signal id.
+    pub id: String,
+    /// Lamp position, world mm.
+    pub lamp: [f32; 2],
+    /// Beam across the part (two world points), for presence sensors.
+    pub beam: Option<([f32; 2], [f32; 2])>,
+    /// High beam.
+    pub high: bool,
+}
+
+/// A drawn conveyor.
+#[derive(Clone, Debug)]
+pub struct ConveyorGeom {
+    /// Display name.
+    pub name: String,
+    /// Start, world mm.
+    pub start: [f32; 2],
+    /// End, world mm.
+    pub end: [f32; 2],
+    /// Width, mm.
+    pub width: f32,
+    /// Motor actuator.
+    pub actuator: String,
+    /// Belt speed, mm/s (for the motion pattern).
+    pub speed: f32,
+}
+
+/// The pure layout of the synoptic: world positions of every element.
+#[derive(Clone, Debug)]
+pub struct Geometry {
+    /// Conveyors.
+    pub conveyors: Vec<ConveyorGeom>,
+    /// Table centre, world mm.
+    pub table_center: [f32; 2],
+    /// Table half length and width, mm.
+    pub table_size: [f32; 2],
+    /// Sensors (C6 at the given table angle).
+    pub sensors: Vec<SensorGeom>,
+    /// Actuator symbols: id → world position.
+    pub actuators: BTreeMap<String, [f32; 2]>,
+    /// Elevators: (label, world position).
+    pub elevators: Vec<(String, [f32; 2])>,
+    /// World bounds (min, max).
+    pub bounds: ([f32; 2], [f32; 2]),
+    /// Table actuators: (+u, -u, rotation).
+    pub table_actuators: [String; 3],
+}
+
+fn unit(a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let l = dx.hypot(dy).max(1e-3);
+    [dx / l, dy / l]
+}
+
+fn add(a: [f32; 2], d: [f32; 2], k: f32) -> [f32; 2] {
+    [a[0] + d[0] * k, a[1] + d[1] * k]
+}
+
+impl Geometry {
+    /// Places every element of `layout` with the table at `angle_mdeg`.
+    pub fn new(layout: &Layout, angle_mdeg: i32) -> Self {
+        #[allow(clippy::cast_precision_loss)]
+        let p = |x: i64, y: i64| [x as f32, y as f32];
+        let conveyors: Vec<ConveyorGeom> = layout
+            .conveyors
+            .iter()
+            .map(|c| ConveyorGeom {
+                name: c.name.clone(),
+                start: p(c.start.x, c.start.y),
+                end: p(c.end.x, c.end.y),
+                #[allow(clippy::cast_precision_loss)]
+                width: c.width_mm as f32,
+                actuator: c.actuator.clone(),
+                #[allow(clippy::cast_precision_loss)]
+                speed: c.speed_mm_s as f32,
+            })
+            .collect();
+        let t = &layout.table;
+        let tc = p(t.center.x, t.center.y);
+        #[allow(clippy::cast_precision_loss)]
+        let (half, tw) = (t.half_length_mm as f32, t.width_mm as f32);
+        let angle = (angle_mdeg as f32 / 1000.0).to_radians();
+        let u = [angle.cos(), angle.sin()];
+        let n = [-u[1], u[0]];
+        let mut sensors = Vec::new();
+        let mut actuators = BTreeMap::new();
+        for c in &conveyors {
+            let d = unit(c.start, c.end);
+            // Motor symbol beside the middle of the belt, on the right of travel.
+            let right = [d[1], -d[0]];
+            let mid = [(c.start[0] + c.end[0]) / 2.0, (c.start[1] + c.end[1]) / 2.0];
+            actuators.insert(c.actuator.clone(), add(mid, right, c.width / 2.0 + 170.0));
+        }
+        let side = t.width_mm as f32 / 2.0 + 520.0;
+        actuators.insert(t.plus_actuator.clone(), [tc[0] + side, tc[1] + 170.0]);
+        actuators.insert(t.rotate_actuator.clone(), [tc[0] + side, tc[1]]);
+        actuators.insert(t.minus_actuator.clone(), [tc[0] + side, tc[1] - 170.0]);
+        for s in &layout.sensors {
+            match &s.kind {
+                SensorKind::Presence { part, at_mm, beam } => {
+                    #[allow(clippy::cast_precision_loss)]
+                    let at = *at_mm as f32;
+                    let high = *beam == Beam::High;
+                    if let Some(c) = conveyors.iter().find(|c| {
+                        layout.conveyors.iter().any(|lc| &lc.id == part && lc.name == c.name)
+                    }) {
+                        let d = unit(c.start, c.end);
+                        let left = [-d[1], d[0]];
+                        let at_pt = add(c.start, d, at);
+                        // Lamps away from the turntable's corner: low beams below the
+                        // horizontal belts, beside the vertical ones.
+                        let horizontal = d[0].abs() > d[1].abs();
+                        let k = match (high, horizontal) {
+                            (false, true) | (true, false) => -1.0,
+                            _ => 1.0,
+                        };
+                        let a = add(at_pt, left, c.width / 2.0 * k);
+                        let b = add(at_pt, left, -c.width / 2.0 * k);
+                        sensors.push(SensorGeom {
+                            id: s.id.clone(),
+                            lamp: add(at_pt, left, (c.width / 2.0 + 70.0) * k),
+                            beam: Some((a, b)),
+                            high,
+                        });
+                    } else if part == &t.id {
+                        let at_pt = add(tc, u, at);
+                        sensors.push(SensorGeom {
+                            id: s.id.clone(),
+                            lamp: add(at_pt, n, tw / 2.0 + 60.0),
+                            beam: Some((add(at_pt, n, tw / 2.0), add(at_pt, n, -tw / 2.0))),
+                            high,
+                        });
+                    }
+                }
+                SensorKind::Angle { min_mdeg, max_mdeg } => {
+                    // Right of the table, upper for angles towards +y.
+                    let mid = (*min_mdeg + *max_mdeg) as f32 / 2000.0;
+                    let y = if mid > 45.0 { 110.0 } else { -110.0 };
+                    sensors.push(SensorGeom {
+                        id: s.id.clone(),
+                        lamp: [tc[0] + tw / 2.0 + 190.0, tc[1] + y],
+                        beam: None,
+                        high: false,
+                    });
+                }
+            }
+        }
+        let elevators: Vec<(String, [f32; 2])> = layout
+            .elevators
+            .iter()
+            .map(|e| (format!("{:?} elevator", e.side), p(e.at.x, e.at.y)))
+            .collect();
+        let mut min = [f32::MAX; 2];
+        let mut max = [f32::MIN; 2];
+        let mut grow = |q: [f32; 2], r: f32| {
+            for i in 0..2 {
+                min[i] = min[i].min(q[i] - r);
+                max[i] = max[i].max(q[i] + r);
+            }
+        };
+        for c in &conveyors {
+            grow(c.start, c.width / 2.0 + 300.0);
+            grow(c.end, c.width / 2.0 + 300.0);
+        }
+        grow(tc, half.max(tw) + 600.0);
+        for (_, e) in &elevators {
+            grow(*e, 200.0);
+        }
+        Self {
+            conveyors,
+            table_center: tc,
+            table_size: [half, tw],
+            sensors,
+            actuators,
+            elevators,
+            bounds: (min, max),
+            table_actuators: [
+                t.plus_actuator.clone(),
+                t.minus_actuator.clone(),
+                t.rotate_actuator.clone(),
+            ],
+        }
+    }
+
+    /// World position of an element (sensor lamp or actuator symbol).
+    pub fn element(&self, id: &str) -> Option<[f32; 2]> {
+        self.sensors
+            .iter()
+            .find(|s| s.id == id)
+            .map(|s| s.lamp)
+            .or_else(|| self.actuators.get(id).copied())
+    }
+}
+
+/// What to draw: the plant at one time, with the marks of an explanation level.
+pub struct Picture<'a> {
+    /// Boxes.
+    pub boxes: &'a [BoxView],
+    /// Signal values to draw (sensors and applied actuators).
+    pub values: &'a BTreeMap<String, bool>,
+    /// Actuators the filter forces (drawn amber).
+    pub forced: &'a BTreeSet<String>,
+    /// Time, ms (phase of the motion pattern).
+    pub time_ms: u64,
+    /// Marks of the explanation level shown.
+    pub highlights: &'a [Highlight],
+    /// Level 1: predicted boxes, table angle and hazards.
+    pub ghost: Option<(&'a [BoxView], i32, &'a [Hazard])>,
+    /// Banner (trip, replay) drawn at the top of the synoptic.
+    pub banner: Option<(String, Color32)>,
+}
+
+/// World → screen transform.
+#[derive(Clone, Copy)]
+struct Xf {
+    origin: Pos2,
+    center: [f32; 2],
+    scale: f32,
+}
+
+impl Xf {
+    fn p(&self, w: [f32; 2]) -> Pos2 {
+        pos2(
+            self.origin.x + (w[0] - self.center[0]) * self.scale,
+            self.origin.y - (w[1] - self.center[1]) * self.scale,
+        )
+    }
+}
+
+fn quad(xf: &Xf, c: [f32; 2], u: [f32; 2], half_l: f32, half_w: f32) -> Vec<Pos2> {
+    let n = [-u[1], u[0]];
+    [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
+        .iter()
+        .map(|(a, b)| xf.p([c[0] + u[0] * half_l * a + n[0] * half_w * b, c[1] + u[1] * half_l * a + n[1] * half_w * b]))
+        .collect()
+}
+
+fn chevrons(painter: &egui::Painter, xf: &Xf, start: [f32; 2], end: [f32; 2], width: f32, phase: f32, color: Color32) {
+    let d = unit(start, end);
+    let n = [-d[1], d[0]];
+    let len = (end[0] - start[0]).hypot(end[1] - start[1]);
+    let pitch = 160.0;
+    let mut s = phase.rem_euclid(pitch);
+    let stroke = Stroke::new((xf.scale * 28.0).clamp(1.0, 3.0), color);
+    while s < len - 40.0 {
+        let tip = add(start, d, s + 40.0);
+        let back = add(start, d, s);
+        let a = add(back, n, width * 0.28);
+        let b = add(back, n, -width * 0.28);
+        painter.line_segment([xf.p(a), xf.p(tip)], stroke);
+        painter.line_segment([xf.p(b), xf.p(tip)], stroke);
+        s += pitch;
+    }
+}
+
+fn box_shape(xf: &Xf, b: &BoxView) -> Vec<Pos2> {
+    let a = (b.angle_mdeg as f32 / 1000.0).to_radians();
+    #[allow(clippy::cast_precision_loss)]
+    quad(xf, [b.x_mm, b.y_mm], [a.cos(), a.sin()], b.length_mm as f32 / 2.0, b.width_mm as f32 / 2.0)
+}
+
+fn badge(painter: &egui::Painter, at: Pos2, text: &str, fill: Color32, fg: Color32) -> Rect {
+    let galley = painter.layout_no_wrap(text.to_string(), FontId::proportional(12.0), fg);
+    let rect = Rect::from_min_size(at, galley.size() + vec2(8.0, 4.0));
+    painter.rect_filled(rect, 4.0, fill);
+    painter.galley(rect.min + vec2(4.0, 2.0), galley, fg);
+    rect
+}
+
+fn tooltip_text(plant: &Plant, id: &str, value: Option<bool>) -> String {
+    let Some(s) = plant.signal(id) else {
+        return id.to_string();
+    };
+    let addr = s.address.map_or_else(|| "no fieldbus address".to_string(), |a| a.to_string());
+    let v = match value {
+        Some(true) => "1",
+        Some(false) => "0",
+        None => "?",
+    };
+    format!("{id} = {v}\n{}\n{addr}", s.description)
+}
+
+/// Paints the synoptic into the available space; returns the response (its rect is the
+/// synoptic's area).
+pub fn synoptic_ui(
+    ui: &mut egui::Ui,
+    view: &mut View,
+    geom: &Geometry,
+    table_angle_mdeg: i32,
+    pic: &Picture<'_>,
+    pal: &Palette,
+    plant: &Plant,
+) -> egui::Response {
+    let size = ui.available_size().max(vec2(100.0, 100.0));
+    let (response, painter) = ui.allocate_painter(size, Sense::click_and_drag());
+    response.widget_info(|| {
+        egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Synoptic")
+    });
+    let rect = response.rect;
+    // Zoom with the wheel around the pointer, pan with a drag.
+    if response.hovered() {
+        let scroll = ui.input(|i| i.smooth_scroll_delta.y + (i.zoom_delta() - 1.0) * 200.0);
+        if scroll.abs() > 0.0 {
+            let factor = (scroll / 400.0).exp();
+            let new_zoom = (view.zoom * factor).clamp(0.3, 12.0);
+            if let Some(ptr) = response.hover_pos() {
+                let c = rect.center() + view.pan;
+                let k = new_zoom / view.zoom;
+                view.pan += (ptr - c) * (1.0 - k);
+            }
+            view.zoom = new_zoom;
+        }
+    }
+    if response.dragged() {
+        view.pan += response.drag_delta();
+    }
+    if response.double_clicked() {
+        *view = View::default();
+    }
+    painter.rect_filled(rect, 0.0, pal.floor);
+    let (min, max) = geom.bounds;
+    let fit = (rect.width() / (max[0] - min[0])).min(rect.height() / (max[1] - min[1])) * 0.95;
+    let xf = Xf {
+        origin: rect.center() + view.pan,
+        center: [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0],
+        scale: fit * view.zoom,
+    };
+    let painter = painter.with_clip_rect(rect);
+    let val = |id: &str| pic.values.get(id).copied().unwrap_or(false);
+    let edge = Stroke::new(1.0, pal.equipment_edge);
+    #[allow(clippy::cast_precision_loss)]
+    let t_s = pic.time_ms as f32 / 1000.0;
+
+    // Conveyors.
+    for c in &geom.conveyors {
+        let d = unit(c.start, c.end);
+        let len = (c.end[0] - c.start[0]).hypot(c.end[1] - c.start[1]);
+        let mid = add(c.start, d, len / 2.0);
+        let on = val(&c.actuator);
+        let fill = if on { pal.equipment } else { pal.equipment.gamma_multiply(0.9) };
+        painter.add(Shape::convex_polygon(quad(&xf, mid, d, len / 2.0, c.width / 2.0), fill, edge));
+        if on {
+            chevrons(&painter, &xf, c.start, c.end, c.width, t_s * c.speed, pal.running);
+        }
+    }
+    // Elevators.
+    for (name, at) in &geom.elevators {
+        let p = xf.p(*at);
+        let r = Rect::from_center_size(p, Vec2::splat(300.0 * xf.scale));
+        painter.rect_stroke(r, 2.0, Stroke::new(1.5, pal.equipment_edge), egui::StrokeKind::Middle);
+        painter.text(r.center(), Align2::CENTER_CENTER, name, FontId::proportional(11.0), pal.text_dim);
+    }
+    // Turntable.
+    let draw_table = |angle_mdeg: i32, fill: Color32, stroke: Stroke, rollers: bool| {
+        let a = (angle_mdeg as f32 / 1000.0).to_radians();
+        let u = [a.cos(), a.sin()];
+        let tc = geom.table_center;
+        let [half, w] = geom.table_size;
+        painter.add(Shape::convex_polygon(quad(&xf, tc, u, half, w / 2.0), fill, stroke));
+        let n = [-u[1], u[0]];
+        if rollers {
+            let mut s = -half + 40.0;
+            while s < half {
+                let c = add(tc, u, s);
+                painter.line_segment(
+                    [xf.p(add(c, n, w / 2.0 - 15.0)), xf.p(add(c, n, -w / 2.0 + 15.0))],
+                    Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.5)),
+                );
+                s += 50.0;
+            }
+        }
+        painter.circle_stroke(xf.p(tc), (half + 25.0) * xf.scale, Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.4)));
+    };
+    draw_table(table_angle_mdeg, pal.equipment, edge, true);
+    {
+        let a = (table_angle_mdeg as f32 / 1000.0).to_radians();
+        let u = [a.cos(), a.sin()];
+        let [half, w] = geom.table_size;
+        let [plus, minus, _] = &geom.table_actuators;
+        let dir = if val(plus) { Some(1.0) } else if val(minus) { Some(-1.0) } else { None };
+        if let Some(k) = dir {
+            let s = add(geom.table_center, u, -half * k);
+            let e = add(geom.table_center, u, half * k);
+            chevrons(&painter, &xf, s, e, w, t_s * 300.0, pal.running);
+        }
+    }
+    // Boxes.
+    for b in pic.boxes {
+        if matches!(b.state, BoxState::Delivered(_)) {
+            continue;
+        }
+        let fill = if b.damaged {
+            pal.trip
+        } else if b.size == BoxSize::Large {
+            pal.box_large
+        } else {
+            pal.box_small
+        };
+        let stroke = Stroke::new(if b.damaged { 2.0 } else { 1.0 }, pal.box_edge);
+        painter.add(Shape::convex_polygon(box_shape(&xf, b), fill, stroke));
+        let label = match b.size {
+            BoxSize::Small => format!("{} S", b.id),
+            BoxSize::Large => format!("{} L", b.id),
+        };
+        painter.text(xf.p([b.x_mm, b.y_mm]), Align2::CENTER_CENTER, label, FontId::proportional(11.0), pal.text);
+    }
+    // Ghosts (projection).
+    if let Some((boxes, angle, hazards)) = pic.ghost {
+        draw_table(angle, pal.ghost.gamma_multiply(0.12), Stroke::new(1.5, pal.ghost), false);
+        for b in boxes {
+            if matches!(b.state, BoxState::Delivered(_)) {
+                continue;
+            }
+            let col = if b.damaged { pal.trip } else { pal.ghost };
+            painter.add(Shape::convex_polygon(box_shape(&xf, b), col.gamma_multiply(0.2), Stroke::new(2.0, col)));
+        }
+        for h in hazards {
+            if let Some(b) = boxes.iter().find(|b| b.id == h.box_id) {
+                let p = xf.p([b.x_mm, b.y_mm]);
+                let r = 16.0;
+                let s = Stroke::new(3.0, pal.trip);
+                painter.line_segment([p - vec2(r, r), p + vec2(r, r)], s);
+                painter.line_segment([p - vec2(r, -r), p + vec2(r, -r)], s);
+                badge(&painter, p + vec2(r, -r - 18.0), &format!("predicted: {:?} box {}", h.kind, h.box_id), pal.trip, Color32::WHITE);
+            }
+        }
+    }
+    // Sensors.
+    let lamp_r = (55.0 * xf.scale).clamp(5.0, 14.0);
+    for s in &geom.sensors {
+        let on = val(&s.id);
+        if let Some((a, b)) = s.beam {
+            let col = if on { pal.sensor_on } else { pal.equipment_edge.gamma_multiply(0.6) };
+            let stroke = Stroke::new(if on { 2.5 } else { 1.0 }, col);
+            if s.high {
+                painter.add(Shape::dashed_line(&[xf.p(a), xf.p(b)], stroke, 4.0, 3.0));
+            } else {
+                painter.line_segment([xf.p(a), xf.p(b)], stroke);
+            }
+        }
+        let p = xf.p(s.lamp);
+        painter.circle(p, lamp_r, if on { pal.sensor_on } else { pal.sensor_off }, Stroke::new(1.2, pal.equipment_edge));
+        painter.text(p + vec2(lamp_r + 2.0, 0.0), Align2::LEFT_CENTER, &s.id, FontId::proportional(12.0), pal.text);
+    }
+    // Actuators.
+    for (id, at) in &geom.actuators {
+        let p = xf.p(*at);
+        let on = val(id);
+        let forced = pic.forced.contains(id);
+        let r = Rect::from_center_size(p, Vec2::splat(lamp_r * 2.4));
+        let fill = if forced { pal.forced } else if on { pal.running } else { pal.equipment };
+        painter.rect_filled(r, 3.0, fill);
+        painter.rect_stroke(r, 3.0, Stroke::new(1.2, pal.equipment_edge), egui::StrokeKind::Middle);
+        let fg = if on && !forced { pal.sensor_on } else { pal.text };
+        painter.text(r.center(), Align2::CENTER_CENTER, id, FontId::proportional(11.0), fg);
+    }
+    // Explanation marks.
+    let mut stacked: BTreeMap<&str, f32> = BTreeMap::new();
+    for h in pic.highlights {
+        let Some(w) = geom.element(&h.element) else {
+            continue;
+        };
+        let p = xf.p(w);
+        let mut put = |text: &str, fill: Color32, fg: Color32| {
+            let dy = stacked.entry(h.element.as_str()).or_insert(0.0);
+            badge(&painter, p + vec2(lamp_r + 4.0, -lamp_r - 20.0 - *dy), text, fill, fg);
+            *dy += 19.0;
+        };
+        match &h.mark {
+            Mark::Circle => {
+                painter.circle_stroke(p, lamp_r * 2.0, Stroke::new(3.0, pal.trip));
+            }
+            Mark::ForcedOn => put("held ON", pal.forced, pal.text),
+            Mark::ForcedOff => put("forced OFF", pal.forced, pal.text),
+            Mark::Change { from, to } => put(&format!("{}→{}", u8::from(*from), u8::from(*to)), pal.highlight, Color32::WHITE),
+            Mark::Steady { value } => put(&format!("stays {}", if *value { "ON" } else { "OFF" }), pal.equipment_edge, Color32::WHITE),
+            Mark::Suspect => {
+                painter.add(Shape::dashed_line(
+                    &circle_points(p, lamp_r * 2.2),
+                    Stroke::new(2.5, pal.alarm),
+                    5.0,
+                    4.0,
+                ));
+                put("suspect", pal.alarm, pal.text);
+            }
+            Mark::Expected { value } => put(&format!("expected {}", if *value { "ON" } else { "OFF" }), pal.highlight, Color32::WHITE),
+            Mark::InferredBox => put("inferred box", pal.highlight, Color32::WHITE),
+        }
+    }
+    if let Some((text, col)) = &pic.banner {
+        badge(&painter, rect.min + vec2(10.0, 10.0), text, *col, Color32::WHITE);
+    }
+    // Tooltip of the element under the pointer.
+    if let Some(ptr) = response.hover_pos() {
+        let hit = geom
+            .sensors
+            .iter()
+            .map(|s| (s.id.as_str(), s.lamp))
+            .chain(geom.actuators.iter().map(|(id, p)| (id.as_str(), *p)))
+            .find(|(_, w)| xf.p(*w).distance(ptr) <= lamp_r * 1.4);
+        if let Some((id, _)) = hit {
+            let text = tooltip_text(plant, id, pic.values.get(id).copied());
+            let galley = painter.layout(text, FontId::proportional(13.0), pal.text, 320.0);
+            let r = Rect::from_min_size(ptr + vec2(14.0, 14.0), galley.size() + vec2(12.0, 10.0));
+            let r = r.translate(vec2((rect.right() - r.right()).min(0.0), (rect.bottom() - r.bottom()).min(0.0)));
+            painter.rect_filled(r, 4.0, pal.panel);
+            painter.rect_stroke(r, 4.0, Stroke::new(1.0, pal.equipment_edge), egui::StrokeKind::Middle);
+            painter.galley(r.min + vec2(6.0, 5.0), galley, pal.text);
+        }
+    }
+    response
+}
+
+fn circle_points(c: Pos2, r: f32) -> Vec<Pos2> {
+    (0..=32)
+        .map(|i| {
+            let a = i as f32 / 32.0 * std::f32::consts::TAU;
+            c + vec2(r * a.cos(), r * a.sin())
+        })
+        .collect()
+}
+
+/// A label in the paper's notation: characters followed by U+0305 are drawn with a bar
+/// above them (egui does not compose combining marks). Its accessible name is the text.
+pub fn overbar_label(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) -> egui::Response {
+    let mut runs: Vec<(String, bool)> = Vec::new();
+    let chars: Vec<char> = text.chars().collect();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        if c == '\u{305}' {
+            i += 1;
+            continue;
+        }
+        let neg = chars.get(i + 1) == Some(&'\u{305}');
+        match runs.last_mut() {
+            Some((s, n)) if *n == neg => s.push(c),
+            _ => runs.push((c.to_string(), neg)),
+        }
+        i += 1;
+    }
+    let font = FontId::proportional(size);
+    let galleys: Vec<_> = runs
+        .iter()
+        .map(|(s, n)| (ui.painter().layout_no_wrap(s.clone(), font.clone(), color), *n))
+        .collect();
+    let w: f32 = galleys.iter().map(|(g, _)| g.size().x).sum();
+    let h = galleys.iter().map(|(g, _)| g.size().y).fold(size, f32::max) + 3.0;
+    let (rect, resp) = ui.allocate_exact_size(vec2(w, h), Sense::hover());
+    let label = text.to_string();
+    resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Label, true, label.clone()));
+    let mut x = rect.left();
+    for (g, neg) in galleys {
+        let gw = g.size().x;
+        if neg {
+            let y = rect.top() + 2.0;
+            ui.painter().line_segment([pos2(x + 1.0, y), pos2(x + gw - 1.0, y)], Stroke::new(1.5, color));
+        }
+        ui.painter().galley(pos2(x, rect.top() + 3.0), g, color);
+        x += gw;
+    }
+    resp
+}

@@ -1,0 +1,166 @@
+//! The console driven as a user would, through accessibility queries (egui_kittest):
+//! start the plant, reach the paper's CSs10 trip, open each explanation level, read its
+//! items, acknowledge the alarm, reset; plus image snapshots (wgpu, lavapipe on CI).
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use std::path::PathBuf;
+use vigie_app::{Command, Console, ConsoleOptions, Mode};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn options(data_dir: Option<PathBuf>) -> ConsoleOptions {
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.scenario = Some(root().join("layouts/sorting-station/scenarios/cs10-paper.ron"));
+    o.data_dir = data_dir;
+    o
+}
+
+fn harness(opts: ConsoleOptions) -> Harness<'static, Console> {
+    Harness::builder()
+        .with_size(egui::vec2(1600.0, 1000.0))
+        .with_step_dt(1.0 / 60.0)
+        .build_eframe(move |cc| {
+            let mut c = Console::new(&opts).expect("console opens");
+            c.setup(&cc.egui_ctx);
+            c
+        })
+}
+
+/// Runs frames at 100x until the filter has tripped (at most 600 frames).
+fn run_to_trip(h: &mut Harness<'static, Console>) {
+    h.state_mut().apply(Command::SetSpeed(100.0));
+    for _ in 0..600 {
+        h.step();
+        if h.state().latest_trip().is_some() {
+            break;
+        }
+    }
+    h.state_mut().apply(Command::Pause);
+    h.run_steps(2);
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("vigie-console-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn cs10_trip_levels_acknowledge_and_reset() {
+    let data = temp_dir("cs10");
+    let mut h = harness(options(Some(data.clone())));
+    h.run_steps(2);
+    h.get_by_label("Start").click();
+    h.run_steps(2);
+    h.get_by_label("No trip: the plant runs within its safety constraints.");
+    run_to_trip(&mut h);
+
+    // The trip, its constraint in the paper's notation.
+    h.get_by_label("Trip at 11.68 s");
+    h.get_by_label("CSs10 = C7 · A\u{305}4\u{305}");
+    h.get_by_label("TRIPPED");
+
+    let expected = [
+        ("0 Current state", "A4 is held ON by the filter: CSs10 (C7=1)."),
+        ("1 Projection", "would be sheared by the rotating turntable"),
+        ("2 Before stop", "CSs10 = C7 · A\u{305}4\u{305} became true: C7=1, A4=0."),
+        ("3 Advanced", "C7 changed 0→1 at 11680 ms (in the stopping cycle), element of the constraint."),
+        ("4 Hypothesis", "Expected from the control: A4 should have been ON."),
+    ];
+    for (button, item) in expected {
+        h.get_by_label(button).click();
+        h.run_steps(2);
+        h.get_by_label(&format!("Level {button}"));
+        assert!(
+            h.query_by_label_contains(item).is_some(),
+            "level {button}: no item containing {item:?}"
+        );
+    }
+    assert_eq!(h.state().level, Some(4));
+
+    // The alarm: unacknowledged, first out; acknowledge with a note.
+    h.get_by_label("UNACK");
+    h.get_by_label("FIRST OUT");
+    let id = h.state().sim.alarms.all()[0].id;
+    h.get_by_label(&format!("Acknowledge #{id}")).click();
+    h.run_steps(2);
+    assert!(h.query_by_label(&format!("Acknowledge #{id}")).is_none());
+    h.get_by_label("ACK");
+
+    // Reset: refused while CSs10 is still violated (the box is still at C7 and the
+    // erroneous program still releases A4), with the reason shown.
+    h.get_by_label("Reset").click();
+    h.run_steps(2);
+    assert!(h.state().sim.engine.is_tripped());
+    assert!(h.query_by_label_contains("Reset: reset refused: CSs10 still violated").is_some());
+
+    // Everything reached the disk as it happened.
+    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal written");
+    for kind in ["\"trip\"", "\"ack\"", "\"reset_refused\""] {
+        assert!(journal.contains(kind), "journal lacks {kind}:\n{journal}");
+    }
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+#[test]
+fn maintenance_fix_of_e01_passes_verification() {
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    h.get_by_label("Maintenance").click();
+    h.run_steps(2);
+    assert_eq!(h.state().mode, Mode::Maintenance);
+    h.get_by_label("Chart table");
+    h.get_by_label("X24");
+    // A syntax error is reported, not a panic.
+    h.state_mut().draft_mut().expect("draft").conditions.insert("t24".into(), "FE(C7".into());
+    h.get_by_label("Recompile").click();
+    h.run_steps(2);
+    assert!(h.state().status.contains("compilation failed"));
+    // The correct receptivity.
+    h.state_mut().draft_mut().expect("draft").conditions.insert("t24".into(), "FE(C7)".into());
+    h.get_by_label("Verify fix").click();
+    h.run_steps(2);
+    assert!(h.state().status.starts_with("correct fix"), "{}", h.state().status);
+    assert!(h.state().score().fixed);
+    assert_eq!(h.state().score().attempts, 1);
+    assert!(h.state().score().summary().contains("Fixed"));
+}
+
+#[test]
+fn journal_exports_to_csv_and_report_to_markdown() {
+    let out = temp_dir("export");
+    let mut h = harness(options(None));
+    h.run_steps(1);
+    run_to_trip(&mut h);
+    h.state_mut().apply(Command::ExportCsv(out.join("journal.csv")));
+    h.state_mut().apply(Command::ExportReport(out.join("report")));
+    let csv = std::fs::read_to_string(out.join("journal.csv")).expect("csv");
+    assert!(csv.starts_with("wall_ms,sim_ms,kind,text\n") && csv.contains(",trip,"));
+    let md = std::fs::read_to_string(out.join("report/report.md")).expect("report");
+    assert!(md.contains("CSs10") && md.contains("## Level 4 Hypothesis") && md.contains("A4 should have been ON"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn snapshots_of_levels_and_modes() {
+    let mut opts = options(None);
+    opts.run_until_ms = Some(12_000);
+    opts.paused = true;
+    let mut h = harness(opts);
+    h.run_steps(3);
+    h.snapshot("console_trip");
+    for (i, name) in ["0 Current state", "1 Projection", "2 Before stop", "3 Advanced", "4 Hypothesis"].iter().enumerate() {
+        h.get_by_label(name).click();
+        h.run_steps(2);
+        h.snapshot(&format!("console_level_{i}"));
+    }
+    h.get_by_label("Maintenance").click();
+    h.run_steps(2);
+    h.snapshot("console_maintenance");
+    h.get_by_label("Training").click();
+    h.run_steps(2);
+    h.snapshot("console_training");
+}
