@@ -546,7 +546,9 @@ impl Simulation {
     /// Task monitors: events of this cycle (on the frame after the filter), alarms, and
     /// their outputs published for the constraints of the next cycle.
     fn step_tasks(&mut self, now: Millis) {
-        let Some(t) = self.tasks.as_mut() else {
+        // The first scan sees every sensor that is on as a rising edge (nothing before
+        // it): task events start from the second cycle.
+        let Some(t) = self.tasks.as_mut().filter(|_| self.engine.cycles() > 1) else {
             return;
         };
         t.events.step(&mut t.monitor, now, self.engine.frame());
@@ -712,7 +714,7 @@ fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundl
             if bundle.plant.signal(e).is_some() {
                 let hl = Highlight {
                     element: e.clone(),
-                    mark: Mark::Suspect,
+                    mark: Mark::Circle,
                 };
                 if !level.highlights.contains(&hl) {
                     level.highlights.push(hl);
