@@ -24,6 +24,9 @@ pub struct FrameTasks {
     /// Per task: start, end, optional (interrupt, resume).
     pub events: Vec<TaskEvents>,
     aux: Vec<Option<u32>>,
+    /// Per task: the event names (start, end, optional interrupt and resume), copied
+    /// once so that a cycle allocates nothing.
+    names: Vec<(String, String, Option<(String, String)>)>,
 }
 
 /// The compiled expressions of one task.
@@ -78,30 +81,31 @@ impl FrameTasks {
                 _ => None,
             })
             .collect();
-        Ok(Self { events, aux })
+        let names = set
+            .tasks
+            .iter()
+            .map(|t| (t.start.clone(), t.end.clone(), t.interruption.clone()))
+            .collect();
+        Ok(Self { events, aux, names })
     }
 
     /// One PLC cycle at `now`: violations before `now`, then the events of this cycle,
     /// then violations at `now`.
     pub fn step(&self, monitor: &mut Monitor, now: Millis, frame: &Frame) {
         monitor.on_event(now, "");
-        for (i, ev) in self.events.iter().enumerate() {
-            let names = monitor.spec().tasks.get(i).map(|t| {
-                (t.start.clone(), t.end.clone(), t.interruption.clone())
-            });
-            let Some((start, end, interruption)) = names else { continue };
+        for (i, (ev, (start, end, interruption))) in self.events.iter().zip(&self.names).enumerate() {
             if expr::eval_dnf(&ev.end, frame) {
-                monitor.apply(now, i, Role::End, &end);
+                monitor.apply(now, i, Role::End, end);
             }
             if expr::eval_dnf(&ev.start, frame) {
-                monitor.apply(now, i, Role::Start, &start);
+                monitor.apply(now, i, Role::Start, start);
             }
             if let (Some((int, res)), Some((int_name, res_name))) = (&ev.interruption, interruption) {
                 let state = monitor.tasks[i].state;
                 if state == TaskState::Running && expr::eval_dnf(int, frame) {
-                    monitor.apply(now, i, Role::Interrupt, &int_name);
+                    monitor.apply(now, i, Role::Interrupt, int_name);
                 } else if state == TaskState::Interrupted && expr::eval_dnf(res, frame) {
-                    monitor.apply(now, i, Role::Resume, &res_name);
+                    monitor.apply(now, i, Role::Resume, res_name);
                 }
             }
         }
