@@ -43,6 +43,63 @@ impl Emulator {
         }
     }
 
+    /// How many internal steps (at most `max`) can be taken at once: none of them can do
+    /// anything but move every box straight on its part. That holds while no fault is
+    /// active, no box waits at the source and no arrival is due, the turntable rests at
+    /// the position its command drives it to, and every box lies inside its part with
+    /// room to spare (so it can neither reach an end, a joint or the table edge, nor
+    /// touch a box on another part; boxes on one part move together). Returns 1 when
+    /// that is not the case.
+    pub(super) fn quiet_steps(&mut self, max: u64) -> u64 {
+        if max < 2 || !self.faults.is_empty() || !self.pending.is_empty() || self.no_skip {
+            return 1;
+        }
+        let act = (self.cmd & !self.overrides.act_off) | self.overrides.act_on;
+        let t = &self.layout.table;
+        let target = if act >> (self.table + 2) & 1 == 1 {
+            i64::from(t.unloading_mdeg) * 1000
+        } else {
+            i64::from(t.loading_mdeg) * 1000
+        };
+        if self.angle != target {
+            return 1;
+        }
+        self.drive(act);
+        let mut k = max;
+        if let Some((at, _)) = self.next_arrival {
+            // The arrival is taken in the step whose time reaches `at`.
+            let steps_before = at.saturating_sub(self.now) / self.step_ms.max(1);
+            k = k.min(steps_before.saturating_sub(1));
+        }
+        for b in &self.bodies {
+            let p = b.part as usize;
+            let room = (b.c - b.half).min(self.parts[p].len - b.c - b.half);
+            if room <= 0 {
+                return 1;
+            }
+            let v = self.vel[p].abs();
+            if v > 0 {
+                k = k.min(u64::try_from((room - 1) / v).unwrap_or(0));
+            }
+            if k < 2 {
+                return 1;
+            }
+        }
+        k
+    }
+
+    /// Takes `k` quiet steps at once (see [`Self::quiet_steps`]): the same positions as
+    /// `k` single steps.
+    pub(super) fn take_quiet_steps(&mut self, k: u64) {
+        self.now += k * self.step_ms;
+        let k = i64::try_from(k).unwrap_or(0);
+        for b in &mut self.bodies {
+            b.c += self.vel[b.part as usize] * k;
+        }
+        self.moving = false;
+        self.rot_dir = 0;
+    }
+
     fn update_faults(&mut self) {
         if self.has_conditions {
             let frame = &mut self.frame;
@@ -63,6 +120,7 @@ impl Emulator {
             self.frame.shift();
         }
         if changed {
+            self.driven = None;
             self.overrides = Default::default();
             self.slow.iter_mut().for_each(|s| *s = 100);
             for f in &self.faults {
@@ -143,6 +201,11 @@ impl Emulator {
 
     /// Surface velocity of each part along its axis, µm per step.
     fn drive(&mut self, act: u64) {
+        // Velocities depend on the command and the slow-down faults only.
+        if self.faults.is_empty() && self.driven == Some(act) {
+            return;
+        }
+        self.driven = Some(act);
         let n = self.table;
         let step = self.step_ms as i64;
         for (i, p) in self.parts.iter().enumerate() {

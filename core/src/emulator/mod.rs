@@ -94,6 +94,10 @@ pub struct Emulator {
     rot_speed: i64,
     rot_dir: i64,
     moving: bool,
+    /// Take every internal step one by one (tests compare both ways).
+    no_skip: bool,
+    /// The command the velocities were last computed for.
+    driven: Option<u64>,
     pos: TablePos,
     links: Vec<[Option<model::Link>; 2]>,
     vel: Vec<i64>,
@@ -207,6 +211,8 @@ impl Emulator {
             rot_speed: t.out_speed_udeg_ms,
             rot_dir: 0,
             moving: false,
+            no_skip: false,
+            driven: None,
             pos: TablePos::Load,
             links: vec![[None; 2]; n_parts],
             vel: vec![0; n_parts],
@@ -257,6 +263,15 @@ impl Emulator {
         self.cmd = cmd;
         self.carry += dt.0;
         while self.carry >= self.step_ms {
+            let quiet = self.quiet_steps(self.carry / self.step_ms);
+            if quiet > 1 {
+                self.carry -= quiet * self.step_ms;
+                self.take_quiet_steps(quiet);
+                if self.carry < self.step_ms {
+                    self.compute_sensors();
+                }
+                continue;
+            }
             self.carry -= self.step_ms;
             self.tick(self.carry < self.step_ms);
         }
@@ -346,6 +361,13 @@ impl Emulator {
             list.sort();
         }
         self.plan_next();
+    }
+
+    /// The layout the emulator was built from.
+    /// Takes every internal step one by one, never several quiet steps at once (for
+    /// tests that check both give the same plant).
+    pub fn disable_quiet_steps(&mut self) {
+        self.no_skip = true;
     }
 
     /// The layout the emulator was built from.
