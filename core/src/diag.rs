@@ -102,6 +102,17 @@ impl std::fmt::Display for Problem {
     }
 }
 
+/// Reads a text file; a failure is a `V0002` problem naming the file.
+pub fn read_text(path: &Path) -> Result<String, Problem> {
+    std::fs::read_to_string(path).map_err(|e| {
+        Problem::error(
+            "V0002",
+            format!("cannot read {}: {e}", path.display()),
+            None,
+        )
+    })
+}
+
 /// Converts a `ron` parse error into a problem at its file position.
 pub fn ron_problem(file: &Path, err: &ron::error::SpannedError) -> Problem {
     Problem::error(

@@ -96,13 +96,7 @@ impl Plant {
 
     /// Loads `plant.ron` from disk.
     pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            vec![Problem::error(
-                "V0002",
-                format!("cannot read {}: {e}", path.display()),
-                None,
-            )]
-        })?;
+        let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
         Self::from_ron(&text, path)
     }
 

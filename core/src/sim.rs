@@ -119,13 +119,7 @@ pub struct Scenario {
 impl Scenario {
     /// Loads a scenario file.
     pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            vec![Problem::error(
-                "V0002",
-                format!("cannot read {}: {e}", path.display()),
-                None,
-            )]
-        })?;
+        let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
         let s: Self = ron::from_str(&text).map_err(|e| vec![ron_problem(path, &e)])?;
         if s.cycle_ms == 0 {
             return Err(vec![Problem::error(

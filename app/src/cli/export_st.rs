@@ -6,14 +6,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 pub(crate) fn run(dir: &Path, out: Option<&Path>) -> anyhow::Result<ExitCode> {
-    let (bundle, problems) = super::load_bundle(dir)?;
-    if problems.iter().any(vigie_core::diag::Problem::is_error) {
-        anyhow::bail!(
-            "plant {} has errors:\n{}",
-            dir.display(),
-            vigie_core::diag::render(&problems)
-        );
-    }
+    let bundle = super::load_valid_bundle(dir)?;
     let st = vigie_core::export::st::generate(&bundle, bundle.tasks.as_ref());
     match out {
         Some(path) => std::fs::write(path, st)

@@ -11,14 +11,7 @@ pub(crate) fn run(
     reset_after_trip: bool,
     explain: bool,
 ) -> anyhow::Result<ExitCode> {
-    let (bundle, problems) = super::load_bundle(dir)?;
-    if problems.iter().any(vigie_core::diag::Problem::is_error) {
-        anyhow::bail!(
-            "plant {} has errors:\n{}",
-            dir.display(),
-            vigie_core::diag::render(&problems)
-        );
-    }
+    let bundle = super::load_valid_bundle(dir)?;
     let text = std::fs::read_to_string(trace_path)
         .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", trace_path.display()))?;
     let rows = vigie_core::trace::parse(&text, trace_path, &bundle.plant)

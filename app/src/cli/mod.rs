@@ -180,6 +180,21 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// Loads a plant folder and refuses it when any problem is an error.
+pub(crate) fn load_valid_bundle(
+    dir: &std::path::Path,
+) -> anyhow::Result<vigie_core::bundle::PlantBundle> {
+    let (bundle, problems) = load_bundle(dir)?;
+    if problems.iter().any(vigie_core::diag::Problem::is_error) {
+        anyhow::bail!(
+            "plant {} has errors:\n{}",
+            dir.display(),
+            vigie_core::diag::render(&problems)
+        );
+    }
+    Ok(bundle)
+}
+
 /// Loads a plant folder, failing with every problem rendered when it cannot be used.
 pub(crate) fn load_bundle(
     dir: &std::path::Path,
