@@ -512,6 +512,10 @@ impl Simulation {
         let Some(mut ex) = explain::explain(&self.engine, index) else {
             return;
         };
+        // Beyond the paper: the program is known, so its elements lead the hypothesis.
+        if let Some(trip) = self.engine.trips.get(index) {
+            explain::add_program_hypothesis(&mut ex, trip, &program, &self.program);
+        }
         let projected = self.project(index, emulator, program);
         fill_projection(&mut ex, &projected, &self.bundle);
         self.projections.insert(index, projected);

@@ -15,6 +15,7 @@
 //! text.
 
 mod hypothesis;
+mod program;
 
 use crate::bits::Bits;
 use crate::engine::{Action, Engine, FiredConstraint, Trip};
@@ -24,6 +25,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 pub use hypothesis::{case_count, hypothesis, hypothesis_from};
+pub use program::{add_program_hypothesis, program_suspects};
 
 /// How an element is marked on the synoptic.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
