@@ -9,8 +9,8 @@
 //! place:
 //! - the place's own id: the transition (mutated receptivity), the step (mutated action)
 //!   or the equation's target (mutated equation);
-//! - or a name its expression reads, before or after the mutation (so that a dropped or
-//!   swapped literal counts).
+//! - or a name its mutated expression reads (a literal the mutation dropped does not
+//!   count: the suspect must name the place or what it reads now).
 //!
 //! The names of a suspect are its fields `transition`, `step`, `activated`, `steps`,
 //! `transitions`, `equation`, `signals` (program suspects, `X407`-`X412`) and `sensor`
@@ -47,7 +47,7 @@ pub struct Config {
 impl Default for Config {
     fn default() -> Self {
         Self {
-            duration_ms: 60_000,
+            duration_ms: 40_000,
             arrivals: vec![(0, BoxSize::Small), (10_000, BoxSize::Large), (20_000, BoxSize::Small)],
             seed: 1,
             threads: 2,
@@ -134,15 +134,12 @@ fn expr_names(text: &str) -> Vec<String> {
 }
 
 /// The names that localise a patch of `reference`, and its place in words.
-fn patch_names(reference: &Program, patch: &Patch) -> (String, BTreeSet<String>) {
+fn patch_names(patch: &Patch) -> (String, BTreeSet<String>) {
     let mut names = BTreeSet::new();
     let place = match patch {
         Patch::Condition { transition, condition } => {
             names.insert(transition.clone());
             names.extend(expr_names(condition));
-            if let Some((_, t)) = reference.transitions().find(|(_, t)| &t.id == transition) {
-                names.extend(expr_names(&t.condition));
-            }
             format!("transition {transition}")
         }
         Patch::ReplaceAction { step, .. } | Patch::RemoveAction { step, .. } | Patch::AddAction { step, .. } => {
@@ -152,9 +149,6 @@ fn patch_names(reference: &Program, patch: &Patch) -> (String, BTreeSet<String>)
         Patch::Equation { target, expression } => {
             names.insert(target.clone());
             names.extend(expr_names(expression));
-            if let Some((_, e)) = reference.equations.iter().find(|(t, _)| t == target) {
-                names.extend(expr_names(e));
-            }
             format!("equation {target}")
         }
     };
@@ -166,7 +160,7 @@ pub fn mutants(bundle: &PlantBundle) -> Result<Vec<Mutant>, Vec<Problem>> {
     let lib = ErrorLibrary::load(&bundle.dir.join("programs/errors.ron"), &bundle.plant)?;
     let mut out = Vec::new();
     for v in &lib.variants {
-        let (place, names) = patch_names(&lib.reference, &v.def.patch);
+        let (place, names) = patch_names(&v.def.patch);
         out.push(Mutant {
             id: v.def.id.clone(),
             description: v.def.description.clone(),
@@ -177,7 +171,7 @@ pub fn mutants(bundle: &PlantBundle) -> Result<Vec<Mutant>, Vec<Problem>> {
     }
     for (k, m) in mutations(&lib.reference, &bundle.plant).into_iter().enumerate() {
         let Ok(program) = m.patch.apply(&lib.reference) else { continue };
-        let (place, names) = patch_names(&lib.reference, &m.patch);
+        let (place, names) = patch_names(&m.patch);
         debug_assert!(match &m.place {
             Place::Transition { id, .. } => names.contains(id),
             Place::Action { step, .. } => names.contains(step),
@@ -240,8 +234,13 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
     sim.emulator.set_arrivals(ArrivalPlan::List(config.arrivals.clone()));
     let _ = sim.act(&OperatorAction::Start);
     let end = Millis(config.duration_ms);
+    let boxes = u32::try_from(config.arrivals.len()).unwrap_or(u32::MAX);
     while sim.now() < end && sim.engine.trips.is_empty() {
         sim.cycle();
+        let stats = sim.emulator.stats();
+        if stats.delivered_left + stats.delivered_right + stats.damaged >= boxes {
+            break;
+        }
     }
     let Some(trip) = sim.engine.trips.first() else {
         outcome.why = "no trip".into();

@@ -82,7 +82,7 @@ pub struct Item {
 }
 
 impl Item {
-    fn new(code: &'static str, text: String, fields: &[(&str, String)]) -> Self {
+    pub(crate) fn new(code: &'static str, text: String, fields: &[(&str, String)]) -> Self {
         Self {
             code,
             fields: fields

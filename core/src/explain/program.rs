@@ -613,7 +613,7 @@ fn deactivation(v: &View<'_>, t: &str, step: &str, q: Qualifier, output: &str, t
         item: Item::new(
             "X407",
             format!(
-                "Transition {t} (receptivity `{rec}`) fired {} and deactivated step {step}, whose action {q} {output} held {output} ON; it activated {}, which does not command {output}: the receptivity of {t} is suspect (it reads {}).",
+                "Transition {t} (receptivity `{rec}`) fired {} and deactivated step {step}, whose action {q} {output} held {output} ON; it activated {}, which does not command {output} now: the receptivity of {t} is suspect (it reads {}).",
                 v.when(time),
                 to.join(", "),
                 signals.join(", ")
