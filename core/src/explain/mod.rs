@@ -15,6 +15,7 @@
 //! text.
 
 mod hypothesis;
+mod observed;
 mod program;
 
 use crate::bits::Bits;
@@ -25,6 +26,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 pub use hypothesis::{case_count, hypothesis, hypothesis_from};
+pub use observed::emulator_from_observation;
 pub use program::{add_program_hypothesis, program_suspects};
 
 /// How an element is marked on the synoptic.
