@@ -509,17 +509,31 @@ impl Simulation {
     }
 
     fn explain_trip(&mut self, index: usize, emulator: Emulator, program: ProgramRuntime) {
-        let Some(mut ex) = explain::explain(&self.engine, index) else {
-            return;
-        };
+        if let Some((ex, projected)) = self.explanation(index, emulator, program, &self.program) {
+            self.projections.insert(index, projected);
+            self.explanations.insert(index, ex);
+        }
+    }
+
+    /// The five levels of trip `index` and its projection, from the emulator as it was at
+    /// the start of the tripping cycle, the program before its tripping scan (`before`)
+    /// and after it (`after`). [`Simulation::cycle`] calls it at each trip; `vigie bench`
+    /// times it. `None` for an unknown trip.
+    pub fn explanation(
+        &self,
+        index: usize,
+        emulator: Emulator,
+        before: ProgramRuntime,
+        after: &ProgramRuntime,
+    ) -> Option<(Explanation, ProjectedPlant)> {
+        let mut ex = explain::explain(&self.engine, index)?;
         // Beyond the paper: the program is known, so its elements lead the hypothesis.
         if let Some(trip) = self.engine.trips.get(index) {
-            explain::add_program_hypothesis(&mut ex, trip, &program, &self.program);
+            explain::add_program_hypothesis(&mut ex, trip, &before, after);
         }
-        let projected = self.project(index, emulator, program);
+        let projected = self.project(index, emulator, before);
         fill_projection(&mut ex, &projected, &self.bundle);
-        self.projections.insert(index, projected);
-        self.explanations.insert(index, ex);
+        Some((ex, projected))
     }
 
     /// Level 1: runs clones of the emulator (as it was at the start of the tripping cycle)

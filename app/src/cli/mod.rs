@@ -1,6 +1,7 @@
 //! Command-line interface: argument parsing and dispatch to the subcommands.
 
 mod bench;
+mod campaign;
 mod check;
 mod filter;
 mod gateway;
@@ -67,6 +68,19 @@ pub(crate) enum Command {
     /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
     /// sensor-to-output latency).
     GatewayBench(gateway::BenchArgs),
+    /// Run a campaign and print its figures (`mutations`: does the hypothesis level
+    /// localise every control error that trips the filter?).
+    Campaign {
+        /// Which campaign.
+        #[arg(value_enum)]
+        kind: campaign::Kind,
+        /// Worker threads (default: the available parallelism).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print the full JSON report.
+        #[arg(long)]
+        json: bool,
+    },
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -88,6 +102,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
+        Some(Command::Campaign { kind, threads, json }) => campaign::run(&cli.plant, kind, threads, json),
         Some(Command::Run {
             scenario,
             headless,
