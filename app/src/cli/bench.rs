@@ -171,8 +171,9 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         s_fallback / 1000.0
     )?;
     writeln!(out, "  (fallback re-evaluating every term:              {:>10.1} µs)", s_fallback_full / 1000.0)?;
-    if let Some(ms) = explanations_ms(plant_dir, 21)? {
-        writeln!(out, "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms")?;
+    if let Some((ms, worst)) = explanations_ms(plant_dir, 21)? {
+        writeln!(out, "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms (CSs10 trip of cs10-paper.ron)")?;
+        writeln!(out, "  (projection running the whole 10 s, no hazard:  {worst:>10.2} ms)")?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -182,7 +183,9 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
 /// [`vigie_core::sim::Simulation::explanation`] is timed on copies of the states at the
 /// start of the tripping cycle. Returns the median time in ms, `None` when the plant has
 /// no such scenario or it does not trip.
-pub(crate) fn explanations_ms(plant_dir: &Path, batches: u32) -> anyhow::Result<Option<f64>> {
+/// The second figure is the worst case of the projection alone: the full 10 s horizon
+/// (no hazard predicted).
+pub(crate) fn explanations_ms(plant_dir: &Path, batches: u32) -> anyhow::Result<Option<(f64, f64)>> {
     use vigie_core::sim::{Options, Scenario, Simulation};
     let path = plant_dir.join("scenarios/cs10-paper.ron");
     if !path.exists() {
@@ -212,5 +215,22 @@ pub(crate) fn explanations_ms(plant_dir: &Path, batches: u32) -> anyhow::Result<
         black_box(&r);
     });
     anyhow::ensure!(levels == 5, "the explanation has {levels} non-empty levels, not 5");
-    Ok(Some(ns / 1e6))
+    // The projection stops at the first predicted hazard (+0.5 s shown); without any
+    // hazard it runs the whole horizon: 10 s of program scans and emulator steps.
+    let worst = median_ns(batches.max(1).min(5), 1, || {
+        use vigie_core::engine::Control as _;
+        let (mut emu, mut prog) = (emulator.clone(), program.clone());
+        let symbols = &sim.engine.symbols;
+        let mut frame = vigie_core::frame::Frame::new(symbols.sizes());
+        let mut outputs = vigie_core::Bits::zeros(sim.bundle.plant.outputs.len());
+        let stop = emu.now() + vigie_core::Millis(10_000);
+        while emu.now() < stop {
+            frame.shift();
+            frame.now_mut(Space::Input).copy_from(emu.sensors());
+            prog.scan(emu.now(), &frame, &mut outputs);
+            emu.step(sim.cycle_period(), &outputs);
+        }
+        black_box(&emu);
+    });
+    Ok(Some((ns / 1e6, worst / 1e6)))
 }
