@@ -12,7 +12,13 @@
 //!
 //! Every item has a stable code (`X0nn` for level 0 … `X4nn` for level 4), structured
 //! fields, the plant elements it concerns (for drawing on the synoptic) and an English
-//! text.
+//! text. The catalogue of codes is `core/src/explain/codes.md` (included below).
+//!
+//! In emulator mode the hypothesis also names the chart elements (`X407`-`X412`,
+//! [`program_suspects`]); in live mode [`emulator_from_observation`] rebuilds a plant
+//! for the projection from the observed inputs and observers.
+//!
+#![doc = include_str!("codes.md")]
 
 mod hypothesis;
 mod observed;

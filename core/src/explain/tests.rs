@@ -369,3 +369,33 @@ fn projection_from_an_observation_predicts_the_damage() {
     }
     assert!(emu.hazards().is_empty(), "{:?}", emu.hazards());
 }
+
+/// Every code the explanation sources emit is in the catalogue, and the catalogue
+/// documents no code that is not emitted.
+#[test]
+fn every_code_is_in_the_catalogue() {
+    let catalogue = include_str!("codes.md");
+    let sources = [
+        include_str!("mod.rs"),
+        include_str!("hypothesis.rs"),
+        include_str!("program.rs"),
+        include_str!("../sim.rs"),
+    ]
+    .concat();
+    let codes = |text: &str, quoted: bool| -> std::collections::BTreeSet<String> {
+        let b = text.as_bytes();
+        let mut out = std::collections::BTreeSet::new();
+        for i in 0..b.len().saturating_sub(5) {
+            let start = if quoted { b[i] == b'"' && b.get(i + 5) == Some(&b'"') } else { b[i] == b'|' };
+            let at = if quoted { i + 1 } else { i + 2 };
+            if start && b.get(at) == Some(&b'X') && b[at + 1..at + 4].iter().all(u8::is_ascii_digit) {
+                out.insert(String::from_utf8_lossy(&b[at..at + 4]).into_owned());
+            }
+        }
+        out
+    };
+    let emitted = codes(&sources, true);
+    let documented = codes(catalogue, false);
+    assert!(emitted.len() >= 23, "{emitted:?}");
+    assert_eq!(emitted, documented);
+}
