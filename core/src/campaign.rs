@@ -48,7 +48,7 @@ impl Default for Config {
     fn default() -> Self {
         Self {
             duration_ms: 40_000,
-            arrivals: vec![(0, BoxSize::Small), (10_000, BoxSize::Large), (20_000, BoxSize::Small)],
+            arrivals: vec![(0, BoxSize::Small), (6_000, BoxSize::Large), (12_000, BoxSize::Small)],
             seed: 1,
             threads: 2,
         }

@@ -217,7 +217,7 @@ pub(crate) fn explanations_ms(plant_dir: &Path, batches: u32) -> anyhow::Result<
     anyhow::ensure!(levels == 5, "the explanation has {levels} non-empty levels, not 5");
     // The projection stops at the first predicted hazard (+0.5 s shown); without any
     // hazard it runs the whole horizon: 10 s of program scans and emulator steps.
-    let worst = median_ns(batches.max(1).min(5), 1, || {
+    let worst = median_ns(batches.clamp(1, 5), 1, || {
         use vigie_core::engine::Control as _;
         let (mut emu, mut prog) = (emulator.clone(), program.clone());
         let symbols = &sim.engine.symbols;

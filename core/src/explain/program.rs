@@ -16,13 +16,17 @@
 //! - `X411`: nothing in the program commands the required value: the steps and the
 //!   equation that could command it are listed;
 //! - `X412`: a step that has been active for a while drives the forbidden value and the
-//!   transitions leaving it have not fired: their receptivity is suspect.
+//!   transitions leaving it have not fired: their receptivity is suspect;
+//! - `X413` (combined constraints): a step activated in the stopping cycle drives one
+//!   actuator of the constraint ON while another, required ON with it, is commanded by
+//!   nothing: the new step's actions or what commands the other actuator miss it.
 //!
 //! Every item has the fields `output`, `chart`, and as they apply `transition`,
 //! `receptivity`, `step`, `activated`, `qualifier`, `equation`, `expression`, `steps`,
 //! `transitions`, `signals` (names the receptivity or equation reads, comma-separated)
 //! and `ms_before` (0 = the stopping cycle). Items are ordered: elements that changed
-//! in the stopping cycle first, then by kind (`X407`-`X409`, `X412`, `X410`, `X411`).
+//! in the stopping cycle first, then by kind (`X413`, `X407`-`X409`, `X412`, `X410`,
+//! `X411`).
 
 use super::{Explanation, Highlight, Item, Mark};
 use crate::control::{Driver, ProgramRuntime, Qualifier};
@@ -221,6 +225,7 @@ pub fn program_suspects(trip: &Trip, before: &ProgramRuntime, after: &ProgramRun
     let mut out: Vec<Suspect> = Vec::new();
     let mut seen: Vec<String> = Vec::new();
     for c in &trip.constraints {
+        let first = out.len();
         for l in c.literals.iter().filter(|l| l.space == Space::Output && !l.previous) {
             if seen.contains(&l.name) {
                 continue;
@@ -233,6 +238,9 @@ pub fn program_suspects(trip: &Trip, before: &ProgramRuntime, after: &ProgramRun
             } else {
                 forbidden_off(&view, &l.name, slot, was, &mut out);
             }
+        }
+        if let Some(s) = coordination(&view, &c.id, &out[first..]) {
+            out.insert(first, s);
         }
     }
     // Stable: suspects of the same rank keep the order of the constraint's literals.
@@ -587,6 +595,85 @@ fn forbidden_off(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut V
         ],
         &[],
     ));
+}
+
+/// X413, for a combined constraint: a step activated in the stopping cycle drives one
+/// actuator of it to the forbidden value (ON) while another one, which must then be ON,
+/// is commanded by nothing (an `X411` suspect): the new situation commands the first
+/// actuator without the second, so the actions of the new step or the elements that
+/// command the second are suspect.
+fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<Suspect> {
+    let undriven = suspects.iter().find(|s| s.item.code == "X411")?;
+    let new_steps: Vec<String> = v
+        .after
+        .active_steps()
+        .into_iter()
+        .filter(|s| !v.before.is_active(s))
+        .map(str::to_string)
+        .collect();
+    let names = |s: &Suspect, key: &str| -> Vec<String> {
+        s.item
+            .fields
+            .get(key)
+            .map(|x| x.split(',').filter(|n| !n.is_empty()).map(str::to_string).collect())
+            .unwrap_or_default()
+    };
+    let (driven, steps) = suspects.iter().filter(|s| s.item.code != "X411").find_map(|s| {
+        let read: Vec<String> = names(s, "step").into_iter().chain(names(s, "steps")).collect();
+        let new: Vec<String> = read.into_iter().filter(|x| new_steps.contains(x)).collect();
+        (!new.is_empty()).then_some((s, new))
+    })?;
+    let on = driven.item.fields.get("output").cloned().unwrap_or_default();
+    let off = undriven.item.fields.get("output").cloned().unwrap_or_default();
+    let fired: Vec<String> = v
+        .after
+        .fired_last_scan()
+        .into_iter()
+        .filter(|t| {
+            let p = v.p();
+            p.transitions
+                .iter()
+                .find(|x| x.id == *t)
+                .is_some_and(|x| v.steps_of(&x.to).iter().any(|s| steps.contains(s)))
+        })
+        .map(str::to_string)
+        .collect();
+    let equation = undriven.item.fields.get("equation").cloned().unwrap_or_default();
+    let expression = undriven.item.fields.get("expression").cloned().unwrap_or_default();
+    let commanding = undriven.item.fields.get("steps").cloned().unwrap_or_default();
+    let elsewhere = match (equation.is_empty(), commanding.is_empty()) {
+        (false, _) => format!("the equation of {off} (`{expression}`)"),
+        (true, false) => format!("the steps acting on {off} ({commanding})"),
+        (true, true) => format!("the program, which never commands {off}"),
+    };
+    Some(Suspect {
+        item: Item::new(
+            "X413",
+            format!(
+                "Step {} (activated by {} in the stopping cycle) drives {on} ON, but nothing commands {off}, which {constraint} requires ON with {on}: the actions of {} or {elsewhere} miss {off}.",
+                steps.join(", "),
+                fired.join(", "),
+                steps.join(", "),
+            ),
+            &[
+                ("output", off.clone()),
+                ("constraint", constraint.to_string()),
+                ("chart", steps.first().map(|s| v.chart_of_step(s)).unwrap_or_default()),
+                ("step", join(&steps)),
+                ("transition", join(&fired)),
+                ("equation", equation),
+                ("expression", expression),
+                ("steps", commanding),
+                ("driven", on),
+                ("ms_before", "0".into()),
+            ],
+        ),
+        highlights: vec![Highlight {
+            element: off,
+            mark: Mark::Suspect,
+        }],
+        rank: (0, 0),
+    })
 }
 
 /// True when transition `t` has `step` upstream.
