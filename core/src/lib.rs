@@ -16,6 +16,7 @@
 pub mod alarms;
 pub mod bits;
 pub mod bundle;
+pub mod campaign;
 pub mod constraints;
 pub mod control;
 pub mod diag;

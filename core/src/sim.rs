@@ -198,6 +198,8 @@ pub struct Simulation {
     pub emulator: Emulator,
     /// The control program.
     pub program: ProgramRuntime,
+    /// The program as it was before its last scan (for the explanations).
+    program_before: ProgramRuntime,
     /// Alarms.
     pub alarms: AlarmList,
     /// Explanations of the trips, by trip index.
@@ -339,8 +341,10 @@ impl Simulation {
         };
         let emulator = Emulator::new(&layout, &bundle.plant, seed).map_err(|p| vec![p])?;
         let engine = Engine::new(&bundle, FilterMode::Enforce, options.history_cycles);
+        let program = ProgramRuntime::new(Arc::new(program));
         Ok(Self {
-            program: ProgramRuntime::new(Arc::new(program)),
+            program_before: program.clone(),
+            program,
             bundle,
             layout,
             engine,
@@ -375,6 +379,7 @@ impl Simulation {
     /// it from its initial steps.
     pub fn replace_program(&mut self, program: CompiledProgram) {
         self.program = ProgramRuntime::new(Arc::new(program));
+        self.program_before = self.program.clone();
         self.log("operator", "control program replaced and restarted".into());
     }
 
@@ -466,6 +471,9 @@ impl Simulation {
                 let _ = self.act(&a.action);
             }
         }
+        if self.options.explain {
+            self.program_before.copy_state_from(&self.program);
+        }
         let applied = self
             .engine
             .cycle(now, self.emulator.sensors(), &mut self.program)
@@ -501,7 +509,7 @@ impl Simulation {
         if let (Some(index), true) = (tripped, self.options.explain) {
             // The emulator is still at the start of the tripping cycle (the engine only
             // read it); the program has just computed the erroneous command.
-            self.explain_trip(index, self.emulator.clone(), self.program.clone());
+            self.explain_trip(index, self.emulator.clone(), self.program_before.clone());
         }
         self.step_tasks(now);
         self.emulator.step(self.cycle, &applied);
@@ -571,13 +579,31 @@ impl Simulation {
     }
 
     fn explain_trip(&mut self, index: usize, emulator: Emulator, program: ProgramRuntime) {
-        let Some(mut ex) = explain::explain(&self.engine, index) else {
-            return;
-        };
-        let projected = self.project(emulator, program);
+        if let Some((ex, projected)) = self.explanation(index, emulator, program, &self.program) {
+            self.projections.insert(index, projected);
+            self.explanations.insert(index, ex);
+        }
+    }
+
+    /// The five levels of trip `index` and its projection, from the emulator as it was at
+    /// the start of the tripping cycle, the program before its tripping scan (`before`)
+    /// and after it (`after`). [`Simulation::cycle`] calls it at each trip; `vigie bench`
+    /// times it. `None` for an unknown trip.
+    pub fn explanation(
+        &self,
+        index: usize,
+        emulator: Emulator,
+        before: ProgramRuntime,
+        after: &ProgramRuntime,
+    ) -> Option<(Explanation, ProjectedPlant)> {
+        let mut ex = explain::explain(&self.engine, index)?;
+        // Beyond the paper: the program is known, so its elements lead the hypothesis.
+        if let Some(trip) = self.engine.trips.get(index) {
+            explain::add_program_hypothesis(&mut ex, trip, &before, after);
+        }
+        let projected = self.project(emulator, after.clone());
         fill_projection(&mut ex, &projected, &self.bundle);
-        self.projections.insert(index, projected);
-        self.explanations.insert(index, ex);
+        Some((ex, projected))
     }
 
     /// Level 1: runs clones of the emulator (as it was at the start of the tripping cycle)

@@ -1,6 +1,7 @@
 //! Command-line interface: argument parsing and dispatch to the subcommands.
 
 mod bench;
+mod campaign;
 mod check;
 mod export_st;
 mod filter;
@@ -131,6 +132,19 @@ pub(crate) enum Command {
         #[arg(long)]
         no_memory: bool,
     },
+    /// Run a campaign and print its figures (`mutations`: does the hypothesis level
+    /// localise every control error that trips the filter?).
+    Campaign {
+        /// Which campaign.
+        #[arg(value_enum)]
+        kind: campaign::Kind,
+        /// Worker threads (default: the available parallelism).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Print the full JSON report.
+        #[arg(long)]
+        json: bool,
+    },
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -163,6 +177,9 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 println!("memory over {} s simulated at 100x: RSS {} KiB after 10 min, {} KiB at the end (growth {} KiB)", b.memory_sim_s, b.rss_warm_kib, b.rss_end_kib, b.rss_end_kib.saturating_sub(b.rss_warm_kib));
             }
             Ok(ExitCode::SUCCESS)
+        }
+        Some(Command::Campaign { kind, threads, json }) => {
+            campaign::run(&cli.plant, kind, threads, json)
         }
         Some(Command::Run {
             scenario,

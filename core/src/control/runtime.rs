@@ -149,6 +149,40 @@ impl ProgramRuntime {
         rt
     }
 
+    /// Makes `self` a copy of `other` (same program) reusing `self`'s allocations: the
+    /// closed loop keeps the state before each scan this way, for the explanations,
+    /// without allocating every cycle.
+    pub fn copy_state_from(&mut self, other: &Self) {
+        if !Arc::ptr_eq(&self.program, &other.program)
+            || self.state.len() != other.state.len()
+            || self.ring.len() != other.ring.len()
+        {
+            *self = other.clone();
+            return;
+        }
+        self.state.copy_from_slice(&other.state);
+        self.activated_at.clone_from(&other.activated_at);
+        self.just_activated.copy_from(&other.just_activated);
+        self.stored.copy_from(&other.stored);
+        self.values.copy_from(&other.values);
+        self.fired.clone_from(&other.fired);
+        for (a, b) in self.ring.iter_mut().zip(&other.ring) {
+            a.time = b.time;
+            a.scan = b.scan;
+            a.fired.clone_from(&b.fired);
+        }
+        self.ring_head = other.ring_head;
+        self.ring_len = other.ring_len;
+        self.pulses.copy_from(&other.pulses);
+        self.switches.copy_from(&other.switches);
+        self.scans = other.scans;
+        self.now = other.now;
+        self.last_pre.copy_from_slice(&other.last_pre);
+        self.last_stored.copy_from(&other.last_stored);
+        self.stable = other.stable;
+        self.time_free = other.time_free;
+    }
+
     /// Evaluates every scan, even when the quiescence rule would skip it (for tests
     /// comparing both behaviours).
     #[cfg(test)]

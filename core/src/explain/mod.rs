@@ -12,9 +12,17 @@
 //!
 //! Every item has a stable code (`X0nn` for level 0 … `X4nn` for level 4), structured
 //! fields, the plant elements it concerns (for drawing on the synoptic) and an English
-//! text.
+//! text. The catalogue of codes is `core/src/explain/codes.md` (included below).
+//!
+//! In emulator mode the hypothesis also names the chart elements (`X407`-`X412`,
+//! [`program_suspects`]); in live mode [`emulator_from_observation`] rebuilds a plant
+//! for the projection from the observed inputs and observers.
+//!
+#![doc = include_str!("codes.md")]
 
 mod hypothesis;
+mod observed;
+mod program;
 
 use crate::bits::Bits;
 use crate::engine::{Action, Engine, FiredConstraint, Trip};
@@ -24,6 +32,8 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 pub use hypothesis::{case_count, hypothesis, hypothesis_from};
+pub use observed::emulator_from_observation;
+pub use program::{add_program_hypothesis, program_suspects};
 
 /// How an element is marked on the synoptic.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
@@ -80,7 +90,7 @@ pub struct Item {
 }
 
 impl Item {
-    fn new(code: &'static str, text: String, fields: &[(&str, String)]) -> Self {
+    pub(crate) fn new(code: &'static str, text: String, fields: &[(&str, String)]) -> Self {
         Self {
             code,
             fields: fields

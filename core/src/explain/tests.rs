@@ -241,3 +241,161 @@ fn every_hypothesis_case_of_the_station() {
     // CSs15 read A4 at t-1, which is not a sensor).
     assert_eq!(cases, 248);
 }
+
+/// The paper's CSs10 case through the real closed loop: scenario `cs10-paper.ron`
+/// (variant E01, t24 on RE(C7)), emulator, program and filter.
+///
+/// Differences with the paper's figures, because of our reference program:
+/// - the exit conveyors run permanently (`A6 = 1`), so level 3 shows A6 staying ON where
+///   the paper shows A6 0→1;
+/// - A3 and A4 are both actions of step X24, so when t24 fires A3 falls with A4 (1→0)
+///   where the paper shows A3 staying ON; level 3 shows that change.
+#[test]
+fn cs10_closed_loop_matches_the_paper() {
+    use crate::sim::{Options, Scenario, Simulation};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station/scenarios/cs10-paper.ron");
+    let scenario = Scenario::load(&path).expect("scenario");
+    let mut sim = Simulation::from_scenario(&scenario, &path, Options::default()).expect("simulation");
+    while sim.engine.trips.is_empty() && sim.now().0 < scenario.duration_ms {
+        sim.cycle();
+    }
+    let trip = &sim.engine.trips[0];
+    assert_eq!(trip.constraints.iter().map(|c| c.id.as_str()).collect::<Vec<_>>(), vec!["CSs10"]);
+    let ex = &sim.explanations[&0];
+    let marks = &ex.advanced.highlights;
+    let change = |e: &str, from, to| Highlight { element: e.into(), mark: Mark::Change { from, to } };
+    assert!(marks.contains(&change("C7", false, true)), "{marks:?}");
+    assert!(marks.contains(&change("A4", true, false)), "{marks:?}");
+    assert!(marks.contains(&Highlight { element: "A6".into(), mark: Mark::Steady { value: true } }), "{marks:?}");
+    assert!(marks.contains(&change("A3", true, false)), "{marks:?}");
+
+    // Level 4: the program element first (t24, its receptivity RE(C7), step X24), then
+    // the paper's suspect C7 with "A4 should have been ON".
+    let first = &ex.hypothesis.items[0];
+    assert_eq!(first.code, "X407");
+    assert_eq!(first.fields["transition"], "t24");
+    assert_eq!(first.fields["receptivity"], "RE(C7)");
+    assert_eq!(first.fields["step"], "X24");
+    assert_eq!(first.fields["chart"], "table");
+    assert_eq!(first.fields["signals"], "C7");
+    let paper = ex.hypothesis.items.iter().find(|i| i.code == "X401").expect("(a) suspect");
+    assert_eq!(paper.fields["sensor"], "C7");
+    assert!(paper.text.contains("A4 should have been ON"), "{}", paper.text);
+    assert!(ex.hypothesis.highlights.contains(&Highlight { element: "A4".into(), mark: Mark::Expected { value: true } }));
+
+    // Level 1: without the filter the box leaving to the right is damaged.
+    let p = &sim.projections[&0];
+    assert!(!p.hazards.is_empty(), "{p:?}");
+    assert_eq!(p.hazards[0].kind, crate::emulator::HazardKind::Sheared);
+    assert_eq!(p.hazards[0].box_id, 1);
+    assert!(ex.projection.items.iter().any(|i| i.code == "X101"));
+}
+
+/// A record with the given inputs and observers ON.
+fn observation(bundle: &PlantBundle, inputs: &[&str], observers: &[&str]) -> crate::history::CycleRecord {
+    let mut inp = Bits::zeros(bundle.plant.inputs.len());
+    for s in inputs {
+        inp.set(bundle.plant.input(s).expect("sensor"), true);
+    }
+    let mut obs = Bits::zeros(bundle.observers.defs.len());
+    for o in observers {
+        obs.set(bundle.observers.defs.iter().position(|d| d.id == *o).expect("observer"), true);
+    }
+    crate::history::CycleRecord {
+        time: crate::Millis(0),
+        inputs: inp,
+        commanded: Bits::zeros(bundle.plant.outputs.len()),
+        applied: Bits::zeros(bundle.plant.outputs.len()),
+        observers: obs,
+        aux: Bits::zeros(0),
+        tripped: true,
+    }
+}
+
+fn observed_emulator(bundle: &PlantBundle, inputs: &[&str], observers: &[&str]) -> (crate::emulator::Emulator, crate::history::CycleRecord) {
+    let layout = crate::emulator::Layout::load(&bundle.dir.join("layout.ron")).expect("layout");
+    let rec = observation(bundle, inputs, observers);
+    let emu = emulator_from_observation(&layout, &bundle.plant, &rec, &bundle.observers).expect("emulator");
+    (emu, rec)
+}
+
+/// The emulator built from an observation shows the same sensors, with the boxes the
+/// observers infer where no sensor sees them.
+#[test]
+fn emulator_from_observation_reproduces_the_sensors() {
+    let bundle = station();
+    let cases: &[(&[&str], &[&str], usize)] = &[
+        (&["C4", "C0", "C1", "C2"], &[], 2),
+        (&["C4", "C3", "C6"], &[], 2),
+        (&["C4"], &["P36"], 1),
+        (&["C5"], &["P67"], 1),
+        (&["C5", "C7", "C10"], &[], 2),
+        (&["C5", "C6", "C8"], &[], 2),
+        (&[], &[], 0),
+    ];
+    for (inputs, observers, boxes) in cases {
+        let (emu, rec) = observed_emulator(&bundle, inputs, observers);
+        assert_eq!(emu.sensors(), &rec.inputs, "{inputs:?} {observers:?}: {:?}", emu.boxes());
+        assert_eq!(emu.boxes().len(), *boxes, "{inputs:?} {observers:?}: {:?}", emu.boxes());
+    }
+    // C2 with C1: a large box; the table between the positions when neither C4 nor C5.
+    let (emu, _) = observed_emulator(&bundle, &["C4", "C1", "C2"], &[]);
+    assert_eq!(emu.boxes()[0].size, crate::emulator::BoxSize::Large);
+    let (emu, _) = observed_emulator(&bundle, &[], &[]);
+    assert_eq!(emu.table_angle_mdeg(), 45_000);
+    let (emu, _) = observed_emulator(&bundle, &["C5"], &["P67"]);
+    assert_eq!(emu.table_angle_mdeg(), 90_000);
+}
+
+/// A projection without the real plant: a box between C6 and C7 (P67) with the table
+/// released while the rollers and the right exit run is sheared.
+#[test]
+fn projection_from_an_observation_predicts_the_damage() {
+    let bundle = station();
+    let (mut emu, _) = observed_emulator(&bundle, &["C5"], &["P67"]);
+    let mut out = Bits::zeros(bundle.plant.outputs.len());
+    for a in ["A3", "A6"] {
+        out.set(bundle.plant.output(a).expect("actuator"), true);
+    }
+    for _ in 0..300 {
+        emu.step(crate::Millis(10), &out);
+    }
+    assert!(!emu.hazards().is_empty(), "{:?}", emu.boxes());
+    // Held at the unloading position, the same box leaves safely.
+    let (mut emu, _) = observed_emulator(&bundle, &["C5"], &["P67"]);
+    out.set(bundle.plant.output("A4").expect("A4"), true);
+    for _ in 0..300 {
+        emu.step(crate::Millis(10), &out);
+    }
+    assert!(emu.hazards().is_empty(), "{:?}", emu.hazards());
+}
+
+/// Every code the explanation sources emit is in the catalogue, and the catalogue
+/// documents no code that is not emitted.
+#[test]
+fn every_code_is_in_the_catalogue() {
+    let catalogue = include_str!("codes.md");
+    let sources = [
+        include_str!("mod.rs"),
+        include_str!("hypothesis.rs"),
+        include_str!("program.rs"),
+        include_str!("../sim.rs"),
+    ]
+    .concat();
+    let codes = |text: &str, quoted: bool| -> std::collections::BTreeSet<String> {
+        let b = text.as_bytes();
+        let mut out = std::collections::BTreeSet::new();
+        for i in 0..b.len().saturating_sub(5) {
+            let start = if quoted { b[i] == b'"' && b.get(i + 5) == Some(&b'"') } else { b[i] == b'|' };
+            let at = if quoted { i + 1 } else { i + 2 };
+            if start && b.get(at) == Some(&b'X') && b[at + 1..at + 4].iter().all(u8::is_ascii_digit) {
+                out.insert(String::from_utf8_lossy(&b[at..at + 4]).into_owned());
+            }
+        }
+        out
+    };
+    let emitted = codes(&sources, true);
+    let documented = codes(catalogue, false);
+    assert!(emitted.len() >= 23, "{emitted:?}");
+    assert_eq!(emitted, documented);
+}
