@@ -694,6 +694,61 @@ impl Simulation {
     }
 }
 
+/// The explanation of a trip seen on a live plant: levels 0, 2, 3 and 4 from the
+/// recorder, and level 1 from an emulator initialised from the observed inputs and
+/// observers of the tripping cycle (boxes placed where sensors and observers see them,
+/// the table angle from its position sensors), run forward for `horizon` with the
+/// outputs the PLC commanded in that cycle held (its program is not known). Without a
+/// layout, level 1 stays empty.
+pub fn explain_live(
+    engine: &Engine,
+    bundle: &PlantBundle,
+    layout: Option<&Layout>,
+    index: usize,
+    horizon: Millis,
+    cycle: Millis,
+) -> Option<Explanation> {
+    let mut ex = explain::explain(engine, index)?;
+    let (Some(layout), Some(trip)) = (layout, engine.trips.get(index)) else {
+        return Some(ex);
+    };
+    let Some(record) = engine.history.iter().find(|r| r.time.0 == trip.time_ms) else {
+        return Some(ex);
+    };
+    let Ok(mut emu) =
+        explain::emulator_from_observation(layout, &bundle.plant, record, &engine.observers)
+    else {
+        return Some(ex);
+    };
+    let start = emu.now();
+    let known = emu.hazards().len();
+    let step = Millis(cycle.0.max(1));
+    while emu.now() < start + horizon {
+        emu.step(step, &record.commanded);
+        if emu.hazards().len() > known {
+            for _ in 0..(500 / step.0).max(1) {
+                emu.step(step, &record.commanded);
+            }
+            break;
+        }
+    }
+    let shift = |t: u64| trip.time_ms + t.saturating_sub(start.0);
+    let projected = ProjectedPlant {
+        at_ms: shift(emu.now().0),
+        boxes: emu.boxes().to_vec(),
+        table_angle_mdeg: emu.table_angle_mdeg(),
+        hazards: emu.hazards()[known..]
+            .iter()
+            .map(|h| Hazard {
+                time_ms: shift(h.time_ms),
+                ..h.clone()
+            })
+            .collect(),
+    };
+    fill_projection(&mut ex, &projected, bundle);
+    Some(ex)
+}
+
 fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundle) {
     let level = &mut ex.projection;
     level.title = "Projection".into();

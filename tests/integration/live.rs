@@ -540,6 +540,13 @@ fn monitor_reports_with_explanations_and_never_writes() {
     });
     assert_eq!(v["record"]["enforced"], false);
     assert!(v["explanation"].is_object(), "{v}");
+    // Level 1 in live mode: an emulator initialised from the observed sensors projects
+    // the released table with the box at C7.
+    let projection = &v["explanation"]["projection"]["items"];
+    assert!(
+        projection.as_array().is_some_and(|items| !items.is_empty()),
+        "{projection}"
+    );
     // Nothing was written: A4 is still OFF at the peer.
     for _ in 0..10 {
         assert_eq!(plant.coils(), "0000000");

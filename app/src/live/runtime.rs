@@ -192,10 +192,17 @@ impl AlarmBoard {
 
 /// Reports the engine's events; a specification error is reported when it changes only
 /// (the engine repeats it every cycle while it lasts).
+/// What the monitor needs to explain a trip: the plant, and its layout for the
+/// projection (level 1) when the plant folder has one.
+struct Explainer<'a> {
+    bundle: &'a PlantBundle,
+    layout: Option<vigie_core::emulator::Layout>,
+}
+
 fn emit_engine_events(
     engine: &mut Engine,
     emit: Emit<'_>,
-    explain: bool,
+    explain: Option<&Explainer<'_>>,
     last_spec: &mut Option<String>,
 ) {
     let events = engine.drain_events();
@@ -229,7 +236,16 @@ fn emit_engine_events(
         let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
         tracing::warn!(cycle = trip.cycle, "{kind}: {}", ids.join(", "));
         let mut line = json!({"event": kind, "record": trip});
-        if explain && let Some(ex) = vigie_core::explain::explain(engine, index) {
+        if let Some(x) = explain
+            && let Some(ex) = vigie_core::sim::explain_live(
+                engine,
+                x.bundle,
+                x.layout.as_ref(),
+                index,
+                vigie_core::Millis(10_000),
+                vigie_core::Millis(10),
+            )
+        {
             line["explanation"] = serde_json::to_value(ex).unwrap_or_default();
         }
         emit(line);
@@ -255,6 +271,10 @@ async fn monitor(
     let peer = client.address;
     let mut link = Reader::new(client, map.clone(), true);
     let mut engine = Engine::new(&bundle, FilterMode::ReportOnly, 6000);
+    let explainer = Explainer {
+        bundle: &bundle,
+        layout: vigie_core::emulator::Layout::load(&bundle.dir.join("layout.ron")).ok(),
+    };
     let mut guard = StaleGuard::new(&bundle);
     let mut control = Commanded(Bits::zeros(bundle.plant.outputs.len()));
     let mut inputs = AgedBits::new(bundle.plant.inputs.len());
@@ -285,7 +305,7 @@ async fn monitor(
         board.watch(emit, now, "link:peer", &format!("monitored peer {peer}"), t);
         control.0.copy_from(outputs.values());
         engine.cycle(now, inputs.values(), &mut control);
-        emit_engine_events(&mut engine, emit, true, &mut last_spec);
+        emit_engine_events(&mut engine, emit, Some(&explainer), &mut last_spec);
         let stale = inputs.stale(now, &bounds);
         let verdict = guard.check(engine.frame(), &stale);
         if verdict.potentially_violated != last_potential {
@@ -402,7 +422,7 @@ async fn gateway(
             let _ = engine.reset();
         }
         engine.cycle(now, inputs.values(), &mut control);
-        emit_engine_events(&mut engine, emit, false, &mut last_spec);
+        emit_engine_events(&mut engine, emit, None, &mut last_spec);
         // 4. Safe outputs.
         let stale = inputs.stale(now, &bounds);
         let mut applied = engine.applied().clone();

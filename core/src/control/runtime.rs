@@ -149,9 +149,11 @@ impl ProgramRuntime {
         rt
     }
 
-    /// Makes `self` a copy of `other` (same program) reusing `self`'s allocations: the
-    /// closed loop keeps the state before each scan this way, for the explanations,
-    /// without allocating every cycle.
+    /// Makes `self` a copy of `other`'s situation (same program) reusing `self`'s
+    /// allocations: steps, step times, memories, values, panel, scan count. The ring of
+    /// past evolutions is not copied (`evolutions()` of the copy is stale). The closed
+    /// loop keeps the situation before each scan this way, for the explanations, without
+    /// allocating every cycle.
     pub fn copy_state_from(&mut self, other: &Self) {
         if !Arc::ptr_eq(&self.program, &other.program)
             || self.state.len() != other.state.len()
@@ -166,13 +168,6 @@ impl ProgramRuntime {
         self.stored.copy_from(&other.stored);
         self.values.copy_from(&other.values);
         self.fired.clone_from(&other.fired);
-        for (a, b) in self.ring.iter_mut().zip(&other.ring) {
-            a.time = b.time;
-            a.scan = b.scan;
-            a.fired.clone_from(&b.fired);
-        }
-        self.ring_head = other.ring_head;
-        self.ring_len = other.ring_len;
         self.pulses.copy_from(&other.pulses);
         self.switches.copy_from(&other.switches);
         self.scans = other.scans;
