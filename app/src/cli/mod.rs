@@ -4,6 +4,7 @@ mod bench;
 mod check;
 mod filter;
 mod gateway;
+mod learn;
 mod run;
 
 use std::path::PathBuf;
@@ -67,6 +68,39 @@ pub(crate) enum Command {
     /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
     /// sensor-to-output latency).
     GatewayBench(gateway::BenchArgs),
+    /// Learn the diagnosers' intervals from normal-run traces into `diagnosers.ron`.
+    Learn {
+        /// Trace files (CSV, `vigie run --trace`).
+        traces: Vec<PathBuf>,
+        /// Confidence coefficient α of ΔT = α·σ (default: the file's).
+        #[arg(long)]
+        alpha: Option<f64>,
+        /// Print the figures without writing the file.
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// Diagnosers: `--report` prints the diagnosability report.
+    Diagnose {
+        /// Print the diagnosability report (JSON).
+        #[arg(long)]
+        report: bool,
+    },
+    /// Campaigns: `vigie campaign diag` runs the fault campaign of the diagnosers.
+    Campaign {
+        /// Which campaign (`diag`).
+        which: String,
+        /// Seeds per fault.
+        #[arg(long, default_value_t = 100)]
+        seeds: u64,
+        /// Simulated hours of fault-free runs.
+        #[arg(long, default_value_t = 10)]
+        hours: u64,
+        /// Only faults whose name contains this.
+        #[arg(long)]
+        only: Option<String>,
+    },
+    /// Measure the diagnosers (per cycle, build) and libFAUDES' centralized diagnoser.
+    BenchDiag,
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -87,6 +121,16 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
+        Some(Command::Learn { traces, alpha, dry_run }) => learn::learn(&cli.plant, &traces, alpha, dry_run),
+        Some(Command::Diagnose { report }) => {
+            anyhow::ensure!(report, "use `vigie diagnose --report`");
+            learn::report(&cli.plant)
+        }
+        Some(Command::Campaign { which, seeds, hours, only }) => {
+            anyhow::ensure!(which == "diag", "unknown campaign `{which}` (known: diag)");
+            learn::campaign(&cli.plant, seeds, hours, only.as_deref())
+        }
+        Some(Command::BenchDiag) => learn::bench(&cli.plant),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
         Some(Command::Run {
             scenario,
