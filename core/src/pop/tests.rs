@@ -62,6 +62,6 @@ fn untimed_replay_and_report() {
     let rep = report(&d.compiled);
     let f5 = rep.faults.iter().find(|f| f.fault == "F5").unwrap();
     assert!(f5.diagnosable, "{f5:?}");
-    let (gen, map) = faudes_export(table);
-    assert!(gen.contains("\"f_F1\" +o+") && map.contains("F12"));
+    let (text, map) = faudes_export(table);
+    assert!(text.contains("\"f_F1\" +o+") && map.contains("F12"));
 }
