@@ -34,6 +34,7 @@ pub mod sim;
 pub mod symbols;
 pub mod synthetic;
 pub mod tasks;
+pub mod verify;
 pub mod time;
 pub mod trace;
 

@@ -1,0 +1,1 @@
+//! Promela export of the abstract model for the SPIN model checker.
