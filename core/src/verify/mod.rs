@@ -39,6 +39,42 @@ use crate::time::Millis;
 use model::{Geometry, PlantState};
 use serde::Serialize;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A small multiplicative hasher (FxHash) for the state table: lookups only, never
+/// iterated, so the order of results does not depend on it.
+#[derive(Default, Clone, Copy)]
+struct Fx(u64);
+
+impl Hasher for Fx {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(w));
+        }
+    }
+    fn write_u8(&mut self, i: u8) {
+        self.write_u64(u64::from(i));
+    }
+    fn write_u16(&mut self, i: u16) {
+        self.write_u64(u64::from(i));
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.write_u64(u64::from(i));
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+}
+
+type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<Fx>>;
 
 /// Options of a verification.
 #[derive(Clone, Debug)]
@@ -141,6 +177,9 @@ pub struct Exploration {
     pub delivered: [Option<Trace>; 2],
     /// Every reachable non-hazard state can still lead to a delivery at each exit.
     pub always_deliverable: [bool; 2],
+    /// Otherwise, a shortest trace to a state from which no delivery at that exit is
+    /// reachable any more.
+    pub stuck: [Option<Trace>; 2],
     /// Per invariant: shortest trace to a state where it is true.
     pub invariants: Vec<Option<Trace>>,
     /// Hazard kinds reachable (each with the length of its shortest trace).
@@ -194,6 +233,9 @@ pub struct Model {
     max_boxes: usize,
     /// Outputs the control may command (all but the exits').
     free_outputs: Vec<usize>,
+    /// Variables read at t-1 by a constraint, an observer or an invariant (inputs,
+    /// outputs, observers): the state keeps only these of the previous cycle.
+    prev_mask: (u64, u64, u64),
 }
 
 impl Model {
@@ -208,10 +250,46 @@ impl Model {
             ));
         }
         let n_out = bundle.plant.outputs.len();
-        if n_out > 63 || bundle.plant.inputs.len() > 63 {
+        if n_out + bundle.plant.inputs.len() + bundle.observers.len() > 128 - 99 {
             return Err(Problem::error("V0501", "too many signals for the verifier", None));
         }
         let free_outputs = (0..n_out).filter(|k| !geo.exit_act.contains(k)).collect();
+        let mut prev_mask = (0u64, 0u64, 0u64);
+        let mut dnfs: Vec<expr::Dnf> = bundle
+            .constraints
+            .constraints
+            .iter()
+            .chain(&bundle.invariants.constraints)
+            .map(|c| c.dnf.clone())
+            .collect();
+        for d in &bundle.observers.defs {
+            let texts: Vec<&String> = match &d.rule {
+                crate::observers::Rule::Memory { set, reset } => vec![set, reset],
+                crate::observers::Rule::Counter { up, down, clear, .. } => {
+                    let mut v = vec![up, down];
+                    v.extend(clear.as_ref());
+                    v
+                }
+            };
+            for t in texts {
+                match expr::parse_str(t).and_then(|e| e.to_dnf(&bundle.symbols)) {
+                    Ok(dnf) => dnfs.push(dnf),
+                    // Unreadable rule: keep every previous value.
+                    Err(_) => prev_mask = (u64::MAX, u64::MAX, u64::MAX),
+                }
+            }
+        }
+        for l in dnfs.iter().flatten().flatten() {
+            if l.var.prev && l.var.index < 64 {
+                let bit = 1u64 << l.var.index;
+                match l.var.space {
+                    Space::Input => prev_mask.0 |= bit,
+                    Space::Output => prev_mask.1 |= bit,
+                    Space::Observer => prev_mask.2 |= bit,
+                    Space::Aux => {}
+                }
+            }
+        }
         Ok(Self {
             geo,
             observers: bundle.observers.clone(),
@@ -229,7 +307,61 @@ impl Model {
             obs_names: bundle.symbols.names(Space::Observer).to_vec(),
             max_boxes: max_boxes.clamp(1, model::MAX_BOXES),
             free_outputs,
+            prev_mask,
         })
+    }
+
+    /// Packs a state into 128 bits (the layout is checked by [`Model::new`]).
+    pub fn pack(&self, s: &AState) -> u128 {
+        let mut k = u128::from(s.plant.angle as u32);
+        k = k << 3 | u128::from(s.plant.n);
+        for b in &s.plant.boxes {
+            let lo = (i32::from(b.lo) + 512) as u128 & 0x3ff;
+            k = k << 12 | u128::from(b.on_table) << 11 | u128::from(b.large) << 10 | lo;
+        }
+        for c in s.obs {
+            k = k << 4 | u128::from(c.min(15));
+        }
+        k = k << self.n_in | u128::from(s.prev.0);
+        k = k << self.n_out | u128::from(s.prev.1);
+        k << self.n_obs | u128::from(s.prev.2)
+    }
+
+    /// Inverse of [`Model::pack`].
+    pub fn unpack(&self, mut k: u128) -> AState {
+        let mask = |n: usize| (1u128 << n) - 1;
+        let ov = (k & mask(self.n_obs)) as u64;
+        k >>= self.n_obs;
+        let out = (k & mask(self.n_out)) as u64;
+        k >>= self.n_out;
+        let inp = (k & mask(self.n_in)) as u64;
+        k >>= self.n_in;
+        let mut obs = [0u16; 4];
+        for c in obs.iter_mut().rev() {
+            *c = (k & 15) as u16;
+            k >>= 4;
+        }
+        let mut boxes = [model::ABox::default(); model::MAX_BOXES];
+        for b in boxes.iter_mut().rev() {
+            let v = k & 0xfff;
+            k >>= 12;
+            *b = model::ABox {
+                on_table: v >> 11 & 1 == 1,
+                large: v >> 10 & 1 == 1,
+                lo: ((v & 0x3ff) as i32 - 512) as i16,
+            };
+        }
+        let n = (k & 7) as u8;
+        k >>= 3;
+        AState {
+            plant: PlantState {
+                angle: (k & 0xffff_ffff) as u32 as i32,
+                n,
+                boxes,
+            },
+            obs,
+            prev: (inp, out, ov),
+        }
     }
 
     /// The initial state.
@@ -305,12 +437,12 @@ struct Edge {
 
 /// Explores the reachable states of `model` under `filter` breadth-first.
 pub fn explore(model: &Model, filter: &Filter) -> Exploration {
-    let mut index: HashMap<AState, u32> = HashMap::new();
-    let mut states: Vec<AState> = Vec::new();
+    let mut index: FxMap<u128, u32> = FxMap::default();
+    let mut states: Vec<u128> = Vec::new();
     let mut edges: Vec<Option<Edge>> = Vec::new();
     let s0 = model.initial();
-    index.insert(s0, 0);
-    states.push(s0);
+    index.insert(model.pack(&s0), 0);
+    states.push(model.pack(&s0));
     edges.push(None);
     let mut frame = Frame::new([model.n_in, model.n_out, model.n_obs, 0]);
     let mut obs = model.observers.clone();
@@ -321,63 +453,40 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
     let mut delivered: [Option<(u32, Edge)>; 2] = [None, None];
     let mut inv: Vec<Option<u32>> = vec![None; model.invariants.len()];
     let mut transitions = 0u64;
+    let mut cache: FxMap<(u64, (u64, u64, u64), [u16; 4]), Ctx> = FxMap::default();
     // Graph for the "always deliverable" check: successors of each state, and the states
     // with a delivering transition.
-    let mut succ: Vec<Vec<u32>> = Vec::new();
+    let mut succ: Vec<u32> = Vec::new();
+    let mut succ_start: Vec<usize> = Vec::new();
     let mut delivers: Vec<[bool; 2]> = Vec::new();
     let exits = model.geo.exit_act.iter().fold(0u64, |m, &k| m | 1 << k);
     let mut head = 0usize;
     while head < states.len() {
-        let s = states[head];
+        let s = model.unpack(states[head]);
         let si = head as u32;
         head += 1;
-        succ.push(Vec::new());
+        succ_start.push(succ.len());
         delivers.push([false, false]);
-        let (inputs, ov, counts) = model.frame(&s, &mut frame, &mut obs);
-        for (k, d) in model.invariants.iter().enumerate() {
-            if inv[k].is_none() && expr::eval_dnf(d, &frame) {
-                inv[k] = Some(si);
+        let inputs = model.geo.sensors(&s.plant);
+        let key = (inputs, s.prev, s.obs);
+        let ctx = match cache.get(&key) {
+            Some(c) => c.clone(),
+            None => {
+                let c = context(model, filter, &s, &mut frame, &mut obs, &mut viol, exits);
+                cache.insert(key, c.clone());
+                c
+            }
+        };
+        let (ov, counts) = (ctx.ov, ctx.counts);
+        for (k, slot) in inv.iter_mut().enumerate() {
+            if slot.is_none() && ctx.inv >> k & 1 == 1 {
+                *slot = Some(si);
             }
         }
-        // Applied vectors: the commanded vector when it violates nothing, else the fallback.
-        let fallback = filter.fallback(&frame);
-        let mut applied_set: Vec<u64> = Vec::new();
-        let n_free = model.free_outputs.len();
-        for c in 0..(1u64 << n_free) {
-            let mut cmd = exits;
-            for (j, &k) in model.free_outputs.iter().enumerate() {
-                if c >> j & 1 == 1 {
-                    cmd |= 1 << k;
-                }
-            }
-            for k in 0..model.n_out {
-                frame.now[Space::Output as usize].set(k, cmd >> k & 1 == 1);
-            }
-            filter.violations_into(&frame, &mut viol);
-            let applied = if viol.is_empty() {
-                cmd
-            } else {
-                match &fallback {
-                    Ok(b) => {
-                        let mut a = exits;
-                        for k in b.ones() {
-                            a |= 1 << k;
-                        }
-                        a
-                    }
-                    Err(_) => {
-                        if no_fallback.is_none() {
-                            no_fallback = Some(si);
-                        }
-                        continue;
-                    }
-                }
-            };
-            if !applied_set.contains(&applied) {
-                applied_set.push(applied);
-            }
+        if ctx.no_fallback && no_fallback.is_none() {
+            no_fallback = Some(si);
         }
-        applied_set.sort_unstable();
+        let applied_set = &ctx.applied;
         let mut arrivals = vec![None];
         if usize::from(s.plant.n) < model.max_boxes {
             for size in [BoxSize::Small, BoxSize::Large] {
@@ -386,7 +495,7 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
                 }
             }
         }
-        for &applied in &applied_set {
+        for &applied in applied_set.iter() {
             for &arrival in &arrivals {
                 transitions += 1;
                 let (p, ev) = model.geo.step(&s.plant, applied, arrival);
@@ -415,37 +524,57 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
                 let next = AState {
                     plant: p,
                     obs: counts,
-                    prev: (inputs, applied, ov),
+                    prev: (
+                        inputs & model.prev_mask.0,
+                        applied & model.prev_mask.1,
+                        ov & model.prev_mask.2,
+                    ),
                 };
-                let id = match index.get(&next) {
+                let key = model.pack(&next);
+                let id = match index.get(&key) {
                     Some(&id) => id,
                     None => {
                         let id = states.len() as u32;
-                        index.insert(next, id);
-                        states.push(next);
+                        index.insert(key, id);
+                        states.push(key);
                         edges.push(Some(edge));
                         id
                     }
                 };
-                succ[si as usize].push(id);
+                succ.push(id);
             }
         }
     }
     // Backward reachability to a delivering state, per exit.
     let mut always = [true, true];
-    let mut pred: Vec<Vec<u32>> = vec![Vec::new(); states.len()];
-    for (i, ss) in succ.iter().enumerate() {
-        for &j in ss {
-            pred[j as usize].push(i as u32);
+    let mut stuck_at: [Option<u32>; 2] = [None, None];
+    drop(index);
+    succ_start.push(succ.len());
+    // Predecessors in compressed rows.
+    let n = states.len();
+    let mut pstart = vec![0usize; n + 1];
+    for &j in &succ {
+        pstart[j as usize + 1] += 1;
+    }
+    for i in 0..n {
+        pstart[i + 1] += pstart[i];
+    }
+    let mut fill = pstart.clone();
+    let mut pred = vec![0u32; succ.len()];
+    for i in 0..n {
+        for &j in &succ[succ_start[i]..succ_start[i + 1]] {
+            pred[fill[j as usize]] = i as u32;
+            fill[j as usize] += 1;
         }
     }
+    drop(succ);
     for side in 0..2 {
         let mut good: Vec<bool> = delivers.iter().map(|d| d[side]).collect();
         let mut stack: Vec<u32> = (0..states.len() as u32)
             .filter(|&i| good[i as usize])
             .collect();
         while let Some(i) = stack.pop() {
-            for &p in &pred[i as usize] {
+            for &p in &pred[pstart[i as usize]..pstart[i as usize + 1]] {
                 if !good[p as usize] {
                     good[p as usize] = true;
                     stack.push(p);
@@ -453,6 +582,7 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
             }
         }
         always[side] = good.iter().all(|&g| g);
+        stuck_at[side] = good.iter().position(|&g| !g).map(|i| i as u32);
     }
     let trace = |what: String, last: u32, extra: Option<Edge>| -> Trace {
         build_trace(model, &states, &edges, what, last, extra)
@@ -475,6 +605,9 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
             })
         }),
         always_deliverable: always,
+        stuck: [0, 1].map(|side| {
+            stuck_at[side].map(|si| trace("no delivery reachable any more".into(), si, None))
+        }),
         invariants: inv
             .iter()
             .map(|o| o.map(|si| trace("invariant true".into(), si, None)))
@@ -483,6 +616,73 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
             .iter()
             .map(|(k, si, _)| (hazard_name(*k).to_string(), depth(&edges, *si) + 1))
             .collect(),
+    }
+}
+
+/// What a cycle's context allows: observers, invariants, applied vectors.
+#[derive(Clone, Debug)]
+struct Ctx {
+    ov: u64,
+    counts: [u16; 4],
+    inv: u64,
+    no_fallback: bool,
+    applied: std::rc::Rc<Vec<u64>>,
+}
+
+/// Evaluates observers, invariants and the filter for every commanded vector.
+fn context(
+    model: &Model,
+    filter: &Filter,
+    s: &AState,
+    frame: &mut Frame,
+    obs: &mut Observers,
+    viol: &mut Vec<usize>,
+    exits: u64,
+) -> Ctx {
+    let (_, ov, counts) = model.frame(s, frame, obs);
+    let mut inv = 0u64;
+    for (k, d) in model.invariants.iter().enumerate().take(64) {
+        if expr::eval_dnf(d, frame) {
+            inv |= 1 << k;
+        }
+    }
+    let fallback = filter.fallback(frame);
+    let mut no_fallback = false;
+    let mut applied_set: Vec<u64> = Vec::new();
+    let n_free = model.free_outputs.len();
+    for c in 0..(1u64 << n_free) {
+        let mut cmd = exits;
+        for (j, &k) in model.free_outputs.iter().enumerate() {
+            if c >> j & 1 == 1 {
+                cmd |= 1 << k;
+            }
+        }
+        for k in 0..model.n_out {
+            frame.now[Space::Output as usize].set(k, cmd >> k & 1 == 1);
+        }
+        filter.violations_into(frame, viol);
+        let applied = if viol.is_empty() {
+            cmd
+        } else {
+            match &fallback {
+                Ok(b) => b.ones().fold(exits, |a, k| a | 1 << k),
+                Err(_) => {
+                    no_fallback = true;
+                    continue;
+                }
+            }
+        };
+        if !applied_set.contains(&applied) {
+            applied_set.push(applied);
+        }
+    }
+    applied_set.sort_unstable();
+    Ctx {
+        ov,
+        counts,
+        inv,
+        no_fallback,
+        applied: std::rc::Rc::new(applied_set),
     }
 }
 
@@ -497,7 +697,7 @@ fn depth(edges: &[Option<Edge>], mut i: u32) -> usize {
 
 fn build_trace(
     model: &Model,
-    states: &[AState],
+    states: &[u128],
     edges: &[Option<Edge>],
     what: String,
     last: u32,
@@ -523,7 +723,7 @@ fn build_trace(
         .iter()
         .enumerate()
         .map(|(k, (si, e))| {
-            let s = &states[*si as usize];
+            let s = &model.unpack(states[*si as usize]);
             let (inputs, ov, _) = model.frame(s, &mut frame, &mut obs);
             let applied = e.map_or(0, |e| e.applied);
             TraceStep {

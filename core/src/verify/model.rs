@@ -359,21 +359,33 @@ impl Geometry {
 
     /// Part boundaries of a frame at a table position: `(bounds, open_start, open_end)`;
     /// part k spans `bounds[k]..bounds[k+1]`.
-    fn parts(&self, on_table: bool, pos: u8) -> Vec<i32> {
+    fn parts(&self, on_table: bool, pos: u8) -> Bounds {
+        let mut b = Bounds { v: [0; 10], n: 0 };
+        let mut push = |x: i32| {
+            if b.n < b.v.len() {
+                b.v[b.n] = x;
+                b.n += 1;
+            }
+        };
         if on_table {
             if pos == 1 {
-                vec![i32::MIN / 4, 0, self.table_len, i32::MAX / 4]
+                for x in [i32::MIN / 4, 0, self.table_len, i32::MAX / 4] {
+                    push(x);
+                }
             } else {
-                vec![0, self.table_len]
+                push(0);
+                push(self.table_len);
             }
         } else {
-            let mut v = vec![0];
-            v.extend(&self.joints);
-            if pos == 0 {
-                v.push(self.line_end() + self.table_len);
+            push(0);
+            for &j in &self.joints {
+                push(j);
             }
-            v
+            if pos == 0 {
+                push(self.line_end() + self.table_len);
+            }
         }
+        b
     }
 
     /// Surface velocity (cells per step along the frame axis) of part `k` of a frame.
@@ -406,7 +418,8 @@ impl Geometry {
         arrival: Option<BoxSize>,
     ) -> (PlantState, StepEvents) {
         let mut ev = StepEvents::default();
-        let mut boxes: Vec<ABox> = s.boxes[..usize::from(s.n)].to_vec();
+        let mut all = s.boxes;
+        let boxes = &mut all[..usize::from(s.n)];
         // Rotation.
         let a4 = out >> self.rotate & 1 == 1;
         let target = if a4 { self.unload } else { self.load };
@@ -423,7 +436,7 @@ impl Geometry {
         let te = self.line_end();
         if p0 == 0 && p1 != 0 {
             // Leaving the loading angle: boxes centred on the table turn with it.
-            for b in &mut boxes {
+            for b in boxes.iter_mut() {
                 let c2 = 2 * i32::from(b.lo) + self.len(b);
                 if !b.on_table && c2 > 2 * te {
                     b.on_table = true;
@@ -431,7 +444,7 @@ impl Geometry {
                 }
             }
         } else if p1 == 0 && p0 != 0 {
-            for b in &mut boxes {
+            for b in boxes.iter_mut() {
                 if b.on_table {
                     b.on_table = false;
                     b.lo += te as i16;
@@ -439,9 +452,10 @@ impl Geometry {
             }
         }
         // Drive.
-        let mut vels = Vec::with_capacity(boxes.len());
-        for b in &boxes {
+        let mut vels = [0i32; MAX_BOXES];
+        for (bi, b) in boxes.iter().enumerate() {
             let bounds = self.parts(b.on_table, p1);
+            let bounds = bounds.as_slice();
             let (lo, l) = (i32::from(b.lo), self.len(b));
             let c2 = 2 * lo + l;
             let k = part_of(&bounds, c2);
@@ -458,15 +472,14 @@ impl Geometry {
                     v = self.vel(b.on_table, p1, k + 1, out);
                 }
             }
-            vels.push(v);
+            vels[bi] = v;
         }
         // Blocking (one cell per step: a blocked box stays).
-        let mut new: Vec<i32> = boxes
-            .iter()
-            .zip(&vels)
-            .map(|(b, v)| i32::from(b.lo) + v)
-            .collect();
-        let mut blocker = vec![usize::MAX; boxes.len()];
+        let mut new = [0i32; MAX_BOXES];
+        for (i, b) in boxes.iter().enumerate() {
+            new[i] = i32::from(b.lo) + vels[i];
+        }
+        let mut blocker = [usize::MAX; MAX_BOXES];
         for _ in 0..=boxes.len() {
             let mut changed = false;
             for i in 0..boxes.len() {
@@ -503,11 +516,13 @@ impl Geometry {
             b.lo = *n as i16;
         }
         // Transfer: drops and deliveries.
-        let mut kept = Vec::with_capacity(boxes.len());
-        for b in boxes {
+        let mut kept_a = [ABox::default(); MAX_BOXES];
+        let mut nk = 0usize;
+        for &b in boxes.iter() {
             let (lo, l) = (i32::from(b.lo), self.len(&b));
             let c2 = 2 * lo + l;
             let bounds = self.parts(b.on_table, p1);
+            let bounds = bounds.as_slice();
             let (first, last) = (bounds[0], bounds[bounds.len() - 1]);
             if c2 > 2 * last || c2 < 2 * first {
                 ev.hazard.get_or_insert(HazardKind::Dropped);
@@ -528,14 +543,17 @@ impl Geometry {
                     continue;
                 }
             }
-            kept.push(b);
+            kept_a[nk] = b;
+            nk += 1;
         }
+        let kept = &mut kept_a[..nk];
         // Shear and push.
         let rotating = moving || p1 == 2;
-        for b in &kept {
+        for b in kept.iter() {
             let (lo, l) = (i32::from(b.lo), self.len(b));
             let c2 = 2 * lo + l;
             let bounds = self.parts(b.on_table, p1);
+            let bounds = bounds.as_slice();
             let k = part_of(&bounds, c2);
             let n_parts = bounds.len() - 1;
             // Which ends of part k are table-side: in the line frame the end of the last
@@ -592,17 +610,19 @@ impl Geometry {
             let free = kept.iter().all(|b| {
                 b.on_table || i32::from(b.lo) >= l + self.spawn_gap || i32::from(b.lo) >= self.joints[0]
             });
-            if free && kept.len() < MAX_BOXES {
-                kept.push(nb);
+            if free && nk < MAX_BOXES {
+                kept_a[nk] = nb;
+                nk += 1;
             }
         }
-        kept.sort();
+        let kept = &mut kept_a[..nk];
+        kept.sort_unstable();
         let mut next = PlantState {
             angle,
-            n: kept.len() as u8,
+            n: nk as u8,
             boxes: [ABox::default(); MAX_BOXES],
         };
-        next.boxes[..kept.len()].copy_from_slice(&kept);
+        next.boxes[..nk].copy_from_slice(kept);
         (next, ev)
     }
 
@@ -612,6 +632,18 @@ impl Geometry {
         s.boxes[..usize::from(s.n)]
             .iter()
             .all(|b| b.on_table || i32::from(b.lo) >= l + self.spawn_gap)
+    }
+}
+
+/// Part boundaries of a frame, on the stack.
+struct Bounds {
+    v: [i32; 10],
+    n: usize,
+}
+
+impl Bounds {
+    fn as_slice(&self) -> &[i32] {
+        &self.v[..self.n]
     }
 }
 
