@@ -11,6 +11,7 @@ apt_packages=()
 need() { dpkg -s "$1" >/dev/null 2>&1 || apt_packages+=("$1"); }
 need python3-venv
 need mbpoll
+need spin
 if [ ${#apt_packages[@]} -gt 0 ]; then
   echo "scripts/test.sh: installing Debian packages: ${apt_packages[*]}"
   if [ "$(id -u)" -eq 0 ]; then SUDO=""; else SUDO="sudo"; fi
