@@ -19,6 +19,7 @@ pub mod bundle;
 pub mod constraints;
 pub mod control;
 pub mod diag;
+pub mod dtree;
 pub mod emulator;
 pub mod engine;
 pub mod explain;

@@ -33,7 +33,7 @@ fn run_spin(text: &str, tag: &str) -> promela::SpinVerdict {
     };
     ok(Command::new("spin").args(["-a", "model.pml"]), "spin");
     ok(Command::new("gcc").args(["-O1", "-w", "-DMEMLIM=2048", "-o", "pan", "pan.c"]), "gcc");
-    let out = ok(Command::new("./pan").args(["-m1000000", "-c0", "-n"]), "pan");
+    let out = ok(Command::new("./pan").args(["-m3000000", "-c0", "-n"]), "pan");
     let _ = std::fs::remove_dir_all(&dir);
     promela::parse_pan(&out)
 }
