@@ -5,6 +5,7 @@ mod check;
 mod filter;
 mod gateway;
 mod run;
+mod verify;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -67,6 +68,9 @@ pub(crate) enum Command {
     /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
     /// sensor-to-output latency).
     GatewayBench(gateway::BenchArgs),
+    /// Verify the constraint set on the abstract plant model (safety, permissiveness,
+    /// invariants, necessity), optionally against SPIN, with benchmarks.
+    Verify(verify::VerifyArgs),
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -88,6 +92,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
+        Some(Command::Verify(args)) => verify::run(&cli.plant, &args),
         Some(Command::Run {
             scenario,
             headless,

@@ -359,6 +359,70 @@ impl CompiledFilter {
     }
 }
 
+/// The mask table over a whole frame, for supports too large to pack in one word:
+/// per monomial, a (table, word, mask, test) quadruple per word it reads.
+#[derive(Clone, Debug, Default)]
+pub struct SparseMasks {
+    words: Vec<(u8, u32, u64, u64)>,
+    /// End of each monomial in `words`.
+    ends: Vec<u32>,
+    support: usize,
+}
+
+impl SparseMasks {
+    /// Compiles every monomial of a set.
+    pub fn new(set: &ConstraintSet) -> Self {
+        let mut s = Self::default();
+        let mut vars = std::collections::BTreeSet::new();
+        for t in set.constraints.iter().flat_map(|c| c.dnf.iter()) {
+            if expr::is_contradictory(t) {
+                continue;
+            }
+            let mut ws: Vec<(u8, u32, u64, u64)> = Vec::new();
+            for l in t {
+                vars.insert(l.var);
+                let table = l.var.space as u8 + if l.var.prev { 4 } else { 0 };
+                let word = l.var.index / 64;
+                let b = 1u64 << (l.var.index % 64);
+                match ws.iter_mut().find(|w| w.0 == table && w.1 == word) {
+                    Some(w) => {
+                        w.2 |= b;
+                        if l.positive {
+                            w.3 |= b;
+                        }
+                    }
+                    None => ws.push((table, word, b, if l.positive { b } else { 0 })),
+                }
+            }
+            s.words.extend(ws);
+            s.ends.push(s.words.len() as u32);
+        }
+        s.support = vars.len();
+        s
+    }
+
+    /// Number of distinct variables read.
+    pub fn support(&self) -> usize {
+        self.support
+    }
+
+    /// True when some monomial holds in `frame`.
+    pub fn eval(&self, frame: &Frame) -> bool {
+        let tables = frame.tables();
+        let mut start = 0usize;
+        for &end in &self.ends {
+            let end = end as usize;
+            if self.words[start..end].iter().all(|&(t, w, m, x)| {
+                tables[usize::from(t & 7)].get(w as usize).copied().unwrap_or(0) & m == x
+            }) {
+                return true;
+            }
+            start = end;
+        }
+        false
+    }
+}
+
 /// Space sizes a frame needs for the variables of a set.
 pub fn frame_sizes(vars: &[Var]) -> [usize; 4] {
     let mut s = [0usize; 4];

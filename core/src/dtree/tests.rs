@@ -137,6 +137,7 @@ proptest::proptest! {
             c.unpack_into(x, &mut frame);
             let direct = syn.constraints.constraints.iter().any(|k| expr::eval_dnf(&k.dnf, &frame));
             proptest::prop_assert_eq!(c.eval_masks(&frame), direct);
+            proptest::prop_assert_eq!(SparseMasks::new(&syn.constraints).eval(&frame), direct);
             proptest::prop_assert_eq!(c.eval_tree(&frame), direct);
         }
     }
