@@ -29,7 +29,8 @@ pub fn icon() -> Option<egui::IconData> {
 
 /// Opens the console window and runs it until closed.
 pub fn run_console(opts: &ConsoleOptions) -> anyhow::Result<()> {
-    let mut console = Console::new(opts).map_err(|e| anyhow::anyhow!("cannot open the console:\n{e}"))?;
+    let mut console =
+        Console::new(opts).map_err(|e| anyhow::anyhow!("cannot open the console:\n{e}"))?;
     let mut viewport = egui::ViewportBuilder::default()
         .with_title("Vigie — operator console")
         .with_inner_size([1600.0, 1000.0])
@@ -41,11 +42,15 @@ pub fn run_console(opts: &ConsoleOptions) -> anyhow::Result<()> {
         viewport,
         ..Default::default()
     };
-    eframe::run_native("vigie", native, Box::new(move |cc| {
-        console.setup(&cc.egui_ctx);
-        Ok(Box::new(console))
-    }))
-        .map_err(|e| anyhow::anyhow!("console: {e}"))
+    eframe::run_native(
+        "vigie",
+        native,
+        Box::new(move |cc| {
+            console.setup(&cc.egui_ctx);
+            Ok(Box::new(console))
+        }),
+    )
+    .map_err(|e| anyhow::anyhow!("console: {e}"))
 }
 
 /// Result of [`bench_frames`].
@@ -68,7 +73,11 @@ pub struct FrameBench {
 fn rss_kib() -> u64 {
     std::fs::read_to_string("/proc/self/statm")
         .ok()
-        .and_then(|s| s.split_whitespace().nth(1).and_then(|v| v.parse::<u64>().ok()))
+        .and_then(|s| {
+            s.split_whitespace()
+                .nth(1)
+                .and_then(|v| v.parse::<u64>().ok())
+        })
         .map_or(0, |pages| pages * 4)
 }
 
@@ -92,7 +101,11 @@ fn run_frame(ctx: &egui::Context, console: &mut Console, t: f64, size: egui::Vec
 /// headless egui context (no GPU) and returns the median CPU time per frame; then, when
 /// `memory_hour` is set, runs one simulated hour at 100x (frames of 1/60 s) and reports
 /// the resident memory after the first 10 simulated minutes and at the end.
-pub fn bench_frames(opts: &ConsoleOptions, frames: usize, memory_hour: bool) -> anyhow::Result<FrameBench> {
+pub fn bench_frames(
+    opts: &ConsoleOptions,
+    frames: usize,
+    memory_hour: bool,
+) -> anyhow::Result<FrameBench> {
     let mut opts = opts.clone();
     opts.data_dir = None;
     opts.paused = false;
@@ -117,7 +130,11 @@ pub fn bench_frames(opts: &ConsoleOptions, frames: usize, memory_hour: bool) -> 
     }
     samples.sort_by(f64::total_cmp);
     let median_ms = samples[samples.len() / 2];
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_precision_loss)]
+    #[allow(
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss,
+        clippy::cast_precision_loss
+    )]
     let p95_ms = samples[((samples.len() as f64 * 0.95) as usize).min(samples.len() - 1)];
     let (mut warm, mut end, mut sim_s) = (0, 0, 0);
     if memory_hour {

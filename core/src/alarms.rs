@@ -227,20 +227,37 @@ mod tests {
     #[test]
     fn isa_18_2_lifecycle() {
         let mut l = AlarmList::new();
-        let a = l.raise(Millis(10), "trip:CSs10", AlarmKind::FilterTrip, "CSs10".into());
+        let a = l.raise(
+            Millis(10),
+            "trip:CSs10",
+            AlarmKind::FilterTrip,
+            "CSs10".into(),
+        );
         assert_eq!(l.get(a).map(Alarm::state), Some(AlarmState::Unacknowledged));
         assert!(l.get(a).is_some_and(|x| x.first_out));
         // Same condition again: no duplicate.
-        assert_eq!(l.raise(Millis(20), "trip:CSs10", AlarmKind::FilterTrip, "x".into()), a);
+        assert_eq!(
+            l.raise(Millis(20), "trip:CSs10", AlarmKind::FilterTrip, "x".into()),
+            a
+        );
         let b = l.raise(Millis(30), "link:plant", AlarmKind::Link, "link".into());
-        assert!(l.get(b).is_some_and(|x| !x.first_out), "second of the burst");
+        assert!(
+            l.get(b).is_some_and(|x| !x.first_out),
+            "second of the burst"
+        );
         l.clear(Millis(40), "link:plant");
-        assert_eq!(l.get(b).map(Alarm::state), Some(AlarmState::ClearedUnacknowledged));
+        assert_eq!(
+            l.get(b).map(Alarm::state),
+            Some(AlarmState::ClearedUnacknowledged)
+        );
         assert_eq!(l.visible(Millis(40)).len(), 2);
         l.acknowledge(Millis(50), b, "cable reseated").unwrap();
         assert_eq!(l.get(b).map(Alarm::state), Some(AlarmState::Normal));
         assert_eq!(l.visible(Millis(50)).len(), 1);
-        assert_eq!(l.acknowledge(Millis(60), b, ""), Err(AlarmError::AlreadyAcknowledged(b)));
+        assert_eq!(
+            l.acknowledge(Millis(60), b, ""),
+            Err(AlarmError::AlreadyAcknowledged(b))
+        );
         l.acknowledge(Millis(60), a, "").unwrap();
         assert_eq!(l.get(a).map(Alarm::state), Some(AlarmState::Acknowledged));
         // A new burst after everything is acknowledged starts a new first-out.
@@ -253,7 +270,10 @@ mod tests {
     fn shelving_is_time_limited() {
         let mut l = AlarmList::new();
         let a = l.raise(Millis(0), "k", AlarmKind::Hazard, "m".into());
-        assert_eq!(l.shelve(Millis(0), a, Millis(0)), Err(AlarmError::EmptyShelving));
+        assert_eq!(
+            l.shelve(Millis(0), a, Millis(0)),
+            Err(AlarmError::EmptyShelving)
+        );
         l.shelve(Millis(100), a, Millis(1000)).unwrap();
         assert!(l.visible(Millis(500)).is_empty());
         assert_eq!(l.shelved(Millis(500)).len(), 1);

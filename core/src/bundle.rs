@@ -44,7 +44,10 @@ impl PlantBundle {
         } else {
             (None, Vec::new())
         };
-        let aux = tasks.as_ref().map(crate::tasks::TaskSet::aux_names).unwrap_or_default();
+        let aux = tasks
+            .as_ref()
+            .map(crate::tasks::TaskSet::aux_names)
+            .unwrap_or_default();
         let (mut bundle, mut more) = Self::from_plant(dir, plant, &aux);
         bundle.tasks = tasks;
         problems.append(&mut more);
@@ -76,7 +79,11 @@ impl PlantBundle {
             problems.push(Problem::error(
                 "V0107",
                 format!("{err} when {witness}"),
-                Some(crate::diag::Location::new(&dir.join("constraints.txt"), 1, 1)),
+                Some(crate::diag::Location::new(
+                    &dir.join("constraints.txt"),
+                    1,
+                    1,
+                )),
             ));
         }
         (

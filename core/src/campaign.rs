@@ -48,7 +48,11 @@ impl Default for Config {
     fn default() -> Self {
         Self {
             duration_ms: 40_000,
-            arrivals: vec![(0, BoxSize::Small), (6_000, BoxSize::Large), (12_000, BoxSize::Small)],
+            arrivals: vec![
+                (0, BoxSize::Small),
+                (6_000, BoxSize::Large),
+                (12_000, BoxSize::Small),
+            ],
             seed: 1,
             threads: 2,
         }
@@ -122,14 +126,21 @@ impl Report {
 
     /// The tripped mutants that were not localised.
     pub fn misses(&self) -> impl Iterator<Item = &Outcome> {
-        self.outcomes.iter().filter(|o| o.trip_ms.is_some() && !o.localised)
+        self.outcomes
+            .iter()
+            .filter(|o| o.trip_ms.is_some() && !o.localised)
     }
 }
 
 /// Names an expression reads (empty when it does not parse).
 fn expr_names(text: &str) -> Vec<String> {
     crate::expr::parse_str(text)
-        .map(|e| e.leaves().into_iter().map(|(n, _, _)| n.to_string()).collect())
+        .map(|e| {
+            e.leaves()
+                .into_iter()
+                .map(|(n, _, _)| n.to_string())
+                .collect()
+        })
         .unwrap_or_default()
 }
 
@@ -137,12 +148,17 @@ fn expr_names(text: &str) -> Vec<String> {
 fn patch_names(patch: &Patch) -> (String, BTreeSet<String>) {
     let mut names = BTreeSet::new();
     let place = match patch {
-        Patch::Condition { transition, condition } => {
+        Patch::Condition {
+            transition,
+            condition,
+        } => {
             names.insert(transition.clone());
             names.extend(expr_names(condition));
             format!("transition {transition}")
         }
-        Patch::ReplaceAction { step, .. } | Patch::RemoveAction { step, .. } | Patch::AddAction { step, .. } => {
+        Patch::ReplaceAction { step, .. }
+        | Patch::RemoveAction { step, .. }
+        | Patch::AddAction { step, .. } => {
             names.insert(step.clone());
             format!("step {step}")
         }
@@ -169,8 +185,13 @@ pub fn mutants(bundle: &PlantBundle) -> Result<Vec<Mutant>, Vec<Problem>> {
             program: v.program.clone(),
         });
     }
-    for (k, m) in mutations(&lib.reference, &bundle.plant).into_iter().enumerate() {
-        let Ok(program) = m.patch.apply(&lib.reference) else { continue };
+    for (k, m) in mutations(&lib.reference, &bundle.plant)
+        .into_iter()
+        .enumerate()
+    {
+        let Ok(program) = m.patch.apply(&lib.reference) else {
+            continue;
+        };
         let (place, names) = patch_names(&m.patch);
         debug_assert!(match &m.place {
             Place::Transition { id, .. } => names.contains(id),
@@ -191,9 +212,23 @@ pub fn mutants(bundle: &PlantBundle) -> Result<Vec<Mutant>, Vec<Problem>> {
 /// The names a suspect gives (see the module doc).
 pub fn suspect_names(item: &Item) -> BTreeSet<String> {
     let mut out = BTreeSet::new();
-    for key in ["transition", "step", "activated", "steps", "transitions", "equation", "signals", "sensor"] {
+    for key in [
+        "transition",
+        "step",
+        "activated",
+        "steps",
+        "transitions",
+        "equation",
+        "signals",
+        "sensor",
+    ] {
         if let Some(v) = item.fields.get(key) {
-            out.extend(v.split(',').map(str::trim).filter(|s| !s.is_empty()).map(str::to_string));
+            out.extend(
+                v.split(',')
+                    .map(str::trim)
+                    .filter(|s| !s.is_empty())
+                    .map(str::to_string),
+            );
         }
     }
     out
@@ -216,7 +251,10 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
     let compiled = match CompiledProgram::new(&mutant.program, &bundle.plant, &Origin::default()) {
         Ok(c) => c,
         Err(p) => {
-            outcome.why = format!("does not compile: {}", p.first().map(|p| p.message.clone()).unwrap_or_default());
+            outcome.why = format!(
+                "does not compile: {}",
+                p.first().map(|p| p.message.clone()).unwrap_or_default()
+            );
             return outcome;
         }
     };
@@ -227,11 +265,15 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
     let mut sim = match Simulation::new(bundle.clone(), compiled, config.seed, options) {
         Ok(s) => s,
         Err(p) => {
-            outcome.why = format!("cannot start: {}", p.first().map(|p| p.message.clone()).unwrap_or_default());
+            outcome.why = format!(
+                "cannot start: {}",
+                p.first().map(|p| p.message.clone()).unwrap_or_default()
+            );
             return outcome;
         }
     };
-    sim.emulator.set_arrivals(ArrivalPlan::List(config.arrivals.clone()));
+    sim.emulator
+        .set_arrivals(ArrivalPlan::List(config.arrivals.clone()));
     let _ = sim.act(&OperatorAction::Start);
     let end = Millis(config.duration_ms);
     let boxes = u32::try_from(config.arrivals.len()).unwrap_or(u32::MAX);

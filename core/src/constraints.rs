@@ -61,7 +61,12 @@ impl ConstraintSet {
         Self::parse_kind(text, file, symbols, SetKind::Invariants)
     }
 
-    fn parse_kind(text: &str, file: &Path, symbols: &Symbols, kind: SetKind) -> (Self, Vec<Problem>) {
+    fn parse_kind(
+        text: &str,
+        file: &Path,
+        symbols: &Symbols,
+        kind: SetKind,
+    ) -> (Self, Vec<Problem>) {
         let mut set = Self::default();
         let mut problems = Vec::new();
         let mut seen: BTreeMap<String, usize> = BTreeMap::new();
@@ -327,10 +332,16 @@ impl Constraint {
         let mut warnings = Vec::new();
         let dnf = expr::simplify(raw);
         if kind == SetKind::Invariants {
-            if dnf.iter().flatten().any(|l| l.var.space == Space::Output && !l.var.prev) {
+            if dnf
+                .iter()
+                .flatten()
+                .any(|l| l.var.space == Space::Output && !l.var.prev)
+            {
                 return Err(Problem::error(
                     "V0109",
-                    format!("invariant `{id}` reads an output at t; invariants describe situations of the plant (inputs, observers, previous outputs)"),
+                    format!(
+                        "invariant `{id}` reads an output at t; invariants describe situations of the plant (inputs, observers, previous outputs)"
+                    ),
                     Some(location),
                 ));
             }

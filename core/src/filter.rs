@@ -210,7 +210,12 @@ impl Filter {
 
     /// The simple constraints that force output `k` ON in the context of `frame`, each
     /// rendered with the literals that make it act, e.g. `CSs10 (C7=1)`.
-    pub fn forcing_on(&self, k: usize, frame: &Frame, symbols: &crate::symbols::Symbols) -> Vec<String> {
+    pub fn forcing_on(
+        &self,
+        k: usize,
+        frame: &Frame,
+        symbols: &crate::symbols::Symbols,
+    ) -> Vec<String> {
         let mut out = Vec::new();
         for t in &self.terms {
             if t.outputs.as_slice() != [(u32::try_from(k).unwrap_or(u32::MAX), false)] {
@@ -440,7 +445,11 @@ pub fn check_fallback_exists(
     let mut checked = 0;
     for assignment in 0..total {
         for (i, v) in vars.iter().enumerate() {
-            let table = if v.prev { &mut frame.prev } else { &mut frame.now };
+            let table = if v.prev {
+                &mut frame.prev
+            } else {
+                &mut frame.now
+            };
             table[v.space as usize].set(v.index as usize, (assignment >> i) & 1 == 1);
         }
         if invariants
@@ -648,7 +657,10 @@ impl Search {
         let next = self
             .nogoods
             .iter()
-            .filter(|ng| !ng.iter().any(|&(k, v)| a.get(k).copied().flatten() == Some(!v)))
+            .filter(|ng| {
+                !ng.iter()
+                    .any(|&(k, v)| a.get(k).copied().flatten() == Some(!v))
+            })
             .flat_map(|ng| ng.iter().map(|&(k, _)| k))
             .filter(|&k| a.get(k).copied().flatten().is_none())
             .min();

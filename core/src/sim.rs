@@ -289,7 +289,8 @@ impl Simulation {
                 CompiledProgram::load(&program_path, &bundle.plant)?
             }
             ProgramChoice::Error(id) => {
-                let lib = ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &bundle.plant)?;
+                let lib =
+                    ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &bundle.plant)?;
                 let Some(v) = lib.variants.into_iter().find(|v| &v.def.id == id) else {
                     return Err(vec![Problem::error(
                         "V0402",
@@ -567,7 +568,14 @@ impl Simulation {
                     a.text.clone(),
                 );
             }
-            self.log(if warning { "task_warning" } else { "task_alarm" }, a.text);
+            self.log(
+                if warning {
+                    "task_warning"
+                } else {
+                    "task_alarm"
+                },
+                a.text,
+            );
         }
     }
 

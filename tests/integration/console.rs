@@ -64,11 +64,23 @@ fn cs10_trip_levels_acknowledge_and_reset() {
     h.get_by_label("TRIPPED");
 
     let expected = [
-        ("0 Current state", "A4 is held ON by the filter: CSs10 (C7=1)."),
+        (
+            "0 Current state",
+            "A4 is held ON by the filter: CSs10 (C7=1).",
+        ),
         ("1 Projection", "would be sheared by the rotating turntable"),
-        ("2 Before stop", "CSs10 = C7 · A\u{305}4\u{305} became true: C7=1, A4=0."),
-        ("3 Advanced", "C7 changed 0→1 at 11680 ms (in the stopping cycle), element of the constraint."),
-        ("4 Hypothesis", "Expected from the control: A4 should have been ON."),
+        (
+            "2 Before stop",
+            "CSs10 = C7 · A\u{305}4\u{305} became true: C7=1, A4=0.",
+        ),
+        (
+            "3 Advanced",
+            "C7 changed 0→1 at 11680 ms (in the stopping cycle), element of the constraint.",
+        ),
+        (
+            "4 Hypothesis",
+            "Expected from the control: A4 should have been ON.",
+        ),
     ];
     for (button, item) in expected {
         h.get_by_label(button).click();
@@ -95,7 +107,10 @@ fn cs10_trip_levels_acknowledge_and_reset() {
     h.get_by_label("Reset").click();
     h.run_steps(2);
     assert!(h.state().sim.engine.is_tripped());
-    assert!(h.query_by_label_contains("Reset: reset refused: CSs10 still violated").is_some());
+    assert!(
+        h.query_by_label_contains("Reset: reset refused: CSs10 still violated")
+            .is_some()
+    );
 
     // Everything reached the disk as it happened.
     let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal written");
@@ -115,15 +130,27 @@ fn maintenance_fix_of_e01_passes_verification() {
     h.get_by_label("Chart table");
     h.get_by_label("X24");
     // A syntax error is reported, not a panic.
-    h.state_mut().draft_mut().expect("draft").conditions.insert("t24".into(), "FE(C7".into());
+    h.state_mut()
+        .draft_mut()
+        .expect("draft")
+        .conditions
+        .insert("t24".into(), "FE(C7".into());
     h.get_by_label("Recompile").click();
     h.run_steps(2);
     assert!(h.state().status.contains("compilation failed"));
     // The correct receptivity.
-    h.state_mut().draft_mut().expect("draft").conditions.insert("t24".into(), "FE(C7)".into());
+    h.state_mut()
+        .draft_mut()
+        .expect("draft")
+        .conditions
+        .insert("t24".into(), "FE(C7)".into());
     h.get_by_label("Verify fix").click();
     h.run_steps(2);
-    assert!(h.state().status.starts_with("correct fix"), "{}", h.state().status);
+    assert!(
+        h.state().status.starts_with("correct fix"),
+        "{}",
+        h.state().status
+    );
     assert!(h.state().score().fixed);
     assert_eq!(h.state().score().attempts, 1);
     assert!(h.state().score().summary().contains("Fixed"));
@@ -135,12 +162,18 @@ fn journal_exports_to_csv_and_report_to_markdown() {
     let mut h = harness(options(None));
     h.run_steps(1);
     run_to_trip(&mut h);
-    h.state_mut().apply(Command::ExportCsv(out.join("journal.csv")));
-    h.state_mut().apply(Command::ExportReport(out.join("report")));
+    h.state_mut()
+        .apply(Command::ExportCsv(out.join("journal.csv")));
+    h.state_mut()
+        .apply(Command::ExportReport(out.join("report")));
     let csv = std::fs::read_to_string(out.join("journal.csv")).expect("csv");
     assert!(csv.starts_with("wall_ms,sim_ms,kind,text\n") && csv.contains(",trip,"));
     let md = std::fs::read_to_string(out.join("report/report.md")).expect("report");
-    assert!(md.contains("CSs10") && md.contains("## Level 4 Hypothesis") && md.contains("A4 should have been ON"));
+    assert!(
+        md.contains("CSs10")
+            && md.contains("## Level 4 Hypothesis")
+            && md.contains("A4 should have been ON")
+    );
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -152,7 +185,16 @@ fn snapshots_of_levels_and_modes() {
     let mut h = harness(opts);
     h.run_steps(3);
     h.snapshot("console_trip");
-    for (i, name) in ["0 Current state", "1 Projection", "2 Before stop", "3 Advanced", "4 Hypothesis"].iter().enumerate() {
+    for (i, name) in [
+        "0 Current state",
+        "1 Projection",
+        "2 Before stop",
+        "3 Advanced",
+        "4 Hypothesis",
+    ]
+    .iter()
+    .enumerate()
+    {
         h.get_by_label(name).click();
         h.run_steps(2);
         h.snapshot(&format!("console_level_{i}"));

@@ -58,7 +58,11 @@ fn blark_parse(name: &str, text: &str) -> (bool, String) {
 fn generated_st_is_accepted_by_blark() {
     let text = station_st();
     let (ok, log) = blark_parse("sorting_station.st", &text);
-    assert!(ok, "blark rejected the generated ST:\n{}", &log[log.len().saturating_sub(4000)..]);
+    assert!(
+        ok,
+        "blark rejected the generated ST:\n{}",
+        &log[log.len().saturating_sub(4000)..]
+    );
     for pou in ["FB_Observers", "FB_Filter", "FB_Tasks", "Vigie_Safety"] {
         assert!(log.contains(pou), "blark's summary does not list {pou}");
     }
@@ -67,6 +71,9 @@ fn generated_st_is_accepted_by_blark() {
 #[test]
 fn blark_rejects_broken_st() {
     // Control: the check has teeth.
-    let (ok, _) = blark_parse("broken.st", "PROGRAM X\nVAR a : BOOL; END_VAR\na := := ;\nEND_PROGRAM\n");
+    let (ok, _) = blark_parse(
+        "broken.st",
+        "PROGRAM X\nVAR a : BOOL; END_VAR\na := := ;\nEND_PROGRAM\n",
+    );
     assert!(!ok, "blark accepted invalid ST");
 }

@@ -145,7 +145,11 @@ fn fuzz_constraints_file() {
                 prop_assert!(!c.id.is_empty());
                 prop_assert!(c.dnf.iter().all(|t| !t.is_empty()));
             }
-            check_problems(&set.check_property_6(&symbols, &Default::default()).0, file, true)?;
+            check_problems(
+                &set.check_property_6(&symbols, &Default::default()).0,
+                file,
+                true,
+            )?;
             Ok(())
         })
         .unwrap();

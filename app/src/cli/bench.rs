@@ -28,7 +28,11 @@ pub(crate) fn median_ns(batches: u32, per_batch: u32, mut f: impl FnMut()) -> f6
 
 fn set(frame: &mut Frame, symbols: &vigie_core::symbols::Symbols, name: &str, prev: bool, v: bool) {
     if let Some((space, index)) = symbols.lookup(name) {
-        let table = if prev { &mut frame.prev } else { &mut frame.now };
+        let table = if prev {
+            &mut frame.prev
+        } else {
+            &mut frame.now
+        };
         table[space as usize].set(index as usize, v);
     }
 }
@@ -43,7 +47,14 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
 
     // Sorting station, production without trip: a box on A1, the table waiting at C4.
     let mut frame = Frame::new(symbols.sizes());
-    for (n, v) in [("C1", true), ("C4", true), ("A0", true), ("A1", true), ("A5", true), ("A6", true)] {
+    for (n, v) in [
+        ("C1", true),
+        ("C4", true),
+        ("A0", true),
+        ("A1", true),
+        ("A5", true),
+        ("A6", true),
+    ] {
         set(&mut frame, symbols, n, false, v);
     }
     let mut observers = bundle.observers.clone();
@@ -55,11 +66,20 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         filter.violations_synced(&state, black_box(&frame), &mut violations);
         black_box(&violations);
     });
-    anyhow::ensure!(violations.is_empty(), "benchmark state unexpectedly violates {violations:?}");
+    anyhow::ensure!(
+        violations.is_empty(),
+        "benchmark state unexpectedly violates {violations:?}"
+    );
 
     // The paper's CSs10 trip: box at C7, A4 released at C5.
     let mut trip = Frame::new(symbols.sizes());
-    for (n, v) in [("C5", true), ("C7", true), ("A3", true), ("A5", true), ("A6", true)] {
+    for (n, v) in [
+        ("C5", true),
+        ("C7", true),
+        ("A3", true),
+        ("A5", true),
+        ("A6", true),
+    ] {
         set(&mut trip, symbols, n, false, v);
     }
     set(&mut trip, symbols, "A4", true, true);
@@ -75,9 +95,18 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
     let a4 = bundle.plant.output("A4").unwrap_or(0);
     anyhow::ensure!(fb.get(a4), "CSs10 fallback must hold A4 ON");
 
-    writeln!(out, "sorting station (11 sensors, 7 actuators, 3 observers, 17 constraints)")?;
-    writeln!(out, "  filter cycle, no trip (observers + constraints): {no_trip:>10.1} ns   goal <= 1000 ns")?;
-    writeln!(out, "  filter cycle with CSs10 trip (+ fallback):       {with_trip:>10.1} ns   goal <= 1000 ns")?;
+    writeln!(
+        out,
+        "sorting station (11 sensors, 7 actuators, 3 observers, 17 constraints)"
+    )?;
+    writeln!(
+        out,
+        "  filter cycle, no trip (observers + constraints): {no_trip:>10.1} ns   goal <= 1000 ns"
+    )?;
+    writeln!(
+        out,
+        "  filter cycle with CSs10 trip (+ fallback):       {with_trip:>10.1} ns   goal <= 1000 ns"
+    )?;
 
     // Synthetic plant: 10,000 signals, 10,000 constraints.
     let synth = vigie_core::synthetic::generate(10_000, 10_000, 42);
@@ -162,20 +191,38 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         "  filter cycle, 10 inputs changed per cycle:       {:>10.1} µs   goal <= 100 µs ({n_viol_after_changes} constraints true at the end)",
         s_cycle / 1000.0
     )?;
-    writeln!(out, "  filter cycle, {n_trip} constraint(s) true:             {:>10.1} µs   goal <= 100 µs", s_trip_cycle / 1000.0)?;
-    writeln!(out, "  (full re-evaluation of every term, no state:     {:>10.1} µs)", s_full / 1000.0)?;
+    writeln!(
+        out,
+        "  filter cycle, {n_trip} constraint(s) true:             {:>10.1} µs   goal <= 100 µs",
+        s_trip_cycle / 1000.0
+    )?;
+    writeln!(
+        out,
+        "  (full re-evaluation of every term, no state:     {:>10.1} µs)",
+        s_full / 1000.0
+    )?;
     writeln!(
         out,
         "  fallback ({}):                              {:>10.1} µs   goal <= 50 µs",
         if ok { "found" } else { "spec error" },
         s_fallback / 1000.0
     )?;
-    writeln!(out, "  (fallback re-evaluating every term:              {:>10.1} µs)", s_fallback_full / 1000.0)?;
+    writeln!(
+        out,
+        "  (fallback re-evaluating every term:              {:>10.1} µs)",
+        s_fallback_full / 1000.0
+    )?;
     closed_loop(&mut out, plant_dir)?;
     task_monitors(&mut out)?;
     if let Some((ms, worst)) = explanations_ms(plant_dir, 21)? {
-        writeln!(out, "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms (CSs10 trip of cs10-paper.ron)")?;
-        writeln!(out, "  (projection running the whole 10 s, no hazard:  {worst:>10.2} ms)")?;
+        writeln!(
+            out,
+            "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms (CSs10 trip of cs10-paper.ron)"
+        )?;
+        writeln!(
+            out,
+            "  (projection running the whole 10 s, no hazard:  {worst:>10.2} ms)"
+        )?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -184,8 +231,15 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
 fn task_monitors(out: &mut impl std::io::Write) -> anyhow::Result<()> {
     use vigie_core::Millis;
     use vigie_core::tasks::{Monitor, synthetic};
-    writeln!(out, "task monitors (stopwatches, seed 000), synthetic task sets:")?;
-    writeln!(out, "  {:>6} {:>14} {:>14}", "tasks", "per event", "per cycle")?;
+    writeln!(
+        out,
+        "task monitors (stopwatches, seed 000), synthetic task sets:"
+    )?;
+    writeln!(
+        out,
+        "  {:>6} {:>14} {:>14}",
+        "tasks", "per event", "per cycle"
+    )?;
     for n in [1usize, 10, 100, 1_000, 10_000] {
         let set = synthetic(n);
         let starts: Vec<String> = set.tasks.iter().map(|t| t.start.clone()).collect();
@@ -202,7 +256,11 @@ fn task_monitors(out: &mut impl std::io::Write) -> anyhow::Result<()> {
             black_box(monitor.advance(Millis(t)));
             black_box(monitor.next_deadline());
         });
-        writeln!(out, "  {n:>6} {:>11.0} ns {:>11.0} ns", per_event, per_cycle)?;
+        writeln!(
+            out,
+            "  {n:>6} {:>11.0} ns {:>11.0} ns",
+            per_event, per_cycle
+        )?;
     }
     Ok(())
 }
@@ -221,7 +279,8 @@ pub(crate) fn thread_cpu() -> Option<std::time::Duration> {
 fn closed_loop(out: &mut impl std::io::Write, plant_dir: &Path) -> anyhow::Result<()> {
     use vigie_core::sim::{Options, Scenario, Simulation};
     let path = plant_dir.join("scenarios/reference-hour.ron");
-    let scenario = Scenario::load(&path).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let scenario =
+        Scenario::load(&path).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let mut sim = Simulation::from_scenario(&scenario, &path, Options::default())
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let cpu0 = thread_cpu();
@@ -260,14 +319,21 @@ fn closed_loop(out: &mut impl std::io::Write, plant_dir: &Path) -> anyhow::Resul
 /// no such scenario or it does not trip.
 /// The second figure is the worst case of the projection alone: the full 10 s horizon
 /// (no hazard predicted).
-pub(crate) fn explanations_ms(plant_dir: &Path, batches: u32) -> anyhow::Result<Option<(f64, f64)>> {
+pub(crate) fn explanations_ms(
+    plant_dir: &Path,
+    batches: u32,
+) -> anyhow::Result<Option<(f64, f64)>> {
     use vigie_core::sim::{Options, Scenario, Simulation};
     let path = plant_dir.join("scenarios/cs10-paper.ron");
     if !path.exists() {
         return Ok(None);
     }
-    let scenario = Scenario::load(&path).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
-    anyhow::ensure!(scenario.projection_ms == 10_000, "the benchmark needs a 10 s projection horizon");
+    let scenario =
+        Scenario::load(&path).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    anyhow::ensure!(
+        scenario.projection_ms == 10_000,
+        "the benchmark needs a 10 s projection horizon"
+    );
     let options = Options {
         history_cycles: 30_000,
         explain: false,
@@ -286,10 +352,15 @@ pub(crate) fn explanations_ms(plant_dir: &Path, batches: u32) -> anyhow::Result<
     let mut levels = 0;
     let ns = median_ns(batches.max(1), 1, || {
         let r = sim.explanation(0, emulator.clone(), program.clone(), &sim.program);
-        levels = r.as_ref().map_or(0, |(ex, _)| ex.levels().iter().filter(|l| !l.items.is_empty()).count());
+        levels = r.as_ref().map_or(0, |(ex, _)| {
+            ex.levels().iter().filter(|l| !l.items.is_empty()).count()
+        });
         black_box(&r);
     });
-    anyhow::ensure!(levels == 5, "the explanation has {levels} non-empty levels, not 5");
+    anyhow::ensure!(
+        levels == 5,
+        "the explanation has {levels} non-empty levels, not 5"
+    );
     // The projection stops at the first predicted hazard (+0.5 s shown); without any
     // hazard it runs the whole horizon: 10 s of program scans and emulator steps.
     let worst = median_ns(batches.clamp(1, 5), 1, || {

@@ -13,7 +13,12 @@ pub(crate) enum Kind {
     Mutations,
 }
 
-pub(crate) fn run(plant_dir: &Path, kind: Kind, threads: Option<usize>, json: bool) -> anyhow::Result<ExitCode> {
+pub(crate) fn run(
+    plant_dir: &Path,
+    kind: Kind,
+    threads: Option<usize>,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
     let Kind::Mutations = kind;
     let config = vigie_core::campaign::Config {
         threads: threads
@@ -22,8 +27,9 @@ pub(crate) fn run(plant_dir: &Path, kind: Kind, threads: Option<usize>, json: bo
             .max(1),
         ..vigie_core::campaign::Config::default()
     };
-    let report = vigie_core::campaign::run(plant_dir, &config)
-        .map_err(|p| anyhow::anyhow!("cannot run the campaign:\n{}", vigie_core::diag::render(&p)))?;
+    let report = vigie_core::campaign::run(plant_dir, &config).map_err(|p| {
+        anyhow::anyhow!("cannot run the campaign:\n{}", vigie_core::diag::render(&p))
+    })?;
     let mut out = std::io::stdout().lock();
     if json {
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
@@ -38,13 +44,27 @@ pub(crate) fn run(plant_dir: &Path, kind: Kind, threads: Option<usize>, json: bo
     writeln!(out, "  mutants:    {}", report.mutants)?;
     writeln!(out, "  tripped:    {}", report.tripped)?;
     writeln!(out, "  localised:  {}", report.localised)?;
-    writeln!(out, "  rate:       {:.1} %   goal >= 90 %", report.rate_percent())?;
-    writeln!(out, "  names in the first suspect (mean): {:.2}", report.mean_first_names)?;
+    writeln!(
+        out,
+        "  rate:       {:.1} %   goal >= 90 %",
+        report.rate_percent()
+    )?;
+    writeln!(
+        out,
+        "  names in the first suspect (mean): {:.2}",
+        report.mean_first_names
+    )?;
     let misses: Vec<_> = report.misses().collect();
     if !misses.is_empty() {
         writeln!(out, "misses:")?;
         for o in misses {
-            writeln!(out, "  {} [{}] {}", o.id, o.constraints.join(","), o.description)?;
+            writeln!(
+                out,
+                "  {} [{}] {}",
+                o.id,
+                o.constraints.join(","),
+                o.description
+            )?;
             writeln!(out, "      {}", o.why)?;
         }
     }

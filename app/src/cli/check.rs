@@ -61,9 +61,19 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
         plant: &bundle.plant.name,
         inputs: bundle.plant.inputs.len(),
         outputs: bundle.plant.outputs.len(),
-        observers: bundle.observers.defs.iter().map(|d| d.id.as_str()).collect(),
+        observers: bundle
+            .observers
+            .defs
+            .iter()
+            .map(|d| d.id.as_str())
+            .collect(),
         constraints: rows,
-        invariants: bundle.invariants.constraints.iter().map(|c| c.id.as_str()).collect(),
+        invariants: bundle
+            .invariants
+            .constraints
+            .iter()
+            .map(|c| c.id.as_str())
+            .collect(),
         property6_discharged: &bundle.discharged,
         problems: &problems,
     };

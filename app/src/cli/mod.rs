@@ -50,9 +50,17 @@ pub(crate) struct ConsoleArgs {
     pub(crate) variant: Option<String>,
 }
 
-fn open_console(plant: &std::path::Path, scenario: Option<PathBuf>, args: &ConsoleArgs) -> anyhow::Result<ExitCode> {
-    let mode = vigie_app::Mode::parse(&args.mode)
-        .ok_or_else(|| anyhow::anyhow!("unknown mode `{}` (production, maintenance, training)", args.mode))?;
+fn open_console(
+    plant: &std::path::Path,
+    scenario: Option<PathBuf>,
+    args: &ConsoleArgs,
+) -> anyhow::Result<ExitCode> {
+    let mode = vigie_app::Mode::parse(&args.mode).ok_or_else(|| {
+        anyhow::anyhow!(
+            "unknown mode `{}` (production, maintenance, training)",
+            args.mode
+        )
+    })?;
     let mut opts = vigie_app::ConsoleOptions::new(plant);
     opts.scenario = scenario;
     opts.speed = args.speed;
@@ -172,15 +180,26 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::BenchConsole { frames, no_memory }) => {
             let opts = vigie_app::ConsoleOptions::new(&cli.plant);
             let b = vigie_app::bench_frames(&opts, frames, !no_memory)?;
-            println!("console frame (logic + ui + tessellation, 1600x1000, 1x): median {:.2} ms, p95 {:.2} ms over {} frames   goal <= 4 ms", b.median_ms, b.p95_ms, b.frames);
+            println!(
+                "console frame (logic + ui + tessellation, 1600x1000, 1x): median {:.2} ms, p95 {:.2} ms over {} frames   goal <= 4 ms",
+                b.median_ms, b.p95_ms, b.frames
+            );
             if !no_memory {
-                println!("memory over {} s simulated at 100x: RSS {} KiB after 10 min, {} KiB at the end (growth {} KiB)", b.memory_sim_s, b.rss_warm_kib, b.rss_end_kib, b.rss_end_kib.saturating_sub(b.rss_warm_kib));
+                println!(
+                    "memory over {} s simulated at 100x: RSS {} KiB after 10 min, {} KiB at the end (growth {} KiB)",
+                    b.memory_sim_s,
+                    b.rss_warm_kib,
+                    b.rss_end_kib,
+                    b.rss_end_kib.saturating_sub(b.rss_warm_kib)
+                );
             }
             Ok(ExitCode::SUCCESS)
         }
-        Some(Command::Campaign { kind, threads, json }) => {
-            campaign::run(&cli.plant, kind, threads, json)
-        }
+        Some(Command::Campaign {
+            kind,
+            threads,
+            json,
+        }) => campaign::run(&cli.plant, kind, threads, json),
         Some(Command::Run {
             scenario,
             headless,
@@ -215,7 +234,10 @@ pub(crate) fn load_valid_bundle(
 /// Loads a plant folder, failing with every problem rendered when it cannot be used.
 pub(crate) fn load_bundle(
     dir: &std::path::Path,
-) -> anyhow::Result<(vigie_core::bundle::PlantBundle, Vec<vigie_core::diag::Problem>)> {
+) -> anyhow::Result<(
+    vigie_core::bundle::PlantBundle,
+    Vec<vigie_core::diag::Problem>,
+)> {
     vigie_core::bundle::PlantBundle::load(dir).map_err(|problems| {
         anyhow::anyhow!(
             "cannot load plant {}:\n{}",

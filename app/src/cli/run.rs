@@ -19,8 +19,8 @@ pub(crate) fn run(
             vigie_core::diag::render(&p)
         )
     })?;
-    let mut sim = Simulation::from_scenario(&scenario, scenario_path, Options::default())
-        .map_err(|p| {
+    let mut sim =
+        Simulation::from_scenario(&scenario, scenario_path, Options::default()).map_err(|p| {
             anyhow::anyhow!(
                 "cannot start scenario {}:\n{}",
                 scenario_path.display(),

@@ -210,11 +210,18 @@ impl Draft {
     /// The draft of a program.
     pub fn of(p: &Program) -> Self {
         Self {
-            conditions: p.transitions().map(|(_, t)| (t.id.clone(), t.condition.clone())).collect(),
+            conditions: p
+                .transitions()
+                .map(|(_, t)| (t.id.clone(), t.condition.clone()))
+                .collect(),
             actions: p
                 .steps()
                 .map(|(_, s)| {
-                    let text: Vec<String> = s.actions.iter().map(|a| format!("{} {}", a.qualifier, a.target)).collect();
+                    let text: Vec<String> = s
+                        .actions
+                        .iter()
+                        .map(|a| format!("{} {}", a.qualifier, a.target))
+                        .collect();
                     (s.id.clone(), text.join(", "))
                 })
                 .collect(),
@@ -246,7 +253,11 @@ impl Draft {
 pub fn parse_actions(text: &str) -> Result<Vec<vigie_core::control::Action>, String> {
     use vigie_core::control::{Action, Qualifier};
     let mut out = Vec::new();
-    for part in text.split([',', ';']).map(str::trim).filter(|s| !s.is_empty()) {
+    for part in text
+        .split([',', ';'])
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+    {
         let mut it = part.split_whitespace();
         let (q, target) = match (it.next(), it.next(), it.next()) {
             (Some(q), Some(t), None) => (q, t),
@@ -265,7 +276,11 @@ pub fn parse_actions(text: &str) -> Result<Vec<vigie_core::control::Action>, Str
             "P" => Qualifier::P,
             q if q.starts_with("L(") => Qualifier::L(num(&q[2..])?),
             q if q.starts_with("D(") => Qualifier::D(num(&q[2..])?),
-            q => return Err(format!("`{q}`: unknown qualifier (N, S, R, P, L(ms), D(ms))")),
+            q => {
+                return Err(format!(
+                    "`{q}`: unknown qualifier (N, S, R, P, L(ms), D(ms))"
+                ));
+            }
         };
         out.push(Action {
             qualifier,
@@ -352,7 +367,11 @@ impl Console {
                 scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
                 path: path.clone(),
             },
-            None => Source::free_run(&opts.plant_dir, ProgramChoice::Reference, "Reference program"),
+            None => Source::free_run(
+                &opts.plant_dir,
+                ProgramChoice::Reference,
+                "Reference program",
+            ),
         };
         let plant_dir = source
             .path
@@ -361,7 +380,11 @@ impl Console {
             .join(&source.scenario.plant);
         let (source, mut sim) = match &opts.variant {
             Some(id) => {
-                let s = Source::free_run(&plant_dir, ProgramChoice::Error(id.clone()), &format!("Training: {id}"));
+                let s = Source::free_run(
+                    &plant_dir,
+                    ProgramChoice::Error(id.clone()),
+                    &format!("Training: {id}"),
+                );
                 let sim = s.build()?;
                 (s, sim)
             }
@@ -372,7 +395,11 @@ impl Console {
         };
         let variants = sim_variants(&plant_dir, &sim);
         let mut journal = Journal::open(opts.data_dir.as_deref());
-        journal.push(0, "session", &format!("console opened on {}", source.scenario.name));
+        journal.push(
+            0,
+            "session",
+            &format!("console opened on {}", source.scenario.name),
+        );
         if opts.start {
             let _ = sim.act(&OperatorAction::Start);
         }
@@ -497,7 +524,8 @@ impl Console {
         let whole = n as u32;
         #[allow(clippy::cast_precision_loss)]
         {
-            self.budget_ms = (self.budget_ms - f64::from(whole) * cycle as f64).min(cycle as f64 * 2.0);
+            self.budget_ms =
+                (self.budget_ms - f64::from(whole) * cycle as f64).min(cycle as f64 * 2.0);
         }
         self.cycles(whole);
     }
@@ -522,7 +550,13 @@ impl Console {
                 self.running = false;
                 self.cycles(1);
             }
-            Command::SetSpeed(s) => self.speed = if s.is_finite() { s.clamp(0.1, 100.0) } else { 1.0 },
+            Command::SetSpeed(s) => {
+                self.speed = if s.is_finite() {
+                    s.clamp(0.1, 100.0)
+                } else {
+                    1.0
+                }
+            }
             Command::Plant(action) => {
                 let result = self.sim.act(&action);
                 self.status = match result {
@@ -547,18 +581,26 @@ impl Console {
             Command::Acknowledge { id, note } => {
                 match self.sim.alarms.acknowledge(Millis(now), id, &note) {
                     Ok(()) => {
-                        self.journal.push(now, "ack", &format!("alarm {id} acknowledged: {note}"));
+                        self.journal
+                            .push(now, "ack", &format!("alarm {id} acknowledged: {note}"));
                         self.notes.remove(&id);
                     }
                     Err(e) => self.status = format!("acknowledge refused: {e}"),
                 }
             }
-            Command::Shelve { id, ms } => match self.sim.alarms.shelve(Millis(now), id, Millis(ms)) {
-                Ok(()) => self.journal.push(now, "shelve", &format!("alarm {id} shelved for {} s", ms / 1000)),
+            Command::Shelve { id, ms } => match self.sim.alarms.shelve(Millis(now), id, Millis(ms))
+            {
+                Ok(()) => self.journal.push(
+                    now,
+                    "shelve",
+                    &format!("alarm {id} shelved for {} s", ms / 1000),
+                ),
                 Err(e) => self.status = format!("shelve refused: {e}"),
             },
             Command::Unshelve(id) => match self.sim.alarms.unshelve(id) {
-                Ok(()) => self.journal.push(now, "unshelve", &format!("alarm {id} unshelved")),
+                Ok(()) => self
+                    .journal
+                    .push(now, "unshelve", &format!("alarm {id} unshelved")),
                 Err(e) => self.status = format!("unshelve refused: {e}"),
             },
             Command::Scrub(t) => self.replay = t,
@@ -586,7 +628,11 @@ impl Console {
             }
             Command::Restart => self.restart(None),
             Command::LoadVariant(id) => {
-                self.source = Source::free_run(&self.plant_dir, ProgramChoice::Error(id.clone()), &format!("Training: {id}"));
+                self.source = Source::free_run(
+                    &self.plant_dir,
+                    ProgramChoice::Error(id.clone()),
+                    &format!("Training: {id}"),
+                );
                 self.score = Score::default();
                 self.score.variant = Some(id);
                 self.draft = None;
@@ -619,7 +665,8 @@ impl Console {
         };
         let base = self.sim.program.program().program.clone();
         let result = draft.apply(&base).and_then(|p| {
-            CompiledProgram::new(&p, &self.sim.bundle.plant, &Origin::default()).map_err(|e| vigie_core::diag::render(&e))
+            CompiledProgram::new(&p, &self.sim.bundle.plant, &Origin::default())
+                .map_err(|e| vigie_core::diag::render(&e))
         });
         match result {
             Ok(c) => {
@@ -654,7 +701,11 @@ impl Console {
                 self.budget_ms = 0.0;
                 self.running = true;
                 self.score.trip_wall_s = None;
-                self.journal.push(0, "operator", &format!("restart: {}", self.source.scenario.name));
+                self.journal.push(
+                    0,
+                    "operator",
+                    &format!("restart: {}", self.source.scenario.name),
+                );
                 self.drain_journal();
                 self.status = "restarted".into();
             }
@@ -686,8 +737,15 @@ impl Console {
         };
         match report::write_markdown(&self.sim, trip, &dir) {
             Ok(path) => {
-                self.status = format!("report written to {}; capturing the levels…", path.display());
-                self.journal.push(self.now().0, "report", &format!("incident report {}", dir.display()));
+                self.status = format!(
+                    "report written to {}; capturing the levels…",
+                    path.display()
+                );
+                self.journal.push(
+                    self.now().0,
+                    "report",
+                    &format!("incident report {}", dir.display()),
+                );
                 self.report_job = Some(ReportJob {
                     dir,
                     level: 0,
@@ -728,16 +786,21 @@ impl Console {
         if !job.waiting && job.frames >= 3 {
             let slot = job.shot.clone();
             let repaint = ctx.clone();
-            ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(egui::ScreenshotCallback::new(move |image| {
-                if let Ok(mut s) = slot.lock() {
-                    *s = Some(image);
-                }
-                repaint.request_repaint();
-            })));
+            ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(
+                egui::ScreenshotCallback::new(move |image| {
+                    if let Ok(mut s) = slot.lock() {
+                        *s = Some(image);
+                    }
+                    repaint.request_repaint();
+                }),
+            ));
             job.waiting = true;
             job.frames = 0;
         } else if job.waiting && job.frames > 120 {
-            self.status = format!("report Markdown in {}; PNG capture unavailable here", job.dir.display());
+            self.status = format!(
+                "report Markdown in {}; PNG capture unavailable here",
+                job.dir.display()
+            );
             self.report_job = None;
             return;
         }
@@ -783,7 +846,13 @@ fn sim_variants(plant_dir: &Path, sim: &Simulation) -> Vec<(String, String, Stri
         Ok(lib) => lib
             .variants
             .iter()
-            .map(|v| (v.def.id.clone(), v.def.description.clone(), v.def.expected_constraint.clone()))
+            .map(|v| {
+                (
+                    v.def.id.clone(),
+                    v.def.description.clone(),
+                    v.def.expected_constraint.clone(),
+                )
+            })
             .collect(),
         Err(_) => Vec::new(),
     }

@@ -14,9 +14,19 @@ pub fn write_markdown(sim: &Simulation, trip: usize, dir: &Path) -> std::io::Res
     if let Some(t) = sim.engine.trips.get(trip) {
         let _ = writeln!(md, "- Trip at **{} ms** (cycle {})", t.time_ms, t.cycle);
         for c in &t.constraints {
-            let _ = writeln!(md, "- Constraint **{}**: `{}` — {}", c.id, c.notation, overbar_notation(&c.notation));
+            let _ = writeln!(
+                md,
+                "- Constraint **{}**: `{}` — {}",
+                c.id,
+                c.notation,
+                overbar_notation(&c.notation)
+            );
         }
-        let fb: Vec<String> = t.fallback.iter().map(|(o, v)| format!("{o}={}", u8::from(*v))).collect();
+        let fb: Vec<String> = t
+            .fallback
+            .iter()
+            .map(|(o, v)| format!("{o}={}", u8::from(*v)))
+            .collect();
         let _ = writeln!(md, "- Fallback: {}\n", fb.join(" "));
     }
     if let Some(ex) = sim.explanations.get(&trip) {
@@ -28,10 +38,25 @@ pub fn write_markdown(sim: &Simulation, trip: usize, dir: &Path) -> std::io::Res
             md.push('\n');
         }
         // Trace window: the last 30 cycles before the trip, changes only.
-        let _ = writeln!(md, "## Trace before the trip (changes)\n\n| time ms | changes |\n|---|---|");
-        let names: Vec<&String> = sim.bundle.plant.inputs.iter().chain(&sim.bundle.plant.outputs).map(|s| &s.id).collect();
+        let _ = writeln!(
+            md,
+            "## Trace before the trip (changes)\n\n| time ms | changes |\n|---|---|"
+        );
+        let names: Vec<&String> = sim
+            .bundle
+            .plant
+            .inputs
+            .iter()
+            .chain(&sim.bundle.plant.outputs)
+            .map(|s| &s.id)
+            .collect();
         let n_in = sim.bundle.plant.inputs.len();
-        let recs: Vec<_> = sim.engine.history.iter().filter(|r| r.time.0 <= ex.time_ms).collect();
+        let recs: Vec<_> = sim
+            .engine
+            .history
+            .iter()
+            .filter(|r| r.time.0 <= ex.time_ms)
+            .collect();
         let start = recs.len().saturating_sub(300);
         for w in recs[start..].windows(2) {
             let mut ch = Vec::new();
@@ -56,7 +81,12 @@ pub fn write_markdown(sim: &Simulation, trip: usize, dir: &Path) -> std::io::Res
 }
 
 /// Saves the part of a screenshot under `rect` (points) as PNG.
-pub fn save_png(image: &egui::ColorImage, rect: Option<egui::Rect>, ppp: f32, path: &Path) -> Result<(), String> {
+pub fn save_png(
+    image: &egui::ColorImage,
+    rect: Option<egui::Rect>,
+    ppp: f32,
+    path: &Path,
+) -> Result<(), String> {
     let [w, h] = image.size;
     let (x0, y0, x1, y1) = match rect {
         #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -71,7 +101,10 @@ pub fn save_png(image: &egui::ColorImage, rect: Option<egui::Rect>, ppp: f32, pa
     if x1 <= x0 || y1 <= y0 {
         return Err("empty capture".into());
     }
-    let mut buf = image::RgbaImage::new(u32::try_from(x1 - x0).unwrap_or(1), u32::try_from(y1 - y0).unwrap_or(1));
+    let mut buf = image::RgbaImage::new(
+        u32::try_from(x1 - x0).unwrap_or(1),
+        u32::try_from(y1 - y0).unwrap_or(1),
+    );
     for y in y0..y1 {
         for x in x0..x1 {
             let c = image.pixels[y * w + x];

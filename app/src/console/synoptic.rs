@@ -136,7 +136,10 @@ impl Geometry {
                     let at = *at_mm as f32;
                     let high = *beam == Beam::High;
                     if let Some(c) = conveyors.iter().find(|c| {
-                        layout.conveyors.iter().any(|lc| &lc.id == part && lc.name == c.name)
+                        layout
+                            .conveyors
+                            .iter()
+                            .any(|lc| &lc.id == part && lc.name == c.name)
                     }) {
                         let d = unit(c.start, c.end);
                         let left = [-d[1], d[0]];
@@ -265,11 +268,24 @@ fn quad(xf: &Xf, c: [f32; 2], u: [f32; 2], half_l: f32, half_w: f32) -> Vec<Pos2
     let n = [-u[1], u[0]];
     [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
         .iter()
-        .map(|(a, b)| xf.p([c[0] + u[0] * half_l * a + n[0] * half_w * b, c[1] + u[1] * half_l * a + n[1] * half_w * b]))
+        .map(|(a, b)| {
+            xf.p([
+                c[0] + u[0] * half_l * a + n[0] * half_w * b,
+                c[1] + u[1] * half_l * a + n[1] * half_w * b,
+            ])
+        })
         .collect()
 }
 
-fn chevrons(painter: &egui::Painter, xf: &Xf, start: [f32; 2], end: [f32; 2], width: f32, phase: f32, color: Color32) {
+fn chevrons(
+    painter: &egui::Painter,
+    xf: &Xf,
+    start: [f32; 2],
+    end: [f32; 2],
+    width: f32,
+    phase: f32,
+    color: Color32,
+) {
     let d = unit(start, end);
     let n = [-d[1], d[0]];
     let len = (end[0] - start[0]).hypot(end[1] - start[1]);
@@ -290,7 +306,13 @@ fn chevrons(painter: &egui::Painter, xf: &Xf, start: [f32; 2], end: [f32; 2], wi
 fn box_shape(xf: &Xf, b: &BoxView) -> Vec<Pos2> {
     let a = (b.angle_mdeg as f32 / 1000.0).to_radians();
     #[allow(clippy::cast_precision_loss)]
-    quad(xf, [b.x_mm, b.y_mm], [a.cos(), a.sin()], b.length_mm as f32 / 2.0, b.width_mm as f32 / 2.0)
+    quad(
+        xf,
+        [b.x_mm, b.y_mm],
+        [a.cos(), a.sin()],
+        b.length_mm as f32 / 2.0,
+        b.width_mm as f32 / 2.0,
+    )
 }
 
 fn badge(painter: &egui::Painter, at: Pos2, text: &str, fill: Color32, fg: Color32) -> Rect {
@@ -305,7 +327,9 @@ fn tooltip_text(plant: &Plant, id: &str, value: Option<bool>) -> String {
     let Some(s) = plant.signal(id) else {
         return id.to_string();
     };
-    let addr = s.address.map_or_else(|| "no fieldbus address".to_string(), |a| a.to_string());
+    let addr = s
+        .address
+        .map_or_else(|| "no fieldbus address".to_string(), |a| a.to_string());
     let v = match value {
         Some(true) => "1",
         Some(false) => "0",
@@ -327,9 +351,7 @@ pub fn synoptic_ui(
 ) -> egui::Response {
     let size = ui.available_size().max(vec2(100.0, 100.0));
     let (response, painter) = ui.allocate_painter(size, Sense::click_and_drag());
-    response.widget_info(|| {
-        egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Synoptic")
-    });
+    response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Synoptic"));
     let rect = response.rect;
     // Zoom with the wheel around the pointer, pan with a drag.
     if response.hovered() {
@@ -371,18 +393,45 @@ pub fn synoptic_ui(
         let len = (c.end[0] - c.start[0]).hypot(c.end[1] - c.start[1]);
         let mid = add(c.start, d, len / 2.0);
         let on = val(&c.actuator);
-        let fill = if on { pal.equipment } else { pal.equipment.gamma_multiply(0.9) };
-        painter.add(Shape::convex_polygon(quad(&xf, mid, d, len / 2.0, c.width / 2.0), fill, edge));
+        let fill = if on {
+            pal.equipment
+        } else {
+            pal.equipment.gamma_multiply(0.9)
+        };
+        painter.add(Shape::convex_polygon(
+            quad(&xf, mid, d, len / 2.0, c.width / 2.0),
+            fill,
+            edge,
+        ));
         if on {
-            chevrons(&painter, &xf, c.start, c.end, c.width, t_s * c.speed, pal.running);
+            chevrons(
+                &painter,
+                &xf,
+                c.start,
+                c.end,
+                c.width,
+                t_s * c.speed,
+                pal.running,
+            );
         }
     }
     // Elevators.
     for (name, at) in &geom.elevators {
         let p = xf.p(*at);
         let r = Rect::from_center_size(p, Vec2::splat(300.0 * xf.scale));
-        painter.rect_stroke(r, 2.0, Stroke::new(1.5, pal.equipment_edge), egui::StrokeKind::Middle);
-        painter.text(r.center(), Align2::CENTER_CENTER, name, FontId::proportional(11.0), pal.text_dim);
+        painter.rect_stroke(
+            r,
+            2.0,
+            Stroke::new(1.5, pal.equipment_edge),
+            egui::StrokeKind::Middle,
+        );
+        painter.text(
+            r.center(),
+            Align2::CENTER_CENTER,
+            name,
+            FontId::proportional(11.0),
+            pal.text_dim,
+        );
     }
     // Turntable.
     let draw_table = |angle_mdeg: i32, fill: Color32, stroke: Stroke, rollers: bool| {
@@ -390,20 +439,31 @@ pub fn synoptic_ui(
         let u = [a.cos(), a.sin()];
         let tc = geom.table_center;
         let [half, w] = geom.table_size;
-        painter.add(Shape::convex_polygon(quad(&xf, tc, u, half, w / 2.0), fill, stroke));
+        painter.add(Shape::convex_polygon(
+            quad(&xf, tc, u, half, w / 2.0),
+            fill,
+            stroke,
+        ));
         let n = [-u[1], u[0]];
         if rollers {
             let mut s = -half + 40.0;
             while s < half {
                 let c = add(tc, u, s);
                 painter.line_segment(
-                    [xf.p(add(c, n, w / 2.0 - 15.0)), xf.p(add(c, n, -w / 2.0 + 15.0))],
+                    [
+                        xf.p(add(c, n, w / 2.0 - 15.0)),
+                        xf.p(add(c, n, -w / 2.0 + 15.0)),
+                    ],
                     Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.5)),
                 );
                 s += 50.0;
             }
         }
-        painter.circle_stroke(xf.p(tc), (half + 25.0) * xf.scale, Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.4)));
+        painter.circle_stroke(
+            xf.p(tc),
+            (half + 25.0) * xf.scale,
+            Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.4)),
+        );
     };
     draw_table(table_angle_mdeg, pal.equipment, edge, true);
     {
@@ -411,7 +471,13 @@ pub fn synoptic_ui(
         let u = [a.cos(), a.sin()];
         let [half, w] = geom.table_size;
         let [plus, minus, _] = &geom.table_actuators;
-        let dir = if val(plus) { Some(1.0) } else if val(minus) { Some(-1.0) } else { None };
+        let dir = if val(plus) {
+            Some(1.0)
+        } else if val(minus) {
+            Some(-1.0)
+        } else {
+            None
+        };
         if let Some(k) = dir {
             let s = add(geom.table_center, u, -half * k);
             let e = add(geom.table_center, u, half * k);
@@ -436,17 +502,32 @@ pub fn synoptic_ui(
             BoxSize::Small => format!("{} S", b.id),
             BoxSize::Large => format!("{} L", b.id),
         };
-        painter.text(xf.p([b.x_mm, b.y_mm]), Align2::CENTER_CENTER, label, FontId::proportional(11.0), pal.text);
+        painter.text(
+            xf.p([b.x_mm, b.y_mm]),
+            Align2::CENTER_CENTER,
+            label,
+            FontId::proportional(11.0),
+            pal.text,
+        );
     }
     // Ghosts (projection).
     if let Some((boxes, angle, hazards)) = pic.ghost {
-        draw_table(angle, pal.ghost.gamma_multiply(0.12), Stroke::new(1.5, pal.ghost), false);
+        draw_table(
+            angle,
+            pal.ghost.gamma_multiply(0.12),
+            Stroke::new(1.5, pal.ghost),
+            false,
+        );
         for b in boxes {
             if matches!(b.state, BoxState::Delivered(_)) {
                 continue;
             }
             let col = if b.damaged { pal.trip } else { pal.ghost };
-            painter.add(Shape::convex_polygon(box_shape(&xf, b), col.gamma_multiply(0.2), Stroke::new(2.0, col)));
+            painter.add(Shape::convex_polygon(
+                box_shape(&xf, b),
+                col.gamma_multiply(0.2),
+                Stroke::new(2.0, col),
+            ));
         }
         for h in hazards {
             if let Some(b) = boxes.iter().find(|b| b.id == h.box_id) {
@@ -455,7 +536,13 @@ pub fn synoptic_ui(
                 let s = Stroke::new(3.0, pal.trip);
                 painter.line_segment([p - vec2(r, r), p + vec2(r, r)], s);
                 painter.line_segment([p - vec2(r, -r), p + vec2(r, -r)], s);
-                badge(&painter, p + vec2(r, -r - 18.0), &format!("predicted: {:?} box {}", h.kind, h.box_id), pal.trip, Color32::WHITE);
+                badge(
+                    &painter,
+                    p + vec2(r, -r - 18.0),
+                    &format!("predicted: {:?} box {}", h.kind, h.box_id),
+                    pal.trip,
+                    Color32::WHITE,
+                );
             }
         }
     }
@@ -464,7 +551,11 @@ pub fn synoptic_ui(
     for s in &geom.sensors {
         let on = val(&s.id);
         if let Some((a, b)) = s.beam {
-            let col = if on { pal.sensor_on } else { pal.equipment_edge.gamma_multiply(0.6) };
+            let col = if on {
+                pal.sensor_on
+            } else {
+                pal.equipment_edge.gamma_multiply(0.6)
+            };
             let stroke = Stroke::new(if on { 2.5 } else { 1.0 }, col);
             if s.high {
                 painter.add(Shape::dashed_line(&[xf.p(a), xf.p(b)], stroke, 4.0, 3.0));
@@ -473,8 +564,19 @@ pub fn synoptic_ui(
             }
         }
         let p = xf.p(s.lamp);
-        painter.circle(p, lamp_r, if on { pal.sensor_on } else { pal.sensor_off }, Stroke::new(1.2, pal.equipment_edge));
-        painter.text(p + vec2(lamp_r + 2.0, 0.0), Align2::LEFT_CENTER, &s.id, FontId::proportional(12.0), pal.text);
+        painter.circle(
+            p,
+            lamp_r,
+            if on { pal.sensor_on } else { pal.sensor_off },
+            Stroke::new(1.2, pal.equipment_edge),
+        );
+        painter.text(
+            p + vec2(lamp_r + 2.0, 0.0),
+            Align2::LEFT_CENTER,
+            &s.id,
+            FontId::proportional(12.0),
+            pal.text,
+        );
     }
     // Actuators.
     for (id, at) in &geom.actuators {
@@ -482,11 +584,32 @@ pub fn synoptic_ui(
         let on = val(id);
         let forced = pic.forced.contains(id);
         let r = Rect::from_center_size(p, Vec2::splat(lamp_r * 2.4));
-        let fill = if forced { pal.forced } else if on { pal.running } else { pal.equipment };
+        let fill = if forced {
+            pal.forced
+        } else if on {
+            pal.running
+        } else {
+            pal.equipment
+        };
         painter.rect_filled(r, 3.0, fill);
-        painter.rect_stroke(r, 3.0, Stroke::new(1.2, pal.equipment_edge), egui::StrokeKind::Middle);
-        let fg = if on && !forced { pal.sensor_on } else { pal.text };
-        painter.text(r.center(), Align2::CENTER_CENTER, id, FontId::proportional(11.0), fg);
+        painter.rect_stroke(
+            r,
+            3.0,
+            Stroke::new(1.2, pal.equipment_edge),
+            egui::StrokeKind::Middle,
+        );
+        let fg = if on && !forced {
+            pal.sensor_on
+        } else {
+            pal.text
+        };
+        painter.text(
+            r.center(),
+            Align2::CENTER_CENTER,
+            id,
+            FontId::proportional(11.0),
+            fg,
+        );
     }
     // Explanation marks.
     let mut stacked: BTreeMap<&str, f32> = BTreeMap::new();
@@ -497,7 +620,13 @@ pub fn synoptic_ui(
         let p = xf.p(w);
         let mut put = |text: &str, fill: Color32, fg: Color32| {
             let dy = stacked.entry(h.element.as_str()).or_insert(0.0);
-            badge(&painter, p + vec2(lamp_r + 4.0, -lamp_r - 20.0 - *dy), text, fill, fg);
+            badge(
+                &painter,
+                p + vec2(lamp_r + 4.0, -lamp_r - 20.0 - *dy),
+                text,
+                fill,
+                fg,
+            );
             *dy += 19.0;
         };
         match &h.mark {
@@ -506,8 +635,16 @@ pub fn synoptic_ui(
             }
             Mark::ForcedOn => put("held ON", pal.forced, pal.text),
             Mark::ForcedOff => put("forced OFF", pal.forced, pal.text),
-            Mark::Change { from, to } => put(&format!("{}→{}", u8::from(*from), u8::from(*to)), pal.highlight, Color32::WHITE),
-            Mark::Steady { value } => put(&format!("stays {}", if *value { "ON" } else { "OFF" }), pal.equipment_edge, Color32::WHITE),
+            Mark::Change { from, to } => put(
+                &format!("{}→{}", u8::from(*from), u8::from(*to)),
+                pal.highlight,
+                Color32::WHITE,
+            ),
+            Mark::Steady { value } => put(
+                &format!("stays {}", if *value { "ON" } else { "OFF" }),
+                pal.equipment_edge,
+                Color32::WHITE,
+            ),
             Mark::Suspect => {
                 painter.add(Shape::dashed_line(
                     &circle_points(p, lamp_r * 2.2),
@@ -517,12 +654,22 @@ pub fn synoptic_ui(
                 ));
                 put("suspect", pal.alarm, pal.text);
             }
-            Mark::Expected { value } => put(&format!("expected {}", if *value { "ON" } else { "OFF" }), pal.highlight, Color32::WHITE),
+            Mark::Expected { value } => put(
+                &format!("expected {}", if *value { "ON" } else { "OFF" }),
+                pal.highlight,
+                Color32::WHITE,
+            ),
             Mark::InferredBox => put("inferred box", pal.highlight, Color32::WHITE),
         }
     }
     if let Some((text, col)) = &pic.banner {
-        badge(&painter, rect.min + vec2(10.0, 10.0), text, *col, Color32::WHITE);
+        badge(
+            &painter,
+            rect.min + vec2(10.0, 10.0),
+            text,
+            *col,
+            Color32::WHITE,
+        );
     }
     // Tooltip of the element under the pointer.
     if let Some(ptr) = response.hover_pos() {
@@ -536,9 +683,17 @@ pub fn synoptic_ui(
             let text = tooltip_text(plant, id, pic.values.get(id).copied());
             let galley = painter.layout(text, FontId::proportional(13.0), pal.text, 320.0);
             let r = Rect::from_min_size(ptr + vec2(14.0, 14.0), galley.size() + vec2(12.0, 10.0));
-            let r = r.translate(vec2((rect.right() - r.right()).min(0.0), (rect.bottom() - r.bottom()).min(0.0)));
+            let r = r.translate(vec2(
+                (rect.right() - r.right()).min(0.0),
+                (rect.bottom() - r.bottom()).min(0.0),
+            ));
             painter.rect_filled(r, 4.0, pal.panel);
-            painter.rect_stroke(r, 4.0, Stroke::new(1.0, pal.equipment_edge), egui::StrokeKind::Middle);
+            painter.rect_stroke(
+                r,
+                4.0,
+                Stroke::new(1.0, pal.equipment_edge),
+                egui::StrokeKind::Middle,
+            );
             painter.galley(r.min + vec2(6.0, 5.0), galley, pal.text);
         }
     }
@@ -576,7 +731,12 @@ pub fn overbar_label(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) -
     let font = FontId::proportional(size);
     let galleys: Vec<_> = runs
         .iter()
-        .map(|(s, n)| (ui.painter().layout_no_wrap(s.clone(), font.clone(), color), *n))
+        .map(|(s, n)| {
+            (
+                ui.painter().layout_no_wrap(s.clone(), font.clone(), color),
+                *n,
+            )
+        })
         .collect();
     let w: f32 = galleys.iter().map(|(g, _)| g.size().x).sum();
     let h = galleys.iter().map(|(g, _)| g.size().y).fold(size, f32::max) + 3.0;
@@ -588,7 +748,10 @@ pub fn overbar_label(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) -
         let gw = g.size().x;
         if neg {
             let y = rect.top() + 2.0;
-            ui.painter().line_segment([pos2(x + 1.0, y), pos2(x + gw - 1.0, y)], Stroke::new(1.5, color));
+            ui.painter().line_segment(
+                [pos2(x + 1.0, y), pos2(x + gw - 1.0, y)],
+                Stroke::new(1.5, color),
+            );
         }
         ui.painter().galley(pos2(x, rect.top() + 3.0), g, color);
         x += gw;

@@ -39,7 +39,11 @@ impl Score {
         let levels: Vec<String> = self.levels.iter().map(ToString::to_string).collect();
         format!(
             "Levels consulted: {}. Attempts: {}. {}",
-            if levels.is_empty() { "none".into() } else { levels.join(", ") },
+            if levels.is_empty() {
+                "none".into()
+            } else {
+                levels.join(", ")
+            },
             self.attempts,
             match (self.fixed, self.located_after_s) {
                 (true, Some(s)) => format!("Fixed, located in {s:.0} s."),
@@ -75,9 +79,21 @@ pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) ->
         if delivered == 0 {
             return "not fixed: no trip but no box was delivered in the re-run".into();
         }
-        format!("correct fix: no trip and no hazard in {} s, {delivered} boxes delivered", sim.now().0 / 1000)
+        format!(
+            "correct fix: no trip and no hazard in {} s, {delivered} boxes delivered",
+            sim.now().0 / 1000
+        )
     } else {
-        let hazards: Vec<String> = sim.emulator.hazards().iter().map(|h| format!("{:?} of box {} at {} ms", h.kind, h.box_id, h.time_ms)).collect();
-        format!("not fixed: the re-run has trips [{}] and hazards [{}]", trips.join(", "), hazards.join("; "))
+        let hazards: Vec<String> = sim
+            .emulator
+            .hazards()
+            .iter()
+            .map(|h| format!("{:?} of box {} at {} ms", h.kind, h.box_id, h.time_ms))
+            .collect();
+        format!(
+            "not fixed: the re-run has trips [{}] and hazards [{}]",
+            trips.join(", "),
+            hazards.join("; ")
+        )
     }
 }

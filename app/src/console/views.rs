@@ -12,7 +12,9 @@ use vigie_core::time::Millis;
 /// The whole console.
 pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let bg = c.palette.background;
-    egui::Panel::top("toolbar").frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.panel)).show(ui, |ui| toolbar_ui(c, ui, out));
+    egui::Panel::top("toolbar")
+        .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.panel))
+        .show(ui, |ui| toolbar_ui(c, ui, out));
     egui::Panel::bottom("status").show(ui, |ui| status_ui(c, ui));
     egui::Panel::bottom("chronogram")
         .resizable(true)
@@ -21,45 +23,57 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         .show(ui, |ui| chronogram_ui(c, ui, out));
     egui::Panel::right("side")
         .resizable(true)
-        .default_size(if c.mode == Mode::Maintenance { 440.0 } else { 470.0 })
+        .default_size(if c.mode == Mode::Maintenance {
+            440.0
+        } else {
+            470.0
+        })
         .min_size(320.0)
         .show(ui, |ui| {
-            egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| match c.mode {
-                Mode::Production => {
-                    explanation_ui(c, ui, out);
-                    ui.separator();
-                    alarms_ui(c, ui, out);
-                    ui.separator();
-                    journal_ui(c, ui, out);
-                }
-                Mode::Maintenance => {
-                    explanation_ui(c, ui, out);
-                    ui.separator();
-                    alarms_ui(c, ui, out);
-                }
-                Mode::Training => {
-                    training_ui(c, ui, out);
-                    ui.separator();
-                    explanation_ui(c, ui, out);
-                    ui.separator();
-                    alarms_ui(c, ui, out);
-                }
-            });
+            egui::ScrollArea::vertical()
+                .auto_shrink([false, false])
+                .show(ui, |ui| match c.mode {
+                    Mode::Production => {
+                        explanation_ui(c, ui, out);
+                        ui.separator();
+                        alarms_ui(c, ui, out);
+                        ui.separator();
+                        journal_ui(c, ui, out);
+                    }
+                    Mode::Maintenance => {
+                        explanation_ui(c, ui, out);
+                        ui.separator();
+                        alarms_ui(c, ui, out);
+                    }
+                    Mode::Training => {
+                        training_ui(c, ui, out);
+                        ui.separator();
+                        explanation_ui(c, ui, out);
+                        ui.separator();
+                        alarms_ui(c, ui, out);
+                    }
+                });
         });
-    egui::CentralPanel::default().frame(egui::Frame::NONE.fill(bg)).show(ui, |ui| {
-        if c.mode == Mode::Maintenance {
-            maintenance_ui(c, ui, out);
-        } else {
-            synoptic_panel_ui(c, ui);
-        }
-    });
+    egui::CentralPanel::default()
+        .frame(egui::Frame::NONE.fill(bg))
+        .show(ui, |ui| {
+            if c.mode == Mode::Maintenance {
+                maintenance_ui(c, ui, out);
+            } else {
+                synoptic_panel_ui(c, ui);
+            }
+        });
 }
 
 fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.horizontal_wrapped(|ui| {
         ui.label(RichText::new("VIGIE").strong().size(18.0));
         ui.separator();
-        for (m, name) in [(Mode::Production, "Production"), (Mode::Maintenance, "Maintenance"), (Mode::Training, "Training")] {
+        for (m, name) in [
+            (Mode::Production, "Production"),
+            (Mode::Maintenance, "Maintenance"),
+            (Mode::Training, "Training"),
+        ] {
             if ui.selectable_label(c.mode == m, name).clicked() && c.mode != m {
                 out.push(Command::SetMode(m));
             }
@@ -76,23 +90,48 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             out.push(Command::Step);
         }
         let mut speed = c.speed;
-        let r = ui.add(egui::Slider::new(&mut speed, 0.1..=100.0).logarithmic(true).suffix("x").text("Speed"));
+        let r = ui.add(
+            egui::Slider::new(&mut speed, 0.1..=100.0)
+                .logarithmic(true)
+                .suffix("x")
+                .text("Speed"),
+        );
         if r.changed() {
             out.push(Command::SetSpeed(speed));
         }
         ui.separator();
         ui.label(format!("t = {}", fmt_ms(c.sim.now().0)));
         ui.separator();
-        if ui.button("Start").on_hover_text("Plant START button").clicked() {
+        if ui
+            .button("Start")
+            .on_hover_text("Plant START button")
+            .clicked()
+        {
             out.push(Command::Plant(OperatorAction::Start));
         }
-        if ui.button("Stop").on_hover_text("Plant STOP button").clicked() {
+        if ui
+            .button("Stop")
+            .on_hover_text("Plant STOP button")
+            .clicked()
+        {
             out.push(Command::Plant(OperatorAction::Stop));
         }
         let tripped = c.sim.engine.is_tripped();
-        let reset = egui::Button::new(RichText::new("Reset").color(if tripped { Color32::WHITE } else { c.palette.text }))
-            .fill(if tripped { c.palette.trip } else { c.palette.equipment.gamma_multiply(0.5) });
-        if ui.add(reset).on_hover_text("Operator reset of the safety filter").clicked() {
+        let reset = egui::Button::new(RichText::new("Reset").color(if tripped {
+            Color32::WHITE
+        } else {
+            c.palette.text
+        }))
+        .fill(if tripped {
+            c.palette.trip
+        } else {
+            c.palette.equipment.gamma_multiply(0.5)
+        });
+        if ui
+            .add(reset)
+            .on_hover_text("Operator reset of the safety filter")
+            .clicked()
+        {
             out.push(Command::Plant(OperatorAction::Reset));
         }
         ui.separator();
@@ -104,7 +143,12 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         } else {
             ("Normal".to_string(), c.palette.equipment_edge)
         };
-        ui.label(RichText::new(txt).strong().color(Color32::WHITE).background_color(col));
+        ui.label(
+            RichText::new(txt)
+                .strong()
+                .color(Color32::WHITE)
+                .background_color(col),
+        );
     });
 }
 
@@ -136,14 +180,19 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     let mut time_ms = sim.now().0;
     let mut banner = None;
     let replay_rec = c.replay.and_then(|t| sim.engine.history.at(Millis(t)));
-    let level = c.level.zip(c.latest_trip()).and_then(|(l, t)| sim.explanations.get(&t).map(|ex| (l, t, ex)));
+    let level = c
+        .level
+        .zip(c.latest_trip())
+        .and_then(|(l, t)| sim.explanations.get(&t).map(|ex| (l, t, ex)));
     // The picture's time: replay, the trip (levels 2-4) or now.
     let picture_time = match (&replay_rec, &level) {
         (Some(r), _) => Some(r.time.0),
         (None, Some((l, _, ex))) if *l >= 2 => Some(ex.time_ms),
         _ => None,
     };
-    let record = picture_time.and_then(|t| sim.engine.history.at(Millis(t))).or_else(|| sim.engine.history.last());
+    let record = picture_time
+        .and_then(|t| sim.engine.history.at(Millis(t)))
+        .or_else(|| sim.engine.history.last());
     if let Some(r) = record {
         for (i, s) in plant.inputs.iter().enumerate() {
             values.insert(s.id.clone(), r.inputs.get(i));
@@ -157,7 +206,9 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     }
     if let Some(t) = picture_time {
         let snaps = sim.snapshots();
-        let i = snaps.partition_point(|s| s.time.0 < t).min(snaps.len().saturating_sub(1));
+        let i = snaps
+            .partition_point(|s| s.time.0 < t)
+            .min(snaps.len().saturating_sub(1));
         if let Some(s) = snaps.get(i) {
             boxes = &s.boxes;
             angle = s.table_angle_mdeg;
@@ -177,18 +228,43 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
                 ghost = Some((p.boxes.as_slice(), p.table_angle_mdeg, p.hazards.as_slice()));
             }
         }
-        banner = Some((format!(
+        banner = Some((
+            format!(
                 "Level {} — trip {} at {}",
                 LEVEL_NAMES[*l],
-                ex.constraints.iter().map(|k| k.split(" =").next().unwrap_or(k)).collect::<Vec<_>>().join(", "),
+                ex.constraints
+                    .iter()
+                    .map(|k| k.split(" =").next().unwrap_or(k))
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 fmt_ms(ex.time_ms)
-            ), c.palette.highlight));
+            ),
+            c.palette.highlight,
+        ));
     }
     if let Some(r) = &replay_rec {
-        banner = Some((format!("REPLAY at {} (live: {})", fmt_ms(r.time.0), fmt_ms(sim.now().0)), c.palette.highlight));
+        banner = Some((
+            format!(
+                "REPLAY at {} (live: {})",
+                fmt_ms(r.time.0),
+                fmt_ms(sim.now().0)
+            ),
+            c.palette.highlight,
+        ));
     } else if banner.is_none() && sim.engine.is_tripped() {
-        let ids: Vec<String> = sim.engine.trips.last().map(|t| t.constraints.iter().map(|c| c.id.clone()).collect()).unwrap_or_default();
-        banner = Some((format!("TRIP {} — the safety filter holds the plant", ids.join(", ")), c.palette.trip));
+        let ids: Vec<String> = sim
+            .engine
+            .trips
+            .last()
+            .map(|t| t.constraints.iter().map(|c| c.id.clone()).collect())
+            .unwrap_or_default();
+        banner = Some((
+            format!(
+                "TRIP {} — the safety filter holds the plant",
+                ids.join(", ")
+            ),
+            c.palette.trip,
+        ));
     }
     let geom = Geometry::new(&sim.layout, angle);
     let pic = Picture {
@@ -207,25 +283,39 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
 fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.heading("Explanation");
     let Some(trip) = c.latest_trip() else {
-        ui.label(RichText::new("No trip: the plant runs within its safety constraints.").color(c.palette.text_dim));
+        ui.label(
+            RichText::new("No trip: the plant runs within its safety constraints.")
+                .color(c.palette.text_dim),
+        );
         return;
     };
     let Some(ex) = c.sim.explanations.get(&trip) else {
         return;
     };
-    ui.label(RichText::new(format!("Trip at {}", fmt_ms(ex.time_ms))).strong().color(c.palette.trip));
+    ui.label(
+        RichText::new(format!("Trip at {}", fmt_ms(ex.time_ms)))
+            .strong()
+            .color(c.palette.trip),
+    );
     for k in &ex.constraints {
         synoptic::overbar_label(ui, k, 20.0, c.palette.text);
     }
     if let Some(t) = c.sim.engine.trips.get(trip) {
         for fc in &t.constraints {
-            ui.label(RichText::new(format!("as written: {} = {}", fc.id, fc.notation)).color(c.palette.text_dim));
+            ui.label(
+                RichText::new(format!("as written: {} = {}", fc.id, fc.notation))
+                    .color(c.palette.text_dim),
+            );
         }
     }
     ui.horizontal_wrapped(|ui| {
         for (i, name) in LEVEL_NAMES.iter().enumerate() {
             if ui.selectable_label(c.level == Some(i), *name).clicked() {
-                out.push(Command::ShowLevel(if c.level == Some(i) { None } else { Some(i) }));
+                out.push(Command::ShowLevel(if c.level == Some(i) {
+                    None
+                } else {
+                    Some(i)
+                }));
             }
         }
     });
@@ -234,7 +324,11 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         ui.label(RichText::new(format!("Level {}", LEVEL_NAMES[l])).strong());
         for item in &level.items {
             ui.horizontal_wrapped(|ui| {
-                ui.label(RichText::new(item.code).monospace().color(c.palette.text_dim));
+                ui.label(
+                    RichText::new(item.code)
+                        .monospace()
+                        .color(c.palette.text_dim),
+                );
                 if item.text.contains('\u{305}') {
                     synoptic::overbar_label(ui, &item.text, 14.0, c.palette.text);
                 } else {
@@ -246,12 +340,15 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             ui.label("Nothing to report at this level.");
         }
     } else {
-        ui.label(RichText::new("Choose a level to draw it on the synoptic.").color(c.palette.text_dim));
+        ui.label(
+            RichText::new("Choose a level to draw it on the synoptic.").color(c.palette.text_dim),
+        );
     }
     ui.add_space(4.0);
     ui.horizontal(|ui| {
         let l = ui.label("Report folder");
-        ui.add(egui::TextEdit::singleline(&mut c.report_dir).desired_width(170.0)).labelled_by(l.id);
+        ui.add(egui::TextEdit::singleline(&mut c.report_dir).desired_width(170.0))
+            .labelled_by(l.id);
         if ui.button("Export incident report").clicked() {
             out.push(Command::ExportReport(c.report_dir.clone().into()));
         }
@@ -276,15 +373,27 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         let (state_txt, col) = match state {
             AlarmState::Unacknowledged => ("UNACK", c.palette.alarm),
             AlarmState::Acknowledged => ("ACK", c.palette.equipment_edge),
-            AlarmState::ClearedUnacknowledged => ("CLEARED-UNACK", c.palette.alarm.gamma_multiply(0.7)),
+            AlarmState::ClearedUnacknowledged => {
+                ("CLEARED-UNACK", c.palette.alarm.gamma_multiply(0.7))
+            }
             _ => ("NORMAL", c.palette.equipment),
         };
         egui::Frame::group(ui.style()).show(ui, |ui| {
             ui.horizontal_wrapped(|ui| {
                 if a.first_out {
-                    ui.label(RichText::new("FIRST OUT").strong().color(Color32::WHITE).background_color(c.palette.trip));
+                    ui.label(
+                        RichText::new("FIRST OUT")
+                            .strong()
+                            .color(Color32::WHITE)
+                            .background_color(c.palette.trip),
+                    );
                 }
-                ui.label(RichText::new(state_txt).strong().color(Color32::WHITE).background_color(col));
+                ui.label(
+                    RichText::new(state_txt)
+                        .strong()
+                        .color(Color32::WHITE)
+                        .background_color(col),
+                );
                 ui.label(fmt_ms(a.raised.0));
                 if a.is_shelved(now) {
                     ui.label("(shelved)");
@@ -292,11 +401,18 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             });
             ui.label(&a.message);
             if let Some((t, note)) = &a.acknowledged {
-                ui.label(RichText::new(format!("acknowledged at {}: {note}", fmt_ms(t.0))).color(c.palette.text_dim));
+                ui.label(
+                    RichText::new(format!("acknowledged at {}: {note}", fmt_ms(t.0)))
+                        .color(c.palette.text_dim),
+                );
             } else {
                 ui.horizontal(|ui| {
                     let note = c.notes.entry(a.id).or_default();
-                    ui.add(egui::TextEdit::singleline(note).hint_text("note").desired_width(160.0));
+                    ui.add(
+                        egui::TextEdit::singleline(note)
+                            .hint_text("note")
+                            .desired_width(160.0),
+                    );
                     if ui.button(format!("Acknowledge #{}", a.id)).clicked() {
                         out.push(Command::Acknowledge {
                             id: a.id,
@@ -311,7 +427,10 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         out.push(Command::Unshelve(a.id));
                     }
                 } else if ui.button(format!("Shelve #{} 5 min", a.id)).clicked() {
-                    out.push(Command::Shelve { id: a.id, ms: 300_000 });
+                    out.push(Command::Shelve {
+                        id: a.id,
+                        ms: 300_000,
+                    });
                 }
             });
         });
@@ -321,14 +440,28 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.heading("Journal");
     if let Some(p) = c.journal.path() {
-        ui.label(RichText::new(format!("written to {}", p.display())).small().color(c.palette.text_dim));
+        ui.label(
+            RichText::new(format!("written to {}", p.display()))
+                .small()
+                .color(c.palette.text_dim),
+        );
     }
     for e in c.journal.entries().iter().rev().take(12) {
-        ui.label(RichText::new(format!("{:>9}  {:<10} {}", fmt_ms(e.sim_ms), e.kind, e.text)).monospace().size(11.0));
+        ui.label(
+            RichText::new(format!(
+                "{:>9}  {:<10} {}",
+                fmt_ms(e.sim_ms),
+                e.kind,
+                e.text
+            ))
+            .monospace()
+            .size(11.0),
+        );
     }
     ui.horizontal(|ui| {
         let l = ui.label("CSV file");
-        ui.add(egui::TextEdit::singleline(&mut c.csv_path).desired_width(200.0)).labelled_by(l.id);
+        ui.add(egui::TextEdit::singleline(&mut c.csv_path).desired_width(200.0))
+            .labelled_by(l.id);
         if ui.button("Export CSV").clicked() {
             out.push(Command::ExportCsv(c.csv_path.clone().into()));
         }
@@ -340,7 +473,11 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.label(RichText::new(c.score.summary()).strong());
     if c.score.variant.is_some() {
         ui.horizontal(|ui| {
-            if ui.button("Verify fix").on_hover_text("Re-run the scenario with the edited program (Maintenance)").clicked() {
+            if ui
+                .button("Verify fix")
+                .on_hover_text("Re-run the scenario with the edited program (Maintenance)")
+                .clicked()
+            {
                 out.push(Command::VerifyFix);
             }
             if ui.button("Edit program").clicked() {
@@ -348,97 +485,164 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             }
         });
     }
-    egui::CollapsingHeader::new("Control-error library").default_open(true).show(ui, |ui| {
-        for (id, desc, _) in &c.variants {
-            ui.horizontal_wrapped(|ui| {
-                let selected = c.score.variant.as_deref() == Some(id.as_str());
-                if ui.selectable_label(selected, format!("Load {id}")).clicked() {
-                    out.push(Command::LoadVariant(id.clone()));
-                }
-                ui.label(RichText::new(desc).small());
-            });
-        }
-    });
-    egui::CollapsingHeader::new("Fault library").default_open(false).show(ui, |ui| {
-        if c.faults.is_empty() {
-            ui.label("No faults.ron in the plant folder.");
-        }
-        for (i, (name, _)) in c.faults.iter().enumerate() {
-            ui.horizontal(|ui| {
-                if ui.button("Inject").clicked() {
-                    out.push(Command::InjectFault(i));
-                }
-                ui.label(name);
-            });
-        }
-    });
+    egui::CollapsingHeader::new("Control-error library")
+        .default_open(true)
+        .show(ui, |ui| {
+            for (id, desc, _) in &c.variants {
+                ui.horizontal_wrapped(|ui| {
+                    let selected = c.score.variant.as_deref() == Some(id.as_str());
+                    if ui
+                        .selectable_label(selected, format!("Load {id}"))
+                        .clicked()
+                    {
+                        out.push(Command::LoadVariant(id.clone()));
+                    }
+                    ui.label(RichText::new(desc).small());
+                });
+            }
+        });
+    egui::CollapsingHeader::new("Fault library")
+        .default_open(false)
+        .show(ui, |ui| {
+            if c.faults.is_empty() {
+                ui.label("No faults.ron in the plant folder.");
+            }
+            for (i, (name, _)) in c.faults.iter().enumerate() {
+                ui.horizontal(|ui| {
+                    if ui.button("Inject").clicked() {
+                        out.push(Command::InjectFault(i));
+                    }
+                    ui.label(name);
+                });
+            }
+        });
 }
 
 fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
-    let active: BTreeSet<String> = c.sim.program.active_steps().into_iter().map(str::to_string).collect();
+    let active: BTreeSet<String> = c
+        .sim
+        .program
+        .active_steps()
+        .into_iter()
+        .map(str::to_string)
+        .collect();
     let program = c.sim.program.program().program.clone();
     let pal = c.palette.clone();
-    egui::Frame::NONE.fill(pal.panel).inner_margin(8.0).show(ui, |ui| {
-        ui.horizontal(|ui| {
-            ui.heading(format!("Control program: {}", program.name));
-            if ui.button("Recompile").clicked() {
-                out.push(Command::Recompile);
+    egui::Frame::NONE
+        .fill(pal.panel)
+        .inner_margin(8.0)
+        .show(ui, |ui| {
+            ui.horizontal(|ui| {
+                ui.heading(format!("Control program: {}", program.name));
+                if ui.button("Recompile").clicked() {
+                    out.push(Command::Recompile);
+                }
+                if ui.button("Restart with edit").clicked() {
+                    out.push(Command::RestartWithEdit);
+                }
+                if ui.button("Discard edits").clicked() {
+                    out.push(Command::DiscardEdits);
+                }
+                if ui
+                    .button("Verify fix")
+                    .on_hover_text("Re-run the scenario headless with the edit")
+                    .clicked()
+                {
+                    out.push(Command::VerifyFix);
+                }
+            });
+            if !c.problems.is_empty() {
+                let col = if c.compiled_edit.is_some() {
+                    pal.text
+                } else {
+                    pal.trip
+                };
+                ui.label(RichText::new(&c.problems).monospace().color(col));
             }
-            if ui.button("Restart with edit").clicked() {
-                out.push(Command::RestartWithEdit);
-            }
-            if ui.button("Discard edits").clicked() {
-                out.push(Command::DiscardEdits);
-            }
-            if ui.button("Verify fix").on_hover_text("Re-run the scenario headless with the edit").clicked() {
-                out.push(Command::VerifyFix);
-            }
-        });
-        if !c.problems.is_empty() {
-            let col = if c.compiled_edit.is_some() { pal.text } else { pal.trip };
-            ui.label(RichText::new(&c.problems).monospace().color(col));
-        }
-        let Some(draft) = &mut c.draft else {
-            return;
-        };
-        egui::ScrollArea::vertical().auto_shrink([false, false]).show(ui, |ui| {
-            for chart in &program.charts {
-                ui.add_space(6.0);
-                ui.label(RichText::new(format!("Chart {}", chart.name)).strong().size(16.0));
-                egui::Grid::new(format!("steps-{}", chart.name)).striped(true).num_columns(3).show(ui, |ui| {
-                    for s in &chart.steps {
-                        let on = active.contains(&s.id);
-                        let txt = RichText::new(format!("{}{}", if s.initial { "[init] " } else { "" }, s.id)).monospace();
-                        let l = ui.label(if on { txt.strong().color(Color32::WHITE).background_color(pal.running) } else { txt });
-                        ui.label(if on { "active" } else { "" });
-                        if let Some(a) = draft.actions.get_mut(&s.id) {
-                            ui.add(egui::TextEdit::singleline(a).desired_width(260.0).font(egui::TextStyle::Monospace)).labelled_by(l.id);
-                        }
-                        ui.end_row();
-                        for t in chart.transitions.iter().filter(|t| t.from.contains(&s.id)) {
-                            let l = ui.label(RichText::new(format!("   + {}", t.id)).monospace());
-                            ui.label(RichText::new(format!("→ {}", t.to.join(", "))).monospace().color(pal.text_dim));
-                            if let Some(cond) = draft.conditions.get_mut(&t.id) {
-                                ui.add(egui::TextEdit::singleline(cond).desired_width(260.0).font(egui::TextStyle::Monospace)).labelled_by(l.id);
+            let Some(draft) = &mut c.draft else {
+                return;
+            };
+            egui::ScrollArea::vertical()
+                .auto_shrink([false, false])
+                .show(ui, |ui| {
+                    for chart in &program.charts {
+                        ui.add_space(6.0);
+                        ui.label(
+                            RichText::new(format!("Chart {}", chart.name))
+                                .strong()
+                                .size(16.0),
+                        );
+                        egui::Grid::new(format!("steps-{}", chart.name))
+                            .striped(true)
+                            .num_columns(3)
+                            .show(ui, |ui| {
+                                for s in &chart.steps {
+                                    let on = active.contains(&s.id);
+                                    let txt = RichText::new(format!(
+                                        "{}{}",
+                                        if s.initial { "[init] " } else { "" },
+                                        s.id
+                                    ))
+                                    .monospace();
+                                    let l = ui.label(if on {
+                                        txt.strong()
+                                            .color(Color32::WHITE)
+                                            .background_color(pal.running)
+                                    } else {
+                                        txt
+                                    });
+                                    ui.label(if on { "active" } else { "" });
+                                    if let Some(a) = draft.actions.get_mut(&s.id) {
+                                        ui.add(
+                                            egui::TextEdit::singleline(a)
+                                                .desired_width(260.0)
+                                                .font(egui::TextStyle::Monospace),
+                                        )
+                                        .labelled_by(l.id);
+                                    }
+                                    ui.end_row();
+                                    for t in
+                                        chart.transitions.iter().filter(|t| t.from.contains(&s.id))
+                                    {
+                                        let l = ui.label(
+                                            RichText::new(format!("   + {}", t.id)).monospace(),
+                                        );
+                                        ui.label(
+                                            RichText::new(format!("→ {}", t.to.join(", ")))
+                                                .monospace()
+                                                .color(pal.text_dim),
+                                        );
+                                        if let Some(cond) = draft.conditions.get_mut(&t.id) {
+                                            ui.add(
+                                                egui::TextEdit::singleline(cond)
+                                                    .desired_width(260.0)
+                                                    .font(egui::TextStyle::Monospace),
+                                            )
+                                            .labelled_by(l.id);
+                                        }
+                                        ui.end_row();
+                                    }
+                                }
+                            });
+                    }
+                    if !draft.equations.is_empty() {
+                        ui.add_space(6.0);
+                        ui.label(RichText::new("Equations").strong().size(16.0));
+                        egui::Grid::new("equations").num_columns(2).show(ui, |ui| {
+                            for (target, expr) in &mut draft.equations {
+                                let l = ui.label(RichText::new(format!("{target} =")).monospace());
+                                ui.add(
+                                    egui::TextEdit::singleline(expr)
+                                        .desired_width(300.0)
+                                        .font(egui::TextStyle::Monospace),
+                                )
+                                .labelled_by(l.id);
+                                ui.end_row();
                             }
-                            ui.end_row();
-                        }
+                        });
                     }
                 });
-            }
-            if !draft.equations.is_empty() {
-                ui.add_space(6.0);
-                ui.label(RichText::new("Equations").strong().size(16.0));
-                egui::Grid::new("equations").num_columns(2).show(ui, |ui| {
-                    for (target, expr) in &mut draft.equations {
-                        let l = ui.label(RichText::new(format!("{target} =")).monospace());
-                        ui.add(egui::TextEdit::singleline(expr).desired_width(300.0).font(egui::TextStyle::Monospace)).labelled_by(l.id);
-                        ui.end_row();
-                    }
-                });
-            }
         });
-    });
 }
 
 fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
@@ -447,14 +651,21 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.horizontal(|ui| {
         ui.label(RichText::new("Chronogram").strong());
         for w in [10u64, 30, 60, 300] {
-            if ui.selectable_label(c.chrono_window_s == w, format!("{w} s")).clicked() {
+            if ui
+                .selectable_label(c.chrono_window_s == w, format!("{w} s"))
+                .clicked()
+            {
                 c.chrono_window_s = w;
             }
         }
         ui.separator();
         let oldest = sim.engine.history.iter().next().map_or(0, |r| r.time.0);
         let mut t = c.replay.unwrap_or(now);
-        let r = ui.add(egui::Slider::new(&mut t, oldest..=now.max(oldest)).text("Replay").custom_formatter(|v, _| fmt_ms(v as u64)));
+        let r = ui.add(
+            egui::Slider::new(&mut t, oldest..=now.max(oldest))
+                .text("Replay")
+                .custom_formatter(|v, _| fmt_ms(v as u64)),
+        );
         if r.changed() {
             out.push(Command::Scrub(Some(t)));
         }
@@ -462,9 +673,18 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             out.push(Command::Scrub(None));
         }
         ui.menu_button("Signals", |ui| {
-            for s in sim.bundle.plant.inputs.iter().chain(&sim.bundle.plant.outputs) {
+            for s in sim
+                .bundle
+                .plant
+                .inputs
+                .iter()
+                .chain(&sim.bundle.plant.outputs)
+            {
                 let mut on = c.chrono_signals.contains(&s.id);
-                if ui.checkbox(&mut on, format!("{} {}", s.id, s.description)).changed() {
+                if ui
+                    .checkbox(&mut on, format!("{} {}", s.id, s.description))
+                    .changed()
+                {
                     if on {
                         c.chrono_signals.insert(s.id.clone());
                     } else {
@@ -487,7 +707,14 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         .enumerate()
         .filter(|(_, s)| c.chrono_signals.contains(&s.id))
         .map(|(i, s)| (true, i, s.id.as_str()))
-        .chain(plant.outputs.iter().enumerate().filter(|(_, s)| c.chrono_signals.contains(&s.id)).map(|(i, s)| (false, i, s.id.as_str())))
+        .chain(
+            plant
+                .outputs
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| c.chrono_signals.contains(&s.id))
+                .map(|(i, s)| (false, i, s.id.as_str())),
+        )
         .collect();
     if rows.is_empty() {
         return;
@@ -500,22 +727,54 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let t0 = t1 - window;
     let plot_w = rect.width() - label_w;
     #[allow(clippy::cast_precision_loss)]
-    let x_of = |t: u64| rect.left() + label_w + (t.saturating_sub(t0)) as f32 / window as f32 * plot_w;
+    let x_of =
+        |t: u64| rect.left() + label_w + (t.saturating_sub(t0)) as f32 / window as f32 * plot_w;
     let recs: Vec<&vigie_core::history::CycleRecord> = {
-        let mut v: Vec<_> = sim.engine.history.iter().rev().take_while(|r| r.time.0 >= t0).collect();
+        let mut v: Vec<_> = sim
+            .engine
+            .history
+            .iter()
+            .rev()
+            .take_while(|r| r.time.0 >= t0)
+            .collect();
         v.reverse();
         v
     };
     for (k, (input, i, name)) in rows.iter().enumerate() {
         #[allow(clippy::cast_precision_loss)]
         let y = rect.top() + k as f32 * row_h;
-        painter.text(pos2(rect.left() + 4.0, y + row_h / 2.0), Align2::LEFT_CENTER, *name, FontId::monospace(11.0), pal.text);
-        painter.line_segment([pos2(rect.left() + label_w, y + row_h), pos2(rect.right(), y + row_h)], Stroke::new(0.5, pal.equipment));
-        let get = |r: &vigie_core::history::CycleRecord| if *input { r.inputs.get(*i) } else { r.applied.get(*i) };
+        painter.text(
+            pos2(rect.left() + 4.0, y + row_h / 2.0),
+            Align2::LEFT_CENTER,
+            *name,
+            FontId::monospace(11.0),
+            pal.text,
+        );
+        painter.line_segment(
+            [
+                pos2(rect.left() + label_w, y + row_h),
+                pos2(rect.right(), y + row_h),
+            ],
+            Stroke::new(0.5, pal.equipment),
+        );
+        let get = |r: &vigie_core::history::CycleRecord| {
+            if *input {
+                r.inputs.get(*i)
+            } else {
+                r.applied.get(*i)
+            }
+        };
         let mut start: Option<u64> = None;
-        let col = if *input { pal.running } else { pal.equipment_edge };
+        let col = if *input {
+            pal.running
+        } else {
+            pal.equipment_edge
+        };
         let flush = |s: u64, e: u64| {
-            let r = egui::Rect::from_min_max(pos2(x_of(s), y + 3.0), pos2(x_of(e).max(x_of(s) + 1.0), y + row_h - 3.0));
+            let r = egui::Rect::from_min_max(
+                pos2(x_of(s), y + 3.0),
+                pos2(x_of(e).max(x_of(s) + 1.0), y + row_h - 3.0),
+            );
             painter.rect_filled(r, 0.0, col);
         };
         for r in &recs {
@@ -536,25 +795,45 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     for t in &sim.engine.trips {
         if t.time_ms >= t0 {
             let x = x_of(t.time_ms);
-            painter.line_segment([pos2(x, rect.top()), pos2(x, rect.bottom())], Stroke::new(2.0, pal.trip));
+            painter.line_segment(
+                [pos2(x, rect.top()), pos2(x, rect.bottom())],
+                Stroke::new(2.0, pal.trip),
+            );
             let ids: Vec<&str> = t.constraints.iter().map(|c| c.id.as_str()).collect();
-            painter.text(pos2(x + 3.0, rect.top() + 2.0), Align2::LEFT_TOP, ids.join(","), FontId::proportional(11.0), pal.trip);
+            painter.text(
+                pos2(x + 3.0, rect.top() + 2.0),
+                Align2::LEFT_TOP,
+                ids.join(","),
+                FontId::proportional(11.0),
+                pal.trip,
+            );
         }
     }
     for h in sim.emulator.hazards() {
         if h.time_ms >= t0 {
             let x = x_of(h.time_ms);
-            painter.line_segment([pos2(x, rect.top()), pos2(x, rect.bottom())], Stroke::new(2.0, pal.alarm));
+            painter.line_segment(
+                [pos2(x, rect.top()), pos2(x, rect.bottom())],
+                Stroke::new(2.0, pal.alarm),
+            );
         }
     }
     if let Some(t) = c.replay {
         let x = x_of(t);
-        painter.line_segment([pos2(x, rect.top()), pos2(x, rect.bottom())], Stroke::new(2.0, pal.highlight));
+        painter.line_segment(
+            [pos2(x, rect.top()), pos2(x, rect.bottom())],
+            Stroke::new(2.0, pal.highlight),
+        );
     }
     if let Some(p) = resp.interact_pointer_pos() {
         if p.x > rect.left() + label_w {
-            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_precision_loss)]
-            let t = t0 + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
+            #[allow(
+                clippy::cast_possible_truncation,
+                clippy::cast_sign_loss,
+                clippy::cast_precision_loss
+            )]
+            let t = t0
+                + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
             out.push(Command::Scrub(Some(t.min(now))));
         }
     }

@@ -16,12 +16,30 @@ fn mutation_campaign_localises_the_errors() {
     let report = run_mutants(&bundle, &all, &Config::default());
     if std::env::var_os("VIGIE_CAMPAIGN_DUMP").is_some() {
         for o in report.outcomes.iter().filter(|o| o.trip_ms.is_some()) {
-            let f = o.first.as_ref().map(|i| format!("{} {}", i.code, i.text)).unwrap_or_default();
-            eprintln!("{} {} @{:?} [{}] {} :: {}", if o.localised { "OK  " } else { "MISS" }, o.id, o.trip_ms, o.constraints.join(","), o.description, f);
+            let f = o
+                .first
+                .as_ref()
+                .map(|i| format!("{} {}", i.code, i.text))
+                .unwrap_or_default();
+            eprintln!(
+                "{} {} @{:?} [{}] {} :: {}",
+                if o.localised { "OK  " } else { "MISS" },
+                o.id,
+                o.trip_ms,
+                o.constraints.join(","),
+                o.description,
+                f
+            );
         }
     }
     for o in report.misses() {
-        eprintln!("MISS {} {} [{}] {}", o.id, o.description, o.constraints.join(","), o.why);
+        eprintln!(
+            "MISS {} {} [{}] {}",
+            o.id,
+            o.description,
+            o.constraints.join(","),
+            o.why
+        );
     }
     eprintln!(
         "mutants {} tripped {} localised {} rate {:.1}% mean names {:.2}",
@@ -38,22 +56,34 @@ fn mutation_campaign_localises_the_errors() {
     // reads X11, not the transition that should have left it.
     assert_eq!(report.mutants, 404);
     assert!(report.tripped >= 130, "{} tripped", report.tripped);
-    let library: Vec<&str> = report.outcomes.iter().filter(|o| o.id.starts_with('E') && o.trip_ms.is_some()).map(|o| o.id.as_str()).collect();
+    let library: Vec<&str> = report
+        .outcomes
+        .iter()
+        .filter(|o| o.id.starts_with('E') && o.trip_ms.is_some())
+        .map(|o| o.id.as_str())
+        .collect();
     eprintln!("library variants that trip: {library:?}");
     let rate = report.rate_percent();
-    assert!(rate >= 93.0 && rate >= 90.0, "localisation rate {rate:.1}% below the floor of 93%");
+    assert!(
+        rate >= 93.0 && rate >= 90.0,
+        "localisation rate {rate:.1}% below the floor of 93%"
+    );
     assert_eq!(library.len(), 13, "{library:?}");
     // The paper's case is localised on t24 and its receptivity.
     let e01 = report.outcomes.iter().find(|o| o.id == "E01").expect("E01");
     let first = e01.first.as_ref().expect("hypothesis");
-    assert_eq!((first.code, first.fields["transition"].as_str()), ("X407", "t24"));
+    assert_eq!(
+        (first.code, first.fields["transition"].as_str()),
+        ("X407", "t24")
+    );
 }
 
 /// The reference program itself never trips in the campaign's run.
 #[test]
 fn the_reference_program_does_not_trip() {
     let bundle = station();
-    let lib = ErrorLibrary::load(&bundle.dir.join("programs/errors.ron"), &bundle.plant).expect("library");
+    let lib = ErrorLibrary::load(&bundle.dir.join("programs/errors.ron"), &bundle.plant)
+        .expect("library");
     let reference = Mutant {
         id: "REF".into(),
         description: "reference".into(),
@@ -71,7 +101,12 @@ fn a_suspect_names_its_elements_not_the_actuator() {
     let item = Item::new(
         "X407",
         String::new(),
-        &[("output", "A4".into()), ("transition", "t24".into()), ("signals", "C7".into()), ("activated", "X25".into())],
+        &[
+            ("output", "A4".into()),
+            ("transition", "t24".into()),
+            ("signals", "C7".into()),
+            ("activated", "X25".into()),
+        ],
     );
     let names: Vec<String> = suspect_names(&item).into_iter().collect();
     assert_eq!(names, vec!["C7", "X25", "t24"]);
@@ -79,10 +114,16 @@ fn a_suspect_names_its_elements_not_the_actuator() {
 
 #[test]
 fn library_patches_name_their_place() {
-    let (place, names) = patch_names(&Patch::Condition { transition: "t24".into(), condition: "RE(C7)".into() });
+    let (place, names) = patch_names(&Patch::Condition {
+        transition: "t24".into(),
+        condition: "RE(C7)".into(),
+    });
     assert_eq!(place, "transition t24");
     assert_eq!(names.into_iter().collect::<Vec<_>>(), vec!["C7", "t24"]);
-    let (place, names) = patch_names(&Patch::RemoveAction { step: "X24".into(), target: "A4".into() });
+    let (place, names) = patch_names(&Patch::RemoveAction {
+        step: "X24".into(),
+        target: "A4".into(),
+    });
     assert_eq!(place, "step X24");
     assert_eq!(names.into_iter().collect::<Vec<_>>(), vec!["X24"]);
 }

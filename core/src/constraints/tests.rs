@@ -174,7 +174,9 @@ fn property_6(text: &str) -> Vec<String> {
     let b = station();
     let (set, problems) = ConstraintSet::parse(text, Path::new("c.txt"), &b.symbols);
     assert!(problems.is_empty(), "{}", crate::diag::render(&problems));
-    let found = set.check_property_6(&b.symbols, &ConstraintSet::default()).0;
+    let found = set
+        .check_property_6(&b.symbols, &ConstraintSet::default())
+        .0;
     assert!(
         found
             .iter()
@@ -283,7 +285,13 @@ fn property_6_on_the_paper_set_holds_modulo_the_invariants() {
     assert!(errors.is_empty(), "{}", crate::diag::render(&errors));
     let got: Vec<(String, String, String)> = discharged
         .iter()
-        .map(|d| (d.forces_zero.clone(), d.forces_one.clone(), d.invariant.clone()))
+        .map(|d| {
+            (
+                d.forces_zero.clone(),
+                d.forces_one.clone(),
+                d.invariant.clone(),
+            )
+        })
         .collect();
     let want = [
         ("CSs13", "CSs9", "INV3"),

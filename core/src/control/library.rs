@@ -111,8 +111,14 @@ pub fn differences(a: &Program, b: &Program) -> Vec<String> {
     let sb: Vec<_> = b.steps().collect();
     let same_shape = ta.len() == tb.len()
         && sa.len() == sb.len()
-        && ta.iter().zip(&tb).all(|(x, y)| x.1.id == y.1.id && x.1.from == y.1.from && x.1.to == y.1.to)
-        && sa.iter().zip(&sb).all(|(x, y)| x.1.id == y.1.id && x.1.initial == y.1.initial);
+        && ta
+            .iter()
+            .zip(&tb)
+            .all(|(x, y)| x.1.id == y.1.id && x.1.from == y.1.from && x.1.to == y.1.to)
+        && sa
+            .iter()
+            .zip(&sb)
+            .all(|(x, y)| x.1.id == y.1.id && x.1.initial == y.1.initial);
     if !same_shape
         || a.panel != b.panel
         || a.memories != b.memories
@@ -132,7 +138,12 @@ pub fn differences(a: &Program, b: &Program) -> Vec<String> {
             out.push(format!("step {}", x.1.id));
         }
     }
-    let mut targets: Vec<&String> = a.equations.iter().chain(&b.equations).map(|e| &e.0).collect();
+    let mut targets: Vec<&String> = a
+        .equations
+        .iter()
+        .chain(&b.equations)
+        .map(|e| &e.0)
+        .collect();
     targets.sort();
     targets.dedup();
     for t in targets {
@@ -210,7 +221,11 @@ impl ErrorLibrary {
     pub fn load(path: &Path, plant: &Plant) -> Result<Self, Vec<Problem>> {
         let read = |p: &Path| {
             std::fs::read_to_string(p).map_err(|e| {
-                vec![Problem::error("V0002", format!("cannot read {}: {e}", p.display()), None)]
+                vec![Problem::error(
+                    "V0002",
+                    format!("cannot read {}: {e}", p.display()),
+                    None,
+                )]
             })
         };
         let text = read(path)?;
@@ -237,13 +252,21 @@ impl ErrorLibrary {
                 })
                 .unwrap_or_else(|| Location::new(path, 1, 1));
             if !ids.insert(def.id.clone()) {
-                problems.push(Problem::error("V0320", format!("variant `{}` is declared twice", def.id), Some(loc)));
+                problems.push(Problem::error(
+                    "V0320",
+                    format!("variant `{}` is declared twice", def.id),
+                    Some(loc),
+                ));
                 continue;
             }
             let program = match def.patch.apply(&reference) {
                 Ok(p) => p,
                 Err(m) => {
-                    problems.push(Problem::error("V0321", format!("variant `{}`: {m}", def.id), Some(loc)));
+                    problems.push(Problem::error(
+                        "V0321",
+                        format!("variant `{}`: {m}", def.id),
+                        Some(loc),
+                    ));
                     continue;
                 }
             };

@@ -42,7 +42,11 @@ impl std::fmt::Display for Place {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Place::Transition { chart, id } => write!(f, "chart {chart}, transition {id}"),
-            Place::Action { chart, step, target } => {
+            Place::Action {
+                chart,
+                step,
+                target,
+            } => {
                 write!(f, "chart {chart}, step {step}, action on {target}")
             }
             Place::Equation { target } => write!(f, "equation {target}"),
@@ -141,7 +145,11 @@ fn drop_operand(e: &Expr, target: usize, j: usize, k: &mut usize) -> Expr {
             if parts.len() == 1 {
                 return parts.remove(0);
             }
-            if matches!(e, Expr::And(_)) { Expr::And(parts) } else { Expr::Or(parts) }
+            if matches!(e, Expr::And(_)) {
+                Expr::And(parts)
+            } else {
+                Expr::Or(parts)
+            }
         }
         Expr::Not(inner) => Expr::Not(Box::new(drop_operand(inner, target, j, k))),
         _ => e.clone(),
@@ -159,9 +167,19 @@ fn nary_nodes(e: &Expr, out: &mut Vec<usize>) {
     }
 }
 
-fn expr_mutations(text: &str, place: &Place, plant: &Plant, make: &dyn Fn(String) -> Patch, out: &mut Vec<Mutation>) {
+fn expr_mutations(
+    text: &str,
+    place: &Place,
+    plant: &Plant,
+    make: &dyn Fn(String) -> Patch,
+    out: &mut Vec<Mutation>,
+) {
     let Ok(e) = expr::parse_str(text) else { return };
-    let leaves: Vec<(String, LeafKind)> = e.leaves().into_iter().map(|(n, k, _)| (n.to_string(), k)).collect();
+    let leaves: Vec<(String, LeafKind)> = e
+        .leaves()
+        .into_iter()
+        .map(|(n, k, _)| (n.to_string(), k))
+        .collect();
     let before = render(&e);
     let mut push = |operator, signal: &str, new: Expr| {
         let after = render(&new);
@@ -178,7 +196,11 @@ fn expr_mutations(text: &str, place: &Place, plant: &Plant, make: &dyn Fn(String
     };
     for (i, (name, kind)) in leaves.iter().enumerate() {
         let negated = rewrite_leaf(&e, i, &mut 0, &|leaf, under_not| {
-            if under_not { leaf.clone() } else { Expr::Not(Box::new(leaf.clone())) }
+            if under_not {
+                leaf.clone()
+            } else {
+                Expr::Not(Box::new(leaf.clone()))
+            }
         });
         push(Operator::NegateLiteral, name, negated);
         if matches!(kind, LeafKind::Rise | LeafKind::Fall) {
@@ -186,12 +208,20 @@ fn expr_mutations(text: &str, place: &Place, plant: &Plant, make: &dyn Fn(String
                 let new = match leaf {
                     Expr::Leaf { name, kind, span } => Expr::Leaf {
                         name: name.clone(),
-                        kind: if *kind == LeafKind::Rise { LeafKind::Fall } else { LeafKind::Rise },
+                        kind: if *kind == LeafKind::Rise {
+                            LeafKind::Fall
+                        } else {
+                            LeafKind::Rise
+                        },
                         span: *span,
                     },
                     other => other.clone(),
                 };
-                if under_not { Expr::Not(Box::new(new)) } else { new }
+                if under_not {
+                    Expr::Not(Box::new(new))
+                } else {
+                    new
+                }
             });
             push(Operator::SwapEdge, name, swapped);
         }
@@ -209,7 +239,11 @@ fn expr_mutations(text: &str, place: &Place, plant: &Plant, make: &dyn Fn(String
                         },
                         other => other.clone(),
                     };
-                    if under_not { Expr::Not(Box::new(new)) } else { new }
+                    if under_not {
+                        Expr::Not(Box::new(new))
+                    } else {
+                        new
+                    }
                 });
                 push(Operator::SwapSignal, name, swapped);
             }
@@ -246,7 +280,12 @@ fn find_operand(e: &Expr, target: usize, j: usize, k: &mut usize, found: &mut St
 /// Alternative qualifiers tried for an action.
 fn qualifier_alternatives(q: Qualifier) -> Vec<Qualifier> {
     match q {
-        Qualifier::N => vec![Qualifier::S, Qualifier::P, Qualifier::L(1000), Qualifier::D(1000)],
+        Qualifier::N => vec![
+            Qualifier::S,
+            Qualifier::P,
+            Qualifier::L(1000),
+            Qualifier::D(1000),
+        ],
         Qualifier::S => vec![Qualifier::N, Qualifier::R],
         Qualifier::R => vec![Qualifier::S, Qualifier::N],
         Qualifier::L(_) | Qualifier::D(_) => vec![Qualifier::N],
@@ -264,10 +303,16 @@ pub fn mutations(program: &Program, plant: &Plant) -> Vec<Mutation> {
             id: t.id.clone(),
         };
         let id = t.id.clone();
-        expr_mutations(&t.condition, &place, plant, &|c| Patch::Condition {
-            transition: id.clone(),
-            condition: c,
-        }, &mut out);
+        expr_mutations(
+            &t.condition,
+            &place,
+            plant,
+            &|c| Patch::Condition {
+                transition: id.clone(),
+                condition: c,
+            },
+            &mut out,
+        );
     }
     for (chart, s) in program.steps() {
         for a in &s.actions {
@@ -299,10 +344,16 @@ pub fn mutations(program: &Program, plant: &Plant) -> Vec<Mutation> {
             target: target.clone(),
         };
         let tg = target.clone();
-        expr_mutations(text, &place, plant, &|e| Patch::Equation {
-            target: tg.clone(),
-            expression: e,
-        }, &mut out);
+        expr_mutations(
+            text,
+            &place,
+            plant,
+            &|e| Patch::Equation {
+                target: tg.clone(),
+                expression: e,
+            },
+            &mut out,
+        );
     }
     out
 }

@@ -30,7 +30,10 @@ impl Layout {
     /// Word index and mask of a variable.
     #[inline]
     pub(crate) fn locate(&self, space: Space, index: usize, prev: bool) -> (usize, u64) {
-        (self.off[usize::from(prev)][space as usize] + index / 64, 1u64 << (index % 64))
+        (
+            self.off[usize::from(prev)][space as usize] + index / 64,
+            1u64 << (index % 64),
+        )
     }
 
     fn var(&self, v: Var) -> (usize, u64) {
@@ -72,7 +75,11 @@ impl Conds {
                 let k = match self.checks[first..].iter().position(|c| c.word == word) {
                     Some(k) => first + k,
                     None => {
-                        self.checks.push(Check { word, ones: 0, zeros: 0 });
+                        self.checks.push(Check {
+                            word,
+                            ones: 0,
+                            zeros: 0,
+                        });
                         self.checks.len() - 1
                     }
                 };
@@ -111,7 +118,10 @@ impl Conds {
     /// Evaluates a compiled expression over the flat state.
     #[inline]
     pub(crate) fn eval(&self, c: Cond, state: &[u64]) -> bool {
-        let terms = self.terms.get(c.start as usize..c.end as usize).unwrap_or(&[]);
+        let terms = self
+            .terms
+            .get(c.start as usize..c.end as usize)
+            .unwrap_or(&[]);
         terms.iter().any(|&(a, b)| {
             self.checks
                 .get(a as usize..b as usize)

@@ -1,10 +1,10 @@
 //! The program format (`programs/*.ron`) and its compilation against a plant.
 
+use super::packed::{Cond, Conds, Layout};
 use crate::diag::{Location, Problem, ron_problem};
 use crate::expr::{self, Dnf, Span};
 use crate::plant::{Plant, is_valid_name};
 use crate::symbols::{Space, Symbols};
-use super::packed::{Cond, Conds, Layout};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -310,7 +310,12 @@ impl CompiledProgram {
         // Declarations: steps, memories, timers, panel.
         let mut step_index: BTreeMap<String, u16> = BTreeMap::new();
         let mut steps = Vec::new();
-        let declare = |name: &str, what: &str, loc: Option<Location>, problems: &mut Vec<Problem>, symbols: &mut Symbols| -> Option<u32> {
+        let declare = |name: &str,
+                       what: &str,
+                       loc: Option<Location>,
+                       problems: &mut Vec<Problem>,
+                       symbols: &mut Symbols|
+         -> Option<u32> {
             if !is_valid_name(name) {
                 problems.push(Problem::error(
                     "V0301",
@@ -322,7 +327,11 @@ impl CompiledProgram {
             match symbols.declare(name, Space::Aux) {
                 Ok(i) => Some(i),
                 Err((space, _)) => {
-                    let other = if space == Space::Aux { "another step, memory, timer or panel input" } else { "a plant signal" };
+                    let other = if space == Space::Aux {
+                        "another step, memory, timer or panel input"
+                    } else {
+                        "a plant signal"
+                    };
                     problems.push(Problem::error(
                         "V0302",
                         format!("{what} `{name}` has the name of {other}"),
@@ -349,11 +358,20 @@ impl CompiledProgram {
                 ));
             }
             for step in &chart.steps {
-                if let Some(aux) = declare(&step.id, &format!("chart `{}`: step", chart.name), at_id(&step.id), &mut problems, &mut symbols) {
+                if let Some(aux) = declare(
+                    &step.id,
+                    &format!("chart `{}`: step", chart.name),
+                    at_id(&step.id),
+                    &mut problems,
+                    &mut symbols,
+                ) {
                     if steps.len() >= MAX_ELEMENTS {
                         continue;
                     }
-                    step_index.insert(step.id.clone(), u16::try_from(steps.len()).unwrap_or(u16::MAX));
+                    step_index.insert(
+                        step.id.clone(),
+                        u16::try_from(steps.len()).unwrap_or(u16::MAX),
+                    );
                     steps.push(StepInfo {
                         id: step.id.clone(),
                         chart: ci,
@@ -368,7 +386,10 @@ impl CompiledProgram {
         for m in &program.memories {
             let loc = Some(origin.location(origin.find_quoted(m, 0)));
             if let Some(aux) = declare(m, "memory", loc, &mut problems, &mut symbols) {
-                memory_index.insert(m.clone(), u32::try_from(memory_aux.len()).unwrap_or(u32::MAX));
+                memory_index.insert(
+                    m.clone(),
+                    u32::try_from(memory_aux.len()).unwrap_or(u32::MAX),
+                );
                 memory_aux.push(aux);
             }
         }
@@ -379,7 +400,11 @@ impl CompiledProgram {
                 continue;
             };
             match step_index.get(step) {
-                Some(&s) => timers.push(TimerInfo { step: s, ms: *ms, aux }),
+                Some(&s) => timers.push(TimerInfo {
+                    step: s,
+                    ms: *ms,
+                    aux,
+                }),
                 None => problems.push(Problem::error(
                     "V0305",
                     format!("timer `{id}`: unknown step `{step}`"),
@@ -405,7 +430,9 @@ impl CompiledProgram {
         // Actions.
         let mut actions = Vec::new();
         for (chart, step) in program.steps() {
-            let Some(&si) = step_index.get(&step.id) else { continue };
+            let Some(&si) = step_index.get(&step.id) else {
+                continue;
+            };
             for a in &step.actions {
                 match target_slot(&a.target) {
                     Some(slot) => actions.push(ActionInfo {
@@ -426,7 +453,11 @@ impl CompiledProgram {
         }
 
         // Expressions.
-        let compile_expr = |text: &str, start: Option<usize>, what: &str, problems: &mut Vec<Problem>| -> Option<Dnf> {
+        let compile_expr = |text: &str,
+                            start: Option<usize>,
+                            what: &str,
+                            problems: &mut Vec<Problem>|
+         -> Option<Dnf> {
             let (line, column) = start.map_or((1, 1), |s| line_col(&origin.text, s));
             let span = Span { line, column };
             match expr::parse(text, span).and_then(|e| e.to_dnf(&symbols)) {
@@ -434,7 +465,10 @@ impl CompiledProgram {
                     if let Some(l) = d.iter().flatten().find(|l| l.var.space == Space::Observer) {
                         problems.push(Problem::error(
                             "V0308",
-                            format!("{what}: a program cannot read the observer `{}`", symbols.name(l.var.space, l.var.index)),
+                            format!(
+                                "{what}: a program cannot read the observer `{}`",
+                                symbols.name(l.var.space, l.var.index)
+                            ),
                             Some(Location::new(&origin.file, line, column)),
                         ));
                         return None;
@@ -456,7 +490,9 @@ impl CompiledProgram {
         for (ci, chart) in program.charts.iter().enumerate() {
             for t in &chart.transitions {
                 let what = format!("chart `{}`, transition `{}`", chart.name, t.id);
-                if transition_ids.insert(t.id.clone(), ()).is_some() || step_index.contains_key(&t.id) {
+                if transition_ids.insert(t.id.clone(), ()).is_some()
+                    || step_index.contains_key(&t.id)
+                {
                     problems.push(Problem::error(
                         "V0309",
                         format!("{what}: the id is used twice"),
@@ -466,11 +502,21 @@ impl CompiledProgram {
                 let ends = |list: &[String], dir: &str, problems: &mut Vec<Problem>| -> Vec<u16> {
                     let mut out = Vec::new();
                     if list.is_empty() {
-                        problems.push(Problem::error("V0310", format!("{what}: no {dir} step"), at_id(&t.id)));
+                        problems.push(Problem::error(
+                            "V0310",
+                            format!("{what}: no {dir} step"),
+                            at_id(&t.id),
+                        ));
                     }
                     for s in list {
                         match step_index.get(s) {
-                            Some(&i) if steps.get(i as usize).is_some_and(|st: &StepInfo| st.chart == ci) => out.push(i),
+                            Some(&i)
+                                if steps
+                                    .get(i as usize)
+                                    .is_some_and(|st: &StepInfo| st.chart == ci) =>
+                            {
+                                out.push(i)
+                            }
                             Some(_) => problems.push(Problem::error(
                                 "V0311",
                                 format!("{what}: {dir} step `{s}` belongs to another chart"),
@@ -489,7 +535,12 @@ impl CompiledProgram {
                 };
                 let from = ends(&t.from, "upstream", &mut problems);
                 let to = ends(&t.to, "downstream", &mut problems);
-                let condition = compile_expr(&t.condition, origin.condition_start(&t.id), &what, &mut problems);
+                let condition = compile_expr(
+                    &t.condition,
+                    origin.condition_start(&t.id),
+                    &what,
+                    &mut problems,
+                );
                 if let Some(condition) = condition.filter(|_| transitions.len() < MAX_ELEMENTS) {
                     transitions.push(TransitionInfo {
                         id: t.id.clone(),
@@ -523,7 +574,11 @@ impl CompiledProgram {
                 ));
             }
             if let Some(dnf) = compile_expr(text, start, &what, &mut problems) {
-                equations.push(EquationInfo { slot, dnf, cond: Cond::default() });
+                equations.push(EquationInfo {
+                    slot,
+                    dnf,
+                    cond: Cond::default(),
+                });
             }
         }
         if !problems.is_empty() {
@@ -563,7 +618,11 @@ impl CompiledProgram {
     /// Loads and compiles a program file.
     pub fn load(path: &Path, plant: &Plant) -> Result<Self, Vec<Problem>> {
         let text = std::fs::read_to_string(path).map_err(|e| {
-            vec![Problem::error("V0002", format!("cannot read {}: {e}", path.display()), None)]
+            vec![Problem::error(
+                "V0002",
+                format!("cannot read {}: {e}", path.display()),
+                None,
+            )]
         })?;
         let program = Program::from_ron(&text, path)?;
         Self::new(&program, plant, &Origin::new(path, &text))
@@ -582,7 +641,8 @@ impl CompiledProgram {
     /// The target slot of an output or a memory name.
     pub(crate) fn slot_name(&self, slot: usize) -> &str {
         if slot < self.n_outputs {
-            self.symbols.name(Space::Output, u32::try_from(slot).unwrap_or(u32::MAX))
+            self.symbols
+                .name(Space::Output, u32::try_from(slot).unwrap_or(u32::MAX))
         } else {
             let m = slot - self.n_outputs;
             self.memory_aux

@@ -349,7 +349,9 @@ impl ProgramRuntime {
             if !self.step_active(step.aux) {
                 continue;
             }
-            if self.action_true(a.step as usize, a.qualifier) && !matches!(a.qualifier, Qualifier::S | Qualifier::R) {
+            if self.action_true(a.step as usize, a.qualifier)
+                && !matches!(a.qualifier, Qualifier::S | Qualifier::R)
+            {
                 out.push(Driver::Action {
                     step: step.id.clone(),
                     qualifier: a.qualifier,
@@ -369,7 +371,12 @@ impl ProgramRuntime {
         for (k, eq) in p.equations.iter().enumerate() {
             if eq.slot == slot && p.conds.eval(eq.cond, &self.state) {
                 out.push(Driver::Equation {
-                    expression: p.program.equations.get(k).map(|e| e.1.clone()).unwrap_or_default(),
+                    expression: p
+                        .program
+                        .equations
+                        .get(k)
+                        .map(|e| e.1.clone())
+                        .unwrap_or_default(),
                 });
             }
         }
@@ -515,7 +522,9 @@ impl ProgramRuntime {
                 continue;
             }
             let s = a.step as usize;
-            if self.get(Space::Aux, p.steps[s].aux as usize, false) && self.action_true(s, a.qualifier) {
+            if self.get(Space::Aux, p.steps[s].aux as usize, false)
+                && self.action_true(s, a.qualifier)
+            {
                 self.values.set(a.slot, true);
             }
         }

@@ -64,7 +64,6 @@ impl Open {
             .map(|k| self.plant.outputs[k].id.clone())
             .collect()
     }
-
 }
 
 const MINI: &str = r#"Program(
@@ -113,7 +112,12 @@ fn control_unknown_name_reports_element_and_column() {
     let eq = "Program(name: \"x\", charts: [Chart(name: \"g\", steps: [Step(id: \"S0\", initial: true)], transitions: [])],\n equations: [(\"A0\", \"S0 . /NOPE\")])";
     let err = compile(eq).unwrap_err();
     let loc = err[0].location.clone().unwrap();
-    assert_eq!((loc.line, loc.column), (2, " equations: [(\"A0\", \"S0 . /".len() + 1), "{}", err[0]);
+    assert_eq!(
+        (loc.line, loc.column),
+        (2, " equations: [(\"A0\", \"S0 . /".len() + 1),
+        "{}",
+        err[0]
+    );
 }
 
 #[test]
@@ -130,7 +134,10 @@ fn control_validation_errors() {
     let has = |s: &str| msgs.iter().any(|m| m.contains(s));
     assert!(has("no initial step"), "{msgs:#?}");
     assert!(has("step `S0` has the name of another"), "{msgs:#?}");
-    assert!(has("memory `C0` has the name of a plant signal"), "{msgs:#?}");
+    assert!(
+        has("memory `C0` has the name of a plant signal"),
+        "{msgs:#?}"
+    );
     assert!(has("unknown upstream step `S9`"), "{msgs:#?}");
     assert!(has("transition `t`: the id is used twice"), "{msgs:#?}");
     assert!(has("action target `C1`"), "{msgs:#?}");
@@ -170,7 +177,10 @@ fn control_qualifiers_timers_and_buttons() {
     let d = o.rt.drivers("A4").unwrap();
     assert_eq!(d.len(), 1);
     let d = o.rt.drivers("M").unwrap();
-    assert!(matches!(&d[..], [Driver::Stored { set_by }] if set_by == &vec!["S1".to_string()]), "{d:?}");
+    assert!(
+        matches!(&d[..], [Driver::Stored { set_by }] if set_by == &vec!["S1".to_string()]),
+        "{d:?}"
+    );
     // C0 → S3 resets M (one evolution per scan: d fires only at the next scan).
     assert_eq!(o.scan(&["C0"]), Vec::<String>::new());
     assert!(o.rt.is_active("S3"));
@@ -181,7 +191,10 @@ fn control_qualifiers_timers_and_buttons() {
     assert!(o.scan(&["C2"]).contains(&"A6".to_string()));
     assert!(o.scan(&[]).contains(&"A6".to_string()));
     let ev = o.rt.evolutions();
-    let fired: Vec<&str> = ev.iter().flat_map(|e| e.fired.iter().map(String::as_str)).collect();
+    let fired: Vec<&str> = ev
+        .iter()
+        .flat_map(|e| e.fired.iter().map(String::as_str))
+        .collect();
     assert_eq!(fired, vec!["a", "b", "c", "d"]);
 }
 
@@ -217,7 +230,10 @@ fn control_simultaneous_firing_and_one_evolution_per_scan() {
 fn station_bundle() -> PlantBundle {
     let (mut bundle, problems) = PlantBundle::load(&station()).unwrap();
     // Property (6) is reported on the paper's set for purely logical A4 pairs.
-    assert!(problems.iter().all(|p| !p.is_error() || p.code == "V0106"), "{problems:?}");
+    assert!(
+        problems.iter().all(|p| !p.is_error() || p.code == "V0106"),
+        "{problems:?}"
+    );
     let mut defs = bundle.observers.defs.clone();
     for d in &mut defs {
         if d.id == "P67" {
@@ -273,13 +289,18 @@ impl Closed {
         self.engine
             .trips
             .iter()
-            .flat_map(|t| t.constraints.iter().map(move |c| format!("{} at {} ms", c.id, t.time_ms)))
+            .flat_map(|t| {
+                t.constraints
+                    .iter()
+                    .map(move |c| format!("{} at {} ms", c.id, t.time_ms))
+            })
             .collect()
     }
 }
 
 fn reference() -> ProgramRuntime {
-    let compiled = CompiledProgram::load(&station().join("programs/reference.ron"), &plant()).unwrap();
+    let compiled =
+        CompiledProgram::load(&station().join("programs/reference.ron"), &plant()).unwrap();
     ProgramRuntime::new(Arc::new(compiled))
 }
 
@@ -292,17 +313,40 @@ fn one_box(c: &mut Closed, large: bool) -> &'static str {
     c.scan(&["C4"]);
     assert_eq!(c.scan(&["C0", "C4"]), "A0 A1 A5 A6", "push from C0");
     c.scan(&with(&["C0", "C1", "C4"], size));
-    assert_eq!(c.scan(&with(&["C1", "C4"], size)), "A0 A1 A5 A6", "box on A1, next box fed");
+    assert_eq!(
+        c.scan(&with(&["C1", "C4"], size)),
+        "A0 A1 A5 A6",
+        "box on A1, next box fed"
+    );
     c.scan(&["C4"]);
     let s = c.scan(&["C3", "C4"]);
-    assert_eq!(s, "A0 A1 A2 A5 A6", "table takes the box in the scan C3 rises");
+    assert_eq!(
+        s, "A0 A1 A2 A5 A6",
+        "table takes the box in the scan C3 rises"
+    );
     let right = c.rt.is_active("X21");
-    assert_eq!(c.scan(&["C4"]), "A0 A2 A5 A6", "box left A1: A1 off, rollers on");
-    assert_eq!(c.scan(&["C4", "C6"]), "A0 A4 A5 A6", "C6 rises: A2 off, A4 on in the same scan");
+    assert_eq!(
+        c.scan(&["C4"]),
+        "A0 A2 A5 A6",
+        "box left A1: A1 off, rollers on"
+    );
+    assert_eq!(
+        c.scan(&["C4", "C6"]),
+        "A0 A4 A5 A6",
+        "C6 rises: A2 off, A4 on in the same scan"
+    );
     c.scan(&["C6"]);
-    let (act, exit, far) = if right { ("A3", "C7", "C9") } else { ("A2", "C8", "C10") };
+    let (act, exit, far) = if right {
+        ("A3", "C7", "C9")
+    } else {
+        ("A2", "C8", "C10")
+    };
     let s = c.scan(&["C5", "C6"]);
-    assert_eq!(s, format!("A0 {} A4 A5 A6", act).replace("A0 A4 A3", "A0 A3 A4"), "evacuation at C5");
+    assert_eq!(
+        s,
+        format!("A0 {} A4 A5 A6", act).replace("A0 A4 A3", "A0 A3 A4"),
+        "evacuation at C5"
+    );
     if right {
         assert!(c.scan(&["C5"]).contains("A4"), "A4 held while P67");
     } else {
@@ -311,7 +355,11 @@ fn one_box(c: &mut Closed, large: bool) -> &'static str {
     }
     assert!(c.scan(&["C5", exit]).contains("A4"), "A4 held while {exit}");
     assert!(c.scan(&["C5", exit]).contains("A4"));
-    assert_eq!(c.scan(&["C5", far]), "A0 A5 A6", "released on FE({exit}) at C5");
+    assert_eq!(
+        c.scan(&["C5", far]),
+        "A0 A5 A6",
+        "released on FE({exit}) at C5"
+    );
     c.scan(&[]);
     c.scan(&[]);
     c.scan(&["C4"]);
@@ -327,7 +375,11 @@ fn control_reference_right_then_left_scan_by_scan() {
     let mut c = Closed::new(reference());
     assert_eq!(c.scan(&["C4"]), "A5 A6", "stopped");
     c.rt.press("START").unwrap();
-    assert_eq!(c.scan(&["C4"]), "A0 A5 A6", "running: A0 brings a box to C0");
+    assert_eq!(
+        c.scan(&["C4"]),
+        "A0 A5 A6",
+        "running: A0 brings a box to C0"
+    );
     assert!(c.rt.is_active("X1"));
     assert_eq!(one_box(&mut c, false), "right");
     assert_eq!(c.rt.value("LAST_R"), Some(true));
@@ -341,11 +393,22 @@ fn control_reference_right_then_left_scan_by_scan() {
     c.rt.press("STOP").unwrap();
     // STOP: the feed stops (A0 off) but the box in transit completes.
     assert_eq!(c.scan(&["C4"]), "A1 A5 A6");
-    assert_eq!(c.scan(&["C3"]), "A5 A6", "table not at C4: A1 stops as C3 rises");
-    assert_eq!(c.scan(&["C3", "C4"]), "A1 A2 A5 A6", "table back: taken in one scan");
+    assert_eq!(
+        c.scan(&["C3"]),
+        "A5 A6",
+        "table not at C4: A1 stops as C3 rises"
+    );
+    assert_eq!(
+        c.scan(&["C3", "C4"]),
+        "A1 A2 A5 A6",
+        "table back: taken in one scan"
+    );
     assert!(c.violations().is_empty(), "{:?}", c.violations());
     let ev = c.rt.evolutions();
-    assert!(ev.last().unwrap().fired.contains(&"t20R".to_string()), "{ev:?}");
+    assert!(
+        ev.last().unwrap().fired.contains(&"t20R".to_string()),
+        "{ev:?}"
+    );
 }
 
 #[test]
@@ -369,13 +432,26 @@ fn control_paper_error_trips_cs10_on_scripted_box() {
     c.rt.press("START").unwrap();
     c.scan(&["C4"]);
     for s in [
-        &["C0", "C4"][..], &["C0", "C1", "C4"], &["C1", "C4"], &["C4"], &["C3", "C4"], &["C4"],
-        &["C4", "C6"], &["C6"], &["C5", "C6"], &["C5"], &["C5", "C7"],
+        &["C0", "C4"][..],
+        &["C0", "C1", "C4"],
+        &["C1", "C4"],
+        &["C4"],
+        &["C3", "C4"],
+        &["C4"],
+        &["C4", "C6"],
+        &["C6"],
+        &["C5", "C6"],
+        &["C5"],
+        &["C5", "C7"],
     ] {
         c.scan(s);
     }
     let v = c.violations();
-    assert_eq!(v.first().map(|s| s.split(' ').next().unwrap()), Some("CSs10"), "{v:?}");
+    assert_eq!(
+        v.first().map(|s| s.split(' ').next().unwrap()),
+        Some("CSs10"),
+        "{v:?}"
+    );
 }
 
 #[test]
@@ -388,14 +464,22 @@ fn control_error_library_loads_and_each_variant_differs_once() {
     for v in &lib.variants {
         let d = differences(&lib.reference, &v.program);
         assert_eq!(d.len(), 1, "{}: {d:?}", v.def.id);
-        assert!(bundle.constraints.get(&v.def.expected_constraint).is_some(), "{}", v.def.id);
+        assert!(
+            bundle.constraints.get(&v.def.expected_constraint).is_some(),
+            "{}",
+            v.def.id
+        );
         expected.insert(v.def.expected_constraint.clone());
     }
     assert!(expected.len() >= 10, "{expected:?}");
     // A broken patch is reported with the variant id.
     let dir = std::env::temp_dir().join(format!("vigie-control-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy(station().join("programs/reference.ron"), dir.join("reference.ron")).unwrap();
+    std::fs::copy(
+        station().join("programs/reference.ron"),
+        dir.join("reference.ron"),
+    )
+    .unwrap();
     std::fs::write(
         dir.join("errors.ron"),
         "ErrorsFile(reference: \"reference.ron\", variants: [(id: \"B1\", description: \"\", expected_constraint: \"CSs1\", patch: Condition(transition: \"t99\", condition: \"1\")), (id: \"B2\", description: \"\", expected_constraint: \"CSs1\", patch: Condition(transition: \"t24\", condition: \"C77\"))])",
@@ -403,8 +487,14 @@ fn control_error_library_loads_and_each_variant_differs_once() {
     .unwrap();
     let err = ErrorLibrary::load(&dir.join("errors.ron"), &plant).unwrap_err();
     let msgs: Vec<String> = err.iter().map(ToString::to_string).collect();
-    assert!(msgs.iter().any(|m| m.contains("B1") && m.contains("t99")), "{msgs:?}");
-    assert!(msgs.iter().any(|m| m.contains("B2") && m.contains("C77")), "{msgs:?}");
+    assert!(
+        msgs.iter().any(|m| m.contains("B1") && m.contains("t99")),
+        "{msgs:?}"
+    );
+    assert!(
+        msgs.iter().any(|m| m.contains("B2") && m.contains("C77")),
+        "{msgs:?}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -420,7 +510,8 @@ fn control_mutations_are_single_place_and_compile() {
     for m in &ms {
         let p = m.patch.apply(&reference).unwrap();
         assert_eq!(differences(&reference, &p).len(), 1, "{}", m.description);
-        CompiledProgram::new(&p, &plant, &Origin::default()).unwrap_or_else(|e| panic!("{}: {e:?}", m.description));
+        CompiledProgram::new(&p, &plant, &Origin::default())
+            .unwrap_or_else(|e| panic!("{}: {e:?}", m.description));
     }
     // The paper's error is among them.
     assert!(ms.iter().any(|m| m.patch
@@ -428,7 +519,9 @@ fn control_mutations_are_single_place_and_compile() {
             transition: "t24".into(),
             condition: "RE(C7)".into()
         }));
-    assert!(ms.iter().any(|m| m.description.contains("equation A1") && m.operator == mutation::Operator::DropTerm));
+    assert!(ms.iter().any(
+        |m| m.description.contains("equation A1") && m.operator == mutation::Operator::DropTerm
+    ));
 }
 
 #[test]
@@ -442,13 +535,20 @@ fn control_runtime_clone_runs_forward_independently() {
     assert!(fork.is_active("X10"));
 }
 
-
 /// Sensor script of one box (no assertion), with a 2 s rotation.
 fn script(right: bool) -> Vec<Vec<&'static str>> {
     let (exit, far) = if right { ("C7", "C9") } else { ("C8", "C10") };
     let mut s: Vec<Vec<&'static str>> = vec![
-        vec!["C4"], vec!["C0", "C4"], vec!["C0", "C1", "C4"], vec!["C1", "C4"], vec!["C4"],
-        vec!["C3", "C4"], vec!["C4"], vec!["C4"], vec!["C4", "C6"], vec!["C4", "C6"],
+        vec!["C4"],
+        vec!["C0", "C4"],
+        vec!["C0", "C1", "C4"],
+        vec!["C1", "C4"],
+        vec!["C4"],
+        vec!["C3", "C4"],
+        vec!["C4"],
+        vec!["C4"],
+        vec!["C4", "C6"],
+        vec!["C4", "C6"],
     ];
     s.extend(std::iter::repeat_n(vec!["C6"], 200));
     s.push(vec!["C5", "C6"]);
@@ -468,17 +568,29 @@ fn control_variants_trip_their_constraint_on_scripted_boxes() {
     let lib = ErrorLibrary::load(&station().join("programs/errors.ron"), &plant()).unwrap();
     // E13 and E14 need the plant's reaction (the next box's timing), not a script.
     let mut checked = 0;
-    for v in lib.variants.iter().filter(|v| !["E13", "E14"].contains(&v.def.id.as_str())) {
+    for v in lib
+        .variants
+        .iter()
+        .filter(|v| !["E13", "E14"].contains(&v.def.id.as_str()))
+    {
         let mut c = Closed::new(ProgramRuntime::new(Arc::new(v.compiled.clone())));
         c.rt.press("START").unwrap();
         for s in script(true).iter().chain(&script(false)) {
             c.scan(s);
         }
         let first = c.engine.trips.first().map(|t| {
-            t.constraints.iter().map(|k| k.id.clone()).collect::<Vec<_>>()
+            t.constraints
+                .iter()
+                .map(|k| k.id.clone())
+                .collect::<Vec<_>>()
         });
         let first = first.unwrap_or_default();
-        assert!(first.contains(&v.def.expected_constraint), "{}: expected {}, first violation {first:?}", v.def.id, v.def.expected_constraint);
+        assert!(
+            first.contains(&v.def.expected_constraint),
+            "{}: expected {}, first violation {first:?}",
+            v.def.id,
+            v.def.expected_constraint
+        );
         checked += 1;
     }
     assert!(checked >= 12);
@@ -510,7 +622,11 @@ fn control_shipped_observers_let_the_reference_evacuate_both_ways() {
         t += 10;
         engine.cycle(Millis(t), &bits, &mut rt);
     }
-    let ids: Vec<&str> = engine.trips.iter().flat_map(|t| t.constraints.iter().map(|c| c.id.as_str())).collect();
+    let ids: Vec<&str> = engine
+        .trips
+        .iter()
+        .flat_map(|t| t.constraints.iter().map(|c| c.id.as_str()))
+        .collect();
     assert!(ids.is_empty(), "{ids:?}");
 }
 

@@ -138,7 +138,11 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
     let expected_text = expected_actions(&outputs, prev, &c.id);
 
     // (a) sensors of the constraint that changed.
-    for (name, from, to) in d.inputs.iter().filter(|(n, _, _)| sensors.contains(&n.as_str())) {
+    for (name, from, to) in d
+        .inputs
+        .iter()
+        .filter(|(n, _, _)| sensors.contains(&n.as_str()))
+    {
         out.push((
             Item::new(
                 "X401",
@@ -229,7 +233,10 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
                     d.observers.join(", "),
                     c.id
                 ),
-                &[("category", "e".into()), ("observers", d.observers.join(","))],
+                &[
+                    ("category", "e".into()),
+                    ("observers", d.observers.join(",")),
+                ],
             ),
             observers_in
                 .iter()
@@ -300,7 +307,14 @@ pub fn case_count(set: &ConstraintSet) -> u64 {
             let mut sensors: Vec<u32> = term
                 .iter()
                 .filter(|l| l.var.space == Space::Input || l.var.space == Space::Observer)
-                .map(|l| l.var.index + if l.var.space == Space::Observer { 1 << 20 } else { 0 })
+                .map(|l| {
+                    l.var.index
+                        + if l.var.space == Space::Observer {
+                            1 << 20
+                        } else {
+                            0
+                        }
+                })
                 .collect();
             sensors.sort_unstable();
             sensors.dedup();

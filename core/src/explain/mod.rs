@@ -150,7 +150,11 @@ impl Explanation {
 }
 
 /// Values of every signal in a record: inputs and, for outputs, the given table.
-pub(crate) fn signal_state(symbols: &Symbols, inputs: &Bits, outputs: &Bits) -> BTreeMap<String, bool> {
+pub(crate) fn signal_state(
+    symbols: &Symbols,
+    inputs: &Bits,
+    outputs: &Bits,
+) -> BTreeMap<String, bool> {
     let mut state = BTreeMap::new();
     for (i, name) in symbols.names(Space::Input).iter().enumerate() {
         state.insert(name.clone(), inputs.get(i));
@@ -188,9 +192,9 @@ pub fn overbar_notation(source: &str) -> String {
                 if negate {
                     out.push('\u{0305}');
                 }
-                let in_name = chars
-                    .peek()
-                    .is_some_and(|n| n.is_ascii_alphanumeric() || *n == '_' || *n == ':' || *n == '*');
+                let in_name = chars.peek().is_some_and(|n| {
+                    n.is_ascii_alphanumeric() || *n == '_' || *n == ':' || *n == '*'
+                });
                 if !in_name {
                     negate = false;
                 }
@@ -248,7 +252,10 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
             trip.time_ms,
             ids.join(", ")
         ),
-        &[("time_ms", trip.time_ms.to_string()), ("constraints", ids.join(","))],
+        &[
+            ("time_ms", trip.time_ms.to_string()),
+            ("constraints", ids.join(",")),
+        ],
     ));
     if let Some(rec) = last {
         level.state = signal_state(symbols, &rec.inputs, &rec.applied);
@@ -293,7 +300,11 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
                 });
                 level.items.push(Item::new(
                     "X004",
-                    format!("Observer {} is set: {}.", def.id, lowercase_first(&def.description)),
+                    format!(
+                        "Observer {} is set: {}.",
+                        def.id,
+                        lowercase_first(&def.description)
+                    ),
                     &[("observer", def.id.clone())],
                 ));
             }
@@ -321,7 +332,11 @@ fn before_stop(symbols: &Symbols, trip: &Trip, at_trip: Option<&CycleRecord>) ->
     for c in &trip.constraints {
         let elements = constraint_elements(c);
         for e in &elements {
-            if !level.highlights.iter().any(|h| &h.element == e && h.mark == Mark::Circle) {
+            if !level
+                .highlights
+                .iter()
+                .any(|h| &h.element == e && h.mark == Mark::Circle)
+            {
                 level.highlights.push(Highlight {
                     element: e.clone(),
                     mark: Mark::Circle,
@@ -331,7 +346,13 @@ fn before_stop(symbols: &Symbols, trip: &Trip, at_trip: Option<&CycleRecord>) ->
         let values: Vec<String> = c
             .literals
             .iter()
-            .map(|l| format!("{}={}", l.literal.trim_start_matches('/'), u8::from(l.value)))
+            .map(|l| {
+                format!(
+                    "{}={}",
+                    l.literal.trim_start_matches('/'),
+                    u8::from(l.value)
+                )
+            })
             .collect();
         level.items.push(Item::new(
             "X201",
@@ -446,7 +467,11 @@ fn advanced(
         return level;
     };
     level.state = signal_state(symbols, &rec.inputs, &rec.commanded);
-    let elements: Vec<String> = trip.constraints.iter().flat_map(constraint_elements).collect();
+    let elements: Vec<String> = trip
+        .constraints
+        .iter()
+        .flat_map(constraint_elements)
+        .collect();
     // Every change in the trip cycle, and the last change of each element of the
     // constraint within the last 10 s of history.
     let changes = last_changes(engine, trip.time_ms, 1000);
@@ -465,7 +490,10 @@ fn advanced(
         let when = if ch.cycles_before_trip == 0 {
             "in the stopping cycle".to_string()
         } else {
-            format!("{} ms before the stop", trip.time_ms.saturating_sub(ch.time_ms))
+            format!(
+                "{} ms before the stop",
+                trip.time_ms.saturating_sub(ch.time_ms)
+            )
         };
         level.items.push(Item::new(
             "X301",
@@ -475,7 +503,11 @@ fn advanced(
                 u8::from(ch.from),
                 u8::from(ch.to),
                 ch.time_ms,
-                if in_constraint { ", element of the constraint" } else { "" }
+                if in_constraint {
+                    ", element of the constraint"
+                } else {
+                    ""
+                }
             ),
             &[
                 ("signal", ch.signal.clone()),

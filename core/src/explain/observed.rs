@@ -52,7 +52,10 @@ fn sensor_world(layout: &Layout, id: &str, angle: i32) -> Option<(f64, f64)> {
     if *part == layout.table.id {
         let (ax, ay) = axis(angle);
         let c = &layout.table.center;
-        return Some((c.x as f64 + ax * *at_mm as f64, c.y as f64 + ay * *at_mm as f64));
+        return Some((
+            c.x as f64 + ax * *at_mm as f64,
+            c.y as f64 + ay * *at_mm as f64,
+        ));
     }
     let c = layout.conveyors.iter().find(|c| &c.id == part)?;
     let (dx, dy) = ((c.end.x - c.start.x) as f64, (c.end.y - c.start.y) as f64);
@@ -142,31 +145,39 @@ pub fn emulator_from_observation(
     let angle = observed_angle(layout, plant, record);
     emu.set_table_angle_mdeg(angle);
     let mut placed: Vec<Placed> = Vec::new();
-    let place = |emu: &mut Emulator, part: &str, centre: i64, size: BoxSize, placed: &mut Vec<Placed>| {
-        let half = layout.dims(size).length_mm / 2;
-        let Some((lo, hi)) = part_range(layout, part) else { return };
-        let centre = centre.clamp(lo + half, (hi - half - 1).max(lo + half));
-        if emu.try_place_box(part, centre, size).is_ok() {
-            placed.push(Placed {
-                part: part.to_string(),
-                centre,
-                half,
-            });
-        }
-    };
+    let place =
+        |emu: &mut Emulator, part: &str, centre: i64, size: BoxSize, placed: &mut Vec<Placed>| {
+            let half = layout.dims(size).length_mm / 2;
+            let Some((lo, hi)) = part_range(layout, part) else {
+                return;
+            };
+            let centre = centre.clamp(lo + half, (hi - half - 1).max(lo + half));
+            if emu.try_place_box(part, centre, size).is_ok() {
+                placed.push(Placed {
+                    part: part.to_string(),
+                    centre,
+                    half,
+                });
+            }
+        };
     // Observers: boxes between two sensors.
     for (o, def) in observers.defs.iter().enumerate() {
         if !record.observers.get(o) {
             continue;
         }
-        let Rule::Memory { set, reset } = &def.rule else { continue };
+        let Rule::Memory { set, reset } = &def.rule else {
+            continue;
+        };
         let (Some(a), Some(b)) = (
             sensor_with(set, LeafKind::Fall, plant),
             sensor_with(reset, LeafKind::Rise, plant),
         ) else {
             continue;
         };
-        let (Some(pa), Some(pb)) = (sensor_world(layout, &a, angle), sensor_world(layout, &b, angle)) else {
+        let (Some(pa), Some(pb)) = (
+            sensor_world(layout, &a, angle),
+            sensor_world(layout, &b, angle),
+        ) else {
             continue;
         };
         let mid = ((pa.0 + pb.0) / 2.0, (pa.1 + pb.1) / 2.0);
@@ -180,7 +191,9 @@ pub fn emulator_from_observation(
         .sensors
         .iter()
         .filter_map(|s| match &s.kind {
-            SensorKind::Presence { part, at_mm, beam } => Some((s.id.as_str(), part.as_str(), *at_mm, *beam)),
+            SensorKind::Presence { part, at_mm, beam } => {
+                Some((s.id.as_str(), part.as_str(), *at_mm, *beam))
+            }
             SensorKind::Angle { .. } => None,
         })
         .filter(|(id, ..)| input_on(plant, record, id))
@@ -206,7 +219,13 @@ pub fn emulator_from_observation(
 }
 
 /// A high beam ON with no low beam ON at the same place (a fault): no box for it.
-fn presence_high_only(layout: &Layout, plant: &Plant, record: &CycleRecord, part: &str, at: i64) -> bool {
+fn presence_high_only(
+    layout: &Layout,
+    plant: &Plant,
+    record: &CycleRecord,
+    part: &str,
+    at: i64,
+) -> bool {
     !layout.sensors.iter().any(|s| {
         matches!(&s.kind, SensorKind::Presence { part: p, at_mm, beam: Beam::Low } if p == part && *at_mm == at)
             && input_on(plant, record, &s.id)

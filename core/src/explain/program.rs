@@ -113,7 +113,12 @@ impl View<'_> {
     fn plant(&self, names: &[String]) -> Vec<String> {
         names
             .iter()
-            .filter(|n| matches!(self.p().symbols.lookup(n), Some((Space::Input | Space::Output, _))))
+            .filter(|n| {
+                matches!(
+                    self.p().symbols.lookup(n),
+                    Some((Space::Input | Space::Output, _))
+                )
+            })
             .cloned()
             .collect()
     }
@@ -140,7 +145,11 @@ impl View<'_> {
         p.actions
             .iter()
             .filter(|a| a.slot == slot && a.qualifier != Qualifier::R)
-            .filter_map(|a| p.steps.get(a.step as usize).map(|s| (s.id.clone(), a.qualifier)))
+            .filter_map(|a| {
+                p.steps
+                    .get(a.step as usize)
+                    .map(|s| (s.id.clone(), a.qualifier))
+            })
             .collect()
     }
 
@@ -148,7 +157,14 @@ impl View<'_> {
     fn equation(&self, slot: usize) -> Option<(usize, String)> {
         let p = self.p();
         let k = p.equations.iter().position(|e| e.slot == slot)?;
-        Some((k, p.program.equations.get(k).map(|e| e.1.clone()).unwrap_or_default()))
+        Some((
+            k,
+            p.program
+                .equations
+                .get(k)
+                .map(|e| e.1.clone())
+                .unwrap_or_default(),
+        ))
     }
 
     /// The last evolution (newest first) in which a transition with `step` in its
@@ -196,7 +212,13 @@ impl View<'_> {
     }
 }
 
-fn suspect(code: &'static str, rank: (u8, u8), text: String, fields: &[(&str, String)], plant: &[String]) -> Suspect {
+fn suspect(
+    code: &'static str,
+    rank: (u8, u8),
+    text: String,
+    fields: &[(&str, String)],
+    plant: &[String],
+) -> Suspect {
     Suspect {
         item: Item::new(code, text, fields),
         highlights: plant
@@ -216,7 +238,11 @@ fn on_off(v: bool) -> &'static str {
 
 /// The program suspects for `trip`, most specific first, from the runtime before the
 /// tripping scan (`before`) and after it (`after`).
-pub fn program_suspects(trip: &Trip, before: &ProgramRuntime, after: &ProgramRuntime) -> Vec<(Item, Vec<Highlight>)> {
+pub fn program_suspects(
+    trip: &Trip,
+    before: &ProgramRuntime,
+    after: &ProgramRuntime,
+) -> Vec<(Item, Vec<Highlight>)> {
     let view = View {
         before,
         after,
@@ -226,12 +252,18 @@ pub fn program_suspects(trip: &Trip, before: &ProgramRuntime, after: &ProgramRun
     let mut seen: Vec<String> = Vec::new();
     for c in &trip.constraints {
         let first = out.len();
-        for l in c.literals.iter().filter(|l| l.space == Space::Output && !l.previous) {
+        for l in c
+            .literals
+            .iter()
+            .filter(|l| l.space == Space::Output && !l.previous)
+        {
             if seen.contains(&l.name) {
                 continue;
             }
             seen.push(l.name.clone());
-            let Some(slot) = view.slot(&l.name) else { continue };
+            let Some(slot) = view.slot(&l.name) else {
+                continue;
+            };
             let was = before.value(&l.name).unwrap_or(false);
             if l.value {
                 forbidden_on(&view, &l.name, slot, was, &mut out);
@@ -250,7 +282,12 @@ pub fn program_suspects(trip: &Trip, before: &ProgramRuntime, after: &ProgramRun
 
 /// Inserts the program suspects at the head of the hypothesis level of `ex` (before the
 /// paper's (a)/(b)/(d) suspects): the first suspect is then the most specific one.
-pub fn add_program_hypothesis(ex: &mut Explanation, trip: &Trip, before: &ProgramRuntime, after: &ProgramRuntime) {
+pub fn add_program_hypothesis(
+    ex: &mut Explanation,
+    trip: &Trip,
+    before: &ProgramRuntime,
+    after: &ProgramRuntime,
+) {
     let suspects = program_suspects(trip, before, after);
     let level = &mut ex.hypothesis;
     let mut items = Vec::with_capacity(suspects.len() + level.items.len());
@@ -277,7 +314,12 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
                 let newly = !v.before.is_active(step);
                 let activation = v.last_firing(step, true);
                 let action_started = rose && !newly;
-                if newly || (rose && activation.as_ref().is_some_and(|(_, t)| v.ms_before(*t) == 0)) {
+                if newly
+                    || (rose
+                        && activation
+                            .as_ref()
+                            .is_some_and(|(_, t)| v.ms_before(*t) == 0))
+                {
                     // X408: the transition that activated the step.
                     if let Some((t, time)) = activation {
                         let rec = v.receptivity(&t);
@@ -326,7 +368,10 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
                 }
                 // X412: the step stays active for too long.
                 let exits = v.exits(step);
-                let recs: Vec<String> = exits.iter().map(|t| format!("{t} `{}`", v.receptivity(t))).collect();
+                let recs: Vec<String> = exits
+                    .iter()
+                    .map(|t| format!("{t} `{}`", v.receptivity(t)))
+                    .collect();
                 let mut signals: Vec<String> = Vec::new();
                 for t in &exits {
                     for s in v.transition_signals(t) {
@@ -365,8 +410,14 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
                     .filter(|s| !v.after.is_active(s))
                     .cloned()
                     .collect();
-                let chart = set_by.first().map(|s| v.chart_of_step(s)).unwrap_or_default();
-                let recent = rose || set_by.iter().any(|s| v.before.is_active(s) && !v.after.is_active(s));
+                let chart = set_by
+                    .first()
+                    .map(|s| v.chart_of_step(s))
+                    .unwrap_or_default();
+                let recent = rose
+                    || set_by
+                        .iter()
+                        .any(|s| v.before.is_active(s) && !v.after.is_active(s));
                 out.push(suspect(
                     "X409",
                     (u8::from(!recent), 0),
@@ -394,7 +445,15 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
 
 /// An equation commands the forbidden value (`on`: true and the actuator must be OFF;
 /// else false and it must be ON).
-fn equation_suspect(v: &View<'_>, output: &str, slot: usize, on: bool, expression: &str, changed: bool, out: &mut Vec<Suspect>) {
+fn equation_suspect(
+    v: &View<'_>,
+    output: &str,
+    slot: usize,
+    on: bool,
+    expression: &str,
+    changed: bool,
+    out: &mut Vec<Suspect>,
+) {
     let p = v.p();
     let Some(eq) = p.equations.iter().find(|e| e.slot == slot) else {
         return;
@@ -440,7 +499,10 @@ fn equation_suspect(v: &View<'_>, output: &str, slot: usize, on: bool, expressio
     let via = if transitions.is_empty() {
         String::new()
     } else {
-        format!("; the steps it reads last changed when {} fired", transitions.join(", "))
+        format!(
+            "; the steps it reads last changed when {} fired",
+            transitions.join(", ")
+        )
     };
     out.push(suspect(
         "X410",
@@ -515,7 +577,11 @@ fn forbidden_off(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut V
                         .collect()
                 };
                 found = true;
-                let chart = resetters.first().or(set_by.first()).map(|s| v.chart_of_step(s)).unwrap_or_default();
+                let chart = resetters
+                    .first()
+                    .or(set_by.first())
+                    .map(|s| v.chart_of_step(s))
+                    .unwrap_or_default();
                 out.push(suspect(
                     "X409",
                     (0, 0),
@@ -575,7 +641,10 @@ fn forbidden_off(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut V
         if steps.is_empty() {
             "no step acts on it".to_string()
         } else {
-            format!("none of the steps that act on it ({}) is active", steps.join(", "))
+            format!(
+                "none of the steps that act on it ({}) is active",
+                steps.join(", ")
+            )
         },
         eq.as_ref()
             .map(|(_, e)| format!(", and its equation `{e}` is false"))
@@ -587,9 +656,22 @@ fn forbidden_off(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut V
         text,
         &[
             ("output", output.to_string()),
-            ("chart", steps.first().map(|s| v.chart_of_step(s)).unwrap_or_default()),
+            (
+                "chart",
+                steps
+                    .first()
+                    .map(|s| v.chart_of_step(s))
+                    .unwrap_or_default(),
+            ),
             ("steps", join(&steps)),
-            ("equation", if eq.is_some() { output.to_string() } else { String::new() }),
+            (
+                "equation",
+                if eq.is_some() {
+                    output.to_string()
+                } else {
+                    String::new()
+                },
+            ),
             ("expression", eq.map(|(_, e)| e).unwrap_or_default()),
             ("signals", join(&signals)),
         ],
@@ -615,16 +697,37 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
         s.item
             .fields
             .get(key)
-            .map(|x| x.split(',').filter(|n| !n.is_empty()).map(str::to_string).collect())
+            .map(|x| {
+                x.split(',')
+                    .filter(|n| !n.is_empty())
+                    .map(str::to_string)
+                    .collect()
+            })
             .unwrap_or_default()
     };
-    let (driven, steps) = suspects.iter().filter(|s| s.item.code != "X411").find_map(|s| {
-        let read: Vec<String> = names(s, "step").into_iter().chain(names(s, "steps")).collect();
-        let new: Vec<String> = read.into_iter().filter(|x| new_steps.contains(x)).collect();
-        (!new.is_empty()).then_some((s, new))
-    })?;
-    let on = driven.item.fields.get("output").cloned().unwrap_or_default();
-    let off = undriven.item.fields.get("output").cloned().unwrap_or_default();
+    let (driven, steps) = suspects
+        .iter()
+        .filter(|s| s.item.code != "X411")
+        .find_map(|s| {
+            let read: Vec<String> = names(s, "step")
+                .into_iter()
+                .chain(names(s, "steps"))
+                .collect();
+            let new: Vec<String> = read.into_iter().filter(|x| new_steps.contains(x)).collect();
+            (!new.is_empty()).then_some((s, new))
+        })?;
+    let on = driven
+        .item
+        .fields
+        .get("output")
+        .cloned()
+        .unwrap_or_default();
+    let off = undriven
+        .item
+        .fields
+        .get("output")
+        .cloned()
+        .unwrap_or_default();
     let fired: Vec<String> = v
         .after
         .fired_last_scan()
@@ -638,9 +741,24 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
         })
         .map(str::to_string)
         .collect();
-    let equation = undriven.item.fields.get("equation").cloned().unwrap_or_default();
-    let expression = undriven.item.fields.get("expression").cloned().unwrap_or_default();
-    let commanding = undriven.item.fields.get("steps").cloned().unwrap_or_default();
+    let equation = undriven
+        .item
+        .fields
+        .get("equation")
+        .cloned()
+        .unwrap_or_default();
+    let expression = undriven
+        .item
+        .fields
+        .get("expression")
+        .cloned()
+        .unwrap_or_default();
+    let commanding = undriven
+        .item
+        .fields
+        .get("steps")
+        .cloned()
+        .unwrap_or_default();
     let elsewhere = match (equation.is_empty(), commanding.is_empty()) {
         (false, _) => format!("the equation of {off} (`{expression}`)"),
         (true, false) => format!("the steps acting on {off} ({commanding})"),
@@ -658,7 +776,13 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
             &[
                 ("output", off.clone()),
                 ("constraint", constraint.to_string()),
-                ("chart", steps.first().map(|s| v.chart_of_step(s)).unwrap_or_default()),
+                (
+                    "chart",
+                    steps
+                        .first()
+                        .map(|s| v.chart_of_step(s))
+                        .unwrap_or_default(),
+                ),
                 ("step", join(&steps)),
                 ("transition", join(&fired)),
                 ("equation", equation),
@@ -686,7 +810,14 @@ fn deactivates(v: &View<'_>, t: &str, step: &str) -> bool {
 }
 
 /// X407 for transition `t` that deactivated `step` at `time`.
-fn deactivation(v: &View<'_>, t: &str, step: &str, q: Qualifier, output: &str, time: u64) -> Suspect {
+fn deactivation(
+    v: &View<'_>,
+    t: &str,
+    step: &str,
+    q: Qualifier,
+    output: &str,
+    time: u64,
+) -> Suspect {
     let p = v.p();
     let to = p
         .transitions

@@ -21,7 +21,9 @@ fn run(bundle: &PlantBundle, cycles: &[(u64, &[&str], &[&str])]) -> Engine {
         }
         control.0.clear();
         for a in *outs {
-            control.0.set(bundle.plant.output(a).expect("actuator"), true);
+            control
+                .0
+                .set(bundle.plant.output(a).expect("actuator"), true);
         }
         engine.cycle(crate::Millis(*t), &inputs, &mut control);
     }
@@ -54,8 +56,17 @@ fn cs10_matches_the_paper_figures() {
     let ex = explain(&engine, 0).expect("explanation");
 
     // Level 0: A4 held ON by CSs10, everything else stopped.
-    let held = &ex.current_state.items.iter().find(|i| i.code == "X002").expect("held").text;
-    assert!(held.contains("A4 is held ON by the filter: CSs10 (C7=1)"), "{held}");
+    let held = &ex
+        .current_state
+        .items
+        .iter()
+        .find(|i| i.code == "X002")
+        .expect("held")
+        .text;
+    assert!(
+        held.contains("A4 is held ON by the filter: CSs10 (C7=1)"),
+        "{held}"
+    );
 
     // Level 2: C7 and A4 circled, A4 held ON, A3 forced OFF.
     let circled: Vec<&str> = ex
@@ -66,29 +77,51 @@ fn cs10_matches_the_paper_figures() {
         .map(|h| h.element.as_str())
         .collect();
     assert_eq!(circled, vec!["C7", "A4"]);
-    assert!(ex.before_stop.highlights.contains(&Highlight { element: "A4".into(), mark: Mark::ForcedOn }));
-    assert!(ex.before_stop.highlights.contains(&Highlight { element: "A3".into(), mark: Mark::ForcedOff }));
+    assert!(ex.before_stop.highlights.contains(&Highlight {
+        element: "A4".into(),
+        mark: Mark::ForcedOn
+    }));
+    assert!(ex.before_stop.highlights.contains(&Highlight {
+        element: "A3".into(),
+        mark: Mark::ForcedOff
+    }));
 
     // Level 3: C7 0→1, A3 stays ON, A6 0→1, A4 1→0.
     let marks = &ex.advanced.highlights;
-    let change = |e: &str, from, to| Highlight { element: e.into(), mark: Mark::Change { from, to } };
+    let change = |e: &str, from, to| Highlight {
+        element: e.into(),
+        mark: Mark::Change { from, to },
+    };
     assert!(marks.contains(&change("C7", false, true)), "{marks:?}");
     assert!(marks.contains(&change("A6", false, true)), "{marks:?}");
     assert!(marks.contains(&change("A4", true, false)), "{marks:?}");
-    assert!(marks.contains(&Highlight { element: "A3".into(), mark: Mark::Steady { value: true } }));
+    assert!(marks.contains(&Highlight {
+        element: "A3".into(),
+        mark: Mark::Steady { value: true }
+    }));
 
     // Level 4: first suspect is C7 (category a), A4 should have been ON.
     let first = &ex.hypothesis.items[0];
     assert_eq!(first.code, "X401");
     assert_eq!(first.fields["sensor"], "C7");
-    assert!(first.text.contains("A4 should have been ON"), "{}", first.text);
-    assert!(ex.hypothesis.highlights.contains(&Highlight { element: "A4".into(), mark: Mark::Expected { value: true } }));
+    assert!(
+        first.text.contains("A4 should have been ON"),
+        "{}",
+        first.text
+    );
+    assert!(ex.hypothesis.highlights.contains(&Highlight {
+        element: "A4".into(),
+        mark: Mark::Expected { value: true }
+    }));
 }
 
 #[test]
 fn overbars_follow_the_paper_notation() {
     assert_eq!(overbar_notation("C7 . /A4"), "C7 · A\u{305}4\u{305}");
-    assert_eq!(overbar_notation("/C4 . RE(A4)"), "C\u{305}4\u{305} · RE(A4)");
+    assert_eq!(
+        overbar_notation("/C4 . RE(A4)"),
+        "C\u{305}4\u{305} · RE(A4)"
+    );
 }
 
 #[test]
@@ -105,8 +138,19 @@ fn timer_suspected_when_no_input_changes() {
     assert_eq!(engine.trips[0].constraints[0].id, "CSc1");
     let ex = explain(&engine, 0).expect("explanation");
     assert_eq!(ex.hypothesis.items[0].code, "X404");
-    let expected = ex.hypothesis.items.iter().find(|i| i.code == "X403").expect("expected");
-    assert!(expected.text.contains("one of: A0 should have been OFF, or A1 should have been ON"), "{}", expected.text);
+    let expected = ex
+        .hypothesis
+        .items
+        .iter()
+        .find(|i| i.code == "X403")
+        .expect("expected");
+    assert!(
+        expected
+            .text
+            .contains("one of: A0 should have been OFF, or A1 should have been ON"),
+        "{}",
+        expected.text
+    );
 }
 
 #[test]
@@ -148,14 +192,23 @@ fn every_hypothesis_case_of_the_station() {
             .filter(|l| l.var.space == Space::Input && !l.var.prev)
             .map(|l| l.var.index as usize)
             .collect();
-        let observers = term.iter().filter(|l| l.var.space == Space::Observer).count();
+        let observers = term
+            .iter()
+            .filter(|l| l.var.space == Space::Observer)
+            .count();
         let outputs: Vec<usize> = term
             .iter()
             .filter(|l| l.var.space == Space::Output && !l.var.prev)
             .map(|l| l.var.index as usize)
             .collect();
         // A sensor that no constraint term of `c` reads.
-        let outside = (0..n_in).find(|i| !term.iter().any(|l| l.var.space == Space::Input && l.var.index as usize == *i)).expect("outside sensor");
+        let outside = (0..n_in)
+            .find(|i| {
+                !term
+                    .iter()
+                    .any(|l| l.var.space == Space::Input && l.var.index as usize == *i)
+            })
+            .expect("outside sensor");
         let n = sensors.len() + observers + outputs.len() + 1;
         for mask in 0u32..(1 << n) {
             cases += 1;
@@ -179,7 +232,12 @@ fn every_hypothesis_case_of_the_station() {
             let mut prev = cur.clone();
             prev.time = crate::Millis(90);
             let bit = |i: usize| mask >> i & 1 == 1;
-            let changed_sensors: Vec<usize> = sensors.iter().enumerate().filter(|(i, _)| bit(*i)).map(|(_, s)| *s).collect();
+            let changed_sensors: Vec<usize> = sensors
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| bit(*i))
+                .map(|(_, s)| *s)
+                .collect();
             for &s in &changed_sensors {
                 prev.inputs.set(s, !cur.inputs.get(s));
             }
@@ -187,7 +245,12 @@ fn every_hypothesis_case_of_the_station() {
             if obs_changed {
                 prev.observers.clear();
             }
-            let changed_outputs: Vec<usize> = outputs.iter().enumerate().filter(|(i, _)| bit(sensors.len() + observers + i)).map(|(_, k)| *k).collect();
+            let changed_outputs: Vec<usize> = outputs
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| bit(sensors.len() + observers + i))
+                .map(|(_, k)| *k)
+                .collect();
             for &k in &changed_outputs {
                 prev.commanded.set(k, !cur.commanded.get(k));
             }
@@ -208,7 +271,12 @@ fn every_hypothesis_case_of_the_station() {
             let trip = Trip {
                 time_ms: 100,
                 cycle: 10,
-                constraints: vec![FiredConstraint { id: c.id.clone(), class: c.class, notation: c.source.clone(), literals }],
+                constraints: vec![FiredConstraint {
+                    id: c.id.clone(),
+                    class: c.class,
+                    notation: c.source.clone(),
+                    literals,
+                }],
                 actions: Vec::new(),
                 fallback: Vec::new(),
                 spec_error: None,
@@ -221,10 +289,21 @@ fn every_hypothesis_case_of_the_station() {
             if !changed_sensors.is_empty() {
                 assert_eq!(first.code, "X401", "{ctx}");
                 let named = symbols.name(Space::Input, changed_sensors[0] as u32);
-                assert!(level.items.iter().filter(|i| i.code == "X401").any(|i| i.fields["sensor"] == named), "{ctx}");
+                assert!(
+                    level
+                        .items
+                        .iter()
+                        .filter(|i| i.code == "X401")
+                        .any(|i| i.fields["sensor"] == named),
+                    "{ctx}"
+                );
             } else if !changed_outputs.is_empty() && outside_changed {
                 assert_eq!(first.code, "X402", "{ctx}");
-                assert_eq!(first.fields["sensor"], symbols.name(Space::Input, outside as u32), "{ctx}");
+                assert_eq!(
+                    first.fields["sensor"],
+                    symbols.name(Space::Input, outside as u32),
+                    "{ctx}"
+                );
             } else if !changed_outputs.is_empty() && !obs_changed {
                 assert_eq!(first.code, "X404", "{ctx}");
             } else if obs_changed && !outside_changed {
@@ -253,20 +332,37 @@ fn every_hypothesis_case_of_the_station() {
 #[test]
 fn cs10_closed_loop_matches_the_paper() {
     use crate::sim::{Options, Scenario, Simulation};
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station/scenarios/cs10-paper.ron");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../layouts/sorting-station/scenarios/cs10-paper.ron");
     let scenario = Scenario::load(&path).expect("scenario");
-    let mut sim = Simulation::from_scenario(&scenario, &path, Options::default()).expect("simulation");
+    let mut sim =
+        Simulation::from_scenario(&scenario, &path, Options::default()).expect("simulation");
     while sim.engine.trips.is_empty() && sim.now().0 < scenario.duration_ms {
         sim.cycle();
     }
     let trip = &sim.engine.trips[0];
-    assert_eq!(trip.constraints.iter().map(|c| c.id.as_str()).collect::<Vec<_>>(), vec!["CSs10"]);
+    assert_eq!(
+        trip.constraints
+            .iter()
+            .map(|c| c.id.as_str())
+            .collect::<Vec<_>>(),
+        vec!["CSs10"]
+    );
     let ex = &sim.explanations[&0];
     let marks = &ex.advanced.highlights;
-    let change = |e: &str, from, to| Highlight { element: e.into(), mark: Mark::Change { from, to } };
+    let change = |e: &str, from, to| Highlight {
+        element: e.into(),
+        mark: Mark::Change { from, to },
+    };
     assert!(marks.contains(&change("C7", false, true)), "{marks:?}");
     assert!(marks.contains(&change("A4", true, false)), "{marks:?}");
-    assert!(marks.contains(&Highlight { element: "A6".into(), mark: Mark::Steady { value: true } }), "{marks:?}");
+    assert!(
+        marks.contains(&Highlight {
+            element: "A6".into(),
+            mark: Mark::Steady { value: true }
+        }),
+        "{marks:?}"
+    );
     assert!(marks.contains(&change("A3", true, false)), "{marks:?}");
 
     // Level 4: the program element first (t24, its receptivity RE(C7), step X24), then
@@ -278,10 +374,22 @@ fn cs10_closed_loop_matches_the_paper() {
     assert_eq!(first.fields["step"], "X24");
     assert_eq!(first.fields["chart"], "table");
     assert_eq!(first.fields["signals"], "C7");
-    let paper = ex.hypothesis.items.iter().find(|i| i.code == "X401").expect("(a) suspect");
+    let paper = ex
+        .hypothesis
+        .items
+        .iter()
+        .find(|i| i.code == "X401")
+        .expect("(a) suspect");
     assert_eq!(paper.fields["sensor"], "C7");
-    assert!(paper.text.contains("A4 should have been ON"), "{}", paper.text);
-    assert!(ex.hypothesis.highlights.contains(&Highlight { element: "A4".into(), mark: Mark::Expected { value: true } }));
+    assert!(
+        paper.text.contains("A4 should have been ON"),
+        "{}",
+        paper.text
+    );
+    assert!(ex.hypothesis.highlights.contains(&Highlight {
+        element: "A4".into(),
+        mark: Mark::Expected { value: true }
+    }));
 
     // Level 1: without the filter the box leaving to the right is damaged.
     let p = &sim.projections[&0];
@@ -292,14 +400,26 @@ fn cs10_closed_loop_matches_the_paper() {
 }
 
 /// A record with the given inputs and observers ON.
-fn observation(bundle: &PlantBundle, inputs: &[&str], observers: &[&str]) -> crate::history::CycleRecord {
+fn observation(
+    bundle: &PlantBundle,
+    inputs: &[&str],
+    observers: &[&str],
+) -> crate::history::CycleRecord {
     let mut inp = Bits::zeros(bundle.plant.inputs.len());
     for s in inputs {
         inp.set(bundle.plant.input(s).expect("sensor"), true);
     }
     let mut obs = Bits::zeros(bundle.observers.defs.len());
     for o in observers {
-        obs.set(bundle.observers.defs.iter().position(|d| d.id == *o).expect("observer"), true);
+        obs.set(
+            bundle
+                .observers
+                .defs
+                .iter()
+                .position(|d| d.id == *o)
+                .expect("observer"),
+            true,
+        );
     }
     crate::history::CycleRecord {
         time: crate::Millis(0),
@@ -312,10 +432,15 @@ fn observation(bundle: &PlantBundle, inputs: &[&str], observers: &[&str]) -> cra
     }
 }
 
-fn observed_emulator(bundle: &PlantBundle, inputs: &[&str], observers: &[&str]) -> (crate::emulator::Emulator, crate::history::CycleRecord) {
+fn observed_emulator(
+    bundle: &PlantBundle,
+    inputs: &[&str],
+    observers: &[&str],
+) -> (crate::emulator::Emulator, crate::history::CycleRecord) {
     let layout = crate::emulator::Layout::load(&bundle.dir.join("layout.ron")).expect("layout");
     let rec = observation(bundle, inputs, observers);
-    let emu = emulator_from_observation(&layout, &bundle.plant, &rec, &bundle.observers).expect("emulator");
+    let emu = emulator_from_observation(&layout, &bundle.plant, &rec, &bundle.observers)
+        .expect("emulator");
     (emu, rec)
 }
 
@@ -335,8 +460,18 @@ fn emulator_from_observation_reproduces_the_sensors() {
     ];
     for (inputs, observers, boxes) in cases {
         let (emu, rec) = observed_emulator(&bundle, inputs, observers);
-        assert_eq!(emu.sensors(), &rec.inputs, "{inputs:?} {observers:?}: {:?}", emu.boxes());
-        assert_eq!(emu.boxes().len(), *boxes, "{inputs:?} {observers:?}: {:?}", emu.boxes());
+        assert_eq!(
+            emu.sensors(),
+            &rec.inputs,
+            "{inputs:?} {observers:?}: {:?}",
+            emu.boxes()
+        );
+        assert_eq!(
+            emu.boxes().len(),
+            *boxes,
+            "{inputs:?} {observers:?}: {:?}",
+            emu.boxes()
+        );
     }
     // C2 with C1: a large box; the table between the positions when neither C4 nor C5.
     let (emu, _) = observed_emulator(&bundle, &["C4", "C1", "C2"], &[]);
@@ -386,9 +521,14 @@ fn every_code_is_in_the_catalogue() {
         let b = text.as_bytes();
         let mut out = std::collections::BTreeSet::new();
         for i in 0..b.len().saturating_sub(5) {
-            let start = if quoted { b[i] == b'"' && b.get(i + 5) == Some(&b'"') } else { b[i] == b'|' };
+            let start = if quoted {
+                b[i] == b'"' && b.get(i + 5) == Some(&b'"')
+            } else {
+                b[i] == b'|'
+            };
             let at = if quoted { i + 1 } else { i + 2 };
-            if start && b.get(at) == Some(&b'X') && b[at + 1..at + 4].iter().all(u8::is_ascii_digit) {
+            if start && b.get(at) == Some(&b'X') && b[at + 1..at + 4].iter().all(u8::is_ascii_digit)
+            {
                 out.insert(String::from_utf8_lossy(&b[at..at + 4]).into_owned());
             }
         }

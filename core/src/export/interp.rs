@@ -61,14 +61,19 @@ fn lex(src: &str) -> Result<Vec<Tok>, StError> {
             while i < c.len() && (c[i].is_ascii_alphanumeric() || c[i] == '_') {
                 i += 1;
             }
-            out.push(Tok::Id(c[s..i].iter().collect::<String>().to_ascii_uppercase()));
+            out.push(Tok::Id(
+                c[s..i].iter().collect::<String>().to_ascii_uppercase(),
+            ));
         } else if ch.is_ascii_digit() {
             let s = i;
             while i < c.len() && c[i].is_ascii_digit() {
                 i += 1;
             }
             let text: String = c[s..i].iter().collect();
-            out.push(Tok::Int(text.parse().map_err(|_| StError(format!("bad integer {text}")))?));
+            out.push(Tok::Int(
+                text.parse()
+                    .map_err(|_| StError(format!("bad integer {text}")))?,
+            ));
         } else {
             let two: String = c[i..(i + 2).min(c.len())].iter().collect();
             let (t, n) = match two.as_str() {
@@ -139,7 +144,11 @@ impl P {
         self.t.get(self.i)
     }
     fn next(&mut self) -> Result<Tok, StError> {
-        let t = self.t.get(self.i).cloned().ok_or_else(|| StError("unexpected end".into()))?;
+        let t = self
+            .t
+            .get(self.i)
+            .cloned()
+            .ok_or_else(|| StError("unexpected end".into()))?;
         self.i += 1;
         Ok(t)
     }
@@ -154,7 +163,11 @@ impl P {
     }
     fn tok(&mut self, want: &Tok) -> Result<(), StError> {
         let t = self.next()?;
-        if &t == want { Ok(()) } else { err(format!("expected {want:?}, found {t:?}")) }
+        if &t == want {
+            Ok(())
+        } else {
+            err(format!("expected {want:?}, found {t:?}"))
+        }
     }
     fn id(&mut self) -> Result<String, StError> {
         match self.next()? {
@@ -171,7 +184,10 @@ impl P {
             } else if self.is_kw("PROGRAM") {
                 "END_PROGRAM"
             } else {
-                return err(format!("expected FUNCTION_BLOCK or PROGRAM, found {:?}", self.peek()));
+                return err(format!(
+                    "expected FUNCTION_BLOCK or PROGRAM, found {:?}",
+                    self.peek()
+                ));
             };
             self.next()?;
             let name = self.id()?;
@@ -376,7 +392,9 @@ fn default_of(ty: &str) -> Option<Val> {
 
 impl Unit {
     fn instantiate(&self, pou: &str, depth: usize) -> Result<Inst, StError> {
-        let Some(p) = self.pous.get(pou) else { return err(format!("unknown POU {pou}")) };
+        let Some(p) = self.pous.get(pou) else {
+            return err(format!("unknown POU {pou}"));
+        };
         if depth > 8 {
             return err("function blocks nested too deeply");
         }
@@ -392,7 +410,11 @@ impl Unit {
                 }
             }
         }
-        Ok(Inst { pou: pou.into(), vars, children })
+        Ok(Inst {
+            pou: pou.into(),
+            vars,
+            children,
+        })
     }
 }
 
@@ -426,7 +448,11 @@ impl Machine {
                 .copied()
                 .ok_or_else(|| StError(format!("no variable {name}")));
         }
-        self.root.vars.get(&name).copied().ok_or_else(|| StError(format!("no variable {name}")))
+        self.root
+            .vars
+            .get(&name)
+            .copied()
+            .ok_or_else(|| StError(format!("no variable {name}")))
     }
 
     /// Sets `inst.var` of an instance (tests force internal state this way).
@@ -522,7 +548,10 @@ fn as_int(v: Val) -> Result<i64, StError> {
 fn eval(inst: &Inst, e: &Expr) -> Result<Val, StError> {
     Ok(match e {
         Expr::Lit(v) => *v,
-        Expr::Var(n) => *inst.vars.get(n).ok_or_else(|| StError(format!("unknown variable {n}")))?,
+        Expr::Var(n) => *inst
+            .vars
+            .get(n)
+            .ok_or_else(|| StError(format!("unknown variable {n}")))?,
         Expr::Member(i, m) => *inst
             .children
             .get(i)

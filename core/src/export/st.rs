@@ -33,8 +33,8 @@ use crate::filter::Filter;
 use crate::frame::Frame;
 use crate::observers::Rule;
 use crate::symbols::{Literal, Space, Symbols, Var};
-use crate::tasks::spec::{Slowdown, Unexpected};
 use crate::tasks::TaskSet;
+use crate::tasks::spec::{Slowdown, Unexpected};
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
@@ -74,7 +74,12 @@ fn render_lit(symbols: &Symbols, l: Literal, filter: bool, used: &mut BTreeSet<S
 }
 
 /// A sum of products as an ST expression; the identifiers read go into `used`.
-pub fn render_dnf(symbols: &Symbols, dnf: &Dnf, filter: bool, used: &mut BTreeSet<String>) -> String {
+pub fn render_dnf(
+    symbols: &Symbols,
+    dnf: &Dnf,
+    filter: bool,
+    used: &mut BTreeSet<String>,
+) -> String {
     if dnf.is_empty() {
         return "FALSE".into();
     }
@@ -84,7 +89,10 @@ pub fn render_dnf(symbols: &Symbols, dnf: &Dnf, filter: bool, used: &mut BTreeSe
             if t.is_empty() {
                 "TRUE".to_string()
             } else {
-                let lits: Vec<String> = t.iter().map(|l| render_lit(symbols, *l, filter, used)).collect();
+                let lits: Vec<String> = t
+                    .iter()
+                    .map(|l| render_lit(symbols, *l, filter, used))
+                    .collect();
                 format!("({})", lits.join(" AND "))
             }
         })
@@ -116,7 +124,14 @@ impl Fb {
     fn render(&self, out: &mut String, doc: &str) {
         let _ = writeln!(out, "(* {doc} *)");
         let _ = writeln!(out, "FUNCTION_BLOCK {}", self.name);
-        section(out, "VAR_INPUT", self.inputs.iter().map(|n| (n.clone(), "BOOL")).chain(self.extra_inputs.iter().cloned()));
+        section(
+            out,
+            "VAR_INPUT",
+            self.inputs
+                .iter()
+                .map(|n| (n.clone(), "BOOL"))
+                .chain(self.extra_inputs.iter().cloned()),
+        );
         section(out, "VAR_OUTPUT", self.outputs.iter().cloned());
         section(out, "VAR", self.locals.iter().cloned());
         out.push_str(&self.body);
@@ -162,25 +177,50 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     // Observers.
     let mut obs = Fb::new("FB_Observers");
     for (i, def) in bundle.observers.defs.iter().enumerate() {
-        let o = ident(symbols, Var { space: Space::Observer, index: u32::try_from(i).unwrap_or(0), prev: false }, false);
-        let dnf = |text: &str, used: &mut BTreeSet<String>| match expr::parse_str(text).and_then(|e| e.to_dnf(symbols)) {
+        let o = ident(
+            symbols,
+            Var {
+                space: Space::Observer,
+                index: u32::try_from(i).unwrap_or(0),
+                prev: false,
+            },
+            false,
+        );
+        let dnf = |text: &str, used: &mut BTreeSet<String>| match expr::parse_str(text)
+            .and_then(|e| e.to_dnf(symbols))
+        {
             Ok(d) => render_dnf(symbols, &expr::simplify(&d), false, used),
             Err(_) => "FALSE (* unresolved *)".into(),
         };
-        let _ = writeln!(obs.body, "(* {}: {} *)", def.id, def.description.replace("*)", "* )"));
+        let _ = writeln!(
+            obs.body,
+            "(* {}: {} *)",
+            def.id,
+            def.description.replace("*)", "* )")
+        );
         match &def.rule {
             Rule::Memory { set, reset } => {
                 let m = format!("M_{}", &o[2..]);
                 let s = dnf(set, &mut obs.inputs);
                 let r = dnf(reset, &mut obs.inputs);
-                let _ = writeln!(obs.body, "IF {s} THEN\n    {m} := TRUE;\nELSIF {r} THEN\n    {m} := FALSE;\nEND_IF;\n{o} := {m};");
+                let _ = writeln!(
+                    obs.body,
+                    "IF {s} THEN\n    {m} := TRUE;\nELSIF {r} THEN\n    {m} := FALSE;\nEND_IF;\n{o} := {m};"
+                );
                 obs.locals.push((m, "BOOL"));
             }
-            Rule::Counter { up, down, clear, at_least } => {
+            Rule::Counter {
+                up,
+                down,
+                clear,
+                at_least,
+            } => {
                 let c = format!("CNT_{}", &o[2..]);
                 let u = dnf(up, &mut obs.inputs);
                 let d = dnf(down, &mut obs.inputs);
-                let cl = clear.as_deref().map_or_else(|| "FALSE".to_string(), |t| dnf(t, &mut obs.inputs));
+                let cl = clear
+                    .as_deref()
+                    .map_or_else(|| "FALSE".to_string(), |t| dnf(t, &mut obs.inputs));
                 let _ = writeln!(
                     obs.body,
                     "IF {cl} THEN\n    {c} := 0;\nELSE\n    IF {u} THEN\n        IF {c} < 1000 THEN\n            {c} := {c} + 1;\n        END_IF;\n    END_IF;\n    IF ({d}) AND {c} > 0 THEN\n        {c} := {c} - 1;\n    END_IF;\nEND_IF;\n{o} := {c} >= {at_least};"
@@ -200,7 +240,12 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     for c in &bundle.constraints.constraints {
         let v = format!("V_{}", mangle(&c.id));
         let e = render_dnf(symbols, &c.dnf, true, &mut fil.inputs);
-        let _ = writeln!(fil.body, "(* {} = {} *)\n{v} := {e};", c.id, c.source.replace("*)", "* )"));
+        let _ = writeln!(
+            fil.body,
+            "(* {} = {} *)\n{v} := {e};",
+            c.id,
+            c.source.replace("*)", "* )")
+        );
         for l in c.dnf.iter().flatten() {
             if l.var.space != Space::Output || l.var.prev {
                 support.insert(l.var);
@@ -210,14 +255,37 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
         viol.push(v);
     }
     for k in 0..n_out {
-        fil.inputs.insert(ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, true));
+        fil.inputs.insert(ident(
+            symbols,
+            Var {
+                space: Space::Output,
+                index: u32::try_from(k).unwrap_or(0),
+                prev: false,
+            },
+            true,
+        ));
     }
-    let any = if viol.is_empty() { "FALSE".to_string() } else { viol.join(" OR ") };
-    let _ = writeln!(fil.body, "VIOLATION := {any};\nIF VIOLATION AND NOT LATCHED THEN\n    LATCHED := TRUE;\nEND_IF;\nIF LATCHED THEN\n    (* Fallback: fewest outputs ON in this context (priority to zero). *)");
+    let any = if viol.is_empty() {
+        "FALSE".to_string()
+    } else {
+        viol.join(" OR ")
+    };
+    let _ = writeln!(
+        fil.body,
+        "VIOLATION := {any};\nIF VIOLATION AND NOT LATCHED THEN\n    LATCHED := TRUE;\nEND_IF;\nIF LATCHED THEN\n    (* Fallback: fewest outputs ON in this context (priority to zero). *)"
+    );
     let support: Vec<Var> = support.into_iter().collect();
     let fallback = fallback_cover(&filter, symbols, &support, n_out);
     for k in 0..n_out {
-        let q = ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, false);
+        let q = ident(
+            symbols,
+            Var {
+                space: Space::Output,
+                index: u32::try_from(k).unwrap_or(0),
+                prev: false,
+            },
+            false,
+        );
         let e = match &fallback {
             Some(cubes) => {
                 let dnf: Dnf = cubes[k].clone();
@@ -229,12 +297,25 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     }
     let _ = writeln!(fil.body, "ELSE");
     for k in 0..n_out {
-        let v = Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false };
-        let _ = writeln!(fil.body, "    {} := {};", ident(symbols, v, false), ident(symbols, v, true));
+        let v = Var {
+            space: Space::Output,
+            index: u32::try_from(k).unwrap_or(0),
+            prev: false,
+        };
+        let _ = writeln!(
+            fil.body,
+            "    {} := {};",
+            ident(symbols, v, false),
+            ident(symbols, v, true)
+        );
     }
     let _ = writeln!(fil.body, "END_IF;\nTRIPPED := LATCHED;");
     for k in 0..n_out {
-        let v = Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false };
+        let v = Var {
+            space: Space::Output,
+            index: u32::try_from(k).unwrap_or(0),
+            prev: false,
+        };
         fil.outputs.push((ident(symbols, v, false), "BOOL"));
     }
     fil.outputs.push(("VIOLATION".into(), "BOOL"));
@@ -245,9 +326,15 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     let tfb = tasks.map(|set| task_fb(set, symbols));
 
     obs.render(&mut out, "Observers (seed 004, section 6.2).");
-    fil.render(&mut out, "Safety filter: constraints on the commanded outputs, latch, fallback.");
+    fil.render(
+        &mut out,
+        "Safety filter: constraints on the commanded outputs, latch, fallback.",
+    );
     if let Some(t) = &tfb {
-        t.render(&mut out, "Task monitors (seed 000): two stopwatches per task as offset variables.");
+        t.render(
+            &mut out,
+            "Task monitors (seed 000): two stopwatches per task as offset variables.",
+        );
     }
 
     // Program.
@@ -255,27 +342,78 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     for space in Space::ALL {
         for i in 0..symbols.len(space) {
             for prev in [false, true] {
-                all_vars.push(Var { space, index: u32::try_from(i).unwrap_or(0), prev });
+                all_vars.push(Var {
+                    space,
+                    index: u32::try_from(i).unwrap_or(0),
+                    prev,
+                });
             }
         }
     }
-    let _ = writeln!(out, "(* One call per PLC cycle, after the control program. *)\nPROGRAM Vigie_Safety");
+    let _ = writeln!(
+        out,
+        "(* One call per PLC cycle, after the control program. *)\nPROGRAM Vigie_Safety"
+    );
     let mut inputs: Vec<(String, &'static str)> = vec![("NOW_MS".into(), "LINT")];
     for i in 0..symbols.len(Space::Input) {
-        inputs.push((ident(symbols, Var { space: Space::Input, index: u32::try_from(i).unwrap_or(0), prev: false }, false), "BOOL"));
+        inputs.push((
+            ident(
+                symbols,
+                Var {
+                    space: Space::Input,
+                    index: u32::try_from(i).unwrap_or(0),
+                    prev: false,
+                },
+                false,
+            ),
+            "BOOL",
+        ));
     }
     for k in 0..n_out {
-        inputs.push((ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, true), "BOOL"));
+        inputs.push((
+            ident(
+                symbols,
+                Var {
+                    space: Space::Output,
+                    index: u32::try_from(k).unwrap_or(0),
+                    prev: false,
+                },
+                true,
+            ),
+            "BOOL",
+        ));
     }
     section(&mut out, "VAR_INPUT", inputs.into_iter());
     let mut outputs: Vec<(String, &'static str)> = Vec::new();
     for k in 0..n_out {
-        outputs.push((ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, false), "BOOL"));
+        outputs.push((
+            ident(
+                symbols,
+                Var {
+                    space: Space::Output,
+                    index: u32::try_from(k).unwrap_or(0),
+                    prev: false,
+                },
+                false,
+            ),
+            "BOOL",
+        ));
     }
     outputs.push(("TRIPPED".into(), "BOOL"));
     for space in [Space::Observer, Space::Aux] {
         for i in 0..symbols.len(space) {
-            outputs.push((ident(symbols, Var { space, index: u32::try_from(i).unwrap_or(0), prev: false }, false), "BOOL"));
+            outputs.push((
+                ident(
+                    symbols,
+                    Var {
+                        space,
+                        index: u32::try_from(i).unwrap_or(0),
+                        prev: false,
+                    },
+                    false,
+                ),
+                "BOOL",
+            ));
         }
     }
     if let Some(t) = &tfb {
@@ -303,7 +441,15 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     }
     out.push_str(&fil.call("fbFilter"));
     for k in 0..n_out {
-        let q = ident(symbols, Var { space: Space::Output, index: u32::try_from(k).unwrap_or(0), prev: false }, false);
+        let q = ident(
+            symbols,
+            Var {
+                space: Space::Output,
+                index: u32::try_from(k).unwrap_or(0),
+                prev: false,
+            },
+            false,
+        );
         let _ = writeln!(out, "{q} := fbFilter.{q};");
     }
     let _ = writeln!(out, "TRIPPED := fbFilter.TRIPPED;");
@@ -316,7 +462,12 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     let _ = writeln!(out, "(* Values at t-1 for the next cycle. *)");
     for v in all_vars.iter().filter(|v| v.prev) {
         let now = Var { prev: false, ..*v };
-        let _ = writeln!(out, "{} := {};", ident(symbols, *v, false), ident(symbols, now, false));
+        let _ = writeln!(
+            out,
+            "{} := {};",
+            ident(symbols, *v, false),
+            ident(symbols, now, false)
+        );
     }
     let _ = writeln!(out, "END_PROGRAM");
     out
@@ -324,7 +475,12 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
 
 /// Per output, the fallback's ON-set over the context `support` as a cover of cubes, or
 /// `None` when the support is too large to enumerate.
-pub fn fallback_cover(filter: &Filter, symbols: &Symbols, support: &[Var], n_out: usize) -> Option<Vec<Dnf>> {
+pub fn fallback_cover(
+    filter: &Filter,
+    symbols: &Symbols,
+    support: &[Var],
+    n_out: usize,
+) -> Option<Vec<Dnf>> {
     let n = support.len();
     if n > FALLBACK_SUPPORT_LIMIT {
         return None;
@@ -333,7 +489,11 @@ pub fn fallback_cover(filter: &Filter, symbols: &Symbols, support: &[Var], n_out
     let mut frame = Frame::new(symbols.sizes());
     for m in 0..(1usize << n) {
         for (j, v) in support.iter().enumerate() {
-            let table = if v.prev { &mut frame.prev } else { &mut frame.now };
+            let table = if v.prev {
+                &mut frame.prev
+            } else {
+                &mut frame.now
+            };
             table[v.space as usize].set(v.index as usize, (m >> j) & 1 == 1);
         }
         if let Ok(bits) = filter.fallback(&frame) {
@@ -366,7 +526,10 @@ fn cover(on: &[bool], n: usize, support: &[Var]) -> Dnf {
         }
         let term = (0..n)
             .filter(|j| care >> j & 1 == 1)
-            .map(|j| Literal { var: support[j], positive: m >> j & 1 == 1 })
+            .map(|j| Literal {
+                var: support[j],
+                positive: m >> j & 1 == 1,
+            })
             .collect();
         cubes.push(term);
     }
@@ -390,7 +553,9 @@ fn cube_members(m: usize, care: usize, n: usize) -> impl Iterator<Item = usize> 
 fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
     let mut fb = Fb::new("FB_Tasks");
     fb.extra_inputs.push(("NOW_MS".into(), "LINT"));
-    let ev = |text: &str, used: &mut BTreeSet<String>| match expr::parse_str(text).and_then(|e| e.to_dnf(symbols)) {
+    let ev = |text: &str, used: &mut BTreeSet<String>| match expr::parse_str(text)
+        .and_then(|e| e.to_dnf(symbols))
+    {
         Ok(d) => render_dnf(symbols, &expr::simplify(&d), false, used),
         Err(_) => "FALSE (* unresolved *)".into(),
     };
@@ -410,7 +575,8 @@ fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
         let clocks = format!(
             "IF {st} = 1 THEN\n    {x} := {dx} + (NOW_MS - {since});\n    {y} := {dy} + (NOW_MS - {since});\nELSIF {st} = 2 THEN\n    {x} := {dx} + (NOW_MS - {since});\n    {y} := {dy};\nELSE\n    {x} := {dx};\n    {y} := {dy};\nEND_IF;\n"
         );
-        let freeze = format!("{dx} := {x};\n    {dy} := {y};\n    {since} := NOW_MS;\n    {st} := 4;");
+        let freeze =
+            format!("{dx} := {x};\n    {dy} := {y};\n    {since} := NOW_MS;\n    {st} := 4;");
         let (a, b, g) = (t.alpha, t.beta, t.gamma);
         let tol = g - a;
         // Violated strictly before NOW (pre) and at NOW (post).
@@ -430,7 +596,11 @@ fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
             t.id,
             pre_c.join(" OR ")
         );
-        let _ = writeln!(post, "{clocks}IF ({st} = 1 OR {st} = 2) AND ({}) THEN\n    {freeze}\nEND_IF;", post_c.join(" OR "));
+        let _ = writeln!(
+            post,
+            "{clocks}IF ({st} = 1 OR {st} = 2) AND ({}) THEN\n    {freeze}\nEND_IF;",
+            post_c.join(" OR ")
+        );
         let end = ev(&t.end, &mut fb.inputs);
         let start = ev(&t.start, &mut fb.inputs);
         let strict_unexpected = set.unexpected == Unexpected::Alarm;
@@ -445,8 +615,16 @@ fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
         } else {
             String::new()
         };
-        let unexpected_end = if strict_unexpected { format!("\n    ELSE\n        {freeze}") } else { String::new() };
-        let unexpected_start = if strict_unexpected { format!("\n    ELSE\n        {freeze}") } else { String::new() };
+        let unexpected_end = if strict_unexpected {
+            format!("\n    ELSE\n        {freeze}")
+        } else {
+            String::new()
+        };
+        let unexpected_start = if strict_unexpected {
+            format!("\n    ELSE\n        {freeze}")
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             events,
             "(* {} *)\nIF {st} <> 4 AND ({end}) THEN\n    IF {st} = 1 OR {st} = 2 THEN\n        {dx} := {x};\n        {dy} := {y};\n        {since} := NOW_MS;\n        {st} := 3;{check}{unexpected_end}\n    END_IF;\nEND_IF;\nIF {st} <> 4 AND ({start}) THEN\n    IF {st} = 0 OR {st} = 3 THEN\n        {dx} := 0;\n        {dy} := 0;\n        {x} := 0;\n        {y} := 0;\n        {since} := NOW_MS;\n        {st} := 1;{unexpected_start}\n    END_IF;\nEND_IF;",
@@ -467,9 +645,11 @@ fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
         fb.locals.push((dy, "LINT"));
         fb.locals.push((since, "LINT"));
     }
-    fb.body.push_str("(* 1. Violations strictly before NOW_MS. *)\n");
+    fb.body
+        .push_str("(* 1. Violations strictly before NOW_MS. *)\n");
     fb.body.push_str(&pre);
-    fb.body.push_str("(* 2. Events of this cycle: end, start, interrupt, resume. *)\n");
+    fb.body
+        .push_str("(* 2. Events of this cycle: end, start, interrupt, resume. *)\n");
     fb.body.push_str(&events);
     fb.body.push_str("(* 3. Violations at NOW_MS. *)\n");
     fb.body.push_str(&post);
@@ -485,7 +665,9 @@ fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
         }
     }
     if set.unexpected == Unexpected::Warn || set.unexpected == Unexpected::Ignore {
-        fb.body.push_str("(* Unexpected events are warnings in the native monitor: no decision here. *)\n");
+        fb.body.push_str(
+            "(* Unexpected events are warnings in the native monitor: no decision here. *)\n",
+        );
     }
     fb
 }

@@ -18,7 +18,10 @@ fn station() -> (PlantBundle, TaskSet) {
     let (bundle, problems) = PlantBundle::from_plant(&dir, plant, &set.aux_names());
     // Property (6) findings (V0106) are static warnings about physically impossible
     // contexts of the paper's constraints; the fallback there is all-zero on both sides.
-    assert!(problems.iter().all(|p| !p.is_error() || p.code == "V0106"), "{problems:#?}");
+    assert!(
+        problems.iter().all(|p| !p.is_error() || p.code == "V0106"),
+        "{problems:#?}"
+    );
     (bundle, set)
 }
 
@@ -87,14 +90,29 @@ fn fallback_is_exact_in_every_context() {
         let mut frame = Frame::new(bundle.symbols.sizes());
         for (j, v) in support.iter().enumerate() {
             let on = ctx >> j & 1 == 1;
-            let table = if v.prev { &mut frame.prev } else { &mut frame.now };
+            let table = if v.prev {
+                &mut frame.prev
+            } else {
+                &mut frame.now
+            };
             table[v.space as usize].set(v.index as usize, on);
-            m.set(&st::ident(&bundle.symbols, *v, true), Val::Bool(on)).unwrap();
+            m.set(&st::ident(&bundle.symbols, *v, true), Val::Bool(on))
+                .unwrap();
         }
         m.scan().unwrap();
-        let native = filter.fallback(&frame).unwrap_or_else(|_| Bits::zeros(n_out));
+        let native = filter
+            .fallback(&frame)
+            .unwrap_or_else(|_| Bits::zeros(n_out));
         for k in 0..n_out {
-            let q = st::ident(&bundle.symbols, Var { space: Space::Output, index: k as u32, prev: false }, false);
+            let q = st::ident(
+                &bundle.symbols,
+                Var {
+                    space: Space::Output,
+                    index: k as u32,
+                    prev: false,
+                },
+                false,
+            );
             assert_eq!(b(&m, &q), native.get(k), "context {ctx:#b}, output {q}");
         }
     }
@@ -111,7 +129,17 @@ fn st_conforms_to_the_native_engine() {
     let n_in = bundle.plant.inputs.len();
     let n_out = bundle.plant.outputs.len();
     let frame_tasks = FrameTasks::compile(&set, sym).unwrap();
-    let name = |space, k: usize, filter| st::ident(sym, Var { space, index: k as u32, prev: false }, filter);
+    let name = |space, k: usize, filter| {
+        st::ident(
+            sym,
+            Var {
+                space,
+                index: k as u32,
+                prev: false,
+            },
+            filter,
+        )
+    };
     let (mut trips, mut task_changes, mut faults) = (0, 0, 0);
     for seed in 1..=120u64 {
         let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
@@ -142,25 +170,39 @@ fn st_conforms_to_the_native_engine() {
 
             m.set("NOW_MS", Val::Int(now as i64)).unwrap();
             for k in 0..n_in {
-                m.set(&name(Space::Input, k, false), Val::Bool(inputs.get(k))).unwrap();
+                m.set(&name(Space::Input, k, false), Val::Bool(inputs.get(k)))
+                    .unwrap();
             }
             for k in 0..n_out {
-                m.set(&name(Space::Output, k, true), Val::Bool(cmd.get(k))).unwrap();
+                m.set(&name(Space::Output, k, true), Val::Bool(cmd.get(k)))
+                    .unwrap();
             }
             m.scan().unwrap();
 
             let at = format!("seed {seed}, cycle {cycle}, t = {now} ms");
             for k in 0..n_out {
-                assert_eq!(b(&m, &name(Space::Output, k, false)), engine.applied().get(k), "{at}: output {k}");
+                assert_eq!(
+                    b(&m, &name(Space::Output, k, false)),
+                    engine.applied().get(k),
+                    "{at}: output {k}"
+                );
             }
             assert_eq!(b(&m, "TRIPPED"), engine.is_tripped(), "{at}: trip");
             for k in 0..sym.len(Space::Observer) {
-                assert_eq!(b(&m, &name(Space::Observer, k, false)), engine.frame().now(Space::Observer).get(k), "{at}: observer {k}");
+                assert_eq!(
+                    b(&m, &name(Space::Observer, k, false)),
+                    engine.frame().now(Space::Observer).get(k),
+                    "{at}: observer {k}"
+                );
             }
             for (ti, t) in set.tasks.iter().enumerate() {
                 let code = i(&m, &format!("T_{}_STATE", st::mangle(&t.id)));
                 let native = monitor.tasks[ti].state.st_code();
-                assert_eq!(code, native, "{at}: task {} ({:?})", t.id, monitor.tasks[ti]);
+                assert_eq!(
+                    code, native,
+                    "{at}: task {} ({:?})",
+                    t.id, monitor.tasks[ti]
+                );
                 if code != last_states[ti] {
                     task_changes += 1;
                     if code == 4 {
@@ -170,7 +212,11 @@ fn st_conforms_to_the_native_engine() {
                 last_states[ti] = code;
             }
             for k in 0..sym.len(Space::Aux) {
-                assert_eq!(b(&m, &name(Space::Aux, k, false)), engine.frame().now(Space::Aux).get(k), "{at}: aux {k}");
+                assert_eq!(
+                    b(&m, &name(Space::Aux, k, false)),
+                    engine.frame().now(Space::Aux).get(k),
+                    "{at}: aux {k}"
+                );
             }
         }
         trips += usize::from(engine.is_tripped());
@@ -198,7 +244,12 @@ fn task_outputs_are_constraint_literals() {
     let c4 = bundle.plant.input("C4").unwrap();
     let a4 = bundle.plant.output("A4").unwrap();
     // Table at C4, rotation ordered at t = 0; it leaves C4 at 100 ms; A4 released at 1 s.
-    let steps: [(u64, bool, bool); 4] = [(0, true, true), (100, false, true), (1000, false, false), (4700, false, false)];
+    let steps: [(u64, bool, bool); 4] = [
+        (0, true, true),
+        (100, false, true),
+        (1000, false, false),
+        (4700, false, false),
+    ];
     let mut infeasible_at = None;
     for (t, c4v, a4v) in steps {
         frame.shift();
@@ -214,7 +265,14 @@ fn task_outputs_are_constraint_literals() {
     // Tolerance γ − α = 3.6 s of interruption from 1 s: alarm at 4.6 s, seen at 4.7 s.
     assert_eq!(infeasible_at, Some(4700));
     // (The first record is a T007 warning: RE(C4) at t = 0 ends turn_back, which never started.)
-    let alarm = monitor.alarms.iter().find(|a| a.severity == crate::tasks::Severity::Alarm).unwrap();
-    assert_eq!((alarm.code, alarm.time, alarm.subject.as_str()), (crate::tasks::AlarmCode::T001, Millis(4600), "turn_out"));
+    let alarm = monitor
+        .alarms
+        .iter()
+        .find(|a| a.severity == crate::tasks::Severity::Alarm)
+        .unwrap();
+    assert_eq!(
+        (alarm.code, alarm.time, alarm.subject.as_str()),
+        (crate::tasks::AlarmCode::T001, Millis(4600), "turn_out")
+    );
     assert_eq!(alarm.earlier_by_ms, Some(1500));
 }

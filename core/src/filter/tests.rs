@@ -180,9 +180,9 @@ fn exhaustive_with(
                 assert!(
                     !reachable_only
                         || b.invariants
-                        .constraints
-                        .iter()
-                        .any(|inv| crate::expr::eval_dnf(&inv.dnf, &frame)),
+                            .constraints
+                            .iter()
+                            .any(|inv| crate::expr::eval_dnf(&inv.dnf, &frame)),
                     "specification error in a reachable context {assignment:b}: {e}"
                 );
             }

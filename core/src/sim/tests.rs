@@ -4,7 +4,12 @@ fn station_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
 }
 
-fn scenario(program: ProgramChoice, filter: FilterMode, arrivals: ArrivalPlan, duration_ms: u64) -> Scenario {
+fn scenario(
+    program: ProgramChoice,
+    filter: FilterMode,
+    arrivals: ArrivalPlan,
+    duration_ms: u64,
+) -> Scenario {
     Scenario {
         name: "test".into(),
         description: String::new(),
@@ -42,22 +47,49 @@ fn three_boxes() -> ArrivalPlan {
 /// follow each other closely, as in a busy shift.
 fn busy_shift() -> ArrivalPlan {
     use crate::emulator::BoxSize::{Large, Small};
-    ArrivalPlan::List((0..6).map(|k| (k * 4_000, if k % 2 == 0 { Small } else { Large })).collect())
+    ArrivalPlan::List(
+        (0..6)
+            .map(|k| (k * 4_000, if k % 2 == 0 { Small } else { Large }))
+            .collect(),
+    )
 }
 
 #[test]
 fn reference_program_runs_an_hour_without_trip_or_hazard() {
     let path = station_dir().join("scenarios/reference-hour.ron");
     let s = Scenario::load(&path).expect("scenario loads");
-    let mut sim = Simulation::from_scenario(&s, &path, Options { history_cycles: 100, explain: true }).expect("starts");
+    let mut sim = Simulation::from_scenario(
+        &s,
+        &path,
+        Options {
+            history_cycles: 100,
+            explain: true,
+        },
+    )
+    .expect("starts");
     sim.run_until(Millis(s.duration_ms));
     let stats = sim.emulator.stats();
-    assert!(sim.engine.trips.is_empty(), "{:?}", sim.engine.trips.first());
-    assert!(sim.emulator.hazards().is_empty(), "{:?}", sim.emulator.hazards().first());
+    assert!(
+        sim.engine.trips.is_empty(),
+        "{:?}",
+        sim.engine.trips.first()
+    );
+    assert!(
+        sim.emulator.hazards().is_empty(),
+        "{:?}",
+        sim.emulator.hazards().first()
+    );
     assert!(stats.created >= 200, "{stats:?}");
-    assert_eq!(stats.delivered_left + stats.delivered_right, stats.created, "{stats:?}");
+    assert_eq!(
+        stats.delivered_left + stats.delivered_right,
+        stats.created,
+        "{stats:?}"
+    );
     assert_eq!(stats.damaged, 0);
-    assert!(stats.delivered_left > 0 && stats.delivered_right > 0, "{stats:?}");
+    assert!(
+        stats.delivered_left > 0 && stats.delivered_right > 0,
+        "{stats:?}"
+    );
 }
 
 /// Every variant of the control-error library: without the filter the plant is damaged
@@ -77,12 +109,23 @@ fn every_error_variant_is_caught_by_its_constraint() {
         .filter(|v| v.def.consequence == crate::control::Consequence::Hazard)
         .count();
     assert!(with_hazard >= 10, "{with_hazard} variants damage the plant");
-    let reference = run(&scenario(ProgramChoice::Reference, FilterMode::Off, busy_shift(), 120_000));
-    let delivered = |s: &Simulation| s.emulator.stats().delivered_left + s.emulator.stats().delivered_right;
+    let reference = run(&scenario(
+        ProgramChoice::Reference,
+        FilterMode::Off,
+        busy_shift(),
+        120_000,
+    ));
+    let delivered =
+        |s: &Simulation| s.emulator.stats().delivered_left + s.emulator.stats().delivered_right;
     let mut failures = Vec::new();
     for v in &lib.variants {
         let id = &v.def.id;
-        let off = run(&scenario(ProgramChoice::Error(id.clone()), FilterMode::Off, busy_shift(), 120_000));
+        let off = run(&scenario(
+            ProgramChoice::Error(id.clone()),
+            FilterMode::Off,
+            busy_shift(),
+            120_000,
+        ));
         match v.def.consequence {
             crate::control::Consequence::Hazard if off.emulator.hazards().is_empty() => {
                 failures.push(format!("{id}: no hazard without the filter"));
@@ -92,14 +135,30 @@ fn every_error_variant_is_caught_by_its_constraint() {
             }
             _ => {}
         }
-        let on = run(&scenario(ProgramChoice::Error(id.clone()), FilterMode::Enforce, busy_shift(), 120_000));
-        let first = on.engine.trips.first().map(|t| t.constraints.iter().map(|c| c.id.clone()).collect::<Vec<_>>());
+        let on = run(&scenario(
+            ProgramChoice::Error(id.clone()),
+            FilterMode::Enforce,
+            busy_shift(),
+            120_000,
+        ));
+        let first = on.engine.trips.first().map(|t| {
+            t.constraints
+                .iter()
+                .map(|c| c.id.clone())
+                .collect::<Vec<_>>()
+        });
         match &first {
             Some(ids) if ids.contains(&v.def.expected_constraint) => {}
-            other => failures.push(format!("{id}: expected a trip on {}, got {other:?}", v.def.expected_constraint)),
+            other => failures.push(format!(
+                "{id}: expected a trip on {}, got {other:?}",
+                v.def.expected_constraint
+            )),
         }
         if !on.emulator.hazards().is_empty() {
-            failures.push(format!("{id}: hazard with the filter: {:?}", on.emulator.hazards()[0]));
+            failures.push(format!(
+                "{id}: hazard with the filter: {:?}",
+                on.emulator.hazards()[0]
+            ));
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
@@ -107,16 +166,34 @@ fn every_error_variant_is_caught_by_its_constraint() {
 
 #[test]
 fn reference_program_copes_with_a_busy_shift() {
-    let sim = run(&scenario(ProgramChoice::Reference, FilterMode::Enforce, busy_shift(), 120_000));
-    assert!(sim.engine.trips.is_empty(), "{:?}", sim.engine.trips.first());
-    assert!(sim.emulator.hazards().is_empty(), "{:?}", sim.emulator.hazards().first());
+    let sim = run(&scenario(
+        ProgramChoice::Reference,
+        FilterMode::Enforce,
+        busy_shift(),
+        120_000,
+    ));
+    assert!(
+        sim.engine.trips.is_empty(),
+        "{:?}",
+        sim.engine.trips.first()
+    );
+    assert!(
+        sim.emulator.hazards().is_empty(),
+        "{:?}",
+        sim.emulator.hazards().first()
+    );
     let stats = sim.emulator.stats();
     assert_eq!(stats.delivered_left + stats.delivered_right, 6, "{stats:?}");
 }
 
 #[test]
 fn same_scenario_and_seed_give_identical_reports() {
-    let s = scenario(ProgramChoice::Error("E01".into()), FilterMode::Enforce, three_boxes(), 40_000);
+    let s = scenario(
+        ProgramChoice::Error("E01".into()),
+        FilterMode::Enforce,
+        three_boxes(),
+        40_000,
+    );
     let a = serde_json::to_string(&run(&s).report(s.seed)).expect("json");
     let b = serde_json::to_string(&run(&s).report(s.seed)).expect("json");
     assert_eq!(a, b);
@@ -126,7 +203,12 @@ fn same_scenario_and_seed_give_identical_reports() {
         mix: crate::emulator::SizeMix::RandomLarge(50),
         count: None,
     };
-    let mut s1 = scenario(ProgramChoice::Reference, FilterMode::Enforce, periodic, 60_000);
+    let mut s1 = scenario(
+        ProgramChoice::Reference,
+        FilterMode::Enforce,
+        periodic,
+        60_000,
+    );
     let r1 = serde_json::to_string(&run(&s1).report(s1.seed)).expect("json");
     s1.seed += 1;
     let r2 = serde_json::to_string(&run(&s1).report(s1.seed)).expect("json");
@@ -144,7 +226,13 @@ fn the_papers_cs10_case_is_explained_with_a_projection() {
     assert!(sim.emulator.hazards().is_empty());
     let ex = &sim.explanations[&0];
     let p = &sim.projections[&0];
-    assert!(p.hazards.iter().any(|h| serde_json::to_value(h.kind).ok() == Some(serde_json::json!("sheared"))), "{:?}", p.hazards);
+    assert!(
+        p.hazards
+            .iter()
+            .any(|h| serde_json::to_value(h.kind).ok() == Some(serde_json::json!("sheared"))),
+        "{:?}",
+        p.hazards
+    );
     assert_eq!(ex.projection.items[0].code, "X101");
     // The held A4 is the filter's doing; operator reset refused while C7 is still on.
     assert!(sim.act(&OperatorAction::Reset).is_err());
@@ -156,18 +244,40 @@ fn bad_scenarios_are_reported() {
     let dir = std::env::temp_dir().join(format!("vigie-sim-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("tmp");
     let p = dir.join("bad.ron");
-    std::fs::write(&p, "Scenario(name: \"x\", program: Reference, seed: 1, duration_ms: 10, bogus: 1)").expect("write");
+    std::fs::write(
+        &p,
+        "Scenario(name: \"x\", program: Reference, seed: 1, duration_ms: 10, bogus: 1)",
+    )
+    .expect("write");
     let err = Scenario::load(&p).expect_err("unknown field");
-    assert!(err[0].location.as_ref().is_some_and(|l| l.line == 1), "{err:?}");
-    let s = scenario(ProgramChoice::Error("E99".into()), FilterMode::Enforce, three_boxes(), 10);
-    let err = Simulation::from_scenario(&s, &station_dir().join("s.ron"), Options::default()).err().expect("unknown variant");
+    assert!(
+        err[0].location.as_ref().is_some_and(|l| l.line == 1),
+        "{err:?}"
+    );
+    let s = scenario(
+        ProgramChoice::Error("E99".into()),
+        FilterMode::Enforce,
+        three_boxes(),
+        10,
+    );
+    let err = Simulation::from_scenario(&s, &station_dir().join("s.ron"), Options::default())
+        .err()
+        .expect("unknown variant");
     assert_eq!(err[0].code, "V0402");
 }
 
 fn load_station_scenario(name: &str) -> (Scenario, Simulation) {
     let path = station_dir().join("scenarios").join(name);
     let s = Scenario::load(&path).expect("scenario");
-    let sim = Simulation::from_scenario(&s, &path, Options { history_cycles: 100, explain: true }).expect("starts");
+    let sim = Simulation::from_scenario(
+        &s,
+        &path,
+        Options {
+            history_cycles: 100,
+            explain: true,
+        },
+    )
+    .expect("starts");
     (s, sim)
 }
 
@@ -195,11 +305,21 @@ fn task_monitors_accept_operator_pauses_over_an_hour() {
             .count();
     }
     sim.run_until(Millis(s.duration_ms));
-    assert!(interrupted_seen >= pauses.len() / 2, "pauses interrupted only {interrupted_seen} tasks");
+    assert!(
+        interrupted_seen >= pauses.len() / 2,
+        "pauses interrupted only {interrupted_seen} tasks"
+    );
     let report = sim.report(s.seed);
-    assert!(report.task_alarms.is_empty(), "{:?}", report.task_alarms.first());
+    assert!(
+        report.task_alarms.is_empty(),
+        "{:?}",
+        report.task_alarms.first()
+    );
     assert!(report.trips.is_empty() && report.hazards.is_empty());
-    assert_eq!(report.boxes.delivered_left + report.boxes.delivered_right, report.boxes.created);
+    assert_eq!(
+        report.boxes.delivered_left + report.boxes.delivered_right,
+        report.boxes.created
+    );
 }
 
 /// A permanent blocking of the turntable mid-rotation: the rotation task alarms when its
@@ -213,5 +333,10 @@ fn task_monitor_alarms_before_the_watchdog_on_a_blocked_table() {
     assert_eq!(a.subject, "turn_out");
     assert!(a.earlier_by_ms.is_some_and(|d| d > 0), "{a:?}");
     assert!(a.text.contains("before the watchdog"), "{}", a.text);
-    assert!(sim.alarms.all().iter().any(|x| x.kind == crate::alarms::AlarmKind::Task));
+    assert!(
+        sim.alarms
+            .all()
+            .iter()
+            .any(|x| x.kind == crate::alarms::AlarmKind::Task)
+    );
 }

@@ -52,7 +52,10 @@ impl FrameTasks {
                 Err(e) => {
                     problems.push(Problem::error(
                         "V0310",
-                        format!("task `{task}`: `{what}` event `{text}`: {} (column {})", e.message, e.span.column),
+                        format!(
+                            "task `{task}`: `{what}` event `{text}`: {} (column {})",
+                            e.message, e.span.column
+                        ),
                         Some(Location::new(&set.file, 1, 1)),
                     ));
                     Vec::new()
@@ -68,7 +71,11 @@ impl FrameTasks {
                     one(&t.id, "resume", r, &mut problems),
                 )
             });
-            events.push(TaskEvents { start, end, interruption });
+            events.push(TaskEvents {
+                start,
+                end,
+                interruption,
+            });
         }
         if !problems.is_empty() {
             return Err(problems);
@@ -93,14 +100,16 @@ impl FrameTasks {
     /// then violations at `now`.
     pub fn step(&self, monitor: &mut Monitor, now: Millis, frame: &Frame) {
         monitor.on_event(now, "");
-        for (i, (ev, (start, end, interruption))) in self.events.iter().zip(&self.names).enumerate() {
+        for (i, (ev, (start, end, interruption))) in self.events.iter().zip(&self.names).enumerate()
+        {
             if expr::eval_dnf(&ev.end, frame) {
                 monitor.apply(now, i, Role::End, end);
             }
             if expr::eval_dnf(&ev.start, frame) {
                 monitor.apply(now, i, Role::Start, start);
             }
-            if let (Some((int, res)), Some((int_name, res_name))) = (&ev.interruption, interruption) {
+            if let (Some((int, res)), Some((int_name, res_name))) = (&ev.interruption, interruption)
+            {
                 let state = monitor.tasks[i].state;
                 if state == TaskState::Running && expr::eval_dnf(int, frame) {
                     monitor.apply(now, i, Role::Interrupt, int_name);

@@ -18,7 +18,9 @@ use crate::time::Millis;
 use serde::Serialize;
 
 /// Stable alarm codes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, serde::Deserialize,
+)]
 pub enum AlarmCode {
     /// Interruption tolerance used up.
     T001,
@@ -183,7 +185,13 @@ impl Alarm {
         }
     }
 
-    fn bare(code: AlarmCode, severity: Severity, time: Millis, subject: &str, text: String) -> Self {
+    fn bare(
+        code: AlarmCode,
+        severity: Severity,
+        time: Millis,
+        subject: &str,
+        text: String,
+    ) -> Self {
         Self {
             code,
             severity,
@@ -236,7 +244,16 @@ impl Alarm {
         let sum = c
             .terms
             .iter()
-            .map(|(t, clock, k)| format!("{k}·{t}.{}", if *clock == super::spec::Clock::X { "x" } else { "y" }))
+            .map(|(t, clock, k)| {
+                format!(
+                    "{k}·{t}.{}",
+                    if *clock == super::spec::Clock::X {
+                        "x"
+                    } else {
+                        "y"
+                    }
+                )
+            })
             .collect::<Vec<_>>()
             .join(" + ");
         Self::bare(
@@ -280,7 +297,10 @@ impl Alarm {
             severity,
             time,
             &spec.id,
-            format!("Unexpected {role} event `{event}` for task {} while it is {state}.", spec.id),
+            format!(
+                "Unexpected {role} event `{event}` for task {} while it is {state}.",
+                spec.id
+            ),
         )
     }
 }

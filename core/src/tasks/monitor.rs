@@ -86,7 +86,11 @@ pub struct Deadline {
 impl Deadline {
     /// True when the constraint is violated at some instant `<= t`.
     pub fn violated_by(self, t: Millis) -> bool {
-        if self.after { self.at < t } else { self.at <= t }
+        if self.after {
+            self.at < t
+        } else {
+            self.at <= t
+        }
     }
 
     /// True when the constraint is violated at some instant `< t`.
@@ -96,15 +100,28 @@ impl Deadline {
 
     /// The first integer millisecond at which the violation holds.
     pub fn first_violating_ms(self) -> Millis {
-        if self.after { Millis(self.at.0.saturating_add(1)) } else { self.at }
+        if self.after {
+            Millis(self.at.0.saturating_add(1))
+        } else {
+            self.at
+        }
     }
 }
 
 /// Crossing of `v(t) = v0 + slope·(t − since)` against a bound, or `None` if never.
 /// `strict`: the constraint is `v < bound` (violated when `v >= bound`), otherwise
 /// `v <= bound` (violated when `v > bound`).
-pub(crate) fn crossing(v0: i64, slope: i64, bound: i64, strict: bool, since: Millis) -> Option<Deadline> {
-    let now = Deadline { at: since, after: false };
+pub(crate) fn crossing(
+    v0: i64,
+    slope: i64,
+    bound: i64,
+    strict: bool,
+    since: Millis,
+) -> Option<Deadline> {
+    let now = Deadline {
+        at: since,
+        after: false,
+    };
     if (strict && v0 >= bound) || (!strict && v0 > bound) {
         return Some(now);
     }
@@ -116,9 +133,18 @@ pub(crate) fn crossing(v0: i64, slope: i64, bound: i64, strict: bool, since: Mil
     let exact = gap % slope == 0;
     let at = |d: i64| Millis(since.0.saturating_add(u64::try_from(d).unwrap_or(0)));
     Some(match (strict, exact) {
-        (true, true) => Deadline { at: at(whole), after: false },
-        (true, false) | (false, false) => Deadline { at: at(whole + 1), after: false },
-        (false, true) => Deadline { at: at(whole), after: true },
+        (true, true) => Deadline {
+            at: at(whole),
+            after: false,
+        },
+        (true, false) | (false, false) => Deadline {
+            at: at(whole + 1),
+            after: false,
+        },
+        (false, true) => Deadline {
+            at: at(whole),
+            after: true,
+        },
     })
 }
 
@@ -187,18 +213,29 @@ impl TaskMonitor {
             }
         };
         if spec.interruptible() {
-            push(TaskBound::Tolerance, crossing(x - y, rx - ry, to_i(spec.tolerance()), true, self.since));
+            push(
+                TaskBound::Tolerance,
+                crossing(x - y, rx - ry, to_i(spec.tolerance()), true, self.since),
+            );
         }
-        push(TaskBound::Total, crossing(x, rx, to_i(spec.gamma), true, self.since));
+        push(
+            TaskBound::Total,
+            crossing(x, rx, to_i(spec.gamma), true, self.since),
+        );
         if spec.interruptible() && spec.slowdown == Slowdown::Strict {
-            push(TaskBound::Effective, crossing(y, ry, to_i(spec.beta), false, self.since));
+            push(
+                TaskBound::Effective,
+                crossing(y, ry, to_i(spec.beta), false, self.since),
+            );
         }
         out
     }
 
     /// The earliest violation of the current state.
     pub fn next_deadline(&self, spec: &TaskSpec) -> Option<(TaskBound, Deadline)> {
-        self.deadlines(spec).into_iter().min_by_key(|(b, d)| (*d, *b))
+        self.deadlines(spec)
+            .into_iter()
+            .min_by_key(|(b, d)| (*d, *b))
     }
 
     fn rebase(&mut self, t: Millis, state: TaskState) {
@@ -295,11 +332,23 @@ impl Monitor {
     pub fn new(set: &TaskSet, start: Millis) -> Self {
         let mut routes: BTreeMap<String, Vec<Route>> = BTreeMap::new();
         for (i, t) in set.tasks.iter().enumerate() {
-            routes.entry(t.start.clone()).or_default().push(Route::Task(i, Role::Start));
-            routes.entry(t.end.clone()).or_default().push(Route::Task(i, Role::End));
+            routes
+                .entry(t.start.clone())
+                .or_default()
+                .push(Route::Task(i, Role::Start));
+            routes
+                .entry(t.end.clone())
+                .or_default()
+                .push(Route::Task(i, Role::End));
             if let Some((int, res)) = &t.interruption {
-                routes.entry(int.clone()).or_default().push(Route::Task(i, Role::Interrupt));
-                routes.entry(res.clone()).or_default().push(Route::Task(i, Role::Resume));
+                routes
+                    .entry(int.clone())
+                    .or_default()
+                    .push(Route::Task(i, Role::Interrupt));
+                routes
+                    .entry(res.clone())
+                    .or_default()
+                    .push(Route::Task(i, Role::Resume));
             }
         }
         for (j, w) in set.windows.iter().enumerate() {
@@ -312,7 +361,10 @@ impl Monitor {
             }
         }
         if let Some(m) = &set.repair {
-            routes.entry(m.clone()).or_default().insert(0, Route::Repair);
+            routes
+                .entry(m.clone())
+                .or_default()
+                .insert(0, Route::Repair);
         }
         let mut cross_of_task = vec![Vec::new(); set.tasks.len()];
         for (k, c) in set.cross.iter().enumerate() {
@@ -348,13 +400,19 @@ impl Monitor {
         self.keys.clear();
         self.frozen = false;
         for tm in &mut self.tasks {
-            *tm = TaskMonitor { since: t, ..TaskMonitor::default() };
+            *tm = TaskMonitor {
+                since: t,
+                ..TaskMonitor::default()
+            };
         }
         for j in 0..self.set.windows.len() {
             self.coordinator.windows[j].opened = self.set.windows[j].open_at_start.then_some(t);
             self.reschedule(Slot::Window(j));
         }
-        self.coordinator.cross_latched.iter_mut().for_each(|c| *c = false);
+        self.coordinator
+            .cross_latched
+            .iter_mut()
+            .for_each(|c| *c = false);
     }
 
     /// The specification.
@@ -379,12 +437,14 @@ impl Monitor {
 
     fn deadline_of(&self, slot: Slot) -> Option<Deadline> {
         match slot {
-            Slot::Task(i) => self.tasks[i].next_deadline(&self.set.tasks[i]).map(|(_, d)| d),
+            Slot::Task(i) => self.tasks[i]
+                .next_deadline(&self.set.tasks[i])
+                .map(|(_, d)| d),
             Slot::Window(j) => {
                 let w = &self.set.windows[j];
-                self.coordinator.windows[j].opened.and_then(|o| {
-                    crossing(0, 1, to_i(w.max_ms), false, o)
-                })
+                self.coordinator.windows[j]
+                    .opened
+                    .and_then(|o| crossing(0, 1, to_i(w.max_ms), false, o))
             }
             Slot::Cross(k) => self.cross_deadline(k).map(|(d, _)| d),
         }
@@ -439,7 +499,11 @@ impl Monitor {
     /// Reports every violation at an instant `< t` (`inclusive = false`) or `<= t`.
     fn detect(&mut self, t: Millis, inclusive: bool) {
         while let Some(&(d, slot)) = self.queue.first() {
-            let hit = if inclusive { d.violated_by(t) } else { d.violated_before(t) };
+            let hit = if inclusive {
+                d.violated_by(t)
+            } else {
+                d.violated_before(t)
+            };
             if !hit || self.frozen {
                 break;
             }
@@ -643,7 +707,11 @@ impl Monitor {
                 let slack = to_i(spec.tolerance()) - (to_i(x) - to_i(y));
                 let to_gamma = to_i(spec.gamma) - to_i(x);
                 let predicted = (tm.state.in_progress() && !self.frozen).then(|| {
-                    let d = if spec.interruptible() { slack.min(to_gamma) } else { to_gamma };
+                    let d = if spec.interruptible() {
+                        slack.min(to_gamma)
+                    } else {
+                        to_gamma
+                    };
                     Millis(t.0.saturating_add(u64::try_from(d.max(0)).unwrap_or(0)))
                 });
                 TaskStatus {

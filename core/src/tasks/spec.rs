@@ -283,7 +283,10 @@ impl TaskSet {
                 _ => {
                     problems.push(Problem::error(
                         "V0305",
-                        format!("task `{}`: give both `interrupt` and `resume`, or neither", t.id),
+                        format!(
+                            "task `{}`: give both `interrupt` and `resume`, or neither",
+                            t.id
+                        ),
                         at(&t.id),
                     ));
                     None
@@ -307,7 +310,10 @@ impl TaskSet {
             if w.min_ms > w.max_ms {
                 problems.push(Problem::error(
                     "V0306",
-                    format!("window `{}`: min = {} ms is greater than max = {} ms", w.id, w.min_ms, w.max_ms),
+                    format!(
+                        "window `{}`: min = {} ms is greater than max = {} ms",
+                        w.id, w.min_ms, w.max_ms
+                    ),
                     at(&w.id),
                 ));
             }
@@ -317,7 +323,10 @@ impl TaskSet {
                 if !seen.contains(task) {
                     problems.push(Problem::error(
                         "V0307",
-                        format!("cross constraint `{}` names the unknown task `{task}`", c.id),
+                        format!(
+                            "cross constraint `{}` names the unknown task `{task}`",
+                            c.id
+                        ),
                         at(&c.id),
                     ));
                 }

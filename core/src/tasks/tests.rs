@@ -21,7 +21,14 @@ struct Case {
     events: Vec<(u64, String)>,
     until_ms: u64,
     /// (time, code, subject, x, y, watchdog)
-    alarms: Vec<(u64, AlarmCode, String, Option<u64>, Option<u64>, Option<u64>)>,
+    alarms: Vec<(
+        u64,
+        AlarmCode,
+        String,
+        Option<u64>,
+        Option<u64>,
+        Option<u64>,
+    )>,
     #[serde(default)]
     texts: Vec<(usize, String)>,
     /// (at, task, state, x, y, interruptions, slack, predicted alarm)
@@ -34,7 +41,10 @@ fn load_fixtures() -> Fixtures {
 }
 
 fn spec_of(f: &Fixtures, name: &str) -> TaskSet {
-    let file = f.specs.get(name).unwrap_or_else(|| panic!("no spec {name}"));
+    let file = f
+        .specs
+        .get(name)
+        .unwrap_or_else(|| panic!("no spec {name}"));
     TaskSet::from_file(file.clone(), Path::new(name), None).unwrap()
 }
 
@@ -79,8 +89,21 @@ fn thesis_fixtures() {
         }
         for (c, st) in statuses {
             let s = st.iter().find(|s| s.id == c.1).unwrap();
-            let got = (s.state, s.x_ms, s.y_ms, s.interruptions, s.slack_ms, s.predicted_alarm.map(|p| p.0));
-            assert_eq!(got, (c.2, c.3, c.4, c.5, c.6, c.7), "case `{}` status at {}", case.name, c.0);
+            let got = (
+                s.state,
+                s.x_ms,
+                s.y_ms,
+                s.interruptions,
+                s.slack_ms,
+                s.predicted_alarm.map(|p| p.0),
+            );
+            assert_eq!(
+                got,
+                (c.2, c.3, c.4, c.5, c.6, c.7),
+                "case `{}` status at {}",
+                case.name,
+                c.0
+            );
         }
     }
 }
@@ -109,11 +132,25 @@ fn next_deadline_predicts_the_alarm() {
     let f = load_fixtures();
     let set = spec_of(&f, "workshop");
     let mut m = Monitor::new(&set, Millis::ZERO);
-    for (t, e) in [(0, "d"), (3000, "b"), (3000, "e"), (3500, "d"), (4000, "s_R"), (4500, "r_R"), (5000, "s_R")] {
+    for (t, e) in [
+        (0, "d"),
+        (3000, "b"),
+        (3000, "e"),
+        (3500, "d"),
+        (4000, "s_R"),
+        (4500, "r_R"),
+        (5000, "s_R"),
+    ] {
         m.on_event(Millis(t), e);
     }
     // Robot interrupted at 5 with x - y = 0.5: tolerance 2 used up at 6.5.
-    assert_eq!(m.next_deadline(), Some(Deadline { at: Millis(6500), after: false }));
+    assert_eq!(
+        m.next_deadline(),
+        Some(Deadline {
+            at: Millis(6500),
+            after: false
+        })
+    );
     assert!(m.advance(Millis(6499)).is_empty());
     assert_eq!(m.advance(Millis(6500)).len(), 1);
 }
@@ -124,13 +161,30 @@ fn invalid_specs_are_rejected_with_a_location() {
     let err = TaskSet::from_ron(text, Path::new("tasks.ron")).unwrap_err();
     let msgs: Vec<String> = err.iter().map(ToString::to_string).collect();
     assert_eq!(msgs.len(), 3, "{msgs:#?}");
-    assert!(msgs[0].starts_with("tasks.ron:2:8: error[V0303]: task `a`: α = 5 ms is greater than β = 4 ms"), "{}", msgs[0]);
-    assert!(msgs[1].starts_with("tasks.ron:3:8: error[V0304]: task `b`: β = 4 ms must be less than γ = 4 ms"), "{}", msgs[1]);
+    assert!(
+        msgs[0].starts_with(
+            "tasks.ron:2:8: error[V0303]: task `a`: α = 5 ms is greater than β = 4 ms"
+        ),
+        "{}",
+        msgs[0]
+    );
+    assert!(
+        msgs[1].starts_with(
+            "tasks.ron:3:8: error[V0304]: task `b`: β = 4 ms must be less than γ = 4 ms"
+        ),
+        "{}",
+        msgs[1]
+    );
     assert!(msgs[2].contains("V0305"), "{}", msgs[2]);
-    let bad = TaskSet::from_ron("(tasks: [(id: \"a\", bogus: 1)])", Path::new("t.ron")).unwrap_err();
+    let bad =
+        TaskSet::from_ron("(tasks: [(id: \"a\", bogus: 1)])", Path::new("t.ron")).unwrap_err();
     assert!(bad[0].to_string().starts_with("t.ron:1:"), "{}", bad[0]);
     // Without interrupt events the task is non-interruptible.
-    let ok = TaskSet::from_ron("(tasks: [(id: \"a\", start: \"s\", end: \"e\", alpha_ms: 1, beta_ms: 2, gamma_ms: 3)])", Path::new("t.ron")).unwrap();
+    let ok = TaskSet::from_ron(
+        "(tasks: [(id: \"a\", start: \"s\", end: \"e\", alpha_ms: 1, beta_ms: 2, gamma_ms: 3)])",
+        Path::new("t.ron"),
+    )
+    .unwrap();
     assert!(!ok.tasks[0].interruptible());
 }
 
@@ -146,7 +200,11 @@ fn crossing_is_exact_for_every_slope() {
                         let v = v0 + s * i64::try_from(t).unwrap();
                         if strict { v >= bound } else { v > bound }
                     });
-                    assert_eq!(d.map(|d| d.first_violating_ms().0), first, "{v0} {s} {bound} {strict}");
+                    assert_eq!(
+                        d.map(|d| d.first_violating_ms().0),
+                        first,
+                        "{v0} {s} {bound} {strict}"
+                    );
                 }
             }
         }
@@ -201,7 +259,11 @@ impl Alarm {
     /// First integer ms at which the alarm's condition holds (the crossing instant, or one
     /// ms later for a bound that is exceeded rather than reached).
     fn deadline_ms(&self) -> u64 {
-        if self.code == AlarmCode::T002 { self.time.0 + 1 } else { self.time.0 }
+        if self.code == AlarmCode::T002 {
+            self.time.0 + 1
+        } else {
+            self.time.0
+        }
     }
 }
 
@@ -212,8 +274,20 @@ fn synthetic_scales() {
     for i in 0..1000 {
         m.on_event(Millis(i), &format!("s{i}"));
     }
-    assert_eq!(m.next_deadline(), Some(Deadline { at: Millis(4000), after: true }));
+    assert_eq!(
+        m.next_deadline(),
+        Some(Deadline {
+            at: Millis(4000),
+            after: true
+        })
+    );
     m.on_event(Millis(1000), "i0");
-    assert_eq!(m.next_deadline(), Some(Deadline { at: Millis(3000), after: false }));
+    assert_eq!(
+        m.next_deadline(),
+        Some(Deadline {
+            at: Millis(3000),
+            after: false
+        })
+    );
     assert_eq!(m.advance(Millis(3000)).len(), 1);
 }
