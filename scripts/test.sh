@@ -16,6 +16,7 @@ need mesa-vulkan-drivers
 need libgl1-mesa-dri
 need xvfb
 need imagemagick
+need spin
 if [ ${#apt_packages[@]} -gt 0 ]; then
   echo "scripts/test.sh: installing Debian packages: ${apt_packages[*]}"
   if [ "$(id -u)" -eq 0 ]; then SUDO=""; else SUDO="sudo"; fi

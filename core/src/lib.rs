@@ -20,6 +20,7 @@ pub mod campaign;
 pub mod constraints;
 pub mod control;
 pub mod diag;
+pub mod dtree;
 pub mod emulator;
 pub mod engine;
 pub mod explain;
@@ -35,6 +36,7 @@ pub mod sim;
 pub mod symbols;
 pub mod synthetic;
 pub mod tasks;
+pub mod verify;
 pub mod time;
 pub mod trace;
 

@@ -206,3 +206,37 @@ fn snapshots_of_levels_and_modes() {
     h.run_steps(2);
     h.snapshot("console_training");
 }
+
+/// Maintenance: verify the loaded constraint set from the console and read the verdicts.
+#[test]
+fn maintenance_verifies_the_constraint_set() {
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    h.state_mut().apply(Command::SetMode(Mode::Maintenance));
+    h.run_steps(2);
+    h.get_by_label("Not verified yet.");
+    h.get_by_label("Verify constraints");
+    h.state_mut().apply(Command::VerifyConstraints);
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(900);
+    while h.query_by_label_contains("Safety:").is_none() {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the verification did not finish in 15 minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+    }
+    h.get_by_label("Safety: proved, no hazard reachable");
+    h.get_by_label_contains("Permissiveness left: delivery in");
+    h.get_by_label_contains("Permissiveness right: delivery in");
+    assert!(h.query_by_label("Replay counterexample").is_none());
+    assert!(
+        h.state().status.starts_with("verification: SAFE"),
+        "{}",
+        h.state().status
+    );
+    // Nothing to replay on a safe set: the command says so and changes nothing.
+    h.state_mut().apply(Command::ReplayCounterexample);
+    assert_eq!(h.state().mode, Mode::Maintenance);
+    assert!(h.state().status.starts_with("no counterexample"), "{}", h.state().status);
+}

@@ -7,6 +7,7 @@ mod export_st;
 mod filter;
 mod gateway;
 mod run;
+mod verify;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -153,6 +154,9 @@ pub(crate) enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Verify the constraint set on the abstract plant model (safety, permissiveness,
+    /// invariants, necessity), optionally against SPIN, with benchmarks.
+    Verify(verify::VerifyArgs),
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -200,6 +204,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             threads,
             json,
         }) => campaign::run(&cli.plant, kind, threads, json),
+        Some(Command::Verify(args)) => verify::run(&cli.plant, &args),
         Some(Command::Run {
             scenario,
             headless,

@@ -8,6 +8,7 @@ pub mod journal;
 pub mod report;
 pub mod synoptic;
 mod training;
+mod verification;
 mod views;
 
 use crate::theme::Palette;
@@ -108,6 +109,10 @@ pub enum Command {
     InjectFault(usize),
     /// Training: re-run the scenario with the compiled edit and score it.
     VerifyFix,
+    /// Maintenance: verify the loaded constraint set (worker thread).
+    VerifyConstraints,
+    /// Maintenance: replay the verification's shortest hazard trace.
+    ReplayCounterexample,
 }
 
 /// Options for opening the console.
@@ -342,6 +347,7 @@ pub struct Console {
     pub(crate) score: Score,
     pub(crate) wall_s: f64,
     pub(crate) alarm_filter_shelved: bool,
+    pub(crate) verification: verification::Verification,
     visuals_set: bool,
     /// Commands emitted by the last frame's views, applied at the next `logic`.
     pending: Vec<Command>,
@@ -448,6 +454,7 @@ impl Console {
             },
             wall_s: 0.0,
             alarm_filter_shelved: false,
+            verification: verification::Verification::default(),
             visuals_set: false,
             pending: Vec::new(),
         };
@@ -656,6 +663,8 @@ impl Console {
                 }
             }
             Command::VerifyFix => self.verify(),
+            Command::VerifyConstraints => verification::start(self),
+            Command::ReplayCounterexample => verification::replay(self),
         }
     }
 
@@ -824,6 +833,7 @@ impl Console {
             self.advance(dt);
         }
         self.report_step(ctx);
+        verification::poll(self, ctx);
         if self.running {
             ctx.request_repaint();
         }

@@ -44,6 +44,8 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
                         explanation_ui(c, ui, out);
                         ui.separator();
                         alarms_ui(c, ui, out);
+                        ui.separator();
+                        super::verification::panel_ui(c, ui, out);
                     }
                     Mode::Training => {
                         training_ui(c, ui, out);

@@ -1,0 +1,246 @@
+//! Maintenance: verification of the loaded constraint set (`vigie verify` in the
+//! console). The exploration runs on a worker thread; the panel shows safety,
+//! permissiveness, the invariants and which constraints are necessary, and replays the
+//! shortest counterexample on the synoptic (filter enforcing).
+
+use super::{Command, Console, Mode, Source};
+use egui::RichText;
+use std::thread::JoinHandle;
+use vigie_core::verify::{self, Options, VerifyReport};
+
+/// Verification state of the console.
+#[derive(Default)]
+pub(crate) struct Verification {
+    job: Option<JoinHandle<Result<VerifyReport, String>>>,
+    started_s: f64,
+    /// Last result and its wall-clock duration.
+    pub(crate) result: Option<(Result<VerifyReport, String>, f64)>,
+}
+
+impl Verification {
+    /// A verification is running.
+    pub(crate) fn running(&self) -> bool {
+        self.job.is_some()
+    }
+}
+
+/// Starts the verification of the loaded plant's constraint set on a worker thread.
+pub(crate) fn start(c: &mut Console) {
+    if c.verification.running() {
+        return;
+    }
+    let bundle = c.sim.bundle.clone();
+    let layout_path = c.plant_dir.join("layout.ron");
+    c.verification.started_s = c.wall_s;
+    c.verification.job = Some(std::thread::spawn(move || {
+        let layout = vigie_core::emulator::Layout::load(&layout_path)
+            .map_err(|p| vigie_core::diag::render(&p))?;
+        verify::verify(
+            &bundle,
+            &layout,
+            &Options {
+                max_boxes: 2,
+                necessity_boxes: None,
+            },
+        )
+        .map_err(|p| vigie_core::diag::render(&[p]))
+    }));
+    c.status = "verifying the constraint set…".into();
+}
+
+/// Collects a finished verification (called every frame).
+pub(crate) fn poll(c: &mut Console, ctx: &egui::Context) {
+    let finished = c.verification.job.as_ref().is_some_and(JoinHandle::is_finished);
+    if !finished {
+        if c.verification.running() {
+            ctx.request_repaint_after(std::time::Duration::from_millis(100));
+        }
+        return;
+    }
+    let Some(job) = c.verification.job.take() else {
+        return;
+    };
+    let result = job
+        .join()
+        .unwrap_or_else(|_| Err("the verification worker panicked".into()));
+    let secs = c.wall_s - c.verification.started_s;
+    let summary = match &result {
+        Ok(r) => format!(
+            "verification: {} ({} states), {}",
+            if r.safe { "SAFE" } else { "NOT SAFE" },
+            r.full.states,
+            if r.permissive {
+                "permissive"
+            } else {
+                "NOT permissive"
+            }
+        ),
+        Err(e) => format!("verification failed: {e}"),
+    };
+    c.journal.push(c.now().0, "maintenance", &summary);
+    c.status = summary;
+    c.verification.result = Some((result, secs));
+}
+
+/// Replays the shortest hazard trace on the synoptic.
+pub(crate) fn replay(c: &mut Console) {
+    let Some((Ok(report), _)) = &c.verification.result else {
+        c.status = "no verification result to replay".into();
+        return;
+    };
+    let Some((kind, trace)) = &report.full.hazard else {
+        c.status = "no counterexample: the set is safe on the model".into();
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("vigie-counterexample-{}", std::process::id()));
+    let plant = std::fs::canonicalize(&c.plant_dir).unwrap_or_else(|_| c.plant_dir.clone());
+    let written = verify::scenario::write(
+        &dir,
+        trace,
+        &c.sim.bundle.plant,
+        &plant.to_string_lossy(),
+        report.geometry.step_us,
+    );
+    let kind = kind.clone();
+    let path = match written {
+        Ok(p) => p,
+        Err(e) => {
+            c.status = format!("cannot write the counterexample: {e}");
+            return;
+        }
+    };
+    match vigie_core::sim::Scenario::load(&path) {
+        Ok(scenario) => {
+            c.source = Source { scenario, path };
+            c.mode = Mode::Production;
+            c.draft = None;
+            c.compiled_edit = None;
+            c.restart(None);
+            c.speed = c.speed.min(0.5);
+            c.status = format!("replaying the counterexample ({kind}) with the filter enforcing");
+        }
+        Err(p) => c.status = format!("counterexample: {}", vigie_core::diag::render(&p)),
+    }
+}
+
+/// The verification section of the maintenance side panel.
+pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let pal = c.palette.clone();
+    ui.heading("Constraint set verification");
+    ui.horizontal(|ui| {
+        let running = c.verification.running();
+        if ui
+            .add_enabled(!running, egui::Button::new("Verify constraints"))
+            .on_hover_text(
+                "Explore the abstract plant model with the most permissive control and the \
+                 filter in the loop (at most 2 boxes): hazards, deliveries, invariants. \
+                 Necessity of each constraint: `vigie verify --necessity`",
+            )
+            .clicked()
+        {
+            out.push(Command::VerifyConstraints);
+        }
+        if running {
+            ui.spinner();
+            ui.label(format!(
+                "exploring… {:.0} s",
+                c.wall_s - c.verification.started_s
+            ));
+        }
+    });
+    let Some((result, secs)) = &c.verification.result else {
+        ui.label("Not verified yet.");
+        return;
+    };
+    let r = match result {
+        Ok(r) => r,
+        Err(e) => {
+            ui.label(RichText::new(e).color(pal.trip));
+            return;
+        }
+    };
+    ui.label(format!(
+        "{} reachable states, {} transitions ({:.1} s)",
+        r.full.states, r.full.transitions, secs
+    ));
+    match &r.full.hazard {
+        None => {
+            ui.label(RichText::new("Safety: proved, no hazard reachable").strong());
+        }
+        Some((kind, trace)) => {
+            ui.label(
+                RichText::new(format!(
+                    "Safety: VIOLATED, {kind} reachable in {} steps",
+                    trace.steps.len()
+                ))
+                .strong()
+                .color(pal.trip),
+            );
+            let kinds: Vec<String> = r
+                .full
+                .hazard_kinds
+                .iter()
+                .map(|(k, n)| format!("{k} ({n} steps)"))
+                .collect();
+            ui.label(format!("Hazards reachable: {}", kinds.join(", ")));
+            if ui
+                .button("Replay counterexample")
+                .on_hover_text("Play the shortest hazard trace on the synoptic, filter enforcing")
+                .clicked()
+            {
+                out.push(Command::ReplayCounterexample);
+            }
+        }
+    }
+    if r.full.no_fallback.is_some() {
+        ui.label(RichText::new("Some reachable context has no fallback vector").color(pal.trip));
+    }
+    for (side, name) in ["left", "right"].iter().enumerate() {
+        let text = match (&r.full.delivered[side], r.full.always_deliverable[side]) {
+            (None, _) => format!("Permissiveness {name}: NO delivery reachable"),
+            (Some(t), true) => format!(
+                "Permissiveness {name}: delivery in {} steps, from every reachable state",
+                t.steps.len()
+            ),
+            (Some(t), false) => format!(
+                "Permissiveness {name}: delivery in {} steps; some states can no longer deliver",
+                t.steps.len()
+            ),
+        };
+        ui.label(text);
+    }
+    egui::CollapsingHeader::new("Invariants")
+        .default_open(false)
+        .show(ui, |ui| {
+            for i in &r.invariants {
+                ui.label(format!(
+                    "{} {}: {}",
+                    i.id,
+                    i.source,
+                    if i.proved { "proved" } else { "REFUTED" }
+                ));
+            }
+        });
+    if r.constraints.is_empty() {
+        ui.label("Necessity of each constraint: `vigie verify --necessity` (one exploration per constraint).");
+        return;
+    }
+    egui::CollapsingHeader::new("Necessity of each constraint")
+        .default_open(true)
+        .show(ui, |ui| {
+            egui::Grid::new("necessity").striped(true).show(ui, |ui| {
+                for role in &r.constraints {
+                    ui.label(RichText::new(&role.id).monospace());
+                    if role.necessary {
+                        ui.label(format!(
+                            "necessary: without it {}",
+                            role.hazard.as_deref().unwrap_or("?")
+                        ));
+                    } else {
+                        ui.label("redundant on this model");
+                    }
+                    ui.end_row();
+                }
+            });
+        });
+}

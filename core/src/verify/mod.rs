@@ -1,0 +1,888 @@
+//! Exhaustive verification of a constraint set on an abstract model of the plant
+//! (seed 004 §2 and §6.2: safety whatever the control, and controllability).
+//!
+//! # The abstraction
+//! - **Plant** ([`model`]): the emulator's geometry on a grid whose cell is the greatest
+//!   common divisor of the lengths the sensors, joints and boxes depend on (20 mm on the
+//!   sorting station); one step is the time a surface takes to move one cell (66.7 ms),
+//!   the table angle advances by the same time's rotation (2° out, 1.98° back). State:
+//!   table angle, boxes (size, frame, rear cell), at most `max_boxes` at once; a box on
+//!   an exit past the exit's first sensor is delivered and leaves the model.
+//! - **Control**: the most permissive: any vector of the filtered outputs every step;
+//!   the exit conveyors run all the time (seed 004 §6.1: "A5 = A6 = 1").
+//! - **PLC**: one cycle per step, in the engine's order: inputs, observers (the real
+//!   [`Observers`]), commanded vector, the real [`Filter`] (the commanded vector if no
+//!   constraint is true, else the fallback), plant step with the applied vector. The
+//!   latch is abstracted away (the operator may reset at any cycle), which includes the
+//!   latched behaviour since the fallback is also offered every cycle.
+//! - **Hazards**: the emulator's list (sheared, dropped, collision, pushed against
+//!   stopped) with its margins, evaluated once per step; "no fallback" is reported too.
+//!   As in the emulator, the table is joined to the conveyors within the docking
+//!   tolerance of the loading/unloading angle, and a box is sheared only when the table
+//!   is outside it during the step.
+//! - **Sampling**: the real PLC cycle (10 ms) is much shorter than a step, so a sensor
+//!   event within a step is seen by the filter. Feed-line beams therefore see a box over
+//!   `(rear, front]`: the rear edge that sits on a beam at a step boundary has left it a
+//!   cycle later, and a one-cell gap between two boxes shows as the beam falling (P36's
+//!   FE(C3), 2P's RE(C0)), as the filter sees it on the real plant.
+//!
+//! Assumptions (stated in every report): at most `max_boxes` boxes, exits always
+//! running, boxes on the feed line only travel forward, PLC cycle shorter than the
+//! time a box takes to cross a 20 mm gap.
+//!
+//! [`verify`] answers safety, permissiveness (a box can be delivered at each exit),
+//! the invariants of `invariants.txt`, and which constraints are necessary. Traces are
+//! shortest (breadth-first search) and replayable in the emulator ([`replay`]).
+
+pub mod model;
+pub mod promela;
+pub mod scenario;
+
+use crate::bits::Bits;
+use crate::bundle::PlantBundle;
+use crate::constraints::ConstraintSet;
+use crate::diag::Problem;
+use crate::emulator::{ArrivalPlan, BoxSize, Emulator, Hazard, HazardKind, Layout};
+use crate::expr;
+use crate::filter::Filter;
+use crate::frame::Frame;
+use crate::observers::Observers;
+use crate::symbols::Space;
+use crate::time::Millis;
+use model::{Geometry, PlantState};
+use serde::Serialize;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A small multiplicative hasher (FxHash) for the state table: lookups only, never
+/// iterated, so the order of results does not depend on it.
+#[derive(Default, Clone, Copy)]
+struct Fx(u64);
+
+impl Hasher for Fx {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(w));
+        }
+    }
+    fn write_u8(&mut self, i: u8) {
+        self.write_u64(u64::from(i));
+    }
+    fn write_u16(&mut self, i: u16) {
+        self.write_u64(u64::from(i));
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.write_u64(u64::from(i));
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.write_u64(i as u64);
+    }
+}
+
+type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<Fx>>;
+
+/// Options of a verification.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Largest number of boxes in the plant at once.
+    pub max_boxes: usize,
+    /// Also test every constraint for necessity (one exploration per constraint), on a
+    /// model with this many boxes (weakened sets have far larger state spaces).
+    pub necessity_boxes: Option<usize>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            max_boxes: 2,
+            necessity_boxes: Some(1),
+        }
+    }
+}
+
+/// One full abstract state: plant, observers' internal counts, previous cycle's frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct AState {
+    /// Plant.
+    pub plant: PlantState,
+    /// Observer counts.
+    pub obs: [u16; 4],
+    /// Inputs, applied outputs and observers of the previous cycle.
+    pub prev: (u64, u64, u64),
+}
+
+/// One step of a trace.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct TraceStep {
+    /// Start of the step, ms (rounded).
+    pub time_ms: u64,
+    /// Inputs read at the start of the step, e.g. `C0 C4`.
+    pub inputs: String,
+    /// Observers true during the step.
+    pub observers: String,
+    /// Applied outputs during the step.
+    pub applied: String,
+    /// Applied outputs, by plant output index.
+    #[serde(skip)]
+    pub applied_bits: u64,
+    /// A box arriving at the end of the step.
+    pub arrival: Option<BoxSize>,
+    /// Table angle at the start, mdeg, and boxes (`frame:rear-cell:size`).
+    pub plant: String,
+}
+
+/// A trace from the initial state.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Trace {
+    /// What it shows.
+    pub what: String,
+    /// Steps, in order.
+    pub steps: Vec<TraceStep>,
+}
+
+/// Result for one invariant.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct InvariantResult {
+    /// Id.
+    pub id: String,
+    /// Text.
+    pub source: String,
+    /// True in no reachable state.
+    pub proved: bool,
+    /// Shortest trace to a state where it is true.
+    pub counterexample: Option<Trace>,
+}
+
+/// Result for one constraint.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct ConstraintRole {
+    /// Id.
+    pub id: String,
+    /// Removing it makes a hazard reachable.
+    pub necessary: bool,
+    /// The hazard reached without it (first found, shortest trace length).
+    pub hazard: Option<String>,
+    /// Length of that trace, steps.
+    pub steps: Option<usize>,
+    /// Reachable states without it.
+    pub states: usize,
+}
+
+/// Outcome of one exploration.
+#[derive(Clone, Debug, Serialize)]
+pub struct Exploration {
+    /// Reachable states (hazard states included).
+    pub states: usize,
+    /// Transitions explored (distinct applied vectors × arrivals).
+    pub transitions: u64,
+    /// Shortest trace to a hazard, and its kind.
+    pub hazard: Option<(String, Trace)>,
+    /// Shortest trace to a context with no fallback.
+    pub no_fallback: Option<Trace>,
+    /// Shortest witness of a delivery at the +u exit (left) and the −u exit (right).
+    pub delivered: [Option<Trace>; 2],
+    /// Every reachable non-hazard state can still lead to a delivery at each exit.
+    pub always_deliverable: [bool; 2],
+    /// Otherwise, a shortest trace to a state from which no delivery at that exit is
+    /// reachable any more.
+    pub stuck: [Option<Trace>; 2],
+    /// Per invariant: shortest trace to a state where it is true.
+    pub invariants: Vec<Option<Trace>>,
+    /// Hazard kinds reachable (each with the length of its shortest trace).
+    pub hazard_kinds: Vec<(String, usize)>,
+}
+
+/// The whole report of `vigie verify`.
+#[derive(Clone, Debug, Serialize)]
+pub struct VerifyReport {
+    /// Plant name.
+    pub plant: String,
+    /// Grid and timing of the abstraction.
+    pub geometry: Geometry,
+    /// Largest number of boxes at once.
+    pub max_boxes: usize,
+    /// The full constraint set.
+    pub full: Exploration,
+    /// No hazard reachable and a fallback in every reachable context.
+    pub safe: bool,
+    /// A delivery is reachable at both exits.
+    pub permissive: bool,
+    /// Invariants proved or refuted.
+    pub invariants: Vec<InvariantResult>,
+    /// Necessity of each constraint (empty when not asked).
+    pub constraints: Vec<ConstraintRole>,
+}
+
+/// Hazard name as the emulator serialises it.
+pub fn hazard_name(k: HazardKind) -> &'static str {
+    match k {
+        HazardKind::Sheared => "sheared",
+        HazardKind::Dropped => "dropped",
+        HazardKind::Collision => "collision",
+        HazardKind::PushedAgainstStopped => "pushed_against_stopped",
+    }
+}
+
+/// The model: geometry, symbols, observers and the names it prints.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Grid.
+    pub geo: Geometry,
+    observers: Observers,
+    invariants: Vec<expr::Dnf>,
+    n_in: usize,
+    n_out: usize,
+    n_obs: usize,
+    input_names: Vec<String>,
+    output_names: Vec<String>,
+    obs_names: Vec<String>,
+    max_boxes: usize,
+    /// Outputs the control may command (all but the exits').
+    free_outputs: Vec<usize>,
+    /// Variables read at t-1 by a constraint, an observer or an invariant (inputs,
+    /// outputs, observers): the state keeps only these of the previous cycle.
+    prev_mask: (u64, u64, u64),
+}
+
+impl Model {
+    /// Builds the model of a plant bundle and its layout.
+    pub fn new(bundle: &PlantBundle, layout: &Layout, max_boxes: usize) -> Result<Self, Problem> {
+        let geo = Geometry::new(layout, &bundle.plant)?;
+        if bundle.observers.len() > 4 {
+            return Err(Problem::error(
+                "V0501",
+                "the verifier handles at most 4 observers",
+                None,
+            ));
+        }
+        let n_out = bundle.plant.outputs.len();
+        if n_out + bundle.plant.inputs.len() + bundle.observers.len() > 128 - 99 {
+            return Err(Problem::error("V0501", "too many signals for the verifier", None));
+        }
+        let free_outputs = (0..n_out).filter(|k| !geo.exit_act.contains(k)).collect();
+        let mut prev_mask = (0u64, 0u64, 0u64);
+        let mut dnfs: Vec<expr::Dnf> = bundle
+            .constraints
+            .constraints
+            .iter()
+            .chain(&bundle.invariants.constraints)
+            .map(|c| c.dnf.clone())
+            .collect();
+        for d in &bundle.observers.defs {
+            let texts: Vec<&String> = match &d.rule {
+                crate::observers::Rule::Memory { set, reset } => vec![set, reset],
+                crate::observers::Rule::Counter { up, down, clear, .. } => {
+                    let mut v = vec![up, down];
+                    v.extend(clear.as_ref());
+                    v
+                }
+            };
+            for t in texts {
+                match expr::parse_str(t).and_then(|e| e.to_dnf(&bundle.symbols)) {
+                    Ok(dnf) => dnfs.push(dnf),
+                    // Unreadable rule: keep every previous value.
+                    Err(_) => prev_mask = (u64::MAX, u64::MAX, u64::MAX),
+                }
+            }
+        }
+        for l in dnfs.iter().flatten().flatten() {
+            if l.var.prev && l.var.index < 64 {
+                let bit = 1u64 << l.var.index;
+                match l.var.space {
+                    Space::Input => prev_mask.0 |= bit,
+                    Space::Output => prev_mask.1 |= bit,
+                    Space::Observer => prev_mask.2 |= bit,
+                    Space::Aux => {}
+                }
+            }
+        }
+        Ok(Self {
+            geo,
+            observers: bundle.observers.clone(),
+            invariants: bundle
+                .invariants
+                .constraints
+                .iter()
+                .map(|c| c.dnf.clone())
+                .collect(),
+            n_in: bundle.plant.inputs.len(),
+            n_out,
+            n_obs: bundle.observers.len(),
+            input_names: bundle.symbols.names(Space::Input).to_vec(),
+            output_names: bundle.symbols.names(Space::Output).to_vec(),
+            obs_names: bundle.symbols.names(Space::Observer).to_vec(),
+            max_boxes: max_boxes.clamp(1, model::MAX_BOXES),
+            free_outputs,
+            prev_mask,
+        })
+    }
+
+    /// Packs a state into 128 bits (the layout is checked by [`Model::new`]).
+    pub fn pack(&self, s: &AState) -> u128 {
+        let mut k = u128::from(s.plant.angle as u32);
+        k = k << 3 | u128::from(s.plant.n);
+        for b in &s.plant.boxes {
+            let lo = (i32::from(b.lo) + 512) as u128 & 0x3ff;
+            k = k << 12 | u128::from(b.on_table) << 11 | u128::from(b.large) << 10 | lo;
+        }
+        for c in s.obs {
+            k = k << 4 | u128::from(c.min(15));
+        }
+        k = k << self.n_in | u128::from(s.prev.0);
+        k = k << self.n_out | u128::from(s.prev.1);
+        k << self.n_obs | u128::from(s.prev.2)
+    }
+
+    /// Inverse of [`Model::pack`].
+    pub fn unpack(&self, mut k: u128) -> AState {
+        let mask = |n: usize| (1u128 << n) - 1;
+        let ov = (k & mask(self.n_obs)) as u64;
+        k >>= self.n_obs;
+        let out = (k & mask(self.n_out)) as u64;
+        k >>= self.n_out;
+        let inp = (k & mask(self.n_in)) as u64;
+        k >>= self.n_in;
+        let mut obs = [0u16; 4];
+        for c in obs.iter_mut().rev() {
+            *c = (k & 15) as u16;
+            k >>= 4;
+        }
+        let mut boxes = [model::ABox::default(); model::MAX_BOXES];
+        for b in boxes.iter_mut().rev() {
+            let v = k & 0xfff;
+            k >>= 12;
+            *b = model::ABox {
+                on_table: v >> 11 & 1 == 1,
+                large: v >> 10 & 1 == 1,
+                lo: ((v & 0x3ff) as i32 - 512) as i16,
+            };
+        }
+        let n = (k & 7) as u8;
+        k >>= 3;
+        AState {
+            plant: PlantState {
+                angle: (k & 0xffff_ffff) as u32 as i32,
+                n,
+                boxes,
+            },
+            obs,
+            prev: (inp, out, ov),
+        }
+    }
+
+    /// The initial state.
+    pub fn initial(&self) -> AState {
+        AState {
+            plant: self.geo.initial(),
+            obs: [0; 4],
+            prev: (0, 0, 0),
+        }
+    }
+
+    fn names(names: &[String], bits: u64) -> String {
+        names
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| bits >> i & 1 == 1)
+            .map(|(_, n)| n.as_str())
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
+    /// The frame of a state at the start of its cycle (inputs and observers at t,
+    /// previous cycle at t-1), and the updated observer counts.
+    fn frame(&self, s: &AState, frame: &mut Frame, obs: &mut Observers) -> (u64, u64, [u16; 4]) {
+        let inputs = self.geo.sensors(&s.plant);
+        for (i, b) in [s.prev.0, s.prev.1, s.prev.2].iter().enumerate() {
+            let space = Space::ALL[i];
+            let n = frame.prev[space as usize].len();
+            for k in 0..n {
+                frame.prev[space as usize].set(k, b >> k & 1 == 1);
+            }
+        }
+        for k in 0..self.n_in {
+            frame.now[0].set(k, inputs >> k & 1 == 1);
+        }
+        let counts: Vec<u32> = s.obs[..self.n_obs].iter().map(|&c| u32::from(c)).collect();
+        obs.set_counts(&counts);
+        obs.update(frame);
+        let mut ov = 0u64;
+        for k in 0..self.n_obs {
+            if frame.now[Space::Observer as usize].get(k) {
+                ov |= 1 << k;
+            }
+        }
+        let mut counts = [0u16; 4];
+        for (c, &v) in counts.iter_mut().zip(obs.counts()) {
+            *c = v.min(u32::from(u16::MAX)) as u16;
+        }
+        (inputs, ov, counts)
+    }
+
+    fn plant_text(&self, p: &PlantState) -> String {
+        let mut s = format!("angle {}", p.angle / 1000);
+        for b in &p.boxes[..usize::from(p.n)] {
+            s.push_str(&format!(
+                " {}:{}:{}",
+                if b.on_table { "table" } else { "line" },
+                b.lo,
+                if b.large { "L" } else { "S" }
+            ));
+        }
+        s
+    }
+}
+
+/// What a transition leads to.
+#[derive(Clone, Copy, Debug)]
+struct Edge {
+    parent: u32,
+    applied: u64,
+    arrival: Option<BoxSize>,
+}
+
+/// Explores the reachable states of `model` under `filter` breadth-first.
+pub fn explore(model: &Model, filter: &Filter) -> Exploration {
+    let mut index: FxMap<u128, u32> = FxMap::default();
+    let mut states: Vec<u128> = Vec::new();
+    let mut edges: Vec<Option<Edge>> = Vec::new();
+    let s0 = model.initial();
+    index.insert(model.pack(&s0), 0);
+    states.push(model.pack(&s0));
+    edges.push(None);
+    let mut frame = Frame::new([model.n_in, model.n_out, model.n_obs, 0]);
+    let mut obs = model.observers.clone();
+    let mut viol = Vec::new();
+    let mut hazard: Option<(String, u32, Edge)> = None;
+    let mut kinds: Vec<(HazardKind, u32, Edge)> = Vec::new();
+    let mut no_fallback: Option<u32> = None;
+    let mut delivered: [Option<(u32, Edge)>; 2] = [None, None];
+    let mut inv: Vec<Option<u32>> = vec![None; model.invariants.len()];
+    let mut transitions = 0u64;
+    let mut cache: FxMap<(u64, (u64, u64, u64), [u16; 4]), Ctx> = FxMap::default();
+    // Graph for the "always deliverable" check: successors of each state, and the states
+    // with a delivering transition.
+    let mut succ: Vec<u32> = Vec::new();
+    let mut succ_start: Vec<usize> = Vec::new();
+    let mut delivers: Vec<[bool; 2]> = Vec::new();
+    let exits = model.geo.exit_act.iter().fold(0u64, |m, &k| m | 1 << k);
+    let mut head = 0usize;
+    while head < states.len() {
+        let s = model.unpack(states[head]);
+        let si = head as u32;
+        head += 1;
+        succ_start.push(succ.len());
+        delivers.push([false, false]);
+        let inputs = model.geo.sensors(&s.plant);
+        let key = (inputs, s.prev, s.obs);
+        let ctx = match cache.get(&key) {
+            Some(c) => c.clone(),
+            None => {
+                let c = context(model, filter, &s, &mut frame, &mut obs, &mut viol, exits);
+                cache.insert(key, c.clone());
+                c
+            }
+        };
+        let (ov, counts) = (ctx.ov, ctx.counts);
+        for (k, slot) in inv.iter_mut().enumerate() {
+            if slot.is_none() && ctx.inv >> k & 1 == 1 {
+                *slot = Some(si);
+            }
+        }
+        if ctx.no_fallback && no_fallback.is_none() {
+            no_fallback = Some(si);
+        }
+        let applied_set = &ctx.applied;
+        let mut arrivals = vec![None];
+        if usize::from(s.plant.n) < model.max_boxes {
+            for size in [BoxSize::Small, BoxSize::Large] {
+                if model.geo.can_spawn(&s.plant, size) {
+                    arrivals.push(Some(size));
+                }
+            }
+        }
+        for &applied in applied_set.iter() {
+            for &arrival in &arrivals {
+                transitions += 1;
+                let (p, ev) = model.geo.step(&s.plant, applied, arrival);
+                let edge = Edge {
+                    parent: si,
+                    applied,
+                    arrival,
+                };
+                if let Some(h) = ev.hazard {
+                    if !kinds.iter().any(|(k, _, _)| *k == h) {
+                        kinds.push((h, si, edge));
+                    }
+                    if hazard.is_none() {
+                        hazard = Some((hazard_name(h).to_string(), si, edge));
+                    }
+                    continue;
+                }
+                for (side, d) in [ev.delivered_plus, ev.delivered_minus].iter().enumerate() {
+                    if *d {
+                        delivers[si as usize][side] = true;
+                        if delivered[side].is_none() {
+                            delivered[side] = Some((si, edge));
+                        }
+                    }
+                }
+                let next = AState {
+                    plant: p,
+                    obs: counts,
+                    prev: (
+                        inputs & model.prev_mask.0,
+                        applied & model.prev_mask.1,
+                        ov & model.prev_mask.2,
+                    ),
+                };
+                let key = model.pack(&next);
+                let id = match index.get(&key) {
+                    Some(&id) => id,
+                    None => {
+                        let id = states.len() as u32;
+                        index.insert(key, id);
+                        states.push(key);
+                        edges.push(Some(edge));
+                        id
+                    }
+                };
+                succ.push(id);
+            }
+        }
+    }
+    // Backward reachability to a delivering state, per exit.
+    let mut always = [true, true];
+    let mut stuck_at: [Option<u32>; 2] = [None, None];
+    drop(index);
+    succ_start.push(succ.len());
+    // Predecessors in compressed rows.
+    let n = states.len();
+    let mut pstart = vec![0usize; n + 1];
+    for &j in &succ {
+        pstart[j as usize + 1] += 1;
+    }
+    for i in 0..n {
+        pstart[i + 1] += pstart[i];
+    }
+    let mut fill = pstart.clone();
+    let mut pred = vec![0u32; succ.len()];
+    for i in 0..n {
+        for &j in &succ[succ_start[i]..succ_start[i + 1]] {
+            pred[fill[j as usize]] = i as u32;
+            fill[j as usize] += 1;
+        }
+    }
+    drop(succ);
+    for side in 0..2 {
+        let mut good: Vec<bool> = delivers.iter().map(|d| d[side]).collect();
+        let mut stack: Vec<u32> = (0..states.len() as u32)
+            .filter(|&i| good[i as usize])
+            .collect();
+        while let Some(i) = stack.pop() {
+            for &p in &pred[pstart[i as usize]..pstart[i as usize + 1]] {
+                if !good[p as usize] {
+                    good[p as usize] = true;
+                    stack.push(p);
+                }
+            }
+        }
+        always[side] = good.iter().all(|&g| g);
+        stuck_at[side] = good.iter().position(|&g| !g).map(|i| i as u32);
+    }
+    let trace = |what: String, last: u32, extra: Option<Edge>| -> Trace {
+        build_trace(model, &states, &edges, what, last, extra)
+    };
+    Exploration {
+        states: states.len() + kinds.len().min(1),
+        transitions,
+        hazard: hazard.map(|(name, si, e)| {
+            let t = trace(format!("hazard: {name}"), si, Some(e));
+            (name, t)
+        }),
+        no_fallback: no_fallback.map(|si| trace("no fallback vector".into(), si, None)),
+        delivered: [0, 1].map(|side| {
+            delivered[side].map(|(si, e)| {
+                trace(
+                    format!("delivery at the {} exit", if side == 0 { "+u (left)" } else { "-u (right)" }),
+                    si,
+                    Some(e),
+                )
+            })
+        }),
+        always_deliverable: always,
+        stuck: [0, 1].map(|side| {
+            stuck_at[side].map(|si| trace("no delivery reachable any more".into(), si, None))
+        }),
+        invariants: inv
+            .iter()
+            .map(|o| o.map(|si| trace("invariant true".into(), si, None)))
+            .collect(),
+        hazard_kinds: kinds
+            .iter()
+            .map(|(k, si, _)| (hazard_name(*k).to_string(), depth(&edges, *si) + 1))
+            .collect(),
+    }
+}
+
+/// What a cycle's context allows: observers, invariants, applied vectors.
+#[derive(Clone, Debug)]
+struct Ctx {
+    ov: u64,
+    counts: [u16; 4],
+    inv: u64,
+    no_fallback: bool,
+    applied: std::rc::Rc<Vec<u64>>,
+}
+
+/// Evaluates observers, invariants and the filter for every commanded vector.
+fn context(
+    model: &Model,
+    filter: &Filter,
+    s: &AState,
+    frame: &mut Frame,
+    obs: &mut Observers,
+    viol: &mut Vec<usize>,
+    exits: u64,
+) -> Ctx {
+    let (_, ov, counts) = model.frame(s, frame, obs);
+    let mut inv = 0u64;
+    for (k, d) in model.invariants.iter().enumerate().take(64) {
+        if expr::eval_dnf(d, frame) {
+            inv |= 1 << k;
+        }
+    }
+    let fallback = filter.fallback(frame);
+    let mut no_fallback = false;
+    let mut applied_set: Vec<u64> = Vec::new();
+    let n_free = model.free_outputs.len();
+    for c in 0..(1u64 << n_free) {
+        let mut cmd = exits;
+        for (j, &k) in model.free_outputs.iter().enumerate() {
+            if c >> j & 1 == 1 {
+                cmd |= 1 << k;
+            }
+        }
+        for k in 0..model.n_out {
+            frame.now[Space::Output as usize].set(k, cmd >> k & 1 == 1);
+        }
+        filter.violations_into(frame, viol);
+        let applied = if viol.is_empty() {
+            cmd
+        } else {
+            match &fallback {
+                Ok(b) => b.ones().fold(exits, |a, k| a | 1 << k),
+                Err(_) => {
+                    no_fallback = true;
+                    continue;
+                }
+            }
+        };
+        if !applied_set.contains(&applied) {
+            applied_set.push(applied);
+        }
+    }
+    applied_set.sort_unstable();
+    Ctx {
+        ov,
+        counts,
+        inv,
+        no_fallback,
+        applied: std::rc::Rc::new(applied_set),
+    }
+}
+
+fn depth(edges: &[Option<Edge>], mut i: u32) -> usize {
+    let mut d = 0;
+    while let Some(e) = edges[i as usize] {
+        i = e.parent;
+        d += 1;
+    }
+    d
+}
+
+fn build_trace(
+    model: &Model,
+    states: &[u128],
+    edges: &[Option<Edge>],
+    what: String,
+    last: u32,
+    extra: Option<Edge>,
+) -> Trace {
+    let mut chain: Vec<(u32, Option<Edge>)> = Vec::new();
+    let mut out_edge = extra;
+    let mut i = last;
+    loop {
+        chain.push((i, out_edge));
+        match edges[i as usize] {
+            Some(e) => {
+                out_edge = Some(e);
+                i = e.parent;
+            }
+            None => break,
+        }
+    }
+    chain.reverse();
+    let mut frame = Frame::new([model.n_in, model.n_out, model.n_obs, 0]);
+    let mut obs = model.observers.clone();
+    let steps = chain
+        .iter()
+        .enumerate()
+        .map(|(k, (si, e))| {
+            let s = &model.unpack(states[*si as usize]);
+            let (inputs, ov, _) = model.frame(s, &mut frame, &mut obs);
+            let applied = e.map_or(0, |e| e.applied);
+            TraceStep {
+                time_ms: (k as i64 * model.geo.step_us / 1000) as u64,
+                inputs: Model::names(&model.input_names, inputs),
+                observers: Model::names(&model.obs_names, ov),
+                applied: Model::names(&model.output_names, applied),
+                applied_bits: applied,
+                arrival: e.and_then(|e| e.arrival),
+                plant: model.plant_text(&s.plant),
+            }
+        })
+        .collect();
+    Trace { what, steps }
+}
+
+/// Loads the layout of a plant folder and verifies its constraint set.
+pub fn verify(bundle: &PlantBundle, layout: &Layout, opts: &Options) -> Result<VerifyReport, Problem> {
+    let model = Model::new(bundle, layout, opts.max_boxes)?;
+    let n_out = bundle.plant.outputs.len();
+    let filter = Filter::new(&bundle.constraints, n_out);
+    let full = explore(&model, &filter);
+    let invariants = bundle
+        .invariants
+        .constraints
+        .iter()
+        .zip(&full.invariants)
+        .map(|(c, t)| InvariantResult {
+            id: c.id.clone(),
+            source: c.source.clone(),
+            proved: t.is_none(),
+            counterexample: t.clone(),
+        })
+        .collect();
+    let constraints = match opts.necessity_boxes {
+        Some(nb) => necessity(bundle, layout, nb)?,
+        None => Vec::new(),
+    };
+    Ok(VerifyReport {
+        plant: bundle.plant.name.clone(),
+        geometry: model.geo.clone(),
+        max_boxes: model.max_boxes,
+        safe: full.hazard.is_none() && full.no_fallback.is_none(),
+        permissive: full.delivered.iter().all(Option::is_some),
+        full,
+        invariants,
+        constraints,
+    })
+}
+
+/// Which constraints are necessary: for each, the set without it explored on a model
+/// with `max_boxes` boxes.
+pub fn necessity(bundle: &PlantBundle, layout: &Layout, max_boxes: usize) -> Result<Vec<ConstraintRole>, Problem> {
+    let model = Model::new(bundle, layout, max_boxes)?;
+    let n_out = bundle.plant.outputs.len();
+    let mut roles = Vec::new();
+    for i in 0..bundle.constraints.constraints.len() {
+        let set = without(&bundle.constraints, i);
+        let e = explore(&model, &Filter::new(&set, n_out));
+        let steps = e.hazard.as_ref().map(|(_, t)| t.steps.len());
+        roles.push(ConstraintRole {
+            id: bundle.constraints.constraints[i].id.clone(),
+            necessary: e.hazard.is_some() || e.no_fallback.is_some(),
+            hazard: e
+                .hazard
+                .as_ref()
+                .map(|(h, _)| h.clone())
+                .or_else(|| e.no_fallback.as_ref().map(|_| "no_fallback".into())),
+            steps,
+            states: e.states,
+        });
+    }
+    Ok(roles)
+}
+
+/// The constraint set without constraint `i`.
+pub fn without(set: &ConstraintSet, i: usize) -> ConstraintSet {
+    let mut s = set.clone();
+    if i < s.constraints.len() {
+        s.constraints.remove(i);
+    }
+    s
+}
+
+/// What the emulator did when driven by a trace's applied outputs.
+#[derive(Clone, Debug, Serialize)]
+pub struct Replay {
+    /// Hazards the emulator reported.
+    pub hazards: Vec<Hazard>,
+    /// The per-cycle trace (CSV of `crate::trace`), 10 ms cycles, outputs as applied.
+    pub csv: String,
+    /// Boxes delivered (left, right).
+    pub delivered: (u32, u32),
+}
+
+/// Replays a trace in the emulator: the arrivals at the step ends, the applied outputs
+/// held for each step, sampled every `cycle_ms` into a trace CSV.
+pub fn replay(layout: &Layout, bundle: &PlantBundle, trace: &Trace, step_us: i64, cycle_ms: u64) -> Result<Replay, Problem> {
+    let plant = &bundle.plant;
+    let mut emu = Emulator::new(layout, plant, 1)?;
+    let arrivals: Vec<(u64, BoxSize)> = trace
+        .steps
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| {
+            s.arrival
+                .map(|a| (((k as i64 + 1) * step_us / 1000) as u64, a))
+        })
+        .collect();
+    emu.set_arrivals(ArrivalPlan::List(arrivals));
+    let mut csv = String::from("time_ms");
+    for s in plant.inputs.iter().chain(&plant.outputs) {
+        csv.push(',');
+        csv.push_str(&s.id);
+    }
+    csv.push('\n');
+    let n_out = plant.outputs.len();
+    let end_ms = (trace.steps.len() as i64 * step_us / 1000) as u64 + 200;
+    let cycle = cycle_ms.max(1);
+    let mut out = Bits::zeros(n_out);
+    for t in 0..end_ms {
+        let k = (t as i64 * 1000 / step_us.max(1)) as usize;
+        let bits = trace.steps.get(k).map_or(0, |s| s.applied_bits);
+        for i in 0..n_out {
+            out.set(i, bits >> i & 1 == 1);
+        }
+        if t % cycle == 0 {
+            let row: Vec<String> = emu
+                .sensors()
+                .to_bools()
+                .into_iter()
+                .chain(out.to_bools())
+                .map(|b| u8::from(b).to_string())
+                .collect();
+            csv.push_str(&format!("{},{}\n", t, row.join(",")));
+        }
+        emu.step(Millis(1), &out);
+    }
+    let st = emu.stats();
+    Ok(Replay {
+        hazards: emu.hazards().to_vec(),
+        csv,
+        delivered: (st.delivered_left, st.delivered_right),
+    })
+}
+
+#[cfg(test)]
+mod tests;

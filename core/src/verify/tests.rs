@@ -1,0 +1,191 @@
+use super::*;
+use crate::diag::Problem;
+use std::path::Path;
+
+fn station() -> (PlantBundle, Layout) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+    let (b, _) = PlantBundle::load(&dir).expect("bundle");
+    let l = Layout::load(&dir.join("layout.ron")).expect("layout");
+    (b, l)
+}
+
+/// A copy of the station folder in a temporary directory with textual patches applied
+/// (`(file, from, to)`), loaded; the folder is removed when the guard drops.
+struct Patched {
+    dir: std::path::PathBuf,
+}
+
+impl Drop for Patched {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn patched(tag: &str, patches: &[(&str, &str, &str)]) -> (Patched, PlantBundle, Layout) {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+    let dir = std::env::temp_dir().join(format!("vigie-verify-{}-{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    for f in ["plant.ron", "observers.ron", "constraints.txt", "invariants.txt", "layout.ron"] {
+        let mut text = std::fs::read_to_string(src.join(f)).expect("read station file");
+        for (file, from, to) in patches {
+            if *file == f {
+                assert!(text.contains(from), "patch target `{from}` not in {f}");
+                text = text.replace(from, to);
+            }
+        }
+        std::fs::write(dir.join(f), text).expect("write patched file");
+    }
+    let (b, problems) = PlantBundle::load(&dir).expect("patched bundle");
+    assert!(!problems.iter().any(Problem::is_error), "{problems:?}");
+    let l = Layout::load(&dir.join("layout.ron")).expect("patched layout");
+    (Patched { dir }, b, l)
+}
+
+fn kinds(e: &Exploration) -> Vec<&str> {
+    let mut k: Vec<&str> = e.hazard_kinds.iter().map(|(k, _)| k.as_str()).collect();
+    k.sort_unstable();
+    k
+}
+
+/// The paper's 17 constraints, one box and two boxes at once: safe, a delivery reachable
+/// at both exits, every invariant holds.
+#[test]
+fn station_paper_set_is_safe_and_permissive() {
+    let (b, l) = station();
+    for max_boxes in [1, 2] {
+        let r = verify(&b, &l, &Options { max_boxes, necessity_boxes: None }).expect("verify");
+        assert!(r.safe, "{max_boxes} boxes: {:?}", kinds(&r.full));
+        assert!(r.permissive, "{max_boxes} boxes: deliveries {:?}", r.full.delivered.iter().map(Option::is_some).collect::<Vec<_>>());
+        for i in &r.invariants {
+            assert!(i.proved, "{max_boxes} boxes: {} refuted", i.id);
+        }
+    }
+}
+
+/// Without CSs13 (no rotation of an empty table) a hazard is reachable; its shortest
+/// trace replays as that hazard in the emulator, and the console scenario generated from
+/// it reaches the hazard with the weakened filter enforcing.
+#[test]
+fn counterexample_of_a_weakened_set_is_real() {
+    let (_guard, b, l) = patched("no-css13", &[("constraints.txt", "CSs13 = C4 . /C6 . A4", "# CSs13 dropped")]);
+    let r = verify(&b, &l, &Options { max_boxes: 1, necessity_boxes: None }).expect("verify");
+    let (kind, trace) = r.full.hazard.as_ref().expect("without CSs13 a hazard is reachable");
+    let rp = replay(&l, &b, trace, r.geometry.step_us, 10).expect("replay");
+    assert!(
+        rp.hazards.iter().any(|h| hazard_name(h.kind) == kind.as_str()),
+        "the emulator does not reproduce {kind}: {:?}",
+        rp.hazards
+    );
+    let out = _guard.dir.join("cex");
+    let path = scenario::write(&out, trace, &b.plant, &_guard.dir.to_string_lossy(), r.geometry.step_us)
+        .expect("write scenario");
+    let sc = crate::sim::Scenario::load(&path).expect("scenario loads");
+    let mut sim = crate::sim::Simulation::from_scenario(&sc, &path, crate::sim::Options::default())
+        .expect("scenario builds");
+    sim.run_until(crate::time::Millis(sc.duration_ms));
+    let report = sim.report(1);
+    assert!(
+        report.hazards.iter().any(|h| hazard_name(h.kind) == kind.as_str()),
+        "the counterexample scenario does not reach {kind}: hazards {:?}, trips {:?}",
+        report.hazards,
+        report.trips.iter().map(|t| (t.time_ms, t.constraints.clone())).collect::<Vec<_>>()
+    );
+}
+
+/// The program generated from a trace commands exactly the trace's output vectors.
+#[test]
+fn counterexample_program_follows_the_trace() {
+    let (b, l) = station();
+    let m = Model::new(&b, &l, 1).expect("model");
+    let e = explore(&m, &Filter::new(&b.constraints, b.plant.outputs.len()));
+    let trace = e.delivered[0].as_ref().expect("a delivery witness");
+    let prog = scenario::program(trace, &b.plant, m.geo.step_us);
+    let compiled = crate::control::CompiledProgram::new(&prog, &b.plant, &crate::control::Origin::default())
+        .expect("generated program compiles");
+    assert!(compiled.step_count() >= 2);
+    // Durations add up to the trace length.
+    let total: u64 = prog.timers.iter().map(|t| t.2).sum();
+    let expected = (trace.steps.len() as i64 * m.geo.step_us + 500) / 1000;
+    assert_eq!(total as i64, expected);
+}
+
+/// Runs SPIN on a generated model (`pan -cN`: stop after N errors, 0 = never); panics
+/// loudly when spin or gcc is missing.
+fn run_spin(text: &str, tag: &str, errors: u32, ignore_end_states: bool) -> promela::SpinVerdict {
+    use std::process::Command;
+    let dir = std::env::temp_dir().join(format!("vigie-spin-{}-{tag}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(dir.join("model.pml"), text).expect("write model");
+    let ok = |c: &mut Command, what: &str| {
+        let o = c.current_dir(&dir).output().unwrap_or_else(|e| {
+            panic!("SPIN CROSS-CHECK CANNOT RUN: `{what}` failed to start ({e}); install the Debian package `spin` (scripts/test.sh does)")
+        });
+        assert!(o.status.success() || what == "pan", "{what} failed: {}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    ok(Command::new("spin").args(["-a", "model.pml"]), "spin");
+    ok(Command::new("gcc").args(["-O2", "-w", "-DSAFETY", "-DMEMLIM=8000", "-DCOLLAPSE", "-o", "pan", "pan.c"]), "gcc");
+    let c = format!("-c{errors}");
+    let mut args = vec!["-m20000000", "-w24", c.as_str(), "-n"];
+    if ignore_end_states {
+        args.push("-E");
+    }
+    let out = ok(Command::new("./pan").args(&args), "pan");
+    let _ = std::fs::remove_dir_all(&dir);
+    promela::parse_pan(&out)
+}
+
+fn rust_verdict(e: &Exploration) -> (Vec<String>, [bool; 2], bool) {
+    let mut h: Vec<String> = e.hazard_kinds.iter().map(|(k, _)| k.clone()).collect();
+    h.sort();
+    (h, [e.delivered[0].is_some(), e.delivered[1].is_some()], e.no_fallback.is_some())
+}
+
+/// SPIN and the explorer agree on the station (one box): hazard kinds, deliveries at
+/// both exits, fallback everywhere; the full state space.
+#[test]
+fn spin_agrees_on_the_station() {
+    let (b, l) = station();
+    let m = Model::new(&b, &l, 1).expect("model");
+    let e = explore(&m, &Filter::new(&b.constraints, b.plant.outputs.len()));
+    let s = run_spin(&promela::generate(&m, &b.constraints, &b.symbols), "full", 0, false);
+    assert!(s.complete, "SPIN search incomplete");
+    assert_eq!((s.hazards.clone(), s.delivered, s.no_fallback), rust_verdict(&e), "SPIN vs explorer");
+    assert!(s.hazards.is_empty() && s.delivered == [true, true] && !s.no_fallback);
+}
+
+/// Drop each constraint in turn: SPIN and the explorer give the same safety verdict
+/// (a hazard reachable or not; SPIN stops at its first hazard).
+#[test]
+fn spin_agrees_on_weakened_sets() {
+    let (b, l) = station();
+    let m = Model::new(&b, &l, 1).expect("model");
+    let n_out = b.plant.outputs.len();
+    let mut unsafe_sets = 0;
+    for (i, c) in b.constraints.constraints.iter().enumerate() {
+        let set = without(&b.constraints, i);
+        let e = explore(&m, &Filter::new(&set, n_out));
+        let s = run_spin(&promela::generate_safety(&m, &set, &b.symbols), &c.id, 1, true);
+        let spin_unsafe = !s.hazards.is_empty();
+        // pan -c1 stops at its first hazard: only a safe verdict must be complete.
+        assert!(spin_unsafe || s.complete, "without {}: SPIN search incomplete", c.id);
+        assert_eq!(spin_unsafe, e.hazard.is_some(), "without {}: SPIN {:?} vs explorer {:?}", c.id, s.hazards, e.hazard_kinds);
+        if let Some(h) = s.hazards.first() {
+            assert!(e.hazard_kinds.iter().any(|(k, _)| k == h), "without {}: SPIN found {h}, the explorer {:?}", c.id, e.hazard_kinds);
+        }
+        unsafe_sets += usize::from(spin_unsafe);
+    }
+    assert!(unsafe_sets > 0, "no weakened set is unsafe: the check proves nothing");
+}
+
+#[test]
+fn promela_dump() {
+    let (b, l) = station();
+    let m = Model::new(&b, &l, 1).expect("model");
+    let text = promela::generate(&m, &b.constraints, &b.symbols);
+    std::fs::write(std::env::temp_dir().join("vigie_model.pml"), text).expect("write");
+    let i = b.constraints.constraints.iter().position(|c| c.id == "CSs13").expect("CSs13");
+    let w = without(&b.constraints, i);
+    std::fs::write(std::env::temp_dir().join("vigie_model_w13.pml"), promela::generate(&m, &w, &b.symbols)).expect("write");
+}
