@@ -3,10 +3,10 @@
 //! (`RUST_LOG`-style level with `--log`); events go to stdout as JSON lines. SIGINT and
 //! SIGTERM stop it cleanly, with the outputs driven to the safe state first.
 
-use crate::live::runtime::{self, CycleStats};
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use vigie_app::live::runtime::{self, CycleStats};
 
 /// Arguments of `vigie gateway`.
 #[derive(clap::Args, Debug)]
@@ -64,7 +64,13 @@ pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
         let _ = out.flush();
     };
     let mut stats = CycleStats::default();
-    rt.block_on(runtime::run(setup, stop_signal(), &mut emit, &mut stats))?;
+    rt.block_on(runtime::run(
+        setup,
+        stop_signal(),
+        &mut emit,
+        &mut stats,
+        None,
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -82,7 +88,7 @@ pub(crate) struct BenchArgs {
 /// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
 pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result<ExitCode> {
     init_tracing("error");
-    let f = crate::live::bench::run(plant, args.edges)?;
+    let f = vigie_app::live::bench::run(plant, args.edges)?;
     if args.json {
         println!("{}", serde_json::to_string(&f)?);
     } else {

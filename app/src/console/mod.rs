@@ -5,6 +5,7 @@
 //! cycles, capped per frame; `App::ui` only renders (see `views.rs`).
 
 pub mod journal;
+pub mod link;
 pub mod report;
 pub mod synoptic;
 mod training;
@@ -133,6 +134,8 @@ pub struct ConsoleOptions {
     pub start: bool,
     /// Load this variant of the control-error library (training).
     pub variant: Option<String>,
+    /// Follow the live link of this configuration instead of the emulator.
+    pub link: Option<PathBuf>,
 }
 
 impl ConsoleOptions {
@@ -150,6 +153,7 @@ impl ConsoleOptions {
             data_dir: Some(journal::data_dir_from_env()),
             start: false,
             variant: None,
+            link: None,
         }
     }
 }
@@ -345,6 +349,8 @@ pub struct Console {
     visuals_set: bool,
     /// Commands emitted by the last frame's views, applied at the next `logic`.
     pending: Vec<Command>,
+    /// The live link followed instead of the emulator (`link.rs`).
+    pub link: Option<link::LinkSession>,
 }
 
 fn load_faults(plant_dir: &Path) -> Vec<(String, FaultSpec)> {
@@ -362,6 +368,8 @@ impl Console {
     /// Opens the console; fails with the rendered problems when the plant or scenario
     /// cannot be loaded.
     pub fn new(opts: &ConsoleOptions) -> Result<Self, String> {
+        let linked = link::options(opts)?;
+        let opts = linked.as_ref().unwrap_or(opts);
         let source = match &opts.scenario {
             Some(path) => Source {
                 scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
@@ -450,7 +458,9 @@ impl Console {
             alarm_filter_shelved: false,
             visuals_set: false,
             pending: Vec::new(),
+            link: None,
         };
+        c.attach_link(opts)?;
         c.drain_journal();
         c.follow_trip();
         if c.mode == Mode::Maintenance {
@@ -512,6 +522,10 @@ impl Console {
     /// Advances by `dt_s` seconds of real time (× speed), in whole cycles, at most
     /// 5000 cycles per call.
     pub fn advance(&mut self, dt_s: f64) {
+        if self.link.is_some() {
+            self.pump_link();
+            return;
+        }
         if !self.running {
             self.budget_ms = 0.0;
             return;
@@ -542,6 +556,9 @@ impl Console {
 
     /// Applies one command: the only place where the UI changes the simulation.
     pub fn apply(&mut self, cmd: Command) {
+        if self.link_command(&cmd) {
+            return;
+        }
         let now = self.now().0;
         match cmd {
             Command::Run => self.running = true,

@@ -21,19 +21,19 @@ use vigie_core::live::iomap::IoMap;
 
 /// Figures of one run.
 #[derive(Debug, serde::Serialize)]
-pub(crate) struct Figures {
+pub struct Figures {
     /// Cycles run.
-    pub(crate) cycles: usize,
+    pub cycles: usize,
     /// Cycles per second over the run.
-    pub(crate) rate_hz: f64,
+    pub rate_hz: f64,
     /// Period jitter |period − cycle| percentiles in ms: p50, p99, max.
-    pub(crate) jitter_ms: [f64; 3],
+    pub jitter_ms: [f64; 3],
     /// Work per cycle (poll, engine, write) percentiles in ms: p50, p99, max.
-    pub(crate) busy_ms: [f64; 3],
+    pub busy_ms: [f64; 3],
     /// Sensor change → filtered output at the plant, percentiles in ms: p50, p99, max.
-    pub(crate) latency_ms: [f64; 3],
+    pub latency_ms: [f64; 3],
     /// Edges timed.
-    pub(crate) edges: usize,
+    pub edges: usize,
 }
 
 fn percentiles(mut v: Vec<f64>) -> [f64; 3] {
@@ -57,7 +57,7 @@ fn repo_root() -> PathBuf {
 }
 
 /// Runs the benchmark: `edges` timed sensor edges, then the cycle figures.
-pub(crate) fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<Figures> {
+pub fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<Figures> {
     let root = repo_root();
     let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| root.join(".venv"), PathBuf::from);
     let python = venv.join("bin/python");
@@ -124,6 +124,7 @@ pub(crate) fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<F
                 },
                 &mut emit,
                 &mut stats,
+                None,
             ))?;
             anyhow::Ok(stats)
         })?;
