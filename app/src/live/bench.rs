@@ -57,7 +57,11 @@ fn repo_root() -> PathBuf {
 }
 
 /// Runs the benchmark: `edges` timed sensor edges, then the cycle figures.
-pub fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<Figures> {
+pub fn run(
+    plant_dir: &std::path::Path,
+    edges: usize,
+    cycle_priority: Option<u8>,
+) -> anyhow::Result<Figures> {
     let root = repo_root();
     let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| root.join(".venv"), PathBuf::from);
     let python = venv.join("bin/python");
@@ -85,8 +89,10 @@ pub fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<Figures>
 
     let text = format!(
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
-         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"))",
-        plant_dir.display().to_string()
+         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
+         cycle_priority: {})",
+        plant_dir.display().to_string(),
+        cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})"))
     );
     let config = GatewayConfig::from_ron(&text, std::path::Path::new("bench.ron"))
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;

@@ -76,10 +76,36 @@ fn tick_at(epoch: Instant, period: Duration, k: u64) -> Instant {
     epoch + Duration::from_nanos(nanos)
 }
 
-/// Runs `c` on the cycle thread at `epoch + k·period` for k = 1, 2, … until `stop`.
+/// Gives the calling thread the real-time priority `priority` (SCHED_FIFO); a refusal
+/// (no right to raise priorities) is logged, and the thread keeps its priority.
+fn raise_priority(priority: u8) {
+    use thread_priority::{
+        RealtimeThreadSchedulePolicy, ThreadPriority, ThreadPriorityValue, ThreadSchedulePolicy,
+    };
+    let result = ThreadPriorityValue::try_from(priority)
+        .map_err(|e| e.to_string())
+        .and_then(|value| {
+            thread_priority::set_thread_priority_and_policy(
+                thread_priority::thread_native_id(),
+                ThreadPriority::Crossplatform(value),
+                ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo),
+            )
+            .map_err(|e| format!("{e:?}"))
+        });
+    match result {
+        Ok(()) => tracing::info!("cycle thread at real-time priority {priority} (SCHED_FIFO)"),
+        Err(e) => tracing::warn!(
+            "cycle thread left at normal priority: real-time priority {priority} refused ({e})"
+        ),
+    }
+}
+
+/// Runs `c` on the cycle thread at `epoch + k·period` for k = 1, 2, … until `stop`,
+/// at the real-time `priority` when one is given.
 fn spawn_cycles<C: Cycle>(
     epoch: Instant,
     period: Duration,
+    priority: Option<u8>,
     stop: Arc<AtomicBool>,
     mut c: C,
 ) -> anyhow::Result<oneshot::Receiver<(C::Done, CycleStats)>> {
@@ -87,6 +113,9 @@ fn spawn_cycles<C: Cycle>(
     std::thread::Builder::new()
         .name("vigie-cycle".into())
         .spawn(move || {
+            if let Some(p) = priority {
+                raise_priority(p);
+            }
             let mut stats = CycleStats::default();
             let mut k = 1;
             loop {
@@ -404,6 +433,7 @@ pub(crate) async fn monitor(
         .context("monitor mode needs a client section")?;
     let clock = Clock(Instant::now());
     let period = Duration::from_millis(config.cycle_ms.max(1));
+    let priority = config.cycle_priority;
     let peer = client.address;
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
     let reader = PeerClient::Monitor(Reader::new(client, map.clone(), true));
@@ -437,7 +467,7 @@ pub(crate) async fn monitor(
         tap: tap.clone(),
         bundle,
     };
-    let done = spawn_cycles(clock.0, period, Arc::clone(&stop), cycle)?;
+    let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
     let result = supervise(shutdown, emit, &mut events, &stop, done).await;
     let _ = stop_io.send(());
     let client = io.await.context("the I/O task failed")?;
@@ -664,6 +694,7 @@ pub(crate) async fn gateway(
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
     let clock = Clock(Instant::now());
     let period = Duration::from_millis(config.cycle_ms.max(1));
+    let priority = config.cycle_priority;
     let shared: SharedImage = Arc::new(Mutex::new(Shared {
         inputs: Bits::zeros(n_in),
         outputs: Bits::zeros(n_out),
@@ -723,7 +754,7 @@ pub(crate) async fn gateway(
         tap: tap.clone(),
         bundle,
     };
-    let done = spawn_cycles(clock.0, period, Arc::clone(&stop), cycle)?;
+    let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
     let result = supervise(shutdown, emit, &mut events, &stop, done).await;
     let _ = stop_io.send(());
     let mut client = io.await.context("the I/O task failed")?;
