@@ -1,12 +1,16 @@
 //! The console on a live link (`vigie --link CONFIG`), driven through accessibility
-//! queries: a monitor run against the pymodbus plant peer (`tests/peers/plant.py`) on
-//! an OS-chosen loopback port; the link state, a violation with its explanation read
-//! from the plant, then the peer killed (reconnecting, alarm, stale inputs) and back.
+//! queries, against the pymodbus peers (`tests/peers/`) on OS-chosen loopback ports:
+//! - a monitor run: the link state, a violation with its explanation read from the
+//!   plant, then the peer killed (reconnecting, alarm, stale inputs) and back;
+//! - a gateway run: the PLC commands a forbidden combination, the plant receives the
+//!   filter's output, the console shows the trip; the operator's reset is refused while
+//!   the constraint holds and goes through the gateway once it does not.
+//!
 //! No fixed sleeps: every wait polls the console with a deadline.
 
 #![allow(clippy::unwrap_used)] // a failure is a test failure
 
-use crate::live::{Plant, TempDir, repo};
+use crate::live::{Plant, Plc, TempDir, repo, wait_until};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use std::time::{Duration, Instant};
@@ -128,4 +132,83 @@ fn console_follows_a_monitor_link_to_pymodbus() {
     let link = h.state().link.as_ref().unwrap();
     assert!(link.state.client.connections >= 2, "{:#?}", link.state);
     plant.set_inputs(&[(7, false)]);
+}
+
+fn gateway_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
+    let station = repo()
+        .join("layouts/sorting-station")
+        .canonicalize()
+        .unwrap();
+    let text = format!(
+        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 10, \
+         client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
+         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"))",
+        station.display().to_string()
+    );
+    let path = dir.0.join("gateway.ron");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Runs frames until `cond` holds on the console (at most `WAIT`).
+#[track_caller]
+fn wait_state(h: &mut Harness<'static, Console>, what: &str, cond: impl Fn(&Console) -> bool) {
+    let deadline = Instant::now() + WAIT;
+    while !cond(h.state()) {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        h.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn console_follows_a_gateway_link_and_resets_through_it() {
+    let mut plant = Plant::start(None);
+    let port = plant.port;
+    let dir = TempDir::new("console-gateway");
+    let mut opts = ConsoleOptions::new(&repo().join("layouts/sorting-station"));
+    opts.link = Some(gateway_config(&dir, port));
+    opts.data_dir = None;
+    let mut h = harness(opts);
+    h.get_by_label("Mode: gateway (filter enforced between PLC and plant)");
+    wait_for_label(&mut h, &format!("Link: connected to 127.0.0.1:{port}"));
+    wait_for_label(&mut h, "PLC: silent");
+    let server = h.state().link.as_ref().unwrap().state.listening.unwrap();
+    wait_for_label(&mut h, &format!("PLC server: {server}"));
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    plc.command("0000000");
+    wait_for_label(&mut h, "PLC: heard");
+
+    // A box at C7 on the right exit while the PLC leaves the turntable off
+    // (CSs10 = C7 · /A4): the gateway trips and holds A4 at the plant.
+    plant.set_inputs(&[(7, true)]);
+    wait_until("the plant to receive A4 from the filter", || {
+        plant.coils() == "0000100"
+    });
+    wait_for_label(&mut h, "TRIPPED");
+    wait_for_label(&mut h, "Trip at");
+    h.get_by_label("CSs10 = C7 · A\u{305}4\u{305}");
+    let trip = h.state().latest_trip().unwrap();
+    assert!(h.state().sim.engine.trips[trip].enforced);
+
+    // Reset while the box is still at C7: the gateway refuses it, the journal says why.
+    h.get_by_label("Reset").click();
+    wait_for_label(&mut h, "reset refused: ");
+    assert!(h.state().sim.engine.is_tripped());
+    assert_eq!(plant.coils(), "0000100");
+
+    // The box has left: the reset goes through the gateway, the mirror follows, the
+    // plant gets the PLC's outputs again.
+    plant.set_inputs(&[(7, false)]);
+    wait_until("the PLC to see C7 off", || {
+        plc.sensors() == "di 00000000000"
+    });
+    h.get_by_label("Reset").click();
+    wait_state(&mut h, "the console's engine to reset", |c| {
+        !c.sim.engine.is_tripped()
+    });
+    wait_until("the plant to follow the PLC again", || {
+        plant.coils() == "0000000"
+    });
+    assert!(h.query_all_by_label_contains("TRIPPED").next().is_none());
 }

@@ -161,10 +161,10 @@ impl Plant {
 }
 
 /// The pymodbus PLC.
-struct Plc(Peer);
+pub(crate) struct Plc(Peer);
 
 impl Plc {
-    fn start(server: SocketAddr, source: Option<&str>) -> Self {
+    pub(crate) fn start(server: SocketAddr, source: Option<&str>) -> Self {
         let mut cmd = Command::new(python());
         cmd.arg(repo().join("tests/peers/plc.py")).args([
             "--port",
@@ -180,11 +180,11 @@ impl Plc {
         Self(peer)
     }
 
-    fn command(&mut self, coils: &str) {
+    pub(crate) fn command(&mut self, coils: &str) {
         assert_eq!(self.0.ask(&format!("coils {coils}")), "ok");
     }
 
-    fn sensors(&mut self) -> String {
+    pub(crate) fn sensors(&mut self) -> String {
         self.0.ask("di")
     }
 

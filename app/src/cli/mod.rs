@@ -77,6 +77,7 @@ fn open_console(
     opts.link.clone_from(&args.link);
     if opts.link.is_some() {
         gateway::init_tracing("warn");
+        vigie_app::console::link::watch_signals(true);
     }
     vigie_app::run_console(&opts)?;
     Ok(ExitCode::SUCCESS)

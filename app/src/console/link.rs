@@ -58,6 +58,7 @@ impl LinkSession {
         let tap = Tap::new(mode);
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
         let run_tap = tap.clone();
+        let watch_signals = WATCH_SIGNALS.load(std::sync::atomic::Ordering::Relaxed);
         let thread = std::thread::Builder::new()
             .name("vigie-link".into())
             .spawn(move || {
@@ -69,10 +70,16 @@ impl LinkSession {
                         let events = run_tap.clone();
                         let mut emit = move |e: serde_json::Value| journal_event(&events, &e);
                         let mut stats = CycleStats::default();
+                        let signal_tap = run_tap.clone();
                         rt.block_on(runtime::run(
                             setup,
-                            async {
-                                let _ = stop_rx.await;
+                            async move {
+                                tokio::select! {
+                                    _ = stop_rx => {}
+                                    () = stop_signal(), if watch_signals => {
+                                        signal_tap.update(|s| s.signalled = true);
+                                    }
+                                }
                             },
                             &mut emit,
                             &mut stats,
@@ -122,6 +129,51 @@ impl LinkSession {
 impl Drop for LinkSession {
     fn drop(&mut self) {
         self.stop();
+    }
+}
+
+/// Whether a link run also stops on SIGINT and SIGTERM (see [`watch_signals`]).
+static WATCH_SIGNALS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Makes the links started from now on stop on SIGINT or SIGTERM (safe outputs first in
+/// gateway mode), after which the console closes. The `vigie` binary turns it on;
+/// tests and embedders leave the process's signals alone.
+pub fn watch_signals(on: bool) {
+    WATCH_SIGNALS.store(on, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Resolves on SIGINT or SIGTERM: the run stops (gateway: safe outputs first), then
+/// the console closes (`close_on_signal`).
+async fn stop_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        match signal(SignalKind::terminate()) {
+            Ok(mut term) => {
+                tokio::select! {
+                    _ = tokio::signal::ctrl_c() => {}
+                    _ = term.recv() => {}
+                }
+            }
+            Err(e) => {
+                tracing::warn!("cannot watch SIGTERM: {e}");
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
+}
+
+/// Closes the window once the run stopped on a signal (called from `logic`).
+pub(crate) fn close_on_signal(c: &Console, ctx: &egui::Context) {
+    if c.link
+        .as_ref()
+        .is_some_and(|l| l.state.signalled && !l.state.running)
+    {
+        ctx.send_viewport_cmd(egui::ViewportCommand::Close);
     }
 }
 
@@ -220,7 +272,12 @@ impl Console {
         for (time, kind, text) in &taken.events {
             self.journal.push(time.0, kind, text);
         }
-        for a in taken.alarms {
+        // Task alarms are the mirror's own (its task monitors follow the same cycles).
+        let link_alarms = taken.alarms.into_iter().filter(|a| {
+            let (LinkAlarm::Raised { key, .. } | LinkAlarm::Cleared { key, .. }) = a;
+            !key.starts_with("task:")
+        });
+        for a in link_alarms {
             match a {
                 LinkAlarm::Raised { key, message, time } => {
                     self.journal.push(time.0, "link_alarm", &message);

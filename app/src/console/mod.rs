@@ -841,6 +841,7 @@ impl Console {
             self.advance(dt);
         }
         self.report_step(ctx);
+        link::close_on_signal(self, ctx);
         if self.running {
             ctx.request_repaint();
         }

@@ -316,6 +316,50 @@ fn event_sender(tx: mpsc::Sender<serde_json::Value>) -> Box<dyn FnMut(serde_json
     })
 }
 
+/// The plant's task monitors (seed 000), stepped after the filter every cycle from the
+/// second one on, their outputs published for the constraints of the next cycle, as
+/// the console's `Simulation` does.
+struct LiveTasks {
+    monitor: vigie_core::tasks::Monitor,
+    events: vigie_core::tasks::FrameTasks,
+    seen: usize,
+}
+
+impl LiveTasks {
+    fn new(bundle: &PlantBundle) -> Option<Self> {
+        let set = bundle.tasks.as_ref()?;
+        match vigie_core::tasks::FrameTasks::compile(set, &bundle.symbols) {
+            Ok(events) => Some(Self {
+                monitor: vigie_core::tasks::Monitor::new(set, Millis::ZERO),
+                events,
+                seen: 0,
+            }),
+            Err(p) => {
+                tracing::warn!("task monitors off: {}", vigie_core::diag::render(&p));
+                None
+            }
+        }
+    }
+
+    fn step(&mut self, engine: &mut Engine, now: Millis, board: &mut AlarmBoard, emit: Emit<'_>) {
+        if engine.cycles() <= 1 {
+            return;
+        }
+        self.events.step(&mut self.monitor, now, engine.frame());
+        self.events.publish(&self.monitor, engine.frame_mut());
+        let new = self.monitor.alarms.get(self.seen..).unwrap_or_default();
+        for a in new {
+            if a.severity == vigie_core::tasks::Severity::Warning {
+                emit(json!({"event": "task_warning", "text": a.text, "time_ms": a.time.0}));
+            } else {
+                let key = format!("task:{}:{:?}", a.subject, a.code);
+                board.raise(emit, a.time, &key, AlarmKind::Task, a.text.clone());
+            }
+        }
+        self.seen = self.monitor.alarms.len();
+    }
+}
+
 /// The monitor's cycle.
 struct MonitorCycle {
     clock: Clock,
@@ -334,6 +378,7 @@ struct MonitorCycle {
     board: AlarmBoard,
     last_potential: Vec<String>,
     last_spec: Option<String>,
+    tasks: Option<LiveTasks>,
     emit: Box<dyn FnMut(serde_json::Value) + Send>,
     tap: Option<Tap>,
 }
@@ -374,6 +419,9 @@ impl Cycle for MonitorCycle {
             Some(&explainer),
             &mut self.last_spec,
         );
+        if let Some(t) = &mut self.tasks {
+            t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
+        }
         let stale = self.inputs.stale(now, &self.bounds);
         let verdict = self.guard.check(self.engine.frame(), &stale);
         if verdict.potentially_violated != self.last_potential {
@@ -463,6 +511,7 @@ pub(crate) async fn monitor(
         },
         last_potential: Vec::new(),
         last_spec: None,
+        tasks: LiveTasks::new(&bundle),
         emit: event_sender(tx),
         tap: tap.clone(),
         bundle,
@@ -500,6 +549,7 @@ struct GatewayCycle {
     board: AlarmBoard,
     safe_reason: Option<String>,
     last_spec: Option<String>,
+    tasks: Option<LiveTasks>,
     auto_reset: bool,
     emit: Box<dyn FnMut(serde_json::Value) + Send>,
     tap: Option<Tap>,
@@ -515,7 +565,7 @@ impl GatewayCycle {
     }
 
     /// Resets a latched trip when asked (automatic reset or the console's operator).
-    fn reset_if_asked(&mut self) -> bool {
+    fn reset_if_asked(&mut self, now: Millis) -> bool {
         let asked = self.tap.as_ref().is_some_and(Tap::take_reset);
         if !(self.auto_reset || asked) || !self.engine.is_tripped() {
             return false;
@@ -525,7 +575,9 @@ impl GatewayCycle {
             Err(e) => {
                 if asked {
                     tracing::warn!("reset refused: {e}");
-                    (self.emit)(json!({"event": "reset_refused", "reason": e.to_string()}));
+                    (self.emit)(
+                        json!({"event": "reset_refused", "reason": e.to_string(), "time_ms": now.0}),
+                    );
                 }
                 false
             }
@@ -571,7 +623,7 @@ impl Cycle for GatewayCycle {
         let t = self.plc_dog.check(now);
         self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
         // 3. The engine.
-        let reset = self.reset_if_asked();
+        let reset = self.reset_if_asked(now);
         self.engine
             .cycle(now, self.inputs.values(), &mut self.control);
         emit_engine_events(&mut self.engine, &mut *self.emit, None, &mut self.last_spec);
@@ -636,6 +688,9 @@ impl Cycle for GatewayCycle {
             .frame_mut()
             .now_mut(Space::Output)
             .copy_from(&applied);
+        if let Some(t) = &mut self.tasks {
+            t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
+        }
         // 5. Outputs to the plant (written by the I/O task at once), sensors to the PLC.
         self.out.send_replace(Some(applied.clone()));
         lock(&self.shared).inputs.copy_from(self.inputs.values());
@@ -749,6 +804,7 @@ pub(crate) async fn gateway(
         },
         safe_reason: None,
         last_spec: None,
+        tasks: LiveTasks::new(&bundle),
         auto_reset: config.auto_reset,
         emit: event_sender(tx),
         tap: tap.clone(),

@@ -38,6 +38,8 @@ pub struct LinkState {
     pub running: bool,
     /// Why the run stopped, when it failed.
     pub error: Option<String>,
+    /// The run stopped on SIGINT or SIGTERM (the console then closes).
+    pub signalled: bool,
 }
 
 impl LinkState {
@@ -56,6 +58,7 @@ impl LinkState {
             server_exceptions: 0,
             running: true,
             error: None,
+            signalled: false,
         }
     }
 }
