@@ -179,17 +179,32 @@ fn console_follows_a_gateway_link_and_resets_through_it() {
     plc.command("0000000");
     wait_for_label(&mut h, "PLC: heard");
 
-    // A box at C7 on the right exit while the PLC leaves the turntable off
-    // (CSs10 = C7 · /A4): the gateway trips and holds A4 at the plant.
+    // The sequence of the gateway test (live.rs): a loaded table rotates to the
+    // unloading position, the box leaves it to the right exit (C6 falls, C7 rises, one
+    // edge per cycle), and the PLC releases A4 too early (CSs10 = C7 · /A4): the
+    // gateway trips and holds A4 at the plant.
+    plant.set_inputs(&[(4, true), (6, true)]);
+    wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
+    plc.command("0000100");
+    wait_until("the plant to rotate", || plant.coils() == "0000100");
+    plant.set_inputs(&[(4, false), (5, true)]);
+    wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
+    plant.set_inputs(&[(6, false)]);
+    wait_until("the PLC to see C5", || plc.sensors() == "di 00000100000");
     plant.set_inputs(&[(7, true)]);
-    wait_until("the plant to receive A4 from the filter", || {
-        plant.coils() == "0000100"
-    });
+    wait_until("the PLC to see C5 C7", || plc.sensors() == "di 00000101000");
+    plc.command("0000000");
     wait_for_label(&mut h, "TRIPPED");
     wait_for_label(&mut h, "Trip at");
     h.get_by_label("CSs10 = C7 · A\u{305}4\u{305}");
     let trip = h.state().latest_trip().unwrap();
-    assert!(h.state().sim.engine.trips[trip].enforced);
+    let record = &h.state().sim.engine.trips[trip];
+    assert!(record.enforced);
+    assert!(
+        record.constraints.iter().any(|c| c.id == "CSs10"),
+        "{record:?}"
+    );
+    assert_eq!(plant.coils(), "0000100", "the plant holds A4");
 
     // Reset while the box is still at C7: the gateway refuses it, the journal says why.
     h.get_by_label("Reset").click();
@@ -200,8 +215,8 @@ fn console_follows_a_gateway_link_and_resets_through_it() {
     // The box has left: the reset goes through the gateway, the mirror follows, the
     // plant gets the PLC's outputs again.
     plant.set_inputs(&[(7, false)]);
-    wait_until("the PLC to see C7 off", || {
-        plc.sensors() == "di 00000000000"
+    wait_until("the PLC to see C5 alone", || {
+        plc.sensors() == "di 00000100000"
     });
     h.get_by_label("Reset").click();
     wait_state(&mut h, "the console's engine to reset", |c| {
