@@ -235,6 +235,7 @@ pub(crate) fn options(opts: &ConsoleOptions) -> Result<Option<ConsoleOptions>, S
         start: false,
         run_until_ms: None,
         paused: false,
+        mode: super::Mode::Production,
         ..opts.clone()
     }))
 }
@@ -423,6 +424,65 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
     }
     ui.label(RichText::new(link.config.display().to_string()).color(c.palette.text_dim));
     ui.separator();
+}
+
+/// The toolbar in link mode (no simulation controls, no plant buttons: the PLC drives
+/// the plant): true when shown.
+pub(crate) fn toolbar_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) -> bool {
+    let Some(link) = &c.link else {
+        return false;
+    };
+    ui.label(RichText::new("VIGIE").strong().size(18.0));
+    ui.separator();
+    let what = match link.mode {
+        Mode::Gateway => "LIVE GATEWAY",
+        _ => "LIVE MONITOR",
+    };
+    ui.label(
+        RichText::new(what)
+            .strong()
+            .color(Color32::WHITE)
+            .background_color(state_color(c, &link.state)),
+    );
+    ui.separator();
+    ui.label(format!("t = {}", super::views::fmt_ms(c.sim.now().0)));
+    ui.separator();
+    let tripped = c.sim.engine.is_tripped();
+    if link.mode == Mode::Gateway {
+        let reset = egui::Button::new(RichText::new("Reset").color(if tripped {
+            Color32::WHITE
+        } else {
+            c.palette.text
+        }))
+        .fill(if tripped {
+            c.palette.trip
+        } else {
+            c.palette.equipment.gamma_multiply(0.5)
+        });
+        if ui
+            .add(reset)
+            .on_hover_text("Operator reset of the gateway's safety filter")
+            .clicked()
+        {
+            out.push(Command::Plant(OperatorAction::Reset));
+        }
+        ui.separator();
+    }
+    let unack = c.sim.alarms.unacknowledged();
+    let (txt, col) = if tripped {
+        ("TRIPPED".to_string(), c.palette.trip)
+    } else if unack > 0 {
+        (format!("{unack} unacknowledged"), c.palette.alarm)
+    } else {
+        ("Normal".to_string(), c.palette.equipment_edge)
+    };
+    ui.label(
+        RichText::new(txt)
+            .strong()
+            .color(Color32::WHITE)
+            .background_color(col),
+    );
+    true
 }
 
 /// The link's element of the status bar: true when shown (link mode).

@@ -68,6 +68,9 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
 
 fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.horizontal_wrapped(|ui| {
+        if super::link::toolbar_ui(c, ui, out) {
+            return;
+        }
         ui.label(RichText::new("VIGIE").strong().size(18.0));
         ui.separator();
         for (m, name) in [
