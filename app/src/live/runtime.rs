@@ -12,17 +12,18 @@
 //!    each stamped with its read time).
 //! 2. Take the PLC's commanded coils from the server image.
 //! 3. Run the engine (observers, filter in enforce mode) on the last values read.
-//! 4. Safe outputs: if the PLC has been silent for `link_timeout_cycles` cycles, the
-//!    outputs are the quantified filter's fallback (whatever it commands); otherwise, if
-//!    inputs are stale and some constraint is potentially violated by the applied
-//!    outputs for some value of them, the quantified fallback too (see
-//!    `vigie_core::live::stale`). An alarm stays raised while this lasts.
+//! 4. Safe outputs: if the PLC or the plant has been silent for `link_timeout_cycles`
+//!    cycles, the outputs are the quantified filter's fallback (whatever the PLC
+//!    commands); otherwise, if inputs are stale and some constraint is potentially
+//!    violated by the applied outputs for some value of them, the quantified fallback
+//!    too (see `vigie_core::live::stale`). An alarm stays raised while this lasts.
 //! 5. Hand the outputs to the I/O task, which writes them at once; publish the sensors
 //!    to the PLC.
 //!
-//! A plant silent for `link_timeout_cycles` cycles raises the `link:plant` alarm; its
-//! inputs are stale by then or soon after, so step 4 holds the safe outputs, written as
-//! soon as the link returns (the client reconnects with backoff). On shutdown the
+//! A plant silent for `link_timeout_cycles` cycles raises the `link:plant` alarm and
+//! step 4 holds the safe outputs, written at once if the plant is still connected (its
+//! values unreadable) or as soon as the link returns (the client reconnects with
+//! backoff). Task monitors follow the filter, as in the console. On shutdown the
 //! outputs go to the fallback of the current context (every output 0 when none exists).
 
 use super::backend::{EmulatorBackend, IoBackend};
