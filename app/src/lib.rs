@@ -3,10 +3,13 @@
 //! - [`console::Console`] is the `eframe::App`: `logic` advances the simulation by real
 //!   time × speed, `ui` renders the synoptic, the explanation levels, alarms, journal,
 //!   chronogram and the maintenance and training views;
+//! - [`live`] is the Modbus TCP link (monitor, gateway, emulator server), which the
+//!   console can follow (`vigie --link CONFIG`) and `vigie gateway` runs headless;
 //! - [`theme`] holds the palette (`assets/palette.ron`);
 //! - [`bench_frames`] measures the CPU time of a frame without a GPU.
 
 pub mod console;
+pub mod live;
 pub mod theme;
 
 pub use console::{Command, Console, ConsoleOptions, Mode};

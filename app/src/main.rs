@@ -1,7 +1,6 @@
 //! The `vigie` binary: the operator console and its headless subcommands.
 
 mod cli;
-mod live;
 
 use clap::Parser as _;
 

@@ -89,6 +89,11 @@ impl History {
         self.records.back()
     }
 
+    /// The most recent record, to amend (a live link records what it really applied).
+    pub fn last_mut(&mut self) -> Option<&mut CycleRecord> {
+        self.records.back_mut()
+    }
+
     /// The record `back` cycles before the most recent one (0 = most recent).
     pub fn back(&self, back: usize) -> Option<&CycleRecord> {
         self.records

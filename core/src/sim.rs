@@ -217,6 +217,8 @@ pub struct Simulation {
     name: String,
     /// Timed task monitors (seed 000), when the plant has `tasks.ron`.
     pub tasks: Option<TaskMonitors>,
+    /// Fed from a live link (see `observed.rs`): the time of the last observed cycle.
+    live_now: Option<Millis>,
 }
 
 /// The plant's task monitors, stepped after the filter every cycle.
@@ -363,12 +365,13 @@ impl Simulation {
             options,
             name: String::new(),
             tasks,
+            live_now: None,
         })
     }
 
-    /// Simulated time.
+    /// Simulated time (on a live link: the time of the last observed cycle).
     pub fn now(&self) -> Millis {
-        self.emulator.now()
+        self.live_now.unwrap_or_else(|| self.emulator.now())
     }
 
     /// The PLC cycle period.
@@ -479,6 +482,54 @@ impl Simulation {
             .engine
             .cycle(now, self.emulator.sensors(), &mut self.program)
             .clone();
+        let tripped = self.record_events(now);
+        if let (Some(index), true) = (tripped, self.options.explain) {
+            // The emulator is still at the start of the tripping cycle (the engine only
+            // read it); the program has just computed the erroneous command.
+            self.explain_trip(index, self.emulator.clone(), self.program_before.clone());
+        }
+        self.step_tasks(now);
+        self.emulator.step(self.cycle, &applied);
+        let hazards = self.emulator.hazards();
+        if hazards.len() > self.hazards_seen {
+            let new: Vec<Hazard> = hazards[self.hazards_seen..].to_vec();
+            self.hazards_seen = hazards.len();
+            for h in new {
+                let text = format!("{:?} of box {} at {}", h.kind, h.box_id, h.place);
+                self.alarms.raise(
+                    Millis(h.time_ms),
+                    &format!("hazard:{}:{:?}", h.box_id, h.kind),
+                    AlarmKind::Hazard,
+                    text.clone(),
+                );
+                self.log("hazard", text);
+            }
+        }
+        self.push_snapshot(now);
+    }
+
+    /// Records where the boxes and the table are, for the replay.
+    fn push_snapshot(&mut self, now: Millis) {
+        let mut snapshot = if self.snapshots.len() >= self.options.history_cycles.max(1) {
+            self.snapshots.pop_front()
+        } else {
+            None
+        }
+        .unwrap_or_else(|| PlantSnapshot {
+            time: now,
+            boxes: Vec::new(),
+            table_angle_mdeg: 0,
+        });
+        snapshot.time = now;
+        snapshot.boxes.clear();
+        snapshot.boxes.extend_from_slice(self.emulator.boxes());
+        snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
+        self.snapshots.push_back(snapshot);
+    }
+
+    /// Turns the engine's events into alarms and journal entries; returns the index of
+    /// the trip (or reported violation) of this cycle, if any.
+    fn record_events(&mut self, now: Millis) -> Option<usize> {
         let events = self.engine.drain_events();
         let mut tripped = None;
         for e in &events {
@@ -507,43 +558,7 @@ impl Simulation {
                 Event::Reset => {}
             }
         }
-        if let (Some(index), true) = (tripped, self.options.explain) {
-            // The emulator is still at the start of the tripping cycle (the engine only
-            // read it); the program has just computed the erroneous command.
-            self.explain_trip(index, self.emulator.clone(), self.program_before.clone());
-        }
-        self.step_tasks(now);
-        self.emulator.step(self.cycle, &applied);
-        let hazards = self.emulator.hazards();
-        if hazards.len() > self.hazards_seen {
-            let new: Vec<Hazard> = hazards[self.hazards_seen..].to_vec();
-            self.hazards_seen = hazards.len();
-            for h in new {
-                let text = format!("{:?} of box {} at {}", h.kind, h.box_id, h.place);
-                self.alarms.raise(
-                    Millis(h.time_ms),
-                    &format!("hazard:{}:{:?}", h.box_id, h.kind),
-                    AlarmKind::Hazard,
-                    text.clone(),
-                );
-                self.log("hazard", text);
-            }
-        }
-        let mut snapshot = if self.snapshots.len() >= self.options.history_cycles.max(1) {
-            self.snapshots.pop_front()
-        } else {
-            None
-        }
-        .unwrap_or_else(|| PlantSnapshot {
-            time: now,
-            boxes: Vec::new(),
-            table_angle_mdeg: 0,
-        });
-        snapshot.time = now;
-        snapshot.boxes.clear();
-        snapshot.boxes.extend_from_slice(self.emulator.boxes());
-        snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
-        self.snapshots.push_back(snapshot);
+        tripped
     }
 
     /// Task monitors: events of this cycle (on the frame after the filter), alarms, and
@@ -716,17 +731,30 @@ pub fn explain_live(
     horizon: Millis,
     cycle: Millis,
 ) -> Option<Explanation> {
+    explain_live_projected(engine, bundle, layout, index, horizon, cycle).map(|(ex, _)| ex)
+}
+
+/// [`explain_live`] with the projected plant (`None` without a layout or when the
+/// emulator cannot be initialised from the observation).
+pub fn explain_live_projected(
+    engine: &Engine,
+    bundle: &PlantBundle,
+    layout: Option<&Layout>,
+    index: usize,
+    horizon: Millis,
+    cycle: Millis,
+) -> Option<(Explanation, Option<ProjectedPlant>)> {
     let mut ex = explain::explain(engine, index)?;
     let (Some(layout), Some(trip)) = (layout, engine.trips.get(index)) else {
-        return Some(ex);
+        return Some((ex, None));
     };
     let Some(record) = engine.history.iter().find(|r| r.time.0 == trip.time_ms) else {
-        return Some(ex);
+        return Some((ex, None));
     };
     let Ok(mut emu) =
         explain::emulator_from_observation(layout, &bundle.plant, record, &engine.observers)
     else {
-        return Some(ex);
+        return Some((ex, None));
     };
     let start = emu.now();
     let known = emu.hazards().len();
@@ -754,7 +782,7 @@ pub fn explain_live(
             .collect(),
     };
     fill_projection(&mut ex, &projected, bundle);
-    Some(ex)
+    Some((ex, Some(projected)))
 }
 
 fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundle) {
@@ -820,6 +848,10 @@ fn hazard_verb(h: &Hazard) -> String {
         other => format!("would suffer: {other}"),
     }
 }
+
+mod observed;
+
+pub use observed::ObservedCycle;
 
 #[cfg(test)]
 mod tests;

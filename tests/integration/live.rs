@@ -16,11 +16,11 @@ use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
-fn repo() -> PathBuf {
+pub(crate) fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-fn python() -> PathBuf {
+pub(crate) fn python() -> PathBuf {
     let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| repo().join(".venv"), PathBuf::from);
     let py = venv.join("bin/python");
     assert!(
@@ -46,7 +46,7 @@ const WAIT: Duration = Duration::from_secs(10);
 
 /// Polls `cond` until it holds or `WAIT` passes.
 #[track_caller]
-fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
+pub(crate) fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
     let deadline = Instant::now() + WAIT;
     while Instant::now() < deadline {
         if cond() {
@@ -59,7 +59,7 @@ fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
 }
 
 /// A child process driven by lines on stdin, answering lines on stdout.
-struct Peer {
+pub(crate) struct Peer {
     name: String,
     child: Child,
     stdin: ChildStdin,
@@ -107,7 +107,7 @@ impl Peer {
         self.line()
     }
 
-    fn kill(&mut self) {
+    pub(crate) fn kill(&mut self) {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
@@ -120,13 +120,13 @@ impl Drop for Peer {
 }
 
 /// The pymodbus plant.
-struct Plant {
+pub(crate) struct Plant {
     peer: Peer,
-    port: u16,
+    pub(crate) port: u16,
 }
 
 impl Plant {
-    fn start(port: Option<u16>) -> Self {
+    pub(crate) fn start(port: Option<u16>) -> Self {
         let mut cmd = Command::new(python());
         cmd.arg(repo().join("tests/peers/plant.py"));
         if let Some(p) = port {
@@ -141,13 +141,18 @@ impl Plant {
         Self { peer, port }
     }
 
-    fn set_inputs(&mut self, bits: &[(u16, bool)]) {
+    pub(crate) fn set_inputs(&mut self, bits: &[(u16, bool)]) {
         for &(a, v) in bits {
             assert_eq!(self.peer.ask(&format!("di {a} {}", u8::from(v))), "ok");
         }
     }
 
-    fn coils(&mut self) -> String {
+    /// Kills the plant process (the link loses its peer).
+    pub(crate) fn stop(&mut self) {
+        self.peer.kill();
+    }
+
+    pub(crate) fn coils(&mut self) -> String {
         let line = self.peer.ask("coils");
         line.strip_prefix("coils ")
             .unwrap_or_else(|| panic!("plant: {line}"))[..7]
@@ -156,10 +161,10 @@ impl Plant {
 }
 
 /// The pymodbus PLC.
-struct Plc(Peer);
+pub(crate) struct Plc(Peer);
 
 impl Plc {
-    fn start(server: SocketAddr, source: Option<&str>) -> Self {
+    pub(crate) fn start(server: SocketAddr, source: Option<&str>) -> Self {
         let mut cmd = Command::new(python());
         cmd.arg(repo().join("tests/peers/plc.py")).args([
             "--port",
@@ -175,11 +180,11 @@ impl Plc {
         Self(peer)
     }
 
-    fn command(&mut self, coils: &str) {
+    pub(crate) fn command(&mut self, coils: &str) {
         assert_eq!(self.0.ask(&format!("coils {coils}")), "ok");
     }
 
-    fn sensors(&mut self) -> String {
+    pub(crate) fn sensors(&mut self) -> String {
         self.0.ask("di")
     }
 
@@ -201,10 +206,10 @@ struct Gateway {
     _dir: TempDir,
 }
 
-struct TempDir(PathBuf);
+pub(crate) struct TempDir(pub(crate) PathBuf);
 
 impl TempDir {
-    fn new(tag: &str) -> Self {
+    pub(crate) fn new(tag: &str) -> Self {
         static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
         let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let dir = std::env::temp_dir().join(format!("vigie-it-{tag}-{}-{n}", std::process::id()));
@@ -435,7 +440,7 @@ fn plant_killed_raises_the_alarm_and_reconnects() {
     wait_until("the plant to receive A0 A1", || plant.coils() == "1100000");
     gw.forget();
     plant.peer.kill();
-    gw.event("plant lost alarm", |e| {
+    let alarm = gw.event("plant lost alarm", |e| {
         e["event"] == "alarm" && e["key"] == "link:plant"
     });
     // Every input is stale now: the outputs the PLC commands are held only if no value
@@ -443,6 +448,11 @@ fn plant_killed_raises_the_alarm_and_reconnects() {
     // CSs2 = C3 . /C4 . A1 can): the safe fallback is applied.
     let safe = gw.event("safe outputs", |e| e["event"] == "safe_outputs");
     assert!(safe["reason"].as_str().unwrap().contains("stale"), "{safe}");
+    // Within the link timeout: at the latest in the cycle that declares the plant lost.
+    assert!(
+        safe["time_ms"].as_u64().unwrap() <= alarm["time_ms"].as_u64().unwrap(),
+        "safe outputs {safe} after the alarm {alarm}"
+    );
     // The plant returns on the same port (a fresh process, all coils 0).
     gw.forget();
     let mut plant = Plant::start(Some(port));

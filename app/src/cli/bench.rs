@@ -224,6 +224,10 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
             "  (projection running the whole 10 s, no hazard:  {worst:>10.2} ms)"
         )?;
     }
+    writeln!(
+        out,
+        "live link (10 ms cycle, jitter, sensor -> filtered output): `vigie gateway-bench` (needs the pymodbus venv)"
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -3,10 +3,10 @@
 //! (`RUST_LOG`-style level with `--log`); events go to stdout as JSON lines. SIGINT and
 //! SIGTERM stop it cleanly, with the outputs driven to the safe state first.
 
-use crate::live::runtime::{self, CycleStats};
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use vigie_app::live::runtime::{self, CycleStats};
 
 /// Arguments of `vigie gateway`.
 #[derive(clap::Args, Debug)]
@@ -64,7 +64,13 @@ pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
         let _ = out.flush();
     };
     let mut stats = CycleStats::default();
-    rt.block_on(runtime::run(setup, stop_signal(), &mut emit, &mut stats))?;
+    rt.block_on(runtime::run(
+        setup,
+        stop_signal(),
+        &mut emit,
+        &mut stats,
+        None,
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -77,18 +83,26 @@ pub(crate) struct BenchArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub(crate) json: bool,
+    /// Run the gateway's cycle thread at this real-time priority (SCHED_FIFO, 1-99;
+    /// needs root or CAP_SYS_NICE), as `cycle_priority` in a gateway configuration.
+    #[arg(long)]
+    pub(crate) rt_priority: Option<u8>,
 }
 
 /// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
 pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result<ExitCode> {
-    init_tracing("error");
-    let f = crate::live::bench::run(plant, args.edges)?;
+    init_tracing("warn");
+    let f = vigie_app::live::bench::run(plant, args.edges, args.rt_priority)?;
     if args.json {
         println!("{}", serde_json::to_string(&f)?);
     } else {
         println!(
-            "gateway against pymodbus on loopback, 10 ms cycle, {} cycles",
-            f.cycles
+            "gateway against pymodbus on loopback, 10 ms cycle, {} cycles, cycle thread {}",
+            f.cycles,
+            args.rt_priority.map_or_else(
+                || "at normal priority".to_string(),
+                |p| format!("at real-time priority {p} (if granted, see the log)")
+            )
         );
         println!("  cycle rate            {:.2} Hz", f.rate_hz);
         println!(

@@ -49,6 +49,10 @@ pub(crate) struct ConsoleArgs {
     /// Console: load this variant of the control-error library (training).
     #[arg(long, global = true)]
     pub(crate) variant: Option<String>,
+    /// Console: follow the live link of this monitor or gateway configuration (e.g.
+    /// layouts/sorting-station/gateway-monitor.ron) instead of the emulator.
+    #[arg(long, global = true)]
+    pub(crate) link: Option<PathBuf>,
 }
 
 fn open_console(
@@ -71,6 +75,11 @@ fn open_console(
     opts.run_until_ms = args.run_until;
     opts.start = args.start;
     opts.variant.clone_from(&args.variant);
+    opts.link.clone_from(&args.link);
+    if opts.link.is_some() {
+        gateway::init_tracing("warn");
+        vigie_app::console::link::watch_signals(true);
+    }
     vigie_app::run_console(&opts)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -5,6 +5,7 @@
 //! cycles, capped per frame; `App::ui` only renders (see `views.rs`).
 
 pub mod journal;
+pub mod link;
 pub mod report;
 pub mod synoptic;
 mod training;
@@ -138,6 +139,8 @@ pub struct ConsoleOptions {
     pub start: bool,
     /// Load this variant of the control-error library (training).
     pub variant: Option<String>,
+    /// Follow the live link of this configuration instead of the emulator.
+    pub link: Option<PathBuf>,
 }
 
 impl ConsoleOptions {
@@ -155,6 +158,7 @@ impl ConsoleOptions {
             data_dir: Some(journal::data_dir_from_env()),
             start: false,
             variant: None,
+            link: None,
         }
     }
 }
@@ -351,6 +355,8 @@ pub struct Console {
     visuals_set: bool,
     /// Commands emitted by the last frame's views, applied at the next `logic`.
     pending: Vec<Command>,
+    /// The live link followed instead of the emulator (`link.rs`).
+    pub link: Option<link::LinkSession>,
 }
 
 fn load_faults(plant_dir: &Path) -> Vec<(String, FaultSpec)> {
@@ -368,6 +374,8 @@ impl Console {
     /// Opens the console; fails with the rendered problems when the plant or scenario
     /// cannot be loaded.
     pub fn new(opts: &ConsoleOptions) -> Result<Self, String> {
+        let linked = link::options(opts)?;
+        let opts = linked.as_ref().unwrap_or(opts);
         let source = match &opts.scenario {
             Some(path) => Source {
                 scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
@@ -457,7 +465,9 @@ impl Console {
             verification: verification::Verification::default(),
             visuals_set: false,
             pending: Vec::new(),
+            link: None,
         };
+        c.attach_link(opts)?;
         c.drain_journal();
         c.follow_trip();
         if c.mode == Mode::Maintenance {
@@ -519,6 +529,10 @@ impl Console {
     /// Advances by `dt_s` seconds of real time (× speed), in whole cycles, at most
     /// 5000 cycles per call.
     pub fn advance(&mut self, dt_s: f64) {
+        if self.link.is_some() {
+            self.pump_link();
+            return;
+        }
         if !self.running {
             self.budget_ms = 0.0;
             return;
@@ -549,6 +563,9 @@ impl Console {
 
     /// Applies one command: the only place where the UI changes the simulation.
     pub fn apply(&mut self, cmd: Command) {
+        if self.link_command(&cmd) {
+            return;
+        }
         let now = self.now().0;
         match cmd {
             Command::Run => self.running = true,
@@ -834,6 +851,7 @@ impl Console {
         }
         self.report_step(ctx);
         verification::poll(self, ctx);
+        link::close_on_signal(self, ctx);
         if self.running {
             ctx.request_repaint();
         }

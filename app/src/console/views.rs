@@ -30,6 +30,7 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         })
         .min_size(320.0)
         .show(ui, |ui| {
+            super::link::panel_ui(c, ui);
             egui::ScrollArea::vertical()
                 .auto_shrink([false, false])
                 .show(ui, |ui| match c.mode {
@@ -69,6 +70,9 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
 
 fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.horizontal_wrapped(|ui| {
+        if super::link::toolbar_ui(c, ui, out) {
+            return;
+        }
         ui.label(RichText::new("VIGIE").strong().size(18.0));
         ui.separator();
         for (m, name) in [
@@ -156,6 +160,9 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 
 fn status_ui(c: &Console, ui: &mut egui::Ui) {
     ui.horizontal(|ui| {
+        if super::link::status_ui(c, ui) {
+            return;
+        }
         let s = c.sim.emulator.stats();
         ui.label(format!(
             "{} — boxes: {} created, {} left, {} right, {} damaged",

@@ -21,19 +21,19 @@ use vigie_core::live::iomap::IoMap;
 
 /// Figures of one run.
 #[derive(Debug, serde::Serialize)]
-pub(crate) struct Figures {
+pub struct Figures {
     /// Cycles run.
-    pub(crate) cycles: usize,
+    pub cycles: usize,
     /// Cycles per second over the run.
-    pub(crate) rate_hz: f64,
+    pub rate_hz: f64,
     /// Period jitter |period − cycle| percentiles in ms: p50, p99, max.
-    pub(crate) jitter_ms: [f64; 3],
+    pub jitter_ms: [f64; 3],
     /// Work per cycle (poll, engine, write) percentiles in ms: p50, p99, max.
-    pub(crate) busy_ms: [f64; 3],
+    pub busy_ms: [f64; 3],
     /// Sensor change → filtered output at the plant, percentiles in ms: p50, p99, max.
-    pub(crate) latency_ms: [f64; 3],
+    pub latency_ms: [f64; 3],
     /// Edges timed.
-    pub(crate) edges: usize,
+    pub edges: usize,
 }
 
 fn percentiles(mut v: Vec<f64>) -> [f64; 3] {
@@ -57,7 +57,11 @@ fn repo_root() -> PathBuf {
 }
 
 /// Runs the benchmark: `edges` timed sensor edges, then the cycle figures.
-pub(crate) fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<Figures> {
+pub fn run(
+    plant_dir: &std::path::Path,
+    edges: usize,
+    cycle_priority: Option<u8>,
+) -> anyhow::Result<Figures> {
     let root = repo_root();
     let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| root.join(".venv"), PathBuf::from);
     let python = venv.join("bin/python");
@@ -85,8 +89,10 @@ pub(crate) fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<F
 
     let text = format!(
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
-         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"))",
-        plant_dir.display().to_string()
+         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
+         cycle_priority: {})",
+        plant_dir.display().to_string(),
+        cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})"))
     );
     let config = GatewayConfig::from_ron(&text, std::path::Path::new("bench.ron"))
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
@@ -124,6 +130,7 @@ pub(crate) fn run(plant_dir: &std::path::Path, edges: usize) -> anyhow::Result<F
                 },
                 &mut emit,
                 &mut stats,
+                None,
             ))?;
             anyhow::Ok(stats)
         })?;

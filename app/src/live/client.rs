@@ -57,6 +57,27 @@ pub(crate) enum LinkError {
     },
 }
 
+/// What the link-state panel shows of a client.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ClientStatus {
+    /// True while connected.
+    pub connected: bool,
+    /// Failed connection attempts since the last success (or since the link dropped).
+    pub failed_attempts: u32,
+    /// The delay before the next attempt (the current backoff) while disconnected.
+    pub backoff: Millis,
+    /// When the next connection attempt is due while disconnected.
+    pub next_attempt: Millis,
+    /// When every due block was last read successfully.
+    pub last_read: Option<Millis>,
+    /// Requests answered with a Modbus exception.
+    pub exceptions: u64,
+    /// Transport errors, timeouts and malformed answers (each drops the connection).
+    pub errors: u64,
+    /// Successful (re)connections.
+    pub connections: u64,
+}
+
 /// The connection and the poll schedule.
 struct Link {
     config: ClientConfig,
@@ -69,6 +90,7 @@ struct Link {
     /// Whether the last connection attempt failed (to log transitions only).
     down_logged: bool,
     failing_blocks: Vec<bool>,
+    status: ClientStatus,
 }
 
 impl Link {
@@ -88,6 +110,7 @@ impl Link {
             next_attempt: Millis::ZERO,
             down_logged: false,
             failing_blocks: vec![false; n],
+            status: ClientStatus::default(),
         }
     }
 
@@ -118,6 +141,10 @@ impl Link {
                 self.backoff.reset();
                 self.down_logged = false;
                 self.last_poll.iter_mut().for_each(|t| *t = None);
+                self.status.connected = true;
+                self.status.failed_attempts = 0;
+                self.status.backoff = Millis::ZERO;
+                self.status.connections += 1;
                 true
             }
             Ok(Err(e)) => {
@@ -137,6 +164,9 @@ impl Link {
     fn retry_later(&mut self, now: Millis, why: &str) {
         let delay = self.backoff.failed();
         self.next_attempt = now + delay;
+        self.status.failed_attempts = self.status.failed_attempts.saturating_add(1);
+        self.status.backoff = delay;
+        self.status.next_attempt = self.next_attempt;
         if !self.down_logged {
             tracing::warn!(peer = %self.peer(), "{why}; retrying with backoff (next in {delay})");
             self.down_logged = true;
@@ -149,7 +179,12 @@ impl Link {
         tracing::warn!("{err}; connection dropped");
         self.ctx = None;
         self.down_logged = true;
-        self.next_attempt = now + self.backoff.failed();
+        let delay = self.backoff.failed();
+        self.next_attempt = now + delay;
+        self.status.connected = false;
+        self.status.errors += 1;
+        self.status.backoff = delay;
+        self.status.next_attempt = self.next_attempt;
     }
 
     /// Reads every block that is due; true when all of them were read.
@@ -161,7 +196,10 @@ impl Link {
         for b in 0..self.blocks.len() {
             let due = match (self.last_poll.get(b).copied().flatten(), self.blocks.get(b)) {
                 (None, Some(_)) => true,
-                (Some(t), Some(block)) => now.saturating_sub(t) >= block.poll,
+                // One millisecond of tolerance: times are whole milliseconds.
+                (Some(t), Some(block)) => {
+                    now.saturating_sub(t) >= block.poll.saturating_sub(Millis(1))
+                }
                 _ => false,
             };
             if !due {
@@ -181,6 +219,7 @@ impl Link {
                     };
                     if let Err(e) = decoded {
                         tracing::warn!(peer = %self.peer(), "{e}");
+                        self.status.errors += 1;
                         all_ok = false;
                     } else if self.failing_blocks.get(b).copied().unwrap_or(false) {
                         tracing::info!(peer = %self.peer(), "{} {} read again", block.area, block.start);
@@ -190,6 +229,7 @@ impl Link {
                     }
                 }
                 Err(e @ LinkError::Exception { .. }) => {
+                    self.status.exceptions += 1;
                     // The device answered: keep the connection, let the values age.
                     if let Some(f) = self.failing_blocks.get_mut(b)
                         && !*f
@@ -204,6 +244,9 @@ impl Link {
                     return false;
                 }
             }
+        }
+        if all_ok {
+            self.status.last_read = Some(now);
         }
         all_ok
     }
@@ -294,6 +337,7 @@ impl Link {
             match result {
                 Ok(()) => {}
                 Err(e @ LinkError::Exception { .. }) => {
+                    self.status.exceptions += 1;
                     tracing::warn!("{e}");
                     return false;
                 }
@@ -355,9 +399,9 @@ impl Reader {
         self.0.poll(now, inputs, outputs).await
     }
 
-    /// True while connected.
-    pub(crate) fn is_connected(&self) -> bool {
-        self.0.is_connected()
+    /// The link state.
+    pub(crate) fn status(&self) -> &ClientStatus {
+        &self.0.status
     }
 }
 
@@ -384,5 +428,10 @@ impl Writer {
     /// True while connected.
     pub(crate) fn is_connected(&self) -> bool {
         self.0.is_connected()
+    }
+
+    /// The link state.
+    pub(crate) fn status(&self) -> &ClientStatus {
+        &self.0.status
     }
 }

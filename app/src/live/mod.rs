@@ -1,20 +1,25 @@
 //! The networked half of the live link (Modbus TCP over tokio-modbus): the pure parts
 //! (I/O map, register image, data age, stale inputs) are in `vigie_core::live`.
 //!
-//! - [`client`]: polls the plant (or the monitored PLC), reconnects with backoff.
-//! - [`server`]: serves an image to a PLC, with allow-list and writer checks.
-//! - [`backend`]: what a server can serve (the emulator, a memory image).
-//! - [`runtime`]: the monitor, gateway and emulator service loops.
+//! - `client`: polls the plant (or the monitored PLC), reconnects with backoff.
+//! - `server`: serves an image to a PLC, with allow-list and writer checks.
+//! - `backend`: what a server can serve (the emulator, a memory image).
+//! - [`runtime`]: loads a configuration and runs its mode (the emulator loop is here).
+//! - `cycle`: the monitor and gateway cycles on their own thread at absolute
+//!   deadlines, the client on a tokio task.
+//! - [`tap`]: what a run publishes for the console (cycles, link state, link alarms).
 //! - [`bench`]: cycle rate, jitter and sensor-to-output latency against pymodbus.
 //!
 //! The only wall clock of Vigie is read here (`std::time::Instant`), turned into
 //! [`vigie_core::Millis`] since the start of the run.
 
 pub(crate) mod backend;
-pub(crate) mod bench;
+pub mod bench;
 pub(crate) mod client;
-pub(crate) mod runtime;
+pub(crate) mod cycle;
+pub mod runtime;
 pub(crate) mod server;
+pub mod tap;
 
 #[cfg(test)]
 mod tests;

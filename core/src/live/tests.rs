@@ -499,6 +499,15 @@ fn config_errors_say_where() {
         (p[0].code, p[0].location.as_ref().unwrap().line),
         ("V0624", 2)
     );
+    let p = GatewayConfig::from_ron(
+        "Gateway(mode: Emulator, plant: \".\",\n cycle_priority: 0, server: Some(()))",
+        Path::new("g.ron"),
+    )
+    .unwrap_err();
+    assert_eq!(
+        (p[0].code, p[0].location.as_ref().unwrap().line),
+        ("V0625", 2)
+    );
     // Defaults: loopback bind.
     let c = GatewayConfig::from_ron(
         "Gateway(mode: Emulator, plant: \".\", server: Some(()))",

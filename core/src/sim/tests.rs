@@ -340,3 +340,107 @@ fn task_monitor_alarms_before_the_watchdog_on_a_blocked_table() {
             .any(|x| x.kind == crate::alarms::AlarmKind::Task)
     );
 }
+
+fn bits(text: &str) -> crate::bits::Bits {
+    let v: Vec<bool> = text.chars().map(|c| c == '1').collect();
+    crate::bits::Bits::from_bools(&v)
+}
+
+fn observed(time: u64, inputs: &str, commanded: &str, applied: &str, reset: bool) -> ObservedCycle {
+    ObservedCycle {
+        time: Millis(time),
+        inputs: bits(inputs),
+        commanded: bits(commanded),
+        applied: bits(applied),
+        reset,
+    }
+}
+
+fn following(mode: FilterMode) -> Simulation {
+    let s = scenario(
+        ProgramChoice::Reference,
+        FilterMode::Enforce,
+        three_boxes(),
+        0,
+    );
+    let mut sim =
+        Simulation::from_scenario(&s, &station_dir().join("scenario.ron"), Options::default())
+            .expect("scenario");
+    sim.follow_link(mode);
+    sim
+}
+
+#[test]
+fn a_monitored_violation_is_recorded_alarmed_and_explained() {
+    let mut sim = following(FilterMode::ReportOnly);
+    assert!(sim.is_live());
+    // C7 with A4 off: CSs10 = C7 . /A4, reported, never enforced.
+    for (k, inputs) in ["00000000000", "00000001000", "00000001000"]
+        .iter()
+        .enumerate()
+    {
+        let t = 10 * (k as u64 + 1);
+        sim.observe(&observed(t, inputs, "0000000", "0000000", false));
+    }
+    assert_eq!(sim.now(), Millis(30));
+    assert_eq!(sim.engine.trips.len(), 1);
+    let trip = &sim.engine.trips[0];
+    assert!(!trip.enforced);
+    assert_eq!(trip.time_ms, 20);
+    assert!(trip.constraints.iter().any(|c| c.id == "CSs10"));
+    let ex = sim.explanations.get(&0).expect("explained");
+    assert!(
+        !ex.projection.items.is_empty(),
+        "level 1 from the observation"
+    );
+    assert!(
+        sim.alarms
+            .all()
+            .iter()
+            .any(|a| a.kind == AlarmKind::FilterTrip)
+    );
+    // The box the sensors see at C7 is drawn there.
+    assert_eq!(sim.emulator.boxes().len(), 1);
+    // Time never goes back.
+    sim.observe(&observed(5, "00000000000", "0000000", "0000000", false));
+    assert_eq!(sim.now(), Millis(30));
+}
+
+#[test]
+fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
+    let mut sim = following(FilterMode::Enforce);
+    // A loaded table rotates to the unloading position, the box leaves it to the right
+    // exit (C6 falls, C7 rises): the PLC commands A4 until then.
+    for (t, inputs) in [
+        (10, "00001010000"),
+        (20, "00000110000"),
+        (30, "00000100000"),
+    ] {
+        sim.observe(&observed(t, inputs, "0000100", "0000100", false));
+    }
+    assert!(!sim.engine.is_tripped());
+    // The PLC releases A4 with the box at C7: the gateway trips on CSs10 and holds A4;
+    // the mirror trips in the same cycle and records what the plant received.
+    sim.observe(&observed(40, "00000101000", "0000000", "0000100", false));
+    assert!(sim.engine.is_tripped());
+    assert!(
+        sim.engine.trips[0]
+            .constraints
+            .iter()
+            .any(|c| c.id == "CSs10")
+    );
+    assert_eq!(sim.engine.history.last().unwrap().applied, bits("0000100"));
+    assert_eq!(sim.engine.applied(), &bits("0000100"));
+    // The box has left; the gateway resets before the next cycle, the mirror follows.
+    sim.observe(&observed(50, "00000100000", "0000000", "0000100", false));
+    assert!(sim.engine.is_tripped());
+    sim.observe(&observed(60, "00000100000", "0000000", "0000000", true));
+    assert!(!sim.engine.is_tripped());
+    assert!(sim.journal().iter().any(|e| e.kind == "reset"));
+    assert!(
+        sim.alarms
+            .all()
+            .iter()
+            .all(|a| a.kind != AlarmKind::FilterTrip || a.cleared.is_some())
+    );
+}

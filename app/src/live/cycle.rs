@@ -1,0 +1,837 @@
+//! The monitor and gateway cycles, and how they are timed.
+//!
+//! The cycle runs on a thread of its own (`vigie-cycle`) at the absolute deadlines
+//! `epoch + k·cycle` (missed deadlines are skipped, never run in a burst), slept with
+//! the OS's high-resolution timer: tokio's timer wheel has a granularity of one
+//! millisecond, too coarse for a period jitter under 1 ms. The cycle never waits for
+//! the network: the Modbus client lives on a tokio task (`peer_io`) that polls the
+//! peer `lead` before each tick (so the cycle finds values a few milliseconds old,
+//! stamped with their read time) and writes the outputs the cycle hands it as soon as
+//! it gets them. Events go back to the async side through a bounded channel.
+
+use super::client::{ClientStatus, Reader, Writer};
+use super::runtime::{
+    AlarmBoard, Clock, CycleStats, Emit, Explainer, Setup, bits_text, emit_engine_events, names,
+};
+use super::server::{self, Shared, SharedImage};
+use super::tap::Tap;
+use anyhow::Context as _;
+use serde_json::json;
+use std::future::Future;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+use tokio::sync::{mpsc, oneshot, watch};
+use vigie_core::alarms::{AlarmKind, AlarmList};
+use vigie_core::bundle::PlantBundle;
+use vigie_core::engine::{Commanded, Engine, FilterMode};
+use vigie_core::live::age::{AgedBits, Watchdog};
+use vigie_core::live::image::ServerImage;
+use vigie_core::live::stale::StaleGuard;
+use vigie_core::sim::ObservedCycle;
+use vigie_core::symbols::Space;
+use vigie_core::{Bits, Millis};
+
+/// Events the cycle thread may queue for the async side before it drops them.
+const EVENT_QUEUE: usize = 4096;
+
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    // A poisoned lock (a panic elsewhere) still holds usable data.
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// How long before a tick the peer is polled: a third of the cycle, at most 3 ms.
+fn poll_lead(period: Duration) -> Duration {
+    (period / 3).min(Duration::from_millis(3))
+}
+
+/// One cycle's work, run on the cycle thread.
+trait Cycle: Send + 'static {
+    /// What the thread hands back when it stops.
+    type Done: Send + 'static;
+    /// One cycle started at `start`.
+    fn step(&mut self, start: Instant);
+    /// The last work after the stop request.
+    fn finish(self) -> Self::Done;
+}
+
+/// Sleeps until `deadline` with the OS timer (nanosleep: microsecond resolution).
+fn sleep_until(deadline: Instant) {
+    let now = Instant::now();
+    if deadline > now {
+        std::thread::sleep(deadline - now);
+    }
+}
+
+/// The index of the first tick strictly after `elapsed` (ticks at multiples of `period`).
+fn next_tick(elapsed: Duration, period: Duration) -> u64 {
+    let p = period.as_nanos().max(1);
+    u64::try_from(elapsed.as_nanos() / p + 1).unwrap_or(u64::MAX)
+}
+
+fn tick_at(epoch: Instant, period: Duration, k: u64) -> Instant {
+    let nanos = u64::try_from(period.as_nanos())
+        .unwrap_or(u64::MAX)
+        .saturating_mul(k);
+    epoch + Duration::from_nanos(nanos)
+}
+
+/// Gives the calling thread the real-time priority `priority` (SCHED_FIFO); a refusal
+/// (no right to raise priorities) is logged, and the thread keeps its priority.
+fn raise_priority(priority: u8) {
+    use thread_priority::{
+        RealtimeThreadSchedulePolicy, ThreadPriority, ThreadPriorityValue, ThreadSchedulePolicy,
+    };
+    let result = ThreadPriorityValue::try_from(priority)
+        .map_err(|e| e.to_string())
+        .and_then(|value| {
+            thread_priority::set_thread_priority_and_policy(
+                thread_priority::thread_native_id(),
+                ThreadPriority::Crossplatform(value),
+                ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo),
+            )
+            .map_err(|e| format!("{e:?}"))
+        });
+    match result {
+        Ok(()) => tracing::info!("cycle thread at real-time priority {priority} (SCHED_FIFO)"),
+        Err(e) => tracing::warn!(
+            "cycle thread left at normal priority: real-time priority {priority} refused ({e})"
+        ),
+    }
+}
+
+/// Runs `c` on the cycle thread at `epoch + k·period` for k = 1, 2, … until `stop`,
+/// at the real-time `priority` when one is given.
+fn spawn_cycles<C: Cycle>(
+    epoch: Instant,
+    period: Duration,
+    priority: Option<u8>,
+    stop: Arc<AtomicBool>,
+    mut c: C,
+) -> anyhow::Result<oneshot::Receiver<(C::Done, CycleStats)>> {
+    let (tx, rx) = oneshot::channel();
+    std::thread::Builder::new()
+        .name("vigie-cycle".into())
+        .spawn(move || {
+            if let Some(p) = priority {
+                raise_priority(p);
+            }
+            let mut stats = CycleStats::default();
+            let mut k = 1;
+            loop {
+                sleep_until(tick_at(epoch, period, k));
+                if stop.load(Ordering::Acquire) {
+                    break;
+                }
+                let start = Instant::now();
+                c.step(start);
+                stats.record(start);
+                let due = next_tick(Instant::now().saturating_duration_since(epoch), period);
+                k = (k + 1).max(due);
+            }
+            let _ = tx.send((c.finish(), stats));
+        })
+        .context("cannot start the cycle thread")?;
+    Ok(rx)
+}
+
+/// What the I/O task publishes for the cycle.
+struct PeerSide {
+    inputs: AgedBits,
+    outputs: AgedBits,
+    /// When every due block was last read.
+    heard: Option<Millis>,
+    status: ClientStatus,
+}
+
+/// The client: read-only (monitor) or reading and writing (gateway).
+enum PeerClient {
+    Monitor(Reader),
+    Plant(Writer),
+}
+
+impl PeerClient {
+    async fn poll(&mut self, now: Millis, inputs: &mut AgedBits, outputs: &mut AgedBits) -> bool {
+        match self {
+            Self::Monitor(r) => r.poll(now, inputs, outputs).await,
+            Self::Plant(w) => w.poll(now, inputs).await,
+        }
+    }
+
+    fn status(&self) -> &ClientStatus {
+        match self {
+            Self::Monitor(r) => r.status(),
+            Self::Plant(w) => w.status(),
+        }
+    }
+
+    fn is_connected(&self) -> bool {
+        self.status().connected
+    }
+}
+
+async fn changed(rx: &mut Option<watch::Receiver<Option<Bits>>>) -> bool {
+    match rx {
+        Some(r) => r.changed().await.is_ok(),
+        None => std::future::pending().await,
+    }
+}
+
+/// The I/O task: polls the peer `lead` before each tick, writes the outputs handed
+/// through `out` at once (gateway), publishes into `side`, until `stop`. Returns the
+/// client (for the last write of the safe outputs).
+async fn peer_io(
+    mut client: PeerClient,
+    side: Arc<Mutex<PeerSide>>,
+    mut out: Option<watch::Receiver<Option<Bits>>>,
+    mut stop: oneshot::Receiver<()>,
+    clock: Clock,
+    period: Duration,
+) -> PeerClient {
+    let lead = poll_lead(period);
+    let (mut inputs, mut outputs) = {
+        let s = lock(&side);
+        (s.inputs.clone(), s.outputs.clone())
+    };
+    let mut k: u64 = 1;
+    enum Wake {
+        Stop,
+        Write,
+        OutputsGone,
+        Poll,
+    }
+    loop {
+        let target = tick_at(clock.0, period, k)
+            .checked_sub(lead)
+            .unwrap_or(clock.0);
+        let wake = tokio::select! {
+            biased;
+            _ = &mut stop => Wake::Stop,
+            ok = changed(&mut out) => if ok { Wake::Write } else { Wake::OutputsGone },
+            () = tokio::time::sleep_until(target.into()) => Wake::Poll,
+        };
+        match wake {
+            Wake::Stop => break,
+            Wake::OutputsGone => out = None,
+            Wake::Write => {
+                let values = out.as_mut().and_then(|r| r.borrow_and_update().clone());
+                if let (Some(values), PeerClient::Plant(w)) = (values, &mut client)
+                    && w.is_connected()
+                {
+                    w.write(clock.now(), &values).await;
+                }
+                lock(&side).status.clone_from(client.status());
+            }
+            Wake::Poll => {
+                let now = clock.now();
+                let ok = client.poll(now, &mut inputs, &mut outputs).await;
+                {
+                    let mut s = lock(&side);
+                    s.inputs.clone_from(&inputs);
+                    s.outputs.clone_from(&outputs);
+                    if ok {
+                        s.heard = Some(now);
+                    }
+                    s.status.clone_from(client.status());
+                }
+                let due = next_tick(
+                    Instant::now().saturating_duration_since(clock.0) + lead,
+                    period,
+                );
+                k = (k + 1).max(due);
+            }
+        }
+    }
+    client
+}
+
+/// Starts the I/O task.
+fn start_peer_io(
+    client: PeerClient,
+    n_in: usize,
+    n_out: usize,
+    out: Option<watch::Receiver<Option<Bits>>>,
+    clock: Clock,
+    period: Duration,
+) -> (
+    Arc<Mutex<PeerSide>>,
+    oneshot::Sender<()>,
+    tokio::task::JoinHandle<PeerClient>,
+) {
+    let side = Arc::new(Mutex::new(PeerSide {
+        inputs: AgedBits::new(n_in),
+        outputs: AgedBits::new(n_out),
+        heard: None,
+        status: ClientStatus::default(),
+    }));
+    let (stop_tx, stop_rx) = oneshot::channel();
+    let task = tokio::spawn(peer_io(
+        client,
+        Arc::clone(&side),
+        out,
+        stop_rx,
+        clock,
+        period,
+    ));
+    (side, stop_tx, task)
+}
+
+/// Forwards the cycle thread's events to `emit` until `shutdown`, then stops the thread
+/// and returns what it handed back (the remaining events are forwarded too).
+async fn supervise<D>(
+    shutdown: impl Future<Output = ()>,
+    emit: Emit<'_>,
+    events: &mut mpsc::Receiver<serde_json::Value>,
+    stop: &AtomicBool,
+    done: oneshot::Receiver<(D, CycleStats)>,
+) -> anyhow::Result<(D, CycleStats)> {
+    tokio::pin!(shutdown);
+    tokio::pin!(done);
+    let result = loop {
+        tokio::select! {
+            biased;
+            () = &mut shutdown => {
+                stop.store(true, Ordering::Release);
+                break (&mut done).await;
+            }
+            r = &mut done => break r,
+            Some(e) = events.recv() => emit(e),
+        }
+    };
+    while let Ok(e) = events.try_recv() {
+        emit(e);
+    }
+    result.map_err(|_| anyhow::anyhow!("the cycle thread stopped unexpectedly"))
+}
+
+fn event_sender(tx: mpsc::Sender<serde_json::Value>) -> Box<dyn FnMut(serde_json::Value) + Send> {
+    let mut dropped = 0_u64;
+    Box::new(move |e| {
+        if tx.try_send(e).is_err() {
+            dropped += 1;
+            if dropped.is_power_of_two() {
+                tracing::warn!("{dropped} events dropped: the event queue is full");
+            }
+        }
+    })
+}
+
+/// The plant's task monitors (seed 000), stepped after the filter every cycle from the
+/// second one on, their outputs published for the constraints of the next cycle, as
+/// the console's `Simulation` does.
+struct LiveTasks {
+    monitor: vigie_core::tasks::Monitor,
+    events: vigie_core::tasks::FrameTasks,
+    seen: usize,
+}
+
+impl LiveTasks {
+    fn new(bundle: &PlantBundle) -> Option<Self> {
+        let set = bundle.tasks.as_ref()?;
+        match vigie_core::tasks::FrameTasks::compile(set, &bundle.symbols) {
+            Ok(events) => Some(Self {
+                monitor: vigie_core::tasks::Monitor::new(set, Millis::ZERO),
+                events,
+                seen: 0,
+            }),
+            Err(p) => {
+                tracing::warn!("task monitors off: {}", vigie_core::diag::render(&p));
+                None
+            }
+        }
+    }
+
+    fn step(&mut self, engine: &mut Engine, now: Millis, board: &mut AlarmBoard, emit: Emit<'_>) {
+        if engine.cycles() <= 1 {
+            return;
+        }
+        self.events.step(&mut self.monitor, now, engine.frame());
+        self.events.publish(&self.monitor, engine.frame_mut());
+        let new = self.monitor.alarms.get(self.seen..).unwrap_or_default();
+        for a in new {
+            if a.severity == vigie_core::tasks::Severity::Warning {
+                emit(json!({"event": "task_warning", "text": a.text, "time_ms": a.time.0}));
+            } else {
+                let key = format!("task:{}:{:?}", a.subject, a.code);
+                board.raise(emit, a.time, &key, AlarmKind::Task, a.text.clone());
+            }
+        }
+        self.seen = self.monitor.alarms.len();
+    }
+}
+
+/// The monitor's cycle.
+struct MonitorCycle {
+    clock: Clock,
+    peer: std::net::SocketAddr,
+    side: Arc<Mutex<PeerSide>>,
+    bundle: PlantBundle,
+    layout: Option<vigie_core::emulator::Layout>,
+    engine: Engine,
+    guard: StaleGuard,
+    control: Commanded,
+    inputs: AgedBits,
+    outputs: AgedBits,
+    bounds: Vec<Millis>,
+    dog: Watchdog,
+    heard: Option<Millis>,
+    board: AlarmBoard,
+    last_potential: Vec<String>,
+    last_spec: Option<String>,
+    tasks: Option<LiveTasks>,
+    emit: Box<dyn FnMut(serde_json::Value) + Send>,
+    tap: Option<Tap>,
+}
+
+impl Cycle for MonitorCycle {
+    type Done = ();
+
+    fn step(&mut self, start: Instant) {
+        let now = self.clock.at(start);
+        let (heard, status) = {
+            let s = lock(&self.side);
+            self.inputs.clone_from(&s.inputs);
+            self.outputs.clone_from(&s.outputs);
+            (s.heard, s.status.clone())
+        };
+        let what = format!("monitored peer {}", self.peer);
+        if heard != self.heard {
+            self.heard = heard;
+            if let Some(h) = heard {
+                let t = self.dog.heard(h);
+                self.board
+                    .watch(&mut *self.emit, now, "link:peer", &what, t);
+            }
+        }
+        let t = self.dog.check(now);
+        self.board
+            .watch(&mut *self.emit, now, "link:peer", &what, t);
+        self.control.0.copy_from(self.outputs.values());
+        self.engine
+            .cycle(now, self.inputs.values(), &mut self.control);
+        let explainer = Explainer {
+            bundle: &self.bundle,
+            layout: self.layout.as_ref(),
+        };
+        emit_engine_events(
+            &mut self.engine,
+            &mut *self.emit,
+            Some(&explainer),
+            &mut self.last_spec,
+        );
+        if let Some(t) = &mut self.tasks {
+            t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
+        }
+        let stale = self.inputs.stale(now, &self.bounds);
+        let verdict = self.guard.check(self.engine.frame(), &stale);
+        if verdict.potentially_violated != self.last_potential {
+            if !verdict.potentially_violated.is_empty() {
+                tracing::warn!(
+                    "potentially violated with stale inputs: {}",
+                    verdict.potentially_violated.join(", ")
+                );
+                (self.emit)(json!({
+                    "event": "potential_violation",
+                    "constraints": verdict.potentially_violated,
+                    "stale_inputs": names(&self.bundle, Space::Input, &stale),
+                    "time_ms": now.0,
+                }));
+            }
+            self.last_potential = verdict.potentially_violated;
+        }
+        if let Some(tap) = &self.tap {
+            let stale_names = names(&self.bundle, Space::Input, &stale);
+            let cycles = self.engine.cycles();
+            tap.push_cycle(
+                ObservedCycle {
+                    time: now,
+                    inputs: self.inputs.values().clone(),
+                    commanded: self.outputs.values().clone(),
+                    applied: self.outputs.values().clone(),
+                    reset: false,
+                },
+                |st| {
+                    st.client = status;
+                    st.now = now;
+                    st.cycles = cycles;
+                    st.stale_inputs = stale_names;
+                },
+            );
+        }
+    }
+
+    fn finish(self) {}
+}
+
+pub(crate) async fn monitor(
+    setup: Setup,
+    shutdown: impl Future<Output = ()>,
+    emit: Emit<'_>,
+    stats: &mut CycleStats,
+    tap: Option<Tap>,
+) -> anyhow::Result<()> {
+    let Setup {
+        config,
+        bundle,
+        map,
+    } = setup;
+    let client = config
+        .client
+        .clone()
+        .context("monitor mode needs a client section")?;
+    let clock = Clock(Instant::now());
+    let period = Duration::from_millis(config.cycle_ms.max(1));
+    let priority = config.cycle_priority;
+    let peer = client.address;
+    let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
+    let reader = PeerClient::Monitor(Reader::new(client, map.clone(), true));
+    let (side, stop_io, io) = start_peer_io(reader, n_in, n_out, None, clock, period);
+    if let Some(t) = &tap {
+        t.update(|s| s.peer = Some(peer));
+    }
+    emit(json!({"event": "monitoring", "peer": peer.to_string()}));
+    let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
+    let stop = Arc::new(AtomicBool::new(false));
+    let cycle = MonitorCycle {
+        clock,
+        peer,
+        side,
+        layout: vigie_core::emulator::Layout::load(&bundle.dir.join("layout.ron")).ok(),
+        engine: Engine::new(&bundle, FilterMode::ReportOnly, 6000),
+        guard: StaleGuard::new(&bundle),
+        control: Commanded(Bits::zeros(n_out)),
+        inputs: AgedBits::new(n_in),
+        outputs: AgedBits::new(n_out),
+        bounds: map.input_bounds(),
+        dog: Watchdog::new(config.link_timeout(), Millis::ZERO),
+        heard: None,
+        board: AlarmBoard {
+            alarms: AlarmList::new(),
+            tap: tap.clone(),
+        },
+        last_potential: Vec::new(),
+        last_spec: None,
+        tasks: LiveTasks::new(&bundle),
+        emit: event_sender(tx),
+        tap: tap.clone(),
+        bundle,
+    };
+    let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
+    let result = supervise(shutdown, emit, &mut events, &stop, done).await;
+    let _ = stop_io.send(());
+    let client = io.await.context("the I/O task failed")?;
+    let ((), cycle_stats) = result?;
+    *stats = cycle_stats;
+    if let Some(t) = &tap {
+        t.update(|s| s.running = false);
+    }
+    emit(json!({"event": "stopped", "connected": client.is_connected()}));
+    Ok(())
+}
+
+/// The gateway's cycle.
+struct GatewayCycle {
+    clock: Clock,
+    plant_peer: std::net::SocketAddr,
+    side: Arc<Mutex<PeerSide>>,
+    shared: SharedImage,
+    out: watch::Sender<Option<Bits>>,
+    bundle: PlantBundle,
+    engine: Engine,
+    guard: StaleGuard,
+    control: Commanded,
+    inputs: AgedBits,
+    bounds: Vec<Millis>,
+    plant_dog: Watchdog,
+    plant_heard: Option<Millis>,
+    plc_dog: Watchdog,
+    plc_last: Option<Instant>,
+    board: AlarmBoard,
+    safe_reason: Option<String>,
+    last_spec: Option<String>,
+    tasks: Option<LiveTasks>,
+    auto_reset: bool,
+    emit: Box<dyn FnMut(serde_json::Value) + Send>,
+    tap: Option<Tap>,
+}
+
+impl GatewayCycle {
+    /// The outputs safe whatever the stale inputs are and whatever the PLC commands.
+    fn safe_now(&mut self, now: Millis) -> Bits {
+        let stale = self.inputs.stale(now, &self.bounds);
+        self.guard
+            .safe_outputs(self.engine.frame(), &stale)
+            .unwrap_or_else(|_| Bits::zeros(self.control.0.len()))
+    }
+
+    /// Resets a latched trip when asked (automatic reset or the console's operator).
+    fn reset_if_asked(&mut self, now: Millis) -> bool {
+        let asked = self.tap.as_ref().is_some_and(Tap::take_reset);
+        if !(self.auto_reset || asked) || !self.engine.is_tripped() {
+            return false;
+        }
+        match self.engine.reset() {
+            Ok(()) => true,
+            Err(e) => {
+                if asked {
+                    tracing::warn!("reset refused: {e}");
+                    (self.emit)(
+                        json!({"event": "reset_refused", "reason": e.to_string(), "time_ms": now.0}),
+                    );
+                }
+                false
+            }
+        }
+    }
+}
+
+impl Cycle for GatewayCycle {
+    type Done = Bits;
+
+    fn step(&mut self, start: Instant) {
+        let now = self.clock.at(start);
+        let n_out = self.control.0.len();
+        // 1. The plant, as last polled.
+        let (heard, status) = {
+            let s = lock(&self.side);
+            self.inputs.clone_from(&s.inputs);
+            (s.heard, s.status.clone())
+        };
+        let what = format!("plant {}", self.plant_peer);
+        if heard != self.plant_heard {
+            self.plant_heard = heard;
+            if let Some(h) = heard {
+                let t = self.plant_dog.heard(h);
+                self.board
+                    .watch(&mut *self.emit, now, "link:plant", &what, t);
+            }
+        }
+        let t = self.plant_dog.check(now);
+        self.board
+            .watch(&mut *self.emit, now, "link:plant", &what, t);
+        // 2. The PLC.
+        let (heard, server_exceptions) = {
+            let s = lock(&self.shared);
+            self.control.0.copy_from(&s.outputs);
+            (s.plc_heard, s.exceptions)
+        };
+        if heard.is_some() && heard != self.plc_last {
+            self.plc_last = heard;
+            let t = self.plc_dog.heard(heard.map_or(now, |h| self.clock.at(h)));
+            self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
+        }
+        let t = self.plc_dog.check(now);
+        self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
+        // 3. The engine.
+        let reset = self.reset_if_asked(now);
+        self.engine
+            .cycle(now, self.inputs.values(), &mut self.control);
+        emit_engine_events(&mut self.engine, &mut *self.emit, None, &mut self.last_spec);
+        // 4. Safe outputs.
+        let stale = self.inputs.stale(now, &self.bounds);
+        let mut applied = self.engine.applied().clone();
+        let reason = if self.plc_dog.is_lost() {
+            applied = self.safe_now(now);
+            Some("PLC lost: outputs held at the safe fallback".to_string())
+        } else if self.plant_dog.is_lost() {
+            // Written as soon as the plant answers again (or now, when it is connected
+            // but its values cannot be read).
+            applied = self.safe_now(now);
+            Some(format!(
+                "plant {} lost, its inputs stale: outputs held at the safe fallback",
+                self.plant_peer
+            ))
+        } else if stale.count_ones() > 0 {
+            let v = self.guard.check(self.engine.frame(), &stale);
+            if v.potentially_violated.is_empty() {
+                None
+            } else {
+                applied = v
+                    .fallback
+                    .and_then(Result::ok)
+                    .unwrap_or_else(|| Bits::zeros(n_out));
+                Some(format!(
+                    "stale inputs {}: {} potentially violated, safe fallback applied",
+                    names(&self.bundle, Space::Input, &stale).join(" "),
+                    v.potentially_violated.join(", ")
+                ))
+            }
+        } else {
+            None
+        };
+        if reason != self.safe_reason {
+            match &reason {
+                Some(r) => {
+                    (self.emit)(json!({
+                        "event": "safe_outputs", "reason": r,
+                        "outputs": bits_text(&applied), "time_ms": now.0,
+                    }));
+                    if self.safe_reason.is_some() {
+                        self.board.clear(&mut *self.emit, now, "safe:outputs");
+                    }
+                    self.board.raise(
+                        &mut *self.emit,
+                        now,
+                        "safe:outputs",
+                        AlarmKind::Link,
+                        r.clone(),
+                    );
+                }
+                None => {
+                    (self.emit)(json!({"event": "safe_outputs_released", "time_ms": now.0}));
+                    self.board.clear(&mut *self.emit, now, "safe:outputs");
+                }
+            }
+            self.safe_reason.clone_from(&reason);
+        }
+        self.engine
+            .frame_mut()
+            .now_mut(Space::Output)
+            .copy_from(&applied);
+        if let Some(t) = &mut self.tasks {
+            t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
+        }
+        // 5. Outputs to the plant (written by the I/O task at once), sensors to the PLC.
+        self.out.send_replace(Some(applied.clone()));
+        lock(&self.shared).inputs.copy_from(self.inputs.values());
+        if let Some(tap) = &self.tap {
+            let stale_names = names(&self.bundle, Space::Input, &stale);
+            let cycles = self.engine.cycles();
+            let plc = self.plc_last.is_some() && !self.plc_dog.is_lost();
+            tap.push_cycle(
+                ObservedCycle {
+                    time: now,
+                    inputs: self.inputs.values().clone(),
+                    commanded: self.control.0.clone(),
+                    applied,
+                    reset,
+                },
+                |st| {
+                    st.client = status;
+                    st.now = now;
+                    st.cycles = cycles;
+                    st.stale_inputs = stale_names;
+                    st.plc_connected = Some(plc);
+                    st.safe_outputs = reason;
+                    st.server_exceptions = server_exceptions;
+                },
+            );
+        }
+    }
+
+    /// Shutdown: the fallback of the current context, whatever the PLC commands.
+    fn finish(mut self) -> Bits {
+        let now = self.clock.now();
+        self.safe_now(now)
+    }
+}
+
+pub(crate) async fn gateway(
+    setup: Setup,
+    shutdown: impl Future<Output = ()>,
+    emit: Emit<'_>,
+    stats: &mut CycleStats,
+    tap: Option<Tap>,
+) -> anyhow::Result<()> {
+    let Setup {
+        config,
+        bundle,
+        map,
+    } = setup;
+    let client = config
+        .client
+        .clone()
+        .context("gateway mode needs a client section")?;
+    let server_config = config
+        .server
+        .clone()
+        .context("gateway mode needs a server section")?;
+    let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
+    let clock = Clock(Instant::now());
+    let period = Duration::from_millis(config.cycle_ms.max(1));
+    let priority = config.cycle_priority;
+    let shared: SharedImage = Arc::new(Mutex::new(Shared {
+        inputs: Bits::zeros(n_in),
+        outputs: Bits::zeros(n_out),
+        ..Shared::default()
+    }));
+    let server = server::start(
+        &server_config,
+        ServerImage::new(&map, server_config.unit),
+        Arc::clone(&shared),
+    )
+    .await
+    .with_context(|| format!("cannot listen on {}", server_config.bind))?;
+    tracing::info!(
+        "serving the PLC on {}, plant at {}",
+        server.local,
+        client.address
+    );
+    if let Some(t) = &tap {
+        t.update(|s| {
+            s.peer = Some(client.address);
+            s.listening = Some(server.local);
+        });
+    }
+    emit(json!({
+        "event": "listening", "address": server.local.to_string(),
+        "plant": client.address.to_string(),
+    }));
+    let plant_peer = client.address;
+    let (out_tx, out_rx) = watch::channel(None);
+    let writer = PeerClient::Plant(Writer::new(client, map.clone()));
+    let (side, stop_io, io) = start_peer_io(writer, n_in, 0, Some(out_rx), clock, period);
+    let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
+    let stop = Arc::new(AtomicBool::new(false));
+    let cycle = GatewayCycle {
+        clock,
+        plant_peer,
+        side,
+        shared,
+        out: out_tx,
+        engine: Engine::new(&bundle, FilterMode::Enforce, 6000),
+        guard: StaleGuard::new(&bundle),
+        control: Commanded(Bits::zeros(n_out)),
+        inputs: AgedBits::new(n_in),
+        bounds: map.input_bounds(),
+        plant_dog: Watchdog::new(config.link_timeout(), Millis::ZERO),
+        plant_heard: None,
+        plc_dog: Watchdog::new(config.link_timeout(), Millis::ZERO),
+        plc_last: None,
+        board: AlarmBoard {
+            alarms: AlarmList::new(),
+            tap: tap.clone(),
+        },
+        safe_reason: None,
+        last_spec: None,
+        tasks: LiveTasks::new(&bundle),
+        auto_reset: config.auto_reset,
+        emit: event_sender(tx),
+        tap: tap.clone(),
+        bundle,
+    };
+    let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
+    let result = supervise(shutdown, emit, &mut events, &stop, done).await;
+    let _ = stop_io.send(());
+    let mut client = io.await.context("the I/O task failed")?;
+    let (safe, cycle_stats) = result?;
+    *stats = cycle_stats;
+    let written = match &mut client {
+        PeerClient::Plant(w) if w.is_connected() => w.write(clock.now(), &safe).await,
+        _ => false,
+    };
+    tracing::info!(
+        "stopped; safe outputs {safe} {}",
+        if written {
+            "written"
+        } else {
+            "not written (plant unreachable)"
+        }
+    );
+    if let Some(t) = &tap {
+        t.update(|s| s.running = false);
+    }
+    emit(json!({"event": "stopped", "outputs": bits_text(&safe), "written": written}));
+    drop(server);
+    Ok(())
+}

@@ -1,0 +1,118 @@
+//! The closed loop fed from a live link instead of the emulator: the console opened on a
+//! monitor or gateway run (`vigie --link CONFIG`).
+//!
+//! Every cycle the link ran (the plant's inputs, the outputs the PLC commanded, the
+//! outputs the link applied, whether its engine was reset first) goes through this
+//! simulation's engine, which mirrors the link's own engine: same filter mode, same
+//! inputs, same commands, same resets, hence the same trips at the same cycles. The
+//! recorder, the explanations (level 1 from an emulator initialised from the
+//! observation), the task monitors, the alarms and the journal then work as in emulator
+//! mode. The emulator never runs: it only shows where the boxes are estimated to be,
+//! rebuilt from the observation whenever the sensors or the observers change.
+
+use super::{OperatorAction, Simulation, explain_live_projected};
+use crate::bits::Bits;
+use crate::emulator::ArrivalPlan;
+use crate::engine::{Commanded, FilterMode};
+use crate::explain;
+use crate::symbols::Space;
+use crate::time::Millis;
+
+/// One cycle of a live link, as the console receives it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ObservedCycle {
+    /// Time of the cycle since the start of the link.
+    pub time: Millis,
+    /// The plant's inputs used by the cycle (held values for stale ones).
+    pub inputs: Bits,
+    /// The outputs the PLC commanded (monitor mode: the outputs read).
+    pub commanded: Bits,
+    /// The outputs the link applied to the plant (gateway mode: after the filter and the
+    /// safe outputs of a lost PLC or of stale inputs; monitor mode: the commanded ones).
+    pub applied: Bits,
+    /// The link's engine was reset (operator or automatic reset) just before this cycle.
+    pub reset: bool,
+}
+
+impl Simulation {
+    /// Switches to observation of a live link whose engine runs in `mode` (report-only
+    /// in monitor mode, enforce in gateway mode): scheduled actions are dropped, no box
+    /// arrives, and time follows the link's cycles from now on.
+    pub fn follow_link(&mut self, mode: FilterMode) {
+        self.live_now = Some(self.live_now.unwrap_or(Millis::ZERO));
+        self.pending.clear();
+        self.engine.set_mode(mode);
+        self.emulator.set_arrivals(ArrivalPlan::List(Vec::new()));
+        self.log("link", format!("following a live link, filter {mode:?}"));
+    }
+
+    /// True when fed from a live link.
+    pub fn is_live(&self) -> bool {
+        self.live_now.is_some()
+    }
+
+    /// Runs one observed cycle (see the module documentation). Cycles older than the
+    /// last one observed are taken at the last time (time never goes back).
+    pub fn observe(&mut self, cycle: &ObservedCycle) {
+        let now = cycle.time.max(self.now());
+        self.live_now = Some(now);
+        if cycle.reset && self.engine.is_tripped() {
+            let _ = self.act(&OperatorAction::Reset);
+        }
+        let mut control = Commanded(cycle.commanded.clone());
+        self.engine.cycle(now, &cycle.inputs, &mut control);
+        // What the plant really received (gateway: safe outputs for a lost PLC or stale
+        // inputs), as the link's engine records it for the next cycle.
+        if cycle.applied.len() == self.engine.applied().len() {
+            self.engine
+                .frame_mut()
+                .now_mut(Space::Output)
+                .copy_from(&cycle.applied);
+            if let Some(r) = self.engine.history.last_mut() {
+                r.applied.copy_from(&cycle.applied);
+            }
+        }
+        if let Some(index) = self.record_events(now)
+            && self.options.explain
+            && let Some((ex, projected)) = explain_live_projected(
+                &self.engine,
+                &self.bundle,
+                Some(&self.layout),
+                index,
+                self.projection,
+                self.cycle,
+            )
+        {
+            if let Some(p) = projected {
+                self.projections.insert(index, p);
+            }
+            self.explanations.insert(index, ex);
+        }
+        self.step_tasks(now);
+        self.estimate_boxes();
+        self.push_snapshot(now);
+    }
+
+    /// Rebuilds the box estimate when the sensors or observers changed.
+    fn estimate_boxes(&mut self) {
+        let changed = match (self.engine.history.back(0), self.engine.history.back(1)) {
+            (Some(a), Some(b)) => a.inputs != b.inputs || a.observers != b.observers,
+            (Some(_), None) => true,
+            _ => false,
+        };
+        if !changed {
+            return;
+        }
+        let Some(record) = self.engine.history.last() else {
+            return;
+        };
+        if let Ok(emu) = explain::emulator_from_observation(
+            &self.layout,
+            &self.bundle.plant,
+            record,
+            &self.engine.observers,
+        ) {
+            self.emulator = emu;
+        }
+    }
+}

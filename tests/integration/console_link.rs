@@ -1,0 +1,229 @@
+//! The console on a live link (`vigie --link CONFIG`), driven through accessibility
+//! queries, against the pymodbus peers (`tests/peers/`) on OS-chosen loopback ports:
+//! - a monitor run: the link state, a violation with its explanation read from the
+//!   plant, then the peer killed (reconnecting, alarm, stale inputs) and back;
+//! - a gateway run: the PLC commands a forbidden combination, the plant receives the
+//!   filter's output, the console shows the trip; the operator's reset is refused while
+//!   the constraint holds and goes through the gateway once it does not.
+//!
+//! No fixed sleeps: every wait polls the console with a deadline.
+
+#![allow(clippy::unwrap_used)] // a failure is a test failure
+
+use crate::live::{Plant, Plc, TempDir, repo, wait_until};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable as _;
+use std::time::{Duration, Instant};
+use vigie_app::{Console, ConsoleOptions};
+
+const WAIT: Duration = Duration::from_secs(15);
+
+fn harness(opts: ConsoleOptions) -> Harness<'static, Console> {
+    Harness::builder()
+        .with_size(egui::vec2(1600.0, 1000.0))
+        .with_step_dt(1.0 / 60.0)
+        .build_eframe(move |cc| {
+            let mut c = Console::new(&opts).expect("console opens on the link");
+            c.setup(&cc.egui_ctx);
+            c
+        })
+}
+
+/// Runs frames until a label containing `text` shows (at most `WAIT`).
+#[track_caller]
+fn wait_for_label(h: &mut Harness<'static, Console>, text: &str) {
+    let deadline = Instant::now() + WAIT;
+    while Instant::now() < deadline {
+        h.step();
+        if h.query_all_by_label_contains(text).next().is_some() {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let state = h.state().link.as_ref().map(|l| format!("{:#?}", l.state));
+    panic!("no label containing {text:?} within {WAIT:?}; link state: {state:?}");
+}
+
+fn monitor_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
+    let station = repo()
+        .join("layouts/sorting-station")
+        .canonicalize()
+        .unwrap();
+    let text = format!(
+        "Gateway(mode: Monitor, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 5, \
+         client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 50, backoff_max_ms: 400))",
+        station.display().to_string()
+    );
+    let path = dir.0.join("monitor.ron");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn console_follows_a_monitor_link_to_pymodbus() {
+    let mut plant = Plant::start(None);
+    let port = plant.port;
+    let dir = TempDir::new("console-link");
+    let mut opts = ConsoleOptions::new(&repo().join("layouts/sorting-station"));
+    opts.link = Some(monitor_config(&dir, port));
+    opts.data_dir = None;
+    let mut h = harness(opts);
+
+    // Connected: the link-state panel and the status bar say so.
+    h.get_by_label("Live link");
+    h.get_by_label("Mode: monitor (read-only, filter reports)");
+    wait_for_label(&mut h, &format!("Link: connected to 127.0.0.1:{port}"));
+    wait_for_label(&mut h, "Stale inputs: none");
+    wait_for_label(&mut h, "Last poll: ");
+    wait_for_label(&mut h, "Exceptions: 0");
+    let cycles = h.state().sim.engine.cycles();
+    assert!(cycles > 0, "the console's engine follows the link's cycles");
+
+    // A box at C7 with the turntable's A4 off (CSs10 = C7 · /A4): the monitored plant
+    // violates the constraint; the console explains it from the observed cycles.
+    plant.set_inputs(&[(7, true)]);
+    wait_for_label(&mut h, "Trip at");
+    h.get_by_label("CSs10 = C7 · A\u{305}4\u{305}");
+    h.get_by_label("2 Before stop").click();
+    wait_for_label(
+        &mut h,
+        "CSs10 = C7 · A\u{305}4\u{305} became true: C7=1, A4=0.",
+    );
+    let trip = h.state().latest_trip().unwrap();
+    assert!(
+        !h.state().sim.engine.trips[trip].enforced,
+        "monitor mode reports, never enforces"
+    );
+
+    // The peer killed: reconnecting with backoff, the link alarm (active, in the
+    // console's alarm list), stale inputs. (On a loaded machine the slow peer may have
+    // raised and cleared the alarm before: wait for an active one.)
+    plant.stop();
+    wait_for_label(
+        &mut h,
+        &format!("Link: reconnecting to 127.0.0.1:{port} (attempt"),
+    );
+    wait_state(&mut h, "the active link alarm", |c| {
+        c.sim
+            .alarms
+            .all()
+            .iter()
+            .any(|a| a.key == "link:peer" && a.cleared.is_none())
+    });
+    wait_for_label(&mut h, &format!("monitored peer 127.0.0.1:{port} lost"));
+    wait_for_label(&mut h, "Stale inputs: C0");
+
+    // The peer back on the same port: connected again, the alarm cleared.
+    let mut plant = Plant::start(Some(port));
+    wait_for_label(&mut h, &format!("Link: connected to 127.0.0.1:{port}"));
+    let deadline = Instant::now() + WAIT;
+    while h
+        .state()
+        .sim
+        .alarms
+        .all()
+        .iter()
+        .any(|a| a.key == "link:peer" && a.cleared.is_none())
+    {
+        assert!(Instant::now() < deadline, "the link alarm never cleared");
+        h.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let link = h.state().link.as_ref().unwrap();
+    assert!(link.state.client.connections >= 2, "{:#?}", link.state);
+    plant.set_inputs(&[(7, false)]);
+}
+
+fn gateway_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
+    let station = repo()
+        .join("layouts/sorting-station")
+        .canonicalize()
+        .unwrap();
+    let text = format!(
+        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 10, \
+         client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
+         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"))",
+        station.display().to_string()
+    );
+    let path = dir.0.join("gateway.ron");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Runs frames until `cond` holds on the console (at most `WAIT`).
+#[track_caller]
+fn wait_state(h: &mut Harness<'static, Console>, what: &str, cond: impl Fn(&Console) -> bool) {
+    let deadline = Instant::now() + WAIT;
+    while !cond(h.state()) {
+        assert!(Instant::now() < deadline, "timed out waiting for {what}");
+        h.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn console_follows_a_gateway_link_and_resets_through_it() {
+    let mut plant = Plant::start(None);
+    let port = plant.port;
+    let dir = TempDir::new("console-gateway");
+    let mut opts = ConsoleOptions::new(&repo().join("layouts/sorting-station"));
+    opts.link = Some(gateway_config(&dir, port));
+    opts.data_dir = None;
+    let mut h = harness(opts);
+    h.get_by_label("Mode: gateway (filter enforced between PLC and plant)");
+    wait_for_label(&mut h, &format!("Link: connected to 127.0.0.1:{port}"));
+    wait_for_label(&mut h, "PLC: silent");
+    let server = h.state().link.as_ref().unwrap().state.listening.unwrap();
+    wait_for_label(&mut h, &format!("PLC server: {server}"));
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    plc.command("0000000");
+    wait_for_label(&mut h, "PLC: heard");
+
+    // The sequence of the gateway test (live.rs): a loaded table rotates to the
+    // unloading position, the box leaves it to the right exit (C6 falls, C7 rises, one
+    // edge per cycle), and the PLC releases A4 too early (CSs10 = C7 · /A4): the
+    // gateway trips and holds A4 at the plant.
+    plant.set_inputs(&[(4, true), (6, true)]);
+    wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
+    plc.command("0000100");
+    wait_until("the plant to rotate", || plant.coils() == "0000100");
+    plant.set_inputs(&[(4, false), (5, true)]);
+    wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
+    plant.set_inputs(&[(6, false)]);
+    wait_until("the PLC to see C5", || plc.sensors() == "di 00000100000");
+    plant.set_inputs(&[(7, true)]);
+    wait_until("the PLC to see C5 C7", || plc.sensors() == "di 00000101000");
+    plc.command("0000000");
+    wait_for_label(&mut h, "TRIPPED");
+    wait_for_label(&mut h, "Trip at");
+    h.get_by_label("CSs10 = C7 · A\u{305}4\u{305}");
+    let trip = h.state().latest_trip().unwrap();
+    let record = &h.state().sim.engine.trips[trip];
+    assert!(record.enforced);
+    assert!(
+        record.constraints.iter().any(|c| c.id == "CSs10"),
+        "{record:?}"
+    );
+    assert_eq!(plant.coils(), "0000100", "the plant holds A4");
+
+    // Reset while the box is still at C7: the gateway refuses it, the journal says why.
+    h.get_by_label("Reset").click();
+    wait_for_label(&mut h, "reset refused: ");
+    assert!(h.state().sim.engine.is_tripped());
+    assert_eq!(plant.coils(), "0000100");
+
+    // The box has left: the reset goes through the gateway, the mirror follows, the
+    // plant gets the PLC's outputs again.
+    plant.set_inputs(&[(7, false)]);
+    wait_until("the PLC to see C5 alone", || {
+        plc.sensors() == "di 00000100000"
+    });
+    h.get_by_label("Reset").click();
+    wait_state(&mut h, "the console's engine to reset", |c| {
+        !c.sim.engine.is_tripped()
+    });
+    wait_until("the plant to follow the PLC again", || {
+        plant.coils() == "0000000"
+    });
+    assert!(h.query_all_by_label_contains("TRIPPED").next().is_none());
+}
