@@ -349,6 +349,8 @@ pub fn synoptic_ui(
     pal: &Palette,
     plant: &Plant,
 ) -> egui::Response {
+    // Predicted-hazard labels, drawn last so that no equipment hides them.
+    let mut predicted_labels: Vec<(Pos2, String)> = Vec::new();
     let size = ui.available_size().max(vec2(100.0, 100.0));
     let (response, painter) = ui.allocate_painter(size, Sense::click_and_drag());
     response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Synoptic"));
@@ -536,13 +538,7 @@ pub fn synoptic_ui(
                 let s = Stroke::new(3.0, pal.trip);
                 painter.line_segment([p - vec2(r, r), p + vec2(r, r)], s);
                 painter.line_segment([p - vec2(r, -r), p + vec2(r, -r)], s);
-                badge(
-                    &painter,
-                    p + vec2(r, -r - 18.0),
-                    &format!("predicted: {:?} box {}", h.kind, h.box_id),
-                    pal.trip,
-                    Color32::WHITE,
-                );
+                predicted_labels.push((p, format!("predicted: {:?} box {}", h.kind, h.box_id)));
             }
         }
     }
@@ -672,6 +668,18 @@ pub fn synoptic_ui(
         );
     }
     // Tooltip of the element under the pointer.
+    // Below and to the left of the box, away from the actuator lamps on the right,
+    // with a leader line to the box.
+    for (p, text) in &predicted_labels {
+        let galley = painter.layout_no_wrap(text.clone(), FontId::proportional(12.0), Color32::WHITE);
+        let size = galley.size() + vec2(8.0, 4.0);
+        let at = pos2(p.x - 22.0 - size.x, p.y + 30.0);
+        painter.line_segment(
+            [pos2(at.x + size.x, at.y + size.y * 0.5), *p],
+            Stroke::new(1.5, pal.trip),
+        );
+        badge(&painter, at, text, pal.trip, Color32::WHITE);
+    }
     if let Some(ptr) = response.hover_pos() {
         let hit = geom
             .sensors
