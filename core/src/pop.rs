@@ -279,35 +279,54 @@ fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option
         }
         best[k] = m;
     }
-    // Pairs where the twins agree on nothing but time-outs: the fault side leaves
-    // only through an edge the other cannot make. When that edge is an actuator's,
-    // certainty waits for the controller.
+    // Pairs where the twins agree on nothing but time-outs and neither has a deadline
+    // (both wait for ever): the fault side must leave through an edge the other cannot
+    // make. None at all: the fault stays silent and the other hypothesis explains the
+    // silence (not diagnosable). Only actuator edges: certainty waits for the
+    // controller, and a controller that waits for the faulty sensor never gives it.
+    let tmo_syms: Vec<usize> = (0..c.symbols.len()).filter(|&s| is_tmo(c, s)).collect();
+    let waits = |q: usize| tmo_syms.iter().all(|&s| c.g[q].obs.iter().any(|&(x, t, _)| x == s && t == q));
     let mut needs = std::collections::BTreeSet::new();
+    let mut silent = None;
     for n in g.node_indices() {
         if g.edges(n).any(|e| !is_tmo(c, *e.weight())) {
             continue;
         }
         let (qa, qb) = g[n];
-        let ca = closure_of(c, &[qa], false, &|m| mine(m));
-        let outs: std::collections::BTreeSet<&str> = ca
-            .iter()
-            .flat_map(|&a| c.g[a].obs.iter())
-            .filter(|(s, _, _)| !is_tmo(c, *s))
-            .filter_map(|(s, _, _)| {
-                let (sig, _) = c.symbols[*s].edge?;
-                (c.signals[sig].var.space == crate::symbols::Space::Output).then_some(c.symbols[*s].name.as_str())
-            })
-            .collect();
-        if outs.is_empty() {
+        if !waits(qa) || !waits(qb) {
             continue;
         }
+        let ca = closure_of(c, &[qa], false, &|m| mine(m));
+        let outs: Vec<(bool, &str)> = ca
+            .iter()
+            .flat_map(|&a| c.g[a].obs.iter())
+            .filter_map(|(s, _, _)| {
+                let (sig, _) = c.symbols[*s].edge?;
+                Some((c.signals[sig].var.space == crate::symbols::Space::Output, c.symbols[*s].name.as_str()))
+            })
+            .collect();
         let other = c.g[qb].mode.map_or_else(|| "normal".to_string(), |m| c.faults[m].clone());
-        needs.insert(format!(
-            "in `{}` the fault looks like {other} (`{}`) until the controller issues {}",
-            c.g[qa].name,
-            c.g[qb].name,
-            outs.into_iter().collect::<Vec<_>>().join(" or ")
-        ));
+        if outs.is_empty() {
+            silent.get_or_insert_with(|| {
+                format!(
+                    "after the fault `{}` shows no edge any more and `{}` ({other}) explains the silence",
+                    c.g[qa].name, c.g[qb].name
+                )
+            });
+        } else if outs.iter().all(|(actuator, _)| *actuator) {
+            let mut names: Vec<&str> = outs.iter().map(|(_, n)| *n).collect();
+            names.sort_unstable();
+            names.dedup();
+            needs.insert(format!(
+                "in `{}` the fault looks like {other} (`{}`) until the controller issues {}",
+                c.g[qa].name,
+                c.g[qb].name,
+                names.join(" or ")
+            ));
+        }
+    }
+    if let Some(w) = silent {
+        return (false, None, Some(w), needs.into_iter().collect());
     }
     (true, Some(best.iter().copied().max().unwrap_or(0)), None, needs.into_iter().collect())
 }
@@ -401,7 +420,7 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
                 match b {
                     model::Behaviour::StuckAt(s, _) | model::Behaviour::Spurious(s, _) => *s = format!("{s}_{i}"),
                     model::Behaviour::Moves(_, e) => *e = rename(e),
-                    model::Behaviour::Blocked(_) => {}
+                    model::Behaviour::Blocked(_) | model::Behaviour::Unguarded => {}
                 }
             }
         }

@@ -551,11 +551,8 @@ fn compile_one(
                     let spur = matches!(beh, Behaviour::Spurious(..));
                     for x in 0..states.len() {
                         let cur = (values[x] >> si) & 1 == 1;
-                        let expected_edge = evs.iter().any(|e| e.from == x && e.sig == si && e.rise == *v);
-                        if spur && expected_edge {
-                            // A pulse that looks like the expected edge is not observable.
-                            continue;
-                        }
+                        // A pulse may also start with an edge the model expects: its end
+                        // (the sensor going back within the pulse limit) tells it apart.
                         let t = if cur == *v {
                             if spur { continue; }
                             get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Timed)
@@ -577,6 +574,12 @@ fn compile_one(
                             }
                             None => ctx.err("V0504", n, format!("fault `{}`: unknown state `{n}`", fd.id)),
                         }
+                    }
+                }
+                Behaviour::Unguarded => {
+                    for x in 0..states.len() {
+                        let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Timed);
+                        g[x].spawn.push((f, t));
                     }
                 }
                 Behaviour::Moves(n, act) => {
@@ -639,6 +642,16 @@ fn compile_one(
                     obs.extend(edge_syms(si, !*v).into_iter().map(|sy| (sy, back, None)));
                 }
                 obs.extend((first_tmo..syms.len()).filter(|&s| s != pulse_sym).map(|s| (s, gi, None)));
+            }
+            (Behaviour::Unguarded, _) => {
+                for e in &out {
+                    let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Timed);
+                    obs.extend(edge_syms(e.sig, e.rise).into_iter().map(|sy| (sy, t, e.window)));
+                    windows.push(e.window);
+                }
+                let d = deadline_of(&windows);
+                obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
+                g[gi].deadline = d;
             }
             (Behaviour::Blocked(_), _) => {
                 for e in out.iter().filter(|e| signals[e.sig].var.space == Space::Output) {

@@ -51,8 +51,8 @@ pub enum Verdict {
     Early(String),
     /// No certain diagnosis; the component still hesitates between these faults.
     Ambiguous(String),
-    /// No certain diagnosis and the component's decisions stayed normal: the fault
-    /// changed nothing the component observes.
+    /// No certain diagnosis, and the fault changed no sensor and no output over the
+    /// watch (compared with a fault-free twin run of the same seed).
     NoEffect,
 }
 
@@ -264,7 +264,8 @@ fn describe(d: &Diagnosis) -> String {
     format!("{} ms {}/{} {}", d.time_ms, d.component, d.partition, d.fault)
 }
 
-/// Runs one injection with one seed.
+/// Runs one injection with one seed, beside a fault-free twin run of the same seed
+/// (to tell a fault that changed nothing observable from one that stays ambiguous).
 fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Result<(Verdict, String), Vec<Problem>> {
     let mut sim = simulation(shared, seed + 1)?;
     let at = config.first_ms + mix(seed) % config.spread_ms.max(1);
@@ -279,6 +280,8 @@ fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Resu
         }
     }
     let at = sim.now().0;
+    let mut twin = simulation(shared, seed + 1)?;
+    twin.run_until(Millis(at));
     let context = sim
         .diagnosers
         .as_ref()
@@ -290,7 +293,15 @@ fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Resu
         duration_ms: None,
     })
     .map_err(|p| vec![p])?;
-    sim.run_until(Millis(at + config.watch_ms));
+    let end = Millis(at + config.watch_ms);
+    let mut effect = false;
+    while sim.now() < end {
+        sim.cycle();
+        if !effect {
+            twin.cycle();
+            effect = sim.emulator.sensors() != twin.emulator.sensors() || sim.engine.applied() != twin.engine.applied();
+        }
+    }
     let Some(d) = sim.diagnosers.as_ref() else {
         return Ok((Verdict::NoEffect, context));
     };
@@ -310,8 +321,10 @@ fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Resu
         .filter(|(c, _, dec)| *c == inj.component && dec.certainty != Certainty::Normal)
         .map(|(_, p, dec)| format!("{} ({p})", dec.faults.join("|")))
         .collect();
-    Ok(if open.is_empty() {
+    Ok(if !effect {
         (Verdict::NoEffect, context)
+    } else if open.is_empty() {
+        (Verdict::Ambiguous("nothing unexpected seen by the component".into()), context)
     } else {
         (Verdict::Ambiguous(open.join(" or ")), context)
     })

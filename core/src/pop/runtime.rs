@@ -425,15 +425,29 @@ fn step(c: &Component, r: &mut Run, sym: usize, t: i64, margin: i64, timed: bool
             }
             // Spurious pulses count from their start; an unexpected motion from entering
             // each state; the rest from the phase's start.
-            let ns = if c.g[tq].phase == st.phase && st.phase != Phase::Untimed { since } else { t };
+            // A time-out looping on the state changes nothing.
+            let keep = (tq == q as usize && c.symbols[sym].edge.is_none())
+                || (c.g[tq].phase == st.phase && st.phase != Phase::Untimed);
+            let ns = if keep { since } else { t };
             match next.iter_mut().find(|(x, _)| *x as usize == tq) {
                 Some(e) => e.1 = e.1.max(ns),
                 None => next.push((tq as u32, ns)),
             }
         }
     }
+    // A timed state whose window already ended (its time-out was emitted since the
+    // clock event) cannot be occupied: a silent move into it comes too late.
+    next.retain(|&(q, _)| !expired(c, r, q as usize));
     next.sort_unstable();
     r.h = next;
+}
+
+fn expired(c: &Component, r: &Run, q: usize) -> bool {
+    let st = &c.g[q];
+    match (st.phase, st.deadline, r.clock) {
+        (Phase::Timed, Some(k), Some((ck, _))) => c.intervals[k].clock == ck && r.emitted & (1 << (k % 64)) != 0,
+        _ => false,
+    }
 }
 
 fn deadline_time(c: &Component, r: &Run, q: usize, margin: i64) -> Option<(i64, usize)> {

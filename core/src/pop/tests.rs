@@ -65,3 +65,4 @@ fn untimed_replay_and_report() {
     let (text, map) = faudes_export(table);
     assert!(text.contains("\"f_F1\" +o+") && map.contains("F12"));
 }
+
