@@ -420,7 +420,7 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
                 match b {
                     model::Behaviour::StuckAt(s, _) | model::Behaviour::Spurious(s, _) => *s = format!("{s}_{i}"),
                     model::Behaviour::Moves(_, e) => *e = rename(e),
-                    model::Behaviour::Blocked(_) | model::Behaviour::Unguarded => {}
+                    model::Behaviour::Blocked(_) | model::Behaviour::Jumps(..) | model::Behaviour::Unguarded => {}
                 }
             }
         }

@@ -576,6 +576,13 @@ fn compile_one(
                         }
                     }
                 }
+                Behaviour::Jumps(n, m) => match (state_of(n), state_of(m)) {
+                    (Some(x), Some(y)) => {
+                        let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, y, Phase::Untimed);
+                        g[x].spawn.push((f, t));
+                    }
+                    _ => ctx.err("V0504", n, format!("fault `{}`: `Jumps({n}, {m})` needs two states", fd.id)),
+                },
                 Behaviour::Unguarded => {
                     for x in 0..states.len() {
                         let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Timed);

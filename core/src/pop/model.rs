@@ -158,6 +158,10 @@ pub enum Behaviour {
     /// In state `.0` the plant moves as if the actuator edge `.1` had happened
     /// (unexpected motion); afterwards its timing is unknown.
     Moves(String, String),
+    /// In state `.0` the plant starts behaving as in state `.1` (a motion reversed by
+    /// a failed actuator: the table released or pushed back half-way); afterwards its
+    /// timing is unknown.
+    Jumps(String, String),
     /// The plant moves without its order: every expected evolution may happen without
     /// its condition (a drive stuck on, seen through guarded sensor edges).
     Unguarded,

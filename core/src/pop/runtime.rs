@@ -384,8 +384,11 @@ fn closure(c: &Component, h: &[(u32, i64)], t: i64, out: &mut Vec<(u32, i64)>) {
         let (q, since) = out[i];
         let st = &c.g[q as usize];
         for &(_, tq) in &st.spawn {
-            if !out.iter().any(|&(x, _)| x as usize == tq) {
-                out.push((tq as u32, t));
+            // The fault may occur at any time up to now: its state starts at the
+            // latest possible moment (the most permissive for pulse limits and holds).
+            match out.iter_mut().find(|(x, _)| *x as usize == tq) {
+                Some(e) => e.1 = e.1.max(t),
+                None => out.push((tq as u32, t)),
             }
         }
         for &tq in &st.silent {

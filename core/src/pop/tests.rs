@@ -66,3 +66,4 @@ fn untimed_replay_and_report() {
     assert!(text.contains("\"f_F1\" +o+") && map.contains("F12"));
 }
 
+
