@@ -27,15 +27,49 @@ fn fault_free_run_has_no_certain_diagnosis() {
 }
 
 #[test]
-fn c4_stuck_at_0_is_never_misdiagnosed() {
-    let (out, sim) = closed_loop(&station_dir(), 3, 300_000, Some((crate::emulator::FaultKind::SensorStuckAt0("C4".into()), 100_000))).unwrap();
-    // C4 stuck at 0 on the return looks like the table blocked between C5 and C4 (F12):
-    // no certain diagnosis of the wrong partition, and no hazard.
-    assert!(out.diagnoses.iter().all(|d| d.partition != "C5"), "{:#?}", out.diagnoses);
-    assert_eq!(out.hazards, 0);
-    let _ = sim;
+fn c4_stuck_at_0_at_rest_is_certain_on_partition_c4() {
+    // C4 falls with A4 off: F1 (stuck at 0), F8 (spurious fall) or F11 (unexpected
+    // motion). No rise of C4 within the pulse limit, no rise of C5 within the motion's
+    // hold: partition C4 with certainty.
+    let dir = station_dir();
+    let (_, mut sim) = closed_loop(&dir, 3, 60_000, None).unwrap();
+    let c4 = sim.bundle.plant.input("C4").unwrap();
+    let a4 = sim.bundle.plant.output("A4").unwrap();
+    while !(sim.emulator.sensors().get(c4) && !sim.engine.applied().get(a4)) {
+        sim.cycle();
+    }
+    let at = sim.now().0;
+    sim.inject(crate::emulator::FaultSpec {
+        trigger: crate::emulator::Trigger::At(at),
+        fault: crate::emulator::FaultKind::SensorStuckAt0("C4".into()),
+        duration_ms: None,
+    })
+    .unwrap();
+    sim.run_until(crate::Millis(at + 60_000));
+    let d = sim.diagnosers.as_ref().unwrap();
+    assert!(!d.diagnoses.is_empty());
+    assert!(d.diagnoses.iter().all(|x| x.partition == "C4" && x.fault == "F1"), "{:#?}", d.diagnoses);
+    assert_eq!(sim.emulator.hazards().len(), 0);
 }
 
+#[test]
+fn malformed_file_gives_file_line_and_column() {
+    let dir = station_dir();
+    let plant = crate::plant::Plant::load(&dir.join("plant.ron")).unwrap();
+    let path = dir.join("diagnosers.ron");
+    let Err(p) = from_text(&dir, plant.clone(), "Diagnosers(\n  components: [\n    (id: 3)\n  ],\n)", &path) else {
+        panic!("accepted");
+    };
+    let at = p[0].location.as_ref().unwrap();
+    assert_eq!((p[0].code, at.line), ("V0001", 3), "{p:?}");
+    let text = std::fs::read_to_string(&path).unwrap().replace("signals: [\"A4\", \"C4\", \"C5\"]", "signals: [\"A4\", \"C44\", \"C5\"]");
+    let Err(p) = from_text(&dir, plant, &text, &path) else {
+        panic!("accepted");
+    };
+    let at = p[0].location.as_ref().unwrap();
+    assert_eq!(p[0].code, "V0503", "{p:?}");
+    assert!(at.line > 1 && at.column > 1, "{at:?}");
+}
 
 #[test]
 fn c4_stuck_at_1_is_diagnosed_on_its_partition() {
