@@ -331,12 +331,20 @@ fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option
     (true, Some(best.iter().copied().max().unwrap_or(0)), None, needs.into_iter().collect())
 }
 
+/// A name as libFAUDES accepts it in a token file (no blanks, no `*`, `+`, `"`):
+/// `RE(C0) . (A0* + A1*)` becomes `RE(C0)_._(A0__+_A1_)` mapped character by character.
+pub fn faudes_name(n: &str) -> String {
+    n.chars()
+        .map(|ch| if ch.is_ascii_alphanumeric() || "()./_-".contains(ch) { ch } else { '_' })
+        .collect()
+}
+
 /// The untimed abstraction of a component as a libFAUDES generator file (`.gen`, with
 /// fault events `f_<label>` and hidden plant moves `hidden` unobservable) and its
 /// failure type map, in libFAUDES token format.
 pub fn faudes_export(c: &Component) -> (String, String) {
     let mut s = String::new();
-    let q = |n: &str| format!("\"{}\"", n.replace('"', "'"));
+    let q = |n: &str| format!("\"{}\"", faudes_name(n));
     let _ = writeln!(s, "<Generator>\n{}", q(&c.id));
     let _ = writeln!(s, "<Alphabet>");
     for sy in &c.symbols {

@@ -524,7 +524,12 @@ fn compile_one(
         *index.entry((f, b, x, ph)).or_insert_with(|| {
             beh_of.push(b);
             g.push(GState {
-                name: format!("{}/{}/{}", faults[f], states[x], format!("{ph:?}").to_lowercase()),
+                // Behaviours of one fault are told apart in the name (`F6.2/x2/untimed`).
+                name: if c.faults[f].behaviours.len() > 1 {
+                    format!("{}.{}/{}/{}", faults[f], b + 1, states[x], format!("{ph:?}").to_lowercase())
+                } else {
+                    format!("{}/{}/{}", faults[f], states[x], format!("{ph:?}").to_lowercase())
+                },
                 mode: Some(f),
                 x,
                 phase: ph,
