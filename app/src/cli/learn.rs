@@ -125,7 +125,7 @@ pub(crate) fn campaign(
 }
 
 /// Wall-clock limit of one libFAUDES construction in `vigie bench-diag`, s.
-const LIBFAUDES_LIMIT_S: u64 = 120;
+const LIBFAUDES_LIMIT_S: u64 = 60;
 
 /// `vigie bench-diag`: diagnoser cost per cycle (station, 1000 synthetic turntables),
 /// build times, and libFAUDES' centralized diagnoser for 3, 4, 5 turntables.
@@ -180,9 +180,18 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     }
     let script: [(u64, usize, bool); 6] = [(0, 0, true), (100, 1, false), (2900, 2, true), (4000, 0, false), (4100, 2, false), (6900, 1, true)];
     let cycles = 6000u64;
+    let warm = 1000u64;
     let mut edges = 0u64;
-    let start = Instant::now();
-    for k in 0..cycles {
+    let mut start = Instant::now();
+    let mut diagnosed = 0;
+    // One period (1000 cycles) of warm-up: the components that start mid-cycle see
+    // edges their initial state does not expect; then the timed cycles.
+    for k in 0..warm + cycles {
+        if k == warm {
+            start = Instant::now();
+            edges = 0;
+            diagnosed = d.diagnoses.len();
+        }
         frame.shift();
         let t = 10_000 + k * 10;
         for i in 0..n {
@@ -203,10 +212,10 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     let per = start.elapsed().as_secs_f64() * 1e6 / cycles as f64;
     writeln!(
         out,
-        "synthetic: {n} turntables, build {:.1} ms (goal < 1000 ms), {per:.2} us per cycle (goal <= 50 us; frame update included, {:.1} edges per cycle, {} certain diagnoses)",
+        "synthetic: {n} turntables, build {:.1} ms (goal < 1000 ms), {per:.2} us per cycle (goal <= 50 us; frame update included, {:.1} edges per cycle, {} certain diagnoses while timed)",
         build.as_secs_f64() * 1e3,
         edges as f64 / cycles as f64,
-        d.diagnoses.len()
+        d.diagnoses.len() - diagnosed
     )?;
     // Construction time vs libFAUDES for k identical turntables.
     let tmp = std::env::temp_dir().join("vigie-bench-diag");
