@@ -52,13 +52,22 @@ pub fn load(dir: &Path) -> Result<(DiagBundle, Vec<Problem>), Vec<Problem>> {
     let plant = Plant::load(&dir.join("plant.ron"))?;
     let path = dir.join("diagnosers.ron");
     let text = std::fs::read_to_string(&path).map_err(|e| {
-        vec![Problem::error("V0002", format!("cannot read {}: {e}", path.display()), None)]
+        vec![Problem::error(
+            "V0002",
+            format!("cannot read {}: {e}", path.display()),
+            None,
+        )]
     })?;
     from_text(dir, plant, &text, &path)
 }
 
 /// As [`load`], with the diagnoser file given as text.
-pub fn from_text(dir: &Path, plant: Plant, text: &str, path: &Path) -> Result<(DiagBundle, Vec<Problem>), Vec<Problem>> {
+pub fn from_text(
+    dir: &Path,
+    plant: Plant,
+    text: &str,
+    path: &Path,
+) -> Result<(DiagBundle, Vec<Problem>), Vec<Problem>> {
     let file = DiagnoserFile::from_ron(text, path).map_err(|p| vec![p])?;
     // The task monitors' outputs are auxiliaries too: declared first, as
     // `PlantBundle::load` does, so that both publish into the same frame.
@@ -71,19 +80,37 @@ pub fn from_text(dir: &Path, plant: Plant, text: &str, path: &Path) -> Result<(D
     } else {
         (None, Vec::new())
     };
-    let mut aux = tasks.as_ref().map(crate::tasks::TaskSet::aux_names).unwrap_or_default();
+    let mut aux = tasks
+        .as_ref()
+        .map(crate::tasks::TaskSet::aux_names)
+        .unwrap_or_default();
     aux.extend(build::aux_names(&file));
     let (mut bundle, mut more) = PlantBundle::from_plant(dir, plant, &aux);
     bundle.tasks = tasks;
     problems.append(&mut more);
-    let compiled = build::compile(&file, text, path, &bundle.symbols, Some(&bundle.constraints))?;
+    let compiled = build::compile(
+        &file,
+        text,
+        path,
+        &bundle.symbols,
+        Some(&bundle.constraints),
+    )?;
     let rewritten = coop::rewrite(&bundle.constraints, &bundle.symbols, &compiled)
         .map_err(|m| vec![Problem::error("V0513", m, None)])?;
     let file_name = dir.join("constraints.txt (rewritten by the diagnosers)");
-    let (set, mut p2) = crate::constraints::ConstraintSet::parse(&rewritten, &file_name, &bundle.symbols);
+    let (set, mut p2) =
+        crate::constraints::ConstraintSet::parse(&rewritten, &file_name, &bundle.symbols);
     problems.append(&mut p2);
     bundle.constraints = set;
-    Ok((DiagBundle { bundle, compiled, file, rewritten }, problems))
+    Ok((
+        DiagBundle {
+            bundle,
+            compiled,
+            file,
+            rewritten,
+        },
+        problems,
+    ))
 }
 
 /// The diagnosability of one fault on its component model.
@@ -151,11 +178,17 @@ pub fn report(compiled: &Compiled) -> Report {
             pruned: c
                 .unexpected
                 .iter()
-                .filter_map(|u| u.pruned_by.as_ref().map(|k| format!("{} in {} (by {k})", u.event, u.state)))
+                .filter_map(|u| {
+                    u.pruned_by
+                        .as_ref()
+                        .map(|k| format!("{} in {} (by {k})", u.event, u.state))
+                })
                 .collect(),
         });
         for (f, fname) in c.faults.iter().enumerate() {
-            let Some(p) = c.partitions.iter().find(|p| p.faults.contains(&f)) else { continue };
+            let Some(p) = c.partitions.iter().find(|p| p.faults.contains(&f)) else {
+                continue;
+            };
             let (diagnosable, max_edges, witness, needs_controller) = twin(c, f, &p.faults);
             faults.push(FaultReport {
                 component: c.id.clone(),
@@ -180,7 +213,12 @@ pub fn report(compiled: &Compiled) -> Report {
     }
 }
 
-fn closure_of(c: &Component, start: &[usize], allow_spawn: bool, keep: &dyn Fn(Option<usize>) -> bool) -> Vec<usize> {
+fn closure_of(
+    c: &Component,
+    start: &[usize],
+    allow_spawn: bool,
+    keep: &dyn Fn(Option<usize>) -> bool,
+) -> Vec<usize> {
     let mut out: Vec<usize> = start.to_vec();
     let mut i = 0;
     while i < out.len() {
@@ -200,7 +238,11 @@ fn closure_of(c: &Component, start: &[usize], allow_spawn: bool, keep: &dyn Fn(O
     out
 }
 
-fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option<String>, Vec<String>) {
+fn twin(
+    c: &Component,
+    f: usize,
+    part: &[usize],
+) -> (bool, Option<usize>, Option<String>, Vec<String>) {
     use petgraph::graph::{DiGraph, NodeIndex};
     let other = |m: Option<usize>| m.is_none_or(|x| !part.contains(&x));
     let mine = |m: Option<usize>| m == Some(f);
@@ -209,7 +251,12 @@ fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option
     let mut idx: BTreeMap<(usize, usize), NodeIndex> = BTreeMap::new();
     let mut work = Vec::new();
     for x in 0..c.states.len() {
-        let a0: Vec<usize> = c.g[x].spawn.iter().filter(|&&(ff, _)| ff == f).map(|&(_, t)| t).collect();
+        let a0: Vec<usize> = c.g[x]
+            .spawn
+            .iter()
+            .filter(|&&(ff, _)| ff == f)
+            .map(|&(_, t)| t)
+            .collect();
         let a = closure_of(c, &a0, false, &|m| mine(m));
         let b = closure_of(c, &[x], true, &|m| other(m));
         for &qa in &a {
@@ -253,13 +300,18 @@ fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option
         }
     }
     for e in g.edge_indices() {
-        let (a, b) = g.edge_endpoints(e).unwrap_or((NodeIndex::new(0), NodeIndex::new(0)));
+        let (a, b) = g
+            .edge_endpoints(e)
+            .unwrap_or((NodeIndex::new(0), NodeIndex::new(0)));
         if comp_of[a.index()] == comp_of[b.index()] && !is_tmo(c, g[e]) {
             let (qa, qb) = g[a];
             return (
                 false,
                 None,
-                Some(format!("`{}` and `{}` both repeat `{}`", c.g[qa].name, c.g[qb].name, c.symbols[g[e]].name)),
+                Some(format!(
+                    "`{}` and `{}` both repeat `{}`",
+                    c.g[qa].name, c.g[qb].name, c.symbols[g[e]].name
+                )),
                 Vec::new(),
             );
         }
@@ -285,7 +337,11 @@ fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option
     // silence (not diagnosable). Only actuator edges: certainty waits for the
     // controller, and a controller that waits for the faulty sensor never gives it.
     let tmo_syms: Vec<usize> = (0..c.symbols.len()).filter(|&s| is_tmo(c, s)).collect();
-    let waits = |q: usize| tmo_syms.iter().all(|&s| c.g[q].obs.iter().any(|&(x, t, _)| x == s && t == q));
+    let waits = |q: usize| {
+        tmo_syms
+            .iter()
+            .all(|&s| c.g[q].obs.iter().any(|&(x, t, _)| x == s && t == q))
+    };
     let mut needs = std::collections::BTreeSet::new();
     let mut silent = None;
     for n in g.node_indices() {
@@ -302,10 +358,15 @@ fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option
             .flat_map(|&a| c.g[a].obs.iter())
             .filter_map(|(s, _, _)| {
                 let (sig, _) = c.symbols[*s].edge?;
-                Some((c.signals[sig].var.space == crate::symbols::Space::Output, c.symbols[*s].name.as_str()))
+                Some((
+                    c.signals[sig].var.space == crate::symbols::Space::Output,
+                    c.symbols[*s].name.as_str(),
+                ))
             })
             .collect();
-        let other = c.g[qb].mode.map_or_else(|| "normal".to_string(), |m| c.faults[m].clone());
+        let other = c.g[qb]
+            .mode
+            .map_or_else(|| "normal".to_string(), |m| c.faults[m].clone());
         if outs.is_empty() {
             silent.get_or_insert_with(|| {
                 format!(
@@ -328,14 +389,25 @@ fn twin(c: &Component, f: usize, part: &[usize]) -> (bool, Option<usize>, Option
     if let Some(w) = silent {
         return (false, None, Some(w), needs.into_iter().collect());
     }
-    (true, Some(best.iter().copied().max().unwrap_or(0)), None, needs.into_iter().collect())
+    (
+        true,
+        Some(best.iter().copied().max().unwrap_or(0)),
+        None,
+        needs.into_iter().collect(),
+    )
 }
 
 /// A name as libFAUDES accepts it in a token file (no blanks, no `*`, `+`, `"`):
 /// `RE(C0) . (A0* + A1*)` becomes `RE(C0)_._(A0__+_A1_)` mapped character by character.
 pub fn faudes_name(n: &str) -> String {
     n.chars()
-        .map(|ch| if ch.is_ascii_alphanumeric() || "()./_-".contains(ch) { ch } else { '_' })
+        .map(|ch| {
+            if ch.is_ascii_alphanumeric() || "()./_-".contains(ch) {
+                ch
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 
@@ -360,19 +432,40 @@ pub fn faudes_export(c: &Component) -> (String, String) {
     let _ = writeln!(s, "</States>\n<TransRel>");
     for st in &c.g {
         for &(sym, t, _) in &st.obs {
-            let _ = writeln!(s, "{} {} {}", q(&st.name), q(&c.symbols[sym].name), q(&c.g[t].name));
+            let _ = writeln!(
+                s,
+                "{} {} {}",
+                q(&st.name),
+                q(&c.symbols[sym].name),
+                q(&c.g[t].name)
+            );
         }
         for &t in &st.silent {
             let _ = writeln!(s, "{} \"hidden\" {}", q(&st.name), q(&c.g[t].name));
         }
         for &(f, t) in &st.spawn {
-            let _ = writeln!(s, "{} {} {}", q(&st.name), q(&format!("f_{}", c.faults[f])), q(&c.g[t].name));
+            let _ = writeln!(
+                s,
+                "{} {} {}",
+                q(&st.name),
+                q(&format!("f_{}", c.faults[f])),
+                q(&c.g[t].name)
+            );
         }
     }
-    let _ = writeln!(s, "</TransRel>\n<InitStates>\n{}\n</InitStates>\n<MarkedStates>\n</MarkedStates>\n</Generator>", q(&c.g[c.initial].name));
+    let _ = writeln!(
+        s,
+        "</TransRel>\n<InitStates>\n{}\n</InitStates>\n<MarkedStates>\n</MarkedStates>\n</Generator>",
+        q(&c.g[c.initial].name)
+    );
     let mut m = String::from("<FailureTypes>\n");
     for f in &c.faults {
-        let _ = writeln!(m, "{} <FailureEvents> {} </FailureEvents>", q(f), q(&format!("f_{f}")));
+        let _ = writeln!(
+            m,
+            "{} <FailureEvents> {} </FailureEvents>",
+            q(f),
+            q(&format!("f_{f}"))
+        );
     }
     m.push_str("</FailureTypes>\n");
     (s, m)
@@ -382,7 +475,13 @@ pub fn faudes_export(c: &Component) -> (String, String) {
 /// its plant, for benchmarks.
 pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile) {
     use crate::plant::{Signal, SignalKind};
-    let sig = |id: String, kind| Signal { id, kind, description: String::new(), element: String::new(), address: None };
+    let sig = |id: String, kind| Signal {
+        id,
+        kind,
+        description: String::new(),
+        element: String::new(),
+        address: None,
+    };
     let mut inputs = Vec::new();
     let mut outputs = Vec::new();
     let mut comps = Vec::new();
@@ -397,14 +496,32 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
         let mut c = table.clone();
         c.id = format!("{}_{i}", table.id);
         for s in &table.signals {
-            let kind = if s.starts_with('A') { SignalKind::Actuator } else { SignalKind::Sensor };
+            let kind = if s.starts_with('A') {
+                SignalKind::Actuator
+            } else {
+                SignalKind::Sensor
+            };
             let id = format!("{s}_{i}");
-            if kind == SignalKind::Actuator { outputs.push(sig(id, kind)) } else { inputs.push(sig(id, kind)) }
+            if kind == SignalKind::Actuator {
+                outputs.push(sig(id, kind))
+            } else {
+                inputs.push(sig(id, kind))
+            }
         }
         c.signals = table.signals.iter().map(|s| format!("{s}_{i}")).collect();
         let mut vals = table.initial_values.clone();
         for s in &table.signals {
-            vals = vals.split(" . ").map(|l| if l.trim_start_matches('/') == s { format!("{l}_{i}") } else { l.to_string() }).collect::<Vec<_>>().join(" . ");
+            vals = vals
+                .split(" . ")
+                .map(|l| {
+                    if l.trim_start_matches('/') == s {
+                        format!("{l}_{i}")
+                    } else {
+                        l.to_string()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(" . ");
         }
         c.initial_values = vals;
         for e in &mut c.expected {
@@ -426,9 +543,13 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
         for f in &mut c.faults {
             for b in &mut f.behaviours {
                 match b {
-                    model::Behaviour::StuckAt(s, _) | model::Behaviour::Spurious(s, _) => *s = format!("{s}_{i}"),
+                    model::Behaviour::StuckAt(s, _) | model::Behaviour::Spurious(s, _) => {
+                        *s = format!("{s}_{i}")
+                    }
                     model::Behaviour::Moves(_, e) => *e = rename(e),
-                    model::Behaviour::Blocked(_) | model::Behaviour::Jumps(..) | model::Behaviour::Unguarded => {}
+                    model::Behaviour::Blocked(_)
+                    | model::Behaviour::Jumps(..)
+                    | model::Behaviour::Unguarded => {}
                 }
             }
         }
@@ -440,7 +561,17 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
             e.sensor = format!("{}_{i}", e.sensor);
             let mut x = e.expr.clone();
             for iv in &table.intervals {
-                x = x.split(" + ").map(|t| if t == iv.id { format!("{t}_{i}") } else { t.to_string() }).collect::<Vec<_>>().join(" + ");
+                x = x
+                    .split(" + ")
+                    .map(|t| {
+                        if t == iv.id {
+                            format!("{t}_{i}")
+                        } else {
+                            t.to_string()
+                        }
+                    })
+                    .collect::<Vec<_>>()
+                    .join(" + ");
             }
             e.expr = x;
         }
@@ -448,7 +579,12 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
     }
     (
         Plant::new("synthetic turntables", inputs, outputs),
-        DiagnoserFile { alpha: 3.0, margin_ms: 10, pulse_max_ms: 2000, components: comps },
+        DiagnoserFile {
+            alpha: 3.0,
+            margin_ms: 10,
+            pulse_max_ms: 2000,
+            components: comps,
+        },
     )
 }
 
@@ -478,27 +614,48 @@ pub fn closed_loop(
 ) -> Result<(RunOutcome, crate::sim::Simulation), Vec<Problem>> {
     use crate::sim::{OperatorAction, Options, Simulation};
     let (bundle, _) = PlantBundle::load(dir)?;
-    let program = crate::control::CompiledProgram::load(&dir.join("programs/reference.ron"), &bundle.plant)?;
-    let mut sim = Simulation::new(bundle, program, seed, Options { history_cycles: 16, explain: false })?;
+    let program =
+        crate::control::CompiledProgram::load(&dir.join("programs/reference.ron"), &bundle.plant)?;
+    let mut sim = Simulation::new(
+        bundle,
+        program,
+        seed,
+        Options {
+            history_cycles: 16,
+            explain: false,
+        },
+    )?;
     sim.enable_diagnosers()?;
-    sim.emulator.set_arrivals(crate::emulator::ArrivalPlan::Periodic {
-        period_ms: 15_000,
-        jitter_ms: 2_000,
-        mix: crate::emulator::SizeMix::Alternate,
-        count: None,
-    });
+    sim.emulator
+        .set_arrivals(crate::emulator::ArrivalPlan::Periodic {
+            period_ms: 15_000,
+            jitter_ms: 2_000,
+            mix: crate::emulator::SizeMix::Alternate,
+            count: None,
+        });
     if let Some((kind, at)) = fault {
         sim.emulator
-            .try_schedule_fault(crate::emulator::FaultSpec { trigger: crate::emulator::Trigger::At(at), fault: kind, duration_ms: None })
+            .try_schedule_fault(crate::emulator::FaultSpec {
+                trigger: crate::emulator::Trigger::At(at),
+                fault: kind,
+                duration_ms: None,
+            })
             .map_err(|p| vec![p])?;
     }
     let _ = sim.act(&OperatorAction::Start);
     sim.run_until(crate::Millis(duration_ms));
-    let d = sim.diagnosers.as_ref().map(|d| d.diagnoses.clone()).unwrap_or_default();
+    let d = sim
+        .diagnosers
+        .as_ref()
+        .map(|d| d.diagnoses.clone())
+        .unwrap_or_default();
     let out = RunOutcome {
         diagnoses: d,
         hazards: sim.emulator.hazards().len(),
-        delivered: { let s = sim.emulator.stats(); s.delivered_left + s.delivered_right },
+        delivered: {
+            let s = sim.emulator.stats();
+            s.delivered_left + s.delivered_right
+        },
         trips: sim.engine.trips.len(),
     };
     Ok((out, sim))

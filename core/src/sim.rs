@@ -409,7 +409,10 @@ impl Simulation {
     /// actuator partition).
     pub fn enable_diagnosers(&mut self) -> Result<(), Vec<Problem>> {
         let (db, problems) = crate::pop::load(&self.bundle.dir)?;
-        let errors: Vec<Problem> = problems.into_iter().filter(|p| p.is_error() && p.code != "V0106").collect();
+        let errors: Vec<Problem> = problems
+            .into_iter()
+            .filter(|p| p.is_error() && p.code != "V0106")
+            .collect();
         if !errors.is_empty() {
             return Err(errors);
         }
@@ -544,9 +547,14 @@ impl Simulation {
                 .cycle(now, self.emulator.sensors(), &mut self.program)
                 .clone(),
             Some(d) => {
-                let mut control = DegradedControl { inner: &mut self.program, subs: &self.degraded };
+                let mut control = DegradedControl {
+                    inner: &mut self.program,
+                    subs: &self.degraded,
+                };
                 self.engine
-                    .cycle_with(now, self.emulator.sensors(), &mut control, &mut |t, f| d.update(t, f))
+                    .cycle_with(now, self.emulator.sensors(), &mut control, &mut |t, f| {
+                        d.update(t, f)
+                    })
                     .clone()
             }
         };
@@ -652,7 +660,9 @@ impl Simulation {
     }
 
     fn diagnosis_events(&mut self, now: Millis) {
-        let Some(d) = self.diagnosers.as_ref() else { return };
+        let Some(d) = self.diagnosers.as_ref() else {
+            return;
+        };
         let new: Vec<crate::pop::Diagnosis> = d.diagnoses[self.diag_seen..].to_vec();
         self.diag_seen = d.diagnoses.len();
         if new.is_empty() {
@@ -686,9 +696,17 @@ impl Simulation {
                         n.component
                     )
                 }
-                _ => format!("Diagnosis: {} on {} ({})", n.fault, n.partition, n.component),
+                _ => format!(
+                    "Diagnosis: {} on {} ({})",
+                    n.fault, n.partition, n.component
+                ),
             };
-            self.alarms.raise(now, &format!("diag:{}:{}", n.component, n.partition), AlarmKind::Diagnosis, text.clone());
+            self.alarms.raise(
+                now,
+                &format!("diag:{}:{}", n.component, n.partition),
+                AlarmKind::Diagnosis,
+                text.clone(),
+            );
             self.log("diagnosis", text);
         }
     }
@@ -812,7 +830,11 @@ impl Simulation {
                 .unwrap_or_default(),
             sim_ms: self.now().0,
             cycles: self.engine.cycles(),
-            diagnoses: self.diagnosers.as_ref().map(|d| d.diagnoses.clone()).unwrap_or_default(),
+            diagnoses: self
+                .diagnosers
+                .as_ref()
+                .map(|d| d.diagnoses.clone())
+                .unwrap_or_default(),
         }
     }
 }

@@ -46,17 +46,32 @@ fn reduced_fault_campaign_diagnoses_the_right_partition_and_never_a_false_one() 
         text.push_str(&format!("{row:?}\n"));
     }
     for row in &r.rows {
-        assert_eq!(row.wrong + row.early, 0, "{}: wrong or early certain diagnosis\n{row:#?}", row.name);
         assert_eq!(
-            row.right + row.ambiguous.values().sum::<usize>() + row.no_effect.values().sum::<usize>(),
+            row.wrong + row.early,
+            0,
+            "{}: wrong or early certain diagnosis\n{row:#?}",
+            row.name
+        );
+        assert_eq!(
+            row.right
+                + row.ambiguous.values().sum::<usize>()
+                + row.no_effect.values().sum::<usize>(),
             row.runs,
             "{row:#?}"
         );
         if ALWAYS.contains(&row.name.as_str()) {
-            assert_eq!(row.right, row.runs, "{} must always be diagnosed\n{row:#?}", row.name);
+            assert_eq!(
+                row.right, row.runs,
+                "{} must always be diagnosed\n{row:#?}",
+                row.name
+            );
         }
     }
-    assert!(r.false_diagnoses.is_empty(), "false diagnoses: {:#?}", r.false_diagnoses);
+    assert!(
+        r.false_diagnoses.is_empty(),
+        "false diagnoses: {:#?}",
+        r.false_diagnoses
+    );
     assert_eq!(r.fault_free_hazards, 0);
     assert!(r.fault_free_delivered > 200, "{}", r.fault_free_delivered);
 }
@@ -69,7 +84,7 @@ fn c4_stuck_at_0_at_rest_goes_on_in_degraded_mode_without_hazard() {
     // Wait until the table rests at C4 with A4 off, then C4 dies.
     let c4 = sim.bundle.plant.input("C4").unwrap();
     let a4 = sim.bundle.plant.output("A4").unwrap();
-    while !(sim.emulator.sensors().get(c4) && !sim.engine.applied().get(a4)) {
+    while !sim.emulator.sensors().get(c4) || sim.engine.applied().get(a4) {
         sim.cycle();
     }
     let at = sim.now().0;
@@ -81,7 +96,10 @@ fn c4_stuck_at_0_at_rest_goes_on_in_degraded_mode_without_hazard() {
     .unwrap();
     sim.run_until(Millis(at + 600_000));
     let d = sim.diagnosers.as_ref().unwrap();
-    assert!(!d.diagnoses.is_empty(), "C4 stuck at 0 at rest was not diagnosed");
+    assert!(
+        !d.diagnoses.is_empty(),
+        "C4 stuck at 0 at rest was not diagnosed"
+    );
     assert!(
         d.diagnoses.iter().all(|x| x.partition == "C4"),
         "{:#?}",
@@ -89,14 +107,27 @@ fn c4_stuck_at_0_at_rest_goes_on_in_degraded_mode_without_hazard() {
     );
     let delay = d.diagnoses[0].time_ms - at;
     assert!(delay < 5_000, "diagnosed after {delay} ms");
-    assert!(d.flagged().iter().any(|(p, stop, s)| p == "C4" && !stop && s.as_deref() == Some("C4")));
-    assert!(sim.emulator.hazards().is_empty(), "{:?}", sim.emulator.hazards());
+    assert!(
+        d.flagged()
+            .iter()
+            .any(|(p, stop, s)| p == "C4" && !stop && s.as_deref() == Some("C4"))
+    );
+    assert!(
+        sim.emulator.hazards().is_empty(),
+        "{:?}",
+        sim.emulator.hazards()
+    );
     let after = sim.emulator.stats();
     let delivered = after.delivered_left + after.delivered_right - delivered_before;
     // A box every 15 s for 10 minutes: production goes on (degraded).
-    assert!(delivered >= 30, "only {delivered} boxes delivered in degraded mode");
     assert!(
-        sim.journal().iter().any(|j| j.text.contains("C4 estimated from time intervals")),
+        delivered >= 30,
+        "only {delivered} boxes delivered in degraded mode"
+    );
+    assert!(
+        sim.journal()
+            .iter()
+            .any(|j| j.text.contains("C4 estimated from time intervals")),
         "the operator is not told that C4 is estimated"
     );
 }
@@ -112,7 +143,11 @@ fn headless_report_lists_the_diagnoses() {
         .current_dir(repo())
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let diagnoses = v["diagnoses"].as_array().unwrap();
     assert!(!diagnoses.is_empty(), "{v:#}");
@@ -182,8 +217,10 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
         let depth = if c.id == "table" { 5 } else { 6 };
         let seqs = sequences(c, depth);
         let seq_path = tmp.join(format!("{}.json", c.id));
-        let theirs_names: Vec<Vec<String>> =
-            seqs.iter().map(|s| s.iter().map(|e| pop::faudes_name(e)).collect()).collect();
+        let theirs_names: Vec<Vec<String>> = seqs
+            .iter()
+            .map(|s| s.iter().map(|e| pop::faudes_name(e)).collect())
+            .collect();
         std::fs::write(&seq_path, serde_json::to_string(&theirs_names).unwrap()).unwrap();
         let out = Command::new(&py)
             .arg(repo().join("tests/peers/faudes_diag.py"))
@@ -193,10 +230,18 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
             .arg(&seq_path)
             .output()
             .unwrap();
-        assert!(out.status.success(), "faudes_diag.py failed: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "faudes_diag.py failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         // The faudes module prints notices on import: the JSON is the last line.
         let text = String::from_utf8_lossy(&out.stdout);
-        let last = text.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("");
+        let last = text
+            .lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("");
         if last.contains("\"empty\"") {
             // libFAUDES 2.34.5 builds an empty diagnoser for the one-sensor conveyor
             // models (not understood yet): they are listed, the turntable must compare.
@@ -212,9 +257,17 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
                 let o = &ours[k];
                 match t {
                     // libFAUDES: the sequence left the language.
-                    None => assert!(o.is_empty(), "{}: {names:?} at {k}: libFAUDES rejects, we keep {o:?}", c.id),
+                    None => assert!(
+                        o.is_empty(),
+                        "{}: {names:?} at {k}: libFAUDES rejects, we keep {o:?}",
+                        c.id
+                    ),
                     Some(labels) => {
-                        assert!(!o.is_empty(), "{}: {names:?} at {k}: we reject, libFAUDES has {labels:?}", c.id);
+                        assert!(
+                            !o.is_empty(),
+                            "{}: {names:?} at {k}: we reject, libFAUDES has {labels:?}",
+                            c.id
+                        );
                         // Same certain verdict per partition: a partition is certain when
                         // every hypothesis is a fault of it.
                         for p in &c.partitions {
@@ -233,7 +286,12 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
             }
         }
     }
-    assert!(!empty.contains(&"table".to_string()), "libFAUDES built no diagnoser for the turntable");
-    eprintln!("libFAUDES cross-check: {compared} verdicts compared; no libFAUDES diagnoser for {empty:?}");
+    assert!(
+        !empty.contains(&"table".to_string()),
+        "libFAUDES built no diagnoser for the turntable"
+    );
+    eprintln!(
+        "libFAUDES cross-check: {compared} verdicts compared; no libFAUDES diagnoser for {empty:?}"
+    );
     assert!(compared > 1000, "only {compared} verdicts compared");
 }

@@ -8,12 +8,22 @@ use std::time::Instant;
 use vigie_core::pop;
 
 /// Learns the intervals of `diagnosers.ron` from normal-run traces and rewrites it.
-pub(crate) fn learn(dir: &Path, traces: &[PathBuf], alpha: Option<f64>, dry_run: bool) -> anyhow::Result<ExitCode> {
-    let (db, _) = pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+pub(crate) fn learn(
+    dir: &Path,
+    traces: &[PathBuf],
+    alpha: Option<f64>,
+    dry_run: bool,
+) -> anyhow::Result<ExitCode> {
+    let (db, _) =
+        pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let mut rows = Vec::new();
     for t in traces {
-        let text = std::fs::read_to_string(t).map_err(|e| anyhow::anyhow!("cannot read {}: {e}", t.display()))?;
-        rows.push(vigie_core::trace::parse(&text, t, &db.bundle.plant).map_err(|p| anyhow::anyhow!("{p}"))?);
+        let text = std::fs::read_to_string(t)
+            .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", t.display()))?;
+        rows.push(
+            vigie_core::trace::parse(&text, t, &db.bundle.plant)
+                .map_err(|p| anyhow::anyhow!("{p}"))?,
+        );
     }
     let measures = pop::learn::measure(&db.compiled, db.bundle.symbols.sizes(), &rows);
     let mut file = db.file.clone();
@@ -23,20 +33,40 @@ pub(crate) fn learn(dir: &Path, traces: &[PathBuf], alpha: Option<f64>, dry_run:
     let done = pop::learn::apply(&mut file, &measures);
     let mut out = std::io::stdout().lock();
     for (id, m) in &measures {
-        writeln!(out, "{id}: n={} min={} max={} mean={:.1} sigma={:.2} dT={:.2} (alpha {})", m.n, m.min, m.max, m.mean, m.sigma(), file.alpha * m.sigma(), file.alpha)?;
+        writeln!(
+            out,
+            "{id}: n={} min={} max={} mean={:.1} sigma={:.2} dT={:.2} (alpha {})",
+            m.n,
+            m.min,
+            m.max,
+            m.mean,
+            m.sigma(),
+            file.alpha * m.sigma(),
+            file.alpha
+        )?;
     }
     if !dry_run {
         std::fs::write(dir.join("diagnosers.ron"), file.to_ron())?;
-        writeln!(out, "wrote {} intervals into {}", done.len(), dir.join("diagnosers.ron").display())?;
+        writeln!(
+            out,
+            "wrote {} intervals into {}",
+            done.len(),
+            dir.join("diagnosers.ron").display()
+        )?;
     }
     Ok(ExitCode::SUCCESS)
 }
 
 /// Prints the diagnosability report (JSON).
 pub(crate) fn report(dir: &Path) -> anyhow::Result<ExitCode> {
-    let (db, _) = pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let (db, _) =
+        pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let r = pop::report(&db.compiled);
-    writeln!(std::io::stdout().lock(), "{}", serde_json::to_string_pretty(&r)?)?;
+    writeln!(
+        std::io::stdout().lock(),
+        "{}",
+        serde_json::to_string_pretty(&r)?
+    )?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -61,8 +91,9 @@ pub(crate) fn campaign(
         ..pop::campaign::Config::default()
     };
     let start = Instant::now();
-    let r = pop::campaign::run(dir, &config)
-        .map_err(|p| anyhow::anyhow!("cannot run the campaign:\n{}", vigie_core::diag::render(&p)))?;
+    let r = pop::campaign::run(dir, &config).map_err(|p| {
+        anyhow::anyhow!("cannot run the campaign:\n{}", vigie_core::diag::render(&p))
+    })?;
     let mut out = std::io::stdout().lock();
     if json {
         writeln!(out, "{}", serde_json::to_string_pretty(&r)?)?;
@@ -77,10 +108,17 @@ pub(crate) fn campaign(
         config.watch_ms / 1000,
         start.elapsed().as_secs_f64()
     )?;
-    writeln!(out, "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max", "fault", "expected partition", "runs", "right", "wrong", "early", "ambig", "none")?;
+    writeln!(
+        out,
+        "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
+        "fault", "expected partition", "runs", "right", "wrong", "early", "ambig", "none"
+    )?;
     let (mut right, mut runs, mut bad) = (0, 0, 0);
     for row in &r.rows {
-        let q = |p| row.delay_quantile(p).map_or_else(|| "-".to_string(), |d| d.to_string());
+        let q = |p| {
+            row.delay_quantile(p)
+                .map_or_else(|| "-".to_string(), |d| d.to_string())
+        };
         writeln!(
             out,
             "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
@@ -109,7 +147,10 @@ pub(crate) fn campaign(
         runs += row.runs;
         bad += row.wrong + row.early;
     }
-    writeln!(out, "total: {runs} runs, {right} right, {bad} wrong or early")?;
+    writeln!(
+        out,
+        "total: {runs} runs, {right} right, {bad} wrong or early"
+    )?;
     writeln!(
         out,
         "fault-free: {} simulated hours, {} boxes delivered, {} hazards, {} certain diagnoses (all false)",
@@ -119,9 +160,17 @@ pub(crate) fn campaign(
         r.false_diagnoses.len()
     )?;
     for d in r.false_diagnoses.iter().take(10) {
-        writeln!(out, "      FALSE {} ms {}/{} {}", d.time_ms, d.component, d.partition, d.fault)?;
+        writeln!(
+            out,
+            "      FALSE {} ms {}/{} {}",
+            d.time_ms, d.component, d.partition, d.fault
+        )?;
     }
-    Ok(if bad == 0 && r.false_diagnoses.is_empty() { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+    Ok(if bad == 0 && r.false_diagnoses.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }
 
 /// Wall-clock limit of one libFAUDES construction in `vigie bench-diag`, s.
@@ -131,11 +180,15 @@ const LIBFAUDES_LIMIT_S: u64 = 60;
 /// build times, and libFAUDES' centralized diagnoser for 3, 4, 5 turntables.
 pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     let mut out = std::io::stdout().lock();
-    let err = |p: Vec<vigie_core::diag::Problem>| anyhow::anyhow!("{}", vigie_core::diag::render(&p));
+    let err =
+        |p: Vec<vigie_core::diag::Problem>| anyhow::anyhow!("{}", vigie_core::diag::render(&p));
     // Station: ten minutes of production recorded (frames after the filter), then
     // replayed through a fresh copy of the diagnosers alone.
     let (_, mut sim) = pop::closed_loop(dir, 2, 10, None).map_err(err)?;
-    let diag = sim.diagnosers.clone().ok_or_else(|| anyhow::anyhow!("no diagnosers"))?;
+    let diag = sim
+        .diagnosers
+        .clone()
+        .ok_or_else(|| anyhow::anyhow!("no diagnosers"))?;
     let mut frames = Vec::new();
     for _ in 0..60_000 {
         sim.cycle();
@@ -159,8 +212,13 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     )?;
     // Synthetic 1000 turntables.
     let text = std::fs::read_to_string(dir.join("diagnosers.ron"))?;
-    let file = pop::model::DiagnoserFile::from_ron(&text, &dir.join("diagnosers.ron")).map_err(|p| anyhow::anyhow!("{p}"))?;
-    let table = file.components.iter().find(|c| c.id == "table").ok_or_else(|| anyhow::anyhow!("no table"))?;
+    let file = pop::model::DiagnoserFile::from_ron(&text, &dir.join("diagnosers.ron"))
+        .map_err(|p| anyhow::anyhow!("{p}"))?;
+    let table = file
+        .components
+        .iter()
+        .find(|c| c.id == "table")
+        .ok_or_else(|| anyhow::anyhow!("no table"))?;
     let n = 1000;
     let (plant, syn) = pop::synthetic(n, table);
     let mut symbols = plant.symbols();
@@ -169,7 +227,8 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     }
     let syn_text = syn.to_ron();
     let start = Instant::now();
-    let compiled = pop::build::compile(&syn, &syn_text, Path::new("<synthetic>"), &symbols, None).map_err(err)?;
+    let compiled = pop::build::compile(&syn, &syn_text, Path::new("<synthetic>"), &symbols, None)
+        .map_err(err)?;
     let build = start.elapsed();
     let mut d = pop::Diagnosers::new(compiled, &symbols);
     let mut frame = vigie_core::frame::Frame::new(symbols.sizes());
@@ -178,7 +237,14 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     for i in 0..n {
         frame.now[0].set(2 * i, true);
     }
-    let script: [(u64, usize, bool); 6] = [(0, 0, true), (100, 1, false), (2900, 2, true), (4000, 0, false), (4100, 2, false), (6900, 1, true)];
+    let script: [(u64, usize, bool); 6] = [
+        (0, 0, true),
+        (100, 1, false),
+        (2900, 2, true),
+        (4000, 0, false),
+        (4100, 2, false),
+        (6900, 1, true),
+    ];
     let cycles = 6000u64;
     let warm = 1000u64;
     let mut edges = 0u64;
@@ -221,11 +287,15 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     let tmp = std::env::temp_dir().join("vigie-bench-diag");
     std::fs::create_dir_all(&tmp)?;
     let c = &pop::load(dir).map_err(err)?.0.compiled;
-    let tc = c.components.iter().find(|c| c.id == "table").ok_or_else(|| anyhow::anyhow!("no table"))?;
+    let tc = c
+        .components
+        .iter()
+        .find(|c| c.id == "table")
+        .ok_or_else(|| anyhow::anyhow!("no table"))?;
     let (g, m) = pop::faudes_export(tc);
     std::fs::write(tmp.join("table.gen"), g)?;
     std::fs::write(tmp.join("table.ftm"), m)?;
-    for k in [3usize, 4, 5] {
+    for k in [1usize, 3, 4, 5] {
         let (plant, syn) = pop::synthetic(k, table);
         let mut symbols = plant.symbols();
         for a in pop::build::aux_names(&syn) {
@@ -233,12 +303,17 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
         }
         let t = syn.to_ron();
         let start = Instant::now();
-        let _ = pop::build::compile(&syn, &t, Path::new("<synthetic>"), &symbols, None).map_err(err)?;
-        writeln!(out, "vigie decentralized build, {k} turntables: {:.3} ms", start.elapsed().as_secs_f64() * 1e3)?;
+        let _ =
+            pop::build::compile(&syn, &t, Path::new("<synthetic>"), &symbols, None).map_err(err)?;
+        writeln!(
+            out,
+            "vigie decentralized build, {k} turntables: {:.3} ms",
+            start.elapsed().as_secs_f64() * 1e3
+        )?;
     }
     let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| PathBuf::from(".venv"), PathBuf::from);
     let script = PathBuf::from("tests/peers/faudes_diag.py");
-    for k in [3usize, 4, 5] {
+    for k in [1usize, 3, 4, 5] {
         let child = std::process::Command::new(venv.join("bin/python"))
             .arg(&script)
             .arg("bench")
@@ -251,7 +326,10 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
         let mut child = match child {
             Ok(c) => c,
             Err(e) => {
-                writeln!(out, "libFAUDES: not run ({e}); create the venv: python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt")?;
+                writeln!(
+                    out,
+                    "libFAUDES: not run ({e}); create the venv: python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt"
+                )?;
                 break;
             }
         };
@@ -266,7 +344,10 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
             if started.elapsed() > limit {
                 let _ = child.kill();
                 let _ = child.wait();
-                writeln!(out, "libFAUDES centralized EventDiagnoser, {k} turntables: not finished after {LIBFAUDES_LIMIT_S} s (stopped)")?;
+                writeln!(
+                    out,
+                    "libFAUDES centralized EventDiagnoser, {k} turntables: not finished after {LIBFAUDES_LIMIT_S} s (stopped)"
+                )?;
                 break;
             }
             std::thread::sleep(std::time::Duration::from_millis(50));

@@ -202,7 +202,11 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
-        Some(Command::Learn { traces, alpha, dry_run }) => learn::learn(&cli.plant, &traces, alpha, dry_run),
+        Some(Command::Learn {
+            traces,
+            alpha,
+            dry_run,
+        }) => learn::learn(&cli.plant, &traces, alpha, dry_run),
         Some(Command::Diagnose { report }) => {
             anyhow::ensure!(report, "use `vigie diagnose --report`");
             learn::report(&cli.plant)

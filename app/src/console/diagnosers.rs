@@ -24,7 +24,10 @@ pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
                 let mut chars = s.chars();
                 let first = chars.next().unwrap_or(' ');
                 let hat = format!("{first}\u{0302}{}", chars.as_str());
-                (format!("{s} estimated from time intervals ({hat}) — degraded mode"), false)
+                (
+                    format!("{s} estimated from time intervals ({hat}) — degraded mode"),
+                    false,
+                )
             }
             (false, None) => (format!("Partition {p} at fault"), false),
         })
@@ -38,13 +41,22 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
     };
     egui::Panel::top("diagnosers").show(ui, |ui| {
         for (line, stop) in banner_lines(c) {
-            let color = if stop { c.palette.trip } else { c.palette.alarm };
+            let color = if stop {
+                c.palette.trip
+            } else {
+                c.palette.alarm
+            };
             ui.label(RichText::new(line).strong().color(color));
         }
-        egui::CollapsingHeader::new(format!("Diagnosers ({} certain diagnoses)", d.diagnoses.len()))
-            .id_salt("diagnosers-table")
-            .show(ui, |ui| {
-                egui::Grid::new("diagnosers-grid").striped(true).show(ui, |ui| {
+        egui::CollapsingHeader::new(format!(
+            "Diagnosers ({} certain diagnoses)",
+            d.diagnoses.len()
+        ))
+        .id_salt("diagnosers-table")
+        .show(ui, |ui| {
+            egui::Grid::new("diagnosers-grid")
+                .striped(true)
+                .show(ui, |ui| {
                     ui.strong("component");
                     ui.strong("state estimate");
                     ui.strong("decisions");
@@ -61,7 +73,9 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
                             shown.join(", ")
                         });
                         ui.horizontal(|ui| {
-                            for (_, p, dec) in decisions.iter().filter(|(cid, _, _)| *cid == comp.id) {
+                            for (_, p, dec) in
+                                decisions.iter().filter(|(cid, _, _)| *cid == comp.id)
+                            {
                                 let (text, color) = match dec.certainty {
                                     Certainty::Normal => (format!("{p}: N"), None),
                                     Certainty::Ambiguous => (
@@ -83,6 +97,6 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
                         ui.end_row();
                     }
                 });
-            });
+        });
     });
 }

@@ -178,7 +178,9 @@ pub fn aux_names(file: &DiagnoserFile) -> Vec<String> {
 /// Parses an expression into one product term over the symbols.
 fn term_of(text: &str, symbols: &Symbols) -> Result<Vec<Literal>, String> {
     let e = parse_str(text).map_err(|e| format!("`{text}`: {}", e.message))?;
-    let d = e.to_dnf(symbols).map_err(|e| format!("`{text}`: {}", e.message))?;
+    let d = e
+        .to_dnf(symbols)
+        .map_err(|e| format!("`{text}`: {}", e.message))?;
     match d.as_slice() {
         [t] => Ok(t.clone()),
         _ => Err(format!("`{text}` must be a single product (no `+`)")),
@@ -255,23 +257,41 @@ fn compile_one(
                     prev: false,
                 },
             }),
-            _ => ctx.err("V0503", s, format!("`{s}` is not a sensor or actuator of the plant")),
+            _ => ctx.err(
+                "V0503",
+                s,
+                format!("`{s}` is not a sensor or actuator of the plant"),
+            ),
         }
     }
     if signals.len() > 64 {
-        ctx.err("V0503", &c.id, "a component observes at most 64 signals".into());
+        ctx.err(
+            "V0503",
+            &c.id,
+            "a component observes at most 64 signals".into(),
+        );
     }
-    let sig_of = |v: Var| signals.iter().position(|s| s.var.space == v.space && s.var.index == v.index);
+    let sig_of = |v: Var| {
+        signals
+            .iter()
+            .position(|s| s.var.space == v.space && s.var.index == v.index)
+    };
     let states: Vec<String> = c.states.iter().map(|s| s.id.clone()).collect();
     let state_of = |n: &str| states.iter().position(|s| s == n);
     let Some(initial) = state_of(&c.initial) else {
-        ctx.err("V0504", &c.initial, format!("unknown initial state `{}`", c.initial));
+        ctx.err(
+            "V0504",
+            &c.initial,
+            format!("unknown initial state `{}`", c.initial),
+        );
         return None;
     };
     // Edges of an expression: (signal, rising, guard).
     let edge_of = |text: &str| -> Result<(usize, bool, Option<Dnf>), String> {
         let e = parse_str(text).map_err(|e| format!("`{text}`: {}", e.message))?;
-        let d = e.to_dnf(symbols).map_err(|e| format!("`{text}`: {}", e.message))?;
+        let d = e
+            .to_dnf(symbols)
+            .map_err(|e| format!("`{text}`: {}", e.message))?;
         let mut edge: Option<(usize, bool)> = None;
         let mut guard: Dnf = Vec::new();
         let mut unguarded = false;
@@ -281,28 +301,41 @@ fn compile_one(
                 if !l.var.prev {
                     continue;
                 }
-                let now = Var { prev: false, ..l.var };
-                if let Some(n) = term.iter().find(|m| m.var == now && m.positive != l.positive)
+                let now = Var {
+                    prev: false,
+                    ..l.var
+                };
+                if let Some(n) = term
+                    .iter()
+                    .find(|m| m.var == now && m.positive != l.positive)
                     && let Some(i) = sig_of(now)
                 {
                     here = Some((i, n.positive));
                 }
             }
             let Some((i, rise)) = here else {
-                return Err(format!("`{text}`: every term needs an edge RE(x)/FE(x) of a component signal"));
+                return Err(format!(
+                    "`{text}`: every term needs an edge RE(x)/FE(x) of a component signal"
+                ));
             };
             if edge.replace((i, rise)).is_some_and(|e| e != (i, rise)) {
                 return Err(format!("`{text}` has more than one edge"));
             }
             let now = signals[i].var;
-            let rest: Vec<Literal> = term.iter().copied().filter(|l| !(l.var == now || l.var == Var { prev: true, ..now })).collect();
+            let rest: Vec<Literal> = term
+                .iter()
+                .copied()
+                .filter(|l| !(l.var == now || l.var == Var { prev: true, ..now }))
+                .collect();
             if rest.is_empty() {
                 unguarded = true;
             }
             guard.push(rest);
         }
         let Some((i, rise)) = edge else {
-            return Err(format!("`{text}` has no edge RE(x)/FE(x) of a component signal"));
+            return Err(format!(
+                "`{text}` has no edge RE(x)/FE(x) of a component signal"
+            ));
         };
         Ok((i, rise, if unguarded { None } else { Some(guard) }))
     };
@@ -317,7 +350,11 @@ fn compile_one(
                             init_val |= 1 << i;
                         }
                     }
-                    _ => ctx.err("V0505", &c.initial_values, format!("`{}`: only component signals at t", c.initial_values)),
+                    _ => ctx.err(
+                        "V0505",
+                        &c.initial_values,
+                        format!("`{}`: only component signals at t", c.initial_values),
+                    ),
                 }
             }
         }
@@ -347,16 +384,28 @@ fn compile_one(
                 });
                 raw.push((iv.id.clone(), k, iv.lo.clone(), iv.hi.clone()));
             }
-            Ok(_) => ctx.err("V0506", &iv.after, format!("clock event `{}` must be a bare edge", iv.after)),
+            Ok(_) => ctx.err(
+                "V0506",
+                &iv.after,
+                format!("clock event `{}` must be a bare edge", iv.after),
+            ),
             Err(m) => ctx.err("V0506", &iv.after, m),
         }
     }
     let resolve = |b: &Bound, depth: usize| -> Result<Option<u64>, String> {
-        fn go(b: &Bound, raw: &[(String, usize, Bound, Bound)], depth: usize) -> Result<Option<u64>, String> {
+        fn go(
+            b: &Bound,
+            raw: &[(String, usize, Bound, Bound)],
+            depth: usize,
+        ) -> Result<Option<u64>, String> {
             if depth > 16 {
                 return Err("interval bounds refer to each other in a cycle".into());
             }
-            let find = |n: &str| raw.iter().find(|r| r.0 == n).ok_or_else(|| format!("unknown interval `{n}`"));
+            let find = |n: &str| {
+                raw.iter()
+                    .find(|r| r.0 == n)
+                    .ok_or_else(|| format!("unknown interval `{n}`"))
+            };
             match b {
                 Bound::Ms(v) => Ok(Some(*v)),
                 Bound::Never => Ok(None),
@@ -369,7 +418,12 @@ fn compile_one(
     let mut intervals = Vec::new();
     for (id, clock, lo, hi) in &raw {
         match (resolve(lo, 0), resolve(hi, 0)) {
-            (Ok(Some(lo)), Ok(hi)) => intervals.push(Interval { id: id.clone(), clock: *clock, lo, hi }),
+            (Ok(Some(lo)), Ok(hi)) => intervals.push(Interval {
+                id: id.clone(),
+                clock: *clock,
+                lo,
+                hi,
+            }),
             (Ok(None), _) => ctx.err("V0507", id, format!("interval `{id}` has no lower bound")),
             (Err(m), _) | (_, Err(m)) => ctx.err("V0507", id, format!("interval `{id}`: {m}")),
         }
@@ -398,7 +452,15 @@ fn compile_one(
     let mut guarded_specs = Vec::new();
     for e in &c.expected {
         let (Some(from), Some(to)) = (state_of(&e.from), state_of(&e.to)) else {
-            ctx.err("V0504", if state_of(&e.from).is_none() { &e.from } else { &e.to }, format!("unknown state in evolution `{}` → `{}`", e.from, e.to));
+            ctx.err(
+                "V0504",
+                if state_of(&e.from).is_none() {
+                    &e.from
+                } else {
+                    &e.to
+                },
+                format!("unknown state in evolution `{}` → `{}`", e.from, e.to),
+            );
             continue;
         };
         let window = match &e.within {
@@ -416,7 +478,12 @@ fn compile_one(
                 let sym = if let Some(guard) = guard {
                     let name = e.event.split_whitespace().collect::<Vec<_>>().join(" ");
                     let k = syms.iter().position(|s| s.name == name).unwrap_or_else(|| {
-                        syms.push(Symbol { name, edge: Some((i, rise)), guard: Some(guard.clone()), timeout: None });
+                        syms.push(Symbol {
+                            name,
+                            edge: Some((i, rise)),
+                            guard: Some(guard.clone()),
+                            timeout: None,
+                        });
                         syms.len() - 1
                     });
                     Some(k)
@@ -424,7 +491,14 @@ fn compile_one(
                     None
                 };
                 guarded_specs.push(sym);
-                evs.push(Ev { from, syms: sym.map_or_else(Vec::new, |k| vec![k]), to, window, sig: i, rise });
+                evs.push(Ev {
+                    from,
+                    syms: sym.map_or_else(Vec::new, |k| vec![k]),
+                    to,
+                    window,
+                    sig: i,
+                    rise,
+                });
             }
             Err(m) => ctx.err("V0508", &e.event, m),
         }
@@ -432,19 +506,39 @@ fn compile_one(
     // Unguarded evolutions match every symbol of their edge.
     for ev in &mut evs {
         if ev.syms.is_empty() {
-            ev.syms = syms.iter().enumerate().filter(|(_, s)| s.edge == Some((ev.sig, ev.rise))).map(|(k, _)| k).collect();
+            ev.syms = syms
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.edge == Some((ev.sig, ev.rise)))
+                .map(|(k, _)| k)
+                .collect();
         }
     }
     // Time-out symbols: one per interval used as a window, then the pulse.
     let first_tmo = syms.len();
     for (k, iv) in intervals.iter().enumerate() {
         if iv.hi.is_some() && evs.iter().any(|e| e.window == Some(k)) {
-            syms.push(Symbol { name: format!("tmo({})", iv.id), edge: None, guard: None, timeout: Some(k) });
+            syms.push(Symbol {
+                name: format!("tmo({})", iv.id),
+                edge: None,
+                guard: None,
+                timeout: Some(k),
+            });
         }
     }
-    syms.push(Symbol { name: "tmo(pulse)".into(), edge: None, guard: None, timeout: None });
+    syms.push(Symbol {
+        name: "tmo(pulse)".into(),
+        edge: None,
+        guard: None,
+        timeout: None,
+    });
     let pulse_sym = syms.len() - 1;
-    syms.push(Symbol { name: "tmo(motion)".into(), edge: None, guard: None, timeout: None });
+    syms.push(Symbol {
+        name: "tmo(motion)".into(),
+        edge: None,
+        guard: None,
+        timeout: None,
+    });
     let motion_sym = syms.len() - 1;
     // Values of every state.
     let mut values: Vec<Option<u64>> = vec![None; states.len()];
@@ -455,7 +549,16 @@ fn compile_one(
         for ev in evs.iter().filter(|e| e.from == x) {
             let before = (v >> ev.sig) & 1 == 1;
             if before == ev.rise {
-                ctx.err("V0509", &c.states[x].id, format!("in state `{}`, `{}` is already {}", states[x], signals[ev.sig].name, u8::from(before)));
+                ctx.err(
+                    "V0509",
+                    &c.states[x].id,
+                    format!(
+                        "in state `{}`, `{}` is already {}",
+                        states[x],
+                        signals[ev.sig].name,
+                        u8::from(before)
+                    ),
+                );
                 continue;
             }
             let nv = v ^ (1 << ev.sig);
@@ -464,7 +567,14 @@ fn compile_one(
                     values[ev.to] = Some(nv);
                     work.push(ev.to);
                 }
-                Some(o) if o != nv => ctx.err("V0509", &c.states[ev.to].id, format!("state `{}` is reached with different signal values", states[ev.to])),
+                Some(o) if o != nv => ctx.err(
+                    "V0509",
+                    &c.states[ev.to].id,
+                    format!(
+                        "state `{}` is reached with different signal values",
+                        states[ev.to]
+                    ),
+                ),
                 Some(_) => {}
             }
         }
@@ -478,24 +588,42 @@ fn compile_one(
         for f in &p.faults {
             match faults.iter().position(|x| x == f) {
                 Some(k) => fs.push(k),
-                None => ctx.err("V0510", f, format!("partition `{}` names unknown fault `{f}`", p.id)),
+                None => ctx.err(
+                    "V0510",
+                    f,
+                    format!("partition `{}` names unknown fault `{f}`", p.id),
+                ),
             }
         }
-        partitions.push(Partition { id: p.id.clone(), faults: fs, sensor: p.sensor.clone(), stop: p.stop });
+        partitions.push(Partition {
+            id: p.id.clone(),
+            faults: fs,
+            sensor: p.sensor.clone(),
+            stop: p.stop,
+        });
     }
     if ctx.problems.len() > before {
         return None;
     }
     // The automaton. Normal states first.
     let deadline_of = |ws: &[Option<usize>]| -> Option<usize> {
-        if ws.is_empty() || ws.iter().any(|w| w.is_none_or(|k| intervals[k].hi.is_none())) {
+        if ws.is_empty()
+            || ws
+                .iter()
+                .any(|w| w.is_none_or(|k| intervals[k].hi.is_none()))
+        {
             return None;
         }
-        ws.iter().flatten().copied().max_by_key(|&k| intervals[k].hi)
+        ws.iter()
+            .flatten()
+            .copied()
+            .max_by_key(|&k| intervals[k].hi)
     };
     let tmo_loops = |deadline: Option<usize>, own_dies: bool| -> Vec<usize> {
         (first_tmo..syms.len())
-            .filter(|&s| !(own_dies && deadline.is_some() && syms[s].timeout == deadline && s < pulse_sym))
+            .filter(|&s| {
+                !(own_dies && deadline.is_some() && syms[s].timeout == deadline && s < pulse_sym)
+            })
             .collect()
     };
     let mut g: Vec<GState> = Vec::new();
@@ -512,23 +640,56 @@ fn compile_one(
         for s in tmo_loops(deadline, true) {
             obs.push((s, x, None));
         }
-        g.push(GState { name: name.clone(), mode: None, x, phase: Phase::Timed, obs, silent: Vec::new(), spawn: Vec::new(), deadline, hold_ms: None });
+        g.push(GState {
+            name: name.clone(),
+            mode: None,
+            x,
+            phase: Phase::Timed,
+            obs,
+            silent: Vec::new(),
+            spawn: Vec::new(),
+            deadline,
+            hold_ms: None,
+        });
     }
     // Fault copies, built from a work list.
     let edge_syms = |sig: usize, rise: bool| -> Vec<usize> {
-        syms.iter().enumerate().filter(|(_, s)| s.edge == Some((sig, rise))).map(|(k, _)| k).collect()
+        syms.iter()
+            .enumerate()
+            .filter(|(_, s)| s.edge == Some((sig, rise)))
+            .map(|(k, _)| k)
+            .collect()
     };
     let mut pending: Vec<usize> = Vec::new();
     let mut beh_of: Vec<usize> = vec![0; g.len()];
-    let get = |g: &mut Vec<GState>, pending: &mut Vec<usize>, index: &mut BTreeMap<(usize, usize, usize, Phase), usize>, beh_of: &mut Vec<usize>, f: usize, b: usize, x: usize, ph: Phase| -> usize {
+    let get = |g: &mut Vec<GState>,
+               pending: &mut Vec<usize>,
+               index: &mut BTreeMap<(usize, usize, usize, Phase), usize>,
+               beh_of: &mut Vec<usize>,
+               f: usize,
+               b: usize,
+               x: usize,
+               ph: Phase|
+     -> usize {
         *index.entry((f, b, x, ph)).or_insert_with(|| {
             beh_of.push(b);
             g.push(GState {
                 // Behaviours of one fault are told apart in the name (`F6.2/x2/untimed`).
                 name: if c.faults[f].behaviours.len() > 1 {
-                    format!("{}.{}/{}/{}", faults[f], b + 1, states[x], format!("{ph:?}").to_lowercase())
+                    format!(
+                        "{}.{}/{}/{}",
+                        faults[f],
+                        b + 1,
+                        states[x],
+                        format!("{ph:?}").to_lowercase()
+                    )
                 } else {
-                    format!("{}/{}/{}", faults[f], states[x], format!("{ph:?}").to_lowercase())
+                    format!(
+                        "{}/{}/{}",
+                        faults[f],
+                        states[x],
+                        format!("{ph:?}").to_lowercase()
+                    )
                 },
                 mode: Some(f),
                 x,
@@ -550,7 +711,11 @@ fn compile_one(
             match beh {
                 Behaviour::StuckAt(s, v) | Behaviour::Spurious(s, v) => {
                     let Some(si) = signals.iter().position(|x| &x.name == s) else {
-                        ctx.err("V0511", s, format!("fault `{}`: `{s}` is not a signal of `{}`", fd.id, c.id));
+                        ctx.err(
+                            "V0511",
+                            s,
+                            format!("fault `{}`: `{s}` is not a signal of `{}`", fd.id, c.id),
+                        );
                         continue;
                     };
                     let spur = matches!(beh, Behaviour::Spurious(..));
@@ -559,12 +724,44 @@ fn compile_one(
                         // A pulse may also start with an edge the model expects: its end
                         // (the sensor going back within the pulse limit) tells it apart.
                         let t = if cur == *v {
-                            if spur { continue; }
-                            get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Timed)
+                            if spur {
+                                continue;
+                            }
+                            get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                x,
+                                Phase::Timed,
+                            )
                         } else {
-                            let p = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Pending);
-                            let after = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, if spur { Phase::Spur } else { Phase::Timed });
-                            g[p].obs = edge_syms(si, *v).into_iter().map(|sy| (sy, after, None)).collect();
+                            let p = get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                x,
+                                Phase::Pending,
+                            );
+                            let after = get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                x,
+                                if spur { Phase::Spur } else { Phase::Timed },
+                            );
+                            g[p].obs = edge_syms(si, *v)
+                                .into_iter()
+                                .map(|sy| (sy, after, None))
+                                .collect();
                             p
                         };
                         g[x].spawn.push((f, t));
@@ -574,37 +771,95 @@ fn compile_one(
                     for n in list {
                         match state_of(n) {
                             Some(x) => {
-                                let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Blocked);
+                                let t = get(
+                                    &mut g,
+                                    &mut pending,
+                                    &mut index,
+                                    &mut beh_of,
+                                    f,
+                                    b,
+                                    x,
+                                    Phase::Blocked,
+                                );
                                 g[x].spawn.push((f, t));
                             }
-                            None => ctx.err("V0504", n, format!("fault `{}`: unknown state `{n}`", fd.id)),
+                            None => ctx.err(
+                                "V0504",
+                                n,
+                                format!("fault `{}`: unknown state `{n}`", fd.id),
+                            ),
                         }
                     }
                 }
                 Behaviour::Jumps(n, m) => match (state_of(n), state_of(m)) {
                     (Some(x), Some(y)) => {
-                        let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, y, Phase::Untimed);
+                        let t = get(
+                            &mut g,
+                            &mut pending,
+                            &mut index,
+                            &mut beh_of,
+                            f,
+                            b,
+                            y,
+                            Phase::Untimed,
+                        );
                         g[x].spawn.push((f, t));
                     }
-                    _ => ctx.err("V0504", n, format!("fault `{}`: `Jumps({n}, {m})` needs two states", fd.id)),
+                    _ => ctx.err(
+                        "V0504",
+                        n,
+                        format!("fault `{}`: `Jumps({n}, {m})` needs two states", fd.id),
+                    ),
                 },
                 Behaviour::Unguarded => {
                     for x in 0..states.len() {
-                        let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Timed);
+                        let t = get(
+                            &mut g,
+                            &mut pending,
+                            &mut index,
+                            &mut beh_of,
+                            f,
+                            b,
+                            x,
+                            Phase::Timed,
+                        );
                         g[x].spawn.push((f, t));
                     }
                 }
                 Behaviour::Moves(n, act) => {
                     let (Some(x), Ok((i, r, _))) = (state_of(n), edge_of(act)) else {
-                        ctx.err("V0511", n, format!("fault `{}`: `Moves({n}, {act})` needs a state and an edge", fd.id));
+                        ctx.err(
+                            "V0511",
+                            n,
+                            format!(
+                                "fault `{}`: `Moves({n}, {act})` needs a state and an edge",
+                                fd.id
+                            ),
+                        );
                         continue;
                     };
-                    match evs.iter().find(|e| e.from == x && e.sig == i && e.rise == r) {
+                    match evs
+                        .iter()
+                        .find(|e| e.from == x && e.sig == i && e.rise == r)
+                    {
                         Some(e) => {
-                            let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Untimed);
+                            let t = get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                e.to,
+                                Phase::Untimed,
+                            );
                             g[x].spawn.push((f, t));
                         }
-                        None => ctx.err("V0511", n, format!("fault `{}`: `{act}` is not expected in `{n}`", fd.id)),
+                        None => ctx.err(
+                            "V0511",
+                            n,
+                            format!("fault `{}`: `{act}` is not expected in `{n}`", fd.id),
+                        ),
                     }
                 }
             }
@@ -623,9 +878,21 @@ fn compile_one(
         let mut windows = Vec::new();
         match (&beh, ph) {
             (Behaviour::StuckAt(s, _), _) => {
-                let si = signals.iter().position(|z| &z.name == s).unwrap_or(usize::MAX);
+                let si = signals
+                    .iter()
+                    .position(|z| &z.name == s)
+                    .unwrap_or(usize::MAX);
                 for e in &out {
-                    let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Timed);
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Timed,
+                    );
                     windows.push(e.window);
                     if e.sig == si {
                         silent.push(t);
@@ -638,27 +905,65 @@ fn compile_one(
                 g[gi].deadline = d;
             }
             (Behaviour::Spurious(s, v), Phase::Spur) => {
-                let si = signals.iter().position(|z| &z.name == s).unwrap_or(usize::MAX);
+                let si = signals
+                    .iter()
+                    .position(|z| &z.name == s)
+                    .unwrap_or(usize::MAX);
                 for e in &out {
-                    let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Spur);
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Spur,
+                    );
                     if e.sig == si {
                         silent.push(t);
                     } else {
                         obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
                     }
                 }
-                let back = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, x, Phase::Timed);
+                let back = get(
+                    &mut g,
+                    &mut pending,
+                    &mut index,
+                    &mut beh_of,
+                    f,
+                    b,
+                    x,
+                    Phase::Timed,
+                );
                 if ((values[x] >> si) & 1 == 1) == *v {
                     silent.push(back);
                 } else {
                     obs.extend(edge_syms(si, !*v).into_iter().map(|sy| (sy, back, None)));
                 }
-                obs.extend((first_tmo..syms.len()).filter(|&s| s != pulse_sym).map(|s| (s, gi, None)));
+                obs.extend(
+                    (first_tmo..syms.len())
+                        .filter(|&s| s != pulse_sym)
+                        .map(|s| (s, gi, None)),
+                );
             }
             (Behaviour::Unguarded, _) => {
                 for e in &out {
-                    let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Timed);
-                    obs.extend(edge_syms(e.sig, e.rise).into_iter().map(|sy| (sy, t, e.window)));
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Timed,
+                    );
+                    obs.extend(
+                        edge_syms(e.sig, e.rise)
+                            .into_iter()
+                            .map(|sy| (sy, t, e.window)),
+                    );
                     windows.push(e.window);
                 }
                 let d = deadline_of(&windows);
@@ -666,8 +971,20 @@ fn compile_one(
                 g[gi].deadline = d;
             }
             (Behaviour::Blocked(_), _) => {
-                for e in out.iter().filter(|e| signals[e.sig].var.space == Space::Output) {
-                    let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Blocked);
+                for e in out
+                    .iter()
+                    .filter(|e| signals[e.sig].var.space == Space::Output)
+                {
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Blocked,
+                    );
                     obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
                 }
                 obs.extend((first_tmo..syms.len()).map(|s| (s, gi, None)));
@@ -678,7 +995,16 @@ fn compile_one(
                 // from entering the state (a bound that can only be generous).
                 let mut hold = Some(0u64);
                 for e in &out {
-                    let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Untimed);
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Untimed,
+                    );
                     obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
                     let bound = (signals[e.sig].var.space == Space::Input)
                         .then(|| e.window.and_then(|k| intervals[k].hi))
@@ -689,13 +1015,26 @@ fn compile_one(
                     };
                 }
                 let hold = hold.filter(|&h| h > 0);
-                obs.extend((first_tmo..syms.len()).filter(|&s| !(hold.is_some() && s == motion_sym)).map(|s| (s, gi, None)));
+                obs.extend(
+                    (first_tmo..syms.len())
+                        .filter(|&s| !(hold.is_some() && s == motion_sym))
+                        .map(|s| (s, gi, None)),
+                );
                 g[gi].hold_ms = hold;
             }
             (_, _) => {
                 // Normal-like copy after a spurious pulse or a move.
                 for e in &out {
-                    let t = get(&mut g, &mut pending, &mut index, &mut beh_of, f, b, e.to, Phase::Timed);
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Timed,
+                    );
                     windows.push(e.window);
                     obs.extend(e.syms.iter().map(|&sy| (sy, t, e.window)));
                 }
@@ -718,7 +1057,11 @@ fn compile_one(
     for e in &c.estimates {
         match parse_str(&e.expr).and_then(|x| x.to_dnf(symbols)) {
             Ok(d) => estimates.push((crate::symbols::estimate_name(&e.sensor), d)),
-            Err(m) => ctx.err("V0512", &e.expr, format!("estimate of `{}`: {}", e.sensor, m.message)),
+            Err(m) => ctx.err(
+                "V0512",
+                &e.expr,
+                format!("estimate of `{}`: {}", e.sensor, m.message),
+            ),
         }
     }
     // Unexpected evolutions, pruned by the filter.
@@ -726,7 +1069,10 @@ fn compile_one(
     for (x, name) in states.iter().enumerate() {
         for (i, s) in signals.iter().enumerate() {
             let rise = (values[x] >> i) & 1 == 0;
-            if evs.iter().any(|e| e.from == x && e.sig == i && e.rise == rise) {
+            if evs
+                .iter()
+                .any(|e| e.from == x && e.sig == i && e.rise == rise)
+            {
                 continue;
             }
             let mut pruned_by = None;
@@ -734,11 +1080,24 @@ fn compile_one(
                 let mut term = Vec::new();
                 for (j, t) in signals.iter().enumerate() {
                     let v = (values[x] >> j) & 1 == 1;
-                    term.push(Literal { var: Var { prev: true, ..t.var }, positive: v });
-                    term.push(Literal { var: t.var, positive: if j == i { !v } else { v } });
+                    term.push(Literal {
+                        var: Var {
+                            prev: true,
+                            ..t.var
+                        },
+                        positive: v,
+                    });
+                    term.push(Literal {
+                        var: t.var,
+                        positive: if j == i { !v } else { v },
+                    });
                 }
                 term.sort();
-                pruned_by = set.constraints.iter().find(|k| implies(&term, &k.dnf)).map(|k| k.id.clone());
+                pruned_by = set
+                    .constraints
+                    .iter()
+                    .find(|k| implies(&term, &k.dnf))
+                    .map(|k| k.id.clone());
             }
             unexpected.push(Unexpected {
                 state: name.clone(),
@@ -747,7 +1106,11 @@ fn compile_one(
             });
         }
         if let Some(d) = g[x].deadline {
-            unexpected.push(Unexpected { state: name.clone(), event: format!("tmo({})", intervals[d].id), pruned_by: None });
+            unexpected.push(Unexpected {
+                state: name.clone(),
+                event: format!("tmo({})", intervals[d].id),
+                pruned_by: None,
+            });
         }
     }
     if ctx.problems.len() > before {

@@ -156,7 +156,11 @@ pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
                 component: c.id.clone(),
                 when: when.map(str::to_string),
             };
-            v.push(one(format!("{s} stuck at 0"), FaultKind::SensorStuckAt0(s.clone()), None));
+            v.push(one(
+                format!("{s} stuck at 0"),
+                FaultKind::SensorStuckAt0(s.clone()),
+                None,
+            ));
             if c.id == "table" && s == "C4" {
                 v.push(one(
                     "C4 stuck at 0, table at rest at C4".into(),
@@ -164,15 +168,25 @@ pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
                     Some("C4 . /A4 . /A4*"),
                 ));
             }
-            v.push(one(format!("{s} stuck at 1"), FaultKind::SensorStuckAt1(s.clone()), None));
+            v.push(one(
+                format!("{s} stuck at 1"),
+                FaultKind::SensorStuckAt1(s.clone()),
+                None,
+            ));
             v.push(one(
                 format!("{s} spurious rise {pulse} ms"),
-                FaultKind::SpuriousRise { sensor: s.clone(), pulse_ms: pulse },
+                FaultKind::SpuriousRise {
+                    sensor: s.clone(),
+                    pulse_ms: pulse,
+                },
                 None,
             ));
             v.push(one(
                 format!("{s} spurious fall {pulse} ms"),
-                FaultKind::SpuriousFall { sensor: s.clone(), pulse_ms: pulse },
+                FaultKind::SpuriousFall {
+                    sensor: s.clone(),
+                    pulse_ms: pulse,
+                },
                 None,
             ));
         }
@@ -187,15 +201,29 @@ pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
     if file.components.iter().any(|c| c.id == "table") {
         v.push(table("table blocked at C4", FaultKind::TableBlockedAtC4));
         v.push(table("table blocked at C5", FaultKind::TableBlockedAtC5));
-        v.push(table("table blocked between", FaultKind::TableBlockedBetween));
-        v.push(table("A4 stuck off", FaultKind::ActuatorStuckOff("A4".into())));
-        v.push(table("A4 stuck on", FaultKind::ActuatorStuckOn("A4".into())));
+        v.push(table(
+            "table blocked between",
+            FaultKind::TableBlockedBetween,
+        ));
+        v.push(table(
+            "A4 stuck off",
+            FaultKind::ActuatorStuckOff("A4".into()),
+        ));
+        v.push(table(
+            "A4 stuck on",
+            FaultKind::ActuatorStuckOn("A4".into()),
+        ));
     }
     let mut actuators: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
     for c in &file.components {
-        let Some(p) = c.partitions.iter().find(|p| p.id.ends_with("_drive")) else { continue };
+        let Some(p) = c.partitions.iter().find(|p| p.id.ends_with("_drive")) else {
+            continue;
+        };
         for e in &c.expected {
-            for w in e.event.split(|ch: char| !ch.is_ascii_alphanumeric() && ch != '*') {
+            for w in e
+                .event
+                .split(|ch: char| !ch.is_ascii_alphanumeric() && ch != '*')
+            {
                 if let Some(a) = w.strip_suffix('*') {
                     let list = actuators.entry(a.to_string()).or_default();
                     if !list.iter().any(|(_, q)| *q == p.id) {
@@ -261,19 +289,33 @@ fn mix(seed: u64) -> u64 {
 }
 
 fn describe(d: &Diagnosis) -> String {
-    format!("{} ms {}/{} {}", d.time_ms, d.component, d.partition, d.fault)
+    format!(
+        "{} ms {}/{} {}",
+        d.time_ms, d.component, d.partition, d.fault
+    )
 }
 
 /// Runs one injection with one seed, beside a fault-free twin run of the same seed
 /// (to tell a fault that changed nothing observable from one that stays ambiguous).
-fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Result<(Verdict, String), Vec<Problem>> {
+fn run_one(
+    shared: &Shared,
+    inj: &Injection,
+    seed: u64,
+    config: &Config,
+) -> Result<(Verdict, String), Vec<Problem>> {
     let mut sim = simulation(shared, seed + 1)?;
     let at = config.first_ms + mix(seed) % config.spread_ms.max(1);
     sim.run_until(Millis(at));
     if let Some(when) = &inj.when {
         let dnf: Dnf = parse_str(when)
             .and_then(|e| e.to_dnf(&sim.engine.symbols))
-            .map_err(|e| vec![Problem::error("V0304", format!("`{when}`: {}", e.message), None)])?;
+            .map_err(|e| {
+                vec![Problem::error(
+                    "V0304",
+                    format!("`{when}`: {}", e.message),
+                    None,
+                )]
+            })?;
         let limit = Millis(at + 120_000);
         while !eval_dnf(&dnf, sim.engine.frame()) && sim.now() < limit {
             sim.cycle();
@@ -285,7 +327,13 @@ fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Resu
     let context = sim
         .diagnosers
         .as_ref()
-        .map(|d| d.estimate(&inj.component).into_iter().filter(|s| !s.contains('/')).collect::<Vec<_>>().join(","))
+        .map(|d| {
+            d.estimate(&inj.component)
+                .into_iter()
+                .filter(|s| !s.contains('/'))
+                .collect::<Vec<_>>()
+                .join(",")
+        })
         .unwrap_or_default();
     sim.inject(FaultSpec {
         trigger: Trigger::At(at),
@@ -299,7 +347,8 @@ fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Resu
         sim.cycle();
         if !effect {
             twin.cycle();
-            effect = sim.emulator.sensors() != twin.emulator.sensors() || sim.engine.applied() != twin.engine.applied();
+            effect = sim.emulator.sensors() != twin.emulator.sensors()
+                || sim.engine.applied() != twin.engine.applied();
         }
     }
     let Some(d) = sim.diagnosers.as_ref() else {
@@ -310,7 +359,12 @@ fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Resu
     }
     if let Some(first) = d.diagnoses.first() {
         return Ok(if inj.expected.contains(&first.partition) {
-            (Verdict::Right { delay_ms: first.time_ms - at }, context)
+            (
+                Verdict::Right {
+                    delay_ms: first.time_ms - at,
+                },
+                context,
+            )
         } else {
             (Verdict::Wrong(describe(first)), context)
         });
@@ -324,16 +378,20 @@ fn run_one(shared: &Shared, inj: &Injection, seed: u64, config: &Config) -> Resu
     Ok(if !effect {
         (Verdict::NoEffect, context)
     } else if open.is_empty() {
-        (Verdict::Ambiguous("nothing unexpected seen by the component".into()), context)
+        (
+            Verdict::Ambiguous("nothing unexpected seen by the component".into()),
+            context,
+        )
     } else {
         (Verdict::Ambiguous(open.join(" or ")), context)
     })
 }
 
-fn parallel<T: Send, R: Send>(items: &[T], threads: usize, f: &(dyn Fn(&T) -> R + Sync)) -> Vec<R>
-where
-    T: Sync,
-{
+fn parallel<T: Send + Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    f: &(dyn Fn(&T) -> R + Sync),
+) -> Vec<R> {
     let next = std::sync::atomic::AtomicUsize::new(0);
     let mut out: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
     std::thread::scope(|scope| {
@@ -370,18 +428,30 @@ where
 /// Runs the campaign on the plant in `dir`.
 pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
     let (bundle, _) = PlantBundle::load(dir)?;
-    let program = Arc::new(CompiledProgram::load(&dir.join("programs/reference.ron"), &bundle.plant)?);
-    let file = super::model::DiagnoserFile::load(&dir.join("diagnosers.ron")).map_err(|p| vec![p])?;
+    let program = Arc::new(CompiledProgram::load(
+        &dir.join("programs/reference.ron"),
+        &bundle.plant,
+    )?);
+    let file =
+        super::model::DiagnoserFile::load(&dir.join("diagnosers.ron")).map_err(|p| vec![p])?;
     let shared = Shared { bundle, program };
     let injections: Vec<Injection> = library(&file)
         .into_iter()
         .filter(|i| config.only.as_deref().is_none_or(|o| i.name.contains(o)))
         .collect();
-    let jobs: Vec<(usize, u64)> = (0..injections.len()).flat_map(|i| (0..config.seeds).map(move |s| (i, s))).collect();
-    let results = parallel(&jobs, config.threads, &|&(i, s)| run_one(&shared, &injections[i], s, config));
+    let jobs: Vec<(usize, u64)> = (0..injections.len())
+        .flat_map(|i| (0..config.seeds).map(move |s| (i, s)))
+        .collect();
+    let results = parallel(&jobs, config.threads, &|&(i, s)| {
+        run_one(&shared, &injections[i], s, config)
+    });
     let mut rows: Vec<Row> = injections
         .iter()
-        .map(|i| Row { name: i.name.clone(), expected: i.expected.clone(), ..Row::default() })
+        .map(|i| Row {
+            name: i.name.clone(),
+            expected: i.expected.clone(),
+            ..Row::default()
+        })
         .collect();
     for (&(i, seed), r) in jobs.iter().zip(results) {
         let (verdict, context) = r?;
@@ -394,16 +464,25 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
             }
             Verdict::Wrong(t) => {
                 row.wrong += 1;
-                row.failures.push(format!("seed {seed}, table/component in {context}: wrong {t}"));
+                row.failures.push(format!(
+                    "seed {seed}, table/component in {context}: wrong {t}"
+                ));
             }
             Verdict::Early(t) => {
                 row.early += 1;
-                row.failures.push(format!("seed {seed}: before the fault {t}"));
+                row.failures
+                    .push(format!("seed {seed}: before the fault {t}"));
             }
             Verdict::Ambiguous(t) => {
-                *row.ambiguous.entry(format!("{t}, injected in {context}")).or_default() += 1;
+                *row.ambiguous
+                    .entry(format!("{t}, injected in {context}"))
+                    .or_default() += 1;
             }
-            Verdict::NoEffect => *row.no_effect.entry(format!("injected in {context}")).or_default() += 1,
+            Verdict::NoEffect => {
+                *row.no_effect
+                    .entry(format!("injected in {context}"))
+                    .or_default() += 1
+            }
         }
     }
     for r in &mut rows {
@@ -411,12 +490,18 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         r.failures.truncate(5);
     }
     let hours: Vec<u64> = (0..config.fault_free_hours).collect();
-    let free = parallel(&hours, config.threads, &|&h| -> Result<(Vec<Diagnosis>, u64, usize), Vec<Problem>> {
+    let free = parallel(&hours, config.threads, &|&h| -> Result<
+        (Vec<Diagnosis>, u64, usize),
+        Vec<Problem>,
+    > {
         let mut sim = simulation(&shared, 10_000 + h)?;
         sim.run_until(Millis(3_600_000));
         let s = sim.emulator.stats();
         Ok((
-            sim.diagnosers.as_ref().map(|d| d.diagnoses.clone()).unwrap_or_default(),
+            sim.diagnosers
+                .as_ref()
+                .map(|d| d.diagnoses.clone())
+                .unwrap_or_default(),
             u64::from(s.delivered_left + s.delivered_right),
             sim.emulator.hazards().len(),
         ))

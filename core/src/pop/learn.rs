@@ -31,7 +31,13 @@ impl Estimator {
     pub fn push(&mut self, tau: u64) {
         let x = tau as f64;
         if self.n == 0 {
-            *self = Self { n: 1, mean: x, beta: x * x, min: tau, max: tau };
+            *self = Self {
+                n: 1,
+                mean: x,
+                beta: x * x,
+                min: tau,
+                max: tau,
+            };
             return;
         }
         let p = 1.0 / self.n as f64;
@@ -49,7 +55,11 @@ impl Estimator {
 }
 
 /// Measures the window intervals on `rows` (each trace replayed from its start).
-pub fn measure(compiled: &Compiled, sizes: [usize; 4], traces: &[Vec<TraceRow>]) -> BTreeMap<String, Estimator> {
+pub fn measure(
+    compiled: &Compiled,
+    sizes: [usize; 4],
+    traces: &[Vec<TraceRow>],
+) -> BTreeMap<String, Estimator> {
     let mut out: BTreeMap<String, Estimator> = BTreeMap::new();
     for c in &compiled.components {
         // Window intervals and the evolutions they frame (normal states only).
@@ -73,7 +83,12 @@ pub fn measure(compiled: &Compiled, sizes: [usize; 4], traces: &[Vec<TraceRow>])
                     continue;
                 };
                 for space in [Space::Output, Space::Input] {
-                    for (i, s) in c.signals.iter().enumerate().filter(|(_, s)| s.var.space == space) {
+                    for (i, s) in c
+                        .signals
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, s)| s.var.space == space)
+                    {
                         let v = frame.now(space).get(s.var.index as usize);
                         if v == frame.prev(space).get(s.var.index as usize) {
                             continue;
@@ -81,7 +96,11 @@ pub fn measure(compiled: &Compiled, sizes: [usize; 4], traces: &[Vec<TraceRow>])
                         let cur = state.unwrap_or(x);
                         let next = c.g[cur].obs.iter().find(|&&(sym, _, _)| {
                             let sy = &c.symbols[sym];
-                            sy.edge == Some((i, v)) && sy.guard.as_ref().is_none_or(|g| crate::expr::eval_dnf(g, &frame))
+                            sy.edge == Some((i, v))
+                                && sy
+                                    .guard
+                                    .as_ref()
+                                    .is_none_or(|g| crate::expr::eval_dnf(g, &frame))
                         });
                         match next {
                             Some(&(_, to, w)) => {
@@ -123,7 +142,9 @@ pub fn apply(file: &mut DiagnoserFile, measures: &BTreeMap<String, Estimator>) -
     let mut done = Vec::new();
     for c in &mut file.components {
         for iv in &mut c.intervals {
-            let Some(m) = measures.get(&iv.id) else { continue };
+            let Some(m) = measures.get(&iv.id) else {
+                continue;
+            };
             if m.n == 0 {
                 continue;
             }

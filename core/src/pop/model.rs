@@ -217,7 +217,11 @@ impl DiagnoserFile {
     /// Reads and parses a file.
     pub fn load(path: &Path) -> Result<Self, Problem> {
         let text = std::fs::read_to_string(path).map_err(|e| {
-            Problem::error("V0002", format!("cannot read {}: {e}", path.display()), None)
+            Problem::error(
+                "V0002",
+                format!("cannot read {}: {e}", path.display()),
+                None,
+            )
         })?;
         Self::from_ron(&text, path)
     }

@@ -112,16 +112,30 @@ impl Diagnosers {
                 decisions: c
                     .partitions
                     .iter()
-                    .map(|_| Decision { certainty: Certainty::Normal, faults: Vec::new() })
+                    .map(|_| Decision {
+                        certainty: Certainty::Normal,
+                        faults: Vec::new(),
+                    })
                     .collect(),
                 unexplained: false,
                 started: false,
-                def_aux: c.partitions.iter().map(|p| aux(&format!("def_{}", p.id))).collect(),
+                def_aux: c
+                    .partitions
+                    .iter()
+                    .map(|p| aux(&format!("def_{}", p.id)))
+                    .collect(),
                 interval_aux: c.intervals.iter().map(|i| aux(&i.id)).collect(),
                 estimate_aux: c.estimates.iter().map(|(n, _)| aux(n)).collect(),
             });
         }
-        Self { compiled, runs, by_signal, timed_only, diagnoses: Vec::new(), scratch: Vec::new() }
+        Self {
+            compiled,
+            runs,
+            by_signal,
+            timed_only,
+            diagnoses: Vec::new(),
+            scratch: Vec::new(),
+        }
     }
 
     /// The current decision of every partition: (component, partition, decision).
@@ -225,7 +239,12 @@ impl Diagnosers {
             // Edges: actuators first, then sensors.
             let mut edges: Vec<(usize, bool)> = Vec::new();
             for space in [Space::Output, Space::Input] {
-                for (i, s) in c.signals.iter().enumerate().filter(|(_, s)| s.var.space == space) {
+                for (i, s) in c
+                    .signals
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, s)| s.var.space == space)
+                {
                     let v = frame.now(space).get(s.var.index as usize);
                     if v != frame.prev(space).get(s.var.index as usize) {
                         edges.push((i, v));
@@ -236,10 +255,25 @@ impl Diagnosers {
                 let sym = c
                     .symbols
                     .iter()
-                    .position(|s| s.edge == Some((i, rise)) && s.guard.as_ref().is_some_and(|g| eval_dnf(g, frame)))
-                    .or_else(|| c.symbols.iter().position(|s| s.edge == Some((i, rise)) && s.guard.is_none()))
+                    .position(|s| {
+                        s.edge == Some((i, rise))
+                            && s.guard.as_ref().is_some_and(|g| eval_dnf(g, frame))
+                    })
+                    .or_else(|| {
+                        c.symbols
+                            .iter()
+                            .position(|s| s.edge == Some((i, rise)) && s.guard.is_none())
+                    })
                     .unwrap_or(0);
-                timeouts(c, &mut r, t, margin, pulse, &mut self.scratch, &mut self.diagnoses);
+                timeouts(
+                    c,
+                    &mut r,
+                    t,
+                    margin,
+                    pulse,
+                    &mut self.scratch,
+                    &mut self.diagnoses,
+                );
                 step(c, &mut r, sym, t, margin, true, &mut self.scratch);
                 if let Some(k) = c.clocks.iter().position(|&e| e == (i, rise)) {
                     r.clock = Some((k, t));
@@ -261,7 +295,15 @@ impl Diagnosers {
                 changed = true;
             }
         }
-        changed |= timeouts(c, &mut r, t, margin, pulse, &mut self.scratch, &mut self.diagnoses);
+        changed |= timeouts(
+            c,
+            &mut r,
+            t,
+            margin,
+            pulse,
+            &mut self.scratch,
+            &mut self.diagnoses,
+        );
         if changed {
             r.next_deadline = next_deadline(c, &r, margin, pulse);
             decide(c, &mut r, t, &mut self.diagnoses);
@@ -280,7 +322,9 @@ impl Diagnosers {
                 let on = match r.clock {
                     Some((ck, ct)) if ck == iv.clock => {
                         let lo = ct.saturating_add(i64::try_from(iv.lo).unwrap_or(i64::MAX));
-                        let hi = iv.hi.map_or(i64::MAX, |h| ct.saturating_add(i64::try_from(h).unwrap_or(i64::MAX)));
+                        let hi = iv.hi.map_or(i64::MAX, |h| {
+                            ct.saturating_add(i64::try_from(h).unwrap_or(i64::MAX))
+                        });
                         if lo > t {
                             next = next.min(lo);
                         } else if hi > t {
@@ -304,37 +348,44 @@ impl Diagnosers {
         }
         self.runs[ci] = r;
     }
-
 }
 
-fn timeouts(c: &Component, r: &mut Run, t: i64, margin: i64, pulse: i64, scratch: &mut Vec<(u32, i64)>, diagnoses: &mut Vec<Diagnosis>) -> bool {
-        let mut any = false;
-        for _ in 0..64 {
-            let Some(sym) = due_timeout(c, r, t, margin, pulse, scratch) else {
-                break;
-            };
-            if let Some(k) = c.symbols[sym].timeout {
-                r.emitted |= 1 << (k % 64);
+fn timeouts(
+    c: &Component,
+    r: &mut Run,
+    t: i64,
+    margin: i64,
+    pulse: i64,
+    scratch: &mut Vec<(u32, i64)>,
+    diagnoses: &mut Vec<Diagnosis>,
+) -> bool {
+    let mut any = false;
+    for _ in 0..64 {
+        let Some(sym) = due_timeout(c, r, t, margin, pulse, scratch) else {
+            break;
+        };
+        if let Some(k) = c.symbols[sym].timeout {
+            r.emitted |= 1 << (k % 64);
+        }
+        step(c, r, sym, t, margin, true, scratch);
+        any = true;
+        if r.h.is_empty() {
+            if !r.unexplained {
+                r.unexplained = true;
+                diagnoses.push(Diagnosis {
+                    time_ms: u64::try_from(t).unwrap_or(0),
+                    component: c.id.clone(),
+                    partition: String::new(),
+                    fault: format!("unexplained {}", c.symbols[sym].name),
+                    certainty: Certainty::Certain,
+                });
             }
-            step(c, r, sym, t, margin, true, scratch);
-            any = true;
-            if r.h.is_empty() {
-                if !r.unexplained {
-                    r.unexplained = true;
-                    diagnoses.push(Diagnosis {
-                        time_ms: u64::try_from(t).unwrap_or(0),
-                        component: c.id.clone(),
-                        partition: String::new(),
-                        fault: format!("unexplained {}", c.symbols[sym].name),
-                        certainty: Certainty::Certain,
-                    });
-                }
-                // Nothing explains the silence: keep the last state estimate's normal states.
-                r.h = (0..c.states.len() as u32).map(|q| (q, t)).collect();
-                r.clock = None;
-                break;
-            }
-            r.next_deadline = next_deadline(c, r, margin, pulse);
+            // Nothing explains the silence: keep the last state estimate's normal states.
+            r.h = (0..c.states.len() as u32).map(|q| (q, t)).collect();
+            r.clock = None;
+            break;
+        }
+        r.next_deadline = next_deadline(c, r, margin, pulse);
     }
     any
 }
@@ -366,7 +417,10 @@ fn valuation(c: &Component, frame: &Frame) -> u64 {
 fn resync(c: &Component, r: &mut Run, frame: &Frame, at: Option<i64>) {
     let v = valuation(c, frame);
     let t = at.unwrap_or(LONG_AGO);
-    r.h = (0..c.states.len()).filter(|&x| c.values[x] == v).map(|x| (x as u32, t)).collect();
+    r.h = (0..c.states.len())
+        .filter(|&x| c.values[x] == v)
+        .map(|x| (x as u32, t))
+        .collect();
     if r.h.is_empty() {
         r.h = (0..c.states.len() as u32).map(|x| (x, t)).collect();
     }
@@ -407,13 +461,23 @@ fn window_ok(c: &Component, r: &Run, w: Option<usize>, t: i64, margin: i64) -> b
         Some((ck, ct)) if ck == iv.clock => {
             let e = t - ct;
             e >= i64::try_from(iv.lo).unwrap_or(i64::MAX) - margin
-                && iv.hi.is_none_or(|h| e < i64::try_from(h).unwrap_or(i64::MAX) + margin)
+                && iv
+                    .hi
+                    .is_none_or(|h| e < i64::try_from(h).unwrap_or(i64::MAX) + margin)
         }
         _ => false,
     }
 }
 
-fn step(c: &Component, r: &mut Run, sym: usize, t: i64, margin: i64, timed: bool, scratch: &mut Vec<(u32, i64)>) {
+fn step(
+    c: &Component,
+    r: &mut Run,
+    sym: usize,
+    t: i64,
+    margin: i64,
+    timed: bool,
+    scratch: &mut Vec<(u32, i64)>,
+) {
     closure(c, &r.h, t, scratch);
     let mut next: Vec<(u32, i64)> = Vec::with_capacity(scratch.len());
     for &(q, since) in scratch.iter() {
@@ -448,7 +512,9 @@ fn step(c: &Component, r: &mut Run, sym: usize, t: i64, margin: i64, timed: bool
 fn expired(c: &Component, r: &Run, q: usize) -> bool {
     let st = &c.g[q];
     match (st.phase, st.deadline, r.clock) {
-        (Phase::Timed, Some(k), Some((ck, _))) => c.intervals[k].clock == ck && r.emitted & (1 << (k % 64)) != 0,
+        (Phase::Timed, Some(k), Some((ck, _))) => {
+            c.intervals[k].clock == ck && r.emitted & (1 << (k % 64)) != 0
+        }
         _ => false,
     }
 }
@@ -485,18 +551,26 @@ fn next_deadline(c: &Component, r: &Run, margin: i64, pulse: i64) -> i64 {
     best
 }
 
-fn due_timeout(c: &Component, r: &Run, t: i64, margin: i64, pulse: i64, scratch: &mut Vec<(u32, i64)>) -> Option<usize> {
+fn due_timeout(
+    c: &Component,
+    r: &Run,
+    t: i64,
+    margin: i64,
+    pulse: i64,
+    scratch: &mut Vec<(u32, i64)>,
+) -> Option<usize> {
     closure(c, &r.h, t, scratch);
     let mut best: Option<(i64, usize)> = None;
     for &(q, since) in scratch.iter() {
         let cand = if let Some((d, k)) = deadline_time(c, r, q as usize, margin) {
-            c.symbols.iter().position(|s| s.timeout == Some(k)).map(|s| (d, s))
+            c.symbols
+                .iter()
+                .position(|s| s.timeout == Some(k))
+                .map(|s| (d, s))
         } else if c.g[q as usize].phase == Phase::Spur && r.h.iter().any(|&(x, _)| x == q) {
             Some((since + pulse, c.pulse_sym))
-        } else if let Some(h) = hold(c, r, q) {
-            Some((since.saturating_add(h).saturating_add(margin), c.motion_sym))
         } else {
-            None
+            hold(c, r, q).map(|h| (since.saturating_add(h).saturating_add(margin), c.motion_sym))
         };
         if let Some((d, s)) = cand
             && d < t
@@ -523,7 +597,12 @@ fn decide(c: &Component, r: &mut Run, t: i64, log: &mut Vec<Diagnosis>) {
         return;
     }
     for (pi, p) in c.partitions.iter().enumerate() {
-        let inside: Vec<usize> = modes.iter().flatten().copied().filter(|f| p.faults.contains(f)).collect();
+        let inside: Vec<usize> = modes
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|f| p.faults.contains(f))
+            .collect();
         let certainty = if inside.is_empty() {
             Certainty::Normal
         } else if inside.len() == modes.len() {
@@ -531,7 +610,10 @@ fn decide(c: &Component, r: &mut Run, t: i64, log: &mut Vec<Diagnosis>) {
         } else {
             Certainty::Ambiguous
         };
-        let d = Decision { certainty, faults: inside.iter().map(|&f| c.faults[f].clone()).collect() };
+        let d = Decision {
+            certainty,
+            faults: inside.iter().map(|&f| c.faults[f].clone()).collect(),
+        };
         if certainty == Certainty::Certain && (!r.latched[pi] || r.decisions[pi] != d) {
             log.push(Diagnosis {
                 time_ms: u64::try_from(t).unwrap_or(0),
@@ -549,15 +631,26 @@ fn decide(c: &Component, r: &mut Run, t: i64, log: &mut Vec<Diagnosis>) {
 /// Replays `events` (symbol names) on a component without timing, from its initial
 /// state, and returns the fault labels possible after each event (`None` = normal);
 /// an empty set means no hypothesis explains the sequence.
-pub fn replay_untimed(c: &Component, events: &[&str]) -> Result<Vec<BTreeSet<Option<String>>>, String> {
+pub fn replay_untimed(
+    c: &Component,
+    events: &[&str],
+) -> Result<Vec<BTreeSet<Option<String>>>, String> {
     let mut r = empty_run();
     r.h = vec![(c.initial as u32, 0)];
     let mut scratch = Vec::new();
     let mut out = Vec::new();
     for e in events {
-        let sym = c.symbols.iter().position(|s| s.name == *e).ok_or_else(|| format!("unknown event `{e}`"))?;
+        let sym = c
+            .symbols
+            .iter()
+            .position(|s| s.name == *e)
+            .ok_or_else(|| format!("unknown event `{e}`"))?;
         step(c, &mut r, sym, 0, 0, false, &mut scratch);
-        out.push(r.h.iter().map(|&(q, _)| c.g[q as usize].mode.map(|f| c.faults[f].clone())).collect());
+        out.push(
+            r.h.iter()
+                .map(|&(q, _)| c.g[q as usize].mode.map(|f| c.faults[f].clone()))
+                .collect(),
+        );
     }
     Ok(out)
 }
