@@ -152,8 +152,13 @@ pub fn apply(file: &mut DiagnoserFile, measures: &BTreeMap<String, Estimator>) -
             let delta = alpha * sigma;
             let lo = (m.mean - delta).floor().max(0.0).min(m.min as f64) as u64;
             let hi = (m.mean + delta).ceil().max(m.max as f64) as u64 + 1;
-            iv.lo = Bound::Ms(lo);
-            iv.hi = Bound::Ms(hi);
+            // Only the window intervals (both bounds in ms) move; an interval defined
+            // from others or without end (`I5`: waiting for the release, as long as
+            // the operator wants) keeps its bounds and only gets the statistics.
+            if matches!((&iv.lo, &iv.hi), (Bound::Ms(_), Bound::Ms(_))) {
+                iv.lo = Bound::Ms(lo);
+                iv.hi = Bound::Ms(hi);
+            }
             iv.learned = Some(Learned {
                 samples: m.n,
                 min_ms: m.min,
