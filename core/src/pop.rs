@@ -206,7 +206,7 @@ pub fn report(compiled: &Compiled) -> Report {
             "one fault at a time per component (faults of different components are independent)".into(),
             "the control part is reliable where the filter enforces the constraints (evolutions the filter forbids are pruned)".into(),
             "the plant keeps cycling: waiting (time-outs only) never decides, an observed edge eventually comes".into(),
-            "time windows are the learned intervals plus margin_ms; delays in ms are measured by `vigie campaign diag`".into(),
+            "time windows are the learned intervals plus margin_ms; delays in ms are measured by `vigie campaign diagnoser`".into(),
         ],
         components,
         faults,
