@@ -282,6 +282,18 @@ impl Engine {
     /// Runs one PLC cycle: reads `inputs`, updates the observers, scans `control`,
     /// filters its outputs and records the cycle. Returns the outputs to apply.
     pub fn cycle(&mut self, now: Millis, inputs: &Bits, control: &mut dyn Control) -> &Bits {
+        self.cycle_with(now, inputs, control, &mut |_, _| {})
+    }
+
+    /// [`Engine::cycle`] with a stage run after the filter and before the recorder (the
+    /// diagnosers): it reads the applied outputs and writes auxiliary variables.
+    pub fn cycle_with(
+        &mut self,
+        now: Millis,
+        inputs: &Bits,
+        control: &mut dyn Control,
+        after_filter: &mut dyn FnMut(Millis, &mut Frame),
+    ) -> &Bits {
         self.now = now;
         self.cycles += 1;
         self.frame.shift();
@@ -327,6 +339,7 @@ impl Engine {
             self.apply_fallback();
         }
 
+        after_filter(now, &mut self.frame);
         let tripped = self.latched;
         let frame = &self.frame;
         let commanded = &self.commanded;

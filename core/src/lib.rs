@@ -32,6 +32,7 @@ pub mod history;
 pub mod live;
 pub mod observers;
 pub mod plant;
+pub mod pop;
 pub mod sim;
 pub mod symbols;
 pub mod synthetic;

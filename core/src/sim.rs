@@ -114,6 +114,9 @@ pub struct Scenario {
     /// Projection horizon of the explanations, ms.
     #[serde(default = "default_projection")]
     pub projection_ms: u64,
+    /// Run the diagnosers of `diagnosers.ron` (with the rewritten constraints).
+    #[serde(default)]
+    pub diagnosers: bool,
 }
 
 impl Scenario {
@@ -219,6 +222,10 @@ pub struct Simulation {
     pub tasks: Option<TaskMonitors>,
     /// Fed from a live link (see `observed.rs`): the time of the last observed cycle.
     live_now: Option<Millis>,
+    /// The diagnosers, when enabled ([`Simulation::enable_diagnosers`]).
+    pub diagnosers: Option<crate::pop::Diagnosers>,
+    diag_seen: usize,
+    degraded: Vec<(usize, usize)>,
 }
 
 /// The plant's task monitors, stepped after the filter every cycle.
@@ -229,6 +236,29 @@ pub struct TaskMonitors {
     /// The event expressions.
     pub events: crate::tasks::FrameTasks,
     seen: usize,
+}
+
+/// The control program fed with estimated sensors (degraded mode): the program reads
+/// `EST(x)` in place of each sensor `x` whose partition flag is set.
+struct DegradedControl<'a> {
+    inner: &'a mut ProgramRuntime,
+    subs: &'a [(usize, usize)],
+}
+
+impl crate::engine::Control for DegradedControl<'_> {
+    fn scan(&mut self, now: Millis, frame: &crate::frame::Frame, outputs: &mut crate::bits::Bits) {
+        if self.subs.is_empty() {
+            return self.inner.scan(now, frame, outputs);
+        }
+        let mut f = frame.clone();
+        for &(input, aux) in self.subs {
+            let v = frame.now(Space::Aux).get(aux);
+            let p = frame.prev(Space::Aux).get(aux);
+            f.now_mut(Space::Input).set(input, v);
+            f.prev[Space::Input as usize].set(input, p);
+        }
+        self.inner.scan(now, &f, outputs);
+    }
 }
 
 /// A serialisable summary of a run (the `vigie run --headless` report, without the
@@ -255,6 +285,8 @@ pub struct RunReport {
     pub sim_ms: u64,
     /// PLC cycles run.
     pub cycles: u64,
+    /// Certain diagnoses of the diagnosers (empty when they are off).
+    pub diagnoses: Vec<crate::pop::Diagnosis>,
 }
 
 /// A trip in the run report.
@@ -308,6 +340,9 @@ impl Simulation {
             }
         };
         let mut sim = Self::new(bundle, program, scenario.seed, options)?;
+        if scenario.diagnosers {
+            sim.enable_diagnosers()?;
+        }
         sim.name.clone_from(&scenario.name);
         sim.cycle = Millis(scenario.cycle_ms);
         sim.projection = Millis(scenario.projection_ms);
@@ -366,7 +401,38 @@ impl Simulation {
             name: String::new(),
             tasks,
             live_now: None,
+            diagnosers: None,
+            diag_seen: 0,
+            degraded: Vec::new(),
         })
+    }
+
+    /// Loads `diagnosers.ron` of the plant and runs its diagnosers after the filter, with
+    /// the constraints rewritten for the cooperation (estimated sensors, stop on an
+    /// actuator partition).
+    pub fn enable_diagnosers(&mut self) -> Result<(), Vec<Problem>> {
+        let (db, problems) = crate::pop::load(&self.bundle.dir)?;
+        let errors: Vec<Problem> = problems
+            .into_iter()
+            .filter(|p| p.is_error() && p.code != "V0106")
+            .collect();
+        if !errors.is_empty() {
+            return Err(errors);
+        }
+        let mode = self.engine.mode();
+        self.engine = Engine::new(&db.bundle, mode, self.options.history_cycles);
+        // The auxiliaries moved: the task monitors are compiled again on the new table.
+        self.tasks = match &db.bundle.tasks {
+            Some(set) => Some(TaskMonitors {
+                monitor: crate::tasks::Monitor::new(set, self.now()),
+                events: crate::tasks::FrameTasks::compile(set, &db.bundle.symbols)?,
+                seen: 0,
+            }),
+            None => None,
+        };
+        self.diagnosers = Some(crate::pop::Diagnosers::new(db.compiled, &db.bundle.symbols));
+        self.bundle = db.bundle;
+        Ok(())
     }
 
     /// Simulated time (on a live link: the time of the last observed cycle).
@@ -478,10 +544,24 @@ impl Simulation {
         if self.options.explain {
             self.program_before.copy_state_from(&self.program);
         }
-        let applied = self
-            .engine
-            .cycle(now, self.emulator.sensors(), &mut self.program)
-            .clone();
+        let applied = match self.diagnosers.as_mut() {
+            None => self
+                .engine
+                .cycle(now, self.emulator.sensors(), &mut self.program)
+                .clone(),
+            Some(d) => {
+                let mut control = DegradedControl {
+                    inner: &mut self.program,
+                    subs: &self.degraded,
+                };
+                self.engine
+                    .cycle_with(now, self.emulator.sensors(), &mut control, &mut |t, f| {
+                        d.update(t, f)
+                    })
+                    .clone()
+            }
+        };
+        self.diagnosis_events(now);
         let tripped = self.record_events(now);
         if let (Some(index), true) = (tripped, self.options.explain) {
             // The emulator is still at the start of the tripping cycle (the engine only
@@ -591,6 +671,58 @@ impl Simulation {
                 },
                 a.text,
             );
+        }
+    }
+
+    fn diagnosis_events(&mut self, now: Millis) {
+        let Some(d) = self.diagnosers.as_ref() else {
+            return;
+        };
+        let new: Vec<crate::pop::Diagnosis> = d.diagnoses[self.diag_seen..].to_vec();
+        self.diag_seen = d.diagnoses.len();
+        if new.is_empty() {
+            return;
+        }
+        let flagged = d.flagged();
+        let symbols = &self.engine.symbols;
+        self.degraded = flagged
+            .iter()
+            .filter_map(|(_, _, s)| {
+                let s = s.as_ref()?;
+                let input = self.bundle.plant.input(s)?;
+                let (_, aux) = symbols.lookup(&crate::symbols::estimate_name(s))?;
+                Some((input, aux as usize))
+            })
+            .collect();
+        for n in new {
+            let stop = flagged.iter().find(|(p, _, _)| *p == n.partition);
+            let text = match stop {
+                Some((_, true, _)) => format!(
+                    "Diagnosis: fault {} on {} ({}), certain: actuator partition at fault, the whole system is stopped",
+                    n.fault, n.partition, n.component
+                ),
+                Some((_, false, Some(s))) => {
+                    let mut chars = s.chars();
+                    let first = chars.next().unwrap_or(' ');
+                    format!(
+                        "Diagnosis: fault {} on sensor {s} (certain): {s} estimated from time intervals ({first}\u{0302}{}, the {} timing); production continues in degraded mode",
+                        n.fault,
+                        chars.as_str(),
+                        n.component
+                    )
+                }
+                _ => format!(
+                    "Diagnosis: {} on {} ({})",
+                    n.fault, n.partition, n.component
+                ),
+            };
+            self.alarms.raise(
+                now,
+                &format!("diag:{}:{}", n.component, n.partition),
+                AlarmKind::Diagnosis,
+                text.clone(),
+            );
+            self.log("diagnosis", text);
         }
     }
 
@@ -713,6 +845,11 @@ impl Simulation {
                 .unwrap_or_default(),
             sim_ms: self.now().0,
             cycles: self.engine.cycles(),
+            diagnoses: self
+                .diagnosers
+                .as_ref()
+                .map(|d| d.diagnoses.clone())
+                .unwrap_or_default(),
         }
     }
 }

@@ -11,6 +11,9 @@ use std::process::ExitCode;
 pub(crate) enum Kind {
     /// Library variants and single mutations of the reference program.
     Mutations,
+    /// Fault campaign of the diagnosers: every injectable fault over many seeds, and
+    /// fault-free hours (`vigie campaign diagnoser`).
+    Diagnoser,
 }
 
 pub(crate) fn run(
@@ -19,7 +22,7 @@ pub(crate) fn run(
     threads: Option<usize>,
     json: bool,
 ) -> anyhow::Result<ExitCode> {
-    let Kind::Mutations = kind;
+    anyhow::ensure!(matches!(kind, Kind::Mutations), "dispatched elsewhere");
     let config = vigie_core::campaign::Config {
         threads: threads
             .or_else(|| std::thread::available_parallelism().ok().map(usize::from))

@@ -6,6 +6,7 @@ mod check;
 mod export_st;
 mod filter;
 mod gateway;
+mod learn;
 mod run;
 mod verify;
 
@@ -162,10 +163,38 @@ pub(crate) enum Command {
         /// Print the full JSON report.
         #[arg(long)]
         json: bool,
+        /// `diagnoser`: seeds per fault.
+        #[arg(long, default_value_t = 100)]
+        seeds: u64,
+        /// `diagnoser`: simulated hours of fault-free runs.
+        #[arg(long, default_value_t = 10)]
+        hours: u64,
+        /// `diagnoser`: only faults whose name contains this.
+        #[arg(long)]
+        only: Option<String>,
     },
     /// Verify the constraint set on the abstract plant model (safety, permissiveness,
     /// invariants, necessity), optionally against SPIN, with benchmarks.
     Verify(verify::VerifyArgs),
+    /// Learn the diagnosers' intervals from normal-run traces into `diagnosers.ron`.
+    Learn {
+        /// Trace files (CSV, `vigie run --trace`).
+        traces: Vec<PathBuf>,
+        /// Confidence coefficient α of ΔT = α·σ (default: the file's).
+        #[arg(long)]
+        alpha: Option<f64>,
+        /// Print the figures without writing the file.
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// Diagnosers: `--report` prints the diagnosability report.
+    Diagnose {
+        /// Print the diagnosability report (JSON).
+        #[arg(long)]
+        report: bool,
+    },
+    /// Measure the diagnosers (per cycle, build) and libFAUDES' centralized diagnoser.
+    BenchDiag,
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -186,6 +215,16 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
+        Some(Command::Learn {
+            traces,
+            alpha,
+            dry_run,
+        }) => learn::learn(&cli.plant, &traces, alpha, dry_run),
+        Some(Command::Diagnose { report }) => {
+            anyhow::ensure!(report, "use `vigie diagnose --report`");
+            learn::report(&cli.plant)
+        }
+        Some(Command::BenchDiag) => learn::bench(&cli.plant),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
         Some(Command::ExportSt { dir, out }) => {
             export_st::run(&dir.unwrap_or(cli.plant), out.as_deref())
@@ -209,9 +248,18 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Some(Command::Campaign {
+            kind: campaign::Kind::Diagnoser,
+            seeds,
+            hours,
+            only,
+            threads,
+            json,
+        }) => learn::campaign(&cli.plant, seeds, hours, only.as_deref(), threads, json),
+        Some(Command::Campaign {
             kind,
             threads,
             json,
+            ..
         }) => campaign::run(&cli.plant, kind, threads, json),
         Some(Command::Verify(args)) => verify::run(&cli.plant, &args),
         Some(Command::Run {

@@ -4,6 +4,7 @@
 //! `App::logic` advances the simulation by real elapsed time × speed, in whole PLC
 //! cycles, capped per frame; `App::ui` only renders (see `views.rs`).
 
+mod diagnosers;
 pub mod journal;
 pub mod link;
 pub mod report;
@@ -193,6 +194,7 @@ impl Source {
                 filter: vigie_core::engine::FilterMode::Enforce,
                 cycle_ms: 10,
                 projection_ms: 10_000,
+                diagnosers: false,
             },
             path: plant_dir.join("console.ron"),
         }
@@ -861,6 +863,7 @@ impl Console {
     /// and applied at the next `logic`.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let mut commands = Vec::new();
+        diagnosers::panel_ui(self, ui);
         views::root_ui(self, ui, &mut commands);
         if !commands.is_empty() {
             ui.ctx().request_repaint();

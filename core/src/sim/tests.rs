@@ -26,6 +26,7 @@ fn scenario(
         filter,
         cycle_ms: 10,
         projection_ms: 10_000,
+        diagnosers: false,
     }
 }
 

@@ -114,6 +114,7 @@ pub fn scenario(trace: &Trace, plant_dir: &str, step_us: i64, seed: u64) -> Scen
         filter: FilterMode::Enforce,
         cycle_ms: 1,
         projection_ms: 2_000,
+        diagnosers: false,
     }
 }
 

@@ -1,0 +1,363 @@
+//! `vigie learn` (interval learning from traces), `vigie diagnose --report`,
+//! `vigie campaign diagnoser` and `vigie bench-diag`: the diagnosers' commands.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+use vigie_core::pop;
+
+/// Learns the intervals of `diagnosers.ron` from normal-run traces and rewrites it.
+pub(crate) fn learn(
+    dir: &Path,
+    traces: &[PathBuf],
+    alpha: Option<f64>,
+    dry_run: bool,
+) -> anyhow::Result<ExitCode> {
+    let (db, _) =
+        pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let mut rows = Vec::new();
+    for t in traces {
+        let text = std::fs::read_to_string(t)
+            .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", t.display()))?;
+        rows.push(
+            vigie_core::trace::parse(&text, t, &db.bundle.plant)
+                .map_err(|p| anyhow::anyhow!("{p}"))?,
+        );
+    }
+    let measures = pop::learn::measure(&db.compiled, db.bundle.symbols.sizes(), &rows);
+    let mut file = db.file.clone();
+    if let Some(a) = alpha {
+        file.alpha = a;
+    }
+    let done = pop::learn::apply(&mut file, &measures);
+    let mut out = std::io::stdout().lock();
+    for (id, m) in &measures {
+        writeln!(
+            out,
+            "{id}: n={} min={} max={} mean={:.1} sigma={:.2} dT={:.2} (alpha {})",
+            m.n,
+            m.min,
+            m.max,
+            m.mean,
+            m.sigma(),
+            file.alpha * m.sigma(),
+            file.alpha
+        )?;
+    }
+    if !dry_run {
+        std::fs::write(dir.join("diagnosers.ron"), file.to_ron())?;
+        writeln!(
+            out,
+            "wrote {} intervals into {}",
+            done.len(),
+            dir.join("diagnosers.ron").display()
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Prints the diagnosability report (JSON).
+pub(crate) fn report(dir: &Path) -> anyhow::Result<ExitCode> {
+    let (db, _) =
+        pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let r = pop::report(&db.compiled);
+    writeln!(
+        std::io::stdout().lock(),
+        "{}",
+        serde_json::to_string_pretty(&r)?
+    )?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `vigie campaign diagnoser`: every fault of the library at random times over `seeds`
+/// seeds, and `fault_free_hours` of fault-free runs (`vigie_core::pop::campaign`).
+pub(crate) fn campaign(
+    dir: &Path,
+    seeds: u64,
+    fault_free_hours: u64,
+    only: Option<&str>,
+    threads: Option<usize>,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    let config = pop::campaign::Config {
+        seeds,
+        fault_free_hours,
+        only: only.map(str::to_string),
+        threads: threads
+            .or_else(|| std::thread::available_parallelism().ok().map(usize::from))
+            .unwrap_or(1)
+            .max(1),
+        ..pop::campaign::Config::default()
+    };
+    let start = Instant::now();
+    let r = pop::campaign::run(dir, &config).map_err(|p| {
+        anyhow::anyhow!("cannot run the campaign:\n{}", vigie_core::diag::render(&p))
+    })?;
+    let mut out = std::io::stdout().lock();
+    if json {
+        writeln!(out, "{}", serde_json::to_string_pretty(&r)?)?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    writeln!(
+        out,
+        "diagnoser fault campaign: {} seeds per fault, fault at {}..{} s, watched {} s after it ({:.0} s wall)",
+        r.seeds,
+        config.first_ms / 1000,
+        (config.first_ms + config.spread_ms) / 1000,
+        config.watch_ms / 1000,
+        start.elapsed().as_secs_f64()
+    )?;
+    writeln!(
+        out,
+        "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
+        "fault", "expected partition", "runs", "right", "wrong", "early", "ambig", "none"
+    )?;
+    let (mut right, mut runs, mut bad) = (0, 0, 0);
+    for row in &r.rows {
+        let q = |p| {
+            row.delay_quantile(p)
+                .map_or_else(|| "-".to_string(), |d| d.to_string())
+        };
+        writeln!(
+            out,
+            "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
+            row.name,
+            row.expected.join("|"),
+            row.runs,
+            row.right,
+            row.wrong,
+            row.early,
+            row.ambiguous.values().sum::<usize>(),
+            row.no_effect.values().sum::<usize>(),
+            q(50),
+            q(90),
+            q(100)
+        )?;
+        for (why, n) in &row.ambiguous {
+            writeln!(out, "      not diagnosable ({n}): ambiguous {why}")?;
+        }
+        for (why, n) in &row.no_effect {
+            writeln!(out, "      no observable effect ({n}): {why}")?;
+        }
+        for f in &row.failures {
+            writeln!(out, "      FAILURE {f}")?;
+        }
+        right += row.right;
+        runs += row.runs;
+        bad += row.wrong + row.early;
+    }
+    writeln!(
+        out,
+        "total: {runs} runs, {right} right, {bad} wrong or early"
+    )?;
+    writeln!(
+        out,
+        "fault-free: {} simulated hours, {} boxes delivered, {} hazards, {} certain diagnoses (all false)",
+        r.fault_free_hours,
+        r.fault_free_delivered,
+        r.fault_free_hazards,
+        r.false_diagnoses.len()
+    )?;
+    for d in r.false_diagnoses.iter().take(10) {
+        writeln!(
+            out,
+            "      FALSE {} ms {}/{} {}",
+            d.time_ms, d.component, d.partition, d.fault
+        )?;
+    }
+    Ok(if bad == 0 && r.false_diagnoses.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+/// Wall-clock limit of one libFAUDES construction in `vigie bench-diag`, s.
+const LIBFAUDES_LIMIT_S: u64 = 60;
+
+/// `vigie bench-diag`: diagnoser cost per cycle (station, 1000 synthetic turntables),
+/// build times, and libFAUDES' centralized diagnoser for 3, 4, 5 turntables.
+pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
+    let mut out = std::io::stdout().lock();
+    let err =
+        |p: Vec<vigie_core::diag::Problem>| anyhow::anyhow!("{}", vigie_core::diag::render(&p));
+    // Station: ten minutes of production recorded (frames after the filter), then
+    // replayed through a fresh copy of the diagnosers alone.
+    let (_, mut sim) = pop::closed_loop(dir, 2, 10, None).map_err(err)?;
+    let diag = sim
+        .diagnosers
+        .clone()
+        .ok_or_else(|| anyhow::anyhow!("no diagnosers"))?;
+    let mut frames = Vec::new();
+    for _ in 0..60_000 {
+        sim.cycle();
+        frames.push((sim.now(), sim.engine.frame().clone()));
+    }
+    let mut best = f64::MAX;
+    for _ in 0..5 {
+        let mut d = diag.clone();
+        let mut fr = frames.clone();
+        let start = Instant::now();
+        for (t, f) in &mut fr {
+            d.update(*t, f);
+        }
+        best = best.min(start.elapsed().as_secs_f64() * 1e6 / frames.len() as f64);
+    }
+    writeln!(
+        out,
+        "station: {} components, {best:.3} us per cycle (best of 5 replays of {} cycles = 10 min of production; goal <= 50 us)",
+        diag.compiled.components.len(),
+        frames.len()
+    )?;
+    // Synthetic 1000 turntables.
+    let text = std::fs::read_to_string(dir.join("diagnosers.ron"))?;
+    let file = pop::model::DiagnoserFile::from_ron(&text, &dir.join("diagnosers.ron"))
+        .map_err(|p| anyhow::anyhow!("{p}"))?;
+    let table = file
+        .components
+        .iter()
+        .find(|c| c.id == "table")
+        .ok_or_else(|| anyhow::anyhow!("no table"))?;
+    let n = 1000;
+    let (plant, syn) = pop::synthetic(n, table);
+    let mut symbols = plant.symbols();
+    for a in pop::build::aux_names(&syn) {
+        let _ = symbols.declare(&a, vigie_core::symbols::Space::Aux);
+    }
+    let syn_text = syn.to_ron();
+    let start = Instant::now();
+    let compiled = pop::build::compile(&syn, &syn_text, Path::new("<synthetic>"), &symbols, None)
+        .map_err(err)?;
+    let build = start.elapsed();
+    let mut d = pop::Diagnosers::new(compiled, &symbols);
+    let mut frame = vigie_core::frame::Frame::new(symbols.sizes());
+    // Every turntable runs its normal cycle (period 10 s, phases staggered): RE(A4) at 0,
+    // FE(C4) at 100, RE(C5) at 2900, FE(A4) at 4000, FE(C5) at 4100, RE(C4) at 6900.
+    for i in 0..n {
+        frame.now[0].set(2 * i, true);
+    }
+    let script: [(u64, usize, bool); 6] = [
+        (0, 0, true),
+        (100, 1, false),
+        (2900, 2, true),
+        (4000, 0, false),
+        (4100, 2, false),
+        (6900, 1, true),
+    ];
+    let cycles = 6000u64;
+    let warm = 1000u64;
+    let mut edges = 0u64;
+    let mut start = Instant::now();
+    let mut diagnosed = 0;
+    // One period (1000 cycles) of warm-up: the components that start mid-cycle see
+    // edges their initial state does not expect; then the timed cycles.
+    for k in 0..warm + cycles {
+        if k == warm {
+            start = Instant::now();
+            edges = 0;
+            diagnosed = d.diagnoses.len();
+        }
+        frame.shift();
+        let t = 10_000 + k * 10;
+        for i in 0..n {
+            let phase = (t + (i as u64 * 7919) % 10_000) % 10_000;
+            for &(at, sig, v) in &script {
+                if phase / 10 == at / 10 {
+                    edges += 1;
+                    match sig {
+                        0 => frame.now[1].set(i, v),
+                        1 => frame.now[0].set(2 * i, v),
+                        _ => frame.now[0].set(2 * i + 1, v),
+                    }
+                }
+            }
+        }
+        d.update(vigie_core::Millis(t), &mut frame);
+    }
+    let per = start.elapsed().as_secs_f64() * 1e6 / cycles as f64;
+    writeln!(
+        out,
+        "synthetic: {n} turntables, build {:.1} ms (goal < 1000 ms), {per:.2} us per cycle (goal <= 50 us; frame update included, {:.1} edges per cycle, {} certain diagnoses while timed)",
+        build.as_secs_f64() * 1e3,
+        edges as f64 / cycles as f64,
+        d.diagnoses.len() - diagnosed
+    )?;
+    // Construction time vs libFAUDES for k identical turntables.
+    let tmp = std::env::temp_dir().join("vigie-bench-diag");
+    std::fs::create_dir_all(&tmp)?;
+    let c = &pop::load(dir).map_err(err)?.0.compiled;
+    let tc = c
+        .components
+        .iter()
+        .find(|c| c.id == "table")
+        .ok_or_else(|| anyhow::anyhow!("no table"))?;
+    let (g, m) = pop::faudes_export(tc);
+    std::fs::write(tmp.join("table.gen"), g)?;
+    std::fs::write(tmp.join("table.ftm"), m)?;
+    for k in [1usize, 3, 4, 5] {
+        let (plant, syn) = pop::synthetic(k, table);
+        let mut symbols = plant.symbols();
+        for a in pop::build::aux_names(&syn) {
+            let _ = symbols.declare(&a, vigie_core::symbols::Space::Aux);
+        }
+        let t = syn.to_ron();
+        let start = Instant::now();
+        let _ =
+            pop::build::compile(&syn, &t, Path::new("<synthetic>"), &symbols, None).map_err(err)?;
+        writeln!(
+            out,
+            "vigie decentralized build, {k} turntables: {:.3} ms",
+            start.elapsed().as_secs_f64() * 1e3
+        )?;
+    }
+    let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| PathBuf::from(".venv"), PathBuf::from);
+    let script = PathBuf::from("tests/peers/faudes_diag.py");
+    for k in [1usize, 3, 4, 5] {
+        let child = std::process::Command::new(venv.join("bin/python"))
+            .arg(&script)
+            .arg("bench")
+            .arg(tmp.join("table.gen"))
+            .arg(tmp.join("table.ftm"))
+            .arg(k.to_string())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::null())
+            .spawn();
+        let mut child = match child {
+            Ok(c) => c,
+            Err(e) => {
+                writeln!(
+                    out,
+                    "libFAUDES: not run ({e}); create the venv: python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt"
+                )?;
+                break;
+            }
+        };
+        let started = Instant::now();
+        let limit = std::time::Duration::from_secs(LIBFAUDES_LIMIT_S);
+        loop {
+            if child.try_wait()?.is_some() {
+                let o = child.wait_with_output()?;
+                // The faudes module prints notices on import: keep the figures.
+                for line in String::from_utf8_lossy(&o.stdout)
+                    .lines()
+                    .filter(|l| l.starts_with("libFAUDES"))
+                {
+                    writeln!(out, "{line}")?;
+                }
+                break;
+            }
+            if started.elapsed() > limit {
+                let _ = child.kill();
+                let _ = child.wait();
+                writeln!(
+                    out,
+                    "libFAUDES centralized EventDiagnoser, {k} turntables: not finished after {LIBFAUDES_LIMIT_S} s (stopped)"
+                )?;
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,102 @@
+//! The diagnoser view: a banner while a sensor is estimated (degraded mode) or the
+//! system is stopped by an actuator partition, and a collapsible table of every
+//! component's state estimate, partition decisions and fault flags. Shown only when the
+//! simulation runs the diagnosers (a scenario with `diagnosers: true`). Renders only.
+
+use super::Console;
+use egui::RichText;
+use vigie_core::pop::Certainty;
+
+/// The text of the degraded-mode banner, one line per flagged partition.
+pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
+    let Some(d) = c.sim.diagnosers.as_ref() else {
+        return Vec::new();
+    };
+    d.flagged()
+        .into_iter()
+        .map(|(p, stop, sensor)| match (stop, sensor) {
+            (true, _) => (
+                format!("Actuator partition {p} at fault: the whole system is stopped"),
+                true,
+            ),
+            (false, Some(s)) => {
+                // `Ĉ4`: the sensor's name with a hat on its first letter.
+                let mut chars = s.chars();
+                let first = chars.next().unwrap_or(' ');
+                let hat = format!("{first}\u{0302}{}", chars.as_str());
+                (
+                    format!("{s} estimated from time intervals ({hat}) — degraded mode"),
+                    false,
+                )
+            }
+            (false, None) => (format!("Partition {p} at fault"), false),
+        })
+        .collect()
+}
+
+/// The diagnoser panel (top of the window).
+pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
+    let Some(d) = c.sim.diagnosers.as_ref() else {
+        return;
+    };
+    egui::Panel::top("diagnosers").show(ui, |ui| {
+        for (line, stop) in banner_lines(c) {
+            let color = if stop {
+                c.palette.trip
+            } else {
+                c.palette.alarm
+            };
+            ui.label(RichText::new(line).strong().color(color));
+        }
+        egui::CollapsingHeader::new(format!(
+            "Diagnosers ({} certain diagnoses)",
+            d.diagnoses.len()
+        ))
+        .id_salt("diagnosers-table")
+        .show(ui, |ui| {
+            egui::Grid::new("diagnosers-grid")
+                .striped(true)
+                .show(ui, |ui| {
+                    ui.strong("component");
+                    ui.strong("state estimate");
+                    ui.strong("decisions");
+                    ui.end_row();
+                    let decisions = d.decisions();
+                    for comp in &d.compiled.components {
+                        ui.label(&comp.id);
+                        let est = d.estimate(&comp.id);
+                        let shown: Vec<&str> = est.iter().take(4).map(String::as_str).collect();
+                        let more = est.len().saturating_sub(shown.len());
+                        ui.label(if more > 0 {
+                            format!("{} (+{more})", shown.join(", "))
+                        } else {
+                            shown.join(", ")
+                        });
+                        ui.horizontal(|ui| {
+                            for (_, p, dec) in
+                                decisions.iter().filter(|(cid, _, _)| *cid == comp.id)
+                            {
+                                let (text, color) = match dec.certainty {
+                                    Certainty::Normal => (format!("{p}: N"), None),
+                                    Certainty::Ambiguous => (
+                                        format!("{p}: {{N, {}}}", dec.faults.join(", ")),
+                                        Some(c.palette.alarm),
+                                    ),
+                                    Certainty::Certain => (
+                                        format!("{p}: {} def_{p}", dec.faults.join("|")),
+                                        Some(c.palette.trip),
+                                    ),
+                                };
+                                let mut t = RichText::new(text);
+                                if let Some(col) = color {
+                                    t = t.color(col).strong();
+                                }
+                                ui.label(t);
+                            }
+                        });
+                        ui.end_row();
+                    }
+                });
+        });
+    });
+}

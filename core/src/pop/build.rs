@@ -1,0 +1,1142 @@
+//! Compiling the component models: signal values of every state, intervals, the
+//! generated fault behaviours (the diagnoser automaton with unobservable fault events)
+//! and the unexpected evolutions, pruned by the filter's constraints.
+
+use super::model::{Behaviour, Bound, ComponentDef, DiagnoserFile, locate};
+use crate::constraints::{ConstraintSet, implies};
+use crate::diag::{Location, Problem};
+use crate::expr::{Dnf, parse_str};
+use crate::symbols::{Literal, Space, Symbols, Var};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// A signal of a component.
+#[derive(Clone, Debug)]
+pub struct Sig {
+    /// Name.
+    pub name: String,
+    /// Variable at t.
+    pub var: Var,
+}
+
+/// An observable event symbol of a component.
+#[derive(Clone, Debug)]
+pub struct Symbol {
+    /// Name (`FE(C4)`, `RE(C3) . A1*`, `tmo(I2)`, `tmo(pulse)`).
+    pub name: String,
+    /// The edge: signal index and direction; None for time-outs.
+    pub edge: Option<(usize, bool)>,
+    /// Extra condition of a guarded symbol.
+    pub guard: Option<Dnf>,
+    /// For a time-out: the interval whose end passed (None: the spurious pulse).
+    pub timeout: Option<usize>,
+}
+
+/// A resolved interval.
+#[derive(Clone, Debug)]
+pub struct Interval {
+    /// Identifier (an auxiliary variable).
+    pub id: String,
+    /// Clock event index (into [`Component::clocks`]).
+    pub clock: usize,
+    /// Lower bound, ms.
+    pub lo: u64,
+    /// Upper bound (exclusive), ms; None for ever.
+    pub hi: Option<u64>,
+}
+
+/// What a state of the diagnoser automaton does with time and sensors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Phase {
+    /// Follows the model with its windows.
+    Timed,
+    /// Follows the model, timing unknown.
+    Untimed,
+    /// The fault's first edge must be observed now.
+    Pending,
+    /// A spurious value is shown; it must end within the pulse limit.
+    Spur,
+    /// The plant does not evolve any more.
+    Blocked,
+}
+
+/// A state of the diagnoser automaton (normal states first, index = normal state).
+#[derive(Clone, Debug)]
+pub struct GState {
+    /// Readable name (`x1`, `F2/x1/timed`).
+    pub name: String,
+    /// Fault label index, None for normal.
+    pub mode: Option<usize>,
+    /// The plant's normal state it follows.
+    pub x: usize,
+    /// Phase.
+    pub phase: Phase,
+    /// Observable transitions: symbol, target, window interval.
+    pub obs: Vec<(usize, usize, Option<usize>)>,
+    /// Unobservable plant transitions (edges hidden by a faulty sensor).
+    pub silent: Vec<usize>,
+    /// Unobservable fault events (normal states only): fault, target.
+    pub spawn: Vec<(usize, usize)>,
+    /// The interval whose end kills this state (None: time does not matter).
+    pub deadline: Option<usize>,
+    /// Untimed states (after an unexpected motion): the longest the plant may stay here
+    /// before one of its expected sensor edges, ms, counted from entering the state (the
+    /// largest upper bound of the windows of its sensor evolutions); None when an
+    /// actuator event or an unbounded window leaves it.
+    pub hold_ms: Option<u64>,
+}
+
+/// A fault partition.
+#[derive(Clone, Debug)]
+pub struct Partition {
+    /// Identifier.
+    pub id: String,
+    /// Fault indices.
+    pub faults: Vec<usize>,
+    /// Estimated sensor.
+    pub sensor: Option<String>,
+    /// Stops the system when certain.
+    pub stop: bool,
+}
+
+/// An unexpected evolution generated from the expected ones.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Unexpected {
+    /// Normal state.
+    pub state: String,
+    /// Event symbol.
+    pub event: String,
+    /// The filter's constraint that makes it impossible, when pruned.
+    pub pruned_by: Option<String>,
+}
+
+/// One compiled component.
+#[derive(Clone, Debug)]
+pub struct Component {
+    /// Identifier.
+    pub id: String,
+    /// Signals.
+    pub signals: Vec<Sig>,
+    /// Normal state names.
+    pub states: Vec<String>,
+    /// Signal values of each normal state (bit i = signal i).
+    pub values: Vec<u64>,
+    /// Initial normal state.
+    pub initial: usize,
+    /// Fault labels.
+    pub faults: Vec<String>,
+    /// Partitions.
+    pub partitions: Vec<Partition>,
+    /// Clock events: signal index, rising.
+    pub clocks: Vec<(usize, bool)>,
+    /// Clock assumed at the start.
+    pub initial_clock: Option<usize>,
+    /// Intervals.
+    pub intervals: Vec<Interval>,
+    /// Observable symbols (edges first, then guarded, then time-outs).
+    pub symbols: Vec<Symbol>,
+    /// The diagnoser automaton.
+    pub g: Vec<GState>,
+    /// Estimates: auxiliary name and expression over the auxiliaries.
+    pub estimates: Vec<(String, Dnf)>,
+    /// Generated unexpected evolutions.
+    pub unexpected: Vec<Unexpected>,
+    /// The symbol `tmo(pulse)`: a spurious value lasted longer than `pulse_max_ms`.
+    pub pulse_sym: usize,
+    /// The symbol `tmo(motion)`: an unexpected motion did not end within its hold.
+    pub motion_sym: usize,
+}
+
+/// Every compiled component, with the run-time settings.
+#[derive(Clone, Debug)]
+pub struct Compiled {
+    /// Components.
+    pub components: Vec<Component>,
+    /// Window slack, ms.
+    pub margin_ms: u64,
+    /// Longest spurious pulse, ms.
+    pub pulse_max_ms: u64,
+}
+
+/// The auxiliary names the diagnosers publish (declare them before the constraints).
+pub fn aux_names(file: &DiagnoserFile) -> Vec<String> {
+    let mut out = Vec::new();
+    for c in &file.components {
+        for p in &c.partitions {
+            out.push(format!("def_{}", p.id));
+        }
+        for i in &c.intervals {
+            out.push(i.id.clone());
+        }
+        for e in &c.estimates {
+            out.push(crate::symbols::estimate_name(&e.sensor));
+        }
+    }
+    out
+}
+
+/// Parses an expression into one product term over the symbols.
+fn term_of(text: &str, symbols: &Symbols) -> Result<Vec<Literal>, String> {
+    let e = parse_str(text).map_err(|e| format!("`{text}`: {}", e.message))?;
+    let d = e
+        .to_dnf(symbols)
+        .map_err(|e| format!("`{text}`: {}", e.message))?;
+    match d.as_slice() {
+        [t] => Ok(t.clone()),
+        _ => Err(format!("`{text}` must be a single product (no `+`)")),
+    }
+}
+
+struct Ctx<'a> {
+    text: &'a str,
+    file: &'a Path,
+    problems: Vec<Problem>,
+}
+
+impl Ctx<'_> {
+    fn err(&mut self, code: &'static str, near: &str, msg: String) {
+        let at = locate(self.text, self.file, near);
+        self.problems.push(Problem::error(code, msg, Some(at)));
+    }
+}
+
+/// Compiles the file `text` (already parsed as `file_def`) against `symbols`; the
+/// unexpected actuator evolutions a constraint of `filter` forbids are pruned.
+pub fn compile(
+    file_def: &DiagnoserFile,
+    text: &str,
+    file: &Path,
+    symbols: &Symbols,
+    filter: Option<&ConstraintSet>,
+) -> Result<Compiled, Vec<Problem>> {
+    let mut ctx = Ctx {
+        text,
+        file,
+        problems: Vec::new(),
+    };
+    let mut ids = BTreeMap::new();
+    let mut components = Vec::new();
+    for c in &file_def.components {
+        if ids.insert(c.id.clone(), ()).is_some() {
+            ctx.err("V0502", &c.id, format!("duplicate component `{}`", c.id));
+            continue;
+        }
+        if let Some(comp) = compile_one(c, symbols, filter, file_def.pulse_max_ms, &mut ctx) {
+            components.push(comp);
+        }
+    }
+    if ctx.problems.is_empty() {
+        Ok(Compiled {
+            components,
+            margin_ms: file_def.margin_ms,
+            pulse_max_ms: file_def.pulse_max_ms,
+        })
+    } else {
+        Err(ctx.problems)
+    }
+}
+
+#[allow(clippy::too_many_lines)]
+fn compile_one(
+    c: &ComponentDef,
+    symbols: &Symbols,
+    filter: Option<&ConstraintSet>,
+    _pulse: u64,
+    ctx: &mut Ctx<'_>,
+) -> Option<Component> {
+    let before = ctx.problems.len();
+    // Signals.
+    let mut signals = Vec::new();
+    for s in &c.signals {
+        match symbols.lookup(s) {
+            Some((space @ (Space::Input | Space::Output), index)) => signals.push(Sig {
+                name: s.clone(),
+                var: Var {
+                    space,
+                    index,
+                    prev: false,
+                },
+            }),
+            _ => ctx.err(
+                "V0503",
+                s,
+                format!("`{s}` is not a sensor or actuator of the plant"),
+            ),
+        }
+    }
+    if signals.len() > 64 {
+        ctx.err(
+            "V0503",
+            &c.id,
+            "a component observes at most 64 signals".into(),
+        );
+    }
+    let sig_of = |v: Var| {
+        signals
+            .iter()
+            .position(|s| s.var.space == v.space && s.var.index == v.index)
+    };
+    let states: Vec<String> = c.states.iter().map(|s| s.id.clone()).collect();
+    let state_of = |n: &str| states.iter().position(|s| s == n);
+    let Some(initial) = state_of(&c.initial) else {
+        ctx.err(
+            "V0504",
+            &c.initial,
+            format!("unknown initial state `{}`", c.initial),
+        );
+        return None;
+    };
+    // Edges of an expression: (signal, rising, guard).
+    let edge_of = |text: &str| -> Result<(usize, bool, Option<Dnf>), String> {
+        let e = parse_str(text).map_err(|e| format!("`{text}`: {}", e.message))?;
+        let d = e
+            .to_dnf(symbols)
+            .map_err(|e| format!("`{text}`: {}", e.message))?;
+        let mut edge: Option<(usize, bool)> = None;
+        let mut guard: Dnf = Vec::new();
+        let mut unguarded = false;
+        for term in &d {
+            let mut here = None;
+            for l in term {
+                if !l.var.prev {
+                    continue;
+                }
+                let now = Var {
+                    prev: false,
+                    ..l.var
+                };
+                if let Some(n) = term
+                    .iter()
+                    .find(|m| m.var == now && m.positive != l.positive)
+                    && let Some(i) = sig_of(now)
+                {
+                    here = Some((i, n.positive));
+                }
+            }
+            let Some((i, rise)) = here else {
+                return Err(format!(
+                    "`{text}`: every term needs an edge RE(x)/FE(x) of a component signal"
+                ));
+            };
+            if edge.replace((i, rise)).is_some_and(|e| e != (i, rise)) {
+                return Err(format!("`{text}` has more than one edge"));
+            }
+            let now = signals[i].var;
+            let rest: Vec<Literal> = term
+                .iter()
+                .copied()
+                .filter(|l| !(l.var == now || l.var == Var { prev: true, ..now }))
+                .collect();
+            if rest.is_empty() {
+                unguarded = true;
+            }
+            guard.push(rest);
+        }
+        let Some((i, rise)) = edge else {
+            return Err(format!(
+                "`{text}` has no edge RE(x)/FE(x) of a component signal"
+            ));
+        };
+        Ok((i, rise, if unguarded { None } else { Some(guard) }))
+    };
+    // Initial values.
+    let mut init_val = 0u64;
+    match term_of(&c.initial_values, symbols) {
+        Ok(t) => {
+            for l in t {
+                match sig_of(l.var) {
+                    Some(i) if !l.var.prev => {
+                        if l.positive {
+                            init_val |= 1 << i;
+                        }
+                    }
+                    _ => ctx.err(
+                        "V0505",
+                        &c.initial_values,
+                        format!("`{}`: only component signals at t", c.initial_values),
+                    ),
+                }
+            }
+        }
+        Err(m) => ctx.err("V0505", &c.initial_values, m),
+    }
+    // Symbols: bare edges, then guarded.
+    let mut syms: Vec<Symbol> = Vec::new();
+    for (i, s) in signals.iter().enumerate() {
+        for rise in [true, false] {
+            syms.push(Symbol {
+                name: format!("{}({})", if rise { "RE" } else { "FE" }, s.name),
+                edge: Some((i, rise)),
+                guard: None,
+                timeout: None,
+            });
+        }
+    }
+    // Intervals.
+    let mut clocks: Vec<(usize, bool)> = Vec::new();
+    let mut raw: Vec<(String, usize, Bound, Bound)> = Vec::new();
+    for iv in &c.intervals {
+        match edge_of(&iv.after) {
+            Ok((i, r, None)) => {
+                let k = clocks.iter().position(|&e| e == (i, r)).unwrap_or_else(|| {
+                    clocks.push((i, r));
+                    clocks.len() - 1
+                });
+                raw.push((iv.id.clone(), k, iv.lo.clone(), iv.hi.clone()));
+            }
+            Ok(_) => ctx.err(
+                "V0506",
+                &iv.after,
+                format!("clock event `{}` must be a bare edge", iv.after),
+            ),
+            Err(m) => ctx.err("V0506", &iv.after, m),
+        }
+    }
+    let resolve = |b: &Bound, depth: usize| -> Result<Option<u64>, String> {
+        fn go(
+            b: &Bound,
+            raw: &[(String, usize, Bound, Bound)],
+            depth: usize,
+        ) -> Result<Option<u64>, String> {
+            if depth > 16 {
+                return Err("interval bounds refer to each other in a cycle".into());
+            }
+            let find = |n: &str| {
+                raw.iter()
+                    .find(|r| r.0 == n)
+                    .ok_or_else(|| format!("unknown interval `{n}`"))
+            };
+            match b {
+                Bound::Ms(v) => Ok(Some(*v)),
+                Bound::Never => Ok(None),
+                Bound::LoOf(n) => go(&find(n)?.2, raw, depth + 1),
+                Bound::HiOf(n) => go(&find(n)?.3, raw, depth + 1),
+            }
+        }
+        go(b, &raw, depth)
+    };
+    let mut intervals = Vec::new();
+    for (id, clock, lo, hi) in &raw {
+        match (resolve(lo, 0), resolve(hi, 0)) {
+            (Ok(Some(lo)), Ok(hi)) => intervals.push(Interval {
+                id: id.clone(),
+                clock: *clock,
+                lo,
+                hi,
+            }),
+            (Ok(None), _) => ctx.err("V0507", id, format!("interval `{id}` has no lower bound")),
+            (Err(m), _) | (_, Err(m)) => ctx.err("V0507", id, format!("interval `{id}`: {m}")),
+        }
+    }
+    let interval_of = |n: &str| intervals.iter().position(|i| i.id == n);
+    let initial_clock = match &c.initial_clock {
+        None => None,
+        Some(t) => match edge_of(t) {
+            Ok((i, r, _)) => clocks.iter().position(|&e| e == (i, r)),
+            Err(m) => {
+                ctx.err("V0506", t, m);
+                None
+            }
+        },
+    };
+    // Expected evolutions: (from, symbols matched, to, window, edge).
+    struct Ev {
+        from: usize,
+        syms: Vec<usize>,
+        to: usize,
+        window: Option<usize>,
+        sig: usize,
+        rise: bool,
+    }
+    let mut evs: Vec<Ev> = Vec::new();
+    let mut guarded_specs = Vec::new();
+    for e in &c.expected {
+        let (Some(from), Some(to)) = (state_of(&e.from), state_of(&e.to)) else {
+            ctx.err(
+                "V0504",
+                if state_of(&e.from).is_none() {
+                    &e.from
+                } else {
+                    &e.to
+                },
+                format!("unknown state in evolution `{}` → `{}`", e.from, e.to),
+            );
+            continue;
+        };
+        let window = match &e.within {
+            None => None,
+            Some(w) => match interval_of(w) {
+                Some(k) => Some(k),
+                None => {
+                    ctx.err("V0507", w, format!("unknown interval `{w}`"));
+                    continue;
+                }
+            },
+        };
+        match edge_of(&e.event) {
+            Ok((i, rise, guard)) => {
+                let sym = if let Some(guard) = guard {
+                    let name = e.event.split_whitespace().collect::<Vec<_>>().join(" ");
+                    let k = syms.iter().position(|s| s.name == name).unwrap_or_else(|| {
+                        syms.push(Symbol {
+                            name,
+                            edge: Some((i, rise)),
+                            guard: Some(guard.clone()),
+                            timeout: None,
+                        });
+                        syms.len() - 1
+                    });
+                    Some(k)
+                } else {
+                    None
+                };
+                guarded_specs.push(sym);
+                evs.push(Ev {
+                    from,
+                    syms: sym.map_or_else(Vec::new, |k| vec![k]),
+                    to,
+                    window,
+                    sig: i,
+                    rise,
+                });
+            }
+            Err(m) => ctx.err("V0508", &e.event, m),
+        }
+    }
+    // Unguarded evolutions match every symbol of their edge.
+    for ev in &mut evs {
+        if ev.syms.is_empty() {
+            ev.syms = syms
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.edge == Some((ev.sig, ev.rise)))
+                .map(|(k, _)| k)
+                .collect();
+        }
+    }
+    // Time-out symbols: one per interval used as a window, then the pulse.
+    let first_tmo = syms.len();
+    for (k, iv) in intervals.iter().enumerate() {
+        if iv.hi.is_some() && evs.iter().any(|e| e.window == Some(k)) {
+            syms.push(Symbol {
+                name: format!("tmo({})", iv.id),
+                edge: None,
+                guard: None,
+                timeout: Some(k),
+            });
+        }
+    }
+    syms.push(Symbol {
+        name: "tmo(pulse)".into(),
+        edge: None,
+        guard: None,
+        timeout: None,
+    });
+    let pulse_sym = syms.len() - 1;
+    syms.push(Symbol {
+        name: "tmo(motion)".into(),
+        edge: None,
+        guard: None,
+        timeout: None,
+    });
+    let motion_sym = syms.len() - 1;
+    // Values of every state.
+    let mut values: Vec<Option<u64>> = vec![None; states.len()];
+    values[initial] = Some(init_val);
+    let mut work = vec![initial];
+    while let Some(x) = work.pop() {
+        let Some(v) = values[x] else { continue };
+        for ev in evs.iter().filter(|e| e.from == x) {
+            let before = (v >> ev.sig) & 1 == 1;
+            if before == ev.rise {
+                ctx.err(
+                    "V0509",
+                    &c.states[x].id,
+                    format!(
+                        "in state `{}`, `{}` is already {}",
+                        states[x],
+                        signals[ev.sig].name,
+                        u8::from(before)
+                    ),
+                );
+                continue;
+            }
+            let nv = v ^ (1 << ev.sig);
+            match values[ev.to] {
+                None => {
+                    values[ev.to] = Some(nv);
+                    work.push(ev.to);
+                }
+                Some(o) if o != nv => ctx.err(
+                    "V0509",
+                    &c.states[ev.to].id,
+                    format!(
+                        "state `{}` is reached with different signal values",
+                        states[ev.to]
+                    ),
+                ),
+                Some(_) => {}
+            }
+        }
+    }
+    let values: Vec<u64> = values.iter().map(|v| v.unwrap_or(init_val)).collect();
+    // Faults and partitions.
+    let faults: Vec<String> = c.faults.iter().map(|f| f.id.clone()).collect();
+    let mut partitions = Vec::new();
+    for p in &c.partitions {
+        let mut fs = Vec::new();
+        for f in &p.faults {
+            match faults.iter().position(|x| x == f) {
+                Some(k) => fs.push(k),
+                None => ctx.err(
+                    "V0510",
+                    f,
+                    format!("partition `{}` names unknown fault `{f}`", p.id),
+                ),
+            }
+        }
+        partitions.push(Partition {
+            id: p.id.clone(),
+            faults: fs,
+            sensor: p.sensor.clone(),
+            stop: p.stop,
+        });
+    }
+    if ctx.problems.len() > before {
+        return None;
+    }
+    // The automaton. Normal states first.
+    let deadline_of = |ws: &[Option<usize>]| -> Option<usize> {
+        if ws.is_empty()
+            || ws
+                .iter()
+                .any(|w| w.is_none_or(|k| intervals[k].hi.is_none()))
+        {
+            return None;
+        }
+        ws.iter()
+            .flatten()
+            .copied()
+            .max_by_key(|&k| intervals[k].hi)
+    };
+    let tmo_loops = |deadline: Option<usize>, own_dies: bool| -> Vec<usize> {
+        (first_tmo..syms.len())
+            .filter(|&s| {
+                !(own_dies && deadline.is_some() && syms[s].timeout == deadline && s < pulse_sym)
+            })
+            .collect()
+    };
+    let mut g: Vec<GState> = Vec::new();
+    let mut index: BTreeMap<(usize, usize, usize, Phase), usize> = BTreeMap::new();
+    for (x, name) in states.iter().enumerate() {
+        let out: Vec<_> = evs.iter().filter(|e| e.from == x).collect();
+        let deadline = deadline_of(&out.iter().map(|e| e.window).collect::<Vec<_>>());
+        let mut obs = Vec::new();
+        for e in &out {
+            for &s in &e.syms {
+                obs.push((s, e.to, e.window));
+            }
+        }
+        for s in tmo_loops(deadline, true) {
+            obs.push((s, x, None));
+        }
+        g.push(GState {
+            name: name.clone(),
+            mode: None,
+            x,
+            phase: Phase::Timed,
+            obs,
+            silent: Vec::new(),
+            spawn: Vec::new(),
+            deadline,
+            hold_ms: None,
+        });
+    }
+    // Fault copies, built from a work list.
+    let edge_syms = |sig: usize, rise: bool| -> Vec<usize> {
+        syms.iter()
+            .enumerate()
+            .filter(|(_, s)| s.edge == Some((sig, rise)))
+            .map(|(k, _)| k)
+            .collect()
+    };
+    let mut pending: Vec<usize> = Vec::new();
+    let mut beh_of: Vec<usize> = vec![0; g.len()];
+    let get = |g: &mut Vec<GState>,
+               pending: &mut Vec<usize>,
+               index: &mut BTreeMap<(usize, usize, usize, Phase), usize>,
+               beh_of: &mut Vec<usize>,
+               f: usize,
+               b: usize,
+               x: usize,
+               ph: Phase|
+     -> usize {
+        *index.entry((f, b, x, ph)).or_insert_with(|| {
+            beh_of.push(b);
+            g.push(GState {
+                // Behaviours of one fault are told apart in the name (`F6.2/x2/untimed`).
+                name: if c.faults[f].behaviours.len() > 1 {
+                    format!(
+                        "{}.{}/{}/{}",
+                        faults[f],
+                        b + 1,
+                        states[x],
+                        format!("{ph:?}").to_lowercase()
+                    )
+                } else {
+                    format!(
+                        "{}/{}/{}",
+                        faults[f],
+                        states[x],
+                        format!("{ph:?}").to_lowercase()
+                    )
+                },
+                mode: Some(f),
+                x,
+                phase: ph,
+                obs: Vec::new(),
+                silent: Vec::new(),
+                spawn: Vec::new(),
+                deadline: None,
+                hold_ms: None,
+            });
+            pending.push(g.len() - 1);
+            // Remember the behaviour in the name only; the key keeps it apart.
+            let _ = b;
+            g.len() - 1
+        })
+    };
+    for (f, fd) in c.faults.iter().enumerate() {
+        for (b, beh) in fd.behaviours.iter().enumerate() {
+            match beh {
+                Behaviour::StuckAt(s, v) | Behaviour::Spurious(s, v) => {
+                    let Some(si) = signals.iter().position(|x| &x.name == s) else {
+                        ctx.err(
+                            "V0511",
+                            s,
+                            format!("fault `{}`: `{s}` is not a signal of `{}`", fd.id, c.id),
+                        );
+                        continue;
+                    };
+                    let spur = matches!(beh, Behaviour::Spurious(..));
+                    for x in 0..states.len() {
+                        let cur = (values[x] >> si) & 1 == 1;
+                        // A pulse may also start with an edge the model expects: its end
+                        // (the sensor going back within the pulse limit) tells it apart.
+                        let t = if cur == *v {
+                            if spur {
+                                continue;
+                            }
+                            get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                x,
+                                Phase::Timed,
+                            )
+                        } else {
+                            let p = get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                x,
+                                Phase::Pending,
+                            );
+                            let after = get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                x,
+                                if spur { Phase::Spur } else { Phase::Timed },
+                            );
+                            g[p].obs = edge_syms(si, *v)
+                                .into_iter()
+                                .map(|sy| (sy, after, None))
+                                .collect();
+                            p
+                        };
+                        g[x].spawn.push((f, t));
+                    }
+                }
+                Behaviour::Blocked(list) => {
+                    for n in list {
+                        match state_of(n) {
+                            Some(x) => {
+                                let t = get(
+                                    &mut g,
+                                    &mut pending,
+                                    &mut index,
+                                    &mut beh_of,
+                                    f,
+                                    b,
+                                    x,
+                                    Phase::Blocked,
+                                );
+                                g[x].spawn.push((f, t));
+                            }
+                            None => ctx.err(
+                                "V0504",
+                                n,
+                                format!("fault `{}`: unknown state `{n}`", fd.id),
+                            ),
+                        }
+                    }
+                }
+                Behaviour::Jumps(n, m) => match (state_of(n), state_of(m)) {
+                    (Some(x), Some(y)) => {
+                        let t = get(
+                            &mut g,
+                            &mut pending,
+                            &mut index,
+                            &mut beh_of,
+                            f,
+                            b,
+                            y,
+                            Phase::Untimed,
+                        );
+                        g[x].spawn.push((f, t));
+                    }
+                    _ => ctx.err(
+                        "V0504",
+                        n,
+                        format!("fault `{}`: `Jumps({n}, {m})` needs two states", fd.id),
+                    ),
+                },
+                Behaviour::Unguarded => {
+                    for x in 0..states.len() {
+                        let t = get(
+                            &mut g,
+                            &mut pending,
+                            &mut index,
+                            &mut beh_of,
+                            f,
+                            b,
+                            x,
+                            Phase::Timed,
+                        );
+                        g[x].spawn.push((f, t));
+                    }
+                }
+                Behaviour::Moves(n, act) => {
+                    let (Some(x), Ok((i, r, _))) = (state_of(n), edge_of(act)) else {
+                        ctx.err(
+                            "V0511",
+                            n,
+                            format!(
+                                "fault `{}`: `Moves({n}, {act})` needs a state and an edge",
+                                fd.id
+                            ),
+                        );
+                        continue;
+                    };
+                    match evs
+                        .iter()
+                        .find(|e| e.from == x && e.sig == i && e.rise == r)
+                    {
+                        Some(e) => {
+                            let t = get(
+                                &mut g,
+                                &mut pending,
+                                &mut index,
+                                &mut beh_of,
+                                f,
+                                b,
+                                e.to,
+                                Phase::Untimed,
+                            );
+                            g[x].spawn.push((f, t));
+                        }
+                        None => ctx.err(
+                            "V0511",
+                            n,
+                            format!("fault `{}`: `{act}` is not expected in `{n}`", fd.id),
+                        ),
+                    }
+                }
+            }
+        }
+    }
+    while let Some(gi) = pending.pop() {
+        let (f, x, ph) = (g[gi].mode.unwrap_or(0), g[gi].x, g[gi].phase);
+        let b = beh_of[gi];
+        if ph == Phase::Pending {
+            continue;
+        }
+        let beh = c.faults[f].behaviours[b].clone();
+        let out: Vec<&Ev> = evs.iter().filter(|e| e.from == x).collect();
+        let mut obs = Vec::new();
+        let mut silent = Vec::new();
+        let mut windows = Vec::new();
+        match (&beh, ph) {
+            (Behaviour::StuckAt(s, _), _) => {
+                let si = signals
+                    .iter()
+                    .position(|z| &z.name == s)
+                    .unwrap_or(usize::MAX);
+                for e in &out {
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Timed,
+                    );
+                    windows.push(e.window);
+                    if e.sig == si {
+                        silent.push(t);
+                    } else {
+                        obs.extend(e.syms.iter().map(|&sy| (sy, t, e.window)));
+                    }
+                }
+                let d = deadline_of(&windows);
+                obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
+                g[gi].deadline = d;
+            }
+            (Behaviour::Spurious(s, v), Phase::Spur) => {
+                let si = signals
+                    .iter()
+                    .position(|z| &z.name == s)
+                    .unwrap_or(usize::MAX);
+                for e in &out {
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Spur,
+                    );
+                    if e.sig == si {
+                        silent.push(t);
+                    } else {
+                        obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
+                    }
+                }
+                let back = get(
+                    &mut g,
+                    &mut pending,
+                    &mut index,
+                    &mut beh_of,
+                    f,
+                    b,
+                    x,
+                    Phase::Timed,
+                );
+                if ((values[x] >> si) & 1 == 1) == *v {
+                    silent.push(back);
+                } else {
+                    obs.extend(edge_syms(si, !*v).into_iter().map(|sy| (sy, back, None)));
+                }
+                obs.extend(
+                    (first_tmo..syms.len())
+                        .filter(|&s| s != pulse_sym)
+                        .map(|s| (s, gi, None)),
+                );
+            }
+            (Behaviour::Unguarded, _) => {
+                for e in &out {
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Timed,
+                    );
+                    obs.extend(
+                        edge_syms(e.sig, e.rise)
+                            .into_iter()
+                            .map(|sy| (sy, t, e.window)),
+                    );
+                    windows.push(e.window);
+                }
+                let d = deadline_of(&windows);
+                obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
+                g[gi].deadline = d;
+            }
+            (Behaviour::Blocked(_), _) => {
+                for e in out
+                    .iter()
+                    .filter(|e| signals[e.sig].var.space == Space::Output)
+                {
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Blocked,
+                    );
+                    obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
+                }
+                obs.extend((first_tmo..syms.len()).map(|s| (s, gi, None)));
+            }
+            (_, Phase::Untimed) => {
+                // The motion goes on with the plant's own dynamics: a sensor edge it
+                // expects comes at the latest at the upper bound of its window, counted
+                // from entering the state (a bound that can only be generous).
+                let mut hold = Some(0u64);
+                for e in &out {
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Untimed,
+                    );
+                    obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
+                    let bound = (signals[e.sig].var.space == Space::Input)
+                        .then(|| e.window.and_then(|k| intervals[k].hi))
+                        .flatten();
+                    hold = match (hold, bound) {
+                        (Some(h), Some(b)) => Some(h.max(b)),
+                        _ => None,
+                    };
+                }
+                let hold = hold.filter(|&h| h > 0);
+                obs.extend(
+                    (first_tmo..syms.len())
+                        .filter(|&s| !(hold.is_some() && s == motion_sym))
+                        .map(|s| (s, gi, None)),
+                );
+                g[gi].hold_ms = hold;
+            }
+            (_, _) => {
+                // Normal-like copy after a spurious pulse or a move.
+                for e in &out {
+                    let t = get(
+                        &mut g,
+                        &mut pending,
+                        &mut index,
+                        &mut beh_of,
+                        f,
+                        b,
+                        e.to,
+                        Phase::Timed,
+                    );
+                    windows.push(e.window);
+                    obs.extend(e.syms.iter().map(|&sy| (sy, t, e.window)));
+                }
+                let d = deadline_of(&windows);
+                obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
+                g[gi].deadline = d;
+            }
+        }
+        obs.sort_unstable();
+        obs.dedup();
+        g[gi].obs = obs;
+        g[gi].silent = silent;
+    }
+    for st in &mut g {
+        st.obs.sort_unstable();
+        st.spawn.sort_unstable();
+    }
+    // Estimates.
+    let mut estimates = Vec::new();
+    for e in &c.estimates {
+        match parse_str(&e.expr).and_then(|x| x.to_dnf(symbols)) {
+            Ok(d) => estimates.push((crate::symbols::estimate_name(&e.sensor), d)),
+            Err(m) => ctx.err(
+                "V0512",
+                &e.expr,
+                format!("estimate of `{}`: {}", e.sensor, m.message),
+            ),
+        }
+    }
+    // Unexpected evolutions, pruned by the filter.
+    let mut unexpected = Vec::new();
+    for (x, name) in states.iter().enumerate() {
+        for (i, s) in signals.iter().enumerate() {
+            let rise = (values[x] >> i) & 1 == 0;
+            if evs
+                .iter()
+                .any(|e| e.from == x && e.sig == i && e.rise == rise)
+            {
+                continue;
+            }
+            let mut pruned_by = None;
+            if let (Some(set), Space::Output) = (filter, s.var.space) {
+                let mut term = Vec::new();
+                for (j, t) in signals.iter().enumerate() {
+                    let v = (values[x] >> j) & 1 == 1;
+                    term.push(Literal {
+                        var: Var {
+                            prev: true,
+                            ..t.var
+                        },
+                        positive: v,
+                    });
+                    term.push(Literal {
+                        var: t.var,
+                        positive: if j == i { !v } else { v },
+                    });
+                }
+                term.sort();
+                pruned_by = set
+                    .constraints
+                    .iter()
+                    .find(|k| implies(&term, &k.dnf))
+                    .map(|k| k.id.clone());
+            }
+            unexpected.push(Unexpected {
+                state: name.clone(),
+                event: format!("{}({})", if rise { "RE" } else { "FE" }, s.name),
+                pruned_by,
+            });
+        }
+        if let Some(d) = g[x].deadline {
+            unexpected.push(Unexpected {
+                state: name.clone(),
+                event: format!("tmo({})", intervals[d].id),
+                pruned_by: None,
+            });
+        }
+    }
+    if ctx.problems.len() > before {
+        return None;
+    }
+    Some(Component {
+        id: c.id.clone(),
+        signals,
+        states,
+        values,
+        initial,
+        faults,
+        partitions,
+        clocks,
+        initial_clock,
+        intervals,
+        symbols: syms,
+        g,
+        estimates,
+        unexpected,
+        pulse_sym,
+        motion_sym,
+    })
+}
+
+/// A problem at the start of the file (for errors not tied to a name).
+pub fn at_start(file: &Path, code: &'static str, msg: String) -> Problem {
+    Problem::error(code, msg, Some(Location::new(file, 1, 1)))
+}

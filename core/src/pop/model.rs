@@ -1,0 +1,245 @@
+//! `diagnosers.ron`: the component models (PoP) as data, and their loader.
+
+use crate::diag::{Location, Problem, ron_problem};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+fn default_alpha() -> f64 {
+    3.0
+}
+fn default_margin() -> u64 {
+    10
+}
+fn default_pulse() -> u64 {
+    2000
+}
+
+/// The whole file: one model per component.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, rename = "Diagnosers")]
+pub struct DiagnoserFile {
+    /// Confidence coefficient of the learned tolerance ΔT = α·σ (seed 003, annex B).
+    #[serde(default = "default_alpha")]
+    pub alpha: f64,
+    /// Slack added to every window at run time (one PLC cycle: the sampling error), ms.
+    #[serde(default = "default_margin")]
+    pub margin_ms: u64,
+    /// Longest spurious pulse a sensor fault of kind `Spurious` may produce, ms.
+    #[serde(default = "default_pulse")]
+    pub pulse_max_ms: u64,
+    /// The component models.
+    pub components: Vec<ComponentDef>,
+}
+
+/// One component (a part of the plant, PoP_i).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComponentDef {
+    /// Identifier (`table`).
+    pub id: String,
+    /// What it is.
+    #[serde(default)]
+    pub description: String,
+    /// The signals it observes (sensors and actuators): their edges are its events.
+    pub signals: Vec<String>,
+    /// The initial state.
+    pub initial: String,
+    /// Values of the signals in the initial state, e.g. `/A4 . C4 . /C5`: every other
+    /// state's values follow from the expected evolutions.
+    pub initial_values: String,
+    /// The normal states.
+    pub states: Vec<StateDef>,
+    /// Expected evolutions; every other evolution is unexpected (generated).
+    pub expected: Vec<EvolutionDef>,
+    /// Time intervals since the last clock event (`RE(A4)`, `FE(A4)`).
+    #[serde(default)]
+    pub intervals: Vec<IntervalDef>,
+    /// The clock event assumed to have happened long before the start (e.g. `FE(A4)`).
+    #[serde(default)]
+    pub initial_clock: Option<String>,
+    /// Fault labels and the behaviour each one gives the component.
+    pub faults: Vec<FaultDef>,
+    /// Fault partitions: one `def_<id>` flag each.
+    pub partitions: Vec<PartitionDef>,
+    /// Sensor estimates from the intervals (`EST(C4) = I1 + I2 + I9 + I10`).
+    #[serde(default)]
+    pub estimates: Vec<EstimateDef>,
+}
+
+/// A normal state.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StateDef {
+    /// Identifier.
+    pub id: String,
+    /// What the component does there.
+    #[serde(default)]
+    pub description: String,
+}
+
+/// An expected evolution: `event` (one edge `RE(x)`/`FE(x)`, optionally and-ed with
+/// conditions) from `from` to `to`, within interval `within` when given.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvolutionDef {
+    /// Source state.
+    pub from: String,
+    /// The logical expression: exactly one edge of a component signal, and conditions.
+    pub event: String,
+    /// Interval of the clock in which it is expected (None: any time).
+    #[serde(default)]
+    pub within: Option<String>,
+    /// Target state.
+    pub to: String,
+}
+
+/// A bound of an interval.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Bound {
+    /// A fixed time since the clock event, ms.
+    Ms(u64),
+    /// The lower bound of another interval.
+    LoOf(String),
+    /// The upper bound of another interval.
+    HiOf(String),
+    /// No upper bound.
+    Never,
+}
+
+/// Learned statistics of an interval (written by `vigie learn`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Learned {
+    /// Number of normally completed evolutions measured.
+    pub samples: u64,
+    /// Shortest observed time, ms.
+    pub min_ms: u64,
+    /// Longest observed time, ms.
+    pub max_ms: u64,
+    /// Mean, ms.
+    pub mean_ms: f64,
+    /// Population standard deviation, ms.
+    pub sigma_ms: f64,
+    /// α used.
+    pub alpha: f64,
+    /// ΔT = α·σ, ms.
+    pub delta_ms: f64,
+}
+
+/// A time interval `[lo, hi[` since the clock event `after`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IntervalDef {
+    /// Identifier, published as an auxiliary variable (`I2`).
+    pub id: String,
+    /// The clock event it is measured from (`RE(A4)`).
+    pub after: String,
+    /// Lower bound.
+    pub lo: Bound,
+    /// Upper bound (exclusive).
+    pub hi: Bound,
+    /// What it means.
+    #[serde(default)]
+    pub description: String,
+    /// Learned statistics, when learned.
+    #[serde(default)]
+    pub learned: Option<Learned>,
+}
+
+/// How a fault changes what the component shows.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Behaviour {
+    /// The sensor reads this value from the fault on.
+    StuckAt(String, bool),
+    /// The sensor takes this value for a while, then reads the plant again.
+    Spurious(String, bool),
+    /// In these states the plant stops evolving (no more sensor edges).
+    Blocked(Vec<String>),
+    /// In state `.0` the plant moves as if the actuator edge `.1` had happened
+    /// (unexpected motion); afterwards its timing is unknown.
+    Moves(String, String),
+    /// In state `.0` the plant starts behaving as in state `.1` (a motion reversed by
+    /// a failed actuator: the table released or pushed back half-way); afterwards its
+    /// timing is unknown.
+    Jumps(String, String),
+    /// The plant moves without its order: every expected evolution may happen without
+    /// its condition (a drive stuck on, seen through guarded sensor edges).
+    Unguarded,
+}
+
+/// A fault label.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultDef {
+    /// Label (`F1`).
+    pub id: String,
+    /// What it is.
+    #[serde(default)]
+    pub description: String,
+    /// Its behaviours (one or several).
+    pub behaviours: Vec<Behaviour>,
+}
+
+/// A fault partition.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartitionDef {
+    /// Identifier: the flag is `def_<id>`.
+    pub id: String,
+    /// Fault labels.
+    pub faults: Vec<String>,
+    /// The sensor the partition is about, estimated while the flag is set.
+    #[serde(default)]
+    pub sensor: Option<String>,
+    /// A certain fault here stops the whole system (actuator partitions).
+    #[serde(default)]
+    pub stop: bool,
+}
+
+/// An estimate of a sensor from the interval variables.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EstimateDef {
+    /// The sensor.
+    pub sensor: String,
+    /// Expression over the interval variables of the component.
+    pub expr: String,
+}
+
+impl DiagnoserFile {
+    /// Parses the file text; RON errors carry file, line and column.
+    pub fn from_ron(text: &str, file: &Path) -> Result<Self, Problem> {
+        ron::Options::default()
+            .from_str(text)
+            .map_err(|e| ron_problem(file, &e))
+    }
+
+    /// Reads and parses a file.
+    pub fn load(path: &Path) -> Result<Self, Problem> {
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            Problem::error(
+                "V0002",
+                format!("cannot read {}: {e}", path.display()),
+                None,
+            )
+        })?;
+        Self::from_ron(&text, path)
+    }
+
+    /// The file text (pretty RON), as `vigie learn` writes it.
+    pub fn to_ron(&self) -> String {
+        let cfg = ron::ser::PrettyConfig::new().struct_names(true);
+        ron::ser::to_string_pretty(self, cfg).unwrap_or_default()
+    }
+}
+
+/// Where `needle` (a quoted name) first appears in `text`, for semantic errors.
+pub fn locate(text: &str, file: &Path, needle: &str) -> Location {
+    let quoted = format!("\"{needle}\"");
+    for (i, line) in text.lines().enumerate() {
+        if let Some(c) = line.find(&quoted) {
+            return Location::new(file, i + 1, line[..c].chars().count() + 1);
+        }
+    }
+    Location::new(file, 1, 1)
+}
