@@ -670,14 +670,29 @@ pub fn synoptic_ui(
     // Tooltip of the element under the pointer.
     // Below and to the left of the box, away from the actuator lamps on the right,
     // with a leader line to the box.
+    // The first of a few places around the box that covers no sensor or actuator lamp.
+    let lamps: Vec<Pos2> = geom
+        .sensors
+        .iter()
+        .map(|s| xf.p(s.lamp))
+        .chain(geom.actuators.iter().map(|(_, p)| xf.p(*p)))
+        .collect();
     for (p, text) in &predicted_labels {
         let galley = painter.layout_no_wrap(text.clone(), FontId::proportional(12.0), Color32::WHITE);
         let size = galley.size() + vec2(8.0, 4.0);
-        let at = pos2(p.x - 22.0 - size.x, p.y + 30.0);
-        painter.line_segment(
-            [pos2(at.x + size.x, at.y + size.y * 0.5), *p],
-            Stroke::new(1.5, pal.trip),
-        );
+        let candidates = [
+            pos2(p.x + 40.0, p.y + 70.0),
+            pos2(p.x - 40.0 - size.x, p.y + 70.0),
+            pos2(p.x + 40.0, p.y - 70.0 - size.y),
+            pos2(p.x - 40.0 - size.x, p.y - 70.0 - size.y),
+        ];
+        let clear = |at: &Pos2| {
+            let r = Rect::from_min_size(*at, size).expand(lamp_r + 6.0);
+            lamps.iter().all(|l| !r.contains(*l)) && rect.contains_rect(Rect::from_min_size(*at, size))
+        };
+        let at = candidates.iter().copied().find(clear).unwrap_or(candidates[0]);
+        let anchor = pos2(at.x.clamp(p.x.min(at.x + size.x), at.x + size.x), if at.y > p.y { at.y } else { at.y + size.y });
+        painter.line_segment([anchor, *p], Stroke::new(1.5, pal.trip));
         badge(&painter, at, text, pal.trip, Color32::WHITE);
     }
     if let Some(ptr) = response.hover_pos() {
