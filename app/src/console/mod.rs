@@ -194,7 +194,7 @@ impl Source {
                 filter: vigie_core::engine::FilterMode::Enforce,
                 cycle_ms: 10,
                 projection_ms: 10_000,
-                diagnosers: false,
+                diagnosers: plant_dir.join("diagnosers.ron").exists(),
             },
             path: plant_dir.join("console.ron"),
         }
@@ -863,7 +863,6 @@ impl Console {
     /// and applied at the next `logic`.
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let mut commands = Vec::new();
-        diagnosers::panel_ui(self, ui);
         views::root_ui(self, ui, &mut commands);
         if !commands.is_empty() {
             ui.ctx().request_repaint();
