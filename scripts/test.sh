@@ -38,4 +38,4 @@ fi
 export VIGIE_VENV="$venv"
 
 # 3. The tests.
-cargo test --workspace --locked "$@"
+cargo test --workspace --locked --no-fail-fast "$@"

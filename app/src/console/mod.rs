@@ -378,7 +378,7 @@ impl Console {
     pub fn new(opts: &ConsoleOptions) -> Result<Self, String> {
         let linked = link::options(opts)?;
         let opts = linked.as_ref().unwrap_or(opts);
-        let source = match &opts.scenario {
+        let mut source = match &opts.scenario {
             Some(path) => Source {
                 scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
                 path: path.clone(),
@@ -389,6 +389,11 @@ impl Console {
                 "Reference program",
             ),
         };
+        if opts.link.is_some() {
+            // The mirror of a live run replays the run's own engine cycle by cycle; the
+            // diagnosers (and their constraint rewrite) are not part of the live cycles.
+            source.scenario.diagnosers = false;
+        }
         let plant_dir = source
             .path
             .parent()
