@@ -37,9 +37,9 @@ pub mod sim;
 pub mod symbols;
 pub mod synthetic;
 pub mod tasks;
-pub mod verify;
 pub mod time;
 pub mod trace;
+pub mod verify;
 
 #[cfg(test)]
 mod test_support;

@@ -238,5 +238,9 @@ fn maintenance_verifies_the_constraint_set() {
     // Nothing to replay on a safe set: the command says so and changes nothing.
     h.state_mut().apply(Command::ReplayCounterexample);
     assert_eq!(h.state().mode, Mode::Maintenance);
-    assert!(h.state().status.starts_with("no counterexample"), "{}", h.state().status);
+    assert!(
+        h.state().status.starts_with("no counterexample"),
+        "{}",
+        h.state().status
+    );
 }

@@ -7,7 +7,7 @@ use std::time::Instant;
 use vigie_core::dtree::{CompiledFilter, Tests};
 use vigie_core::emulator::Layout;
 use vigie_core::frame::Frame;
-use vigie_core::verify::{self, promela, Model, Options};
+use vigie_core::verify::{self, Model, Options, promela};
 
 /// Arguments of `vigie verify`.
 #[derive(clap::Args, Debug)]
@@ -46,11 +46,27 @@ pub(crate) fn run_spin(text: &str) -> anyhow::Result<(promela::SpinVerdict, f64)
             .args(args)
             .current_dir(&dir)
             .output()
-            .map_err(|e| anyhow::anyhow!("cannot run `{cmd}` ({e}): install the Debian package `spin` and gcc"))?;
+            .map_err(|e| {
+                anyhow::anyhow!(
+                    "cannot run `{cmd}` ({e}): install the Debian package `spin` and gcc"
+                )
+            })?;
         Ok(String::from_utf8_lossy(&o.stdout).into_owned())
     };
     run("spin", &["-a", "model.pml"])?;
-    run("gcc", &["-O2", "-w", "-DSAFETY", "-DMEMLIM=8000", "-DCOLLAPSE", "-o", "pan", "pan.c"])?;
+    run(
+        "gcc",
+        &[
+            "-O2",
+            "-w",
+            "-DSAFETY",
+            "-DMEMLIM=8000",
+            "-DCOLLAPSE",
+            "-o",
+            "pan",
+            "pan.c",
+        ],
+    )?;
     let out = run("./pan", &["-m20000000", "-w24", "-c0", "-n"])?;
     let secs = t0.elapsed().as_secs_f64();
     let _ = std::fs::remove_dir_all(&dir);
@@ -138,13 +154,19 @@ pub(crate) fn run(plant_dir: &Path, args: &VerifyArgs) -> anyhow::Result<ExitCod
                         "  replayed in the emulator: {:?} at {} ms ({}) — a real flaw of the constraint set on this plant",
                         h.kind, h.time_ms, h.place
                     ),
-                    None => println!("  replayed in the emulator: no hazard (abstraction artefact)"),
+                    None => {
+                        println!("  replayed in the emulator: no hazard (abstraction artefact)")
+                    }
                 }
                 if let Some(out) = &args.out {
                     std::fs::create_dir_all(out)?;
                     std::fs::write(out.join("counterexample.csv"), &rp.csv)?;
-                    std::fs::write(out.join("counterexample.json"), serde_json::to_string_pretty(trace)?)?;
-                    let plant_abs = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+                    std::fs::write(
+                        out.join("counterexample.json"),
+                        serde_json::to_string_pretty(trace)?,
+                    )?;
+                    let plant_abs =
+                        std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
                     let sc = verify::scenario::write(
                         out,
                         trace,
@@ -152,7 +174,10 @@ pub(crate) fn run(plant_dir: &Path, args: &VerifyArgs) -> anyhow::Result<ExitCod
                         &plant_abs.to_string_lossy(),
                         g.step_us,
                     )?;
-                    println!("  trace written to {}", out.join("counterexample.csv").display());
+                    println!(
+                        "  trace written to {}",
+                        out.join("counterexample.csv").display()
+                    );
                     println!(
                         "  open it in the console: vigie run {}   (or --headless for the report)",
                         sc.display()
@@ -167,19 +192,25 @@ pub(crate) fn run(plant_dir: &Path, args: &VerifyArgs) -> anyhow::Result<ExitCod
         for (side, name) in ["left (+u)", "right (-u)"].iter().enumerate() {
             println!(
                 "PERMISSIVENESS {name}: delivery {} ; from every reachable state: {}",
-                report.full.delivered[side]
-                    .as_ref()
-                    .map_or("UNREACHABLE".to_string(), |t| format!("reachable in {} steps", t.steps.len())),
+                report.full.delivered[side].as_ref().map_or(
+                    "UNREACHABLE".to_string(),
+                    |t| format!("reachable in {} steps", t.steps.len())
+                ),
                 if report.full.always_deliverable[side] {
                     "yes".to_string()
                 } else {
                     format!(
                         "NO (stuck after {} steps: {})",
-                        report.full.stuck[side].as_ref().map_or(0, |t| t.steps.len()),
+                        report.full.stuck[side]
+                            .as_ref()
+                            .map_or(0, |t| t.steps.len()),
                         report.full.stuck[side]
                             .as_ref()
                             .and_then(|t| t.steps.last())
-                            .map_or(String::new(), |s| format!("in[{}] obs[{}] {}", s.inputs, s.observers, s.plant))
+                            .map_or(String::new(), |s| format!(
+                                "in[{}] obs[{}] {}",
+                                s.inputs, s.observers, s.plant
+                            ))
                     )
                 }
             );
@@ -243,7 +274,11 @@ pub(crate) fn run(plant_dir: &Path, args: &VerifyArgs) -> anyhow::Result<ExitCod
             v.delivered,
             v.no_fallback,
             v.complete,
-            if agree { "AGREES with vigie" } else { "DISAGREES with vigie" }
+            if agree {
+                "AGREES with vigie"
+            } else {
+                "DISAGREES with vigie"
+            }
         );
         println!("vigie: {} states in {:.2} s", full.states, t_full);
     }
@@ -284,7 +319,10 @@ fn bench_compiled(bundle: &vigie_core::bundle::PlantBundle) -> anyhow::Result<()
     });
     let t1 = c1.tree.clone();
     let t2 = c2.tree.clone();
-    for (name, s) in [("w=1", t1.as_ref().map(|t| t.stats())), ("w=2", t2.as_ref().map(|t| t.stats()))] {
+    for (name, s) in [
+        ("w=1", t1.as_ref().map(|t| t.stats())),
+        ("w=2", t2.as_ref().map(|t| t.stats())),
+    ] {
         if let Some(s) = s {
             println!(
                 "station tree {name}: {} tests, {} leaves, depth {}, mean {:.3} tests over {} support variables",

@@ -678,7 +678,8 @@ pub fn synoptic_ui(
         .chain(geom.actuators.iter().map(|(_, p)| xf.p(*p)))
         .collect();
     for (p, text) in &predicted_labels {
-        let galley = painter.layout_no_wrap(text.clone(), FontId::proportional(12.0), Color32::WHITE);
+        let galley =
+            painter.layout_no_wrap(text.clone(), FontId::proportional(12.0), Color32::WHITE);
         let size = galley.size() + vec2(8.0, 4.0);
         let candidates = [
             pos2(p.x + 40.0, p.y + 70.0),
@@ -688,10 +689,18 @@ pub fn synoptic_ui(
         ];
         let clear = |at: &Pos2| {
             let r = Rect::from_min_size(*at, size).expand(lamp_r + 6.0);
-            lamps.iter().all(|l| !r.contains(*l)) && rect.contains_rect(Rect::from_min_size(*at, size))
+            lamps.iter().all(|l| !r.contains(*l))
+                && rect.contains_rect(Rect::from_min_size(*at, size))
         };
-        let at = candidates.iter().copied().find(clear).unwrap_or(candidates[0]);
-        let anchor = pos2(at.x.clamp(p.x.min(at.x + size.x), at.x + size.x), if at.y > p.y { at.y } else { at.y + size.y });
+        let at = candidates
+            .iter()
+            .copied()
+            .find(clear)
+            .unwrap_or(candidates[0]);
+        let anchor = pos2(
+            at.x.clamp(p.x.min(at.x + size.x), at.x + size.x),
+            if at.y > p.y { at.y } else { at.y + size.y },
+        );
         painter.line_segment([anchor, *p], Stroke::new(1.5, pal.trip));
         badge(&painter, at, text, pal.trip, Color32::WHITE);
     }

@@ -50,7 +50,11 @@ pub(crate) fn start(c: &mut Console) {
 
 /// Collects a finished verification (called every frame).
 pub(crate) fn poll(c: &mut Console, ctx: &egui::Context) {
-    let finished = c.verification.job.as_ref().is_some_and(JoinHandle::is_finished);
+    let finished = c
+        .verification
+        .job
+        .as_ref()
+        .is_some_and(JoinHandle::is_finished);
     if !finished {
         if c.verification.running() {
             ctx.request_repaint_after(std::time::Duration::from_millis(100));

@@ -224,7 +224,11 @@ impl DecisionTable {
 
     /// Size, depth and mean number of tests.
     pub fn stats(&self) -> TreeStats {
-        let internal = self.rows.iter().filter(|r| matches!(r, Row::Test { .. })).count();
+        let internal = self
+            .rows
+            .iter()
+            .filter(|r| matches!(r, Row::Test { .. }))
+            .count();
         let mut depth = 0;
         let mut total = 0u64;
         for x in 0..1u64 << self.n {
@@ -300,7 +304,10 @@ impl CompiledFilter {
         if vars.len() > 64 {
             return Err(Problem::error(
                 "V0601",
-                format!("support of {} variables: the compiled forms take at most 64", vars.len()),
+                format!(
+                    "support of {} variables: the compiled forms take at most 64",
+                    vars.len()
+                ),
                 None,
             ));
         }
@@ -339,7 +346,11 @@ impl CompiledFilter {
     /// Writes a packed input into a frame (support variables only).
     pub fn unpack_into(&self, packed: u64, frame: &mut Frame) {
         for (k, v) in self.vars.iter().enumerate() {
-            let table = if v.prev { &mut frame.prev } else { &mut frame.now };
+            let table = if v.prev {
+                &mut frame.prev
+            } else {
+                &mut frame.now
+            };
             table[v.space as usize].set(v.index as usize, packed >> k & 1 == 1);
         }
     }
@@ -413,7 +424,12 @@ impl SparseMasks {
         for &end in &self.ends {
             let end = end as usize;
             if self.words[start..end].iter().all(|&(t, w, m, x)| {
-                tables[usize::from(t & 7)].get(w as usize).copied().unwrap_or(0) & m == x
+                tables[usize::from(t & 7)]
+                    .get(w as usize)
+                    .copied()
+                    .unwrap_or(0)
+                    & m
+                    == x
             }) {
                 return true;
             }

@@ -34,7 +34,11 @@ fn close(a: (usize, usize, f64), b: (usize, usize, f64)) {
 fn majority_of_three() {
     let f = from_fn(3, |x| (x[0] && x[1]) || (x[0] && x[2]) || (x[1] && x[2]));
     assert_eq!(
-        f.iter().enumerate().filter(|(_, v)| **v).map(|(i, _)| i).collect::<Vec<_>>(),
+        f.iter()
+            .enumerate()
+            .filter(|(_, v)| **v)
+            .map(|(i, _)| i)
+            .collect::<Vec<_>>(),
         vec![3, 5, 6, 7]
     );
     close(figures(3, &f, Tests::Single), (5, 3, 2.5));
@@ -65,7 +69,13 @@ fn chapter_three_examples() {
     assert!((hv[2] - 1.0).abs() < 1e-9 && (hv[3] - 1.0).abs() < 1e-9);
     // Ex. 2 with pair tests: X1⊕X2 at the root.
     let t = build(4, &ex2, Tests::Pairs);
-    assert!(matches!(t.rows[0], Row::Test { test: Test::Xor(0, 1), .. }));
+    assert!(matches!(
+        t.rows[0],
+        Row::Test {
+            test: Test::Xor(0, 1),
+            ..
+        }
+    ));
 }
 
 #[test]

@@ -265,7 +265,11 @@ impl Model {
         }
         let n_out = bundle.plant.outputs.len();
         if n_out + bundle.plant.inputs.len() + bundle.observers.len() > 128 - 99 {
-            return Err(Problem::error("V0501", "too many signals for the verifier", None));
+            return Err(Problem::error(
+                "V0501",
+                "too many signals for the verifier",
+                None,
+            ));
         }
         let free_outputs = (0..n_out).filter(|k| !geo.exit_act.contains(k)).collect();
         let mut prev_mask = (0u64, 0u64, 0u64);
@@ -279,7 +283,9 @@ impl Model {
         for d in &bundle.observers.defs {
             let texts: Vec<&String> = match &d.rule {
                 crate::observers::Rule::Memory { set, reset } => vec![set, reset],
-                crate::observers::Rule::Counter { up, down, clear, .. } => {
+                crate::observers::Rule::Counter {
+                    up, down, clear, ..
+                } => {
                     let mut v = vec![up, down];
                     v.extend(clear.as_ref());
                     v
@@ -612,7 +618,10 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
         delivered: [0, 1].map(|side| {
             delivered[side].map(|(si, e)| {
                 trace(
-                    format!("delivery at the {} exit", if side == 0 { "+u (left)" } else { "-u (right)" }),
+                    format!(
+                        "delivery at the {} exit",
+                        if side == 0 { "+u (left)" } else { "-u (right)" }
+                    ),
                     si,
                     Some(e),
                 )
@@ -755,7 +764,11 @@ fn build_trace(
 }
 
 /// Loads the layout of a plant folder and verifies its constraint set.
-pub fn verify(bundle: &PlantBundle, layout: &Layout, opts: &Options) -> Result<VerifyReport, Problem> {
+pub fn verify(
+    bundle: &PlantBundle,
+    layout: &Layout,
+    opts: &Options,
+) -> Result<VerifyReport, Problem> {
     let model = Model::new(bundle, layout, opts.max_boxes)?;
     let n_out = bundle.plant.outputs.len();
     let filter = Filter::new(&bundle.constraints, n_out);
@@ -790,7 +803,11 @@ pub fn verify(bundle: &PlantBundle, layout: &Layout, opts: &Options) -> Result<V
 
 /// Which constraints are necessary: for each, the set without it explored on a model
 /// with `max_boxes` boxes.
-pub fn necessity(bundle: &PlantBundle, layout: &Layout, max_boxes: usize) -> Result<Vec<ConstraintRole>, Problem> {
+pub fn necessity(
+    bundle: &PlantBundle,
+    layout: &Layout,
+    max_boxes: usize,
+) -> Result<Vec<ConstraintRole>, Problem> {
     let model = Model::new(bundle, layout, max_boxes)?;
     let n_out = bundle.plant.outputs.len();
     let mut roles = Vec::new();
@@ -835,7 +852,13 @@ pub struct Replay {
 
 /// Replays a trace in the emulator: the arrivals at the step ends, the applied outputs
 /// held for each step, sampled every `cycle_ms` into a trace CSV.
-pub fn replay(layout: &Layout, bundle: &PlantBundle, trace: &Trace, step_us: i64, cycle_ms: u64) -> Result<Replay, Problem> {
+pub fn replay(
+    layout: &Layout,
+    bundle: &PlantBundle,
+    trace: &Trace,
+    step_us: i64,
+    cycle_ms: u64,
+) -> Result<Replay, Problem> {
     let plant = &bundle.plant;
     let mut emu = Emulator::new(layout, plant, 1)?;
     let arrivals: Vec<(u64, BoxSize)> = trace

@@ -214,9 +214,8 @@ impl Geometry {
                     if *part == t.id {
                         probes_mm.push((input, true, at_mm + t.half_length_mm, large_only));
                         lens.push(at_mm + t.half_length_mm);
-                    } else if let Some(k) = chain
-                        .iter()
-                        .position(|&c| layout.conveyors[c].id == *part)
+                    } else if let Some(k) =
+                        chain.iter().position(|&c| layout.conveyors[c].id == *part)
                     {
                         let base: i64 = chain[..k]
                             .iter()
@@ -350,9 +349,7 @@ impl Geometry {
                         continue;
                     }
                     (true, true) => p.at,
-                    (true, false) if at_load && p.at >= 0 && p.at <= self.table_len => {
-                        p.at + te
-                    }
+                    (true, false) if at_load && p.at >= 0 && p.at <= self.table_len => p.at + te,
                     _ => continue,
                 };
                 if lo <= at && at <= hi {
@@ -545,9 +542,15 @@ impl Geometry {
             if b.on_table && p1 == 1 {
                 // On an exit, past every modelled exit sensor: gone to the elevator.
                 let beyond_plus = lo > self.table_len
-                    && self.probes.iter().all(|p| !p.on_table || p.at < lo || p.at <= self.table_len);
-                let beyond_minus =
-                    lo + l < 0 && self.probes.iter().all(|p| !p.on_table || p.at > lo + l || p.at >= 0);
+                    && self
+                        .probes
+                        .iter()
+                        .all(|p| !p.on_table || p.at < lo || p.at <= self.table_len);
+                let beyond_minus = lo + l < 0
+                    && self
+                        .probes
+                        .iter()
+                        .all(|p| !p.on_table || p.at > lo + l || p.at >= 0);
                 if beyond_plus {
                     ev.delivered_plus = true;
                     continue;
@@ -622,7 +625,9 @@ impl Geometry {
             };
             let l = self.len(&nb);
             let free = kept.iter().all(|b| {
-                b.on_table || i32::from(b.lo) >= l + self.spawn_gap || i32::from(b.lo) >= self.joints[0]
+                b.on_table
+                    || i32::from(b.lo) >= l + self.spawn_gap
+                    || i32::from(b.lo) >= self.joints[0]
             });
             if free && nk < MAX_BOXES {
                 kept_a[nk] = nb;

@@ -26,7 +26,13 @@ fn patched(tag: &str, patches: &[(&str, &str, &str)]) -> (Patched, PlantBundle, 
     let dir = std::env::temp_dir().join(format!("vigie-verify-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temp dir");
-    for f in ["plant.ron", "observers.ron", "constraints.txt", "invariants.txt", "layout.ron"] {
+    for f in [
+        "plant.ron",
+        "observers.ron",
+        "constraints.txt",
+        "invariants.txt",
+        "layout.ron",
+    ] {
         let mut text = std::fs::read_to_string(src.join(f)).expect("read station file");
         for (file, from, to) in patches {
             if *file == f {
@@ -54,9 +60,25 @@ fn kinds(e: &Exploration) -> Vec<&str> {
 fn station_paper_set_is_safe_and_permissive() {
     let (b, l) = station();
     for max_boxes in [1, 2] {
-        let r = verify(&b, &l, &Options { max_boxes, necessity_boxes: None }).expect("verify");
+        let r = verify(
+            &b,
+            &l,
+            &Options {
+                max_boxes,
+                necessity_boxes: None,
+            },
+        )
+        .expect("verify");
         assert!(r.safe, "{max_boxes} boxes: {:?}", kinds(&r.full));
-        assert!(r.permissive, "{max_boxes} boxes: deliveries {:?}", r.full.delivered.iter().map(Option::is_some).collect::<Vec<_>>());
+        assert!(
+            r.permissive,
+            "{max_boxes} boxes: deliveries {:?}",
+            r.full
+                .delivered
+                .iter()
+                .map(Option::is_some)
+                .collect::<Vec<_>>()
+        );
         for i in &r.invariants {
             assert!(i.proved, "{max_boxes} boxes: {} refuted", i.id);
         }
@@ -68,28 +90,62 @@ fn station_paper_set_is_safe_and_permissive() {
 /// it reaches the hazard with the weakened filter enforcing.
 #[test]
 fn counterexample_of_a_weakened_set_is_real() {
-    let (_guard, b, l) = patched("no-css13", &[("constraints.txt", "CSs13 = C4 . /C6 . A4", "# CSs13 dropped")]);
-    let r = verify(&b, &l, &Options { max_boxes: 1, necessity_boxes: None }).expect("verify");
-    let (kind, trace) = r.full.hazard.as_ref().expect("without CSs13 a hazard is reachable");
+    let (_guard, b, l) = patched(
+        "no-css13",
+        &[(
+            "constraints.txt",
+            "CSs13 = C4 . /C6 . A4",
+            "# CSs13 dropped",
+        )],
+    );
+    let r = verify(
+        &b,
+        &l,
+        &Options {
+            max_boxes: 1,
+            necessity_boxes: None,
+        },
+    )
+    .expect("verify");
+    let (kind, trace) = r
+        .full
+        .hazard
+        .as_ref()
+        .expect("without CSs13 a hazard is reachable");
     let rp = replay(&l, &b, trace, r.geometry.step_us, 10).expect("replay");
     assert!(
-        rp.hazards.iter().any(|h| hazard_name(h.kind) == kind.as_str()),
+        rp.hazards
+            .iter()
+            .any(|h| hazard_name(h.kind) == kind.as_str()),
         "the emulator does not reproduce {kind}: {:?}",
         rp.hazards
     );
     let out = _guard.dir.join("cex");
-    let path = scenario::write(&out, trace, &b.plant, &_guard.dir.to_string_lossy(), r.geometry.step_us)
-        .expect("write scenario");
+    let path = scenario::write(
+        &out,
+        trace,
+        &b.plant,
+        &_guard.dir.to_string_lossy(),
+        r.geometry.step_us,
+    )
+    .expect("write scenario");
     let sc = crate::sim::Scenario::load(&path).expect("scenario loads");
     let mut sim = crate::sim::Simulation::from_scenario(&sc, &path, crate::sim::Options::default())
         .expect("scenario builds");
     sim.run_until(crate::time::Millis(sc.duration_ms));
     let report = sim.report(1);
     assert!(
-        report.hazards.iter().any(|h| hazard_name(h.kind) == kind.as_str()),
+        report
+            .hazards
+            .iter()
+            .any(|h| hazard_name(h.kind) == kind.as_str()),
         "the counterexample scenario does not reach {kind}: hazards {:?}, trips {:?}",
         report.hazards,
-        report.trips.iter().map(|t| (t.time_ms, t.constraints.clone())).collect::<Vec<_>>()
+        report
+            .trips
+            .iter()
+            .map(|t| (t.time_ms, t.constraints.clone()))
+            .collect::<Vec<_>>()
     );
 }
 
@@ -101,8 +157,9 @@ fn counterexample_program_follows_the_trace() {
     let e = explore(&m, &Filter::new(&b.constraints, b.plant.outputs.len()));
     let trace = e.delivered[0].as_ref().expect("a delivery witness");
     let prog = scenario::program(trace, &b.plant, m.geo.step_us);
-    let compiled = crate::control::CompiledProgram::new(&prog, &b.plant, &crate::control::Origin::default())
-        .expect("generated program compiles");
+    let compiled =
+        crate::control::CompiledProgram::new(&prog, &b.plant, &crate::control::Origin::default())
+            .expect("generated program compiles");
     assert!(compiled.step_count() >= 2);
     // Durations add up to the trace length.
     let total: u64 = prog.timers.iter().map(|t| t.2).sum();
@@ -121,11 +178,27 @@ fn run_spin(text: &str, tag: &str, errors: u32, ignore_end_states: bool) -> prom
         let o = c.current_dir(&dir).output().unwrap_or_else(|e| {
             panic!("SPIN CROSS-CHECK CANNOT RUN: `{what}` failed to start ({e}); install the Debian package `spin` (scripts/test.sh does)")
         });
-        assert!(o.status.success() || what == "pan", "{what} failed: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.status.success() || what == "pan",
+            "{what} failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         String::from_utf8_lossy(&o.stdout).into_owned()
     };
     ok(Command::new("spin").args(["-a", "model.pml"]), "spin");
-    ok(Command::new("gcc").args(["-O2", "-w", "-DSAFETY", "-DMEMLIM=8000", "-DCOLLAPSE", "-o", "pan", "pan.c"]), "gcc");
+    ok(
+        Command::new("gcc").args([
+            "-O2",
+            "-w",
+            "-DSAFETY",
+            "-DMEMLIM=8000",
+            "-DCOLLAPSE",
+            "-o",
+            "pan",
+            "pan.c",
+        ]),
+        "gcc",
+    );
     let c = format!("-c{errors}");
     let mut args = vec!["-m20000000", "-w24", c.as_str(), "-n"];
     if ignore_end_states {
@@ -139,7 +212,11 @@ fn run_spin(text: &str, tag: &str, errors: u32, ignore_end_states: bool) -> prom
 fn rust_verdict(e: &Exploration) -> (Vec<String>, [bool; 2], bool) {
     let mut h: Vec<String> = e.hazard_kinds.iter().map(|(k, _)| k.clone()).collect();
     h.sort();
-    (h, [e.delivered[0].is_some(), e.delivered[1].is_some()], e.no_fallback.is_some())
+    (
+        h,
+        [e.delivered[0].is_some(), e.delivered[1].is_some()],
+        e.no_fallback.is_some(),
+    )
 }
 
 /// SPIN and the explorer agree on the station (one box): hazard kinds, deliveries at
@@ -149,9 +226,18 @@ fn spin_agrees_on_the_station() {
     let (b, l) = station();
     let m = Model::new(&b, &l, 1).expect("model");
     let e = explore(&m, &Filter::new(&b.constraints, b.plant.outputs.len()));
-    let s = run_spin(&promela::generate(&m, &b.constraints, &b.symbols), "full", 0, false);
+    let s = run_spin(
+        &promela::generate(&m, &b.constraints, &b.symbols),
+        "full",
+        0,
+        false,
+    );
     assert!(s.complete, "SPIN search incomplete");
-    assert_eq!((s.hazards.clone(), s.delivered, s.no_fallback), rust_verdict(&e), "SPIN vs explorer");
+    assert_eq!(
+        (s.hazards.clone(), s.delivered, s.no_fallback),
+        rust_verdict(&e),
+        "SPIN vs explorer"
+    );
     assert!(s.hazards.is_empty() && s.delivered == [true, true] && !s.no_fallback);
 }
 
@@ -166,17 +252,41 @@ fn spin_agrees_on_weakened_sets() {
     for (i, c) in b.constraints.constraints.iter().enumerate() {
         let set = without(&b.constraints, i);
         let e = explore(&m, &Filter::new(&set, n_out));
-        let s = run_spin(&promela::generate_safety(&m, &set, &b.symbols), &c.id, 1, true);
+        let s = run_spin(
+            &promela::generate_safety(&m, &set, &b.symbols),
+            &c.id,
+            1,
+            true,
+        );
         let spin_unsafe = !s.hazards.is_empty();
         // pan -c1 stops at its first hazard: only a safe verdict must be complete.
-        assert!(spin_unsafe || s.complete, "without {}: SPIN search incomplete", c.id);
-        assert_eq!(spin_unsafe, e.hazard.is_some(), "without {}: SPIN {:?} vs explorer {:?}", c.id, s.hazards, e.hazard_kinds);
+        assert!(
+            spin_unsafe || s.complete,
+            "without {}: SPIN search incomplete",
+            c.id
+        );
+        assert_eq!(
+            spin_unsafe,
+            e.hazard.is_some(),
+            "without {}: SPIN {:?} vs explorer {:?}",
+            c.id,
+            s.hazards,
+            e.hazard_kinds
+        );
         if let Some(h) = s.hazards.first() {
-            assert!(e.hazard_kinds.iter().any(|(k, _)| k == h), "without {}: SPIN found {h}, the explorer {:?}", c.id, e.hazard_kinds);
+            assert!(
+                e.hazard_kinds.iter().any(|(k, _)| k == h),
+                "without {}: SPIN found {h}, the explorer {:?}",
+                c.id,
+                e.hazard_kinds
+            );
         }
         unsafe_sets += usize::from(spin_unsafe);
     }
-    assert!(unsafe_sets > 0, "no weakened set is unsafe: the check proves nothing");
+    assert!(
+        unsafe_sets > 0,
+        "no weakened set is unsafe: the check proves nothing"
+    );
 }
 
 #[test]
@@ -185,7 +295,16 @@ fn promela_dump() {
     let m = Model::new(&b, &l, 1).expect("model");
     let text = promela::generate(&m, &b.constraints, &b.symbols);
     std::fs::write(std::env::temp_dir().join("vigie_model.pml"), text).expect("write");
-    let i = b.constraints.constraints.iter().position(|c| c.id == "CSs13").expect("CSs13");
+    let i = b
+        .constraints
+        .constraints
+        .iter()
+        .position(|c| c.id == "CSs13")
+        .expect("CSs13");
     let w = without(&b.constraints, i);
-    std::fs::write(std::env::temp_dir().join("vigie_model_w13.pml"), promela::generate(&m, &w, &b.symbols)).expect("write");
+    std::fs::write(
+        std::env::temp_dir().join("vigie_model_w13.pml"),
+        promela::generate(&m, &w, &b.symbols),
+    )
+    .expect("write");
 }
