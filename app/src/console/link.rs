@@ -76,7 +76,7 @@ impl LinkSession {
                             async move {
                                 tokio::select! {
                                     _ = stop_rx => {}
-                                    () = stop_signal(), if watch_signals => {
+                                    () = crate::live::stop_signal(), if watch_signals => {
                                         signal_tap.update(|s| s.signalled = true);
                                     }
                                 }
@@ -140,31 +140,6 @@ static WATCH_SIGNALS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicB
 /// tests and embedders leave the process's signals alone.
 pub fn watch_signals(on: bool) {
     WATCH_SIGNALS.store(on, std::sync::atomic::Ordering::Relaxed);
-}
-
-/// Resolves on SIGINT or SIGTERM: the run stops (gateway: safe outputs first), then
-/// the console closes (`close_on_signal`).
-async fn stop_signal() {
-    #[cfg(unix)]
-    {
-        use tokio::signal::unix::{SignalKind, signal};
-        match signal(SignalKind::terminate()) {
-            Ok(mut term) => {
-                tokio::select! {
-                    _ = tokio::signal::ctrl_c() => {}
-                    _ = term.recv() => {}
-                }
-            }
-            Err(e) => {
-                tracing::warn!("cannot watch SIGTERM: {e}");
-                let _ = tokio::signal::ctrl_c().await;
-            }
-        }
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = tokio::signal::ctrl_c().await;
-    }
 }
 
 /// Closes the window once the run stopped on a signal (called from `logic`).
