@@ -35,15 +35,7 @@ impl PlantBundle {
     /// found, or only problems when the plant file itself cannot be used.
     pub fn load(dir: &Path) -> Result<(Self, Vec<Problem>), Vec<Problem>> {
         let plant = Plant::load(&dir.join("plant.ron"))?;
-        let tasks_path = dir.join("tasks.ron");
-        let (tasks, mut problems) = if tasks_path.exists() {
-            match crate::tasks::TaskSet::load(&tasks_path) {
-                Ok(t) => (Some(t), Vec::new()),
-                Err(p) => (None, p),
-            }
-        } else {
-            (None, Vec::new())
-        };
+        let (tasks, mut problems) = crate::tasks::TaskSet::load_optional(dir);
         let aux = tasks
             .as_ref()
             .map(crate::tasks::TaskSet::aux_names)

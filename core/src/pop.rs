@@ -71,15 +71,7 @@ pub fn from_text(
     let file = DiagnoserFile::from_ron(text, path).map_err(|p| vec![p])?;
     // The task monitors' outputs are auxiliaries too: declared first, as
     // `PlantBundle::load` does, so that both publish into the same frame.
-    let tasks_path = dir.join("tasks.ron");
-    let (tasks, mut problems) = if tasks_path.exists() {
-        match crate::tasks::TaskSet::load(&tasks_path) {
-            Ok(t) => (Some(t), Vec::new()),
-            Err(p) => (None, p),
-        }
-    } else {
-        (None, Vec::new())
-    };
+    let (tasks, mut problems) = crate::tasks::TaskSet::load_optional(dir);
     let mut aux = tasks
         .as_ref()
         .map(crate::tasks::TaskSet::aux_names)

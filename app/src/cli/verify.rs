@@ -2,7 +2,7 @@
 //! model, the SPIN cross-check, and the compiled-filter benchmarks.
 
 use std::path::Path;
-use std::process::{Command, ExitCode};
+use std::process::ExitCode;
 use std::time::Instant;
 use vigie_core::dtree::{CompiledFilter, Tests};
 use vigie_core::emulator::Layout;
@@ -33,44 +33,6 @@ pub(crate) struct VerifyArgs {
     /// Write counterexamples here (trace CSV replayed in the emulator, Promela model).
     #[arg(long)]
     pub(crate) out: Option<std::path::PathBuf>,
-}
-
-/// Runs SPIN on a Promela text in a temporary folder; returns the verdict and seconds.
-pub(crate) fn run_spin(text: &str) -> anyhow::Result<(promela::SpinVerdict, f64)> {
-    let dir = std::env::temp_dir().join(format!("vigie-verify-spin-{}", std::process::id()));
-    std::fs::create_dir_all(&dir)?;
-    std::fs::write(dir.join("model.pml"), text)?;
-    let t0 = Instant::now();
-    let run = |cmd: &str, args: &[&str]| -> anyhow::Result<String> {
-        let o = Command::new(cmd)
-            .args(args)
-            .current_dir(&dir)
-            .output()
-            .map_err(|e| {
-                anyhow::anyhow!(
-                    "cannot run `{cmd}` ({e}): install the Debian package `spin` and gcc"
-                )
-            })?;
-        Ok(String::from_utf8_lossy(&o.stdout).into_owned())
-    };
-    run("spin", &["-a", "model.pml"])?;
-    run(
-        "gcc",
-        &[
-            "-O2",
-            "-w",
-            "-DSAFETY",
-            "-DMEMLIM=8000",
-            "-DCOLLAPSE",
-            "-o",
-            "pan",
-            "pan.c",
-        ],
-    )?;
-    let out = run("./pan", &["-m20000000", "-w24", "-c0", "-n"])?;
-    let secs = t0.elapsed().as_secs_f64();
-    let _ = std::fs::remove_dir_all(&dir);
-    Ok((promela::parse_pan(&out), secs))
 }
 
 fn ns_per(iters: u32, mut f: impl FnMut(u32) -> bool) -> f64 {
@@ -260,7 +222,10 @@ pub(crate) fn run(plant_dir: &Path, args: &VerifyArgs) -> anyhow::Result<ExitCod
             std::fs::create_dir_all(out)?;
             std::fs::write(out.join("model.pml"), &text)?;
         }
-        let (v, secs) = run_spin(&text)?;
+        let t0 = Instant::now();
+        let v = promela::run_spin(&text, 0, false)
+            .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
+        let secs = t0.elapsed().as_secs_f64();
         let mut mine: Vec<String> = full.hazard_kinds.iter().map(|(k, _)| k.clone()).collect();
         mine.sort();
         let agree = v.hazards == mine

@@ -698,7 +698,7 @@ pub fn synoptic_ui(
             .find(clear)
             .unwrap_or(candidates[0]);
         let anchor = pos2(
-            at.x.clamp(p.x.min(at.x + size.x), at.x + size.x),
+            p.x.clamp(at.x, at.x + size.x),
             if at.y > p.y { at.y } else { at.y + size.y },
         );
         painter.line_segment([anchor, *p], Stroke::new(1.5, pal.trip));

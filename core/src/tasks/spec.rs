@@ -229,6 +229,19 @@ impl TaskSet {
         Self::from_file(parsed, file, Some(text))
     }
 
+    /// Loads the optional `tasks.ron` of a plant folder: `None` without problems when
+    /// the folder has none, `None` with the problems when it cannot be used.
+    pub fn load_optional(dir: &Path) -> (Option<Self>, Vec<Problem>) {
+        let path = dir.join("tasks.ron");
+        if !path.exists() {
+            return (None, Vec::new());
+        }
+        match Self::load(&path) {
+            Ok(t) => (Some(t), Vec::new()),
+            Err(p) => (None, p),
+        }
+    }
+
     /// Loads `tasks.ron` from disk.
     pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
         let text = crate::diag::read_text(path).map_err(|p| vec![p])?;

@@ -13,6 +13,7 @@
 
 use super::Model;
 use crate::constraints::ConstraintSet;
+use crate::diag::Problem;
 use crate::expr::Dnf;
 use crate::symbols::{Literal, Space, Symbols};
 use std::fmt::Write as _;
@@ -448,4 +449,70 @@ pub fn parse_pan(text: &str) -> SpinVerdict {
     }
     v.hazards.sort();
     v
+}
+
+/// Runs SPIN on a model from [`generate`] in a fresh temporary folder: `spin -a`, gcc
+/// (`-DSAFETY -DCOLLAPSE`), then `pan`, stopping after `max_errors` errors (0: never) and
+/// ignoring invalid end states (no fallback) when asked.
+pub fn run_spin(
+    text: &str,
+    max_errors: u32,
+    ignore_end_states: bool,
+) -> Result<SpinVerdict, Problem> {
+    use std::process::Command;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static RUNS: AtomicUsize = AtomicUsize::new(0);
+    let fail = |msg: String| Problem::error("V0520", msg, None);
+    let dir = std::env::temp_dir().join(format!(
+        "vigie-spin-{}-{}",
+        std::process::id(),
+        RUNS.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::write(dir.join("model.pml"), text))
+        .map_err(|e| {
+            fail(format!(
+                "cannot write the model into {}: {e}",
+                dir.display()
+            ))
+        })?;
+    let run = |cmd: &str, args: &[&str], check: bool| -> Result<String, Problem> {
+        let o = Command::new(cmd).args(args).current_dir(&dir).output().map_err(|e| {
+            fail(format!(
+                "cannot run `{cmd}` ({e}): install the Debian packages `spin` and `gcc` (scripts/test.sh does)"
+            ))
+        })?;
+        if check && !o.status.success() {
+            return Err(fail(format!(
+                "`{cmd}` failed: {}",
+                String::from_utf8_lossy(&o.stderr)
+            )));
+        }
+        Ok(String::from_utf8_lossy(&o.stdout).into_owned())
+    };
+    let c = format!("-c{max_errors}");
+    let mut pan = vec!["-m20000000", "-w24", c.as_str(), "-n"];
+    if ignore_end_states {
+        pan.push("-E");
+    }
+    let out = run("spin", &["-a", "model.pml"], true)
+        .and_then(|_| {
+            run(
+                "gcc",
+                &[
+                    "-O2",
+                    "-w",
+                    "-DSAFETY",
+                    "-DMEMLIM=8000",
+                    "-DCOLLAPSE",
+                    "-o",
+                    "pan",
+                    "pan.c",
+                ],
+                true,
+            )
+        })
+        .and_then(|_| run("./pan", &pan, false));
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(parse_pan(&out?))
 }

@@ -169,44 +169,9 @@ fn counterexample_program_follows_the_trace() {
 
 /// Runs SPIN on a generated model (`pan -cN`: stop after N errors, 0 = never); panics
 /// loudly when spin or gcc is missing.
-fn run_spin(text: &str, tag: &str, errors: u32, ignore_end_states: bool) -> promela::SpinVerdict {
-    use std::process::Command;
-    let dir = std::env::temp_dir().join(format!("vigie-spin-{}-{tag}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    std::fs::write(dir.join("model.pml"), text).expect("write model");
-    let ok = |c: &mut Command, what: &str| {
-        let o = c.current_dir(&dir).output().unwrap_or_else(|e| {
-            panic!("SPIN CROSS-CHECK CANNOT RUN: `{what}` failed to start ({e}); install the Debian package `spin` (scripts/test.sh does)")
-        });
-        assert!(
-            o.status.success() || what == "pan",
-            "{what} failed: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        String::from_utf8_lossy(&o.stdout).into_owned()
-    };
-    ok(Command::new("spin").args(["-a", "model.pml"]), "spin");
-    ok(
-        Command::new("gcc").args([
-            "-O2",
-            "-w",
-            "-DSAFETY",
-            "-DMEMLIM=8000",
-            "-DCOLLAPSE",
-            "-o",
-            "pan",
-            "pan.c",
-        ]),
-        "gcc",
-    );
-    let c = format!("-c{errors}");
-    let mut args = vec!["-m20000000", "-w24", c.as_str(), "-n"];
-    if ignore_end_states {
-        args.push("-E");
-    }
-    let out = ok(Command::new("./pan").args(&args), "pan");
-    let _ = std::fs::remove_dir_all(&dir);
-    promela::parse_pan(&out)
+fn run_spin(text: &str, errors: u32, ignore_end_states: bool) -> promela::SpinVerdict {
+    promela::run_spin(text, errors, ignore_end_states)
+        .unwrap_or_else(|p| panic!("SPIN CROSS-CHECK CANNOT RUN: {}", p.message))
 }
 
 fn rust_verdict(e: &Exploration) -> (Vec<String>, [bool; 2], bool) {
@@ -226,12 +191,7 @@ fn spin_agrees_on_the_station() {
     let (b, l) = station();
     let m = Model::new(&b, &l, 1).expect("model");
     let e = explore(&m, &Filter::new(&b.constraints, b.plant.outputs.len()));
-    let s = run_spin(
-        &promela::generate(&m, &b.constraints, &b.symbols),
-        "full",
-        0,
-        false,
-    );
+    let s = run_spin(&promela::generate(&m, &b.constraints, &b.symbols), 0, false);
     assert!(s.complete, "SPIN search incomplete");
     assert_eq!(
         (s.hazards.clone(), s.delivered, s.no_fallback),
@@ -252,12 +212,7 @@ fn spin_agrees_on_weakened_sets() {
     for (i, c) in b.constraints.constraints.iter().enumerate() {
         let set = without(&b.constraints, i);
         let e = explore(&m, &Filter::new(&set, n_out));
-        let s = run_spin(
-            &promela::generate_safety(&m, &set, &b.symbols),
-            &c.id,
-            1,
-            true,
-        );
+        let s = run_spin(&promela::generate_safety(&m, &set, &b.symbols), 1, true);
         let spin_unsafe = !s.hazards.is_empty();
         // pan -c1 stops at its first hazard: only a safe verdict must be complete.
         assert!(
