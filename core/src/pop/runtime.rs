@@ -55,7 +55,8 @@ struct Run {
     next_deadline: i64,
     next_boundary: i64,
     latched: Vec<bool>,
-    decisions: Vec<Decision>,
+    /// Per partition: certainty and the fault indices still possible.
+    decisions: Vec<(Certainty, Vec<usize>)>,
     unexplained: bool,
     started: bool,
     def_aux: Vec<Option<u32>>,
@@ -70,11 +71,222 @@ pub struct Diagnosers {
     pub compiled: Compiled,
     runs: Vec<Run>,
     by_signal: [Vec<Vec<usize>>; 2],
-    timed_only: Vec<usize>,
+    /// Whether a component's time matters (intervals or deadlines).
+    timed: Vec<bool>,
+    /// When each component must be looked at even without an edge (`i64::MIN`: not
+    /// started; `i64::MAX`: never), kept dense for the per-cycle scan.
+    wake: Vec<i64>,
     /// Certain diagnoses so far, in order.
     pub diagnoses: Vec<Diagnosis>,
-    scratch: Vec<(u32, i64)>,
+    /// Per component; components with the same automaton share one (a plant of many
+    /// identical parts keeps one table per part type in the cache, not one per part).
+    tables: Vec<std::sync::Arc<Tables>>,
+    work: Work,
+    touched: Vec<usize>,
 }
+
+/// What the run time derives once from a compiled component.
+#[derive(Clone, Debug, Default)]
+struct Tables {
+    /// The unobservable closure of each automaton state (itself included only when a
+    /// fault event leads back to it): target, and whether the path takes a fault event
+    /// (then the target starts now, the latest possible moment).
+    /// Flat: the closure of `q` is `closure[closure_at[q]..closure_at[q + 1]]`.
+    closure: Vec<(u32, bool)>,
+    /// See `closure`.
+    closure_at: Vec<u32>,
+    /// The time-out symbol of each interval.
+    timeout_sym: Vec<Option<usize>>,
+    /// Candidate symbols of each signal edge (`[falling, rising]`): the guarded ones
+    /// first, then the unguarded one.
+    by_edge: Vec<[Vec<usize>; 2]>,
+    /// Number of symbols.
+    nsym: usize,
+    /// The observable transitions of state `q` on symbol `s` are
+    /// `obs[obs_at[q * nsym + s]..obs_at[q * nsym + s + 1]]` (flat: one lookup, no
+    /// search, contiguous in memory).
+    obs_at: Vec<u32>,
+    /// Target and window interval of each observable transition.
+    obs: Vec<(u32, Option<u32>)>,
+    /// What the updates read of each state, packed.
+    info: Vec<Info>,
+}
+
+/// The per-state facts the updates read, packed together.
+#[derive(Clone, Copy, Debug)]
+struct Info {
+    phase: Phase,
+    mode: Option<u32>,
+    deadline: Option<u32>,
+    hold: Option<i64>,
+}
+
+impl Tables {
+    /// Everything [`Tables::new`] reads of a component, as numbers: equal shapes give
+    /// equal tables.
+    fn shape(c: &Component) -> Vec<u64> {
+        let mut k: Vec<u64> = vec![
+            c.g.len() as u64,
+            c.symbols.len() as u64,
+            c.signals.len() as u64,
+            c.intervals.len() as u64,
+        ];
+        for s in &c.symbols {
+            k.push(s.edge.map_or(0, |(i, r)| 1 + 2 * i as u64 + u64::from(r)));
+            k.push(u64::from(s.guard.is_some()));
+            k.push(s.timeout.map_or(0, |t| 1 + t as u64));
+        }
+        for st in &c.g {
+            k.push(st.phase as u64);
+            k.push(st.mode.map_or(0, |m| 1 + m as u64));
+            k.push(st.deadline.map_or(0, |d| 1 + d as u64));
+            k.push(st.hold_ms.map_or(0, |h| 1 + h));
+            k.push(st.obs.len() as u64);
+            for &(s, t, w) in &st.obs {
+                k.extend([s as u64, t as u64, w.map_or(0, |w| 1 + w as u64)]);
+            }
+            k.push(st.silent.len() as u64);
+            k.extend(st.silent.iter().map(|&x| x as u64));
+            k.push(st.spawn.len() as u64);
+            for &(f, t) in &st.spawn {
+                k.extend([f as u64, t as u64]);
+            }
+        }
+        k
+    }
+
+    fn new(c: &Component) -> Self {
+        let n = c.g.len();
+        let mut closure = Vec::new();
+        let mut closure_at = Vec::with_capacity(n + 1);
+        // Nodes (state, through a fault event): at most 2n, visited once each.
+        let mut seen = vec![[false; 2]; n];
+        let mut queue: Vec<(usize, bool)> = Vec::new();
+        for q in 0..n {
+            queue.clear();
+            queue.push((q, false));
+            seen[q][0] = true;
+            let mut i = 0;
+            while i < queue.len() {
+                let (x, f) = queue[i];
+                i += 1;
+                for &(_, y) in &c.g[x].spawn {
+                    if !seen[y][1] {
+                        seen[y][1] = true;
+                        queue.push((y, true));
+                    }
+                }
+                for &y in &c.g[x].silent {
+                    if !seen[y][usize::from(f)] {
+                        seen[y][usize::from(f)] = true;
+                        queue.push((y, f));
+                    }
+                }
+            }
+            closure_at.push(closure.len() as u32);
+            for &(x, _) in &queue {
+                if seen[x][0] || seen[x][1] {
+                    let spawned = seen[x][1];
+                    if x != q || spawned {
+                        closure.push((x as u32, spawned));
+                    }
+                    seen[x] = [false; 2];
+                }
+            }
+        }
+        closure_at.push(closure.len() as u32);
+        let timeout_sym = (0..c.intervals.len())
+            .map(|k| c.symbols.iter().position(|s| s.timeout == Some(k)))
+            .collect();
+        let mut by_edge = vec![[Vec::new(), Vec::new()]; c.signals.len()];
+        for guarded in [true, false] {
+            for (k, s) in c.symbols.iter().enumerate() {
+                if let Some((i, rise)) = s.edge
+                    && s.guard.is_some() == guarded
+                    && let Some(e) = by_edge.get_mut(i)
+                {
+                    e[usize::from(rise)].push(k);
+                }
+            }
+        }
+        let nsym = c.symbols.len();
+        let mut obs_at = Vec::with_capacity(n * nsym + 1);
+        let mut obs = Vec::new();
+        for st in &c.g {
+            // `st.obs` is sorted by symbol.
+            let mut k = 0;
+            for sym in 0..nsym {
+                obs_at.push(obs.len() as u32);
+                while k < st.obs.len() && st.obs[k].0 <= sym {
+                    if st.obs[k].0 == sym {
+                        let (_, tq, w) = st.obs[k];
+                        obs.push((tq as u32, w.map(|w| w as u32)));
+                    }
+                    k += 1;
+                }
+            }
+        }
+        obs_at.push(obs.len() as u32);
+        let info =
+            c.g.iter()
+                .map(|st| Info {
+                    phase: st.phase,
+                    mode: st.mode.map(|m| m as u32),
+                    deadline: st.deadline.map(|k| k as u32),
+                    hold: st.hold_ms.and_then(|h| i64::try_from(h).ok()),
+                })
+                .collect();
+        Self {
+            closure,
+            closure_at,
+            timeout_sym,
+            by_edge,
+            nsym,
+            obs_at,
+            obs,
+            info,
+        }
+    }
+}
+
+/// Scratch space of the updates, kept between cycles (no allocation per step).
+#[derive(Clone, Debug, Default)]
+struct Work {
+    /// The closure of the estimate (its own states first, in its order).
+    cl: Vec<(u32, i64)>,
+    /// Per entry of `cl`: reached through a fault event, so it starts anew at every
+    /// instant (its hold or pulse limit never falls due).
+    renewed: Vec<bool>,
+    /// The time `cl` was computed for, while the estimate has not changed since.
+    cl_at: Option<i64>,
+    /// The next estimate being built.
+    next: Vec<(u32, i64)>,
+    /// Position of a state in `cl` or `next` (`u32::MAX`: absent); all absent between uses.
+    slot: Vec<u32>,
+    /// Edges of the cycle: signal index, rising.
+    edges: Vec<(usize, bool)>,
+    /// Fault modes present in the estimate (last entry: normal).
+    modes: Vec<bool>,
+}
+
+impl Work {
+    fn for_component(c: &Component) -> Self {
+        let mut w = Self::default();
+        w.fit(c);
+        w
+    }
+
+    fn fit(&mut self, c: &Component) {
+        if self.slot.len() < c.g.len() {
+            self.slot.resize(c.g.len(), u32::MAX);
+        }
+        if self.modes.len() < c.faults.len() + 1 {
+            self.modes.resize(c.faults.len() + 1, false);
+        }
+    }
+}
+
+const ABSENT: u32 = u32::MAX;
 
 const LONG_AGO: i64 = -1_000_000_000_000;
 
@@ -82,6 +294,17 @@ impl Diagnosers {
     /// Builds the run-time diagnosers; `symbols` must hold the auxiliaries of
     /// [`super::build::aux_names`].
     pub fn new(compiled: Compiled, symbols: &Symbols) -> Self {
+        Self::build(compiled, symbols, true)
+    }
+
+    /// As [`Diagnosers::new`], but every component gets its own run-time tables even
+    /// when its automaton is the same as another's: the cost of a plant whose parts are
+    /// all different, for benchmarks.
+    pub fn new_unshared(compiled: Compiled, symbols: &Symbols) -> Self {
+        Self::build(compiled, symbols, false)
+    }
+
+    fn build(compiled: Compiled, symbols: &Symbols, share: bool) -> Self {
         let aux = |n: &str| match symbols.lookup(n) {
             Some((Space::Aux, i)) => Some(i),
             _ => None,
@@ -90,7 +313,7 @@ impl Diagnosers {
             vec![Vec::new(); symbols.len(Space::Input)],
             vec![Vec::new(); symbols.len(Space::Output)],
         ];
-        let mut timed_only = Vec::new();
+        let mut timed = Vec::new();
         let mut runs = Vec::new();
         for (ci, c) in compiled.components.iter().enumerate() {
             for s in &c.signals {
@@ -99,9 +322,7 @@ impl Diagnosers {
                     v.push(ci);
                 }
             }
-            if !c.intervals.is_empty() || c.g.iter().any(|q| q.deadline.is_some()) {
-                timed_only.push(ci);
-            }
+            timed.push(!c.intervals.is_empty() || c.g.iter().any(|q| q.deadline.is_some()));
             runs.push(Run {
                 h: Vec::new(),
                 clock: c.initial_clock.map(|k| (k, LONG_AGO)),
@@ -109,14 +330,7 @@ impl Diagnosers {
                 next_deadline: i64::MAX,
                 next_boundary: i64::MIN,
                 latched: vec![false; c.partitions.len()],
-                decisions: c
-                    .partitions
-                    .iter()
-                    .map(|_| Decision {
-                        certainty: Certainty::Normal,
-                        faults: Vec::new(),
-                    })
-                    .collect(),
+                decisions: vec![(Certainty::Normal, Vec::new()); c.partitions.len()],
                 unexplained: false,
                 started: false,
                 def_aux: c
@@ -128,13 +342,38 @@ impl Diagnosers {
                 estimate_aux: c.estimates.iter().map(|(n, _)| aux(n)).collect(),
             });
         }
+        let mut shared: std::collections::HashMap<Vec<u64>, std::sync::Arc<Tables>> =
+            std::collections::HashMap::new();
+        let tables = compiled
+            .components
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let key = if share {
+                    Tables::shape(c)
+                } else {
+                    vec![i as u64]
+                };
+                shared
+                    .entry(key)
+                    .or_insert_with(|| std::sync::Arc::new(Tables::new(c)))
+                    .clone()
+            })
+            .collect();
+        let mut work = Work::default();
+        for c in &compiled.components {
+            work.fit(c);
+        }
         Self {
             compiled,
+            wake: vec![i64::MIN; runs.len()],
             runs,
             by_signal,
-            timed_only,
+            timed,
             diagnoses: Vec::new(),
-            scratch: Vec::new(),
+            tables,
+            work,
+            touched: Vec::new(),
         }
     }
 
@@ -142,8 +381,12 @@ impl Diagnosers {
     pub fn decisions(&self) -> Vec<(String, String, Decision)> {
         let mut out = Vec::new();
         for (c, r) in self.compiled.components.iter().zip(&self.runs) {
-            for (p, d) in c.partitions.iter().zip(&r.decisions) {
-                out.push((c.id.clone(), p.id.clone(), d.clone()));
+            for (p, (certainty, faults)) in c.partitions.iter().zip(&r.decisions) {
+                let d = Decision {
+                    certainty: *certainty,
+                    faults: faults.iter().map(|&f| c.faults[f].clone()).collect(),
+                };
+                out.push((c.id.clone(), p.id.clone(), d));
             }
         }
         out
@@ -186,13 +429,14 @@ impl Diagnosers {
             r.started = false;
             r.unexplained = false;
         }
+        self.wake.iter_mut().for_each(|w| *w = i64::MIN);
     }
 
     /// Follows one cycle: the frame holds inputs and applied outputs at t and t-1; the
-    /// flags, intervals and estimates are written into its auxiliaries at t.
     pub fn update(&mut self, now: Millis, frame: &mut Frame) {
         let t = i64::try_from(now.0).unwrap_or(i64::MAX);
-        let mut touched: Vec<usize> = Vec::new();
+        let mut touched = std::mem::take(&mut self.touched);
+        touched.clear();
         for (k, space) in [(0usize, Space::Input), (1, Space::Output)] {
             let a = frame.now(space).words();
             let b = frame.prev(space).words();
@@ -207,74 +451,80 @@ impl Diagnosers {
                 }
             }
         }
-        for i in 0..self.runs.len() {
-            if !self.runs[i].started {
-                touched.push(i);
-            }
-        }
-        for &i in &self.timed_only {
-            let r = &self.runs[i];
-            if t > r.next_deadline || t >= r.next_boundary {
+        for (i, &w) in self.wake.iter().enumerate() {
+            if t >= w {
                 touched.push(i);
             }
         }
         touched.sort_unstable();
         touched.dedup();
-        for i in touched {
+        for &i in &touched {
             self.component_cycle(i, t, frame);
+            self.rewake(i);
         }
+        self.touched = touched;
+    }
+
+    /// When component `i` must next be looked at without an edge.
+    fn rewake(&mut self, i: usize) {
+        let r = &self.runs[i];
+        self.wake[i] = if !r.started {
+            i64::MIN
+        } else if self.timed[i] {
+            r.next_deadline.saturating_add(1).min(r.next_boundary)
+        } else {
+            i64::MAX
+        };
     }
 
     fn component_cycle(&mut self, ci: usize, t: i64, frame: &mut Frame) {
         let c = &self.compiled.components[ci];
+        let tab = &self.tables[ci];
+        let ws = &mut self.work;
         let margin = i64::try_from(self.compiled.margin_ms).unwrap_or(0);
         let pulse = i64::try_from(self.compiled.pulse_max_ms).unwrap_or(0);
-        let mut r = std::mem::replace(&mut self.runs[ci], empty_run());
+        let r = &mut self.runs[ci];
+        ws.cl_at = None;
         let mut changed = false;
         if !r.started {
             r.started = true;
-            resync(c, &mut r, frame, None);
+            resync(c, r, frame, None);
             changed = true;
         } else {
             // Edges: actuators first, then sensors.
-            let mut edges: Vec<(usize, bool)> = Vec::new();
+            ws.edges.clear();
             for space in [Space::Output, Space::Input] {
-                for (i, s) in c
-                    .signals
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, s)| s.var.space == space)
-                {
+                for (i, s) in c.signals.iter().enumerate() {
+                    if s.var.space != space {
+                        continue;
+                    }
                     let v = frame.now(space).get(s.var.index as usize);
                     if v != frame.prev(space).get(s.var.index as usize) {
-                        edges.push((i, v));
+                        ws.edges.push((i, v));
                     }
                 }
             }
-            for (i, rise) in edges {
-                let sym = c
-                    .symbols
+            for e in 0..ws.edges.len() {
+                let (i, rise) = ws.edges[e];
+                let cands = &tab.by_edge[i][usize::from(rise)];
+                let sym = cands
                     .iter()
-                    .position(|s| {
-                        s.edge == Some((i, rise))
-                            && s.guard.as_ref().is_some_and(|g| eval_dnf(g, frame))
+                    .copied()
+                    .find(|&k| {
+                        c.symbols[k]
+                            .guard
+                            .as_ref()
+                            .is_some_and(|g| eval_dnf(g, frame))
                     })
                     .or_else(|| {
-                        c.symbols
+                        cands
                             .iter()
-                            .position(|s| s.edge == Some((i, rise)) && s.guard.is_none())
+                            .copied()
+                            .find(|&k| c.symbols[k].guard.is_none())
                     })
                     .unwrap_or(0);
-                timeouts(
-                    c,
-                    &mut r,
-                    t,
-                    margin,
-                    pulse,
-                    &mut self.scratch,
-                    &mut self.diagnoses,
-                );
-                step(c, &mut r, sym, t, margin, true, &mut self.scratch);
+                timeouts(c, tab, r, t, margin, pulse, ws, &mut self.diagnoses);
+                step(c, tab, r, sym, t, margin, true, ws);
                 if let Some(k) = c.clocks.iter().position(|&e| e == (i, rise)) {
                     r.clock = Some((k, t));
                     r.emitted = 0;
@@ -290,23 +540,20 @@ impl Diagnosers {
                             certainty: Certainty::Certain,
                         });
                     }
-                    resync(c, &mut r, frame, Some(t));
+                    resync(c, r, frame, Some(t));
+                    ws.cl_at = None;
                 }
                 changed = true;
             }
         }
-        changed |= timeouts(
-            c,
-            &mut r,
-            t,
-            margin,
-            pulse,
-            &mut self.scratch,
-            &mut self.diagnoses,
-        );
+        changed |= timeouts(c, tab, r, t, margin, pulse, ws, &mut self.diagnoses);
+        if changed || t > r.next_deadline {
+            // A deadline that passed without a time-out was one of a hypothesis that can
+            // start as late as now (a fault that may occur at any time): it moved on.
+            r.next_deadline = next_deadline(c, tab, r, t, margin, pulse, ws);
+        }
         if changed {
-            r.next_deadline = next_deadline(c, &r, margin, pulse);
-            decide(c, &mut r, t, &mut self.diagnoses);
+            decide(c, tab, r, t, ws, &mut self.diagnoses);
             r.next_boundary = i64::MIN;
         }
         // Flags, intervals, estimates.
@@ -346,28 +593,33 @@ impl Diagnosers {
                 }
             }
         }
-        self.runs[ci] = r;
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn timeouts(
     c: &Component,
+    tab: &Tables,
     r: &mut Run,
     t: i64,
     margin: i64,
     pulse: i64,
-    scratch: &mut Vec<(u32, i64)>,
+    ws: &mut Work,
     diagnoses: &mut Vec<Diagnosis>,
 ) -> bool {
+    if t <= r.next_deadline {
+        // Nothing falls due before the earliest deadline of the estimate.
+        return false;
+    }
     let mut any = false;
     for _ in 0..64 {
-        let Some(sym) = due_timeout(c, r, t, margin, pulse, scratch) else {
+        let Some(sym) = due_timeout(c, tab, r, t, margin, pulse, ws) else {
             break;
         };
         if let Some(k) = c.symbols[sym].timeout {
             r.emitted |= 1 << (k % 64);
         }
-        step(c, r, sym, t, margin, true, scratch);
+        step(c, tab, r, sym, t, margin, true, ws);
         any = true;
         if r.h.is_empty() {
             if !r.unexplained {
@@ -383,9 +635,10 @@ fn timeouts(
             // Nothing explains the silence: keep the last state estimate's normal states.
             r.h = (0..c.states.len() as u32).map(|q| (q, t)).collect();
             r.clock = None;
+            r.next_deadline = i64::MIN;
+            ws.cl_at = None;
             break;
         }
-        r.next_deadline = next_deadline(c, r, margin, pulse);
     }
     any
 }
@@ -424,34 +677,53 @@ fn resync(c: &Component, r: &mut Run, frame: &Frame, at: Option<i64>) {
     if r.h.is_empty() {
         r.h = (0..c.states.len() as u32).map(|x| (x, t)).collect();
     }
+    r.next_deadline = i64::MIN;
     if at.is_some() {
         r.clock = None;
     }
 }
 
-/// The unobservable closure: fault events from normal states, hidden plant moves.
-fn closure(c: &Component, h: &[(u32, i64)], t: i64, out: &mut Vec<(u32, i64)>) {
-    out.clear();
-    out.extend_from_slice(h);
-    let mut i = 0;
-    while i < out.len() {
-        let (q, since) = out[i];
-        let st = &c.g[q as usize];
-        for &(_, tq) in &st.spawn {
-            // The fault may occur at any time up to now: its state starts at the
-            // latest possible moment (the most permissive for pulse limits and holds).
-            match out.iter_mut().find(|(x, _)| *x as usize == tq) {
-                Some(e) => e.1 = e.1.max(t),
-                None => out.push((tq as u32, t)),
-            }
-        }
-        for &tq in &st.silent {
-            if !out.iter().any(|&(x, _)| x as usize == tq) {
-                out.push((tq as u32, since));
-            }
-        }
-        i += 1;
+/// The unobservable closure of the estimate at time `t` (fault events from normal
+/// states, hidden plant moves) into `ws.cl`: the estimate's own states first, in its
+/// order, so that `ws.cl[i]` is in the estimate exactly when `i < h.len()`. A state
+/// reached through a fault event starts at `t` (the fault may occur at any time up to
+/// now: the latest possible moment is the most permissive for pulse limits and holds);
+/// one reached through hidden moves only keeps the latest start of its origins.
+fn closure(tab: &Tables, h: &[(u32, i64)], t: i64, ws: &mut Work) {
+    if ws.cl_at == Some(t) {
+        return;
     }
+    let (cl, renewed, slot) = (&mut ws.cl, &mut ws.renewed, &mut ws.slot);
+    cl.clear();
+    renewed.clear();
+    for &(q, s) in h {
+        slot[q as usize] = cl.len() as u32;
+        cl.push((q, s));
+        renewed.push(false);
+    }
+    for &(q, s) in h {
+        let q = q as usize;
+        let range = tab.closure_at[q] as usize..tab.closure_at[q + 1] as usize;
+        for &(y, spawned) in &tab.closure[range] {
+            let ty = if spawned { t } else { s };
+            match slot[y as usize] {
+                ABSENT => {
+                    slot[y as usize] = cl.len() as u32;
+                    cl.push((y, ty));
+                    renewed.push(spawned);
+                }
+                j => {
+                    let e = &mut cl[j as usize].1;
+                    *e = (*e).max(ty);
+                    renewed[j as usize] |= spawned;
+                }
+            }
+        }
+    }
+    for &(q, _) in cl.iter() {
+        slot[q as usize] = ABSENT;
+    }
+    ws.cl_at = Some(t);
 }
 
 fn window_ok(c: &Component, r: &Run, w: Option<usize>, t: i64, margin: i64) -> bool {
@@ -469,62 +741,85 @@ fn window_ok(c: &Component, r: &Run, w: Option<usize>, t: i64, margin: i64) -> b
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn step(
     c: &Component,
+    tab: &Tables,
     r: &mut Run,
     sym: usize,
     t: i64,
     margin: i64,
     timed: bool,
-    scratch: &mut Vec<(u32, i64)>,
+    ws: &mut Work,
 ) {
-    closure(c, &r.h, t, scratch);
-    let mut next: Vec<(u32, i64)> = Vec::with_capacity(scratch.len());
-    for &(q, since) in scratch.iter() {
-        let st = &c.g[q as usize];
-        let lo = st.obs.partition_point(|o| o.0 < sym);
-        for &(s, tq, w) in &st.obs[lo..] {
-            if s != sym {
-                break;
-            }
-            if timed && st.phase == Phase::Timed && !window_ok(c, r, w, t, margin) {
+    closure(tab, &r.h, t, ws);
+    let (cl, next, slot) = (&ws.cl, &mut ws.next, &mut ws.slot);
+    next.clear();
+    let is_edge = c.symbols[sym].edge.is_some();
+    for &(q, since) in cl {
+        let phase = tab.info[q as usize].phase;
+        let at = q as usize * tab.nsym + sym;
+        let range = tab.obs_at[at] as usize..tab.obs_at[at + 1] as usize;
+        for &(tq, w) in &tab.obs[range] {
+            let tq = tq as usize;
+            if timed && phase == Phase::Timed && !window_ok(c, r, w.map(|w| w as usize), t, margin)
+            {
                 continue;
             }
             // Spurious pulses count from their start; an unexpected motion from entering
             // each state; the rest from the phase's start.
             // A time-out looping on the state changes nothing.
-            let keep = (tq == q as usize && c.symbols[sym].edge.is_none())
-                || (c.g[tq].phase == st.phase && st.phase != Phase::Untimed);
+            let keep = (tq == q as usize && !is_edge)
+                || (tab.info[tq].phase == phase && phase != Phase::Untimed);
             let ns = if keep { since } else { t };
-            match next.iter_mut().find(|(x, _)| *x as usize == tq) {
-                Some(e) => e.1 = e.1.max(ns),
-                None => next.push((tq as u32, ns)),
+            match slot[tq] {
+                ABSENT => {
+                    slot[tq] = next.len() as u32;
+                    next.push((tq as u32, ns));
+                }
+                j => {
+                    let e = &mut next[j as usize].1;
+                    *e = (*e).max(ns);
+                }
             }
         }
     }
+    for &(q, _) in next.iter() {
+        slot[q as usize] = ABSENT;
+    }
     // A timed state whose window already ended (its time-out was emitted since the
     // clock event) cannot be occupied: a silent move into it comes too late.
-    next.retain(|&(q, _)| !expired(c, r, q as usize));
+    next.retain(|&(q, _)| !expired(c, tab, r, q as usize));
     next.sort_unstable();
-    r.h = next;
+    std::mem::swap(&mut r.h, next);
+    ws.cl_at = None;
+    // The estimate changed: its deadlines are to be looked at again.
+    r.next_deadline = i64::MIN;
 }
 
-fn expired(c: &Component, r: &Run, q: usize) -> bool {
-    let st = &c.g[q];
+fn expired(c: &Component, tab: &Tables, r: &Run, q: usize) -> bool {
+    let st = &tab.info[q];
     match (st.phase, st.deadline, r.clock) {
         (Phase::Timed, Some(k), Some((ck, _))) => {
+            let k = k as usize;
             c.intervals[k].clock == ck && r.emitted & (1 << (k % 64)) != 0
         }
         _ => false,
     }
 }
 
-fn deadline_time(c: &Component, r: &Run, q: usize, margin: i64) -> Option<(i64, usize)> {
-    let st = &c.g[q];
+fn deadline_time(
+    c: &Component,
+    tab: &Tables,
+    r: &Run,
+    q: usize,
+    margin: i64,
+) -> Option<(i64, usize)> {
+    let st = &tab.info[q];
     if st.phase != Phase::Timed {
         return None;
     }
-    let k = st.deadline?;
+    let k = st.deadline? as usize;
     let iv = &c.intervals[k];
     let (ck, ct) = r.clock?;
     if ck != iv.clock || r.emitted & (1 << (k % 64)) != 0 {
@@ -533,46 +828,64 @@ fn deadline_time(c: &Component, r: &Run, q: usize, margin: i64) -> Option<(i64, 
     Some((ct + i64::try_from(iv.hi?).ok()? + margin, k))
 }
 
-fn next_deadline(c: &Component, r: &Run, margin: i64, pulse: i64) -> i64 {
-    let mut scratch = Vec::new();
-    closure(c, &r.h, 0, &mut scratch);
-    let mut best = i64::MAX;
-    for &(q, since) in &scratch {
-        if let Some((d, _)) = deadline_time(c, r, q as usize, margin) {
-            best = best.min(d);
-        }
-        if c.g[q as usize].phase == Phase::Spur && r.h.iter().any(|&(x, _)| x == q) {
-            best = best.min(since + pulse);
-        }
-        if let Some(h) = hold(c, r, q) {
-            best = best.min(since.saturating_add(h).saturating_add(margin));
-        }
+/// The time-outs that may fall due for the state at `ws.cl[i]`: (when, symbol).
+fn due_of(
+    c: &Component,
+    tab: &Tables,
+    r: &Run,
+    i: usize,
+    margin: i64,
+    pulse: i64,
+    ws: &Work,
+) -> Option<(i64, usize)> {
+    let (q, since) = ws.cl[i];
+    // A limit counted from the state's start only applies to the estimate's own states,
+    // and not to those a fault event keeps starting anew.
+    let in_h = i < r.h.len() && !ws.renewed[i];
+    let st = &tab.info[q as usize];
+    if let Some((d, k)) = deadline_time(c, tab, r, q as usize, margin) {
+        tab.timeout_sym[k].map(|s| (d, s))
+    } else if st.phase == Phase::Spur && in_h {
+        Some((since + pulse, c.pulse_sym))
+    } else if st.phase == Phase::Untimed && in_h {
+        // The hold of an untimed state of the estimate itself (not of its closure).
+        let h = st.hold?;
+        Some((since.saturating_add(h).saturating_add(margin), c.motion_sym))
+    } else {
+        None
     }
-    best
 }
 
-fn due_timeout(
+fn next_deadline(
     c: &Component,
+    tab: &Tables,
     r: &Run,
     t: i64,
     margin: i64,
     pulse: i64,
-    scratch: &mut Vec<(u32, i64)>,
+    ws: &mut Work,
+) -> i64 {
+    closure(tab, &r.h, t, ws);
+    (0..ws.cl.len())
+        .filter_map(|i| due_of(c, tab, r, i, margin, pulse, ws))
+        .map(|(d, _)| d)
+        .min()
+        .unwrap_or(i64::MAX)
+}
+
+fn due_timeout(
+    c: &Component,
+    tab: &Tables,
+    r: &Run,
+    t: i64,
+    margin: i64,
+    pulse: i64,
+    ws: &mut Work,
 ) -> Option<usize> {
-    closure(c, &r.h, t, scratch);
+    closure(tab, &r.h, t, ws);
     let mut best: Option<(i64, usize)> = None;
-    for &(q, since) in scratch.iter() {
-        let cand = if let Some((d, k)) = deadline_time(c, r, q as usize, margin) {
-            c.symbols
-                .iter()
-                .position(|s| s.timeout == Some(k))
-                .map(|s| (d, s))
-        } else if c.g[q as usize].phase == Phase::Spur && r.h.iter().any(|&(x, _)| x == q) {
-            Some((since + pulse, c.pulse_sym))
-        } else {
-            hold(c, r, q).map(|h| (since.saturating_add(h).saturating_add(margin), c.motion_sym))
-        };
-        if let Some((d, s)) = cand
+    for i in 0..ws.cl.len() {
+        if let Some((d, s)) = due_of(c, tab, r, i, margin, pulse, ws)
             && d < t
             && best.is_none_or(|(bd, _)| d < bd)
         {
@@ -582,49 +895,58 @@ fn due_timeout(
     best.map(|(_, s)| s)
 }
 
-/// The hold of an untimed state of the estimate itself (not of its closure), ms.
-fn hold(c: &Component, r: &Run, q: u32) -> Option<i64> {
-    let st = &c.g[q as usize];
-    if st.phase != Phase::Untimed || !r.h.iter().any(|&(x, _)| x == q) {
-        return None;
-    }
-    st.hold_ms.and_then(|h| i64::try_from(h).ok())
-}
-
-fn decide(c: &Component, r: &mut Run, t: i64, log: &mut Vec<Diagnosis>) {
-    let modes: BTreeSet<Option<usize>> = r.h.iter().map(|&(q, _)| c.g[q as usize].mode).collect();
-    if modes.is_empty() {
+fn decide(
+    c: &Component,
+    tab: &Tables,
+    r: &mut Run,
+    t: i64,
+    ws: &mut Work,
+    log: &mut Vec<Diagnosis>,
+) {
+    if r.h.is_empty() {
         return;
     }
+    let nf = c.faults.len();
+    let modes = &mut ws.modes[..=nf];
+    modes.iter_mut().for_each(|m| *m = false);
+    for &(q, _) in &r.h {
+        modes[tab.info[q as usize].mode.map_or(nf, |m| m as usize)] = true;
+    }
+    let count = modes.iter().filter(|&&m| m).count();
     for (pi, p) in c.partitions.iter().enumerate() {
-        let inside: Vec<usize> = modes
-            .iter()
-            .flatten()
-            .copied()
-            .filter(|f| p.faults.contains(f))
-            .collect();
-        let certainty = if inside.is_empty() {
+        // Faults of the partition still possible, in fault order.
+        let inside = || (0..nf).filter(|&f| modes[f] && p.faults.contains(&f));
+        let n = inside().count();
+        let certainty = if n == 0 {
             Certainty::Normal
-        } else if inside.len() == modes.len() {
+        } else if n == count {
             Certainty::Certain
         } else {
             Certainty::Ambiguous
         };
-        let d = Decision {
-            certainty,
-            faults: inside.iter().map(|&f| c.faults[f].clone()).collect(),
-        };
-        if certainty == Certainty::Certain && (!r.latched[pi] || r.decisions[pi] != d) {
+        let (old_certainty, old) = &mut r.decisions[pi];
+        let same =
+            *old_certainty == certainty && old.len() == n && old.iter().copied().eq(inside());
+        if same && (certainty != Certainty::Certain || r.latched[pi]) {
+            continue;
+        }
+        *old_certainty = certainty;
+        old.clear();
+        old.extend(inside());
+        if certainty == Certainty::Certain {
             log.push(Diagnosis {
                 time_ms: u64::try_from(t).unwrap_or(0),
                 component: c.id.clone(),
                 partition: p.id.clone(),
-                fault: d.faults.join("|"),
+                fault: old
+                    .iter()
+                    .map(|&f| c.faults[f].as_str())
+                    .collect::<Vec<_>>()
+                    .join("|"),
                 certainty,
             });
             r.latched[pi] = true;
         }
-        r.decisions[pi] = d;
     }
 }
 
@@ -635,9 +957,10 @@ pub fn replay_untimed(
     c: &Component,
     events: &[&str],
 ) -> Result<Vec<BTreeSet<Option<String>>>, String> {
+    let tab = Tables::new(c);
+    let mut ws = Work::for_component(c);
     let mut r = empty_run();
     r.h = vec![(c.initial as u32, 0)];
-    let mut scratch = Vec::new();
     let mut out = Vec::new();
     for e in events {
         let sym = c
@@ -645,7 +968,7 @@ pub fn replay_untimed(
             .iter()
             .position(|s| s.name == *e)
             .ok_or_else(|| format!("unknown event `{e}`"))?;
-        step(c, &mut r, sym, 0, 0, false, &mut scratch);
+        step(c, &tab, &mut r, sym, 0, 0, false, &mut ws);
         out.push(
             r.h.iter()
                 .map(|&(q, _)| c.g[q as usize].mode.map(|f| c.faults[f].clone()))
@@ -653,4 +976,102 @@ pub fn replay_untimed(
         );
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_support::station_dir;
+
+    /// The precomputed closures and transition index say what the automaton says, for
+    /// every state of every station model: reachability through fault events and hidden
+    /// moves computed naively, and the observable transitions by linear search.
+    #[test]
+    fn run_time_tables_match_the_automaton() {
+        let bundle = match super::super::load(&station_dir()) {
+            Ok((d, _)) => d,
+            Err(p) => panic!("{}", crate::diag::render(&p)),
+        };
+        for c in &bundle.compiled.components {
+            let tab = Tables::new(c);
+            for q in 0..c.g.len() {
+                // Naive: every path; `true` when it takes a fault event.
+                let mut reach: BTreeSet<(usize, bool)> = BTreeSet::new();
+                let mut todo = vec![(q, false)];
+                while let Some((x, f)) = todo.pop() {
+                    let next = c.g[x]
+                        .spawn
+                        .iter()
+                        .map(|&(_, y)| (y, true))
+                        .chain(c.g[x].silent.iter().map(|&y| (y, f)));
+                    for n in next {
+                        if reach.insert(n) {
+                            todo.push(n);
+                        }
+                    }
+                }
+                let want: BTreeSet<(u32, bool)> = reach
+                    .iter()
+                    .map(|&(y, _)| (y as u32, reach.contains(&(y, true))))
+                    .filter(|&(y, spawned)| y as usize != q || spawned)
+                    .collect();
+                let range = tab.closure_at[q] as usize..tab.closure_at[q + 1] as usize;
+                let got: BTreeSet<(u32, bool)> = tab.closure[range].iter().copied().collect();
+                assert_eq!(got, want, "{} state {}", c.id, c.g[q].name);
+                for sym in 0..c.symbols.len() {
+                    let at = q * tab.nsym + sym;
+                    let got: Vec<(usize, Option<usize>)> = tab.obs
+                        [tab.obs_at[at] as usize..tab.obs_at[at + 1] as usize]
+                        .iter()
+                        .map(|&(t, w)| (t as usize, w.map(|w| w as usize)))
+                        .collect();
+                    let want: Vec<(usize, Option<usize>)> = c.g[q]
+                        .obs
+                        .iter()
+                        .filter(|o| o.0 == sym)
+                        .map(|&(_, t, w)| (t, w))
+                        .collect();
+                    assert_eq!(got, want, "{} state {} symbol {sym}", c.id, c.g[q].name);
+                }
+            }
+        }
+    }
+
+    /// Identical automata share their run-time tables; different ones do not.
+    #[test]
+    fn identical_components_share_their_tables() {
+        let bundle = match super::super::load(&station_dir()) {
+            Ok((d, _)) => d,
+            Err(p) => panic!("{}", crate::diag::render(&p)),
+        };
+        let d = Diagnosers::new(bundle.compiled.clone(), &bundle.bundle.symbols);
+        let table = d
+            .compiled
+            .components
+            .iter()
+            .position(|c| c.id == "table")
+            .unwrap();
+        let c0 = d
+            .compiled
+            .components
+            .iter()
+            .position(|c| c.id == "c0")
+            .unwrap();
+        assert!(!std::sync::Arc::ptr_eq(&d.tables[table], &d.tables[c0]));
+        let distinct = |d: &Diagnosers| {
+            let mut v: Vec<*const Tables> = d.tables.iter().map(std::sync::Arc::as_ptr).collect();
+            v.sort();
+            v.dedup();
+            v.len()
+        };
+        let u = Diagnosers::new_unshared(bundle.compiled.clone(), &bundle.bundle.symbols);
+        assert_eq!(distinct(&u), u.compiled.components.len());
+        // The conveyor models of the same form share one.
+        assert!(
+            distinct(&d) < distinct(&u),
+            "{} {}",
+            distinct(&d),
+            distinct(&u)
+        );
+    }
 }
