@@ -355,6 +355,32 @@ impl Engine {
         self.frame.now(Space::Output)
     }
 
+    /// After [`Engine::cycle`]: the outputs the plant really received in this cycle when
+    /// they differ from the filter's (a live gateway's safe outputs for a lost peer or
+    /// stale inputs; the outputs a followed live run applied). The frame (read as the
+    /// outputs at t-1 next cycle) and the recorder's last record take them. Ignored
+    /// when the length is not the number of outputs.
+    pub fn set_applied(&mut self, applied: &Bits) {
+        if applied.len() != self.frame.now(Space::Output).len() {
+            return;
+        }
+        self.frame.now_mut(Space::Output).copy_from(applied);
+        if let Some(r) = self.history.last_mut() {
+            r.applied.copy_from(applied);
+        }
+    }
+
+    /// After [`Engine::cycle`] (and [`Engine::set_applied`]): the stage that follows the
+    /// filter (the diagnosers of a live link, which follow the outputs really applied),
+    /// run on the frame at the cycle's time; the recorder's last record takes the
+    /// auxiliaries it wrote, as [`Engine::cycle_with`] records them.
+    pub fn after_filter(&mut self, stage: &mut dyn FnMut(Millis, &mut Frame)) {
+        stage(self.now, &mut self.frame);
+        if let Some(r) = self.history.last_mut() {
+            r.aux.copy_from(self.frame.now(Space::Aux));
+        }
+    }
+
     fn apply_fallback(&mut self) {
         let fallback = if self.mode == FilterMode::Off {
             self.filter.fallback(&self.frame)

@@ -411,14 +411,7 @@ impl Simulation {
     /// the constraints rewritten for the cooperation (estimated sensors, stop on an
     /// actuator partition).
     pub fn enable_diagnosers(&mut self) -> Result<(), Vec<Problem>> {
-        let (db, problems) = crate::pop::load(&self.bundle.dir)?;
-        let errors: Vec<Problem> = problems
-            .into_iter()
-            .filter(|p| p.is_error() && p.code != "V0106")
-            .collect();
-        if !errors.is_empty() {
-            return Err(errors);
-        }
+        let db = diagnosis::load(&self.bundle.dir)?;
         let mode = self.engine.mode();
         self.engine = Engine::new(&db.bundle, mode, self.options.history_cycles);
         // The auxiliaries moved: the task monitors are compiled again on the new table.
@@ -674,55 +667,28 @@ impl Simulation {
         }
     }
 
+    /// Certain diagnoses of this cycle: alarms and journal lines, and the sensors the
+    /// control program reads from their estimates from the next cycle on.
     fn diagnosis_events(&mut self, now: Millis) {
         let Some(d) = self.diagnosers.as_ref() else {
             return;
         };
-        let new: Vec<crate::pop::Diagnosis> = d.diagnoses[self.diag_seen..].to_vec();
-        self.diag_seen = d.diagnoses.len();
-        if new.is_empty() {
+        let enforced = self.engine.mode() == FilterMode::Enforce;
+        let acts = diagnosis::Cooperation {
+            stop: enforced,
+            // The simulation's program reads the estimates; a followed monitor's PLC
+            // does not.
+            estimate: enforced || !self.is_live(),
+        };
+        let notices = diagnosis::take_notices(d, &mut self.diag_seen, acts);
+        if notices.is_empty() {
             return;
         }
-        let flagged = d.flagged();
-        let symbols = &self.engine.symbols;
-        self.degraded = flagged
-            .iter()
-            .filter_map(|(_, _, s)| {
-                let s = s.as_ref()?;
-                let input = self.bundle.plant.input(s)?;
-                let (_, aux) = symbols.lookup(&crate::symbols::estimate_name(s))?;
-                Some((input, aux as usize))
-            })
-            .collect();
-        for n in new {
-            let stop = flagged.iter().find(|(p, _, _)| *p == n.partition);
-            let text = match stop {
-                Some((_, true, _)) => format!(
-                    "Diagnosis: fault {} on {} ({}), certain: actuator partition at fault, the whole system is stopped",
-                    n.fault, n.partition, n.component
-                ),
-                Some((_, false, Some(s))) => {
-                    let mut chars = s.chars();
-                    let first = chars.next().unwrap_or(' ');
-                    format!(
-                        "Diagnosis: fault {} on sensor {s} (certain): {s} estimated from time intervals ({first}\u{0302}{}, the {} timing); production continues in degraded mode",
-                        n.fault,
-                        chars.as_str(),
-                        n.component
-                    )
-                }
-                _ => format!(
-                    "Diagnosis: {} on {} ({})",
-                    n.fault, n.partition, n.component
-                ),
-            };
-            self.alarms.raise(
-                now,
-                &format!("diag:{}:{}", n.component, n.partition),
-                AlarmKind::Diagnosis,
-                text.clone(),
-            );
-            self.log("diagnosis", text);
+        self.degraded = diagnosis::estimated_inputs(d, &self.bundle.plant, &self.engine.symbols);
+        for n in notices {
+            self.alarms
+                .raise(now, &n.key, AlarmKind::Diagnosis, n.text.clone());
+            self.log("diagnosis", n.text);
         }
     }
 
@@ -986,6 +952,7 @@ fn hazard_verb(h: &Hazard) -> String {
     }
 }
 
+pub mod diagnosis;
 mod observed;
 
 pub use observed::ObservedCycle;

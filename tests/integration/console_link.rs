@@ -4,7 +4,9 @@
 //!   plant, then the peer killed (reconnecting, alarm, stale inputs) and back;
 //! - a gateway run: the PLC commands a forbidden combination, the plant receives the
 //!   filter's output, the console shows the trip; the operator's reset is refused while
-//!   the constraint holds and goes through the gateway once it does not.
+//!   the constraint holds and goes through the gateway once it does not;
+//! - a monitor run with the plant's diagnosers: C4 dies at rest, the diagnoser panel
+//!   shows the certain diagnosis the mirror makes from the run's cycles.
 //!
 //! No fixed sleeps: every wait polls the console with a deadline.
 
@@ -44,14 +46,15 @@ fn wait_for_label(h: &mut Harness<'static, Console>, text: &str) {
     panic!("no label containing {text:?} within {WAIT:?}; link state: {state:?}");
 }
 
-fn monitor_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
+/// A monitor configuration; `extra` adds fields (the diagnosers are on by default).
+fn monitor_config(dir: &TempDir, port: u16, extra: &str) -> std::path::PathBuf {
     let station = repo()
         .join("layouts/sorting-station")
         .canonicalize()
         .unwrap();
     let text = format!(
         "Gateway(mode: Monitor, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 5, \
-         client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 50, backoff_max_ms: 400))",
+         client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 50, backoff_max_ms: 400), {extra})",
         station.display().to_string()
     );
     let path = dir.0.join("monitor.ron");
@@ -65,7 +68,9 @@ fn console_follows_a_monitor_link_to_pymodbus() {
     let port = plant.port;
     let dir = TempDir::new("console-link");
     let mut opts = ConsoleOptions::new(&repo().join("layouts/sorting-station"));
-    opts.link = Some(monitor_config(&dir, port));
+    // The paper's constraints as written: with the diagnosers they are shown rewritten
+    // for the cooperation (CSs10 = C7 . /A4 . /def_P).
+    opts.link = Some(monitor_config(&dir, port, "diagnosers: false"));
     opts.data_dir = None;
     let mut h = harness(opts);
 
@@ -142,7 +147,8 @@ fn gateway_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
     let text = format!(
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 10, \
          client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
-         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"))",
+         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), \
+         diagnosers: false)", // the table moves in milliseconds: a fault for its diagnoser
         station.display().to_string()
     );
     let path = dir.0.join("gateway.ron");
@@ -226,4 +232,43 @@ fn console_follows_a_gateway_link_and_resets_through_it() {
         plant.coils() == "0000000"
     });
     assert!(h.query_all_by_label_contains("TRIPPED").next().is_none());
+}
+
+#[test]
+fn console_shows_the_diagnosers_of_a_monitor_link() {
+    let mut plant = Plant::start(None);
+    // The empty table at rest at C4: the initial state, where the diagnosers start.
+    plant.set_inputs(&[(4, true)]);
+    let dir = TempDir::new("console-diag");
+    let mut opts = ConsoleOptions::new(&repo().join("layouts/sorting-station"));
+    opts.link = Some(monitor_config(&dir, plant.port, ""));
+    opts.data_dir = None;
+    let mut h = harness(opts);
+    // The diagnoser panel, fed by the mirror of the run's cycles.
+    wait_for_label(&mut h, "Diagnosers (0 certain diagnoses)");
+    wait_state(&mut h, "the mirror's diagnosers to start", |c| {
+        c.sim
+            .diagnosers
+            .as_ref()
+            .is_some_and(|d| d.estimate("table").iter().any(|s| s == "x0"))
+    });
+    // C4 dies at rest: certain on partition C4 after about 3.1 s.
+    plant.set_inputs(&[(4, false)]);
+    wait_for_label(&mut h, "Diagnosers (1 certain diagnoses)");
+    wait_for_label(&mut h, "C4 at fault: the filter reads C\u{302}4");
+    let c = h.state();
+    let d = &c.sim.diagnosers.as_ref().unwrap().diagnoses[0];
+    assert_eq!(
+        (d.component.as_str(), d.partition.as_str()),
+        ("table", "C4")
+    );
+    // One alarm, the mirror's (the run's own `diag:` alarm is not added twice).
+    let alarms: Vec<_> = c
+        .sim
+        .alarms
+        .all()
+        .iter()
+        .filter(|a| a.key == "diag:table:C4")
+        .collect();
+    assert_eq!(alarms.len(), 1, "{alarms:#?}");
 }

@@ -349,10 +349,15 @@ fn gateway_round_trip_with_pymodbus() {
     assert_eq!(stopped["written"], true);
 }
 
+/// The tests of the filter move the turntable from C4 to C5 in a few milliseconds,
+/// which the table's diagnoser rightly takes for a fault (and may stop the plant for):
+/// they run without the diagnosers.
+const NO_DIAGNOSERS: &str = "diagnosers: false";
+
 #[test]
 fn gateway_enforces_the_hold_of_a4() {
     let mut plant = Plant::start(None);
-    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let mut gw = Gateway::start(&gateway_config(plant.port, NO_DIAGNOSERS));
     let server = gw.listening();
     let mut plc = Plc::start(server, Some("127.0.0.2"));
     // A loaded table in the loading position starts rotating.
@@ -391,7 +396,7 @@ fn gateway_enforces_the_hold_of_a4() {
 #[test]
 fn plc_killed_gives_safe_outputs_then_recovers() {
     let mut plant = Plant::start(None);
-    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let mut gw = Gateway::start(&gateway_config(plant.port, NO_DIAGNOSERS));
     let server = gw.listening();
     let mut plc = Plc::start(server, Some("127.0.0.2"));
     // A loaded table rotates to the unloading position (CSs8: hold A4 there), the
@@ -572,6 +577,185 @@ fn monitor_reports_with_explanations_and_never_writes() {
         e["event"] == "alarm_cleared" && e["key"] == "link:peer"
     });
     gw.stop();
+}
+
+/// A `diagnosis` event of the partition `partition`.
+fn diagnosis_of(partition: &'static str) -> impl Fn(&serde_json::Value) -> bool {
+    move |e| e["event"] == "diagnosis" && e["partition"] == partition
+}
+
+#[test]
+fn gateway_diagnoses_c4_stuck_at_rest_and_the_plc_and_filter_read_its_estimate() {
+    let mut plant = Plant::start(None);
+    // The empty table rests at C4, A4 off, before the gateway starts.
+    plant.set_inputs(&[(C4, true)]);
+    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    plc.command("0000000");
+    // The diagnosers start on the plant in its initial state.
+    gw.event("the diagnosers' start", |e| {
+        e["event"] == "diagnosers" && e["state"] == "started"
+    });
+    wait_until("the PLC to see C4", || plc.sensors() == "di 00001000000");
+    // C4 dies (stuck at 0) while the table stays: the table's diagnoser sees the fall
+    // with A4 off; once no pulse end (2 s) and no motion (C5 within I4, 3.1 s) explains
+    // it, the fault is certainly in partition C4 (docs/diagnoser.md).
+    plant.set_inputs(&[(C4, false)]);
+    let fell = Instant::now();
+    let d = gw.event("a diagnosis of C4", diagnosis_of("C4"));
+    assert!(
+        fell.elapsed() >= Duration::from_secs(2),
+        "diagnosed after {:?}: {d}",
+        fell.elapsed()
+    );
+    assert_eq!(d["component"], "table", "{d}");
+    assert_eq!(d["certainty"], "certain", "{d}");
+    assert_eq!(d["estimated"], "C4", "{d}");
+    assert_eq!(d["stop"], false, "{d}");
+    assert!(d["fault"].as_str().unwrap().contains("F1"), "{d}");
+    assert!(d["time_ms"].as_u64().is_some(), "{d}");
+    gw.event("the diagnosis alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "diag:table:C4"
+    });
+    // Degraded mode: the PLC reads Ĉ4 (1: the table rests since long, I10) in place of
+    // the dead sensor, as the simulation's program does.
+    wait_until("the PLC to read the estimate of C4", || {
+        plc.sensors() == "di 00001000000"
+    });
+    // The filter reads it too: rotating the empty table trips CSs13 (C4 . /C6 . A4,
+    // with the estimate), not CSs14 (/C4 . RE(A4), with the dead sensor).
+    gw.forget();
+    plc.command("0000100");
+    let trip = gw.event("a trip", Gateway::kind("trip"));
+    let ids: Vec<&str> = trip["record"]["constraints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(ids, ["CSs13"], "{trip}");
+    assert!(
+        trip["record"]["constraints"][0]["literals"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|l| l["name"] == "EST(C4)" && l["value"] == true),
+        "{trip}"
+    );
+    for _ in 0..10 {
+        assert_eq!(plant.coils(), "0000000", "the empty table must not rotate");
+    }
+    plc.command("0000000");
+    // The final report carries the diagnosis.
+    let stopped = gw.stop();
+    let diagnoses = stopped["diagnoses"].as_array().unwrap();
+    assert!(
+        diagnoses
+            .iter()
+            .any(|d| d["partition"] == "C4" && d["component"] == "table"),
+        "{stopped}"
+    );
+}
+
+#[test]
+fn gateway_stops_the_plant_on_a_certain_fault_of_the_table_drive() {
+    let mut plant = Plant::start(None);
+    // The empty table at C4 (the initial state) before the gateway starts.
+    plant.set_inputs(&[(C4, true)]);
+    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    gw.event("the diagnosers' start", |e| {
+        e["event"] == "diagnosers" && e["state"] == "started"
+    });
+    // A box comes onto the table with the intermediate conveyor.
+    plc.command("0100000");
+    wait_until("the plant to receive A1", || plant.coils() == "0100000");
+    plant.set_inputs(&[(C6, true)]);
+    wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
+    // The PLC orders the rotation; the table does not move (blocked at C4): no fall of
+    // C4 within I2, no rise of C5 within I4. Partition P (stop) becomes certain.
+    plc.command("0100100");
+    wait_until("the plant to receive A1 A4", || plant.coils() == "0100100");
+    let d = gw.event("a diagnosis of P", diagnosis_of("P"));
+    assert_eq!(d["component"], "table", "{d}");
+    assert_eq!(d["stop"], true, "{d}");
+    assert!(d["fault"].as_str().unwrap().contains("F5"), "{d}");
+    // From the next cycle on, DSTOP_P drives every output to 0, whatever the PLC
+    // commands, as in the simulation.
+    gw.event("the stop", |e| {
+        e["event"] == "trip"
+            && e["record"]["constraints"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|c| c["id"] == "DSTOP_P"))
+    });
+    wait_until("the plant to be stopped", || plant.coils() == "0000000");
+    for _ in 0..10 {
+        assert_eq!(plant.coils(), "0000000", "the PLC's A1 A4 must not pass");
+    }
+    let stopped = gw.stop();
+    assert_eq!(stopped["outputs"], "0000000");
+    assert!(
+        stopped["diagnoses"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|d| d["partition"] == "P"),
+        "{stopped}"
+    );
+}
+
+#[test]
+fn monitor_reports_a_diagnosis_and_the_diagnosers_can_be_switched_off() {
+    for on in [true, false] {
+        let mut plant = Plant::start(None);
+        // The empty table at rest at C4: the initial state.
+        plant.set_inputs(&[(C4, true)]);
+        let body = format!(
+            "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 10, diagnosers: {on}, \
+             client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
+            plant.port
+        );
+        let mut gw = Gateway::start(&body);
+        let m = gw.event("monitoring", Gateway::kind("monitoring"));
+        assert_eq!(m["diagnosers"], on, "{m}");
+        if !on {
+            // The paper's constraints as written (with the diagnosers CSs10 reads
+            // `C7 . /A4 . /def_P`): a box at C7 with A4 off.
+            plant.set_inputs(&[(C7, true)]);
+            let v = gw.event("the violation of CSs10", Gateway::kind("violation"));
+            let c = &v["record"]["constraints"][0];
+            assert_eq!(c["id"], "CSs10", "{v}");
+            assert!(!c["notation"].as_str().unwrap().contains("def_"), "{v}");
+            let stopped = gw.stop();
+            assert_eq!(stopped["diagnoses"], serde_json::json!([]), "{stopped}");
+            continue;
+        }
+        // The diagnosers start on the first values read, then C4 dies.
+        gw.event("the diagnosers' start", |e| {
+            e["event"] == "diagnosers" && e["state"] == "started"
+        });
+        plant.set_inputs(&[(C4, false)]);
+        let d = gw.event("a diagnosis of C4", diagnosis_of("C4"));
+        // Report-only: the PLC keeps reading its own sensor.
+        assert!(
+            d["text"]
+                .as_str()
+                .unwrap()
+                .contains("the control program still reads C4"),
+            "{d}"
+        );
+        let stopped = gw.stop();
+        assert!(
+            stopped["diagnoses"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|d| d["partition"] == "C4" && d["component"] == "table"),
+            "{stopped}"
+        );
+    }
 }
 
 fn mbpoll_run(args: &[&str]) -> String {

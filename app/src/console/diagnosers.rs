@@ -1,35 +1,48 @@
 //! The diagnoser view: a banner while a sensor is estimated (degraded mode) or the
 //! system is stopped by an actuator partition, and a collapsible table of every
 //! component's state estimate, partition decisions and fault flags. Shown only when the
-//! simulation runs the diagnosers (a scenario with `diagnosers: true`). Renders only.
+//! simulation runs the diagnosers (a scenario with `diagnosers: true`, or a live link
+//! whose run steps them: the mirror's diagnosers follow the run's cycles). Renders only.
 
 use super::Console;
 use egui::RichText;
+use vigie_core::live::config::Mode;
 use vigie_core::pop::Certainty;
+use vigie_core::sim::diagnosis::hat;
 
-/// The text of the degraded-mode banner, one line per flagged partition.
+/// The text of the degraded-mode banner, one line per flagged partition (on a monitor
+/// link the filter only reports and the PLC reads its own sensors: the lines say so).
 pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
     let Some(d) = c.sim.diagnosers.as_ref() else {
         return Vec::new();
     };
+    let monitor = c.link.as_ref().is_some_and(|l| l.mode == Mode::Monitor);
     d.flagged()
         .into_iter()
-        .map(|(p, stop, sensor)| match (stop, sensor) {
-            (true, _) => (
+        .map(|(p, stop, sensor)| match (stop, sensor, monitor) {
+            (true, _, false) => (
                 format!("Actuator partition {p} at fault: the whole system is stopped"),
                 true,
             ),
-            (false, Some(s)) => {
-                // `Ĉ4`: the sensor's name with a hat on its first letter.
-                let mut chars = s.chars();
-                let first = chars.next().unwrap_or(' ');
-                let hat = format!("{first}\u{0302}{}", chars.as_str());
-                (
-                    format!("{s} estimated from time intervals ({hat}) — degraded mode"),
-                    false,
-                )
-            }
-            (false, None) => (format!("Partition {p} at fault"), false),
+            (true, _, true) => (
+                format!("Actuator partition {p} at fault (monitor: reported, not stopped)"),
+                true,
+            ),
+            (false, Some(s), false) => (
+                format!(
+                    "{s} estimated from time intervals ({}) — degraded mode",
+                    hat(&s)
+                ),
+                false,
+            ),
+            (false, Some(s), true) => (
+                format!(
+                    "{s} at fault: the filter reads {} (monitor: the PLC still reads {s})",
+                    hat(&s)
+                ),
+                false,
+            ),
+            (false, None, _) => (format!("Partition {p} at fault"), false),
         })
         .collect()
 }

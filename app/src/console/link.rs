@@ -4,11 +4,12 @@
 //!
 //! Every frame, `Console::pump_link` takes the cycles the run published (through a
 //! [`Tap`]) and feeds them to the simulation's engine (`Simulation::observe`, a mirror
-//! of the run's engine), so the synoptic, the filter, the explanations, the chronogram
-//! and the replay show the live plant; link alarms join the alarm list, notable events
-//! the journal. The link-state panel (`panel_ui`) and the status bar
-//! (`status_ui`) show the connection: connected or reconnecting (attempt, backoff),
-//! peer, age of the last poll, stale inputs, cycles, exceptions.
+//! of the run's engine), so the synoptic, the filter, the explanations, the chronogram,
+//! the replay and the diagnosers (when the run steps them) show the live plant; link
+//! alarms join the alarm list, notable events the journal. The link-state panel
+//! (`panel_ui`) and the status bar (`status_ui`) show the connection: connected or
+//! reconnecting (attempt, backoff), peer, age of the last poll, stale inputs, cycles,
+//! exceptions.
 //!
 //! Vigie never commands a live plant from the console: the plant buttons and the
 //! simulation controls are refused; the operator's reset goes to the run (gateway).
@@ -48,6 +49,13 @@ pub(crate) fn plant_dir(config: &Path) -> Result<PathBuf, String> {
             config.display()
         )),
     }
+}
+
+/// Whether the run of a link configuration steps the diagnosers (its mirror then runs
+/// them too).
+pub(crate) fn runs_diagnosers(config: &Path) -> Result<bool, String> {
+    let c = GatewayConfig::load(config).map_err(|p| vigie_core::diag::render(&p))?;
+    Ok(c.runs_diagnosers())
 }
 
 impl LinkSession {
@@ -173,6 +181,13 @@ fn journal_event(tap: &Tap, e: &serde_json::Value) {
             e["reason"].as_str().unwrap_or_default()
         ),
         "specification_error" => e["message"].as_str().unwrap_or_default().to_string(),
+        "diagnosers" => match e["state"].as_str().unwrap_or_default() {
+            "started" => "diagnosers started: the plant in its initial state".to_string(),
+            "suspended" => "diagnosers suspended while the peer is lost".to_string(),
+            "resumed" => "diagnosers resumed, their flags and estimates kept".to_string(),
+            "restarted" => "diagnosers restarted: the plant in its initial state".to_string(),
+            other => format!("diagnosers {other}"),
+        },
         "listening" => format!(
             "serving the PLC on {}",
             e["address"].as_str().unwrap_or_default()
@@ -248,10 +263,11 @@ impl Console {
         for (time, kind, text) in &taken.events {
             self.journal.push(time.0, kind, text);
         }
-        // Task alarms are the mirror's own (its task monitors follow the same cycles).
+        // Task and diagnosis alarms are the mirror's own (its task monitors and its
+        // diagnosers follow the same cycles).
         let link_alarms = taken.alarms.into_iter().filter(|a| {
             let (LinkAlarm::Raised { key, .. } | LinkAlarm::Cleared { key, .. }) = a;
-            !key.starts_with("task:")
+            !key.starts_with("task:") && !key.starts_with("diag:")
         });
         for a in link_alarms {
             match a {

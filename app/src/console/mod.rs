@@ -389,10 +389,10 @@ impl Console {
                 "Reference program",
             ),
         };
-        if opts.link.is_some() {
-            // The mirror of a live run replays the run's own engine cycle by cycle; the
-            // diagnosers (and their constraint rewrite) are not part of the live cycles.
-            source.scenario.diagnosers = false;
+        if let Some(config) = &opts.link {
+            // The mirror of a live run replays the run's own engine cycle by cycle: with
+            // the diagnosers and their constraint rewrite exactly when the run has them.
+            source.scenario.diagnosers = link::runs_diagnosers(config)?;
         }
         let plant_dir = source
             .path

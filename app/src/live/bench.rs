@@ -15,7 +15,6 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use tokio_modbus::client::{Reader as _, Writer as _};
-use vigie_core::bundle::PlantBundle;
 use vigie_core::live::config::GatewayConfig;
 use vigie_core::live::iomap::IoMap;
 
@@ -96,14 +95,15 @@ pub fn run(
     );
     let config = GatewayConfig::from_ron(&text, std::path::Path::new("bench.ron"))
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
-    let (bundle, _) = PlantBundle::load(plant_dir)
-        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    // The gateway as configured by default: with the plant's diagnosers.
+    let (bundle, diagnosers) = runtime::load_plant(&config)?;
     let (map, _) = IoMap::load(&config.io_map_path(), &bundle.plant)
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let setup = Setup {
         config,
         bundle,
         map,
+        diagnosers,
     };
 
     // The gateway on its own thread and runtime.

@@ -28,7 +28,12 @@ use vigie_core::engine::{Commanded, Engine, FilterMode};
 use vigie_core::live::age::{AgedBits, Watchdog};
 use vigie_core::live::image::ServerImage;
 use vigie_core::live::stale::StaleGuard;
+use vigie_core::pop::Diagnosers;
+use vigie_core::pop::build::Compiled;
 use vigie_core::sim::ObservedCycle;
+use vigie_core::sim::diagnosis::{
+    Cooperation, LinkGate, LinkStep, estimated_inputs, run_link_step, substitute, take_notices,
+};
 use vigie_core::symbols::Space;
 use vigie_core::{Bits, Millis};
 
@@ -360,6 +365,75 @@ impl LiveTasks {
     }
 }
 
+/// The plant's diagnosers in a live cycle, stepped after the filter (and the gateway's
+/// safe outputs) on the outputs really applied, from the first cycle that shows the
+/// plant in its initial state and not while the peer is lost (`LinkGate`), as the
+/// simulation steps them (`vigie_core::sim::diagnosis`): their flags, intervals and
+/// estimates are read by the rewritten constraints from the next cycle on; each
+/// certain diagnosis is a `diagnosis` event and a `diag:` alarm, each start, suspension
+/// or restart a `diagnosers` event.
+struct LiveDiagnosers {
+    diagnosers: Diagnosers,
+    gate: LinkGate,
+    seen: usize,
+    acts: Cooperation,
+    /// Sensors read from their estimates: (input, auxiliary of the estimate).
+    estimated: Vec<(usize, usize)>,
+}
+
+impl LiveDiagnosers {
+    fn new(compiled: Option<Compiled>, bundle: &PlantBundle, acts: Cooperation) -> Option<Self> {
+        Some(Self {
+            diagnosers: Diagnosers::new(compiled?, &bundle.symbols),
+            gate: LinkGate::default(),
+            seen: 0,
+            acts,
+            estimated: Vec::new(),
+        })
+    }
+
+    /// Steps the diagnosers (when `usable`) and reports their new certain diagnoses;
+    /// returns what was done, for the console's mirror.
+    fn step(
+        &mut self,
+        engine: &mut Engine,
+        usable: bool,
+        bundle: &PlantBundle,
+        board: &mut AlarmBoard,
+        emit: Emit<'_>,
+    ) -> LinkStep {
+        let now = engine.now();
+        let (step, change) = self.gate.step(usable, &self.diagnosers, engine.frame());
+        if let Some(change) = change {
+            tracing::info!("diagnosers {change:?} at {now}");
+            emit(json!({"event": "diagnosers", "state": change, "time_ms": now.0}));
+        }
+        let d = &mut self.diagnosers;
+        engine.after_filter(&mut |t, f| run_link_step(d, step, t, f));
+        let notices = take_notices(&self.diagnosers, &mut self.seen, self.acts);
+        if notices.is_empty() {
+            return step;
+        }
+        self.estimated = estimated_inputs(&self.diagnosers, &bundle.plant, &bundle.symbols);
+        for n in notices {
+            let mut line = serde_json::to_value(&n.diagnosis).unwrap_or_default();
+            line["event"] = json!("diagnosis");
+            line["stop"] = json!(n.stop);
+            line["estimated"] = json!(n.estimated);
+            line["text"] = json!(n.text);
+            emit(line);
+            board.raise(emit, now, &n.key, AlarmKind::Diagnosis, n.text);
+        }
+        step
+    }
+
+    /// The certain diagnoses so far.
+    fn diagnoses(this: Option<&Self>) -> Vec<vigie_core::pop::Diagnosis> {
+        this.map(|d| d.diagnosers.diagnoses.clone())
+            .unwrap_or_default()
+    }
+}
+
 /// The monitor's cycle.
 struct MonitorCycle {
     clock: Clock,
@@ -379,12 +453,13 @@ struct MonitorCycle {
     last_potential: Vec<String>,
     last_spec: Option<String>,
     tasks: Option<LiveTasks>,
+    diagnosers: Option<LiveDiagnosers>,
     emit: Box<dyn FnMut(serde_json::Value) + Send>,
     tap: Option<Tap>,
 }
 
 impl Cycle for MonitorCycle {
-    type Done = ();
+    type Done = Vec<vigie_core::pop::Diagnosis>;
 
     fn step(&mut self, start: Instant) {
         let now = self.clock.at(start);
@@ -419,6 +494,17 @@ impl Cycle for MonitorCycle {
             Some(&explainer),
             &mut self.last_spec,
         );
+        let usable = self.heard.is_some() && !self.dog.is_lost();
+        let diagnosers = match &mut self.diagnosers {
+            Some(d) => d.step(
+                &mut self.engine,
+                usable,
+                &self.bundle,
+                &mut self.board,
+                &mut *self.emit,
+            ),
+            None => LinkStep::Skipped,
+        };
         if let Some(t) = &mut self.tasks {
             t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
         }
@@ -449,6 +535,7 @@ impl Cycle for MonitorCycle {
                     commanded: self.outputs.values().clone(),
                     applied: self.outputs.values().clone(),
                     reset: false,
+                    diagnosers,
                 },
                 |st| {
                     st.client = status;
@@ -460,7 +547,9 @@ impl Cycle for MonitorCycle {
         }
     }
 
-    fn finish(self) {}
+    fn finish(self) -> Self::Done {
+        LiveDiagnosers::diagnoses(self.diagnosers.as_ref())
+    }
 }
 
 pub(crate) async fn monitor(
@@ -474,6 +563,7 @@ pub(crate) async fn monitor(
         config,
         bundle,
         map,
+        diagnosers,
     } = setup;
     let client = config
         .client
@@ -489,7 +579,9 @@ pub(crate) async fn monitor(
     if let Some(t) = &tap {
         t.update(|s| s.peer = Some(peer));
     }
-    emit(json!({"event": "monitoring", "peer": peer.to_string()}));
+    emit(json!({
+        "event": "monitoring", "peer": peer.to_string(), "diagnosers": diagnosers.is_some(),
+    }));
     let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
     let stop = Arc::new(AtomicBool::new(false));
     let cycle = MonitorCycle {
@@ -512,6 +604,15 @@ pub(crate) async fn monitor(
         last_potential: Vec::new(),
         last_spec: None,
         tasks: LiveTasks::new(&bundle),
+        // Report-only: the stop is reported, the PLC reads its own sensors.
+        diagnosers: LiveDiagnosers::new(
+            diagnosers,
+            &bundle,
+            Cooperation {
+                stop: false,
+                estimate: false,
+            },
+        ),
         emit: event_sender(tx),
         tap: tap.clone(),
         bundle,
@@ -520,12 +621,14 @@ pub(crate) async fn monitor(
     let result = supervise(shutdown, emit, &mut events, &stop, done).await;
     let _ = stop_io.send(());
     let client = io.await.context("the I/O task failed")?;
-    let ((), cycle_stats) = result?;
+    let (diagnoses, cycle_stats) = result?;
     *stats = cycle_stats;
     if let Some(t) = &tap {
         t.update(|s| s.running = false);
     }
-    emit(json!({"event": "stopped", "connected": client.is_connected()}));
+    emit(json!({
+        "event": "stopped", "connected": client.is_connected(), "diagnoses": diagnoses,
+    }));
     Ok(())
 }
 
@@ -550,6 +653,7 @@ struct GatewayCycle {
     safe_reason: Option<String>,
     last_spec: Option<String>,
     tasks: Option<LiveTasks>,
+    diagnosers: Option<LiveDiagnosers>,
     auto_reset: bool,
     emit: Box<dyn FnMut(serde_json::Value) + Send>,
     tap: Option<Tap>,
@@ -586,7 +690,7 @@ impl GatewayCycle {
 }
 
 impl Cycle for GatewayCycle {
-    type Done = Bits;
+    type Done = (Bits, Vec<vigie_core::pop::Diagnosis>);
 
     fn step(&mut self, start: Instant) {
         let now = self.clock.at(start);
@@ -684,16 +788,32 @@ impl Cycle for GatewayCycle {
             }
             self.safe_reason.clone_from(&reason);
         }
-        self.engine
-            .frame_mut()
-            .now_mut(Space::Output)
-            .copy_from(&applied);
+        self.engine.set_applied(&applied);
+        // 5. The diagnosers follow what the plant receives.
+        let usable = self.plant_heard.is_some() && !self.plant_dog.is_lost();
+        let diagnosers = match &mut self.diagnosers {
+            Some(d) => d.step(
+                &mut self.engine,
+                usable,
+                &self.bundle,
+                &mut self.board,
+                &mut *self.emit,
+            ),
+            None => LinkStep::Skipped,
+        };
         if let Some(t) = &mut self.tasks {
             t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
         }
-        // 5. Outputs to the plant (written by the I/O task at once), sensors to the PLC.
+        // 6. Outputs to the plant (written by the I/O task at once), sensors to the PLC
+        // (in degraded mode a flagged sensor as its estimate).
         self.out.send_replace(Some(applied.clone()));
-        lock(&self.shared).inputs.copy_from(self.inputs.values());
+        {
+            let mut shared = lock(&self.shared);
+            shared.inputs.copy_from(self.inputs.values());
+            if let Some(d) = &self.diagnosers {
+                substitute(&d.estimated, self.engine.frame(), &mut shared.inputs);
+            }
+        }
         if let Some(tap) = &self.tap {
             let stale_names = names(&self.bundle, Space::Input, &stale);
             let cycles = self.engine.cycles();
@@ -705,6 +825,7 @@ impl Cycle for GatewayCycle {
                     commanded: self.control.0.clone(),
                     applied,
                     reset,
+                    diagnosers,
                 },
                 |st| {
                     st.client = status;
@@ -719,10 +840,14 @@ impl Cycle for GatewayCycle {
         }
     }
 
-    /// Shutdown: the fallback of the current context, whatever the PLC commands.
-    fn finish(mut self) -> Bits {
+    /// Shutdown: the fallback of the current context, whatever the PLC commands; and
+    /// the certain diagnoses of the run.
+    fn finish(mut self) -> Self::Done {
         let now = self.clock.now();
-        self.safe_now(now)
+        (
+            self.safe_now(now),
+            LiveDiagnosers::diagnoses(self.diagnosers.as_ref()),
+        )
     }
 }
 
@@ -737,6 +862,7 @@ pub(crate) async fn gateway(
         config,
         bundle,
         map,
+        diagnosers,
     } = setup;
     let client = config
         .client
@@ -775,7 +901,7 @@ pub(crate) async fn gateway(
     }
     emit(json!({
         "event": "listening", "address": server.local.to_string(),
-        "plant": client.address.to_string(),
+        "plant": client.address.to_string(), "diagnosers": diagnosers.is_some(),
     }));
     let plant_peer = client.address;
     let (out_tx, out_rx) = watch::channel(None);
@@ -805,6 +931,16 @@ pub(crate) async fn gateway(
         safe_reason: None,
         last_spec: None,
         tasks: LiveTasks::new(&bundle),
+        // Enforced: a flagged stop partition stops the plant, the PLC reads the
+        // estimate of a flagged sensor.
+        diagnosers: LiveDiagnosers::new(
+            diagnosers,
+            &bundle,
+            Cooperation {
+                stop: true,
+                estimate: true,
+            },
+        ),
         auto_reset: config.auto_reset,
         emit: event_sender(tx),
         tap: tap.clone(),
@@ -814,7 +950,7 @@ pub(crate) async fn gateway(
     let result = supervise(shutdown, emit, &mut events, &stop, done).await;
     let _ = stop_io.send(());
     let mut client = io.await.context("the I/O task failed")?;
-    let (safe, cycle_stats) = result?;
+    let ((safe, diagnoses), cycle_stats) = result?;
     *stats = cycle_stats;
     let written = match &mut client {
         PeerClient::Plant(w) if w.is_connected() => w.write(clock.now(), &safe).await,
@@ -831,7 +967,10 @@ pub(crate) async fn gateway(
     if let Some(t) = &tap {
         t.update(|s| s.running = false);
     }
-    emit(json!({"event": "stopped", "outputs": bits_text(&safe), "written": written}));
+    emit(json!({
+        "event": "stopped", "outputs": bits_text(&safe), "written": written,
+        "diagnoses": diagnoses,
+    }));
     drop(server);
     Ok(())
 }

@@ -1,7 +1,7 @@
 //! The service loops of `vigie gateway`: monitor, gateway and emulator. Each runs one
 //! cycle per `cycle_ms` until `shutdown` resolves, reports through `emit` (one JSON
 //! object per event: listening, alarm, alarm_cleared, trip, violation,
-//! potential_violation, safe_outputs, safe_outputs_released, stopped) and logs through
+//! potential_violation, safe_outputs, safe_outputs_released, diagnosis, stopped) and logs through
 //! `tracing`; with a [`Tap`], every cycle and the link state also go to the console.
 //!
 //! Monitor and gateway cycles run on a thread of their own at absolute deadlines, the
@@ -17,14 +17,22 @@
 //!    commands); otherwise, if inputs are stale and some constraint is potentially
 //!    violated by the applied outputs for some value of them, the quantified fallback
 //!    too (see `vigie_core::live::stale`). An alarm stays raised while this lasts.
-//! 5. Hand the outputs to the I/O task, which writes them at once; publish the sensors
-//!    to the PLC.
+//! 5. Diagnosers (when the plant has `diagnosers.ron` and the configuration does not
+//!    say `diagnosers: false`): they follow the inputs and the outputs of step 4 and
+//!    write their flags, intervals and estimates for the rewritten constraints of the
+//!    next cycle, as in the simulation (`vigie_core::sim::diagnosis`); a certain
+//!    diagnosis is a `diagnosis` event and a `diag:` alarm.
+//! 6. Hand the outputs to the I/O task, which writes them at once; publish the sensors
+//!    to the PLC (a sensor whose partition is flagged as its estimate, as the
+//!    simulation's program reads it in degraded mode).
 //!
 //! A plant silent for `link_timeout_cycles` cycles raises the `link:plant` alarm and
 //! step 4 holds the safe outputs, written at once if the plant is still connected (its
 //! values unreadable) or as soon as the link returns (the client reconnects with
-//! backoff). Task monitors follow the filter, as in the console. On shutdown the
-//! outputs go to the fallback of the current context (every output 0 when none exists).
+//! backoff); the diagnosers are not stepped while it is lost. Task monitors follow the
+//! filter, as in the console. On shutdown the outputs go to the fallback of the current
+//! context (every output 0 when none exists); the `stopped` event carries the certain
+//! diagnoses of the run.
 
 use super::backend::{EmulatorBackend, IoBackend};
 use super::server::{self, Shared, SharedImage};
@@ -42,6 +50,7 @@ use vigie_core::live::age::Transition;
 use vigie_core::live::config::{GatewayConfig, Mode};
 use vigie_core::live::image::ServerImage;
 use vigie_core::live::iomap::IoMap;
+use vigie_core::pop::build::Compiled;
 use vigie_core::symbols::Space;
 use vigie_core::{Bits, Millis};
 
@@ -86,30 +95,22 @@ impl Clock {
 pub struct Setup {
     /// The configuration.
     pub config: GatewayConfig,
-    /// The plant.
+    /// The plant (with the diagnosers: auxiliaries declared, constraints rewritten for
+    /// the cooperation).
     pub bundle: PlantBundle,
     /// The I/O map.
     pub map: IoMap,
+    /// The compiled diagnosers, when the run steps them
+    /// ([`GatewayConfig::runs_diagnosers`]).
+    pub diagnosers: Option<Compiled>,
 }
 
-/// Loads the configuration, the plant folder and the I/O map.
+/// Loads the configuration, the plant folder (with its diagnosers when the run steps
+/// them) and the I/O map.
 pub fn load(path: &std::path::Path) -> anyhow::Result<Setup> {
     let render = vigie_core::diag::render;
     let config = GatewayConfig::load(path).map_err(|p| anyhow::anyhow!("{}", render(&p)))?;
-    let (bundle, problems) = PlantBundle::load(&config.plant).map_err(|p| {
-        anyhow::anyhow!(
-            "cannot load plant {}:\n{}",
-            config.plant.display(),
-            render(&p)
-        )
-    })?;
-    if problems.iter().any(vigie_core::diag::Problem::is_error) {
-        anyhow::bail!(
-            "plant {} has errors:\n{}",
-            config.plant.display(),
-            render(&problems)
-        );
-    }
+    let (bundle, diagnosers) = load_plant(&config)?;
     let (map, warnings) = IoMap::load(&config.io_map_path(), &bundle.plant)
         .map_err(|p| anyhow::anyhow!("{}", render(&p)))?;
     for w in &warnings {
@@ -119,7 +120,32 @@ pub fn load(path: &std::path::Path) -> anyhow::Result<Setup> {
         config,
         bundle,
         map,
+        diagnosers,
     })
+}
+
+/// The plant folder of `config`: with its diagnosers (`diagnosers.ron`, the constraints
+/// rewritten) when the monitor or gateway cycles step them, as they run in the
+/// simulation; plain otherwise.
+pub fn load_plant(config: &GatewayConfig) -> anyhow::Result<(PlantBundle, Option<Compiled>)> {
+    let render = vigie_core::diag::render;
+    let dir = &config.plant;
+    if config.runs_diagnosers() {
+        let db = vigie_core::sim::diagnosis::load(dir).map_err(|p| {
+            anyhow::anyhow!(
+                "cannot load the diagnosers of {} (`diagnosers: false` in the configuration runs without them):\n{}",
+                dir.display(),
+                render(&p)
+            )
+        })?;
+        return Ok((db.bundle, Some(db.compiled)));
+    }
+    let (bundle, problems) = PlantBundle::load(dir)
+        .map_err(|p| anyhow::anyhow!("cannot load plant {}:\n{}", dir.display(), render(&p)))?;
+    if problems.iter().any(vigie_core::diag::Problem::is_error) {
+        anyhow::bail!("plant {} has errors:\n{}", dir.display(), render(&problems));
+    }
+    Ok((bundle, None))
 }
 
 /// Runs the configured mode until `shutdown`; `tap` (monitor and gateway) receives
@@ -298,6 +324,7 @@ async fn emulator(
         config,
         bundle,
         map,
+        diagnosers: _,
     } = setup;
     let server_config = config
         .server

@@ -1,4 +1,5 @@
-//! The server over a memory backend, with tokio-modbus as the client (same process).
+//! The server over a memory backend, with tokio-modbus as the client (same process);
+//! what a monitor or gateway run loads (the diagnosers and their constraint rewrite).
 
 use super::backend::MemoryBackend;
 use super::runtime::{CycleStats, serve_backend};
@@ -98,4 +99,54 @@ fn memory_backend_served_round_trip_and_exceptions() {
         };
         tokio::join!(served, client);
     });
+}
+
+#[test]
+fn the_run_loads_the_diagnosers_unless_switched_off() {
+    use vigie_core::symbols::Space;
+    // The committed configurations: the diagnosers on by default.
+    for name in ["gateway-monitor.ron", "gateway-enforce.ron"] {
+        let setup = super::runtime::load(&station().join(name)).unwrap();
+        assert!(setup.config.diagnosers, "{name}");
+        let compiled = setup.diagnosers.as_ref().expect("diagnosers loaded");
+        assert!(compiled.components.iter().any(|c| c.id == "table"));
+        // The bundle is the cooperation's: flags and estimates declared, constraints
+        // rewritten (one DSTOP_ per stop partition).
+        assert!(matches!(
+            setup.bundle.symbols.lookup("def_C4"),
+            Some((Space::Aux, _))
+        ));
+        assert!(
+            setup
+                .bundle
+                .constraints
+                .constraints
+                .iter()
+                .any(|c| c.id == "DSTOP_P")
+        );
+    }
+    // Switched off: the plant's constraints as written.
+    let text = format!(
+        "Gateway(mode: Monitor, plant: {:?}, client: (address: \"127.0.0.1:1502\"), diagnosers: false)",
+        station().display().to_string()
+    );
+    let config = GatewayConfig::from_ron(&text, Path::new("t.ron")).unwrap();
+    assert!(!config.runs_diagnosers());
+    let (bundle, diagnosers) = super::runtime::load_plant(&config).unwrap();
+    assert!(diagnosers.is_none());
+    assert!(bundle.symbols.lookup("def_C4").is_none());
+    assert!(
+        bundle
+            .constraints
+            .constraints
+            .iter()
+            .all(|c| !c.id.starts_with("DSTOP"))
+    );
+    // Emulator mode never runs them.
+    let text = format!(
+        "Gateway(mode: Emulator, plant: {:?}, server: (bind: \"127.0.0.1:0\"))",
+        station().display().to_string()
+    );
+    let config = GatewayConfig::from_ron(&text, Path::new("t.ron")).unwrap();
+    assert!(config.diagnosers && !config.runs_diagnosers());
 }

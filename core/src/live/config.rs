@@ -134,6 +134,15 @@ pub struct GatewayConfig {
     /// refused, the cycle runs at normal priority with a warning. None by default.
     #[serde(default)]
     pub cycle_priority: Option<u8>,
+    /// Run the plant's diagnosers (`diagnosers.ron`, when the plant folder has one) in
+    /// the monitor and gateway cycles, after the filter, with the constraints rewritten
+    /// for the cooperation; true by default. Ignored in emulator mode.
+    #[serde(default = "default_diagnosers")]
+    pub diagnosers: bool,
+}
+
+fn default_diagnosers() -> bool {
+    true
 }
 
 fn default_mode() -> Mode {
@@ -231,6 +240,14 @@ impl GatewayConfig {
         self.io_map
             .clone()
             .unwrap_or_else(|| self.plant.join("io-map.ron"))
+    }
+
+    /// True when the monitor or gateway cycles run the diagnosers: switched on (the
+    /// default) and the plant folder has a `diagnosers.ron`.
+    pub fn runs_diagnosers(&self) -> bool {
+        self.diagnosers
+            && matches!(self.mode, Mode::Monitor | Mode::Gateway)
+            && self.plant.join("diagnosers.ron").is_file()
     }
 
     /// The cycle period.

@@ -6,16 +6,18 @@
 //! simulation's engine, which mirrors the link's own engine: same filter mode, same
 //! inputs, same commands, same resets, hence the same trips at the same cycles. The
 //! recorder, the explanations (level 1 from an emulator initialised from the
-//! observation), the task monitors, the alarms and the journal then work as in emulator
-//! mode. The emulator never runs: it only shows where the boxes are estimated to be,
-//! rebuilt from the observation whenever the sensors or the observers change.
+//! observation), the task monitors, the diagnosers (stepped when the link stepped its
+//! own, on the same frames: the same decisions, the same flags for the rewritten
+//! constraints), the alarms and the journal then work as in emulator mode. The emulator
+//! never runs: it only shows where the boxes are estimated to be, rebuilt from the
+//! observation whenever the sensors or the observers change.
 
+use super::diagnosis::{LinkStep, run_link_step};
 use super::{OperatorAction, Simulation, explain_live_projected};
 use crate::bits::Bits;
 use crate::emulator::ArrivalPlan;
 use crate::engine::{Commanded, FilterMode};
 use crate::explain;
-use crate::symbols::Space;
 use crate::time::Millis;
 
 /// One cycle of a live link, as the console receives it.
@@ -32,6 +34,8 @@ pub struct ObservedCycle {
     pub applied: Bits,
     /// The link's engine was reset (operator or automatic reset) just before this cycle.
     pub reset: bool,
+    /// What the link's diagnosers did in this cycle (the mirror's do the same).
+    pub diagnosers: LinkStep,
 }
 
 impl Simulation {
@@ -63,15 +67,14 @@ impl Simulation {
         self.engine.cycle(now, &cycle.inputs, &mut control);
         // What the plant really received (gateway: safe outputs for a lost PLC or stale
         // inputs), as the link's engine records it for the next cycle.
-        if cycle.applied.len() == self.engine.applied().len() {
+        self.engine.set_applied(&cycle.applied);
+        // The diagnosers follow those outputs, stepped as the link stepped its own.
+        if let Some(d) = self.diagnosers.as_mut() {
+            let step = cycle.diagnosers;
             self.engine
-                .frame_mut()
-                .now_mut(Space::Output)
-                .copy_from(&cycle.applied);
-            if let Some(r) = self.engine.history.last_mut() {
-                r.applied.copy_from(&cycle.applied);
-            }
+                .after_filter(&mut |t, f| run_link_step(d, step, t, f));
         }
+        self.diagnosis_events(now);
         if let Some(index) = self.record_events(now)
             && self.options.explain
             && let Some((ex, projected)) = explain_live_projected(

@@ -354,6 +354,7 @@ fn observed(time: u64, inputs: &str, commanded: &str, applied: &str, reset: bool
         commanded: bits(commanded),
         applied: bits(applied),
         reset,
+        diagnosers: diagnosis::LinkStep::Skipped,
     }
 }
 
@@ -444,4 +445,191 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
             .iter()
             .all(|a| a.kind != AlarmKind::FilterTrip || a.cleared.is_some())
     );
+}
+
+fn following_with_diagnosers(mode: FilterMode) -> Simulation {
+    let mut s = scenario(
+        ProgramChoice::Reference,
+        FilterMode::Enforce,
+        three_boxes(),
+        0,
+    );
+    s.diagnosers = true;
+    let mut sim =
+        Simulation::from_scenario(&s, &station_dir().join("scenario.ron"), Options::default())
+            .expect("scenario");
+    sim.follow_link(mode);
+    sim
+}
+
+/// Observes `inputs` / `commanded` / `applied` every 10 ms from `from` (excluded) to `to`
+/// (included), with the diagnosers stepped as `step`.
+fn observe_span(
+    sim: &mut Simulation,
+    (from, to): (u64, u64),
+    (inputs, commanded, applied): (&str, &str, &str),
+    step: diagnosis::LinkStep,
+) {
+    let mut t = from + 10;
+    while t <= to {
+        let mut c = observed(t, inputs, commanded, applied, false);
+        c.diagnosers = step;
+        sim.observe(&c);
+        t += 10;
+    }
+}
+
+#[test]
+fn a_followed_link_diagnoses_c4_stuck_at_rest_and_the_filter_reads_the_estimate() {
+    use diagnosis::LinkStep::Stepped;
+    let mut sim = following_with_diagnosers(FilterMode::Enforce);
+    // The empty table rests at C4 (A4 off) for a second, then C4 dies.
+    observe_span(
+        &mut sim,
+        (0, 1000),
+        ("00001000000", "0000000", "0000000"),
+        Stepped,
+    );
+    let d = sim.diagnosers.as_ref().expect("diagnosers on");
+    assert!(diagnosis::at_initial_state(d, sim.engine.frame()));
+    observe_span(
+        &mut sim,
+        (1000, 3000),
+        ("00000000000", "0000000", "0000000"),
+        Stepped,
+    );
+    let d = sim.diagnosers.as_ref().expect("diagnosers on");
+    assert!(d.diagnoses.is_empty(), "{:?}", d.diagnoses);
+    assert!(!diagnosis::at_initial_state(d, sim.engine.frame()));
+    // Certain once no pulse end (2 s) and no motion (C5 within I4) explains the fall.
+    observe_span(
+        &mut sim,
+        (3000, 5000),
+        ("00000000000", "0000000", "0000000"),
+        Stepped,
+    );
+    let d = sim.diagnosers.as_ref().expect("diagnosers on");
+    let diag = d.diagnoses.first().expect("a certain diagnosis");
+    assert_eq!(
+        (diag.component.as_str(), diag.partition.as_str()),
+        ("table", "C4")
+    );
+    assert!(diag.fault.contains("F1"), "{diag:?}");
+    assert!((4000..=4300).contains(&diag.time_ms), "{diag:?}");
+    assert!(
+        sim.alarms
+            .all()
+            .iter()
+            .any(|a| a.key == "diag:table:C4" && a.kind == AlarmKind::Diagnosis)
+    );
+    assert!(
+        sim.journal()
+            .iter()
+            .any(|e| e.kind == "diagnosis" && e.text.contains("C4 estimated from time intervals"))
+    );
+    // The filter reads Ĉ4 = 1 (at rest since long, I10): the PLC rotating the empty
+    // table trips CSs13 (C4 . /C6 . A4 with the estimate), not CSs14 (/C4 . RE(A4)).
+    observe_span(
+        &mut sim,
+        (5000, 5010),
+        ("00000000000", "0000100", "0000000"),
+        Stepped,
+    );
+    let trip = sim.engine.trips.last().expect("a trip");
+    let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
+    assert_eq!(ids, ["CSs13"], "{trip:?}");
+    assert!(
+        trip.constraints[0]
+            .literals
+            .iter()
+            .any(|l| l.name == "EST(C4)" && l.value),
+        "{trip:?}"
+    );
+    // A link lost and back: the flag is kept, the estimates go on at once (no restart,
+    // whatever changed meanwhile).
+    use diagnosis::GateChange::{Resumed, Started, Suspended};
+    let mut gate = diagnosis::LinkGate::default();
+    let d = sim.diagnosers.as_ref().expect("diagnosers on");
+    let (c4, none, c5) = (
+        frame_with(&sim, "00001000000"),
+        frame_with(&sim, "00000000000"),
+        frame_with(&sim, "00000100000"),
+    );
+    assert_eq!(gate.step(true, d, &c4), (Stepped, Some(Started)));
+    assert_eq!(
+        gate.step(false, d, &none),
+        (diagnosis::LinkStep::Skipped, Some(Suspended))
+    );
+    assert_eq!(gate.step(true, d, &c5), (Stepped, Some(Resumed)));
+}
+
+/// A frame with `inputs` at t and every output 0.
+fn frame_with(sim: &Simulation, inputs: &str) -> crate::frame::Frame {
+    let mut f = crate::frame::Frame::new(sim.engine.symbols.sizes());
+    f.now_mut(Space::Input).copy_from(&bits(inputs));
+    f
+}
+
+#[test]
+fn a_followed_link_does_not_step_the_diagnosers_the_link_skipped() {
+    use diagnosis::LinkStep::{Restarted, Skipped, Stepped};
+    let mut sim = following_with_diagnosers(FilterMode::ReportOnly);
+    observe_span(
+        &mut sim,
+        (0, 1000),
+        ("00001000000", "0000000", "0000000"),
+        Stepped,
+    );
+    // The peer lost for 5 s: its held values are no observation.
+    observe_span(
+        &mut sim,
+        (1000, 6000),
+        ("00000000000", "0000000", "0000000"),
+        Skipped,
+    );
+    let d = sim.diagnosers.as_ref().expect("diagnosers on");
+    assert!(d.diagnoses.is_empty(), "{:?}", d.diagnoses);
+    // Nothing flagged: after a loss, the diagnosers go on when nothing changed
+    // meanwhile, and restart in the initial state otherwise; no diagnosis comes from
+    // the gap.
+    use diagnosis::GateChange::{Restarted as Restart, Resumed, Started, Suspended};
+    let (c4, none, c5) = (
+        frame_with(&sim, "00001000000"),
+        frame_with(&sim, "00000000000"),
+        frame_with(&sim, "00000100000"),
+    );
+    let mut gate = diagnosis::LinkGate::default();
+    assert_eq!(gate.step(false, d, &c4), (Skipped, None), "never heard yet");
+    assert_eq!(gate.step(true, d, &none), (Skipped, None), "not initial");
+    assert_eq!(gate.step(true, d, &c4), (Stepped, Some(Started)));
+    assert_eq!(gate.step(true, d, &none), (Stepped, None));
+    assert_eq!(gate.step(false, d, &none), (Skipped, Some(Suspended)));
+    assert_eq!(gate.step(false, d, &c5), (Skipped, None));
+    assert_eq!(
+        gate.step(true, d, &none),
+        (Stepped, Some(Resumed)),
+        "unchanged"
+    );
+    assert_eq!(gate.step(false, d, &none), (Skipped, Some(Suspended)));
+    assert_eq!(
+        gate.step(true, d, &c5),
+        (Skipped, None),
+        "changed, not initial"
+    );
+    assert_eq!(gate.step(true, d, &c4), (Restarted, Some(Restart)));
+    assert_eq!(gate.step(true, d, &none), (Stepped, None));
+    observe_span(
+        &mut sim,
+        (6000, 6010),
+        ("00001000000", "0000000", "0000000"),
+        Restarted,
+    );
+    observe_span(
+        &mut sim,
+        (6010, 8000),
+        ("00001000000", "0000000", "0000000"),
+        Stepped,
+    );
+    let d = sim.diagnosers.as_ref().expect("diagnosers on");
+    assert!(d.diagnoses.is_empty(), "{:?}", d.diagnoses);
 }
