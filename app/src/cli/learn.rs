@@ -330,6 +330,14 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
             if started.elapsed() > limit {
                 let _ = child.kill();
                 let _ = child.wait();
+                // What it printed before (the size of the composed plant).
+                let mut text = String::new();
+                if let Some(mut o) = child.stdout.take() {
+                    let _ = std::io::Read::read_to_string(&mut o, &mut text);
+                }
+                for line in text.lines().filter(|l| l.starts_with("libFAUDES")) {
+                    writeln!(out, "{line}")?;
+                }
                 writeln!(
                     out,
                     "libFAUDES centralized EventDiagnoser, {k} turntables: not finished after {LIBFAUDES_LIMIT_S} s (stopped)"
