@@ -486,10 +486,20 @@ impl Diagnosers {
         let r = &mut self.runs[ci];
         ws.cl_at = None;
         let mut changed = false;
+        // A certain fault of a partition that stops the system (DSTOP) freezes the
+        // component's estimate until the operator's reset: the outputs forced to 0 are
+        // the stop's doing, not the plant's, and would only read as unexplained.
+        let stopped = c
+            .partitions
+            .iter()
+            .zip(&r.latched)
+            .any(|(p, &l)| p.stop && l);
         if !r.started {
             r.started = true;
             resync(c, r, frame, None);
             changed = true;
+        } else if stopped {
+            r.next_deadline = i64::MAX;
         } else {
             // Edges: actuators first, then sensors.
             ws.edges.clear();
@@ -546,8 +556,10 @@ impl Diagnosers {
                 changed = true;
             }
         }
-        changed |= timeouts(c, tab, r, t, margin, pulse, ws, &mut self.diagnoses);
-        if changed || t > r.next_deadline {
+        if !stopped {
+            changed |= timeouts(c, tab, r, t, margin, pulse, ws, &mut self.diagnoses);
+        }
+        if !stopped && (changed || t > r.next_deadline) {
             // A deadline that passed without a time-out was one of a hypothesis that can
             // start as late as now (a fault that may occur at any time): it moved on.
             r.next_deadline = next_deadline(c, tab, r, t, margin, pulse, ws);
@@ -1035,6 +1047,35 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A certain fault of the actuator partition stops the station (DSTOP_P); the outputs
+    /// it forces to 0 are not the plant's doing: the table's estimate is frozen, no
+    /// "unexplained" note follows the diagnosis, and the flag stays set.
+    #[test]
+    fn a_stop_freezes_the_component_that_ordered_it() {
+        let (out, sim) = super::super::closed_loop(
+            &station_dir(),
+            5,
+            120_000,
+            Some((crate::emulator::FaultKind::TableBlockedAtC4, 60_000)),
+        )
+        .unwrap();
+        let table: Vec<_> = out
+            .diagnoses
+            .iter()
+            .filter(|d| d.component == "table")
+            .collect();
+        assert!(
+            table.first().is_some_and(|d| d.partition == "P"),
+            "{table:#?}"
+        );
+        assert!(
+            table.iter().all(|d| !d.fault.starts_with("unexplained")),
+            "{table:#?}"
+        );
+        let d = sim.diagnosers.as_ref().unwrap();
+        assert!(d.flagged().iter().any(|(p, stop, _)| p == "P" && *stop));
     }
 
     /// Identical automata share their run-time tables; different ones do not.
