@@ -367,7 +367,30 @@ fn timeouts(
         if let Some(k) = c.symbols[sym].timeout {
             r.emitted |= 1 << (k % 64);
         }
+        // `tmo(pulse)` and `tmo(motion)` end the hypotheses whose own limit passed; the
+        // others (a younger pulse or motion) wait on, unchanged.
+        let waiting: Vec<(u32, i64)> =
+            r.h.iter()
+                .copied()
+                .filter(|&(q, since)| {
+                    let limit = if sym == c.pulse_sym && c.g[q as usize].phase == Phase::Spur {
+                        Some(pulse)
+                    } else if sym == c.motion_sym {
+                        hold(c, r, q).map(|h| h.saturating_add(margin))
+                    } else {
+                        None
+                    };
+                    limit.is_some_and(|l| since.saturating_add(l) >= t)
+                })
+                .collect();
         step(c, r, sym, t, margin, true, scratch);
+        for (q, since) in waiting {
+            match r.h.iter_mut().find(|(x, _)| *x == q) {
+                Some(e) => e.1 = e.1.max(since),
+                None => r.h.push((q, since)),
+            }
+        }
+        r.h.sort_unstable();
         any = true;
         if r.h.is_empty() {
             if !r.unexplained {
