@@ -29,6 +29,8 @@ const ALWAYS: &[&str] = &[
     "C4 stuck at 0, table at rest at C4",
     "table blocked at C4",
     "table blocked at C5",
+    "A4 stuck off",
+    "A4 stuck on",
 ];
 
 #[test]

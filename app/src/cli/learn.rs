@@ -74,7 +74,7 @@ pub(crate) fn report(dir: &Path) -> anyhow::Result<ExitCode> {
 /// seeds, and `fault_free_hours` of fault-free runs (`vigie_core::pop::campaign`).
 pub(crate) fn campaign(
     dir: &Path,
-    seeds: u64,
+    (first_seed, seeds): (u64, u64),
     fault_free_hours: u64,
     only: Option<&str>,
     threads: Option<usize>,
@@ -82,6 +82,7 @@ pub(crate) fn campaign(
 ) -> anyhow::Result<ExitCode> {
     let config = pop::campaign::Config {
         seeds,
+        first_seed,
         fault_free_hours,
         only: only.map(str::to_string),
         threads: threads

@@ -166,6 +166,9 @@ pub(crate) enum Command {
         /// `diagnoser`: seeds per fault.
         #[arg(long, default_value_t = 100)]
         seeds: u64,
+        /// `diagnoser`: the first seed (`--from-seed 66 --seeds 1` replays seed 66).
+        #[arg(long, default_value_t = 0)]
+        from_seed: u64,
         /// `diagnoser`: simulated hours of fault-free runs.
         #[arg(long, default_value_t = 10)]
         hours: u64,
@@ -250,11 +253,19 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Some(Command::Campaign {
             kind: campaign::Kind::Diagnoser,
             seeds,
+            from_seed,
             hours,
             only,
             threads,
             json,
-        }) => learn::campaign(&cli.plant, seeds, hours, only.as_deref(), threads, json),
+        }) => learn::campaign(
+            &cli.plant,
+            (from_seed, seeds),
+            hours,
+            only.as_deref(),
+            threads,
+            json,
+        ),
         Some(Command::Campaign {
             kind,
             threads,

@@ -35,7 +35,8 @@ pub struct Symbol {
 /// A resolved interval.
 #[derive(Clone, Debug)]
 pub struct Interval {
-    /// Identifier (an auxiliary variable).
+    /// Identifier (an auxiliary variable). After those of the file come the windows of
+    /// the early copies, lower bound moved back by their lead (`I9-260`, not published).
     pub id: String,
     /// Clock event index (into [`Component::clocks`]).
     pub clock: usize,
@@ -48,9 +49,10 @@ pub struct Interval {
 /// What a state of the diagnoser automaton does with time and sensors.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Phase {
-    /// Follows the model with its windows.
+    /// Follows the model with its windows (an early copy, `early<lead>`, whose clock
+    /// event came after its motion started: lower bounds moved back by the lead).
     Timed,
-    /// Follows the model, timing unknown.
+    /// Follows the model, timing unknown (an unexpected motion, until the next order).
     Untimed,
     /// The fault's first edge must be observed now.
     Pending,
@@ -221,7 +223,7 @@ pub fn compile(
             ctx.err("V0502", &c.id, format!("duplicate component `{}`", c.id));
             continue;
         }
-        if let Some(comp) = compile_one(c, symbols, filter, file_def.pulse_max_ms, &mut ctx) {
+        if let Some(comp) = compile_one(c, symbols, filter, file_def.margin_ms, &mut ctx) {
             components.push(comp);
         }
     }
@@ -241,7 +243,7 @@ fn compile_one(
     c: &ComponentDef,
     symbols: &Symbols,
     filter: Option<&ConstraintSet>,
-    _pulse: u64,
+    margin: u64,
     ctx: &mut Ctx<'_>,
 ) -> Option<Component> {
     let before = ctx.problems.len();
@@ -627,7 +629,7 @@ fn compile_one(
             .collect()
     };
     let mut g: Vec<GState> = Vec::new();
-    let mut index: BTreeMap<(usize, usize, usize, Phase), usize> = BTreeMap::new();
+    let mut index: BTreeMap<(usize, usize, usize, Phase, Option<u64>), usize> = BTreeMap::new();
     for (x, name) in states.iter().enumerate() {
         let out: Vec<_> = evs.iter().filter(|e| e.from == x).collect();
         let deadline = deadline_of(&out.iter().map(|e| e.window).collect::<Vec<_>>());
@@ -661,35 +663,31 @@ fn compile_one(
             .collect()
     };
     let mut pending: Vec<usize> = Vec::new();
-    let mut beh_of: Vec<usize> = vec![0; g.len()];
+    let mut beh_of: Vec<(usize, Option<u64>)> = vec![(0, None); g.len()];
     let get = |g: &mut Vec<GState>,
                pending: &mut Vec<usize>,
-               index: &mut BTreeMap<(usize, usize, usize, Phase), usize>,
-               beh_of: &mut Vec<usize>,
+               index: &mut BTreeMap<(usize, usize, usize, Phase, Option<u64>), usize>,
+               beh_of: &mut Vec<(usize, Option<u64>)>,
                f: usize,
                b: usize,
                x: usize,
-               ph: Phase|
+               ph: Phase,
+               early: Option<u64>|
      -> usize {
-        *index.entry((f, b, x, ph)).or_insert_with(|| {
-            beh_of.push(b);
+        *index.entry((f, b, x, ph, early)).or_insert_with(|| {
+            beh_of.push((b, early));
+            // A timed copy whose clock event came up to `lead` ms after its motion
+            // started is `early<lead>`.
+            let phase = match early {
+                Some(lead) => format!("early{lead}"),
+                None => format!("{ph:?}").to_lowercase(),
+            };
             g.push(GState {
                 // Behaviours of one fault are told apart in the name (`F6.2/x2/untimed`).
                 name: if c.faults[f].behaviours.len() > 1 {
-                    format!(
-                        "{}.{}/{}/{}",
-                        faults[f],
-                        b + 1,
-                        states[x],
-                        format!("{ph:?}").to_lowercase()
-                    )
+                    format!("{}.{}/{}/{phase}", faults[f], b + 1, states[x])
                 } else {
-                    format!(
-                        "{}/{}/{}",
-                        faults[f],
-                        states[x],
-                        format!("{ph:?}").to_lowercase()
-                    )
+                    format!("{}/{}/{phase}", faults[f], states[x])
                 },
                 mode: Some(f),
                 x,
@@ -724,7 +722,12 @@ fn compile_one(
                         // A pulse may also start with an edge the model expects: its end
                         // (the sensor going back within the pulse limit) tells it apart.
                         let t = if cur == *v {
-                            if spur {
+                            // A pulse that starts while the sensor already shows its value
+                            // is invisible, and changes nothing unless the plant makes its
+                            // own edge of that sensor meanwhile: the pulse hides it, and its
+                            // end shows it late. Only where the model expects such an edge.
+                            let masks = evs.iter().any(|e| e.from == x && e.sig == si);
+                            if spur && !masks {
                                 continue;
                             }
                             get(
@@ -735,7 +738,8 @@ fn compile_one(
                                 f,
                                 b,
                                 x,
-                                Phase::Timed,
+                                if spur { Phase::Spur } else { Phase::Timed },
+                                None,
                             )
                         } else {
                             let p = get(
@@ -747,6 +751,7 @@ fn compile_one(
                                 b,
                                 x,
                                 Phase::Pending,
+                                None,
                             );
                             let after = get(
                                 &mut g,
@@ -757,6 +762,7 @@ fn compile_one(
                                 b,
                                 x,
                                 if spur { Phase::Spur } else { Phase::Timed },
+                                None,
                             );
                             g[p].obs = edge_syms(si, *v)
                                 .into_iter()
@@ -780,6 +786,7 @@ fn compile_one(
                                     b,
                                     x,
                                     Phase::Blocked,
+                                    None,
                                 );
                                 g[x].spawn.push((f, t));
                             }
@@ -802,6 +809,7 @@ fn compile_one(
                             b,
                             y,
                             Phase::Untimed,
+                            None,
                         );
                         g[x].spawn.push((f, t));
                     }
@@ -822,6 +830,7 @@ fn compile_one(
                             b,
                             x,
                             Phase::Timed,
+                            None,
                         );
                         g[x].spawn.push((f, t));
                     }
@@ -852,6 +861,7 @@ fn compile_one(
                                 b,
                                 e.to,
                                 Phase::Untimed,
+                                None,
                             );
                             g[x].spawn.push((f, t));
                         }
@@ -865,9 +875,77 @@ fn compile_one(
             }
         }
     }
+    // The next order of the controller ends an unexpected motion: where the fault
+    // blocks the plant (a stuck actuator), it stays blocked; elsewhere the order restarts
+    // the clock and the plant follows its windows again. (behaviour, phase, lead)
+    let after_order = |f: usize, b: usize, to: usize| -> (usize, Phase, Option<u64>) {
+        c.faults[f]
+            .behaviours
+            .iter()
+            .position(|bb| matches!(bb, Behaviour::Blocked(l) if l.contains(&states[to])))
+            .map_or((b, Phase::Timed, None), |bb| (bb, Phase::Blocked, None))
+    };
+    // The longest the plant may stay in a state during an unexpected motion before one of
+    // its expected sensor edges, counted from entering it (the largest upper bound of the
+    // windows of its sensor evolutions); None when an order or an unbounded window
+    // leaves it.
+    let hold_of = |y: usize| -> Option<u64> {
+        let mut hold = Some(0u64);
+        for e in evs.iter().filter(|e| e.from == y) {
+            let bound = (signals[e.sig].var.space == Space::Input)
+                .then(|| e.window.and_then(|k| intervals[k].hi))
+                .flatten();
+            hold = match (hold, bound) {
+                (Some(h), Some(b)) => Some(h.max(b)),
+                _ => None,
+            };
+        }
+        hold.filter(|&h| h > 0)
+    };
+    // The state an unexpected motion (`Moves`, `Jumps`) starts in.
+    let entry_of = |f: usize, b: usize| -> Option<usize> {
+        match &c.faults[f].behaviours[b] {
+            Behaviour::Jumps(_, m) => state_of(m),
+            Behaviour::Moves(n, act) => {
+                let (x, (i, r, _)) = (state_of(n)?, edge_of(act).ok()?);
+                evs.iter()
+                    .find(|e| e.from == x && e.sig == i && e.rise == r)
+                    .map(|e| e.to)
+            }
+            _ => None,
+        }
+    };
+    // How long an unexpected motion that started in `entry` may have been under way in
+    // `y` without showing its next sensor edge: the holds (and margins) along the way.
+    // Capped at the largest lower bound of the windows (from there on, every window
+    // opens at 0).
+    let max_lo = intervals.iter().map(|i| i.lo).max().unwrap_or(0);
+    let lead_to = |entry: Option<usize>, y: usize| -> u64 {
+        let Some(entry) = entry else { return max_lo };
+        let here = |z: usize| hold_of(z).map_or(max_lo, |h| h + margin).min(max_lo);
+        let mut lead: Vec<Option<u64>> = vec![None; states.len()];
+        lead[entry] = Some(here(entry));
+        let mut work = vec![entry];
+        while let Some(a) = work.pop() {
+            let la = lead[a].unwrap_or(max_lo);
+            for e in evs
+                .iter()
+                .filter(|e| e.from == a && signals[e.sig].var.space == Space::Input)
+            {
+                let l = (la + here(e.to)).min(max_lo);
+                if lead[e.to].is_none_or(|o| o < l) {
+                    lead[e.to] = Some(l);
+                    work.push(e.to);
+                }
+            }
+        }
+        lead[y].unwrap_or(max_lo)
+    };
+    // Windows of the early copies: the lower bound moved back by the lead (`I9-270`).
+    let mut relaxed: Vec<Interval> = Vec::new();
     while let Some(gi) = pending.pop() {
         let (f, x, ph) = (g[gi].mode.unwrap_or(0), g[gi].x, g[gi].phase);
-        let b = beh_of[gi];
+        let (b, early) = beh_of[gi];
         if ph == Phase::Pending {
             continue;
         }
@@ -892,6 +970,7 @@ fn compile_one(
                         b,
                         e.to,
                         Phase::Timed,
+                        None,
                     );
                     windows.push(e.window);
                     if e.sig == si {
@@ -919,6 +998,7 @@ fn compile_one(
                         b,
                         e.to,
                         Phase::Spur,
+                        None,
                     );
                     if e.sig == si {
                         silent.push(t);
@@ -935,6 +1015,7 @@ fn compile_one(
                     b,
                     x,
                     Phase::Timed,
+                    None,
                 );
                 if ((values[x] >> si) & 1 == 1) == *v {
                     silent.push(back);
@@ -958,6 +1039,7 @@ fn compile_one(
                         b,
                         e.to,
                         Phase::Timed,
+                        None,
                     );
                     obs.extend(
                         edge_syms(e.sig, e.rise)
@@ -984,6 +1066,7 @@ fn compile_one(
                         b,
                         e.to,
                         Phase::Blocked,
+                        None,
                     );
                     obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
                 }
@@ -993,28 +1076,50 @@ fn compile_one(
                 // The motion goes on with the plant's own dynamics: a sensor edge it
                 // expects comes at the latest at the upper bound of its window, counted
                 // from entering the state (a bound that can only be generous).
-                let mut hold = Some(0u64);
                 for e in &out {
+                    let (tb, tph, te) = if signals[e.sig].var.space == Space::Output {
+                        after_order(f, b, e.to)
+                    } else {
+                        (b, Phase::Untimed, None)
+                    };
                     let t = get(
                         &mut g,
                         &mut pending,
                         &mut index,
                         &mut beh_of,
                         f,
-                        b,
+                        tb,
                         e.to,
-                        Phase::Untimed,
+                        tph,
+                        te,
                     );
                     obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
-                    let bound = (signals[e.sig].var.space == Space::Input)
-                        .then(|| e.window.and_then(|k| intervals[k].hi))
-                        .flatten();
-                    hold = match (hold, bound) {
-                        (Some(h), Some(b)) => Some(h.max(b)),
-                        _ => None,
-                    };
                 }
-                let hold = hold.filter(|&h| h > 0);
+                let hold = hold_of(x);
+                // The controller's order may catch up with a motion already under way
+                // (the plant left without its order, or went back while the order
+                // stayed): an actuator edge to the value this state already has. From
+                // that clock event on, the plant's edges come within the windows, but
+                // early by as much as the motion may have been under way: an early
+                // timed copy, with that lead.
+                let lead = lead_to(entry_of(f, b), x);
+                for (i, sg) in signals.iter().enumerate() {
+                    if sg.var.space == Space::Output {
+                        let rise = (values[x] >> i) & 1 == 1;
+                        let t = get(
+                            &mut g,
+                            &mut pending,
+                            &mut index,
+                            &mut beh_of,
+                            f,
+                            b,
+                            x,
+                            Phase::Timed,
+                            Some(lead),
+                        );
+                        obs.extend(edge_syms(i, rise).into_iter().map(|sy| (sy, t, None)));
+                    }
+                }
                 obs.extend(
                     (first_tmo..syms.len())
                         .filter(|&s| !(hold.is_some() && s == motion_sym))
@@ -1023,20 +1128,47 @@ fn compile_one(
                 g[gi].hold_ms = hold;
             }
             (_, _) => {
-                // Normal-like copy after a spurious pulse or a move.
+                // Normal-like copy after a spurious pulse or a move. An early copy (its
+                // clock event came up to `lead` ms after its motion started) has the
+                // lower bounds of its windows moved back by the lead, the upper ones
+                // stay (its deadline), until the next order.
                 for e in &out {
+                    let order = signals[e.sig].var.space == Space::Output;
+                    let (tb, tph, te) = if early.is_some() && order {
+                        after_order(f, b, e.to)
+                    } else {
+                        (b, Phase::Timed, early)
+                    };
                     let t = get(
                         &mut g,
                         &mut pending,
                         &mut index,
                         &mut beh_of,
                         f,
-                        b,
+                        tb,
                         e.to,
-                        Phase::Timed,
+                        tph,
+                        te,
                     );
                     windows.push(e.window);
-                    obs.extend(e.syms.iter().map(|&sy| (sy, t, e.window)));
+                    let w = match (early, e.window) {
+                        (Some(lead), Some(k)) if intervals[k].lo > 0 && lead > 0 => {
+                            let iv = &intervals[k];
+                            let id = format!("{}-{lead}", iv.id);
+                            let j = relaxed.iter().position(|r| r.id == id).unwrap_or_else(|| {
+                                relaxed.push(Interval {
+                                    id,
+                                    clock: iv.clock,
+                                    lo: iv.lo.saturating_sub(lead),
+                                    hi: iv.hi,
+                                });
+                                relaxed.len() - 1
+                            });
+                            Some(intervals.len() + j)
+                        }
+                        (_, w) => w,
+                    };
+                    obs.extend(e.syms.iter().map(|&sy| (sy, t, w)));
                 }
                 let d = deadline_of(&windows);
                 obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
@@ -1048,6 +1180,7 @@ fn compile_one(
         g[gi].obs = obs;
         g[gi].silent = silent;
     }
+    intervals.extend(relaxed);
     for st in &mut g {
         st.obs.sort_unstable();
         st.spawn.sort_unstable();

@@ -111,6 +111,8 @@ pub struct Report {
 pub struct Config {
     /// Seeds per injection.
     pub seeds: u64,
+    /// The first seed (the runs use `first_seed..first_seed + seeds`): replays one run.
+    pub first_seed: u64,
     /// Simulated hours of fault-free runs (one run per hour, its own seed).
     pub fault_free_hours: u64,
     /// Only injections whose name contains this.
@@ -129,6 +131,7 @@ impl Default for Config {
     fn default() -> Self {
         Self {
             seeds: 100,
+            first_seed: 0,
             fault_free_hours: 10,
             only: None,
             threads: 2,
@@ -439,8 +442,9 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         .into_iter()
         .filter(|i| config.only.as_deref().is_none_or(|o| i.name.contains(o)))
         .collect();
+    let seeds = config.first_seed..config.first_seed.saturating_add(config.seeds);
     let jobs: Vec<(usize, u64)> = (0..injections.len())
-        .flat_map(|i| (0..config.seeds).map(move |s| (i, s)))
+        .flat_map(|i| seeds.clone().map(move |s| (i, s)))
         .collect();
     let results = parallel(&jobs, config.threads, &|&(i, s)| {
         run_one(&shared, &injections[i], s, config)

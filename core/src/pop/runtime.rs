@@ -267,6 +267,8 @@ struct Work {
     edges: Vec<(usize, bool)>,
     /// Fault modes present in the estimate (last entry: normal).
     modes: Vec<bool>,
+    /// Hypotheses a pulse or motion time-out leaves as they are.
+    waiting: Vec<(u32, i64)>,
 }
 
 impl Work {
@@ -631,7 +633,32 @@ fn timeouts(
         if let Some(k) = c.symbols[sym].timeout {
             r.emitted |= 1 << (k % 64);
         }
+        // `tmo(pulse)` and `tmo(motion)` end the hypotheses whose own limit passed; the
+        // others (a younger pulse or motion) wait on, unchanged.
+        let mut waiting = std::mem::take(&mut ws.waiting);
+        waiting.clear();
+        waiting.extend(r.h.iter().copied().filter(|&(q, since)| {
+            let st = &tab.info[q as usize];
+            let limit = if sym == c.pulse_sym && st.phase == Phase::Spur {
+                Some(pulse)
+            } else if sym == c.motion_sym && st.phase == Phase::Untimed {
+                st.hold.map(|h| h.saturating_add(margin))
+            } else {
+                None
+            };
+            limit.is_some_and(|l| since.saturating_add(l) >= t)
+        }));
         step(c, tab, r, sym, t, margin, true, ws);
+        if !waiting.is_empty() {
+            for &(q, since) in &waiting {
+                match r.h.iter_mut().find(|(x, _)| *x == q) {
+                    Some(e) => e.1 = e.1.max(since),
+                    None => r.h.push((q, since)),
+                }
+            }
+            r.h.sort_unstable();
+        }
+        ws.waiting = waiting;
         any = true;
         if r.h.is_empty() {
             if !r.unexplained {

@@ -146,11 +146,80 @@ fn untimed_replay_and_report() {
         .iter()
         .find(|c| c.id == "table")
         .unwrap();
+    // C4 never fell, C5 rose: C4 stuck at 1, or (untimed: no pulse limit) a spurious
+    // rise of C4 that hid its fall.
     let r = runtime::replay_untimed(table, &["RE(A4)", "tmo(I2)", "RE(C5)"]).unwrap();
-    assert_eq!(r[2], [Some("F2".to_string())].into_iter().collect());
+    assert_eq!(
+        r[2],
+        [Some("F2".to_string()), Some("F7".to_string())]
+            .into_iter()
+            .collect()
+    );
     let rep = report(&d.compiled);
     let f5 = rep.faults.iter().find(|f| f.fault == "F5").unwrap();
     assert!(f5.diagnosable, "{f5:?}");
     let (text, map) = faudes_export(table);
     assert!(text.contains("\"f_F1\" +o+") && map.contains("F12"));
+}
+
+#[test]
+fn a_pulse_that_hides_the_plants_own_edge_shows_it_late() {
+    // Returning to C4, C4 falls spuriously while it still reads 0 (invisible), the table
+    // reaches C4 meanwhile: the rise shows at the end of the pulse, after the window.
+    let d = station();
+    let table = d
+        .compiled
+        .components
+        .iter()
+        .find(|c| c.id == "table")
+        .unwrap();
+    let cycle = [
+        "RE(A4)",
+        "FE(C4)",
+        "RE(C5)",
+        "FE(A4)",
+        "FE(C5)",
+        "tmo(I7)",
+        "tmo(pulse)",
+        "tmo(I9)",
+        "RE(C4)",
+    ];
+    let r = runtime::replay_untimed(table, &cycle).unwrap();
+    assert!(r[7].contains(&Some("F8".to_string())), "{:?}", r[7]);
+    assert_eq!(r[8], [Some("F8".to_string())].into_iter().collect());
+}
+
+#[test]
+fn the_turntable_runs_that_were_wrong_are_right() {
+    // The 15 wrong runs of the 100-seed campaign before the model was completed: a pulse
+    // whose limit was cut by another hypothesis' pulse (C4/C5 rise), a pulse that hid the
+    // plant's own edge (C4/C5 fall), the order catching up with a motion of the table (A4
+    // stuck off at C5, A4 stuck on just before the order).
+    let runs: &[(&str, &[u64])] = &[
+        ("C4 spurious rise 300 ms", &[37, 38, 57, 58, 96]),
+        ("C4 spurious fall 300 ms", &[15, 55]),
+        ("C5 spurious rise 300 ms", &[12]),
+        ("C5 spurious fall 300 ms", &[46, 69, 86]),
+        ("A4 stuck off", &[18, 28, 89]),
+        ("A4 stuck on", &[66]),
+    ];
+    for (name, seeds) in runs {
+        for &seed in *seeds {
+            let config = campaign::Config {
+                seeds: 1,
+                first_seed: seed,
+                fault_free_hours: 0,
+                only: Some((*name).to_string()),
+                threads: 1,
+                ..campaign::Config::default()
+            };
+            let r = campaign::run(&station_dir(), &config).unwrap();
+            let row = &r.rows[0];
+            assert_eq!(
+                (row.runs, row.right),
+                (1, 1),
+                "{name}, seed {seed}: {row:#?}"
+            );
+        }
+    }
 }
