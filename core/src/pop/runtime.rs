@@ -107,7 +107,7 @@ struct Tables {
     /// search, contiguous in memory).
     obs_at: Vec<u32>,
     /// Target and window interval of each observable transition.
-    obs: Vec<(u32, Option<u32>)>,
+    obs: Vec<(u32, u32)>,
     /// What the updates read of each state, packed.
     info: Vec<Info>,
 }
@@ -118,7 +118,8 @@ struct Info {
     phase: Phase,
     mode: Option<u32>,
     deadline: Option<u32>,
-    hold: Option<i64>,
+    /// ms; a hold beyond `u32::MAX` ms (49 days) is kept as that.
+    hold: Option<u32>,
 }
 
 impl Tables {
@@ -220,7 +221,7 @@ impl Tables {
                 while k < st.obs.len() && st.obs[k].0 <= sym {
                     if st.obs[k].0 == sym {
                         let (_, tq, w) = st.obs[k];
-                        obs.push((tq as u32, w.map(|w| w as u32)));
+                        obs.push((tq as u32, w.map_or(NO_WINDOW, |w| w as u32)));
                     }
                     k += 1;
                 }
@@ -233,7 +234,7 @@ impl Tables {
                     phase: st.phase,
                     mode: st.mode.map(|m| m as u32),
                     deadline: st.deadline.map(|k| k as u32),
-                    hold: st.hold_ms.and_then(|h| i64::try_from(h).ok()),
+                    hold: st.hold_ms.map(|h| u32::try_from(h).unwrap_or(u32::MAX)),
                 })
                 .collect();
         Self {
@@ -289,6 +290,8 @@ impl Work {
 }
 
 const ABSENT: u32 = u32::MAX;
+/// An observable transition without a window.
+const NO_WINDOW: u32 = u32::MAX;
 
 const LONG_AGO: i64 = -1_000_000_000_000;
 
@@ -642,7 +645,7 @@ fn timeouts(
             let limit = if sym == c.pulse_sym && st.phase == Phase::Spur {
                 Some(pulse)
             } else if sym == c.motion_sym && st.phase == Phase::Untimed {
-                st.hold.map(|h| h.saturating_add(margin))
+                st.hold.map(|h| i64::from(h).saturating_add(margin))
             } else {
                 None
             };
@@ -801,8 +804,8 @@ fn step(
         let range = tab.obs_at[at] as usize..tab.obs_at[at + 1] as usize;
         for &(tq, w) in &tab.obs[range] {
             let tq = tq as usize;
-            if timed && phase == Phase::Timed && !window_ok(c, r, w.map(|w| w as usize), t, margin)
-            {
+            let w = (w != NO_WINDOW).then_some(w as usize);
+            if timed && phase == Phase::Timed && !window_ok(c, r, w, t, margin) {
                 continue;
             }
             // Spurious pulses count from their start; an unexpected motion from entering
@@ -888,7 +891,7 @@ fn due_of(
         Some((since + pulse, c.pulse_sym))
     } else if st.phase == Phase::Untimed && in_h {
         // The hold of an untimed state of the estimate itself (not of its closure).
-        let h = st.hold?;
+        let h = i64::from(st.hold?);
         Some((since.saturating_add(h).saturating_add(margin), c.motion_sym))
     } else {
         None
@@ -1062,7 +1065,7 @@ mod tests {
                     let got: Vec<(usize, Option<usize>)> = tab.obs
                         [tab.obs_at[at] as usize..tab.obs_at[at + 1] as usize]
                         .iter()
-                        .map(|&(t, w)| (t as usize, w.map(|w| w as usize)))
+                        .map(|&(t, w)| (t as usize, (w != NO_WINDOW).then_some(w as usize)))
                         .collect();
                     let want: Vec<(usize, Option<usize>)> = c.g[q]
                         .obs
