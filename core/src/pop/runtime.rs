@@ -898,6 +898,28 @@ fn due_of(
     }
 }
 
+/// The earliest time-out the estimate may fall due for at or after `t`: (when, symbol).
+fn earliest_due(
+    c: &Component,
+    tab: &Tables,
+    r: &Run,
+    t: i64,
+    margin: i64,
+    pulse: i64,
+    ws: &mut Work,
+) -> Option<(i64, usize)> {
+    closure(tab, &r.h, t, ws);
+    let mut best: Option<(i64, usize)> = None;
+    for i in 0..ws.cl.len() {
+        if let Some((d, s)) = due_of(c, tab, r, i, margin, pulse, ws)
+            && best.is_none_or(|(bd, _)| d < bd)
+        {
+            best = Some((d, s));
+        }
+    }
+    best
+}
+
 fn next_deadline(
     c: &Component,
     tab: &Tables,
@@ -907,12 +929,7 @@ fn next_deadline(
     pulse: i64,
     ws: &mut Work,
 ) -> i64 {
-    closure(tab, &r.h, t, ws);
-    (0..ws.cl.len())
-        .filter_map(|i| due_of(c, tab, r, i, margin, pulse, ws))
-        .map(|(d, _)| d)
-        .min()
-        .unwrap_or(i64::MAX)
+    earliest_due(c, tab, r, t, margin, pulse, ws).map_or(i64::MAX, |(d, _)| d)
 }
 
 fn due_timeout(
@@ -924,17 +941,9 @@ fn due_timeout(
     pulse: i64,
     ws: &mut Work,
 ) -> Option<usize> {
-    closure(tab, &r.h, t, ws);
-    let mut best: Option<(i64, usize)> = None;
-    for i in 0..ws.cl.len() {
-        if let Some((d, s)) = due_of(c, tab, r, i, margin, pulse, ws)
-            && d < t
-            && best.is_none_or(|(bd, _)| d < bd)
-        {
-            best = Some((d, s));
-        }
-    }
-    best.map(|(_, s)| s)
+    earliest_due(c, tab, r, t, margin, pulse, ws)
+        .filter(|&(d, _)| d < t)
+        .map(|(_, s)| s)
 }
 
 fn decide(
