@@ -1039,10 +1039,7 @@ mod tests {
     /// moves computed naively, and the observable transitions by linear search.
     #[test]
     fn run_time_tables_match_the_automaton() {
-        let bundle = match super::super::load(&station_dir()) {
-            Ok((d, _)) => d,
-            Err(p) => panic!("{}", crate::diag::render(&p)),
-        };
+        let bundle = super::super::tests::station();
         for c in &bundle.compiled.components {
             let tab = Tables::new(c);
             for q in 0..c.g.len() {
@@ -1120,10 +1117,7 @@ mod tests {
     /// Identical automata share their run-time tables; different ones do not.
     #[test]
     fn identical_components_share_their_tables() {
-        let bundle = match super::super::load(&station_dir()) {
-            Ok((d, _)) => d,
-            Err(p) => panic!("{}", crate::diag::render(&p)),
-        };
+        let bundle = super::super::tests::station();
         let d = Diagnosers::new(bundle.compiled.clone(), &bundle.bundle.symbols);
         let table = d
             .compiled

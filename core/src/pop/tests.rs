@@ -1,7 +1,8 @@
 use super::*;
 use crate::test_support::station_dir;
 
-fn station() -> DiagBundle {
+/// The station's diagnosers, loaded and compiled (shared with the run-time tests).
+pub(super) fn station() -> DiagBundle {
     match load(&station_dir()) {
         Ok((d, _)) => d,
         Err(p) => panic!("{}", crate::diag::render(&p)),
