@@ -239,6 +239,14 @@ impl Engine {
         self.latched
     }
 
+    /// True while the filter holds the outputs in its safe state (a latched trip, or
+    /// the hold), the stage after the filter sees the filter's orders, not the
+    /// controller's.
+    pub fn holds_outputs(&self) -> bool {
+        (self.latched && self.mode == FilterMode::Enforce)
+            || (self.hold && self.mode != FilterMode::ReportOnly)
+    }
+
     /// The compiled filter.
     pub fn filter(&self) -> &Filter {
         &self.filter
@@ -282,7 +290,7 @@ impl Engine {
     /// Runs one PLC cycle: reads `inputs`, updates the observers, scans `control`,
     /// filters its outputs and records the cycle. Returns the outputs to apply.
     pub fn cycle(&mut self, now: Millis, inputs: &Bits, control: &mut dyn Control) -> &Bits {
-        self.cycle_with(now, inputs, control, &mut |_, _| {})
+        self.cycle_with(now, inputs, control, &mut |_, _, _| {})
     }
 
     /// [`Engine::cycle`] with a stage run after the filter and before the recorder (the
@@ -292,7 +300,7 @@ impl Engine {
         now: Millis,
         inputs: &Bits,
         control: &mut dyn Control,
-        after_filter: &mut dyn FnMut(Millis, &mut Frame),
+        after_filter: &mut dyn FnMut(Millis, &mut Frame, bool),
     ) -> &Bits {
         self.now = now;
         self.cycles += 1;
@@ -339,7 +347,8 @@ impl Engine {
             self.apply_fallback();
         }
 
-        after_filter(now, &mut self.frame);
+        let held = self.holds_outputs();
+        after_filter(now, &mut self.frame, held);
         let tripped = self.latched;
         let frame = &self.frame;
         let commanded = &self.commanded;
@@ -374,8 +383,9 @@ impl Engine {
     /// filter (the diagnosers of a live link, which follow the outputs really applied),
     /// run on the frame at the cycle's time; the recorder's last record takes the
     /// auxiliaries it wrote, as [`Engine::cycle_with`] records them.
-    pub fn after_filter(&mut self, stage: &mut dyn FnMut(Millis, &mut Frame)) {
-        stage(self.now, &mut self.frame);
+    pub fn after_filter(&mut self, stage: &mut dyn FnMut(Millis, &mut Frame, bool)) {
+        let held = self.holds_outputs();
+        stage(self.now, &mut self.frame, held);
         if let Some(r) = self.history.last_mut() {
             r.aux.copy_from(self.frame.now(Space::Aux));
         }

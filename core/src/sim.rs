@@ -548,9 +548,12 @@ impl Simulation {
                     subs: &self.degraded,
                 };
                 self.engine
-                    .cycle_with(now, self.emulator.sensors(), &mut control, &mut |t, f| {
-                        d.update(t, f)
-                    })
+                    .cycle_with(
+                        now,
+                        self.emulator.sensors(),
+                        &mut control,
+                        &mut |t, f, held| d.update_held(t, f, held),
+                    )
                     .clone()
             }
         };

@@ -210,7 +210,17 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
     std::fs::create_dir_all(&tmp).unwrap();
     let mut compared = 0;
     let mut empty: Vec<String> = Vec::new();
+    let mut too_big: Vec<String> = Vec::new();
     for c in &db.compiled.components {
+        // libFAUDES' diagnoser (an observer of the fault-labelled automaton) grows
+        // fast with the automaton: the table (202 states) takes 5 s, the right exit
+        // (235) 18 s, the left exit (361) did not finish in 12 minutes, the feed
+        // (about 1,450) in 10. Above 300 states the model is left out, and said so.
+        if c.g.len() > 300 {
+            too_big.push(format!("{} ({} states)", c.id, c.g.len()));
+            continue;
+        }
+        let started = std::time::Instant::now();
         let (g, m) = pop::faudes_export(c);
         let gen_path = tmp.join(format!("{}.gen", c.id));
         let ftm_path = tmp.join(format!("{}.ftm", c.id));
@@ -250,6 +260,13 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
             empty.push(c.id.clone());
             continue;
         }
+        eprintln!(
+            "libFAUDES on {} ({} states, {} sequences): {:.1} s",
+            c.id,
+            c.g.len(),
+            seqs.len(),
+            started.elapsed().as_secs_f64()
+        );
         let theirs: Vec<Vec<Option<Vec<String>>>> = serde_json::from_str(last).unwrap();
         assert_eq!(theirs.len(), seqs.len());
         for (seq, row) in seqs.iter().zip(&theirs) {
@@ -292,8 +309,14 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
         !empty.contains(&"table".to_string()),
         "libFAUDES built no diagnoser for the turntable"
     );
+    for must in ["table", "right"] {
+        assert!(
+            !too_big.iter().any(|t| t.starts_with(must)),
+            "{must} must be cross-checked: {too_big:?}"
+        );
+    }
     eprintln!(
-        "libFAUDES cross-check: {compared} verdicts compared; no libFAUDES diagnoser for {empty:?}"
+        "libFAUDES cross-check: {compared} verdicts compared; no libFAUDES diagnoser for {empty:?}; too large for it: {too_big:?}"
     );
     assert!(compared > 1000, "only {compared} verdicts compared");
 }

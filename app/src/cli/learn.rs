@@ -111,10 +111,10 @@ pub(crate) fn campaign(
     )?;
     writeln!(
         out,
-        "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
-        "fault", "expected partition", "runs", "right", "wrong", "early", "ambig", "none"
+        "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
+        "fault", "expected partition", "runs", "right", "wrong", "early", "ambig", "none", "lost"
     )?;
-    let (mut right, mut runs, mut bad) = (0, 0, 0);
+    let (mut right, mut runs, mut bad, mut lost) = (0, 0, 0, 0);
     for row in &r.rows {
         let q = |p| {
             row.delay_quantile(p)
@@ -122,7 +122,7 @@ pub(crate) fn campaign(
         };
         writeln!(
             out,
-            "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
+            "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
             row.name,
             row.expected.join("|"),
             row.runs,
@@ -131,6 +131,7 @@ pub(crate) fn campaign(
             row.early,
             row.ambiguous.values().sum::<usize>(),
             row.no_effect.values().sum::<usize>(),
+            row.lost,
             q(50),
             q(90),
             q(100)
@@ -144,13 +145,17 @@ pub(crate) fn campaign(
         for f in &row.failures {
             writeln!(out, "      FAILURE {f}")?;
         }
+        for l in &row.lost_runs {
+            writeln!(out, "      lost track (no fault claimed) {l}")?;
+        }
         right += row.right;
+        lost += row.lost;
         runs += row.runs;
         bad += row.wrong + row.early;
     }
     writeln!(
         out,
-        "total: {runs} runs, {right} right, {bad} wrong or early"
+        "total: {runs} runs, {right} right, {bad} wrong or early, {lost} lost track (unexplained, no fault claimed)"
     )?;
     writeln!(
         out,

@@ -409,7 +409,7 @@ impl LiveDiagnosers {
             emit(json!({"event": "diagnosers", "state": change, "time_ms": now.0}));
         }
         let d = &mut self.diagnosers;
-        engine.after_filter(&mut |t, f| run_link_step(d, step, t, f));
+        engine.after_filter(&mut |t, f, held| run_link_step(d, step, t, f, held));
         let notices = take_notices(&self.diagnosers, &mut self.seen, self.acts);
         if notices.is_empty() {
             return step;

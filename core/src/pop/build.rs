@@ -141,6 +141,10 @@ pub struct Component {
     pub g: Vec<GState>,
     /// Estimates: auxiliary name and expression over the auxiliaries.
     pub estimates: Vec<(String, Dnf)>,
+    /// Keeps following the plant while the filter holds the outputs (else suspended).
+    pub follows_safe_state: bool,
+    /// Sensors of other components this model takes as true.
+    pub assumes: Vec<String>,
     /// Generated unexpected evolutions.
     pub unexpected: Vec<Unexpected>,
     /// The symbol `tmo(pulse)`: a spurious value lasted longer than `pulse_max_ms`.
@@ -597,6 +601,18 @@ fn compile_one(
                 ),
             }
         }
+        for a in &p.actuators {
+            if !matches!(symbols.lookup(a), Some((Space::Output, _))) {
+                ctx.err(
+                    "V0510",
+                    a,
+                    format!(
+                        "partition `{}` names `{a}`, not an actuator of the plant",
+                        p.id
+                    ),
+                );
+            }
+        }
         partitions.push(Partition {
             id: p.id.clone(),
             faults: fs,
@@ -887,11 +903,14 @@ fn compile_one(
     };
     // The longest the plant may stay in a state during an unexpected motion before one of
     // its expected sensor edges, counted from entering it (the largest upper bound of the
-    // windows of its sensor evolutions); None when an order or an unbounded window
-    // leaves it.
-    let hold_of = |y: usize| -> Option<u64> {
+    // windows of its sensor evolutions); None when an order (counted with `orders`) or
+    // an unbounded window leaves it.
+    let hold_with = |y: usize, orders: bool| -> Option<u64> {
         let mut hold = Some(0u64);
-        for e in evs.iter().filter(|e| e.from == y) {
+        for e in evs
+            .iter()
+            .filter(|e| e.from == y && (orders || signals[e.sig].var.space == Space::Input))
+        {
             let bound = (signals[e.sig].var.space == Space::Input)
                 .then(|| e.window.and_then(|k| intervals[k].hi))
                 .flatten();
@@ -902,6 +921,7 @@ fn compile_one(
         }
         hold.filter(|&h| h > 0)
     };
+    let hold_of = |y: usize| hold_with(y, true);
     // The state an unexpected motion (`Moves`, `Jumps`) starts in.
     let entry_of = |f: usize, b: usize| -> Option<usize> {
         match &c.faults[f].behaviours[b] {
@@ -1052,7 +1072,7 @@ fn compile_one(
                 obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
                 g[gi].deadline = d;
             }
-            (Behaviour::Blocked(_), _) => {
+            (Behaviour::Blocked(list), Phase::Blocked) => {
                 for e in out
                     .iter()
                     .filter(|e| signals[e.sig].var.space == Space::Output)
@@ -1070,6 +1090,49 @@ fn compile_one(
                     );
                     obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
                 }
+                // An order the model does not foresee here starts a new motion of the
+                // plant (the next box, while the previous one is stuck): it goes on as
+                // from wherever the model foresees that order, untimed, and stops again
+                // where the fault blocks the plant.
+                for (si, sig) in signals.iter().enumerate() {
+                    if sig.var.space != Space::Output {
+                        continue;
+                    }
+                    for rise in [true, false] {
+                        for sy in edge_syms(si, rise) {
+                            if obs.iter().any(|&(o, _, _)| o == sy) {
+                                continue;
+                            }
+                            let targets: Vec<usize> = evs
+                                .iter()
+                                .filter(|e| e.syms.contains(&sy))
+                                .map(|e| e.to)
+                                .collect();
+                            if targets.is_empty() {
+                                obs.push((sy, gi, None));
+                            }
+                            for to in targets {
+                                let ph = if list.contains(&states[to]) {
+                                    Phase::Blocked
+                                } else {
+                                    Phase::Untimed
+                                };
+                                let t = get(
+                                    &mut g,
+                                    &mut pending,
+                                    &mut index,
+                                    &mut beh_of,
+                                    f,
+                                    b,
+                                    to,
+                                    ph,
+                                    None,
+                                );
+                                obs.push((sy, t, None));
+                            }
+                        }
+                    }
+                }
                 obs.extend((first_tmo..syms.len()).map(|s| (s, gi, None)));
             }
             (_, Phase::Untimed) => {
@@ -1079,6 +1142,11 @@ fn compile_one(
                 for e in &out {
                     let (tb, tph, te) = if signals[e.sig].var.space == Space::Output {
                         after_order(f, b, e.to)
+                    } else if matches!(&c.faults[f].behaviours[b],
+                        Behaviour::Blocked(l) if l.contains(&states[e.to]))
+                    {
+                        // A motion restarted on a blocked plant stops where it blocks.
+                        (b, Phase::Blocked, None)
                     } else {
                         (b, Phase::Untimed, None)
                     };
@@ -1095,7 +1163,13 @@ fn compile_one(
                     );
                     obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
                 }
-                let hold = hold_of(x);
+                // A motion without its order (`Moves`): the controller never gave that
+                // order, so it cannot take it back either; only the sensor windows
+                // bound the hold.
+                let hold = hold_with(
+                    x,
+                    !matches!(c.faults[f].behaviours[b], Behaviour::Moves(..)),
+                );
                 // The controller's order may catch up with a motion already under way
                 // (the plant left without its order, or went back while the order
                 // stayed): an actuator edge to the value this state already has. From
@@ -1249,7 +1323,21 @@ fn compile_one(
     if ctx.problems.len() > before {
         return None;
     }
+    for a in &c.assumes {
+        if !matches!(symbols.lookup(a), Some((Space::Input, _))) {
+            ctx.err(
+                "V0503",
+                a,
+                format!("`assumes`: `{a}` is not a sensor of the plant"),
+            );
+        }
+    }
+    if ctx.problems.len() > before {
+        return None;
+    }
     Some(Component {
+        follows_safe_state: c.follows_safe_state,
+        assumes: c.assumes.clone(),
         id: c.id.clone(),
         signals,
         states,

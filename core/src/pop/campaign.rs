@@ -79,6 +79,11 @@ pub struct Row {
     pub delays_ms: Vec<u64>,
     /// Examples of wrong or early runs (seed and text).
     pub failures: Vec<String>,
+    /// Runs where the model lost track of the plant ("unexplained" note, no fault
+    /// claimed, estimate restarted) before its verdict.
+    pub lost: usize,
+    /// Examples of those (seed and note).
+    pub lost_runs: Vec<String>,
 }
 
 impl Row {
@@ -143,9 +148,9 @@ impl Default for Config {
 }
 
 /// The injection library: the four sensor faults of every diagnosed sensor (expected:
-/// its own partition), the turntable's mechanical and valve faults (expected: `P`), and
-/// both stuck faults of every conveyor drive (expected: the `_drive` partition of a
-/// component whose expected evolutions read it).
+/// its own partition), the turntable's mechanical faults (expected: `P`), and both
+/// stuck faults of every actuator a partition lists in `actuators` (expected: those
+/// partitions).
 pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
     let mut v = Vec::new();
     let pulse = 300;
@@ -208,31 +213,16 @@ pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
             "table blocked between",
             FaultKind::TableBlockedBetween,
         ));
-        v.push(table(
-            "A4 stuck off",
-            FaultKind::ActuatorStuckOff("A4".into()),
-        ));
-        v.push(table(
-            "A4 stuck on",
-            FaultKind::ActuatorStuckOn("A4".into()),
-        ));
     }
+    // Actuator faults: expected in every partition that lists the actuator.
     let mut actuators: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();
     for c in &file.components {
-        let Some(p) = c.partitions.iter().find(|p| p.id.ends_with("_drive")) else {
-            continue;
-        };
-        for e in &c.expected {
-            for w in e
-                .event
-                .split(|ch: char| !ch.is_ascii_alphanumeric() && ch != '*')
-            {
-                if let Some(a) = w.strip_suffix('*') {
-                    let list = actuators.entry(a.to_string()).or_default();
-                    if !list.iter().any(|(_, q)| *q == p.id) {
-                        list.push((c.id.clone(), p.id.clone()));
-                    }
-                }
+        for p in &c.partitions {
+            for a in &p.actuators {
+                actuators
+                    .entry(a.clone())
+                    .or_default()
+                    .push((c.id.clone(), p.id.clone()));
             }
         }
     }
@@ -305,7 +295,7 @@ fn run_one(
     inj: &Injection,
     seed: u64,
     config: &Config,
-) -> Result<(Verdict, String), Vec<Problem>> {
+) -> Result<(Verdict, String, Option<String>), Vec<Problem>> {
     let mut sim = simulation(shared, seed + 1)?;
     let at = config.first_ms + mix(seed) % config.spread_ms.max(1);
     sim.run_until(Millis(at));
@@ -355,13 +345,33 @@ fn run_one(
         }
     }
     let Some(d) = sim.diagnosers.as_ref() else {
-        return Ok((Verdict::NoEffect, context));
+        return Ok((Verdict::NoEffect, context, None));
     };
     if let Some(e) = d.diagnoses.iter().find(|x| x.time_ms < at) {
-        return Ok((Verdict::Early(describe(e)), context));
+        return Ok((Verdict::Early(describe(e)), context, None));
     }
-    if let Some(first) = d.diagnoses.first() {
-        return Ok(if inj.expected.contains(&first.partition) {
+    // An "unexplained" note claims no fault (no flag, no stop): the model lost track of
+    // the plant and restarted from the observed values. It is counted apart (`lost`),
+    // and the verdict goes to the first diagnosis that names a partition.
+    let first_named = d.diagnoses.iter().position(|x| !x.partition.is_empty());
+    let lost = d.diagnoses[..first_named.unwrap_or(d.diagnoses.len())]
+        .iter()
+        .find(|x| x.partition.is_empty())
+        .map(describe);
+    let (verdict, context) = verdict_of(inj, d, first_named, at, effect, context);
+    Ok((verdict, context, lost))
+}
+
+fn verdict_of(
+    inj: &Injection,
+    d: &crate::pop::Diagnosers,
+    first_named: Option<usize>,
+    at: u64,
+    effect: bool,
+    context: String,
+) -> (Verdict, String) {
+    if let Some(first) = first_named.map(|k| &d.diagnoses[k]) {
+        return if inj.expected.contains(&first.partition) {
             (
                 Verdict::Right {
                     delay_ms: first.time_ms - at,
@@ -370,7 +380,7 @@ fn run_one(
             )
         } else {
             (Verdict::Wrong(describe(first)), context)
-        });
+        };
     }
     let open: Vec<String> = d
         .decisions()
@@ -378,7 +388,7 @@ fn run_one(
         .filter(|(c, _, dec)| *c == inj.component && dec.certainty != Certainty::Normal)
         .map(|(_, p, dec)| format!("{} ({p})", dec.faults.join("|")))
         .collect();
-    Ok(if !effect {
+    if !effect {
         (Verdict::NoEffect, context)
     } else if open.is_empty() {
         (
@@ -387,7 +397,7 @@ fn run_one(
         )
     } else {
         (Verdict::Ambiguous(open.join(" or ")), context)
-    })
+    }
 }
 
 fn parallel<T: Send + Sync, R: Send>(
@@ -458,9 +468,15 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         })
         .collect();
     for (&(i, seed), r) in jobs.iter().zip(results) {
-        let (verdict, context) = r?;
+        let (verdict, context, lost) = r?;
         let row = &mut rows[i];
         row.runs += 1;
+        if let Some(l) = lost {
+            row.lost += 1;
+            if row.lost_runs.len() < 5 {
+                row.lost_runs.push(format!("seed {seed}: {l}"));
+            }
+        }
         match verdict {
             Verdict::Right { delay_ms } => {
                 row.right += 1;

@@ -64,6 +64,19 @@ pub struct ComponentDef {
     /// Sensor estimates from the intervals (`EST(C4) = I1 + I2 + I9 + I10`).
     #[serde(default)]
     pub estimates: Vec<EstimateDef>,
+    /// The model also describes the plant under the filter's safe state (outputs forced
+    /// to 0, as the monostable A4 returning the table). Otherwise the component is
+    /// suspended while the filter holds the outputs and restarts from the observed
+    /// values when the hold ends.
+    #[serde(default)]
+    pub follows_safe_state: bool,
+    /// Sensors of other components this model takes as true (in its guards: the exits
+    /// evacuate a box when C5 says the table is there). While another component has
+    /// lost its normal hypothesis and a fault of its partition of one of them is
+    /// possible, a certain decision here waits: the local anomaly may be that
+    /// neighbour's fault.
+    #[serde(default)]
+    pub assumes: Vec<String>,
 }
 
 /// A normal state.
@@ -194,6 +207,10 @@ pub struct PartitionDef {
     /// A certain fault here stops the whole system (actuator partitions).
     #[serde(default)]
     pub stop: bool,
+    /// The actuators whose failures (stuck off, stuck on) show as a fault of this
+    /// partition: what the fault campaign expects when it injects them.
+    #[serde(default)]
+    pub actuators: Vec<String>,
 }
 
 /// An estimate of a sensor from the interval variables.

@@ -59,6 +59,16 @@ struct Run {
     decisions: Vec<(Certainty, Vec<usize>)>,
     unexplained: bool,
     started: bool,
+    /// Suspended by the filter's hold: the restart does not know the clock.
+    held: bool,
+    /// A certain decision waits on the component's interface (see
+    /// [`Diagnosers::interface_blocks`]).
+    deferred: bool,
+    /// The normal mode is among the hypotheses.
+    normal_possible: bool,
+    /// The clock is not known (after a hold): every window is open and nothing times
+    /// out until the next clock event.
+    clock_unknown: bool,
     def_aux: Vec<Option<u32>>,
     interval_aux: Vec<Option<u32>>,
     estimate_aux: Vec<Option<u32>>,
@@ -83,6 +93,13 @@ pub struct Diagnosers {
     tables: Vec<std::sync::Arc<Tables>>,
     work: Work,
     touched: Vec<usize>,
+    /// The filter held the outputs in the previous cycle.
+    was_held: bool,
+    /// In this cycle, component edges of actuators are the filter's (first held cycle).
+    orders_forced: bool,
+    /// Per component: the partitions of other components that cover a sensor it
+    /// assumes (component, partition).
+    interface: Vec<Vec<(usize, usize)>>,
 }
 
 /// What the run time derives once from a compiled component.
@@ -338,6 +355,10 @@ impl Diagnosers {
                 decisions: vec![(Certainty::Normal, Vec::new()); c.partitions.len()],
                 unexplained: false,
                 started: false,
+                held: false,
+                deferred: false,
+                normal_possible: true,
+                clock_unknown: false,
                 def_aux: c
                     .partitions
                     .iter()
@@ -365,6 +386,22 @@ impl Diagnosers {
                     .clone()
             })
             .collect();
+        let interface = compiled
+            .components
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let mut v = Vec::new();
+                for (j, o) in compiled.components.iter().enumerate() {
+                    for (pj, p) in o.partitions.iter().enumerate() {
+                        if j != i && p.sensor.as_ref().is_some_and(|s| c.assumes.contains(s)) {
+                            v.push((j, pj));
+                        }
+                    }
+                }
+                v
+            })
+            .collect();
         let mut work = Work::default();
         for c in &compiled.components {
             work.fit(c);
@@ -379,6 +416,9 @@ impl Diagnosers {
             tables,
             work,
             touched: Vec::new(),
+            was_held: false,
+            orders_forced: false,
+            interface,
         }
     }
 
@@ -439,6 +479,29 @@ impl Diagnosers {
 
     /// Follows one cycle: the frame holds inputs and applied outputs at t and t-1; the
     pub fn update(&mut self, now: Millis, frame: &mut Frame) {
+        self.update_held(now, frame, false);
+    }
+
+    /// As [`Diagnosers::update`], `held` telling whether the filter holds the outputs
+    /// in its safe state in this cycle: the orders then are the filter's, not the
+    /// controller's, and the plant stops. The components whose model does not describe
+    /// that (`follows_safe_state: false`) are suspended; they restart from the observed
+    /// values in the first cycle after the hold, keeping their flags.
+    pub fn update_held(&mut self, now: Millis, frame: &mut Frame, held: bool) {
+        // The first held cycle still shows the plant's own sensor edges (those that
+        // tripped the filter): they are followed, the forced orders are not. From the
+        // next cycle on, the suspended components wait for the end of the hold.
+        let first = held && !self.was_held;
+        self.was_held = held;
+        if held && !first {
+            for (i, c) in self.compiled.components.iter().enumerate() {
+                if !c.follows_safe_state {
+                    self.runs[i].started = false;
+                    self.runs[i].held = true;
+                    self.wake[i] = i64::MIN;
+                }
+            }
+        }
         let t = i64::try_from(now.0).unwrap_or(i64::MAX);
         let mut touched = std::mem::take(&mut self.touched);
         touched.clear();
@@ -464,8 +527,47 @@ impl Diagnosers {
         touched.sort_unstable();
         touched.dedup();
         for &i in &touched {
+            let suspend = held && !self.compiled.components[i].follows_safe_state;
+            if suspend && !first {
+                continue;
+            }
+            self.orders_forced = suspend;
             self.component_cycle(i, t, frame);
-            self.rewake(i);
+            self.orders_forced = false;
+            if suspend {
+                self.runs[i].started = false;
+                self.runs[i].held = true;
+                self.wake[i] = i64::MIN;
+            } else {
+                self.rewake(i);
+            }
+        }
+        // Certain decisions that waited on their interface: issued once no neighbour
+        // suspects an assumed sensor any more (while one does, they keep waiting).
+        for i in 0..self.runs.len() {
+            if self.runs[i].deferred && !self.interface_blocks(i) {
+                let c = &self.compiled.components[i];
+                let r = &mut self.runs[i];
+                r.deferred = false;
+                decide(
+                    c,
+                    &self.tables[i],
+                    r,
+                    t,
+                    &mut self.work,
+                    false,
+                    &mut self.diagnoses,
+                );
+            }
+        }
+        if first {
+            for (i, c) in self.compiled.components.iter().enumerate() {
+                if !c.follows_safe_state {
+                    self.runs[i].started = false;
+                    self.runs[i].held = true;
+                    self.wake[i] = i64::MIN;
+                }
+            }
         }
         self.touched = touched;
     }
@@ -482,7 +584,22 @@ impl Diagnosers {
         };
     }
 
+    /// Whether a certain decision of component `ci` must wait: it assumes sensors of
+    /// other components, and one of those has lost its normal hypothesis while a fault
+    /// of its partition covering the sensor is possible (the local anomaly may be that
+    /// neighbour's fault: the local model took the sensor as true).
+    fn interface_blocks(&self, ci: usize) -> bool {
+        self.interface[ci].iter().any(|&(j, pj)| {
+            let r = &self.runs[j];
+            !r.normal_possible
+                && r.decisions
+                    .get(pj)
+                    .is_some_and(|(c, _)| *c != Certainty::Normal)
+        })
+    }
+
     fn component_cycle(&mut self, ci: usize, t: i64, frame: &mut Frame) {
+        let wait = self.interface_blocks(ci);
         let c = &self.compiled.components[ci];
         let tab = &self.tables[ci];
         let ws = &mut self.work;
@@ -502,6 +619,12 @@ impl Diagnosers {
         if !r.started {
             r.started = true;
             resync(c, r, frame, None);
+            if std::mem::take(&mut r.held) {
+                // The boxes stopped for as long as the hold lasted: the windows of
+                // the motions under way no longer hold until the next order.
+                r.clock = None;
+                r.clock_unknown = true;
+            }
             changed = true;
         } else if stopped {
             r.next_deadline = i64::MAX;
@@ -509,6 +632,9 @@ impl Diagnosers {
             // Edges: actuators first, then sensors.
             ws.edges.clear();
             for space in [Space::Output, Space::Input] {
+                if space == Space::Output && self.orders_forced {
+                    continue;
+                }
                 for (i, s) in c.signals.iter().enumerate() {
                     if s.var.space != space {
                         continue;
@@ -541,6 +667,7 @@ impl Diagnosers {
                 timeouts(c, tab, r, t, margin, pulse, ws, &mut self.diagnoses);
                 step(c, tab, r, sym, t, margin, true, ws);
                 if let Some(k) = c.clocks.iter().position(|&e| e == (i, rise)) {
+                    r.clock_unknown = false;
                     r.clock = Some((k, t));
                     r.emitted = 0;
                 }
@@ -570,7 +697,7 @@ impl Diagnosers {
             r.next_deadline = next_deadline(c, tab, r, t, margin, pulse, ws);
         }
         if changed {
-            decide(c, tab, r, t, ws, &mut self.diagnoses);
+            decide(c, tab, r, t, ws, wait, &mut self.diagnoses);
             r.next_boundary = i64::MIN;
         }
         // Flags, intervals, estimates.
@@ -696,6 +823,10 @@ fn empty_run() -> Run {
         decisions: Vec::new(),
         unexplained: false,
         started: false,
+        held: false,
+        deferred: false,
+        normal_possible: true,
+        clock_unknown: false,
         def_aux: Vec::new(),
         interval_aux: Vec::new(),
         estimate_aux: Vec::new(),
@@ -770,6 +901,9 @@ fn closure(tab: &Tables, h: &[(u32, i64)], t: i64, ws: &mut Work) {
 
 fn window_ok(c: &Component, r: &Run, w: Option<usize>, t: i64, margin: i64) -> bool {
     let Some(k) = w else { return true };
+    if r.clock_unknown {
+        return true;
+    }
     let iv = &c.intervals[k];
     match r.clock {
         Some((ck, ct)) if ck == iv.clock => {
@@ -952,6 +1086,7 @@ fn decide(
     r: &mut Run,
     t: i64,
     ws: &mut Work,
+    wait: bool,
     log: &mut Vec<Diagnosis>,
 ) {
     if r.h.is_empty() {
@@ -964,6 +1099,7 @@ fn decide(
         modes[tab.info[q as usize].mode.map_or(nf, |m| m as usize)] = true;
     }
     let count = modes.iter().filter(|&&m| m).count();
+    r.normal_possible = modes[nf];
     for (pi, p) in c.partitions.iter().enumerate() {
         // Faults of the partition still possible, in fault order.
         let inside = || (0..nf).filter(|&f| modes[f] && p.faults.contains(&f));
@@ -984,7 +1120,10 @@ fn decide(
         *old_certainty = certainty;
         old.clear();
         old.extend(inside());
-        if certainty == Certainty::Certain {
+        if certainty == Certainty::Certain && wait {
+            r.deferred = true;
+        } else if certainty == Certainty::Certain {
+            r.deferred = false;
             log.push(Diagnosis {
                 time_ms: u64::try_from(t).unwrap_or(0),
                 component: c.id.clone(),
@@ -1125,13 +1264,13 @@ mod tests {
             .iter()
             .position(|c| c.id == "table")
             .unwrap();
-        let c0 = d
+        let c2 = d
             .compiled
             .components
             .iter()
-            .position(|c| c.id == "c0")
+            .position(|c| c.id == "c2")
             .unwrap();
-        assert!(!std::sync::Arc::ptr_eq(&d.tables[table], &d.tables[c0]));
+        assert!(!std::sync::Arc::ptr_eq(&d.tables[table], &d.tables[c2]));
         let distinct = |d: &Diagnosers| {
             let mut v: Vec<*const Tables> = d.tables.iter().map(std::sync::Arc::as_ptr).collect();
             v.sort();

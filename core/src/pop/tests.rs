@@ -224,3 +224,141 @@ fn the_turntable_runs_that_were_wrong_are_right() {
         }
     }
 }
+
+#[test]
+fn conveyor_faults_are_diagnosed_by_the_timed_models() {
+    // The conveyor models time the boxes from the orders of their drives (A1, A2, A3):
+    // a silent sensor shows as a missed window, a stuck one as an edge out of its
+    // window, a stopped belt as a box that does not go on. Seeds that were wrong while
+    // the models were built are kept: a belt stopped under a box still takes the next
+    // box to its entry beam (A5, A6 stuck off); the entry conveyor pushes a box past a
+    // dead C0; the table leaving C5 with the box half out is the table's fault (A4
+    // stuck off), not the exit's.
+    let runs: &[(&str, &[u64])] = &[
+        ("C0 stuck at 1", &[0, 1]),
+        ("C1 stuck at 0", &[0]),
+        ("C7 stuck at 0", &[0]),
+        ("C9 stuck at 1", &[0]),
+        ("C8 stuck at 0", &[0]),
+        ("C10 spurious rise", &[0]),
+        ("A6 stuck off", &[4, 7]),
+        ("A5 stuck off", &[1]),
+        ("A2 stuck on", &[0]),
+        ("A4 stuck off", &[0, 8]),
+    ];
+    for (name, seeds) in runs {
+        for &seed in *seeds {
+            let config = campaign::Config {
+                seeds: 1,
+                first_seed: seed,
+                fault_free_hours: 0,
+                only: Some((*name).to_string()),
+                threads: 1,
+                ..campaign::Config::default()
+            };
+            let r = campaign::run(&station_dir(), &config).unwrap();
+            let row = &r.rows[0];
+            assert_eq!(
+                (row.runs, row.right, row.lost),
+                (1, 1, 0),
+                "{name}, seed {seed}: {row:#?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_dead_c0_is_never_blamed_on_c1() {
+    // C0 stuck at 0: the entry conveyor keeps running and pushes the box onto the idle
+    // intermediate belt, where C1 sees it. That is C0 (or C1 stuck at 1): ambiguous,
+    // never a certain C1.
+    for seed in 0..3 {
+        let config = campaign::Config {
+            seeds: 1,
+            first_seed: seed,
+            fault_free_hours: 0,
+            only: Some("C0 stuck at 0".into()),
+            threads: 1,
+            ..campaign::Config::default()
+        };
+        let r = campaign::run(&station_dir(), &config).unwrap();
+        let row = &r.rows[0];
+        assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
+    }
+}
+
+#[test]
+fn a_pause_suspends_the_conveyor_models_and_they_resume_without_a_false_diagnosis() {
+    // The operator's pause forces every output to 0 mid-travel: those falls are the
+    // filter's, and the boxes stop. The conveyor models are suspended and restart from
+    // the observed values; the table's model describes its return.
+    use crate::sim::OperatorAction;
+    let dir = station_dir();
+    let mut paused = 0;
+    for pause_at in [61_000u64, 64_500, 76_300, 89_700] {
+        let (_, mut sim) = closed_loop(&dir, 5, 1_000, None).unwrap();
+        sim.run_until(crate::Millis(pause_at));
+        let _ = sim.act(&OperatorAction::Pause);
+        sim.run_until(crate::Millis(pause_at + 4_000));
+        assert!(sim.engine.holds_outputs());
+        let _ = sim.act(&OperatorAction::Resume);
+        sim.run_until(crate::Millis(pause_at + 120_000));
+        let d = sim.diagnosers.as_ref().unwrap();
+        assert!(
+            d.diagnoses.is_empty(),
+            "pause at {pause_at}: {:#?}",
+            d.diagnoses
+        );
+        paused += 1;
+        assert!(sim.emulator.stats().delivered_left + sim.emulator.stats().delivered_right > 5);
+    }
+    assert_eq!(paused, 4);
+}
+
+#[test]
+fn a_stopped_belt_still_takes_the_next_box_to_its_entry_beam() {
+    // Untimed replay on the right exit: a box leaves the table and C7, then the belt
+    // stops (no RE(C9) in its window). Either C9 is dead or the belt stopped. The next
+    // box, pushed by the table rollers, reaches C7 but never clears it: only the stopped
+    // belt explains that (a blocked plant follows the next order as a new, untimed
+    // motion, which stops where the fault blocks it).
+    let d = station();
+    let right = d
+        .compiled
+        .components
+        .iter()
+        .find(|c| c.id == "right")
+        .unwrap();
+    let first = ["RE(A3)", "RE(C7)", "FE(A3)", "FE(C7)", "tmo(I23)"];
+    let r = runtime::replay_untimed(right, &first).unwrap();
+    let after: Vec<_> = r[4].iter().flatten().cloned().collect();
+    assert!(after.contains(&"M6_belt".to_string()), "{after:?}");
+    assert!(after.contains(&"C9_stuck0".to_string()), "{after:?}");
+    let mut all = first.to_vec();
+    all.extend(["RE(A3)", "RE(C7)"]);
+    let r = runtime::replay_untimed(right, &all).unwrap();
+    // Blocked used to mean "no sensor edge any more": the second box's RE(C7) ended
+    // that hypothesis and left C9 stuck at 0 alone.
+    assert!(r[6].contains(&Some("M6_belt".to_string())), "{:?}", r[6]);
+}
+
+#[test]
+fn the_exits_wait_while_the_table_suspects_c5() {
+    // C5 stuck at 1 during the rotation: the controller evacuates early, the box does
+    // not leave the table. The exits take C5 as true (`assumes`); the table has lost
+    // its normal hypothesis with C5 suspect, so the exit's "rollers" conclusion waits
+    // (these seeds were wrong before).
+    for seed in [6, 12, 14, 17, 23] {
+        let config = campaign::Config {
+            seeds: 1,
+            first_seed: seed,
+            fault_free_hours: 0,
+            only: Some("C5 stuck at 1".into()),
+            threads: 1,
+            ..campaign::Config::default()
+        };
+        let r = campaign::run(&station_dir(), &config).unwrap();
+        let row = &r.rows[0];
+        assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
+    }
+}

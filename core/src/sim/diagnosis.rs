@@ -275,13 +275,19 @@ pub fn at_initial_state(d: &Diagnosers, frame: &Frame) -> bool {
 
 /// Runs `step` of a live link's diagnosers on `frame` (inputs and applied outputs at t
 /// and t-1, auxiliaries written at t).
-pub fn run_link_step(d: &mut Diagnosers, step: LinkStep, now: Millis, frame: &mut Frame) {
+pub fn run_link_step(
+    d: &mut Diagnosers,
+    step: LinkStep,
+    now: Millis,
+    frame: &mut Frame,
+    held: bool,
+) {
     match step {
         LinkStep::Skipped => {}
-        LinkStep::Stepped => d.update(now, frame),
+        LinkStep::Stepped => d.update_held(now, frame, held),
         LinkStep::Restarted => {
             d.reset();
-            d.update(now, frame);
+            d.update_held(now, frame, held);
         }
     }
 }

@@ -72,7 +72,7 @@ impl Simulation {
         if let Some(d) = self.diagnosers.as_mut() {
             let step = cycle.diagnosers;
             self.engine
-                .after_filter(&mut |t, f| run_link_step(d, step, t, f));
+                .after_filter(&mut |t, f, held| run_link_step(d, step, t, f, held));
         }
         self.diagnosis_events(now);
         if let Some(index) = self.record_events(now)
