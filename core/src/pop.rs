@@ -548,7 +548,9 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
         for p in &mut c.partitions {
             p.id = format!("{}_{i}", p.id);
             p.sensor = p.sensor.as_ref().map(|s| format!("{s}_{i}"));
+            p.actuators = p.actuators.iter().map(|a| format!("{a}_{i}")).collect();
         }
+        c.assumes = c.assumes.iter().map(|a| format!("{a}_{i}")).collect();
         for e in &mut c.estimates {
             e.sensor = format!("{}_{i}", e.sensor);
             let mut x = e.expr.clone();

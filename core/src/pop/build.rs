@@ -143,14 +143,29 @@ pub struct Component {
     pub estimates: Vec<(String, Dnf)>,
     /// Keeps following the plant while the filter holds the outputs (else suspended).
     pub follows_safe_state: bool,
+    /// Edges of one cycle: sensors before orders.
+    pub sensors_first: bool,
     /// Sensors of other components this model takes as true.
     pub assumes: Vec<String>,
+    /// How long a certain decision waits for those neighbours at least, ms.
+    pub settle_ms: u64,
     /// Generated unexpected evolutions.
     pub unexpected: Vec<Unexpected>,
     /// The symbol `tmo(pulse)`: a spurious value lasted longer than `pulse_max_ms`.
     pub pulse_sym: usize,
     /// The symbol `tmo(motion)`: an unexpected motion did not end within its hold.
     pub motion_sym: usize,
+}
+
+impl Component {
+    /// The order in which the edges of one cycle are taken.
+    pub fn edge_order(&self) -> [Space; 2] {
+        if self.sensors_first {
+            [Space::Input, Space::Output]
+        } else {
+            [Space::Output, Space::Input]
+        }
+    }
 }
 
 /// Every compiled component, with the run-time settings.
@@ -1337,7 +1352,9 @@ fn compile_one(
     }
     Some(Component {
         follows_safe_state: c.follows_safe_state,
+        sensors_first: c.sensors_first,
         assumes: c.assumes.clone(),
+        settle_ms: c.settle_ms,
         id: c.id.clone(),
         signals,
         states,

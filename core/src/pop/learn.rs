@@ -82,7 +82,7 @@ pub fn measure(
                     state = c.values.iter().position(|&v| v == val);
                     continue;
                 };
-                for space in [Space::Output, Space::Input] {
+                for space in c.edge_order() {
                     for (i, s) in c
                         .signals
                         .iter()

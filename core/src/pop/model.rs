@@ -70,13 +70,25 @@ pub struct ComponentDef {
     /// values when the hold ends.
     #[serde(default)]
     pub follows_safe_state: bool,
+    /// Edges of one cycle are taken sensors first, then orders (the controller reacts
+    /// in the same scan to what it sees: a push ordered on the rise of C0). By default
+    /// orders come first (the plant reacts to them: a rotation ordered, then the table
+    /// leaves C4).
+    #[serde(default)]
+    pub sensors_first: bool,
     /// Sensors of other components this model takes as true (in its guards: the exits
-    /// evacuate a box when C5 says the table is there). While another component has
-    /// lost its normal hypothesis and a fault of its partition of one of them is
-    /// possible, a certain decision here waits: the local anomaly may be that
-    /// neighbour's fault.
+    /// evacuate a box when C5 says the table is there). A certain decision here waits
+    /// `settle_ms`, and for as long as another component has lost its normal hypothesis
+    /// with a fault of its partition of one of them possible (the local anomaly may be
+    /// that neighbour's fault) or has lost track of its plant.
     #[serde(default)]
     pub assumes: Vec<String>,
+    /// How long a certain decision waits at least for the neighbours whose sensors it
+    /// `assumes`, ms: a neighbour's window on that sensor may still be open when this
+    /// model sees the anomaly (C2 falls without C1 a few ms before the feed's C1
+    /// window closes).
+    #[serde(default)]
+    pub settle_ms: u64,
 }
 
 /// A normal state.

@@ -51,7 +51,9 @@ pub struct Diagnosis {
 struct Run {
     h: Vec<(u32, i64)>,
     clock: Option<(usize, i64)>,
-    emitted: u64,
+    /// The intervals whose time-out was emitted since the clock event (a bit each;
+    /// a component may have more than 64 with the windows of its early copies).
+    emitted: Vec<u64>,
     next_deadline: i64,
     next_boundary: i64,
     latched: Vec<bool>,
@@ -61,9 +63,9 @@ struct Run {
     started: bool,
     /// Suspended by the filter's hold: the restart does not know the clock.
     held: bool,
-    /// A certain decision waits on the component's interface (see
+    /// Since when a certain decision waits on the component's interface (see
     /// [`Diagnosers::interface_blocks`]).
-    deferred: bool,
+    deferred: Option<i64>,
     /// The normal mode is among the hypotheses.
     normal_possible: bool,
     /// The clock is not known (after a hold): every window is open and nothing times
@@ -348,7 +350,7 @@ impl Diagnosers {
             runs.push(Run {
                 h: Vec::new(),
                 clock: c.initial_clock.map(|k| (k, LONG_AGO)),
-                emitted: 0,
+                emitted: vec![0; c.intervals.len().div_ceil(64)],
                 next_deadline: i64::MAX,
                 next_boundary: i64::MIN,
                 latched: vec![false; c.partitions.len()],
@@ -356,7 +358,7 @@ impl Diagnosers {
                 unexplained: false,
                 started: false,
                 held: false,
-                deferred: false,
+                deferred: None,
                 normal_possible: true,
                 clock_unknown: false,
                 def_aux: c
@@ -542,13 +544,14 @@ impl Diagnosers {
                 self.rewake(i);
             }
         }
-        // Certain decisions that waited on their interface: issued once no neighbour
-        // suspects an assumed sensor any more (while one does, they keep waiting).
+        // Certain decisions that waited on their interface: issued once they have
+        // waited `settle_ms` and no neighbour suspects an assumed sensor (while one
+        // does, they keep waiting).
         for i in 0..self.runs.len() {
-            if self.runs[i].deferred && !self.interface_blocks(i) {
+            if self.runs[i].deferred.is_some() && !self.interface_blocks(i, t) {
                 let c = &self.compiled.components[i];
                 let r = &mut self.runs[i];
-                r.deferred = false;
+                r.deferred = None;
                 decide(
                     c,
                     &self.tables[i],
@@ -584,22 +587,33 @@ impl Diagnosers {
         };
     }
 
-    /// Whether a certain decision of component `ci` must wait: it assumes sensors of
-    /// other components, and one of those has lost its normal hypothesis while a fault
-    /// of its partition covering the sensor is possible (the local anomaly may be that
-    /// neighbour's fault: the local model took the sensor as true).
-    fn interface_blocks(&self, ci: usize) -> bool {
-        self.interface[ci].iter().any(|&(j, pj)| {
-            let r = &self.runs[j];
-            !r.normal_possible
-                && r.decisions
-                    .get(pj)
-                    .is_some_and(|(c, _)| *c != Certainty::Normal)
-        })
+    /// Whether a certain decision of component `ci` must wait at `t`: it assumes
+    /// sensors of other components (its model took them as true), and either it has
+    /// not waited its `settle_ms` yet (the neighbour may not have seen yet that its
+    /// sensor lies: its window is still open), or a neighbour has lost its normal
+    /// hypothesis while a fault of its partition covering the sensor is possible (the
+    /// local anomaly may be that neighbour's fault), or lost track of its plant (it
+    /// cannot vouch for the sensor until the operator's reset).
+    fn interface_blocks(&self, ci: usize, t: i64) -> bool {
+        if self.interface[ci].is_empty() {
+            return false;
+        }
+        let settle = i64::try_from(self.compiled.components[ci].settle_ms).unwrap_or(i64::MAX);
+        self.runs[ci]
+            .deferred
+            .is_none_or(|since| t.saturating_sub(since) < settle)
+            || self.interface[ci].iter().any(|&(j, pj)| {
+                let r = &self.runs[j];
+                r.unexplained
+                    || (!r.normal_possible
+                        && r.decisions
+                            .get(pj)
+                            .is_some_and(|(c, _)| *c != Certainty::Normal))
+            })
     }
 
     fn component_cycle(&mut self, ci: usize, t: i64, frame: &mut Frame) {
-        let wait = self.interface_blocks(ci);
+        let wait = self.interface_blocks(ci, t);
         let c = &self.compiled.components[ci];
         let tab = &self.tables[ci];
         let ws = &mut self.work;
@@ -629,9 +643,9 @@ impl Diagnosers {
         } else if stopped {
             r.next_deadline = i64::MAX;
         } else {
-            // Edges: actuators first, then sensors.
+            // Edges: actuators first, then sensors (or the reverse, `sensors_first`).
             ws.edges.clear();
-            for space in [Space::Output, Space::Input] {
+            for space in c.edge_order() {
                 if space == Space::Output && self.orders_forced {
                     continue;
                 }
@@ -669,7 +683,7 @@ impl Diagnosers {
                 if let Some(k) = c.clocks.iter().position(|&e| e == (i, rise)) {
                     r.clock_unknown = false;
                     r.clock = Some((k, t));
-                    r.emitted = 0;
+                    r.emitted.iter_mut().for_each(|w| *w = 0);
                 }
                 if r.h.is_empty() {
                     if !r.unexplained {
@@ -761,7 +775,7 @@ fn timeouts(
             break;
         };
         if let Some(k) = c.symbols[sym].timeout {
-            r.emitted |= 1 << (k % 64);
+            set_emitted(r, k);
         }
         // `tmo(pulse)` and `tmo(motion)` end the hypotheses whose own limit passed; the
         // others (a younger pulse or motion) wait on, unchanged.
@@ -812,11 +826,23 @@ fn timeouts(
     any
 }
 
+fn set_emitted(r: &mut Run, k: usize) {
+    if let Some(w) = r.emitted.get_mut(k / 64) {
+        *w |= 1 << (k % 64);
+    }
+}
+
+fn was_emitted(r: &Run, k: usize) -> bool {
+    r.emitted
+        .get(k / 64)
+        .is_some_and(|w| w & (1 << (k % 64)) != 0)
+}
+
 fn empty_run() -> Run {
     Run {
         h: Vec::new(),
         clock: None,
-        emitted: 0,
+        emitted: Vec::new(),
         next_deadline: i64::MAX,
         next_boundary: i64::MIN,
         latched: Vec::new(),
@@ -824,7 +850,7 @@ fn empty_run() -> Run {
         unexplained: false,
         started: false,
         held: false,
-        deferred: false,
+        deferred: None,
         normal_possible: true,
         clock_unknown: false,
         def_aux: Vec::new(),
@@ -978,7 +1004,7 @@ fn expired(c: &Component, tab: &Tables, r: &Run, q: usize) -> bool {
     match (st.phase, st.deadline, r.clock) {
         (Phase::Timed, Some(k), Some((ck, _))) => {
             let k = k as usize;
-            c.intervals[k].clock == ck && r.emitted & (1 << (k % 64)) != 0
+            c.intervals[k].clock == ck && was_emitted(r, k)
         }
         _ => false,
     }
@@ -998,7 +1024,7 @@ fn deadline_time(
     let k = st.deadline? as usize;
     let iv = &c.intervals[k];
     let (ck, ct) = r.clock?;
-    if ck != iv.clock || r.emitted & (1 << (k % 64)) != 0 {
+    if ck != iv.clock || was_emitted(r, k) {
         return None;
     }
     Some((ct + i64::try_from(iv.hi?).ok()? + margin, k))
@@ -1121,9 +1147,9 @@ fn decide(
         old.clear();
         old.extend(inside());
         if certainty == Certainty::Certain && wait {
-            r.deferred = true;
+            r.deferred.get_or_insert(t);
         } else if certainty == Certainty::Certain {
-            r.deferred = false;
+            r.deferred = None;
             log.push(Diagnosis {
                 time_ms: u64::try_from(t).unwrap_or(0),
                 component: c.id.clone(),
@@ -1150,6 +1176,7 @@ pub fn replay_untimed(
     let tab = Tables::new(c);
     let mut ws = Work::for_component(c);
     let mut r = empty_run();
+    r.emitted = vec![0; c.intervals.len().div_ceil(64)];
     r.h = vec![(c.initial as u32, 0)];
     let mut out = Vec::new();
     for e in events {
@@ -1253,38 +1280,55 @@ mod tests {
         assert!(d.flagged().iter().any(|(p, stop, _)| p == "P" && *stop));
     }
 
+    /// The time-outs emitted since the clock event are one bit per interval, however
+    /// many intervals (the early copies add relaxed windows).
+    #[test]
+    fn emitted_time_outs_beyond_64_intervals_stay_apart() {
+        let mut r = empty_run();
+        r.emitted = vec![0; 130usize.div_ceil(64)];
+        set_emitted(&mut r, 70);
+        assert!(was_emitted(&r, 70));
+        assert!(!was_emitted(&r, 6));
+        set_emitted(&mut r, 129);
+        assert!(was_emitted(&r, 129) && !was_emitted(&r, 1) && !was_emitted(&r, 65));
+    }
+
     /// Identical automata share their run-time tables; different ones do not.
     #[test]
     fn identical_components_share_their_tables() {
         let bundle = super::super::tests::station();
         let d = Diagnosers::new(bundle.compiled.clone(), &bundle.bundle.symbols);
-        let table = d
-            .compiled
-            .components
-            .iter()
-            .position(|c| c.id == "table")
-            .unwrap();
-        let c2 = d
-            .compiled
-            .components
-            .iter()
-            .position(|c| c.id == "c2")
-            .unwrap();
-        assert!(!std::sync::Arc::ptr_eq(&d.tables[table], &d.tables[c2]));
         let distinct = |d: &Diagnosers| {
             let mut v: Vec<*const Tables> = d.tables.iter().map(std::sync::Arc::as_ptr).collect();
             v.sort();
             v.dedup();
             v.len()
         };
-        let u = Diagnosers::new_unshared(bundle.compiled.clone(), &bundle.bundle.symbols);
-        assert_eq!(distinct(&u), u.compiled.components.len());
-        // The conveyor models of the same form share one.
-        assert!(
-            distinct(&d) < distinct(&u),
-            "{} {}",
-            distinct(&d),
-            distinct(&u)
-        );
+        // The station's models are all different: one table each.
+        assert_eq!(distinct(&d), d.compiled.components.len());
+        // Three identical turntables share one; unshared, each has its own.
+        let table = bundle
+            .file
+            .components
+            .iter()
+            .find(|c| c.id == "table")
+            .unwrap();
+        let (plant, syn) = crate::pop::synthetic(3, table);
+        let mut symbols = plant.symbols();
+        for a in crate::pop::build::aux_names(&syn) {
+            let _ = symbols.declare(&a, Space::Aux);
+        }
+        let compiled = crate::pop::build::compile(
+            &syn,
+            &syn.to_ron(),
+            std::path::Path::new("<synthetic>"),
+            &symbols,
+            None,
+        )
+        .unwrap();
+        let shared = Diagnosers::new(compiled.clone(), &symbols);
+        assert_eq!(distinct(&shared), 1);
+        let own = Diagnosers::new_unshared(compiled, &symbols);
+        assert_eq!(distinct(&own), 3);
     }
 }

@@ -362,3 +362,22 @@ fn the_exits_wait_while_the_table_suspects_c5() {
         assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
     }
 }
+
+#[test]
+fn a_c1_stuck_at_1_is_never_read_as_a_c2_fault() {
+    // C2 used to be read against C1 on its fall too: a large box leaving with C1 stuck
+    // at 1 then looked like C2 falling alone (seeds 3, 21, 29 were wrong).
+    for seed in [3, 21, 29] {
+        let config = campaign::Config {
+            seeds: 1,
+            first_seed: seed,
+            fault_free_hours: 0,
+            only: Some("C1 stuck at 1".into()),
+            threads: 1,
+            ..campaign::Config::default()
+        };
+        let r = campaign::run(&station_dir(), &config).unwrap();
+        let row = &r.rows[0];
+        assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
+    }
+}
