@@ -31,6 +31,17 @@ const ALWAYS: &[&str] = &[
     "table blocked at C5",
     "A4 stuck off",
     "A4 stuck on",
+    "C0 stuck at 1",
+    "C1 stuck at 0",
+    "C7 stuck at 0",
+    "C8 stuck at 0",
+    "C9 stuck at 1",
+    "C10 stuck at 1",
+    "C10 spurious rise 300 ms",
+    "A2 stuck on",
+    "A3 stuck off",
+    "A5 stuck off",
+    "A6 stuck off",
 ];
 
 #[test]
