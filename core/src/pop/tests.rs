@@ -9,6 +9,21 @@ pub(super) fn station() -> DiagBundle {
     }
 }
 
+/// One run of the fault campaign: injection `name` (the first whose name contains it)
+/// with seed `seed`.
+fn one_run(name: &str, seed: u64) -> campaign::Row {
+    let config = campaign::Config {
+        seeds: 1,
+        first_seed: seed,
+        fault_free_hours: 0,
+        only: Some(name.to_string()),
+        threads: 1,
+        ..campaign::Config::default()
+    };
+    let mut r = campaign::run(&station_dir(), &config).unwrap();
+    r.rows.swap_remove(0)
+}
+
 #[test]
 fn station_models_compile_and_prune_by_the_filter() {
     let d = station();
@@ -206,16 +221,7 @@ fn the_turntable_runs_that_were_wrong_are_right() {
     ];
     for (name, seeds) in runs {
         for &seed in *seeds {
-            let config = campaign::Config {
-                seeds: 1,
-                first_seed: seed,
-                fault_free_hours: 0,
-                only: Some((*name).to_string()),
-                threads: 1,
-                ..campaign::Config::default()
-            };
-            let r = campaign::run(&station_dir(), &config).unwrap();
-            let row = &r.rows[0];
+            let row = one_run(name, seed);
             assert_eq!(
                 (row.runs, row.right),
                 (1, 1),
@@ -248,16 +254,7 @@ fn conveyor_faults_are_diagnosed_by_the_timed_models() {
     ];
     for (name, seeds) in runs {
         for &seed in *seeds {
-            let config = campaign::Config {
-                seeds: 1,
-                first_seed: seed,
-                fault_free_hours: 0,
-                only: Some((*name).to_string()),
-                threads: 1,
-                ..campaign::Config::default()
-            };
-            let r = campaign::run(&station_dir(), &config).unwrap();
-            let row = &r.rows[0];
+            let row = one_run(name, seed);
             assert_eq!(
                 (row.runs, row.right, row.lost),
                 (1, 1, 0),
@@ -273,16 +270,7 @@ fn a_dead_c0_is_never_blamed_on_c1() {
     // intermediate belt, where C1 sees it. That is C0 (or C1 stuck at 1): ambiguous,
     // never a certain C1.
     for seed in 0..3 {
-        let config = campaign::Config {
-            seeds: 1,
-            first_seed: seed,
-            fault_free_hours: 0,
-            only: Some("C0 stuck at 0".into()),
-            threads: 1,
-            ..campaign::Config::default()
-        };
-        let r = campaign::run(&station_dir(), &config).unwrap();
-        let row = &r.rows[0];
+        let row = one_run("C0 stuck at 0", seed);
         assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
     }
 }
@@ -349,16 +337,7 @@ fn the_exits_wait_while_the_table_suspects_c5() {
     // its normal hypothesis with C5 suspect, so the exit's "rollers" conclusion waits
     // (these seeds were wrong before).
     for seed in [6, 12, 14, 17, 23] {
-        let config = campaign::Config {
-            seeds: 1,
-            first_seed: seed,
-            fault_free_hours: 0,
-            only: Some("C5 stuck at 1".into()),
-            threads: 1,
-            ..campaign::Config::default()
-        };
-        let r = campaign::run(&station_dir(), &config).unwrap();
-        let row = &r.rows[0];
+        let row = one_run("C5 stuck at 1", seed);
         assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
     }
 }
@@ -368,16 +347,7 @@ fn a_c1_stuck_at_1_is_never_read_as_a_c2_fault() {
     // C2 used to be read against C1 on its fall too: a large box leaving with C1 stuck
     // at 1 then looked like C2 falling alone (seeds 3, 21, 29 were wrong).
     for seed in [3, 21, 29] {
-        let config = campaign::Config {
-            seeds: 1,
-            first_seed: seed,
-            fault_free_hours: 0,
-            only: Some("C1 stuck at 1".into()),
-            threads: 1,
-            ..campaign::Config::default()
-        };
-        let r = campaign::run(&station_dir(), &config).unwrap();
-        let row = &r.rows[0];
+        let row = one_run("C1 stuck at 1", seed);
         assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
     }
 }
