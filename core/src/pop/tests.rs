@@ -9,6 +9,15 @@ pub(super) fn station() -> DiagBundle {
     }
 }
 
+/// The compiled model `id` of the station's diagnosers.
+fn component<'a>(d: &'a DiagBundle, id: &str) -> &'a build::Component {
+    d.compiled
+        .components
+        .iter()
+        .find(|c| c.id == id)
+        .unwrap_or_else(|| panic!("no component `{id}`"))
+}
+
 /// One run of the fault campaign: injection `name` (the first whose name contains it)
 /// with seed `seed`.
 fn one_run(name: &str, seed: u64) -> campaign::Row {
@@ -27,12 +36,7 @@ fn one_run(name: &str, seed: u64) -> campaign::Row {
 #[test]
 fn station_models_compile_and_prune_by_the_filter() {
     let d = station();
-    let table = d
-        .compiled
-        .components
-        .iter()
-        .find(|c| c.id == "table")
-        .unwrap();
+    let table = component(&d, "table");
     assert_eq!(table.states.len(), 6);
     let pruned: Vec<_> = table
         .unexpected
@@ -156,12 +160,7 @@ fn annex_b_recursion_matches_the_batch_figures() {
 #[test]
 fn untimed_replay_and_report() {
     let d = station();
-    let table = d
-        .compiled
-        .components
-        .iter()
-        .find(|c| c.id == "table")
-        .unwrap();
+    let table = component(&d, "table");
     // C4 never fell, C5 rose: C4 stuck at 1, or (untimed: no pulse limit) a spurious
     // rise of C4 that hid its fall.
     let r = runtime::replay_untimed(table, &["RE(A4)", "tmo(I2)", "RE(C5)"]).unwrap();
@@ -183,12 +182,7 @@ fn a_pulse_that_hides_the_plants_own_edge_shows_it_late() {
     // Returning to C4, C4 falls spuriously while it still reads 0 (invisible), the table
     // reaches C4 meanwhile: the rise shows at the end of the pulse, after the window.
     let d = station();
-    let table = d
-        .compiled
-        .components
-        .iter()
-        .find(|c| c.id == "table")
-        .unwrap();
+    let table = component(&d, "table");
     let cycle = [
         "RE(A4)",
         "FE(C4)",
@@ -311,12 +305,7 @@ fn a_stopped_belt_still_takes_the_next_box_to_its_entry_beam() {
     // belt explains that (a blocked plant follows the next order as a new, untimed
     // motion, which stops where the fault blocks it).
     let d = station();
-    let right = d
-        .compiled
-        .components
-        .iter()
-        .find(|c| c.id == "right")
-        .unwrap();
+    let right = component(&d, "right");
     let first = ["RE(A3)", "RE(C7)", "FE(A3)", "FE(C7)", "tmo(I23)"];
     let r = runtime::replay_untimed(right, &first).unwrap();
     let after: Vec<_> = r[4].iter().flatten().cloned().collect();
