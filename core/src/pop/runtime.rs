@@ -679,8 +679,17 @@ impl Diagnosers {
                     })
                     .unwrap_or(0);
                 timeouts(c, tab, r, t, margin, pulse, ws, &mut self.diagnoses);
+                let clock_event = c.clocks.iter().position(|&e| e == (i, rise));
+                if clock_event.is_some() {
+                    // A new period of the clock starts with this edge: the time-outs of
+                    // the last one do not make the states it leads to expired (a state
+                    // entered on the next order would be refused because some
+                    // hypothesis timed out on its window in the previous cycle of the
+                    // plant).
+                    r.emitted.iter_mut().for_each(|w| *w = 0);
+                }
                 step(c, tab, r, sym, t, margin, true, ws);
-                if let Some(k) = c.clocks.iter().position(|&e| e == (i, rise)) {
+                if let Some(k) = clock_event {
                     r.clock_unknown = false;
                     r.clock = Some((k, t));
                     r.emitted.iter_mut().for_each(|w| *w = 0);
