@@ -97,11 +97,11 @@ pub struct Diagnosers {
     touched: Vec<usize>,
     /// The filter held the outputs in the previous cycle.
     was_held: bool,
-    /// In this cycle, component edges of actuators are the filter's (first held cycle).
-    orders_forced: bool,
     /// Per component: the partitions of other components that cover a sensor it
     /// assumes (component, partition).
     interface: Vec<Vec<(usize, usize)>>,
+    /// The components with such an interface (the only ones whose decisions can wait).
+    with_interface: Vec<usize>,
 }
 
 /// What the run time derives once from a compiled component.
@@ -388,7 +388,7 @@ impl Diagnosers {
                     .clone()
             })
             .collect();
-        let interface = compiled
+        let interface: Vec<Vec<(usize, usize)>> = compiled
             .components
             .iter()
             .enumerate()
@@ -403,6 +403,9 @@ impl Diagnosers {
                 }
                 v
             })
+            .collect();
+        let with_interface = (0..compiled.components.len())
+            .filter(|&i| !interface[i].is_empty())
             .collect();
         let mut work = Work::default();
         for c in &compiled.components {
@@ -419,8 +422,8 @@ impl Diagnosers {
             work,
             touched: Vec::new(),
             was_held: false,
-            orders_forced: false,
             interface,
+            with_interface,
         }
     }
 
@@ -496,13 +499,7 @@ impl Diagnosers {
         let first = held && !self.was_held;
         self.was_held = held;
         if held && !first {
-            for (i, c) in self.compiled.components.iter().enumerate() {
-                if !c.follows_safe_state {
-                    self.runs[i].started = false;
-                    self.runs[i].held = true;
-                    self.wake[i] = i64::MIN;
-                }
-            }
+            self.suspend_for_hold();
         }
         let t = i64::try_from(now.0).unwrap_or(i64::MAX);
         let mut touched = std::mem::take(&mut self.touched);
@@ -533,21 +530,14 @@ impl Diagnosers {
             if suspend && !first {
                 continue;
             }
-            self.orders_forced = suspend;
-            self.component_cycle(i, t, frame);
-            self.orders_forced = false;
-            if suspend {
-                self.runs[i].started = false;
-                self.runs[i].held = true;
-                self.wake[i] = i64::MIN;
-            } else {
-                self.rewake(i);
-            }
+            self.component_cycle(i, t, frame, suspend);
+            self.rewake(i);
         }
         // Certain decisions that waited on their interface: issued once they have
         // waited `settle_ms` and no neighbour suspects an assumed sensor (while one
         // does, they keep waiting).
-        for i in 0..self.runs.len() {
+        for k in 0..self.with_interface.len() {
+            let i = self.with_interface[k];
             if self.runs[i].deferred.is_some() && !self.interface_blocks(i, t) {
                 let c = &self.compiled.components[i];
                 let r = &mut self.runs[i];
@@ -564,15 +554,21 @@ impl Diagnosers {
             }
         }
         if first {
-            for (i, c) in self.compiled.components.iter().enumerate() {
-                if !c.follows_safe_state {
-                    self.runs[i].started = false;
-                    self.runs[i].held = true;
-                    self.wake[i] = i64::MIN;
-                }
-            }
+            self.suspend_for_hold();
         }
         self.touched = touched;
+    }
+
+    /// Suspends the components whose model does not describe the filter's safe state:
+    /// they restart from the observed values, clock unknown, once the hold ends.
+    fn suspend_for_hold(&mut self) {
+        for (i, c) in self.compiled.components.iter().enumerate() {
+            if !c.follows_safe_state {
+                self.runs[i].started = false;
+                self.runs[i].held = true;
+                self.wake[i] = i64::MIN;
+            }
+        }
     }
 
     /// When component `i` must next be looked at without an edge.
@@ -612,7 +608,9 @@ impl Diagnosers {
             })
     }
 
-    fn component_cycle(&mut self, ci: usize, t: i64, frame: &mut Frame) {
+    /// One cycle of component `ci`; with `orders_forced` (the first cycle the filter
+    /// holds the outputs) its actuator edges are the filter's and are not followed.
+    fn component_cycle(&mut self, ci: usize, t: i64, frame: &mut Frame, orders_forced: bool) {
         let wait = self.interface_blocks(ci, t);
         let c = &self.compiled.components[ci];
         let tab = &self.tables[ci];
@@ -646,7 +644,7 @@ impl Diagnosers {
             // Edges: actuators first, then sensors (or the reverse, `sensors_first`).
             ws.edges.clear();
             for space in c.edge_order() {
-                if space == Space::Output && self.orders_forced {
+                if space == Space::Output && orders_forced {
                     continue;
                 }
                 for (i, s) in c.signals.iter().enumerate() {
