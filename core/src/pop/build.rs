@@ -1088,10 +1088,12 @@ fn compile_one(
                 g[gi].deadline = d;
             }
             (Behaviour::Blocked(list), Phase::Blocked) => {
-                for e in out
-                    .iter()
-                    .filter(|e| signals[e.sig].var.space == Space::Output)
-                {
+                // Orders, and the edges of a part the fault does not stop
+                // (`independent`), go on as expected; the plant stays blocked.
+                for e in out.iter().filter(|e| {
+                    signals[e.sig].var.space == Space::Output
+                        || c.independent.contains(&signals[e.sig].name)
+                }) {
                     let t = get(
                         &mut g,
                         &mut pending,
@@ -1344,6 +1346,18 @@ fn compile_one(
                 "V0503",
                 a,
                 format!("`assumes`: `{a}` is not a sensor of the plant"),
+            );
+        }
+    }
+    for a in &c.independent {
+        if !signals
+            .iter()
+            .any(|s| &s.name == a && s.var.space == Space::Input)
+        {
+            ctx.err(
+                "V0503",
+                a,
+                format!("`independent`: `{a}` is not a sensor of the component"),
             );
         }
     }

@@ -89,6 +89,11 @@ pub struct ComponentDef {
     /// window closes).
     #[serde(default)]
     pub settle_ms: u64,
+    /// Sensors of a part that the component's blocking faults do not stop (the next box
+    /// reaching C0 on the entry conveyor while the intermediate belt is stopped): a
+    /// blocked plant still shows their edges where the expected evolutions foresee them.
+    #[serde(default)]
+    pub independent: Vec<String>,
 }
 
 /// A normal state.

@@ -340,3 +340,42 @@ fn a_c1_stuck_at_1_is_never_read_as_a_c2_fault() {
         assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
     }
 }
+
+#[test]
+fn a_c6_that_rises_before_the_box_is_blamed_on_c6_not_on_the_left_exit() {
+    // Seed 66: C6 turns to 1 while the rollers load a box. The controller stops the
+    // rollers at once, the box rests 33 mm short, and the left exit later sees it reach
+    // C8 late. The untimed C6 model accepted the rise, and the left exit read a C8
+    // fault (wrong). Timed from the rollers' order, the rise comes before its window:
+    // only a C6 fault explains it.
+    for name in ["C6 stuck at 1", "C6 spurious rise"] {
+        let row = one_run(name, 66);
+        assert_eq!(
+            (row.runs, row.right, row.lost),
+            (1, 1, 0),
+            "{name}: {row:#?}"
+        );
+    }
+    // A2 stuck on: the box goes on past C6 after its release, as a dead C6 would show.
+    // Ambiguous for the C6 model (the box left without the order, or C6 died), never a
+    // certain C6; the exit finds the rollers. A3 stuck on pushes the box away the other
+    // way.
+    for seed in [0, 1, 2, 5, 6] {
+        let row = one_run("A2 stuck on", seed);
+        assert_eq!(
+            (row.right, row.wrong + row.early),
+            (1, 0),
+            "seed {seed}: {row:#?}"
+        );
+    }
+    for seed in [6, 12, 17, 23] {
+        let row = one_run("A3 stuck on", seed);
+        assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
+    }
+    // C3 stuck at 1: the table loads a box that is not there yet; it reaches C6 late.
+    // The C6 model assumes C3, which the feed already blames.
+    for seed in [2, 16, 19, 22, 24] {
+        let row = one_run("C3 stuck at 1", seed);
+        assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
+    }
+}
