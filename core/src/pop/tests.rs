@@ -306,13 +306,13 @@ fn a_stopped_belt_still_takes_the_next_box_to_its_entry_beam() {
     // motion, which stops where the fault blocks it).
     let d = station();
     let right = component(&d, "right");
-    let first = ["RE(A3)", "RE(C7)", "FE(A3)", "FE(C7)", "tmo(I23)"];
+    let first = ["RE(A3)", "RE(C7) . C5", "FE(A3)", "FE(C7)", "tmo(I23)"];
     let r = runtime::replay_untimed(right, &first).unwrap();
     let after: Vec<_> = r[4].iter().flatten().cloned().collect();
     assert!(after.contains(&"M6_belt".to_string()), "{after:?}");
     assert!(after.contains(&"C9_stuck0".to_string()), "{after:?}");
     let mut all = first.to_vec();
-    all.extend(["RE(A3)", "RE(C7)"]);
+    all.extend(["RE(A3)", "RE(C7) . C5"]);
     let r = runtime::replay_untimed(right, &all).unwrap();
     // Blocked used to mean "no sensor edge any more": the second box's RE(C7) ended
     // that hypothesis and left C9 stuck at 0 alone.
@@ -377,5 +377,27 @@ fn a_c6_that_rises_before_the_box_is_blamed_on_c6_not_on_the_left_exit() {
     for seed in [2, 16, 19, 22, 24] {
         let row = one_run("C3 stuck at 1", seed);
         assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
+    }
+}
+
+#[test]
+fn an_exit_beam_stuck_at_1_away_from_c5_is_the_beam() {
+    // A box reaches an exit only from the table standing at C5: the exits' entry beams
+    // rise with C5 (`RE(C7) . C5`). C7 or C8 turning to 1 while the table is elsewhere
+    // cannot be a box pushed out without the order (rollers stuck on): the beam is
+    // certain at once. Before the guard these runs stayed ambiguous (the filter trips on
+    // the beam and holds the exits before the box could have cleared it).
+    for (name, seeds) in [
+        ("C7 stuck at 1", [1, 2, 3, 5]),
+        ("C8 stuck at 1", [2, 3, 4, 5]),
+    ] {
+        for seed in seeds {
+            let row = one_run(name, seed);
+            assert_eq!(
+                (row.runs, row.right),
+                (1, 1),
+                "{name}, seed {seed}: {row:#?}"
+            );
+        }
     }
 }
