@@ -247,17 +247,10 @@ struct DegradedControl<'a> {
 
 impl crate::engine::Control for DegradedControl<'_> {
     fn scan(&mut self, now: Millis, frame: &crate::frame::Frame, outputs: &mut crate::bits::Bits) {
-        if self.subs.is_empty() {
-            return self.inner.scan(now, frame, outputs);
+        match diagnosis::estimated_frame(self.subs, frame) {
+            None => self.inner.scan(now, frame, outputs),
+            Some(f) => self.inner.scan(now, &f, outputs),
         }
-        let mut f = frame.clone();
-        for &(input, aux) in self.subs {
-            let v = frame.now(Space::Aux).get(aux);
-            let p = frame.prev(Space::Aux).get(aux);
-            f.now_mut(Space::Input).set(input, v);
-            f.prev[Space::Input as usize].set(input, p);
-        }
-        self.inner.scan(now, &f, outputs);
     }
 }
 
@@ -645,7 +638,11 @@ impl Simulation {
         let Some(t) = self.tasks.as_mut().filter(|_| self.engine.cycles() > 1) else {
             return;
         };
-        t.events.step(&mut t.monitor, now, self.engine.frame());
+        // In degraded mode the tasks read the estimated sensors, as the program does.
+        match diagnosis::estimated_frame(&self.degraded, self.engine.frame()) {
+            None => t.events.step(&mut t.monitor, now, self.engine.frame()),
+            Some(f) => t.events.step(&mut t.monitor, now, &f),
+        }
         t.events.publish(&t.monitor, self.engine.frame_mut());
         let new: Vec<crate::tasks::Alarm> = t.monitor.alarms[t.seen..].to_vec();
         t.seen = t.monitor.alarms.len();

@@ -121,6 +121,16 @@ fn c4_stuck_at_0_at_rest_goes_on_in_degraded_mode_without_hazard() {
     );
     let delay = d.diagnoses[0].time_ms - at;
     assert!(delay < 5_000, "diagnosed after {delay} ms");
+    // The task monitors (seed 000) read the estimate too: once C4 is estimated, no
+    // task waits for the dead sensor (no "running longer than" alarm, no "unexpected
+    // end event" warning). The task under way when C4 died may report once.
+    let settled = d.diagnoses[0].time_ms + 20_000;
+    let task_lines: Vec<_> = sim
+        .journal()
+        .iter()
+        .filter(|e| e.time_ms > settled && e.kind.starts_with("task_"))
+        .collect();
+    assert!(task_lines.is_empty(), "{task_lines:#?}");
     assert!(
         d.flagged()
             .iter()

@@ -32,7 +32,8 @@ use vigie_core::pop::Diagnosers;
 use vigie_core::pop::build::Compiled;
 use vigie_core::sim::ObservedCycle;
 use vigie_core::sim::diagnosis::{
-    Cooperation, LinkGate, LinkStep, estimated_inputs, run_link_step, substitute, take_notices,
+    Cooperation, LinkGate, LinkStep, estimated_frame, estimated_inputs, run_link_step, substitute,
+    take_notices,
 };
 use vigie_core::symbols::Space;
 use vigie_core::{Bits, Millis};
@@ -346,11 +347,23 @@ impl LiveTasks {
         }
     }
 
-    fn step(&mut self, engine: &mut Engine, now: Millis, board: &mut AlarmBoard, emit: Emit<'_>) {
+    /// One cycle of the task monitors; in degraded mode they read the `estimated`
+    /// sensors from their estimates, as the program does.
+    fn step(
+        &mut self,
+        engine: &mut Engine,
+        now: Millis,
+        estimated: &[(usize, usize)],
+        board: &mut AlarmBoard,
+        emit: Emit<'_>,
+    ) {
         if engine.cycles() <= 1 {
             return;
         }
-        self.events.step(&mut self.monitor, now, engine.frame());
+        match estimated_frame(estimated, engine.frame()) {
+            None => self.events.step(&mut self.monitor, now, engine.frame()),
+            Some(f) => self.events.step(&mut self.monitor, now, &f),
+        }
         self.events.publish(&self.monitor, engine.frame_mut());
         let new = self.monitor.alarms.get(self.seen..).unwrap_or_default();
         for a in new {
@@ -506,7 +519,17 @@ impl Cycle for MonitorCycle {
             None => LinkStep::Skipped,
         };
         if let Some(t) = &mut self.tasks {
-            t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
+            let estimated = self
+                .diagnosers
+                .as_ref()
+                .map_or(&[][..], |d| &d.estimated[..]);
+            t.step(
+                &mut self.engine,
+                now,
+                estimated,
+                &mut self.board,
+                &mut *self.emit,
+            );
         }
         let stale = self.inputs.stale(now, &self.bounds);
         let verdict = self.guard.check(self.engine.frame(), &stale);
@@ -802,7 +825,17 @@ impl Cycle for GatewayCycle {
             None => LinkStep::Skipped,
         };
         if let Some(t) = &mut self.tasks {
-            t.step(&mut self.engine, now, &mut self.board, &mut *self.emit);
+            let estimated = self
+                .diagnosers
+                .as_ref()
+                .map_or(&[][..], |d| &d.estimated[..]);
+            t.step(
+                &mut self.engine,
+                now,
+                estimated,
+                &mut self.board,
+                &mut *self.emit,
+            );
         }
         // 6. Outputs to the plant (written by the I/O task at once), sensors to the PLC
         // (in degraded mode a flagged sensor as its estimate).

@@ -140,6 +140,28 @@ pub fn estimated_inputs(d: &Diagnosers, plant: &Plant, symbols: &Symbols) -> Vec
         .collect()
 }
 
+/// The frame as the control program and the task monitors read it in degraded mode:
+/// each estimated sensor replaced, at t and at t−1, by its estimate. None when no sensor
+/// is estimated (they read `frame` itself).
+pub fn estimated_frame(estimated: &[(usize, usize)], frame: &Frame) -> Option<Frame> {
+    if estimated.is_empty() {
+        return None;
+    }
+    let mut f = frame.clone();
+    for &(input, aux) in estimated {
+        if input >= f.now(Space::Input).len() || aux >= frame.now(Space::Aux).len() {
+            continue;
+        }
+        let (v, p) = (
+            frame.now(Space::Aux).get(aux),
+            frame.prev(Space::Aux).get(aux),
+        );
+        f.now_mut(Space::Input).set(input, v);
+        f.prev[Space::Input as usize].set(input, p);
+    }
+    Some(f)
+}
+
 /// Replaces, in `inputs`, each estimated sensor by its estimate at t in `frame` (what
 /// the control program reads in degraded mode).
 pub fn substitute(estimated: &[(usize, usize)], frame: &Frame, inputs: &mut Bits) {
