@@ -53,6 +53,11 @@ pub enum OperatorAction {
     Switch(String, bool),
     /// Change the filter mode.
     Filter(FilterMode),
+    /// After a repair: clear the diagnosers' fault flags (the operator's reset of the
+    /// paper). The estimated sensors are read again and a stop by an actuator partition
+    /// ends; the models restart from the observed values, and a fault still present is
+    /// diagnosed again.
+    ResetDiagnosers,
 }
 
 /// An operator action at a time.
@@ -454,6 +459,13 @@ impl Simulation {
                 Ok(())
             }
             OperatorAction::Reset => self.engine.reset().map_err(|e| e.to_string()),
+            OperatorAction::ResetDiagnosers => match self.diagnosers.as_mut() {
+                Some(d) => {
+                    d.reset_in(self.engine.frame_mut());
+                    Ok(())
+                }
+                None => Err("this run has no diagnosers".to_string()),
+            },
             OperatorAction::Pause => {
                 self.engine.set_hold(true);
                 Ok(())
@@ -471,10 +483,32 @@ impl Simulation {
                 self.log("reset", "operator reset of the filter".into());
             }
             (Err(e), OperatorAction::Reset) => self.log("reset_refused", e.clone()),
+            (Ok(()), OperatorAction::ResetDiagnosers) => self.diagnosers_cleared(
+                now,
+                "operator reset of the diagnosers after a repair: fault flags cleared, \
+                 sensors read again",
+            ),
             (Ok(()), a) => self.log("operator", format!("{a:?}")),
             (Err(e), a) => self.log("operator_refused", format!("{a:?}: {e}")),
         }
         result
+    }
+
+    /// The diagnosers' flags were cleared (operator's reset, or a live link's restart):
+    /// the sensors are read again and the diagnosis alarms end.
+    fn diagnosers_cleared(&mut self, now: Millis, text: &str) {
+        self.degraded.clear();
+        let keys: Vec<String> = self
+            .alarms
+            .all()
+            .iter()
+            .filter(|a| a.kind == AlarmKind::Diagnosis && a.cleared.is_none())
+            .map(|a| a.key.clone())
+            .collect();
+        for key in keys {
+            self.alarms.clear(now, &key);
+        }
+        self.log("diagnosers_reset", text.to_string());
     }
 
     fn trip_keys(&self) -> Vec<String> {
@@ -507,6 +541,17 @@ impl Simulation {
         let from = self.journal_taken;
         self.journal_taken = self.journal.len();
         &self.journal[from..]
+    }
+
+    /// The sensors the control program and the task monitors read from their estimates
+    /// (degraded mode), in input order.
+    pub fn degraded_sensors(&self) -> Vec<String> {
+        let mut inputs: Vec<usize> = self.degraded.iter().map(|&(i, _)| i).collect();
+        inputs.sort_unstable();
+        inputs
+            .into_iter()
+            .filter_map(|i| self.bundle.plant.inputs.get(i).map(|s| s.id.clone()))
+            .collect()
     }
 
     /// The whole journal of the run.

@@ -271,4 +271,30 @@ fn console_shows_the_diagnosers_of_a_monitor_link() {
         .filter(|a| a.key == "diag:table:C4")
         .collect();
     assert_eq!(alarms.len(), 1, "{alarms:#?}");
+
+    // The technician changes the sensor (C4 shows the table at rest again) and resets
+    // the diagnosers: the run clears its flags, the mirror follows, the banner and the
+    // alarm go.
+    plant.set_inputs(&[(4, true)]);
+    h.get_by_label("Reset diagnosers (after repair)").click();
+    wait_state(&mut h, "the mirror's flags to clear", |c| {
+        c.sim
+            .diagnosers
+            .as_ref()
+            .is_some_and(|d| d.flagged().is_empty())
+    });
+    h.run_steps(3);
+    assert!(
+        h.query_all_by_label_contains("at fault").next().is_none(),
+        "the degraded-mode banner is still shown"
+    );
+    assert!(
+        h.state()
+            .sim
+            .alarms
+            .all()
+            .iter()
+            .filter(|a| a.key == "diag:table:C4")
+            .all(|a| a.cleared.is_some())
+    );
 }

@@ -2,12 +2,14 @@
 //! system is stopped by an actuator partition, and a collapsible table of every
 //! component's state estimate, partition decisions and fault flags. Shown only when the
 //! simulation runs the diagnosers (a scenario with `diagnosers: true`, or a live link
-//! whose run steps them: the mirror's diagnosers follow the run's cycles). Renders only.
+//! whose run steps them: the mirror's diagnosers follow the run's cycles). Renders, and
+//! offers the operator's reset of the flags after a repair (a typed command).
 
-use super::Console;
+use super::{Command, Console};
 use egui::RichText;
 use vigie_core::live::config::Mode;
 use vigie_core::pop::Certainty;
+use vigie_core::sim::OperatorAction;
 use vigie_core::sim::diagnosis::hat;
 
 /// The text of the degraded-mode banner, one line per flagged partition (on a monitor
@@ -48,18 +50,31 @@ pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
 }
 
 /// The diagnoser panel (top of the window).
-pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
+pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let Some(d) = c.sim.diagnosers.as_ref() else {
         return;
     };
     egui::Panel::top("diagnosers").show(ui, |ui| {
-        for (line, stop) in banner_lines(c) {
-            let color = if stop {
+        let lines = banner_lines(c);
+        for (line, stop) in &lines {
+            let color = if *stop {
                 c.palette.trip
             } else {
                 c.palette.alarm
             };
             ui.label(RichText::new(line).strong().color(color));
+        }
+        if !lines.is_empty()
+            && ui
+                .button("Reset diagnosers (after repair)")
+                .on_hover_text(
+                    "The faulty sensor or actuator was repaired: clear the fault flags, \
+                     read the sensors again and end the stop. A fault still present is \
+                     diagnosed again.",
+                )
+                .clicked()
+        {
+            out.push(Command::Plant(OperatorAction::ResetDiagnosers));
         }
         egui::CollapsingHeader::new(format!(
             "Diagnosers ({} certain diagnoses)",

@@ -301,6 +301,10 @@ impl Console {
                 }
                 _ => "monitor mode: the filter only reports, there is nothing to reset".into(),
             },
+            Command::Plant(OperatorAction::ResetDiagnosers) => {
+                link.tap.request_diagnosers_reset();
+                "diagnosers reset requested from the run".to_string()
+            }
             Command::Plant(_)
             | Command::Restart
             | Command::RestartWithEdit

@@ -16,7 +16,7 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.panel))
         .show(ui, |ui| toolbar_ui(c, ui, out));
     // Below the toolbar: the degraded-mode banner and the diagnosers' table.
-    super::diagnosers::panel_ui(c, ui);
+    super::diagnosers::panel_ui(c, ui, out);
     egui::Panel::bottom("status").show(ui, |ui| status_ui(c, ui));
     egui::Panel::bottom("chronogram")
         .resizable(true)

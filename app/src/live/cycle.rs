@@ -392,6 +392,8 @@ struct LiveDiagnosers {
     acts: Cooperation,
     /// Sensors read from their estimates: (input, auxiliary of the estimate).
     estimated: Vec<(usize, usize)>,
+    /// The operator asked to clear the fault flags; done at the next stepped cycle.
+    reset_pending: bool,
 }
 
 impl LiveDiagnosers {
@@ -402,6 +404,7 @@ impl LiveDiagnosers {
             seen: 0,
             acts,
             estimated: Vec::new(),
+            reset_pending: false,
         })
     }
 
@@ -416,10 +419,29 @@ impl LiveDiagnosers {
         emit: Emit<'_>,
     ) -> LinkStep {
         let now = engine.now();
-        let (step, change) = self.gate.step(usable, &self.diagnosers, engine.frame());
+        let (mut step, change) = self.gate.step(usable, &self.diagnosers, engine.frame());
         if let Some(change) = change {
             tracing::info!("diagnosers {change:?} at {now}");
             emit(json!({"event": "diagnosers", "state": change, "time_ms": now.0}));
+        }
+        // The operator's reset after a repair: the flags are cleared and the models
+        // restart from the observed values (the mirror does the same on `Restarted`).
+        if self.reset_pending && step == LinkStep::Stepped {
+            self.reset_pending = false;
+            step = LinkStep::Restarted;
+            self.estimated.clear();
+            let keys: Vec<String> = board
+                .alarms
+                .all()
+                .iter()
+                .filter(|a| a.kind == AlarmKind::Diagnosis && a.cleared.is_none())
+                .map(|a| a.key.clone())
+                .collect();
+            for key in keys {
+                board.clear(emit, now, &key);
+            }
+            tracing::info!("diagnosers reset by the operator at {now}");
+            emit(json!({"event": "diagnosers_reset", "time_ms": now.0}));
         }
         let d = &mut self.diagnosers;
         engine.after_filter(&mut |t, f, held| run_link_step(d, step, t, f, held));
@@ -508,6 +530,11 @@ impl Cycle for MonitorCycle {
             &mut self.last_spec,
         );
         let usable = self.heard.is_some() && !self.dog.is_lost();
+        if self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset) {
+            if let Some(d) = &mut self.diagnosers {
+                d.reset_pending = true;
+            }
+        }
         let diagnosers = match &mut self.diagnosers {
             Some(d) => d.step(
                 &mut self.engine,
@@ -814,6 +841,11 @@ impl Cycle for GatewayCycle {
         self.engine.set_applied(&applied);
         // 5. The diagnosers follow what the plant receives.
         let usable = self.plant_heard.is_some() && !self.plant_dog.is_lost();
+        if self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset) {
+            if let Some(d) = &mut self.diagnosers {
+                d.reset_pending = true;
+            }
+        }
         let diagnosers = match &mut self.diagnosers {
             Some(d) => d.step(
                 &mut self.engine,

@@ -105,6 +105,7 @@ struct Inner {
     events: Vec<(Millis, String, String)>,
     dropped: u64,
     reset_requested: bool,
+    diagnosers_reset_requested: bool,
 }
 
 /// The shared mailbox between a live run and the console.
@@ -124,6 +125,7 @@ impl Tap {
             events: Vec::new(),
             dropped: 0,
             reset_requested: false,
+            diagnosers_reset_requested: false,
         })))
     }
 
@@ -158,6 +160,16 @@ impl Tap {
 
     pub(crate) fn take_reset(&self) -> bool {
         self.with(|i| std::mem::take(&mut i.reset_requested))
+    }
+
+    /// Asks the run to clear its diagnosers' fault flags (the operator's reset after a
+    /// repair).
+    pub fn request_diagnosers_reset(&self) {
+        self.with(|i| i.diagnosers_reset_requested = true);
+    }
+
+    pub(crate) fn take_diagnosers_reset(&self) -> bool {
+        self.with(|i| std::mem::take(&mut i.diagnosers_reset_requested))
     }
 
     pub(crate) fn push_cycle(&self, cycle: ObservedCycle, update: impl FnOnce(&mut LinkState)) {

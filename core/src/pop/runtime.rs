@@ -61,7 +61,8 @@ struct Run {
     decisions: Vec<(Certainty, Vec<usize>)>,
     unexplained: bool,
     started: bool,
-    /// Suspended by the filter's hold: the restart does not know the clock.
+    /// Suspended by the filter's hold, or reset by the operator: the restart does not
+    /// know the clock.
     held: bool,
     /// Since when a certain decision waits on the component's interface (see
     /// [`Diagnosers::interface_blocks`]).
@@ -471,6 +472,19 @@ impl Diagnosers {
             .unwrap_or_default()
     }
 
+    /// As [`Diagnosers::reset`], and writes the cleared flags into `frame` at once, so
+    /// that the filter and the program of the next cycle read the sensors again (the
+    /// diagnosers run after them in the cycle).
+    pub fn reset_in(&mut self, frame: &mut Frame) {
+        self.reset();
+        let aux = frame.now_mut(Space::Aux);
+        for r in &self.runs {
+            for &a in r.def_aux.iter().flatten() {
+                aux.set(a as usize, false);
+            }
+        }
+    }
+
     /// Clears the latched flags (operator's acknowledgement after a repair) and restarts
     /// every estimate from the next cycle.
     pub fn reset(&mut self) {
@@ -478,6 +492,10 @@ impl Diagnosers {
             r.latched.iter_mut().for_each(|l| *l = false);
             r.started = false;
             r.unexplained = false;
+            // Restarted mid-motion (an order of the reset's cycle is taken as a value,
+            // not as a clock event): the clock is unknown until the next clock event,
+            // as after a hold.
+            r.held = true;
         }
         self.wake.iter_mut().for_each(|w| *w = i64::MIN);
     }

@@ -71,8 +71,16 @@ impl Simulation {
         // The diagnosers follow those outputs, stepped as the link stepped its own.
         if let Some(d) = self.diagnosers.as_mut() {
             let step = cycle.diagnosers;
+            let had_flags = !d.flagged().is_empty();
             self.engine
                 .after_filter(&mut |t, f, held| run_link_step(d, step, t, f, held));
+            if step == LinkStep::Restarted && had_flags {
+                self.diagnosers_cleared(
+                    now,
+                    "diagnosers restarted by the link (operator's reset after a repair, or \
+                     the peer back): fault flags cleared, sensors read again",
+                );
+            }
         }
         self.diagnosis_events(now);
         if let Some(index) = self.record_events(now)
