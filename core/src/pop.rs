@@ -463,8 +463,9 @@ pub fn faudes_export(c: &Component) -> (String, String) {
     (s, m)
 }
 
-/// A synthetic model of `n` identical turntables (`A4_<i>`, `C4_<i>`, `C5_<i>`), with
-/// its plant, for benchmarks.
+/// A synthetic model of `n` identical copies of a component (the turntable: `A4_<i>`,
+/// `C4_<i>`, `C5_<i>`), with its plant, for benchmarks. Its guards may only read its own
+/// signals.
 pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile) {
     use crate::plant::{Signal, SignalKind};
     let sig = |id: String, kind| Signal {
@@ -548,9 +549,19 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
         for p in &mut c.partitions {
             p.id = format!("{}_{i}", p.id);
             p.sensor = p.sensor.as_ref().map(|s| format!("{s}_{i}"));
-            p.actuators = p.actuators.iter().map(|a| format!("{a}_{i}")).collect();
+            // Actuators the component does not observe (A1 for the box beam) are not in
+            // the synthetic plant.
+            p.actuators = p
+                .actuators
+                .iter()
+                .filter(|a| table.signals.contains(a))
+                .map(|a| format!("{a}_{i}"))
+                .collect();
         }
-        c.assumes = c.assumes.iter().map(|a| format!("{a}_{i}")).collect();
+        // The neighbours whose sensors a component assumes are not in the synthetic
+        // plant: each copy stands alone.
+        c.assumes.clear();
+        c.independent = c.independent.iter().map(|a| format!("{a}_{i}")).collect();
         for e in &mut c.estimates {
             e.sensor = format!("{}_{i}", e.sensor);
             let mut x = e.expr.clone();

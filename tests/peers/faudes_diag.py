@@ -2,9 +2,9 @@
 
     faudes_diag.py check GEN FTM SEQS.json   -> JSON: for each sequence, the failure
         labels of the libFAUDES event diagnoser's state after each event
-    faudes_diag.py bench GEN FTM [K..]       -> construction time of the centralized
-        diagnoser (EventDiagnoser on the parallel composition of K copies, each copy's
-        events renamed), for each K (default 3 4 5)
+    faudes_diag.py bench GEN FTM NAME [K..]  -> construction time of the centralized
+        diagnoser (EventDiagnoser on the parallel composition of K copies of component
+        NAME, each copy's events renamed), for each K (default 3 4 5)
 """
 import json
 import sys
@@ -78,7 +78,7 @@ def check(gen, ftm, seqs_path):
     json.dump(result, sys.stdout)
 
 
-def bench(gen, ftm, ks):
+def bench(gen, ftm, what, ks):
     g, fm = load(gen, ftm)
     for k in ks:
         copies = []
@@ -94,7 +94,7 @@ def bench(gen, ftm, ks):
             p = faudes.System()
             faudes.Parallel(prod, c, p)
             prod = p
-        print(f"libFAUDES parallel composition, {k} turntables: "
+        print(f"libFAUDES parallel composition, {k} x {what}: "
               f"{(time.perf_counter() - start)*1e3:.1f} ms (plant {prod.Size()} states, "
               f"{prod.TransRelSize()} transitions)", flush=True)
         ft = faudes.FailureTypeMap()
@@ -107,7 +107,7 @@ def bench(gen, ftm, ks):
         d = faudes.Diagnoser()
         faudes.EventDiagnoser(prod, ft, d)
         el = time.perf_counter() - start
-        print(f"libFAUDES centralized EventDiagnoser, {k} turntables: {el*1e3:.1f} ms "
+        print(f"libFAUDES centralized EventDiagnoser, {k} x {what}: {el*1e3:.1f} ms "
               f"(plant {prod.Size()} states, diagnoser {d.Size()} states)", flush=True)
 
 
@@ -115,4 +115,4 @@ if __name__ == "__main__":
     if sys.argv[1] == "check":
         check(sys.argv[2], sys.argv[3], sys.argv[4])
     else:
-        bench(sys.argv[2], sys.argv[3], [int(k) for k in sys.argv[4:]] or [3, 4, 5])
+        bench(sys.argv[2], sys.argv[3], sys.argv[4], [int(k) for k in sys.argv[5:]] or [3, 4, 5])

@@ -1,7 +1,7 @@
 //! `vigie learn` (interval learning from traces), `vigie diagnose --report`,
 //! `vigie campaign diagnoser` and `vigie bench-diag`: the diagnosers' commands.
 
-use std::io::Write as _;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -183,7 +183,8 @@ pub(crate) fn campaign(
 const LIBFAUDES_LIMIT_S: u64 = 60;
 
 /// `vigie bench-diag`: diagnoser cost per cycle (station, 1000 synthetic turntables),
-/// build times, and libFAUDES' centralized diagnoser for 3, 4, 5 turntables.
+/// build times, and libFAUDES' centralized diagnoser for 1, 3, 4, 5 identical turntables
+/// and box beams (`c6`).
 pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     let mut out = std::io::stdout().lock();
     let err =
@@ -269,42 +270,79 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
             r.diagnosed
         )?;
     }
-    // Construction time vs libFAUDES for k identical turntables.
+    // Construction time vs libFAUDES for k identical components: the turntable (202
+    // automaton states) and the table's box beam `c6` (small enough for libFAUDES to
+    // finish with several copies).
     let tmp = std::env::temp_dir().join("vigie-bench-diag");
     std::fs::create_dir_all(&tmp)?;
-    let c = &pop::load(dir).map_err(err)?.0.compiled;
-    let tc = c
-        .components
-        .iter()
-        .find(|c| c.id == "table")
-        .ok_or_else(|| anyhow::anyhow!("no table"))?;
-    let (g, m) = pop::faudes_export(tc);
-    std::fs::write(tmp.join("table.gen"), g)?;
-    std::fs::write(tmp.join("table.ftm"), m)?;
-    for k in [1usize, 3, 4, 5] {
-        let (plant, syn) = pop::synthetic(k, table);
-        let mut symbols = plant.symbols();
-        for a in pop::build::aux_names(&syn) {
-            let _ = symbols.declare(&a, vigie_core::symbols::Space::Aux);
-        }
-        let t = syn.to_ron();
-        let start = Instant::now();
-        let _ =
-            pop::build::compile(&syn, &t, Path::new("<synthetic>"), &symbols, None).map_err(err)?;
-        writeln!(
-            out,
-            "vigie decentralized build, {k} turntables: {:.3} ms",
-            start.elapsed().as_secs_f64() * 1e3
-        )?;
-    }
+    let station = pop::load(dir).map_err(err)?.0.compiled;
     let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| PathBuf::from(".venv"), PathBuf::from);
+    for id in ["table", "c6"] {
+        let def = file
+            .components
+            .iter()
+            .find(|c| c.id == id)
+            .ok_or_else(|| anyhow::anyhow!("no component `{id}`"))?;
+        let compiled = station
+            .components
+            .iter()
+            .find(|c| c.id == id)
+            .ok_or_else(|| anyhow::anyhow!("no component `{id}`"))?;
+        for k in [1usize, 3, 4, 5] {
+            let (plant, syn) = pop::synthetic(k, def);
+            let mut symbols = plant.symbols();
+            for a in pop::build::aux_names(&syn) {
+                let _ = symbols.declare(&a, vigie_core::symbols::Space::Aux);
+            }
+            let t = syn.to_ron();
+            let start = Instant::now();
+            let _ = pop::build::compile(&syn, &t, Path::new("<synthetic>"), &symbols, None)
+                .map_err(err)?;
+            writeln!(
+                out,
+                "vigie decentralized build, {k} x {id}: {:.3} ms ({} automaton states each)",
+                start.elapsed().as_secs_f64() * 1e3,
+                compiled.g.len()
+            )?;
+        }
+        let (g, m) = pop::faudes_export(compiled);
+        let (gen_path, ftm_path) = (tmp.join(format!("{id}.gen")), tmp.join(format!("{id}.ftm")));
+        std::fs::write(&gen_path, g)?;
+        std::fs::write(&ftm_path, m)?;
+        if !libfaudes_rows(&mut out, &venv, &gen_path, &ftm_path, id)? {
+            break;
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// libFAUDES' centralized diagnoser for 1, 3, 4 and 5 copies of the exported component
+/// `id`, each construction stopped after [`LIBFAUDES_LIMIT_S`]; false when the venv is
+/// missing (said in the output).
+fn libfaudes_rows(
+    out: &mut impl Write,
+    venv: &Path,
+    gen_path: &Path,
+    ftm_path: &Path,
+    id: &str,
+) -> anyhow::Result<bool> {
     let script = PathBuf::from("tests/peers/faudes_diag.py");
+    let mut unfinished: Option<usize> = None;
     for k in [1usize, 3, 4, 5] {
+        if let Some(j) = unfinished {
+            // More copies only make the composition larger.
+            writeln!(
+                out,
+                "libFAUDES centralized EventDiagnoser, {k} x {id}: not run ({j} copies did not finish)"
+            )?;
+            continue;
+        }
         let child = std::process::Command::new(venv.join("bin/python"))
             .arg(&script)
             .arg("bench")
-            .arg(tmp.join("table.gen"))
-            .arg(tmp.join("table.ftm"))
+            .arg(gen_path)
+            .arg(ftm_path)
+            .arg(id)
             .arg(k.to_string())
             .stdout(std::process::Stdio::piped())
             .stderr(std::process::Stdio::null())
@@ -316,7 +354,7 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
                     out,
                     "libFAUDES: not run ({e}); create the venv: python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt"
                 )?;
-                break;
+                return Ok(false);
             }
         };
         let started = Instant::now();
@@ -346,14 +384,15 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
                 }
                 writeln!(
                     out,
-                    "libFAUDES centralized EventDiagnoser, {k} turntables: not finished after {LIBFAUDES_LIMIT_S} s (stopped)"
+                    "libFAUDES centralized EventDiagnoser, {k} x {id}: not finished after {LIBFAUDES_LIMIT_S} s (stopped)"
                 )?;
+                unfinished = Some(k);
                 break;
             }
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(true)
 }
 
 /// Time the calling thread spent on a CPU, ns (Linux `schedstat`): unlike the wall
