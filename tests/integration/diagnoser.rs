@@ -338,3 +338,25 @@ fn libfaudes_gives_the_same_certain_faults_on_the_same_sequences() {
     );
     assert!(compared > 1000, "only {compared} verdicts compared");
 }
+
+#[test]
+fn the_committed_feed_model_is_what_its_generator_writes() {
+    // `scripts/gen-feed-model.py` writes the 41-state feed model; an edit by hand (or a
+    // generator change not run) would make them drift.
+    let out = Command::new("python3")
+        .arg(repo().join("scripts/gen-feed-model.py"))
+        .arg("--print")
+        .output()
+        .expect("python3 must be installed (scripts/test.sh installs it)");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let generated = String::from_utf8(out.stdout).unwrap();
+    let file = std::fs::read_to_string(station().join("diagnosers.ron")).unwrap();
+    assert!(
+        file.contains(&generated),
+        "diagnosers.ron's feed differs from `python3 scripts/gen-feed-model.py --print`: run `python3 scripts/gen-feed-model.py`"
+    );
+}
