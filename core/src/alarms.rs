@@ -135,6 +135,16 @@ impl AlarmList {
         self.next_id
     }
 
+    /// The keys of the alarms of `kind` whose condition is still present, in raising
+    /// order.
+    pub fn active_keys(&self, kind: AlarmKind) -> Vec<String> {
+        self.alarms
+            .iter()
+            .filter(|a| a.kind == kind && a.cleared.is_none())
+            .map(|a| a.key.clone())
+            .collect()
+    }
+
     /// The condition behind `key` returned to normal.
     pub fn clear(&mut self, now: Millis, key: &str) {
         for a in self

@@ -477,7 +477,7 @@ impl Simulation {
         };
         match (&result, action) {
             (Ok(()), OperatorAction::Reset) => {
-                for key in self.trip_keys() {
+                for key in self.alarms.active_keys(AlarmKind::FilterTrip) {
                     self.alarms.clear(now, &key);
                 }
                 self.log("reset", "operator reset of the filter".into());
@@ -498,26 +498,10 @@ impl Simulation {
     /// the sensors are read again and the diagnosis alarms end.
     fn diagnosers_cleared(&mut self, now: Millis, text: &str) {
         self.degraded.clear();
-        let keys: Vec<String> = self
-            .alarms
-            .all()
-            .iter()
-            .filter(|a| a.kind == AlarmKind::Diagnosis && a.cleared.is_none())
-            .map(|a| a.key.clone())
-            .collect();
-        for key in keys {
+        for key in self.alarms.active_keys(AlarmKind::Diagnosis) {
             self.alarms.clear(now, &key);
         }
         self.log("diagnosers_reset", text.to_string());
-    }
-
-    fn trip_keys(&self) -> Vec<String> {
-        self.alarms
-            .all()
-            .iter()
-            .filter(|a| a.kind == AlarmKind::FilterTrip && a.cleared.is_none())
-            .map(|a| a.key.clone())
-            .collect()
     }
 
     /// Injects a fault now (training).

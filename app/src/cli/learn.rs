@@ -227,11 +227,7 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
         .find(|c| c.id == "table")
         .ok_or_else(|| anyhow::anyhow!("no table"))?;
     let n = 1000;
-    let (plant, syn) = pop::synthetic(n, table);
-    let mut symbols = plant.symbols();
-    for a in pop::build::aux_names(&syn) {
-        let _ = symbols.declare(&a, vigie_core::symbols::Space::Aux);
-    }
+    let (syn, symbols) = synthetic(n, table);
     let syn_text = syn.to_ron();
     let start = Instant::now();
     let compiled = pop::build::compile(&syn, &syn_text, Path::new("<synthetic>"), &symbols, None)
@@ -289,11 +285,7 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
             .find(|c| c.id == id)
             .ok_or_else(|| anyhow::anyhow!("no component `{id}`"))?;
         for k in [1usize, 3, 4, 5] {
-            let (plant, syn) = pop::synthetic(k, def);
-            let mut symbols = plant.symbols();
-            for a in pop::build::aux_names(&syn) {
-                let _ = symbols.declare(&a, vigie_core::symbols::Space::Aux);
-            }
+            let (syn, symbols) = synthetic(k, def);
             let t = syn.to_ron();
             let start = Instant::now();
             let _ = pop::build::compile(&syn, &t, Path::new("<synthetic>"), &symbols, None)
@@ -314,6 +306,19 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `n` synthetic copies of `def` and the symbols of their plant (auxiliaries declared).
+fn synthetic(
+    n: usize,
+    def: &pop::model::ComponentDef,
+) -> (pop::model::DiagnoserFile, vigie_core::symbols::Symbols) {
+    let (plant, syn) = pop::synthetic(n, def);
+    let mut symbols = plant.symbols();
+    for a in pop::build::aux_names(&syn) {
+        let _ = symbols.declare(&a, vigie_core::symbols::Space::Aux);
+    }
+    (syn, symbols)
 }
 
 /// libFAUDES' centralized diagnoser for 1, 3, 4 and 5 copies of the exported component

@@ -347,19 +347,20 @@ impl LiveTasks {
         }
     }
 
-    /// One cycle of the task monitors; in degraded mode they read the `estimated`
-    /// sensors from their estimates, as the program does.
+    /// One cycle of the task monitors; in degraded mode they read the sensors the
+    /// diagnosers estimate from their estimates, as the program does.
     fn step(
         &mut self,
         engine: &mut Engine,
         now: Millis,
-        estimated: &[(usize, usize)],
+        diagnosers: Option<&LiveDiagnosers>,
         board: &mut AlarmBoard,
         emit: Emit<'_>,
     ) {
         if engine.cycles() <= 1 {
             return;
         }
+        let estimated = diagnosers.map_or(&[][..], |d| &d.estimated[..]);
         match estimated_frame(estimated, engine.frame()) {
             None => self.events.step(&mut self.monitor, now, engine.frame()),
             Some(f) => self.events.step(&mut self.monitor, now, &f),
@@ -408,17 +409,20 @@ impl LiveDiagnosers {
         })
     }
 
-    /// Steps the diagnosers (when `usable`) and reports their new certain diagnoses;
-    /// returns what was done, for the console's mirror.
+    /// Steps the diagnosers (when `usable`; first clearing their flags when the
+    /// operator asked, `reset_asked`) and reports their new certain diagnoses; returns
+    /// what was done, for the console's mirror.
     fn step(
         &mut self,
         engine: &mut Engine,
         usable: bool,
+        reset_asked: bool,
         bundle: &PlantBundle,
         board: &mut AlarmBoard,
         emit: Emit<'_>,
     ) -> LinkStep {
         let now = engine.now();
+        self.reset_pending |= reset_asked;
         let (mut step, change) = self.gate.step(usable, &self.diagnosers, engine.frame());
         if let Some(change) = change {
             tracing::info!("diagnosers {change:?} at {now}");
@@ -430,14 +434,7 @@ impl LiveDiagnosers {
             self.reset_pending = false;
             step = LinkStep::Restarted;
             self.estimated.clear();
-            let keys: Vec<String> = board
-                .alarms
-                .all()
-                .iter()
-                .filter(|a| a.kind == AlarmKind::Diagnosis && a.cleared.is_none())
-                .map(|a| a.key.clone())
-                .collect();
-            for key in keys {
+            for key in board.alarms.active_keys(AlarmKind::Diagnosis) {
                 board.clear(emit, now, &key);
             }
             tracing::info!("diagnosers reset by the operator at {now}");
@@ -530,15 +527,12 @@ impl Cycle for MonitorCycle {
             &mut self.last_spec,
         );
         let usable = self.heard.is_some() && !self.dog.is_lost();
-        if self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset) {
-            if let Some(d) = &mut self.diagnosers {
-                d.reset_pending = true;
-            }
-        }
+        let reset_asked = self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset);
         let diagnosers = match &mut self.diagnosers {
             Some(d) => d.step(
                 &mut self.engine,
                 usable,
+                reset_asked,
                 &self.bundle,
                 &mut self.board,
                 &mut *self.emit,
@@ -546,17 +540,8 @@ impl Cycle for MonitorCycle {
             None => LinkStep::Skipped,
         };
         if let Some(t) = &mut self.tasks {
-            let estimated = self
-                .diagnosers
-                .as_ref()
-                .map_or(&[][..], |d| &d.estimated[..]);
-            t.step(
-                &mut self.engine,
-                now,
-                estimated,
-                &mut self.board,
-                &mut *self.emit,
-            );
+            let d = self.diagnosers.as_ref();
+            t.step(&mut self.engine, now, d, &mut self.board, &mut *self.emit);
         }
         let stale = self.inputs.stale(now, &self.bounds);
         let verdict = self.guard.check(self.engine.frame(), &stale);
@@ -841,15 +826,12 @@ impl Cycle for GatewayCycle {
         self.engine.set_applied(&applied);
         // 5. The diagnosers follow what the plant receives.
         let usable = self.plant_heard.is_some() && !self.plant_dog.is_lost();
-        if self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset) {
-            if let Some(d) = &mut self.diagnosers {
-                d.reset_pending = true;
-            }
-        }
+        let reset_asked = self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset);
         let diagnosers = match &mut self.diagnosers {
             Some(d) => d.step(
                 &mut self.engine,
                 usable,
+                reset_asked,
                 &self.bundle,
                 &mut self.board,
                 &mut *self.emit,
@@ -857,17 +839,8 @@ impl Cycle for GatewayCycle {
             None => LinkStep::Skipped,
         };
         if let Some(t) = &mut self.tasks {
-            let estimated = self
-                .diagnosers
-                .as_ref()
-                .map_or(&[][..], |d| &d.estimated[..]);
-            t.step(
-                &mut self.engine,
-                now,
-                estimated,
-                &mut self.board,
-                &mut *self.emit,
-            );
+            let d = self.diagnosers.as_ref();
+            t.step(&mut self.engine, now, d, &mut self.board, &mut *self.emit);
         }
         // 6. Outputs to the plant (written by the I/O task at once), sensors to the PLC
         // (in degraded mode a flagged sensor as its estimate).

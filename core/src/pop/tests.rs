@@ -33,6 +33,25 @@ fn one_run(name: &str, seed: u64) -> campaign::Row {
     r.rows.swap_remove(0)
 }
 
+/// A closed loop (seed 3) run until the table rests at C4 with A4 off, where C4 dies
+/// (stuck at 0, for `repaired_after` ms or for ever); the simulation and that time.
+fn c4_dies_at_rest(repaired_after: Option<u64>) -> (crate::sim::Simulation, u64) {
+    let (_, mut sim) = closed_loop(&station_dir(), 3, 60_000, None).unwrap();
+    let c4 = sim.bundle.plant.input("C4").unwrap();
+    let a4 = sim.bundle.plant.output("A4").unwrap();
+    while !sim.emulator.sensors().get(c4) || sim.engine.applied().get(a4) {
+        sim.cycle();
+    }
+    let at = sim.now().0;
+    sim.inject(crate::emulator::FaultSpec {
+        trigger: crate::emulator::Trigger::At(at),
+        fault: crate::emulator::FaultKind::SensorStuckAt0("C4".into()),
+        duration_ms: repaired_after,
+    })
+    .unwrap();
+    (sim, at)
+}
+
 #[test]
 fn station_models_compile_and_prune_by_the_filter() {
     let d = station();
@@ -67,20 +86,7 @@ fn c4_stuck_at_0_at_rest_is_certain_on_partition_c4() {
     // C4 falls with A4 off: F1 (stuck at 0), F8 (spurious fall) or F11 (unexpected
     // motion). No rise of C4 within the pulse limit, no rise of C5 within the motion's
     // hold: partition C4 with certainty.
-    let dir = station_dir();
-    let (_, mut sim) = closed_loop(&dir, 3, 60_000, None).unwrap();
-    let c4 = sim.bundle.plant.input("C4").unwrap();
-    let a4 = sim.bundle.plant.output("A4").unwrap();
-    while !sim.emulator.sensors().get(c4) || sim.engine.applied().get(a4) {
-        sim.cycle();
-    }
-    let at = sim.now().0;
-    sim.inject(crate::emulator::FaultSpec {
-        trigger: crate::emulator::Trigger::At(at),
-        fault: crate::emulator::FaultKind::SensorStuckAt0("C4".into()),
-        duration_ms: None,
-    })
-    .unwrap();
+    let (mut sim, at) = c4_dies_at_rest(None);
     sim.run_until(crate::Millis(at + 60_000));
     let d = sim.diagnosers.as_ref().unwrap();
     assert!(!d.diagnoses.is_empty());
@@ -409,20 +415,7 @@ fn after_the_repair_the_operators_reset_ends_the_degraded_mode() {
     // still read. The operator's reset clears the flag: C4 is read again, the models
     // restart from the observed values and production goes on with no new diagnosis.
     use crate::sim::OperatorAction;
-    let dir = station_dir();
-    let (_, mut sim) = closed_loop(&dir, 3, 60_000, None).unwrap();
-    let c4 = sim.bundle.plant.input("C4").unwrap();
-    let a4 = sim.bundle.plant.output("A4").unwrap();
-    while !sim.emulator.sensors().get(c4) || sim.engine.applied().get(a4) {
-        sim.cycle();
-    }
-    let at = sim.now().0;
-    sim.inject(crate::emulator::FaultSpec {
-        trigger: crate::emulator::Trigger::At(at),
-        fault: crate::emulator::FaultKind::SensorStuckAt0("C4".into()),
-        duration_ms: Some(60_000),
-    })
-    .unwrap();
+    let (mut sim, at) = c4_dies_at_rest(Some(60_000));
     sim.run_until(crate::Millis(at + 70_000));
     let flagged = |sim: &crate::sim::Simulation| sim.diagnosers.as_ref().unwrap().flagged();
     assert_eq!(flagged(&sim).len(), 1, "{:?}", flagged(&sim));
