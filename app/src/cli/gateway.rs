@@ -27,31 +27,33 @@ pub(crate) fn init_tracing(level: &str) {
         .try_init();
 }
 
-/// Resolves on SIGINT or SIGTERM.
-async fn stop_signal() {
-    vigie_app::live::stop_signal().await;
-    tracing::info!("stop requested");
+/// Resolves on SIGINT or SIGTERM; the handlers are installed by the call (inside the
+/// runtime), before the configuration is loaded.
+fn stop_signal(rt: &tokio::runtime::Runtime) -> impl std::future::Future<Output = ()> {
+    let signal = {
+        let _inside = rt.enter();
+        vigie_app::live::stop_signal()
+    };
+    async move {
+        signal.await;
+        tracing::info!("stop requested");
+    }
 }
 
 pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
     init_tracing(&args.log);
-    let setup = runtime::load(&args.config)?;
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;
+    let stop = stop_signal(&rt);
+    let setup = runtime::load(&args.config)?;
     let mut emit = |line: serde_json::Value| {
         let mut out = std::io::stdout().lock();
         let _ = writeln!(out, "{line}");
         let _ = out.flush();
     };
     let mut stats = CycleStats::default();
-    rt.block_on(runtime::run(
-        setup,
-        stop_signal(),
-        &mut emit,
-        &mut stats,
-        None,
-    ))?;
+    rt.block_on(runtime::run(setup, stop, &mut emit, &mut stats, None))?;
     Ok(ExitCode::SUCCESS)
 }
 

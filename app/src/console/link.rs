@@ -79,13 +79,24 @@ impl LinkSession {
                         let mut emit = move |e: serde_json::Value| journal_event(&events, &e);
                         let mut stats = CycleStats::default();
                         let signal_tap = run_tap.clone();
+                        // The signal handlers are installed now, and only when asked
+                        // (a console that does not watch them leaves SIGTERM alone).
+                        let signals = watch_signals.then(|| {
+                            let _inside = rt.enter();
+                            crate::live::stop_signal()
+                        });
                         rt.block_on(runtime::run(
                             setup,
                             async move {
-                                tokio::select! {
-                                    _ = stop_rx => {}
-                                    () = crate::live::stop_signal(), if watch_signals => {
-                                        signal_tap.update(|s| s.signalled = true);
+                                match signals {
+                                    Some(signals) => tokio::select! {
+                                        _ = stop_rx => {}
+                                        () = signals => {
+                                            signal_tap.update(|s| s.signalled = true);
+                                        }
+                                    },
+                                    None => {
+                                        let _ = stop_rx.await;
                                     }
                                 }
                             },

@@ -25,26 +25,37 @@ pub mod tap;
 mod tests;
 
 /// Resolves on SIGINT or SIGTERM (on other systems: Ctrl-C), for the headless gateway
-/// and the console on a link.
-pub async fn stop_signal() {
-    #[cfg(unix)]
-    {
-        use tokio::signal::unix::{SignalKind, signal};
-        match signal(SignalKind::terminate()) {
-            Ok(mut term) => {
+/// and the console on a link. Call it inside a Tokio runtime: the handlers are installed
+/// by the call, not when the future is first polled, so a signal that comes while the
+/// run starts waits for it instead of ending the process by the default action (before
+/// the outputs are driven to the safe state).
+#[cfg(unix)]
+pub fn stop_signal() -> impl std::future::Future<Output = ()> {
+    use tokio::signal::unix::{SignalKind, signal};
+    let term = signal(SignalKind::terminate());
+    let int = signal(SignalKind::interrupt());
+    async move {
+        match (term, int) {
+            (Ok(mut term), Ok(mut int)) => {
                 tokio::select! {
-                    _ = tokio::signal::ctrl_c() => {}
                     _ = term.recv() => {}
+                    _ = int.recv() => {}
                 }
             }
-            Err(e) => {
-                tracing::warn!("cannot watch SIGTERM: {e}");
+            (term, int) => {
+                for e in [term.err(), int.err()].into_iter().flatten() {
+                    tracing::warn!("cannot watch a stop signal: {e}");
+                }
                 let _ = tokio::signal::ctrl_c().await;
             }
         }
     }
-    #[cfg(not(unix))]
-    {
+}
+
+/// Resolves on Ctrl-C (see the Unix version).
+#[cfg(not(unix))]
+pub fn stop_signal() -> impl std::future::Future<Output = ()> {
+    async {
         let _ = tokio::signal::ctrl_c().await;
     }
 }
