@@ -97,7 +97,7 @@ pub fn generate(signals: usize, constraints: usize, seed: u64) -> Synthetic {
             })
             .collect();
         let k = rng.below(n_out as u64);
-        let monostable = |k: u64| k % 10 == 0;
+        let monostable = |k: u64| k.is_multiple_of(10);
         if monostable(k) {
             lits.push(if rng.chance(1, 2) {
                 format!("RE(A{k})")

@@ -197,7 +197,7 @@ fn snapshots_of_levels_and_modes() {
     {
         h.get_by_label(name).click();
         h.run_steps(2);
-        h.snapshot(&format!("console_level_{i}"));
+        h.snapshot(format!("console_level_{i}"));
     }
     h.get_by_label("Maintenance").click();
     h.run_steps(2);

@@ -29,10 +29,8 @@ pub(crate) fn run(
         for event in engine.drain_events() {
             if let vigie_core::engine::Event::Trip { index } = event {
                 let mut line = serde_json::to_value(&engine.trips[index])?;
-                if explain {
-                    if let Some(ex) = vigie_core::explain::explain(&engine, index) {
-                        line["explanation"] = serde_json::to_value(ex)?;
-                    }
+                if explain && let Some(ex) = vigie_core::explain::explain(&engine, index) {
+                    line["explanation"] = serde_json::to_value(ex)?;
                 }
                 writeln!(out, "{line}")?;
             }

@@ -675,7 +675,7 @@ pub fn synoptic_ui(
         .sensors
         .iter()
         .map(|s| xf.p(s.lamp))
-        .chain(geom.actuators.iter().map(|(_, p)| xf.p(*p)))
+        .chain(geom.actuators.values().map(|p| xf.p(*p)))
         .collect();
     for (p, text) in &predicted_labels {
         let galley =

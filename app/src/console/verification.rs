@@ -32,20 +32,28 @@ pub(crate) fn start(c: &mut Console) {
     let bundle = c.sim.bundle.clone();
     let layout_path = c.plant_dir.join("layout.ron");
     c.verification.started_s = c.wall_s;
-    c.verification.job = Some(std::thread::spawn(move || {
-        let layout = vigie_core::emulator::Layout::load(&layout_path)
-            .map_err(|p| vigie_core::diag::render(&p))?;
-        verify::verify(
-            &bundle,
-            &layout,
-            &Options {
-                max_boxes: 2,
-                necessity_boxes: None,
-            },
-        )
-        .map_err(|p| vigie_core::diag::render(&[p]))
-    }));
-    c.status = "verifying the constraint set…".into();
+    let spawned = std::thread::Builder::new()
+        .name("vigie-verify".into())
+        .spawn(move || {
+            let layout = vigie_core::emulator::Layout::load(&layout_path)
+                .map_err(|p| vigie_core::diag::render(&p))?;
+            verify::verify(
+                &bundle,
+                &layout,
+                &Options {
+                    max_boxes: 2,
+                    necessity_boxes: None,
+                },
+            )
+            .map_err(|p| vigie_core::diag::render(&[p]))
+        });
+    match spawned {
+        Ok(job) => {
+            c.verification.job = Some(job);
+            c.status = "verifying the constraint set…".into();
+        }
+        Err(e) => c.status = format!("cannot start the verification: {e}"),
+    }
 }
 
 /// Collects a finished verification (called every frame).

@@ -234,10 +234,10 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
             values.insert(k.clone(), *v);
         }
         highlights = &lv.highlights;
-        if *l == 1 {
-            if let Some(p) = sim.projections.get(t) {
-                ghost = Some((p.boxes.as_slice(), p.table_angle_mdeg, p.hazards.as_slice()));
-            }
+        if *l == 1
+            && let Some(p) = sim.projections.get(t)
+        {
+            ghost = Some((p.boxes.as_slice(), p.table_angle_mdeg, p.hazards.as_slice()));
         }
         banner = Some((
             format!(
@@ -836,17 +836,17 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             Stroke::new(2.0, pal.highlight),
         );
     }
-    if let Some(p) = resp.interact_pointer_pos() {
-        if p.x > rect.left() + label_w {
-            #[allow(
-                clippy::cast_possible_truncation,
-                clippy::cast_sign_loss,
-                clippy::cast_precision_loss
-            )]
-            let t = t0
-                + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
-            out.push(Command::Scrub(Some(t.min(now))));
-        }
+    if let Some(p) = resp.interact_pointer_pos()
+        && p.x > rect.left() + label_w
+    {
+        #[allow(
+            clippy::cast_possible_truncation,
+            clippy::cast_sign_loss,
+            clippy::cast_precision_loss
+        )]
+        let t =
+            t0 + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
+        out.push(Command::Scrub(Some(t.min(now))));
     }
 }
 

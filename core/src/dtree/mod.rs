@@ -168,7 +168,7 @@ pub fn build(n: usize, f: &[bool], which: Tests) -> DecisionTable {
 
 fn node(n: usize, f: &[bool], tests: &[Test], set: Vec<u64>, rows: &mut Vec<Row>) -> u32 {
     let me = rows.len() as u32;
-    let first = set.first().map_or(false, |&x| f[x as usize]);
+    let first = set.first().is_some_and(|&x| f[x as usize]);
     if set.iter().all(|&x| f[x as usize] == first) {
         rows.push(Row::Out(first));
         return me;

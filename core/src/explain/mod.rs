@@ -422,11 +422,7 @@ pub(crate) fn last_changes(engine: &Engine, trip_time: u64, window: usize) -> Ve
                 Space::Input => r.inputs.get(i),
                 _ => r.commanded.get(i),
             };
-            let mut back = 0;
-            for pair in records.windows(2).rev() {
-                if back >= window {
-                    break;
-                }
+            for (back, pair) in records.windows(2).rev().enumerate().take(window) {
                 let (prev, cur) = (pair[0], pair[1]);
                 if value(prev) != value(cur) {
                     changes.push(Change {
@@ -440,7 +436,6 @@ pub(crate) fn last_changes(engine: &Engine, trip_time: u64, window: usize) -> Ve
                     });
                     break;
                 }
-                back += 1;
             }
         }
     }

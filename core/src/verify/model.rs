@@ -469,7 +469,7 @@ impl Geometry {
             let bounds = bounds.as_slice();
             let (lo, l) = (i32::from(b.lo), self.len(b));
             let c2 = 2 * lo + l;
-            let k = part_of(&bounds, c2);
+            let k = part_of(bounds, c2);
             let mut v = self.vel(b.on_table, p1, k, out);
             if v == 0 {
                 // Other surface under the box by more than the margin.
@@ -571,7 +571,7 @@ impl Geometry {
             let c2 = 2 * lo + l;
             let bounds = self.parts(b.on_table, p1);
             let bounds = bounds.as_slice();
-            let k = part_of(&bounds, c2);
+            let k = part_of(bounds, c2);
             let n_parts = bounds.len() - 1;
             // Which ends of part k are table-side: in the line frame the end of the last
             // conveyor and both table ends; in the table frame every end at the table.
