@@ -41,7 +41,7 @@ pub enum FilterMode {
 }
 
 /// The filter's action on one output during a trip.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Action {
     /// Commanded OFF, held ON by the filter.
@@ -53,7 +53,7 @@ pub enum Action {
 }
 
 /// One output in a trip record.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct OutputAction {
     /// Actuator id.
     pub output: String,
@@ -66,7 +66,7 @@ pub struct OutputAction {
 }
 
 /// One literal of a fired constraint with its value in the tripping cycle.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct LiteralValue {
     /// The literal in file notation (`/A4`, `A4*`).
     pub literal: String,
@@ -81,7 +81,7 @@ pub struct LiteralValue {
 }
 
 /// One constraint that fired.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct FiredConstraint {
     /// Constraint id.
     pub id: String,
@@ -94,7 +94,7 @@ pub struct FiredConstraint {
 }
 
 /// A filter trip (or, in report-only mode, a reported violation).
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct Trip {
     /// Time of the cycle.
     pub time_ms: u64,
@@ -487,6 +487,18 @@ impl Engine {
             notation: self.notation.get(ci).cloned().unwrap_or_default(),
             literals,
         }
+    }
+
+    /// Latches `trip`, a trip of an earlier run of the same plant that was never reset
+    /// (a live gateway restarted after a crash): from the next cycle on the outputs are
+    /// the fallback until the operator's reset, as if the trip had just happened. No
+    /// [`Event::Trip`] is raised (the caller reports the restoration). Enforce mode only.
+    pub fn restore_trip(&mut self, trip: Trip) {
+        if self.mode != FilterMode::Enforce {
+            return;
+        }
+        self.latched = true;
+        self.trips.push(trip);
     }
 
     /// The operator's reset after a trip. Refused while a constraint is still violated

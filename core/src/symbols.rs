@@ -4,7 +4,9 @@ use crate::expr::{ExprError, LeafKind, Span};
 use std::collections::BTreeMap;
 
 /// The four kinds of boolean variables a literal can read.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Space {
     /// PLC inputs: sensors (C0..C10).

@@ -148,8 +148,9 @@ fn gateway_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 10, \
          client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
          server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), \
-         diagnosers: false)", // the table moves in milliseconds: a fault for its diagnoser
-        station.display().to_string()
+         diagnosers: false, state_dir: {:?})", // the table moves in milliseconds: a fault for its diagnoser
+        station.display().to_string(),
+        dir.0.join("state").display().to_string()
     );
     let path = dir.0.join("gateway.ron");
     std::fs::write(&path, text).unwrap();

@@ -231,8 +231,18 @@ impl Gateway {
             .join("layouts/sorting-station")
             .canonicalize()
             .unwrap();
+        // Each gateway keeps its journal and latch in its own folder (unless the test
+        // names one).
+        let state = if config_body.contains("state_dir") {
+            String::new()
+        } else {
+            format!(
+                "state_dir: {:?}, ",
+                dir.0.join("state").display().to_string()
+            )
+        };
         let text = format!(
-            "Gateway(plant: {:?}, {config_body})",
+            "Gateway(plant: {:?}, {state}{config_body})",
             station.display().to_string()
         );
         let path = dir.0.join("gateway.ron");

@@ -1,12 +1,15 @@
 //! `vigie gateway CONFIG`: the live link as a headless service (monitor, gateway or
 //! emulator mode, from the configuration file). Logs go to stderr through `tracing`
-//! (`RUST_LOG`-style level with `--log`); events go to stdout as JSON lines. SIGINT and
-//! SIGTERM stop it cleanly, with the outputs driven to the safe state first.
+//! (`RUST_LOG`-style level with `--log`); events go to the journal in the state folder
+//! (`journal.jsonl`) and to stdout as JSON lines. Neither stderr nor stdout can block
+//! the service: both are written by threads of their own through bounded, lossy
+//! queues (a reader that stalls loses lines, counted; the journal loses none). SIGINT
+//! and SIGTERM stop it cleanly, with the outputs driven to the safe state first.
 
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use vigie_app::live::runtime::{self, CycleStats};
+use vigie_app::live::sink::EventSink;
 
 /// Arguments of `vigie gateway`.
 #[derive(clap::Args, Debug)]
@@ -18,13 +21,21 @@ pub(crate) struct GatewayArgs {
     pub(crate) log: String,
 }
 
-pub(crate) fn init_tracing(level: &str) {
+/// Logs to stderr through a thread of their own (lossy when nobody reads stderr); keep
+/// the guard for the whole run, it flushes what is left when dropped.
+#[must_use]
+pub(crate) fn init_tracing(level: &str) -> tracing_appender::non_blocking::WorkerGuard {
     let level = level.parse().unwrap_or(tracing::Level::INFO);
+    let (writer, guard) = tracing_appender::non_blocking::NonBlockingBuilder::default()
+        .lossy(true)
+        .thread_name("vigie-log")
+        .finish(std::io::stderr());
     let _ = tracing_subscriber::fmt()
         .with_max_level(level)
-        .with_writer(std::io::stderr)
+        .with_writer(writer)
         .with_ansi(false)
         .try_init();
+    guard
 }
 
 /// Resolves on SIGINT or SIGTERM; the handlers are installed by the call (inside the
@@ -41,19 +52,20 @@ fn stop_signal(rt: &tokio::runtime::Runtime) -> impl std::future::Future<Output 
 }
 
 pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
-    init_tracing(&args.log);
+    let _log = init_tracing(&args.log);
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;
     let stop = stop_signal(&rt);
     let setup = runtime::load(&args.config)?;
-    let mut emit = |line: serde_json::Value| {
-        let mut out = std::io::stdout().lock();
-        let _ = writeln!(out, "{line}");
-        let _ = out.flush();
+    let (sink, thread) = EventSink::start(Some(&setup.state_dir))?;
+    let result = {
+        let mut emit = move |line: serde_json::Value| sink.emit(line);
+        let mut stats = CycleStats::default();
+        rt.block_on(runtime::run(setup, stop, &mut emit, &mut stats, None))
     };
-    let mut stats = CycleStats::default();
-    rt.block_on(runtime::run(setup, stop, &mut emit, &mut stats, None))?;
+    thread.finish();
+    result?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -67,21 +79,38 @@ pub(crate) struct BenchArgs {
     #[arg(long)]
     pub(crate) json: bool,
     /// Run the gateway's cycle thread at this real-time priority (SCHED_FIFO, 1-99;
-    /// needs root or CAP_SYS_NICE), as `cycle_priority` in a gateway configuration.
-    #[arg(long)]
+    /// needs root or CAP_SYS_NICE), as `cycle_priority` in a gateway configuration;
+    /// without it every thread runs at normal priority (`realtime: false`).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=99))]
     pub(crate) rt_priority: Option<u8>,
+    /// Busy background processes running beside the bench (a fixed load).
+    #[arg(long, default_value_t = 0)]
+    pub(crate) load: usize,
+    /// Keep timing edges until this many seconds have passed (at least `--edges`).
+    #[arg(long, default_value_t = 0)]
+    pub(crate) seconds: u64,
 }
 
 /// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
 pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result<ExitCode> {
-    init_tracing("warn");
-    let f = vigie_app::live::bench::run(plant, args.edges, args.rt_priority)?;
+    let _log = init_tracing("warn");
+    let f = vigie_app::live::bench::run(
+        plant,
+        vigie_app::live::bench::Options {
+            edges: args.edges,
+            seconds: args.seconds,
+            rt_priority: args.rt_priority,
+            load: args.load,
+        },
+    )?;
     if args.json {
         println!("{}", serde_json::to_string(&f)?);
     } else {
         println!(
-            "gateway against pymodbus on loopback, 10 ms cycle, {} cycles, cycle thread {}",
+            "gateway against pymodbus on loopback, 10 ms cycle, {} cycles over {:.0} s, {} busy background processes, cycle thread {}",
             f.cycles,
+            f.seconds,
+            f.load,
             args.rt_priority.map_or_else(
                 || "at normal priority".to_string(),
                 |p| format!("at real-time priority {p} (if granted, see the log)")
@@ -100,6 +129,10 @@ pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result
             "  sensor -> output (ms) p50 {:.2}  p99 {:.2}  max {:.2}  ({} edges)",
             f.latency_ms[0], f.latency_ms[1], f.latency_ms[2], f.edges
         );
+        println!("  false link alarms     {}", f.false_alarms.len());
+        for a in &f.false_alarms {
+            println!("    {a}");
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -77,10 +77,10 @@ fn open_console(
     opts.start = args.start;
     opts.variant.clone_from(&args.variant);
     opts.link.clone_from(&args.link);
-    if opts.link.is_some() {
-        gateway::init_tracing("warn");
+    let _log = opts.link.is_some().then(|| {
         vigie_app::console::link::watch_signals(true);
-    }
+        gateway::init_tracing("warn")
+    });
     vigie_app::run_console(&opts)?;
     Ok(ExitCode::SUCCESS)
 }

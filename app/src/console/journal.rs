@@ -43,6 +43,8 @@ fn wall_ms() -> u64 {
 /// The journal: in memory for display, on disk append-only.
 pub struct Journal {
     entries: Vec<Entry>,
+    /// Keep the entries in memory (the console shows them; a headless run does not).
+    keep: bool,
     file: Option<File>,
     path: Option<PathBuf>,
     /// The last write error, shown in the status bar.
@@ -55,6 +57,7 @@ impl Journal {
     pub fn open(dir: Option<&Path>) -> Self {
         let mut j = Self {
             entries: Vec::new(),
+            keep: true,
             file: None,
             path: None,
             error: None,
@@ -72,6 +75,16 @@ impl Journal {
             }
         }
         j
+    }
+
+    /// A journal appending to `dir/journal.jsonl` that keeps nothing in memory (a
+    /// headless service running for months); fails when the file cannot be opened.
+    pub fn append_only(dir: &Path) -> std::io::Result<Self> {
+        let j = Self::open(Some(dir));
+        match (&j.file, &j.error) {
+            (Some(_), _) => Ok(Self { keep: false, ..j }),
+            (None, e) => Err(std::io::Error::other(e.clone().unwrap_or_default())),
+        }
     }
 
     /// The file written, if any.
@@ -93,7 +106,9 @@ impl Journal {
                 self.error = Some(format!("journal write: {err}"));
             }
         }
-        self.entries.push(e);
+        if self.keep {
+            self.entries.push(e);
+        }
     }
 
     /// Entries, oldest first.

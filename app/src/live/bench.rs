@@ -6,6 +6,11 @@
 //! (CSs2 = C3 . /C4 . A1), the filter trips and the plant's A1 falls; C3 falls, the
 //! trip resets (auto reset) and A1 returns. Both edges are timed from the moment the
 //! plant peer is asked to change C3 until a probe client reads the new coil.
+//!
+//! With `load`, that many busy processes (`sh -c 'while :; do :; done'`) run beside
+//! it for the whole run, a fixed background load; every link alarm raised once the
+//! PLC's first command has reached the plant is false (nothing is lost in the bench)
+//! and is counted. With `seconds`, edges are timed until that much time has passed.
 
 use super::runtime::{self, CycleStats, Setup};
 use anyhow::Context as _;
@@ -33,6 +38,56 @@ pub struct Figures {
     pub latency_ms: [f64; 3],
     /// Edges timed.
     pub edges: usize,
+    /// Busy background processes.
+    pub load: usize,
+    /// Seconds measured.
+    pub seconds: f64,
+    /// Link alarms (`link:plant`, `link:plc`) and safe-output holds raised while
+    /// measuring: all false, nothing is lost in the bench.
+    pub false_alarms: Vec<String>,
+    /// The cycle thread's real-time priority, when one was asked for.
+    pub rt_priority: Option<u8>,
+}
+
+/// What a run does.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Edges to time (at least).
+    pub edges: usize,
+    /// Run at least this long.
+    pub seconds: u64,
+    /// Real-time priority of the cycle thread; `None`: normal priority.
+    pub rt_priority: Option<u8>,
+    /// Busy background processes.
+    pub load: usize,
+}
+
+/// Busy processes, killed when dropped.
+struct Load(Vec<std::process::Child>);
+
+impl Load {
+    fn start(n: usize) -> anyhow::Result<Self> {
+        let mut v = Vec::with_capacity(n);
+        for _ in 0..n {
+            v.push(
+                Command::new("sh")
+                    .args(["-c", "while :; do :; done"])
+                    .stdin(Stdio::null())
+                    .spawn()
+                    .context("cannot start a background load process")?,
+            );
+        }
+        Ok(Self(v))
+    }
+}
+
+impl Drop for Load {
+    fn drop(&mut self) {
+        for c in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
 }
 
 fn percentiles(mut v: Vec<f64>) -> [f64; 3] {
@@ -56,11 +111,14 @@ fn repo_root() -> PathBuf {
 }
 
 /// Runs the benchmark: `edges` timed sensor edges, then the cycle figures.
-pub fn run(
-    plant_dir: &std::path::Path,
-    edges: usize,
-    cycle_priority: Option<u8>,
-) -> anyhow::Result<Figures> {
+pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures> {
+    let Options {
+        edges,
+        seconds,
+        rt_priority: cycle_priority,
+        load,
+    } = opts;
+    let _load = Load::start(load)?;
     let root = repo_root();
     let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| root.join(".venv"), PathBuf::from);
     let python = venv.join("bin/python");
@@ -86,12 +144,16 @@ pub fn run(
         .with_context(|| format!("unexpected plant output {line:?}"))?;
     let plant_addr: SocketAddr = ([127, 0, 0, 1], port).into();
 
+    let state = std::env::temp_dir().join(format!("vigie-gateway-bench-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&state);
     let text = format!(
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
          client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
-         cycle_priority: {})",
+         cycle_priority: {}, realtime: {}, state_dir: {:?})",
         plant_dir.display().to_string(),
-        cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})"))
+        cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})")),
+        cycle_priority.is_some(),
+        state.display().to_string(),
     );
     let config = GatewayConfig::from_ron(&text, std::path::Path::new("bench.ron"))
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
@@ -104,7 +166,14 @@ pub fn run(
         bundle,
         map,
         diagnosers,
+        state_dir: state.clone(),
     };
+    let measuring = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let alarms = std::sync::Arc::new(std::sync::Mutex::new(Vec::<String>::new()));
+    let (m, a) = (
+        std::sync::Arc::clone(&measuring),
+        std::sync::Arc::clone(&alarms),
+    );
 
     // The gateway on its own thread and runtime.
     let (addr_tx, addr_rx) = std::sync::mpsc::channel::<SocketAddr>();
@@ -115,9 +184,19 @@ pub fn run(
             let mut stats = CycleStats::default();
             let mut emit = move |e: serde_json::Value| {
                 if e["event"] == "listening"
-                    && let Some(a) = e["address"].as_str().and_then(|a| a.parse().ok())
+                    && let Some(addr) = e["address"].as_str().and_then(|a| a.parse().ok())
                 {
-                    let _ = addr_tx.send(a);
+                    let _ = addr_tx.send(addr);
+                }
+                let key = e["key"].as_str().unwrap_or_default();
+                if e["event"] == "alarm"
+                    && (key.starts_with("link:") || key == "safe:outputs")
+                    && m.load(std::sync::atomic::Ordering::Acquire)
+                {
+                    let text = format!("{key} at {} ms: {}", e["time_ms"], e["message"]);
+                    a.lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner)
+                        .push(text);
                 }
             };
             let rt = tokio::runtime::Builder::new_current_thread()
@@ -168,8 +247,11 @@ pub fn run(
         while !read_a1().await? {
             anyhow::ensure!(Instant::now() < deadline, "A1 never reached the plant");
         }
+        measuring.store(true, std::sync::atomic::Ordering::Release);
+        let started = Instant::now();
         let mut latencies = Vec::with_capacity(edges);
-        for k in 0..edges {
+        let mut k = 0;
+        while k < edges || started.elapsed() < Duration::from_secs(seconds) {
             // Spread the phase of the change over the cycle.
             tokio::time::sleep(Duration::from_micros(3000 + (k as u64 * 7919) % 10_000)).await;
             let rising = k % 2 == 0;
@@ -187,9 +269,11 @@ pub fn run(
                 );
             }
             latencies.push(t0.elapsed().as_secs_f64() * 1e3);
+            k += 1;
         }
+        measuring.store(false, std::sync::atomic::Ordering::Release);
         plc_task.abort();
-        anyhow::Ok(latencies)
+        anyhow::Ok((latencies, started.elapsed().as_secs_f64()))
     });
     let _ = stop_tx.send(());
     let stats = gateway
@@ -198,7 +282,13 @@ pub fn run(
     let _ = writeln!(plant_in, "quit");
     let _ = plant.kill();
     let _ = plant.wait();
-    let latencies = result?;
+    let (latencies, measured) = result?;
+    let _ = std::fs::remove_dir_all(&state);
+    let false_alarms = std::mem::take(
+        &mut *alarms
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner),
+    );
 
     let periods: Vec<f64> = stats
         .starts
@@ -221,5 +311,9 @@ pub fn run(
         busy_ms: percentiles(stats.busy.iter().map(|d| d.as_secs_f64() * 1e3).collect()),
         latency_ms: percentiles(latencies.clone()),
         edges: latencies.len(),
+        load,
+        seconds: measured,
+        false_alarms,
+        rt_priority: cycle_priority,
     })
 }

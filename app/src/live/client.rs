@@ -138,7 +138,8 @@ impl Link {
             Ok(Ok(ctx)) => {
                 tracing::info!(%peer, "connected");
                 self.ctx = Some(ctx);
-                self.backoff.reset();
+                // The backoff is reset by the first answered request, not here: a peer
+                // that accepts and then fails at once is retried ever more slowly.
                 self.down_logged = false;
                 self.last_poll.iter_mut().for_each(|t| *t = None);
                 self.status.connected = true;
@@ -148,7 +149,7 @@ impl Link {
                 true
             }
             Ok(Err(e)) => {
-                self.retry_later(now, &format!("cannot connect: {e}"));
+                self.retry_later(now, &format!("cannot connect: {}", describe_io(&e)));
                 false
             }
             Err(_) => {
@@ -247,6 +248,7 @@ impl Link {
         }
         if all_ok {
             self.status.last_read = Some(now);
+            self.backoff.reset();
         }
         all_ok
     }
@@ -287,16 +289,22 @@ impl Link {
         settle(peer, what, timeout_ms, outcome)
     }
 
-    async fn write(&mut self, now: Millis, outputs: &Bits) -> bool {
-        if !self.is_connected() {
-            return false;
+    /// Writes every output (connecting first when the backoff allows); `Ok` when every
+    /// write was acknowledged, else why not.
+    async fn write(&mut self, now: Millis, outputs: &Bits) -> Result<(), String> {
+        if !self.ensure_connected(now).await {
+            return Err(format!(
+                "{}: not connected (next attempt at {})",
+                self.peer(),
+                self.next_attempt
+            ));
         }
         let peer = self.peer();
         let timeout = self.timeout();
         let timeout_ms = self.config.timeout_ms;
         for op in plan_writes(&self.map, outputs) {
             let Some(ctx) = self.ctx.as_mut() else {
-                return false;
+                return Err(format!("{peer}: not connected"));
             };
             let result = match &op {
                 WriteOp::Coils {
@@ -339,15 +347,15 @@ impl Link {
                 Err(e @ LinkError::Exception { .. }) => {
                     self.status.exceptions += 1;
                     tracing::warn!("{e}");
-                    return false;
+                    return Err(e.to_string());
                 }
                 Err(e) => {
                     self.drop_connection(now, &e);
-                    return false;
+                    return Err(e.to_string());
                 }
             }
         }
-        true
+        Ok(())
     }
 }
 
@@ -370,13 +378,52 @@ fn settle<T>(
         Ok(Err(e)) => Err(LinkError::Transport {
             peer,
             what,
-            error: e.to_string(),
+            error: describe_modbus(&e),
         }),
         Err(_) => Err(LinkError::Timeout {
             peer,
             what,
             timeout_ms,
         }),
+    }
+}
+
+/// A transport error in words a technician reads: what happened to the connection,
+/// with the system's own text after it.
+pub(crate) fn describe_io(e: &std::io::Error) -> String {
+    use std::io::ErrorKind as K;
+    let what = match e.kind() {
+        K::UnexpectedEof | K::ConnectionReset | K::ConnectionAborted | K::BrokenPipe => {
+            "the peer closed the connection"
+        }
+        K::ConnectionRefused => "connection refused (nothing listens at that address)",
+        K::TimedOut => "no answer in time",
+        K::InvalidData => "the peer sent a malformed frame",
+        K::AddrNotAvailable => "the address is not available on this machine",
+        K::NotConnected => "not connected",
+        _ => match e.raw_os_error() {
+            // EINPROGRESS, EALREADY: a connection whose handshake never completed.
+            Some(115 | 114) => "the connection was not established (the peer did not complete it)",
+            // EMFILE, ENFILE: no file descriptor left.
+            Some(24 | 23) => "no file descriptor left (too many open connections or files)",
+            Some(113) => "no route to the peer",
+            _ => "",
+        },
+    };
+    if what.is_empty() {
+        e.to_string()
+    } else {
+        format!("{what} ({e})")
+    }
+}
+
+/// A Modbus client error in words (see [`describe_io`]).
+fn describe_modbus(e: &tokio_modbus::Error) -> String {
+    match e {
+        tokio_modbus::Error::Transport(io) => describe_io(io),
+        tokio_modbus::Error::Protocol(p) => {
+            format!("the peer answered out of turn or malformed ({p})")
+        }
     }
 }
 
@@ -420,9 +467,15 @@ impl Writer {
         self.0.poll(now, inputs, &mut none).await
     }
 
-    /// Writes every output; true when every write was acknowledged.
-    pub(crate) async fn write(&mut self, now: Millis, outputs: &Bits) -> bool {
+    /// Writes every output, connecting first when the backoff allows; `Ok` when every
+    /// write was acknowledged, else why not.
+    pub(crate) async fn write(&mut self, now: Millis, outputs: &Bits) -> Result<(), String> {
         self.0.write(now, outputs).await
+    }
+
+    /// Successful connections so far (a new connection needs the outputs again).
+    pub(crate) fn connection(&self) -> u64 {
+        self.0.status.connections
     }
 
     /// True while connected.

@@ -9,7 +9,9 @@
 //! stamped with their read time) and writes the outputs the cycle hands it as soon as
 //! it gets them. Events go back to the async side through a bounded channel.
 
-use super::client::{ClientStatus, Reader, Writer};
+use super::client::{Reader, Writer};
+use super::io::{Heartbeat, PeerClient, PeerIo, PeerSide};
+use super::latch::LatchStore;
 use super::runtime::{
     AlarmBoard, Clock, CycleStats, Emit, Explainer, Setup, bits_text, emit_engine_events, names,
 };
@@ -41,13 +43,13 @@ use vigie_core::{Bits, Millis};
 /// Events the cycle thread may queue for the async side before it drops them.
 const EVENT_QUEUE: usize = 4096;
 
-fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+pub(crate) fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A poisoned lock (a panic elsewhere) still holds usable data.
     m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// How long before a tick the peer is polled: a third of the cycle, at most 3 ms.
-fn poll_lead(period: Duration) -> Duration {
+pub(crate) fn poll_lead(period: Duration) -> Duration {
     (period / 3).min(Duration::from_millis(3))
 }
 
@@ -70,25 +72,62 @@ fn sleep_until(deadline: Instant) {
 }
 
 /// The index of the first tick strictly after `elapsed` (ticks at multiples of `period`).
-fn next_tick(elapsed: Duration, period: Duration) -> u64 {
+pub(crate) fn next_tick(elapsed: Duration, period: Duration) -> u64 {
     let p = period.as_nanos().max(1);
     u64::try_from(elapsed.as_nanos() / p + 1).unwrap_or(u64::MAX)
 }
 
-fn tick_at(epoch: Instant, period: Duration, k: u64) -> Instant {
+pub(crate) fn tick_at(epoch: Instant, period: Duration, k: u64) -> Instant {
     let nanos = u64::try_from(period.as_nanos())
         .unwrap_or(u64::MAX)
         .saturating_mul(k);
     epoch + Duration::from_nanos(nanos)
 }
 
-/// Gives the calling thread the real-time priority `priority` (SCHED_FIFO); a refusal
-/// (no right to raise priorities) is logged, and the thread keeps its priority.
-fn raise_priority(priority: u8) {
+/// The real-time priority a run asks for: the configured one, or by default 50 for the
+/// cycle thread (49 for the I/O runtime), taken when the process may have it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Priority {
+    pub(crate) value: u8,
+    /// Configured explicitly: a refusal is a warning, not a note.
+    pub(crate) explicit: bool,
+}
+
+impl Priority {
+    /// From the configuration: `cycle_priority`, else the default unless `realtime:
+    /// false`.
+    pub(crate) fn of(config: &vigie_core::live::config::GatewayConfig) -> Option<Self> {
+        match (config.cycle_priority, config.realtime) {
+            (Some(value), _) => Some(Self {
+                value,
+                explicit: true,
+            }),
+            (None, true) => Some(Self {
+                value: 50,
+                explicit: false,
+            }),
+            (None, false) => None,
+        }
+    }
+
+    /// One step below, for the I/O runtime's thread.
+    pub(crate) fn below(self) -> Self {
+        Self {
+            value: self.value.saturating_sub(1).max(1),
+            ..self
+        }
+    }
+}
+
+/// Gives the calling thread (named `what` in the log) the real-time priority
+/// (SCHED_FIFO); a refusal (no right to raise priorities) is logged, and the thread
+/// keeps its priority.
+pub(crate) fn raise_priority(priority: Priority, what: &str) {
     use thread_priority::{
         RealtimeThreadSchedulePolicy, ThreadPriority, ThreadPriorityValue, ThreadSchedulePolicy,
     };
-    let result = ThreadPriorityValue::try_from(priority)
+    let p = priority.value;
+    let result = ThreadPriorityValue::try_from(p)
         .map_err(|e| e.to_string())
         .and_then(|value| {
             thread_priority::set_thread_priority_and_policy(
@@ -99,9 +138,12 @@ fn raise_priority(priority: u8) {
             .map_err(|e| format!("{e:?}"))
         });
     match result {
-        Ok(()) => tracing::info!("cycle thread at real-time priority {priority} (SCHED_FIFO)"),
-        Err(e) => tracing::warn!(
-            "cycle thread left at normal priority: real-time priority {priority} refused ({e})"
+        Ok(()) => tracing::info!("{what} at real-time priority {p} (SCHED_FIFO)"),
+        Err(e) if priority.explicit => {
+            tracing::warn!("{what} left at normal priority: real-time priority {p} refused ({e})")
+        }
+        Err(e) => tracing::info!(
+            "{what} at normal priority (real-time priority {p} not granted: {e}; grant CAP_SYS_NICE for a jitter under 1 ms on a loaded machine)"
         ),
     }
 }
@@ -111,7 +153,7 @@ fn raise_priority(priority: u8) {
 fn spawn_cycles<C: Cycle>(
     epoch: Instant,
     period: Duration,
-    priority: Option<u8>,
+    priority: Option<Priority>,
     stop: Arc<AtomicBool>,
     mut c: C,
 ) -> anyhow::Result<oneshot::Receiver<(C::Done, CycleStats)>> {
@@ -120,7 +162,7 @@ fn spawn_cycles<C: Cycle>(
         .name("vigie-cycle".into())
         .spawn(move || {
             if let Some(p) = priority {
-                raise_priority(p);
+                raise_priority(p, "cycle thread");
             }
             let mut stats = CycleStats::default();
             let mut k = 1;
@@ -139,147 +181,6 @@ fn spawn_cycles<C: Cycle>(
         })
         .context("cannot start the cycle thread")?;
     Ok(rx)
-}
-
-/// What the I/O task publishes for the cycle.
-struct PeerSide {
-    inputs: AgedBits,
-    outputs: AgedBits,
-    /// When every due block was last read.
-    heard: Option<Millis>,
-    status: ClientStatus,
-}
-
-/// The client: read-only (monitor) or reading and writing (gateway).
-enum PeerClient {
-    Monitor(Reader),
-    Plant(Writer),
-}
-
-impl PeerClient {
-    async fn poll(&mut self, now: Millis, inputs: &mut AgedBits, outputs: &mut AgedBits) -> bool {
-        match self {
-            Self::Monitor(r) => r.poll(now, inputs, outputs).await,
-            Self::Plant(w) => w.poll(now, inputs).await,
-        }
-    }
-
-    fn status(&self) -> &ClientStatus {
-        match self {
-            Self::Monitor(r) => r.status(),
-            Self::Plant(w) => w.status(),
-        }
-    }
-
-    fn is_connected(&self) -> bool {
-        self.status().connected
-    }
-}
-
-async fn changed(rx: &mut Option<watch::Receiver<Option<Bits>>>) -> bool {
-    match rx {
-        Some(r) => r.changed().await.is_ok(),
-        None => std::future::pending().await,
-    }
-}
-
-/// The I/O task: polls the peer `lead` before each tick, writes the outputs handed
-/// through `out` at once (gateway), publishes into `side`, until `stop`. Returns the
-/// client (for the last write of the safe outputs).
-async fn peer_io(
-    mut client: PeerClient,
-    side: Arc<Mutex<PeerSide>>,
-    mut out: Option<watch::Receiver<Option<Bits>>>,
-    mut stop: oneshot::Receiver<()>,
-    clock: Clock,
-    period: Duration,
-) -> PeerClient {
-    let lead = poll_lead(period);
-    let (mut inputs, mut outputs) = {
-        let s = lock(&side);
-        (s.inputs.clone(), s.outputs.clone())
-    };
-    let mut k: u64 = 1;
-    enum Wake {
-        Stop,
-        Write,
-        OutputsGone,
-        Poll,
-    }
-    loop {
-        let target = tick_at(clock.0, period, k)
-            .checked_sub(lead)
-            .unwrap_or(clock.0);
-        let wake = tokio::select! {
-            biased;
-            _ = &mut stop => Wake::Stop,
-            ok = changed(&mut out) => if ok { Wake::Write } else { Wake::OutputsGone },
-            () = tokio::time::sleep_until(target.into()) => Wake::Poll,
-        };
-        match wake {
-            Wake::Stop => break,
-            Wake::OutputsGone => out = None,
-            Wake::Write => {
-                let values = out.as_mut().and_then(|r| r.borrow_and_update().clone());
-                if let (Some(values), PeerClient::Plant(w)) = (values, &mut client)
-                    && w.is_connected()
-                {
-                    w.write(clock.now(), &values).await;
-                }
-                lock(&side).status.clone_from(client.status());
-            }
-            Wake::Poll => {
-                let now = clock.now();
-                let ok = client.poll(now, &mut inputs, &mut outputs).await;
-                {
-                    let mut s = lock(&side);
-                    s.inputs.clone_from(&inputs);
-                    s.outputs.clone_from(&outputs);
-                    if ok {
-                        s.heard = Some(now);
-                    }
-                    s.status.clone_from(client.status());
-                }
-                let due = next_tick(
-                    Instant::now().saturating_duration_since(clock.0) + lead,
-                    period,
-                );
-                k = (k + 1).max(due);
-            }
-        }
-    }
-    client
-}
-
-/// Starts the I/O task.
-fn start_peer_io(
-    client: PeerClient,
-    n_in: usize,
-    n_out: usize,
-    out: Option<watch::Receiver<Option<Bits>>>,
-    clock: Clock,
-    period: Duration,
-) -> (
-    Arc<Mutex<PeerSide>>,
-    oneshot::Sender<()>,
-    tokio::task::JoinHandle<PeerClient>,
-) {
-    let side = Arc::new(Mutex::new(PeerSide {
-        inputs: AgedBits::new(n_in),
-        outputs: AgedBits::new(n_out),
-        heard: None,
-        status: ClientStatus::default(),
-    }));
-    let (stop_tx, stop_rx) = oneshot::channel();
-    let task = tokio::spawn(peer_io(
-        client,
-        Arc::clone(&side),
-        out,
-        stop_rx,
-        clock,
-        period,
-    ));
-    (side, stop_tx, task)
 }
 
 /// Forwards the cycle thread's events to `emit` until `shutdown`, then stops the thread
@@ -466,11 +367,54 @@ impl LiveDiagnosers {
     }
 }
 
+/// How the cycles tell a late peer from a lost one (see
+/// [`Watchdog::check_seen`]): the request timeout as the grace of a request in flight,
+/// and a hard bound of four times the link timeout plus the request timeout.
+#[derive(Clone, Copy, Debug)]
+struct Liveness {
+    grace: Millis,
+    hard: Millis,
+}
+
+impl Liveness {
+    fn of(config: &vigie_core::live::config::GatewayConfig, request_timeout_ms: u64) -> Self {
+        let grace = Millis(request_timeout_ms);
+        Self {
+            grace,
+            hard: Millis((config.link_timeout() + grace).0.saturating_mul(4)),
+        }
+    }
+
+    /// A polled peer: a request in flight gets the grace.
+    fn check(
+        self,
+        dog: &mut Watchdog,
+        now: Millis,
+        beat: &Heartbeat,
+        failed: bool,
+    ) -> Option<vigie_core::live::age::Transition> {
+        dog.check_seen(now, beat.seen(), failed, self.grace, self.hard)
+    }
+
+    /// The PLC, which writes to us: no grace, its silence is measured up to the
+    /// runtime's heartbeat.
+    fn check_plc(
+        self,
+        dog: &mut Watchdog,
+        now: Millis,
+        beat: &Heartbeat,
+    ) -> Option<vigie_core::live::age::Transition> {
+        dog.check_seen(now, beat.seen(), true, Millis::ZERO, self.hard)
+    }
+}
+
 /// The monitor's cycle.
 struct MonitorCycle {
     clock: Clock,
     peer: std::net::SocketAddr,
     side: Arc<Mutex<PeerSide>>,
+    beat: Heartbeat,
+    liveness: Liveness,
     bundle: PlantBundle,
     layout: Option<vigie_core::emulator::Layout>,
     engine: Engine,
@@ -495,11 +439,11 @@ impl Cycle for MonitorCycle {
 
     fn step(&mut self, start: Instant) {
         let now = self.clock.at(start);
-        let (heard, status) = {
+        let (heard, failed, status) = {
             let s = lock(&self.side);
             self.inputs.clone_from(&s.inputs);
             self.outputs.clone_from(&s.outputs);
-            (s.heard, s.status.clone())
+            (s.heard, s.failed, s.status.clone())
         };
         let what = format!("monitored peer {}", self.peer);
         if heard != self.heard {
@@ -510,7 +454,7 @@ impl Cycle for MonitorCycle {
                     .watch(&mut *self.emit, now, "link:peer", &what, t);
             }
         }
-        let t = self.dog.check(now);
+        let t = self.liveness.check(&mut self.dog, now, &self.beat, failed);
         self.board
             .watch(&mut *self.emit, now, "link:peer", &what, t);
         self.control.0.copy_from(self.outputs.values());
@@ -599,6 +543,7 @@ pub(crate) async fn monitor(
         bundle,
         map,
         diagnosers,
+        state_dir: _,
     } = setup;
     let client = config
         .client
@@ -606,23 +551,29 @@ pub(crate) async fn monitor(
         .context("monitor mode needs a client section")?;
     let clock = Clock(Instant::now());
     let period = Duration::from_millis(config.cycle_ms.max(1));
-    let priority = config.cycle_priority;
+    let priority = Priority::of(&config);
+    if let Some(p) = priority {
+        raise_priority(p.below(), "I/O runtime thread");
+    }
     let peer = client.address;
+    let liveness = Liveness::of(&config, client.timeout_ms);
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
+    let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
     let reader = PeerClient::Monitor(Reader::new(client, map.clone(), true));
-    let (side, stop_io, io) = start_peer_io(reader, n_in, n_out, None, clock, period);
+    let io = PeerIo::start(reader, (n_in, n_out), None, tx.clone(), clock, period);
     if let Some(t) = &tap {
         t.update(|s| s.peer = Some(peer));
     }
     emit(json!({
         "event": "monitoring", "peer": peer.to_string(), "diagnosers": diagnosers.is_some(),
     }));
-    let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
     let stop = Arc::new(AtomicBool::new(false));
     let cycle = MonitorCycle {
         clock,
         peer,
-        side,
+        side: Arc::clone(&io.side),
+        beat: io.heartbeat.clone(),
+        liveness,
         layout: vigie_core::emulator::Layout::load(&bundle.dir.join("layout.ron")).ok(),
         engine: Engine::new(&bundle, FilterMode::ReportOnly, 6000),
         guard: StaleGuard::new(&bundle),
@@ -654,8 +605,7 @@ pub(crate) async fn monitor(
     };
     let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
     let result = supervise(shutdown, emit, &mut events, &stop, done).await;
-    let _ = stop_io.send(());
-    let client = io.await.context("the I/O task failed")?;
+    let client = io.stop().await?;
     let (diagnoses, cycle_stats) = result?;
     *stats = cycle_stats;
     if let Some(t) = &tap {
@@ -672,6 +622,12 @@ struct GatewayCycle {
     clock: Clock,
     plant_peer: std::net::SocketAddr,
     side: Arc<Mutex<PeerSide>>,
+    beat: Heartbeat,
+    liveness: Liveness,
+    /// Saves the latch before its events are released.
+    latch: LatchStore,
+    /// The latch state last handed to `latch`.
+    latched: bool,
     shared: SharedImage,
     out: watch::Sender<Option<Bits>>,
     bundle: PlantBundle,
@@ -731,10 +687,10 @@ impl Cycle for GatewayCycle {
         let now = self.clock.at(start);
         let n_out = self.control.0.len();
         // 1. The plant, as last polled.
-        let (heard, status) = {
+        let (heard, failed, status) = {
             let s = lock(&self.side);
             self.inputs.clone_from(&s.inputs);
-            (s.heard, s.status.clone())
+            (s.heard, s.failed, s.status.clone())
         };
         let what = format!("plant {}", self.plant_peer);
         if heard != self.plant_heard {
@@ -745,10 +701,12 @@ impl Cycle for GatewayCycle {
                     .watch(&mut *self.emit, now, "link:plant", &what, t);
             }
         }
-        let t = self.plant_dog.check(now);
+        let t = self
+            .liveness
+            .check(&mut self.plant_dog, now, &self.beat, failed);
         self.board
             .watch(&mut *self.emit, now, "link:plant", &what, t);
-        // 2. The PLC.
+        // 2. The PLC: heard when it writes its outputs.
         let (heard, server_exceptions) = {
             let s = lock(&self.shared);
             self.control.0.copy_from(&s.outputs);
@@ -759,25 +717,38 @@ impl Cycle for GatewayCycle {
             let t = self.plc_dog.heard(heard.map_or(now, |h| self.clock.at(h)));
             self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
         }
-        let t = self.plc_dog.check(now);
+        let t = self.liveness.check_plc(&mut self.plc_dog, now, &self.beat);
         self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
-        // 3. The engine.
+        // 3. The engine; a change of the latch is on disk before it is reported.
         let reset = self.reset_if_asked(now);
         self.engine
             .cycle(now, self.inputs.values(), &mut self.control);
-        emit_engine_events(&mut self.engine, &mut *self.emit, None, &mut self.last_spec);
+        let mut events = Vec::new();
+        emit_engine_events(
+            &mut self.engine,
+            &mut |e| events.push(e),
+            None,
+            &mut self.last_spec,
+        );
+        if self.engine.is_tripped() == self.latched {
+            events.into_iter().for_each(&mut *self.emit);
+        } else {
+            self.latched = self.engine.is_tripped();
+            let trip = self.engine.trips.last().filter(|_| self.latched).cloned();
+            self.latch.save(trip, events);
+        }
         // 4. Safe outputs.
         let stale = self.inputs.stale(now, &self.bounds);
         let mut applied = self.engine.applied().clone();
         let reason = if self.plc_dog.is_lost() {
             applied = self.safe_now(now);
-            Some("PLC lost: outputs held at the safe fallback".to_string())
+            Some("PLC lost: the safe fallback is sent to the plant".to_string())
         } else if self.plant_dog.is_lost() {
             // Written as soon as the plant answers again (or now, when it is connected
             // but its values cannot be read).
             applied = self.safe_now(now);
             Some(format!(
-                "plant {} lost, its inputs stale: outputs held at the safe fallback",
+                "plant {} lost, its inputs stale: the safe fallback is sent to the plant (written first after a reconnection; `plant_write` says what it acknowledged)",
                 self.plant_peer
             ))
         } else if stale.count_ones() > 0 {
@@ -901,6 +872,7 @@ pub(crate) async fn gateway(
         bundle,
         map,
         diagnosers,
+        state_dir,
     } = setup;
     let client = config
         .client
@@ -913,7 +885,16 @@ pub(crate) async fn gateway(
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
     let clock = Clock(Instant::now());
     let period = Duration::from_millis(config.cycle_ms.max(1));
-    let priority = config.cycle_priority;
+    let priority = Priority::of(&config);
+    if let Some(p) = priority {
+        raise_priority(p.below(), "I/O runtime thread");
+    }
+    // A trip latched by an earlier run (a crash, a kill) holds from the first cycle.
+    let mut engine = Engine::new(&bundle, FilterMode::Enforce, 6000);
+    let restored = super::latch::load(&state_dir)?;
+    if let Some(trip) = restored.clone() {
+        engine.restore_trip(trip);
+    }
     let shared: SharedImage = Arc::new(Mutex::new(Shared {
         inputs: Bits::zeros(n_in),
         outputs: Bits::zeros(n_out),
@@ -923,6 +904,7 @@ pub(crate) async fn gateway(
         &server_config,
         ServerImage::new(&map, server_config.unit),
         Arc::clone(&shared),
+        Duration::from_millis(config.link_timeout().0),
     )
     .await
     .with_context(|| format!("cannot listen on {}", server_config.bind))?;
@@ -940,20 +922,40 @@ pub(crate) async fn gateway(
     emit(json!({
         "event": "listening", "address": server.local.to_string(),
         "plant": client.address.to_string(), "diagnosers": diagnosers.is_some(),
+        "state_dir": state_dir.display().to_string(),
     }));
+    if let Some(trip) = &restored {
+        let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
+        tracing::warn!(
+            "a trip latched before the restart holds ({}): the outputs stay at the fallback until the reset",
+            ids.join(", ")
+        );
+        emit(json!({"event": "trip_restored", "record": trip}));
+    }
     let plant_peer = client.address;
+    let liveness = Liveness::of(&config, client.timeout_ms);
     let (out_tx, out_rx) = watch::channel(None);
-    let writer = PeerClient::Plant(Writer::new(client, map.clone()));
-    let (side, stop_io, io) = start_peer_io(writer, n_in, 0, Some(out_rx), clock, period);
     let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
+    let writer = PeerClient::Plant(Writer::new(client, map.clone()));
+    let io = PeerIo::start(writer, (n_in, 0), Some(out_rx), tx.clone(), clock, period);
+    let latch_tx = tx.clone();
+    let latch = LatchStore::start(state_dir, move |e| {
+        if latch_tx.try_send(e).is_err() {
+            tracing::warn!("a latch event was dropped: the event queue is full");
+        }
+    })?;
     let stop = Arc::new(AtomicBool::new(false));
     let cycle = GatewayCycle {
         clock,
         plant_peer,
-        side,
+        side: Arc::clone(&io.side),
+        beat: io.heartbeat.clone(),
+        liveness,
+        latch,
+        latched: restored.is_some(),
         shared,
         out: out_tx,
-        engine: Engine::new(&bundle, FilterMode::Enforce, 6000),
+        engine,
         guard: StaleGuard::new(&bundle),
         control: Commanded(Bits::zeros(n_out)),
         inputs: AgedBits::new(n_in),
@@ -986,13 +988,12 @@ pub(crate) async fn gateway(
     };
     let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
     let result = supervise(shutdown, emit, &mut events, &stop, done).await;
-    let _ = stop_io.send(());
-    let mut client = io.await.context("the I/O task failed")?;
+    let mut client = io.stop().await?;
     let ((safe, diagnoses), cycle_stats) = result?;
     *stats = cycle_stats;
     let written = match &mut client {
-        PeerClient::Plant(w) if w.is_connected() => w.write(clock.now(), &safe).await,
-        _ => false,
+        PeerClient::Plant(w) => w.write(clock.now(), &safe).await.is_ok(),
+        PeerClient::Monitor(_) => false,
     };
     tracing::info!(
         "stopped; safe outputs {safe} {}",

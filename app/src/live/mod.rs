@@ -6,7 +6,11 @@
 //! - `backend`: what a server can serve (the emulator, a memory image).
 //! - [`runtime`]: loads a configuration and runs its mode (the emulator loop is here).
 //! - `cycle`: the monitor and gateway cycles on their own thread at absolute
-//!   deadlines, the client on a tokio task.
+//!   deadlines.
+//! - `io`: the client on a tokio task (outputs first after a reconnection,
+//!   `plant_write` events) and the runtime's heartbeat.
+//! - `latch`: the latched trip on disk, saved before it is reported.
+//! - [`sink`]: the headless run's events to the journal and to stdout, off the cycle.
 //! - [`tap`]: what a run publishes for the console (cycles, link state, link alarms).
 //! - [`bench`]: cycle rate, jitter and sensor-to-output latency against pymodbus.
 //!
@@ -17,8 +21,11 @@ pub(crate) mod backend;
 pub mod bench;
 pub(crate) mod client;
 pub(crate) mod cycle;
+pub(crate) mod io;
+pub(crate) mod latch;
 pub mod runtime;
 pub(crate) mod server;
+pub mod sink;
 pub mod tap;
 
 #[cfg(test)]

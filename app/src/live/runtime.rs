@@ -103,6 +103,22 @@ pub struct Setup {
     /// The compiled diagnosers, when the run steps them
     /// ([`GatewayConfig::runs_diagnosers`]).
     pub diagnosers: Option<Compiled>,
+    /// Where the run keeps its journal and its latched trip
+    /// ([`GatewayConfig::state_dir`], or its default).
+    pub state_dir: std::path::PathBuf,
+}
+
+/// The state folder of the configuration at `path`: its `state_dir`, else the data
+/// folder's `gateway/<file stem>`.
+pub fn state_dir(config: &GatewayConfig, path: &std::path::Path) -> std::path::PathBuf {
+    config.state_dir.clone().unwrap_or_else(|| {
+        let stem = path
+            .file_stem()
+            .map_or_else(|| "gateway".into(), |s| s.to_string_lossy().into_owned());
+        crate::console::journal::data_dir_from_env()
+            .join("gateway")
+            .join(stem)
+    })
 }
 
 /// Loads the configuration, the plant folder (with its diagnosers when the run steps
@@ -117,6 +133,7 @@ pub fn load(path: &std::path::Path) -> anyhow::Result<Setup> {
         tracing::warn!("{w}");
     }
     Ok(Setup {
+        state_dir: state_dir(&config, path),
         config,
         bundle,
         map,
@@ -325,6 +342,7 @@ async fn emulator(
         bundle,
         map,
         diagnosers: _,
+        state_dir: _,
     } = setup;
     let server_config = config
         .server
@@ -368,6 +386,7 @@ pub(crate) async fn serve_backend(
         server_config,
         ServerImage::new(map, server_config.unit),
         Arc::clone(&shared),
+        Duration::from_millis(config.link_timeout().0),
     )
     .await
     .with_context(|| format!("cannot listen on {}", server_config.bind))?;

@@ -1,19 +1,39 @@
 //! The Modbus TCP server Vigie is to a PLC (gateway mode) or to a soft-PLC (emulator
 //! mode): it answers from a [`Shared`] image that the service loop keeps up to date.
 //!
-//! Security: the listener binds where the configuration says (loopback by default),
-//! clients outside the allow-list are disconnected at once, and only the configured PLC
-//! address may write; anyone else's write is refused with exception 01 (illegal
-//! function). Illegal addresses and quantities get exceptions 02 and 03, unknown
-//! functions 01, another unit id 0B; nothing a client sends can stop the server.
+//! Security and robustness:
+//! - the listener binds where the configuration says (loopback by default); clients
+//!   outside the allow-list are disconnected at once;
+//! - only a connection from the configured PLC endpoint (address, and source port when
+//!   pinned) may write, one such connection at a time (a second one is read-only until
+//!   the first closes or the PLC is lost); anyone else's write gets exception 01
+//!   (illegal function) and is logged;
+//! - the PLC's liveness is its own acknowledged writes: a client that only reads keeps
+//!   nothing alive;
+//! - requests for any unit id but the configured one (0 and 255 included) get
+//!   exception 0B; illegal addresses and quantities get exceptions 02 and 03, unknown
+//!   functions 01;
+//! - at most `max_connections` clients are served at once (more are closed at once, the
+//!   refusals counted); a connection silent for `idle_timeout_ms` is closed; an accept
+//!   error (descriptor exhaustion) is logged and the listener retried with backoff, so
+//!   the server recovers when descriptors are free again.
+//!
+//! Nothing a client sends can stop the server.
 
+use std::future::Future as _;
+use std::io;
 use std::net::{IpAddr, SocketAddr};
+use std::pin::Pin;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::Instant;
+use std::task::{Context, Poll};
+use std::time::{Duration, Instant};
+use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
+use tokio::net::TcpStream;
 use tokio_modbus::prelude::{ExceptionCode, Request, Response, SlaveRequest};
-use tokio_modbus::server::tcp::{Server, accept_tcp_connection};
+use tokio_modbus::server::tcp::Server;
 use vigie_core::Bits;
-use vigie_core::live::config::ServerConfig;
+use vigie_core::live::config::{PlcEndpoint, ServerConfig};
 use vigie_core::live::image::{ImageError, ServerImage};
 use vigie_core::live::iomap::Area;
 
@@ -24,14 +44,33 @@ pub(crate) struct Shared {
     pub(crate) inputs: Bits,
     /// Actuators as last written by the PLC.
     pub(crate) outputs: Bits,
-    /// When the PLC was last heard (any request).
+    /// When the PLC last wrote outputs that were accepted (its liveness).
     pub(crate) plc_heard: Option<Instant>,
     /// Requests answered with an exception.
     pub(crate) exceptions: u64,
+    /// The connection that holds the writer role, while one does.
+    pub(crate) writer: Option<SocketAddr>,
 }
 
 /// A handle on the shared image.
 pub(crate) type SharedImage = Arc<Mutex<Shared>>;
+
+fn lock(shared: &SharedImage) -> std::sync::MutexGuard<'_, Shared> {
+    shared
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Counters of what the server refused (for the link-state panel and the tests).
+#[derive(Debug, Default)]
+pub(crate) struct Refusals {
+    /// Connections closed because `max_connections` were served.
+    pub(crate) over_cap: AtomicU64,
+    /// Connections closed after `idle_timeout_ms` of silence.
+    pub(crate) idle: AtomicU64,
+    /// Failed accepts (descriptor exhaustion and the like).
+    pub(crate) accept_errors: AtomicU64,
+}
 
 /// A running server; stopped when dropped.
 pub(crate) struct ServerHandle {
@@ -49,10 +88,23 @@ impl Drop for ServerHandle {
 /// One client connection.
 struct Session {
     peer: SocketAddr,
-    writer: bool,
+    /// The connection comes from the PLC's endpoint (it may claim the writer role).
+    plc: bool,
     unit: u8,
+    /// A writer silent for this long may be replaced by another PLC connection.
+    takeover_after: Duration,
     image: Arc<ServerImage>,
     shared: SharedImage,
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        let mut s = lock(&self.shared);
+        if s.writer == Some(self.peer) {
+            s.writer = None;
+            tracing::info!(peer = %self.peer, "the PLC's connection closed");
+        }
+    }
 }
 
 impl tokio_modbus::server::Service for Session {
@@ -77,46 +129,71 @@ fn exception(e: &ImageError) -> ExceptionCode {
     }
 }
 
+fn is_write(request: &Request<'_>) -> bool {
+    matches!(
+        request,
+        Request::WriteSingleCoil(..)
+            | Request::WriteMultipleCoils(..)
+            | Request::WriteSingleRegister(..)
+            | Request::WriteMultipleRegisters(..)
+            | Request::MaskWriteRegister(..)
+            | Request::ReadWriteMultipleRegisters(..)
+    )
+}
+
 impl Session {
     fn handle(&self, req: SlaveRequest<'static>) -> Result<Response, ExceptionCode> {
         let SlaveRequest { slave, request } = req;
-        let Ok(mut shared) = self.shared.lock() else {
-            return Err(ExceptionCode::ServerDeviceFailure);
-        };
+        let mut shared = lock(&self.shared);
         let shared = &mut *shared;
-        if self.writer {
-            shared.plc_heard = Some(Instant::now());
-        }
-        let result = self.answer(slave, request, shared);
-        if result.is_err() {
-            shared.exceptions += 1;
+        let write = is_write(&request);
+        let result = if slave != self.unit {
+            if write {
+                tracing::warn!(peer = %self.peer, "write to unit {slave} refused: this server is unit {}", self.unit);
+            }
+            Err(ExceptionCode::GatewayTargetDevice)
+        } else if write && !self.claim_writer(shared) {
+            Err(ExceptionCode::IllegalFunction)
+        } else {
+            self.answer(request, shared)
+        };
+        match &result {
+            Err(_) => shared.exceptions += 1,
+            Ok(_) if write => shared.plc_heard = Some(Instant::now()),
+            Ok(_) => {}
         }
         result
     }
 
-    fn answer(
-        &self,
-        slave: u8,
-        request: Request<'static>,
-        s: &mut Shared,
-    ) -> Result<Response, ExceptionCode> {
-        if slave != self.unit && slave != 0 && slave != 255 {
-            return Err(ExceptionCode::GatewayTargetDevice);
+    /// True when this connection may write: it comes from the PLC's endpoint and holds
+    /// the writer role (taken when free, or from a writer silent for longer than the
+    /// link timeout).
+    fn claim_writer(&self, s: &mut Shared) -> bool {
+        if !self.plc {
+            tracing::warn!(peer = %self.peer, "write refused: only the configured PLC endpoint may write");
+            return false;
         }
+        match s.writer {
+            Some(w) if w == self.peer => true,
+            Some(w)
+                if s.plc_heard
+                    .is_some_and(|h| h.elapsed() <= self.takeover_after) =>
+            {
+                tracing::warn!(peer = %self.peer, writer = %w, "write refused: the PLC already writes on another connection");
+                false
+            }
+            previous => {
+                if let Some(w) = previous {
+                    tracing::warn!(peer = %self.peer, "the PLC writes on a new connection; the silent one ({w}) is read-only now");
+                }
+                s.writer = Some(self.peer);
+                true
+            }
+        }
+    }
+
+    fn answer(&self, request: Request<'static>, s: &mut Shared) -> Result<Response, ExceptionCode> {
         let img = &self.image;
-        let is_write = matches!(
-            request,
-            Request::WriteSingleCoil(..)
-                | Request::WriteMultipleCoils(..)
-                | Request::WriteSingleRegister(..)
-                | Request::WriteMultipleRegisters(..)
-                | Request::MaskWriteRegister(..)
-                | Request::ReadWriteMultipleRegisters(..)
-        );
-        if is_write && !self.writer {
-            tracing::warn!(peer = %self.peer, "write refused: only the configured PLC address may write");
-            return Err(ExceptionCode::IllegalFunction);
-        }
         let r = match request {
             Request::ReadCoils(a, n) => img
                 .read_bits(Area::Coil, a, n, &s.inputs, &s.outputs)
@@ -156,44 +233,186 @@ impl Session {
     }
 }
 
-/// Binds and starts a server over `image` and `shared`.
+/// A served connection: closed after `idle` without a byte received; frees its place
+/// under the connection cap when dropped.
+struct Connection {
+    stream: TcpStream,
+    idle: Duration,
+    deadline: Pin<Box<tokio::time::Sleep>>,
+    active: Arc<AtomicUsize>,
+    refusals: Arc<Refusals>,
+    peer: SocketAddr,
+}
+
+impl Drop for Connection {
+    fn drop(&mut self) {
+        self.active.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+impl AsyncRead for Connection {
+    fn poll_read(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &mut ReadBuf<'_>,
+    ) -> Poll<io::Result<()>> {
+        let this = self.get_mut();
+        let before = buf.filled().len();
+        match Pin::new(&mut this.stream).poll_read(cx, buf) {
+            Poll::Ready(r) => {
+                if buf.filled().len() > before {
+                    let next = tokio::time::Instant::now() + this.idle;
+                    this.deadline.as_mut().reset(next);
+                }
+                Poll::Ready(r)
+            }
+            Poll::Pending => match this.deadline.as_mut().poll(cx) {
+                Poll::Ready(()) => {
+                    this.refusals.idle.fetch_add(1, Ordering::Relaxed);
+                    tracing::info!(peer = %this.peer, "connection closed: silent for {} ms", this.idle.as_millis());
+                    Poll::Ready(Err(io::Error::new(
+                        io::ErrorKind::TimedOut,
+                        "idle connection closed",
+                    )))
+                }
+                Poll::Pending => Poll::Pending,
+            },
+        }
+    }
+}
+
+impl AsyncWrite for Connection {
+    fn poll_write(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &[u8],
+    ) -> Poll<io::Result<usize>> {
+        Pin::new(&mut self.get_mut().stream).poll_write(cx, buf)
+    }
+
+    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.get_mut().stream).poll_flush(cx)
+    }
+
+    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.get_mut().stream).poll_shutdown(cx)
+    }
+}
+
+/// Logs the 1st, 2nd, 4th, 8th… occurrence of a repeated event.
+fn log_power_of_two(counter: &AtomicU64, what: impl FnOnce(u64)) {
+    let n = counter.fetch_add(1, Ordering::Relaxed) + 1;
+    if n.is_power_of_two() {
+        what(n);
+    }
+}
+
+/// What a server needs to accept a connection.
+struct Acceptor {
+    allow: Vec<IpAddr>,
+    plc: Option<PlcEndpoint>,
+    unit: u8,
+    max: usize,
+    idle: Duration,
+    takeover_after: Duration,
+    image: Arc<ServerImage>,
+    shared: SharedImage,
+    active: Arc<AtomicUsize>,
+    refusals: Arc<Refusals>,
+}
+
+impl Acceptor {
+    fn accept(&self, stream: TcpStream, peer: SocketAddr) -> Option<(Session, Connection)> {
+        if !self.allow.contains(&peer.ip()) {
+            tracing::warn!(%peer, "connection refused: not in the allow-list");
+            return None;
+        }
+        let served = self.active.fetch_add(1, Ordering::AcqRel);
+        if served >= self.max {
+            self.active.fetch_sub(1, Ordering::AcqRel);
+            log_power_of_two(&self.refusals.over_cap, |n| {
+                tracing::warn!(%peer, "connection refused: {} clients already served (max_connections); {n} refused so far", self.max);
+            });
+            return None;
+        }
+        let _ = stream.set_nodelay(true);
+        let plc = self.plc.is_some_and(|p| p.matches(peer));
+        tracing::info!(%peer, plc, "client connected");
+        let session = Session {
+            peer,
+            plc,
+            unit: self.unit,
+            takeover_after: self.takeover_after,
+            image: Arc::clone(&self.image),
+            shared: Arc::clone(&self.shared),
+        };
+        let conn = Connection {
+            stream,
+            idle: self.idle,
+            deadline: Box::pin(tokio::time::sleep(self.idle)),
+            active: Arc::clone(&self.active),
+            refusals: Arc::clone(&self.refusals),
+            peer,
+        };
+        Some((session, conn))
+    }
+}
+
+/// Binds and starts a server over `image` and `shared`; `takeover_after` is the link
+/// timeout (a PLC silent that long may write again from a new connection).
 pub(crate) async fn start(
     config: &ServerConfig,
     image: ServerImage,
     shared: SharedImage,
-) -> std::io::Result<ServerHandle> {
+    takeover_after: Duration,
+) -> io::Result<ServerHandle> {
     let listener = tokio::net::TcpListener::bind(config.bind).await?;
     let local = listener.local_addr()?;
-    let image = Arc::new(image);
-    let allow: Vec<IpAddr> = config.allow.clone();
-    let plc = config.plc;
-    let unit = config.unit;
+    let refusals = Arc::new(Refusals::default());
+    let acceptor = Arc::new(Acceptor {
+        allow: config.allow.clone(),
+        plc: config.plc,
+        unit: config.unit,
+        max: config.max_connections.max(1),
+        idle: Duration::from_millis(config.idle_timeout_ms.max(1)),
+        takeover_after,
+        image: Arc::new(image),
+        shared,
+        active: Arc::new(AtomicUsize::new(0)),
+        refusals,
+    });
     let task = tokio::spawn(async move {
         let server = Server::new(listener);
         let on_connected = |stream, peer: SocketAddr| {
-            let allowed = allow.contains(&peer.ip());
-            let session = Session {
-                peer,
-                writer: plc == Some(peer.ip()),
-                unit,
-                image: Arc::clone(&image),
-                shared: Arc::clone(&shared),
-            };
-            async move {
-                if !allowed {
-                    tracing::warn!(%peer, "connection refused: not in the allow-list");
-                    return Ok(None);
-                }
-                tracing::info!(%peer, writer = session.writer, "client connected");
-                let session = std::sync::Mutex::new(Some(session));
-                accept_tcp_connection(stream, peer, move |_| {
-                    Ok(session.lock().ok().and_then(|mut s| s.take()))
-                })
-            }
+            let accepted = acceptor.accept(stream, peer);
+            async move { Ok(accepted) }
         };
-        let on_error = |err: std::io::Error| tracing::debug!("connection closed: {err}");
-        if let Err(err) = server.serve(&on_connected, on_error).await {
-            tracing::error!("server on {local} stopped: {err}");
+        let on_error = |err: io::Error| {
+            tracing::debug!("connection closed: {}", super::client::describe_io(&err))
+        };
+        let mut delay = Duration::from_millis(10);
+        loop {
+            let started = Instant::now();
+            // `serve` returns only on an accept error (descriptors exhausted, …): the
+            // connections it served are closed with it; retry once descriptors may be
+            // free again.
+            match server.serve(&on_connected, on_error).await {
+                Ok(()) => break,
+                Err(err) => {
+                    if started.elapsed() > Duration::from_secs(1) {
+                        delay = Duration::from_millis(10);
+                    }
+                    log_power_of_two(&acceptor.refusals.accept_errors, |n| {
+                        tracing::error!(
+                            "server on {local}: cannot accept a connection ({}); retrying in {} ms ({n} failures)",
+                            super::client::describe_io(&err),
+                            delay.as_millis()
+                        );
+                    });
+                    tokio::time::sleep(delay).await;
+                    delay = (delay * 2).min(Duration::from_secs(1));
+                }
+            }
         }
     });
     Ok(ServerHandle { local, task })

@@ -135,6 +135,38 @@ impl Watchdog {
         None
     }
 
+    /// Checks at `now`, telling a late peer from a lost one. `seen` is when the I/O
+    /// side last ran (the runtime's heartbeat): a silence is measured up to there, so a
+    /// runtime delayed by a loaded machine does not blame the peer for it. `failed`
+    /// says whether a request failed (or the link is down) since the peer was last
+    /// heard; while none did, an answer may still come and the peer gets `grace` more.
+    /// Whatever the I/O side, a silence longer than `hard` on the cycle's own clock is
+    /// a loss. Returns [`Transition::Lost`] once, as [`Watchdog::check`].
+    pub fn check_seen(
+        &mut self,
+        now: Millis,
+        seen: Millis,
+        failed: bool,
+        grace: Millis,
+        hard: Millis,
+    ) -> Option<Transition> {
+        let since = self.last_heard.unwrap_or(self.started);
+        let allowed = if failed {
+            self.timeout
+        } else {
+            self.timeout + grace
+        };
+        let silent =
+            seen.saturating_sub(since) > allowed || now.saturating_sub(since) > hard.max(allowed);
+        if !self.lost && silent {
+            self.lost = true;
+            return Some(Transition::Lost {
+                last_heard: self.last_heard,
+            });
+        }
+        None
+    }
+
     /// True while the peer is lost.
     pub fn is_lost(&self) -> bool {
         self.lost

@@ -46,6 +46,65 @@ fn default_allow() -> Vec<IpAddr> {
 fn default_unit() -> u8 {
     1
 }
+fn default_max_connections() -> usize {
+    8
+}
+fn default_idle_timeout_ms() -> u64 {
+    10_000
+}
+
+/// The PLC's endpoint: its address, and optionally the source port it connects from
+/// (`"127.0.0.2"` or `"127.0.0.2:5020"`). Only a connection from this endpoint may
+/// write, and only its own writes of outputs keep the PLC alive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub struct PlcEndpoint {
+    /// The PLC's address.
+    pub ip: IpAddr,
+    /// The source port it connects from, when pinned.
+    pub port: Option<u16>,
+}
+
+impl PlcEndpoint {
+    /// True when a connection from `peer` is the PLC's.
+    pub fn matches(&self, peer: SocketAddr) -> bool {
+        peer.ip() == self.ip && self.port.is_none_or(|p| p == peer.port())
+    }
+}
+
+impl std::fmt::Display for PlcEndpoint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.port {
+            Some(p) => write!(f, "{}", SocketAddr::new(self.ip, p)),
+            None => write!(f, "{}", self.ip),
+        }
+    }
+}
+
+impl TryFrom<String> for PlcEndpoint {
+    type Error = String;
+
+    fn try_from(s: String) -> Result<Self, String> {
+        if let Ok(ip) = s.parse::<IpAddr>() {
+            return Ok(Self { ip, port: None });
+        }
+        match s.parse::<SocketAddr>() {
+            Ok(a) => Ok(Self {
+                ip: a.ip(),
+                port: (a.port() != 0).then_some(a.port()),
+            }),
+            Err(_) => Err(format!(
+                "`{s}` is not a PLC endpoint: write an address (\"127.0.0.2\") or an address and source port (\"127.0.0.2:5020\")"
+            )),
+        }
+    }
+}
+
+impl From<PlcEndpoint> for String {
+    fn from(e: PlcEndpoint) -> Self {
+        e.to_string()
+    }
+}
 
 /// The Modbus TCP server Vigie is to a PLC.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -59,13 +118,21 @@ pub struct ServerConfig {
     /// `[127.0.0.1]` by default.
     #[serde(default = "default_allow")]
     pub allow: Vec<IpAddr>,
-    /// The only address allowed to write coils or registers (the PLC); `None` makes the
-    /// server read-only.
+    /// The PLC's endpoint (`"IP"` or `"IP:SOURCE_PORT"`), the only client allowed to
+    /// write coils or registers, one connection at a time; `None` makes the server
+    /// read-only. Every other client is read-only (exception 01 on writes).
     #[serde(default)]
-    pub plc: Option<IpAddr>,
-    /// Unit id answered (requests to unit 0 and 255 are answered too).
+    pub plc: Option<PlcEndpoint>,
+    /// The unit id served, 1 to 247; requests to any other unit id (0 and 255
+    /// included) get exception 0B.
     #[serde(default = "default_unit")]
     pub unit: u8,
+    /// Client connections served at once; more are closed at once (8 by default).
+    #[serde(default = "default_max_connections")]
+    pub max_connections: usize,
+    /// A connection that sends nothing for this long is closed (10 s by default).
+    #[serde(default = "default_idle_timeout_ms")]
+    pub idle_timeout_ms: u64,
 }
 
 impl Default for ServerConfig {
@@ -73,8 +140,10 @@ impl Default for ServerConfig {
         Self {
             bind: default_bind(),
             allow: default_allow(),
-            plc: Some(IpAddr::V4(Ipv4Addr::LOCALHOST)),
+            plc: None,
             unit: default_unit(),
+            max_connections: default_max_connections(),
+            idle_timeout_ms: default_idle_timeout_ms(),
         }
     }
 }
@@ -128,12 +197,24 @@ pub struct GatewayConfig {
     /// Emulator seed.
     #[serde(default)]
     pub seed: u64,
-    /// Real-time priority (SCHED_FIFO, 1 to 99) of the monitor or gateway cycle thread,
-    /// for a period jitter under 1 ms on a loaded machine; it needs the right to raise
-    /// priorities (root or CAP_SYS_NICE, e.g. systemd's `AmbientCapabilities`). When
-    /// refused, the cycle runs at normal priority with a warning. None by default.
+    /// Real-time priority (SCHED_FIFO, 1 to 99) of the monitor or gateway cycle thread
+    /// (the I/O runtime's thread gets one less), for a period jitter under 1 ms on a
+    /// loaded machine; it needs the right to raise priorities (root or CAP_SYS_NICE,
+    /// e.g. systemd's `AmbientCapabilities`). When refused, the cycle runs at normal
+    /// priority with a warning. By default 50 when `realtime` is on.
     #[serde(default)]
     pub cycle_priority: Option<u8>,
+    /// Take a real-time priority when the process may have one (true by default);
+    /// false runs every thread at normal priority.
+    #[serde(default = "default_realtime")]
+    pub realtime: bool,
+    /// Where the gateway keeps its journal (`journal.jsonl`, as the console's) and its
+    /// latched trip (`latch.json`, so that a trip survives a crash or a restart);
+    /// relative to the configuration's folder. By default the data folder
+    /// (`VIGIE_DATA_DIR`, else `$XDG_DATA_HOME/vigie`, else `~/.local/share/vigie`)
+    /// under `gateway/<configuration file stem>`.
+    #[serde(default)]
+    pub state_dir: Option<PathBuf>,
     /// Run the plant's diagnosers (`diagnosers.ron`, when the plant folder has one) in
     /// the monitor and gateway cycles, after the filter, with the constraints rewritten
     /// for the cooperation; true by default. Ignored in emulator mode.
@@ -142,6 +223,10 @@ pub struct GatewayConfig {
 }
 
 fn default_diagnosers() -> bool {
+    true
+}
+
+fn default_realtime() -> bool {
     true
 }
 
@@ -161,6 +246,9 @@ impl GatewayConfig {
         }
         if let Some(m) = config.io_map.as_mut().filter(|m| m.is_relative()) {
             *m = base.join(&*m);
+        }
+        if let Some(d) = config.state_dir.as_mut().filter(|d| d.is_relative()) {
+            *d = base.join(&*d);
         }
         let mut problems = Vec::new();
         let at = |n: &str| Some(super::iomap::locate(text, file, n));
@@ -206,13 +294,43 @@ impl GatewayConfig {
             _ => {}
         }
         if let Some((s, plc)) = config.server.as_ref().and_then(|s| s.plc.map(|p| (s, p)))
-            && !s.allow.contains(&plc)
+            && !s.allow.contains(&plc.ip)
         {
             {
                 problems.push(Problem::error(
                     "V0624",
-                    format!("the PLC address {plc} is not in the allow-list"),
+                    format!("the PLC address {} is not in the allow-list", plc.ip),
                     at("plc"),
+                ));
+            }
+        }
+        if let Some(s) = &config.server {
+            if !(1..=247).contains(&s.unit) {
+                problems.push(Problem::error(
+                    "V0626",
+                    format!(
+                        "unit {} cannot be served: a Modbus unit id is 1 to 247 (0 is broadcast, 248 to 255 are reserved)",
+                        s.unit
+                    ),
+                    at("unit"),
+                ));
+            }
+            if s.max_connections == 0 {
+                problems.push(Problem::error(
+                    "V0627",
+                    "max_connections must be at least 1 (the PLC's connection)",
+                    at("max_connections"),
+                ));
+            }
+            if s.idle_timeout_ms <= config.link_timeout().0 {
+                problems.push(Problem::error(
+                    "V0628",
+                    format!(
+                        "idle_timeout_ms ({}) must be longer than the link timeout ({} ms): a PLC would be disconnected before it is declared lost",
+                        s.idle_timeout_ms,
+                        config.link_timeout().0
+                    ),
+                    at("idle_timeout_ms"),
                 ));
             }
         }

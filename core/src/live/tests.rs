@@ -329,6 +329,116 @@ fn watchdog_and_backoff() {
     assert_eq!(b.failed(), Millis(100));
 }
 
+#[test]
+fn a_late_runtime_does_not_blame_the_peer_but_a_silent_peer_is_lost() {
+    // Heard at 100, timeout 20, grace 50 (the request timeout), hard bound 400.
+    let fresh = || {
+        let mut w = Watchdog::new(Millis(20), Millis(0));
+        w.heard(Millis(100));
+        w
+    };
+    // The runtime last ran at 105: whatever the cycle's clock says (up to the hard
+    // bound), the silence it saw is 5 ms.
+    let mut w = fresh();
+    assert_eq!(
+        w.check_seen(Millis(300), Millis(105), false, Millis(50), Millis(400)),
+        None
+    );
+    assert_eq!(
+        w.check_seen(Millis(300), Millis(105), true, Millis(50), Millis(400)),
+        None
+    );
+    // A request in flight that has not failed: timeout + grace.
+    let mut w = fresh();
+    assert_eq!(
+        w.check_seen(Millis(170), Millis(170), false, Millis(50), Millis(400)),
+        None
+    );
+    assert!(
+        w.check_seen(Millis(171), Millis(171), false, Millis(50), Millis(400))
+            .is_some()
+    );
+    // A failed request: the timeout alone.
+    let mut w = fresh();
+    assert_eq!(
+        w.check_seen(Millis(120), Millis(120), true, Millis(50), Millis(400)),
+        None
+    );
+    assert_eq!(
+        w.check_seen(Millis(121), Millis(121), true, Millis(50), Millis(400)),
+        Some(Transition::Lost {
+            last_heard: Some(Millis(100))
+        })
+    );
+    assert_eq!(
+        w.check_seen(Millis(130), Millis(130), true, Millis(50), Millis(400)),
+        None,
+        "once"
+    );
+    // A runtime starved beyond the hard bound: lost on the cycle's clock.
+    let mut w = fresh();
+    assert!(
+        w.check_seen(Millis(501), Millis(105), false, Millis(50), Millis(400))
+            .is_some()
+    );
+    // Exhaustive over a small grid: never lost before the timeout seen by the runtime,
+    // always lost past the hard bound.
+    for seen in 100..=200 {
+        for now in seen..=560 {
+            for failed in [false, true] {
+                let mut w = fresh();
+                let lost = w
+                    .check_seen(Millis(now), Millis(seen), failed, Millis(50), Millis(400))
+                    .is_some();
+                if now - 100 > 400 {
+                    assert!(lost, "now {now} seen {seen}");
+                } else if seen - 100 <= 20 {
+                    assert!(!lost, "now {now} seen {seen}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn plc_endpoint_is_an_address_or_an_address_and_source_port() {
+    use super::config::PlcEndpoint;
+    let any = PlcEndpoint::try_from("127.0.0.2".to_string()).unwrap();
+    assert!(any.matches("127.0.0.2:40000".parse().unwrap()));
+    assert!(!any.matches("127.0.0.1:40000".parse().unwrap()));
+    let pinned = PlcEndpoint::try_from("127.0.0.2:5020".to_string()).unwrap();
+    assert!(pinned.matches("127.0.0.2:5020".parse().unwrap()));
+    assert!(!pinned.matches("127.0.0.2:5021".parse().unwrap()));
+    assert_eq!(pinned.to_string(), "127.0.0.2:5020");
+    let err = PlcEndpoint::try_from("plc.local".to_string()).unwrap_err();
+    assert!(err.contains("not a PLC endpoint"), "{err}");
+}
+
+#[test]
+fn server_units_connection_caps_and_idle_timeouts_are_validated() {
+    let path = std::path::Path::new("gw.ron");
+    for (body, code) in [
+        ("unit: 0", "V0626"),
+        ("unit: 255", "V0626"),
+        ("max_connections: 0", "V0627"),
+        ("idle_timeout_ms: 20", "V0628"),
+    ] {
+        let text = format!(
+            "Gateway(mode: Emulator, plant: \".\", cycle_ms: 10, link_timeout_cycles: 2,\n server: (plc: \"127.0.0.1\", {body}))"
+        );
+        let problems = GatewayConfig::from_ron(&text, path).unwrap_err();
+        assert!(
+            problems
+                .iter()
+                .any(|p| p.code == code && p.location.as_ref().is_some_and(|l| l.line == 2)),
+            "{body}: {problems:?}"
+        );
+    }
+    let ok = "Gateway(mode: Emulator, plant: \".\", server: (plc: \"127.0.0.2:5020\", allow: [\"127.0.0.2\"], unit: 247))";
+    let c = GatewayConfig::from_ron(ok, path).unwrap();
+    assert_eq!(c.server.unwrap().plc.unwrap().port, Some(5020));
+}
+
 fn bundle() -> PlantBundle {
     let (b, problems) = PlantBundle::load(&station()).unwrap();
     assert!(
