@@ -417,3 +417,206 @@ pub(crate) async fn start(
     });
     Ok(ServerHandle { local, task })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tokio_modbus::Slave;
+    use tokio_modbus::client::{Context as Client, Reader as _, Writer as _};
+    use tokio_modbus::prelude::SlaveContext as _;
+    use vigie_core::live::iomap::IoMap;
+    use vigie_core::plant::Plant;
+
+    fn station() -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
+    }
+
+    /// A server for the station's map, PLC at 127.0.0.2, with `extra` server fields.
+    async fn serve(extra: &str) -> (ServerHandle, SharedImage) {
+        let plant = Plant::load(&station().join("plant.ron")).unwrap();
+        let (map, _) = IoMap::load(&station().join("io-map.ron"), &plant).unwrap();
+        let text = format!(
+            "Gateway(mode: Emulator, plant: \".\", server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"{extra}))"
+        );
+        let config =
+            vigie_core::live::config::GatewayConfig::from_ron(&text, std::path::Path::new("t.ron"))
+                .unwrap()
+                .server
+                .unwrap();
+        let shared: SharedImage = Arc::new(Mutex::new(Shared {
+            inputs: Bits::zeros(11),
+            outputs: Bits::zeros(7),
+            ..Shared::default()
+        }));
+        let server = start(
+            &config,
+            ServerImage::new(&map, 1),
+            Arc::clone(&shared),
+            Duration::from_millis(200),
+        )
+        .await
+        .unwrap();
+        (server, shared)
+    }
+
+    async fn client_from(source: [u8; 4], server: SocketAddr) -> Client {
+        let socket = tokio::net::TcpSocket::new_v4().unwrap();
+        socket.bind((source, 0).into()).unwrap();
+        let stream = socket.connect(server).await.unwrap();
+        tokio_modbus::client::tcp::attach_slave(stream, Slave(1))
+    }
+
+    fn outputs(shared: &SharedImage) -> String {
+        lock(shared).outputs.to_string()
+    }
+
+    fn rt() -> tokio::runtime::Runtime {
+        tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn only_the_plc_endpoint_writes_one_connection_at_a_time_and_only_its_writes_keep_it_alive() {
+        rt().block_on(async {
+            let (server, shared) = serve("").await;
+            // Another local program: it reads, its writes are refused, it keeps nothing alive.
+            let mut other = client_from([127, 0, 0, 1], server.local).await;
+            for _ in 0..5 {
+                other.read_discrete_inputs(0, 11).await.unwrap().unwrap();
+            }
+            assert_eq!(lock(&shared).plc_heard, None, "reads keep nothing alive");
+            assert_eq!(
+                other.write_multiple_coils(0, &[true; 7]).await.unwrap(),
+                Err(ExceptionCode::IllegalFunction)
+            );
+            assert_eq!(outputs(&shared), "0000000");
+            // The PLC: its writes are served and are its liveness.
+            let mut plc = client_from([127, 0, 0, 2], server.local).await;
+            plc.read_discrete_inputs(0, 11).await.unwrap().unwrap();
+            assert_eq!(
+                lock(&shared).plc_heard,
+                None,
+                "a PLC that only reads is not alive"
+            );
+            plc.write_multiple_coils(0, &[true, false, false, false, false, false, false])
+                .await
+                .unwrap()
+                .unwrap();
+            assert!(lock(&shared).plc_heard.is_some());
+            assert_eq!(outputs(&shared), "1000000");
+            // A second connection from the PLC's address while the PLC writes: refused.
+            let mut second = client_from([127, 0, 0, 2], server.local).await;
+            assert_eq!(
+                second.write_multiple_coils(0, &[true; 7]).await.unwrap(),
+                Err(ExceptionCode::IllegalFunction)
+            );
+            assert_eq!(outputs(&shared), "1000000");
+            // Units other than 1, broadcast 0 and 255 included: refused, never executed.
+            for unit in [0, 2, 247, 255] {
+                plc.set_slave(Slave(unit));
+                assert_eq!(
+                    plc.write_multiple_coils(0, &[true; 7]).await.unwrap(),
+                    Err(ExceptionCode::GatewayTargetDevice),
+                    "unit {unit}"
+                );
+                assert_eq!(
+                    plc.read_coils(0, 7).await.unwrap(),
+                    Err(ExceptionCode::GatewayTargetDevice),
+                    "unit {unit}"
+                );
+            }
+            assert_eq!(outputs(&shared), "1000000");
+            // The first PLC connection closes: the second may write.
+            drop(plc);
+            let deadline = Instant::now() + Duration::from_secs(10);
+            while lock(&shared).writer.is_some() {
+                assert!(
+                    Instant::now() < deadline,
+                    "the closed writer was not released"
+                );
+                tokio::time::sleep(Duration::from_millis(2)).await;
+            }
+            second
+                .write_multiple_coils(0, &[false, true, false, false, false, false, false])
+                .await
+                .unwrap()
+                .unwrap();
+            assert_eq!(outputs(&shared), "0100000");
+        });
+    }
+
+    #[test]
+    fn a_silent_writer_is_replaced_after_the_link_timeout() {
+        rt().block_on(async {
+            let (server, shared) = serve("").await;
+            let mut first = client_from([127, 0, 0, 2], server.local).await;
+            first.write_single_coil(0, true).await.unwrap().unwrap();
+            let mut second = client_from([127, 0, 0, 2], server.local).await;
+            assert_eq!(
+                second.write_single_coil(1, true).await.unwrap(),
+                Err(ExceptionCode::IllegalFunction)
+            );
+            // The first connection stays open but the PLC stops writing on it (a
+            // half-open connection after a PLC restart): after the link timeout
+            // (200 ms here) the new connection takes over.
+            let deadline = Instant::now() + Duration::from_secs(10);
+            loop {
+                if second.write_single_coil(1, true).await.unwrap().is_ok() {
+                    break;
+                }
+                assert!(Instant::now() < deadline, "never taken over");
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+            assert!(lock(&shared).plc_heard.unwrap().elapsed() < Duration::from_secs(1));
+            assert_eq!(
+                first.write_single_coil(2, true).await.unwrap(),
+                Err(ExceptionCode::IllegalFunction),
+                "the old connection is read-only now"
+            );
+        });
+    }
+
+    #[test]
+    fn connections_over_the_cap_are_closed_and_idle_ones_time_out() {
+        rt().block_on(async {
+            let (server, _shared) = serve(", max_connections: 3, idle_timeout_ms: 300").await;
+            let mut plc = client_from([127, 0, 0, 2], server.local).await;
+            plc.read_discrete_inputs(0, 11).await.unwrap().unwrap();
+            // Two more fill the cap; the rest of a flood is closed at once.
+            let mut held = Vec::new();
+            for _ in 0..2 {
+                let mut c = client_from([127, 0, 0, 1], server.local).await;
+                c.read_discrete_inputs(0, 1).await.unwrap().unwrap();
+                held.push(c);
+            }
+            for _ in 0..50 {
+                let mut c = client_from([127, 0, 0, 1], server.local).await;
+                assert!(
+                    c.read_discrete_inputs(0, 1).await.is_err(),
+                    "a connection over the cap must be closed"
+                );
+            }
+            // The PLC is still served through the flood.
+            plc.read_discrete_inputs(0, 11).await.unwrap().unwrap();
+            // Silent connections are closed after 300 ms, which frees their places.
+            let deadline = Instant::now() + Duration::from_secs(10);
+            loop {
+                let mut c = client_from([127, 0, 0, 1], server.local).await;
+                if c.read_discrete_inputs(0, 1).await.is_ok() {
+                    break;
+                }
+                assert!(
+                    Instant::now() < deadline,
+                    "idle connections never timed out"
+                );
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+            assert!(
+                held[0].read_discrete_inputs(0, 1).await.is_err(),
+                "an idle connection is closed"
+            );
+        });
+    }
+}
