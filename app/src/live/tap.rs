@@ -197,7 +197,15 @@ impl Tap {
         });
     }
 
+    /// Records a link alarm for the console (at most `Tap::CAP` kept between two
+    /// takes; the rest counted as dropped, as cycles are).
     pub(crate) fn alarm(&self, alarm: LinkAlarm) {
-        self.with(|i| i.alarms.push(alarm));
+        self.with(|i| {
+            if i.alarms.len() < Self::CAP {
+                i.alarms.push(alarm);
+            } else {
+                i.dropped += 1;
+            }
+        });
     }
 }
