@@ -64,7 +64,7 @@ impl PlantBundle {
         problems.append(&mut p);
         let (mut p, discharged) = constraints.check_property_6(&symbols, &invariants);
         problems.append(&mut p);
-        let filter = crate::filter::Filter::new(&constraints, plant.outputs.len());
+        let filter = crate::filter::Filter::for_plant(&constraints, &plant);
         if let Err((err, witness)) =
             crate::filter::check_fallback_exists(&filter, &symbols, &invariants)
         {

@@ -185,7 +185,7 @@ impl Engine {
             symbols: bundle.symbols.clone(),
             observers: bundle.observers.clone(),
             filter_state: Filter::new(&bundle.constraints, n_out).new_state(),
-            filter: Filter::new(&bundle.constraints, n_out),
+            filter: Filter::for_plant(&bundle.constraints, &bundle.plant),
             notation: bundle
                 .constraints
                 .constraints
@@ -395,7 +395,7 @@ impl Engine {
         let fallback = if self.mode == FilterMode::Off {
             self.filter.fallback(&self.frame)
         } else {
-            self.filter.fallback_synced(&self.filter_state)
+            self.filter.fallback_synced(&self.filter_state, &self.frame)
         };
         match fallback {
             Ok(out) => {
@@ -403,7 +403,9 @@ impl Engine {
                 self.spec_error = None;
             }
             Err(err) => {
-                self.frame.now_mut(Space::Output).clear();
+                // No vector satisfies every constraint: each output at its safe value.
+                let safe = self.filter.safe_vector(&self.frame);
+                self.frame.now_mut(Space::Output).copy_from(&safe);
                 self.report_spec_error(&err);
             }
         }
@@ -424,15 +426,14 @@ impl Engine {
 
     fn trip_record(&self, violations: &[usize], enforced: bool) -> Trip {
         let fallback = self.filter.fallback(&self.frame);
-        let n_out = self.commanded.len();
+        let safe = self.filter.safe_vector(&self.frame);
         let applied_bits = match (&fallback, enforced) {
             (Ok(b), true) => b.clone(),
-            (Err(_), true) => Bits::zeros(n_out),
+            (Err(_), true) => safe.clone(),
             (_, false) => self.commanded.clone(),
         };
-        let fallback_bits = fallback
-            .as_ref()
-            .map_or_else(|_| Bits::zeros(n_out), Clone::clone);
+        let fallback_bits = fallback.as_ref().map_or(safe, Clone::clone);
+        let n_out = self.commanded.len();
         let out_name = |k: usize| {
             self.symbols
                 .name(Space::Output, u32::try_from(k).unwrap_or(0))

@@ -4,10 +4,19 @@
 //! ## Fallback rule
 //! When a trip latches, every output is recomputed (the commanded values are ignored):
 //! the fallback is an output vector that makes every constraint 0 in the current
-//! context (inputs, observers, auxiliaries, previous outputs) and has as few outputs ON
-//! as possible. Among vectors with the same number of ONs, the tie-break is
-//! lexicographic in output order with 0 before 1: the first output (A0) is kept OFF
-//! whenever some minimal vector allows it, then the second, and so on.
+//! context (inputs, observers, auxiliaries, previous outputs) and has as few outputs
+//! away from their *safe value* as possible. The safe value of an output is declared in
+//! `plant.ron` (`safe: Zero`, the paper's priority to zero and the default; `One`, for
+//! an actuator that moves when its output is 0; `Hold`, the value applied in the
+//! previous cycle). Among vectors with the same number of outputs away from their safe
+//! value, the tie-break is lexicographic in output order, the safe value first: the
+//! first output (A0) is kept at its safe value whenever some minimal vector allows it,
+//! then the second, and so on. With every safe value `Zero` this is the minimum number
+//! of outputs ON, then 0 before 1.
+//!
+//! When no vector satisfies every constraint (a specification error), every output
+//! takes its safe value and the error names a smallest set of conflicting constraints
+//! (no constraint can be left out of it and the rest still conflict).
 //!
 //! Each active product term gives a *nogood*: a partial output assignment that is
 //! forbidden. Unit nogoods (simple constraints) fix an output directly; the rest is a
@@ -17,6 +26,7 @@
 use crate::bits::Bits;
 use crate::constraints::{Class, ConstraintSet};
 use crate::frame::Frame;
+use crate::plant::SafeValue;
 use crate::symbols::{Literal, Space};
 
 /// A compiled product term: its context literals and its literals on outputs at t.
@@ -67,6 +77,8 @@ pub struct Filter {
     /// (id, class) per constraint, in file order.
     ids: Vec<(String, Class)>,
     n_outputs: usize,
+    /// The safe value of every output (all `Zero` unless [`Filter::with_safe_values`]).
+    safe: Vec<SafeValue>,
     /// Largest number of search nodes for one fallback before the best vector found so far
     /// is used.
     pub search_budget: usize,
@@ -131,8 +143,45 @@ impl Filter {
                 .map(|c| (c.id.clone(), c.class))
                 .collect(),
             n_outputs,
+            safe: vec![SafeValue::Zero; n_outputs],
             search_budget: 100_000,
         }
+    }
+
+    /// Compiles a constraint set for a plant's outputs, with their safe values.
+    pub fn for_plant(set: &ConstraintSet, plant: &crate::plant::Plant) -> Self {
+        Self::new(set, plant.outputs.len())
+            .with_safe_values(plant.outputs.iter().map(|s| s.safe).collect())
+    }
+
+    /// Sets the safe value of every output (missing ones are `Zero`).
+    #[must_use]
+    pub fn with_safe_values(mut self, mut safe: Vec<SafeValue>) -> Self {
+        safe.resize(self.n_outputs, SafeValue::Zero);
+        self.safe = safe;
+        self
+    }
+
+    /// The safe values.
+    pub fn safe_values(&self) -> &[SafeValue] {
+        &self.safe
+    }
+
+    /// The safe vector in the context of `frame`: each output at its safe value (`Hold`
+    /// reads the output applied in the previous cycle). The fallback's preference, and
+    /// the outputs when no fallback exists.
+    pub fn safe_vector(&self, frame: &Frame) -> Bits {
+        let mut out = Bits::zeros(self.n_outputs);
+        let prev = frame.prev(Space::Output);
+        for (k, s) in self.safe.iter().enumerate() {
+            let v = match s {
+                SafeValue::Zero => false,
+                SafeValue::One => true,
+                SafeValue::Hold => prev.get(k),
+            };
+            out.set(k, v);
+        }
+        out
     }
 
     /// Number of constraints.
@@ -258,19 +307,61 @@ impl Filter {
                 active.push(t);
             }
         }
-        self.solve(&active)
+        self.solve(&active, &self.safe_vector(frame))
     }
 
-    fn solve(&self, active: &[&Term]) -> Result<Bits, SpecError> {
-        solve_min_ones(self.n_outputs, active, self.search_budget).ok_or_else(|| {
-            let mut ids: Vec<String> = active
-                .iter()
-                .map(|t| self.id(t.constraint as usize).to_string())
-                .collect();
-            ids.sort();
-            ids.dedup();
-            SpecError { constraints: ids }
-        })
+    /// The search on the active terms, with every output's literals read relative to
+    /// its safe value (`prefer`): the fewest outputs away from it, then lexicographic.
+    fn solve(&self, active: &[&Term], prefer: &Bits) -> Result<Bits, SpecError> {
+        if prefer.count_ones() == 0 {
+            return solve_min_ones(self.n_outputs, active, self.search_budget)
+                .ok_or_else(|| self.conflict(active));
+        }
+        let flipped: Vec<Term> = active
+            .iter()
+            .map(|t| Term {
+                constraint: t.constraint,
+                context: Vec::new(),
+                outputs: t
+                    .outputs
+                    .iter()
+                    .map(|&(k, v)| (k, v != prefer.get(k as usize)))
+                    .collect(),
+            })
+            .collect();
+        let refs: Vec<&Term> = flipped.iter().collect();
+        match solve_min_ones(self.n_outputs, &refs, self.search_budget) {
+            Some(mut away) => {
+                for k in 0..self.n_outputs {
+                    away.set(k, away.get(k) != prefer.get(k));
+                }
+                Ok(away)
+            }
+            None => Err(self.conflict(&refs)),
+        }
+    }
+
+    /// A smallest set of conflicting constraints among `active` (deletion: a term is
+    /// left out whenever the rest still conflict), sorted by id.
+    fn conflict(&self, active: &[&Term]) -> SpecError {
+        let mut core: Vec<&Term> = active.to_vec();
+        let mut i = 0;
+        while i < core.len() {
+            let mut without = core.clone();
+            without.remove(i);
+            if solve_min_ones(self.n_outputs, &without, self.search_budget).is_none() {
+                core = without;
+            } else {
+                i += 1;
+            }
+        }
+        let mut ids: Vec<String> = core
+            .iter()
+            .map(|t| self.id(t.constraint as usize).to_string())
+            .collect();
+        ids.sort();
+        ids.dedup();
+        SpecError { constraints: ids }
     }
 }
 
@@ -400,20 +491,118 @@ impl Filter {
         }
     }
 
-    /// [`Filter::fallback`] using a synced state.
-    pub fn fallback_synced(&self, state: &FilterState) -> Result<Bits, SpecError> {
+    /// [`Filter::fallback`] using a synced state (`frame` gives the previous outputs
+    /// that `Hold` keeps).
+    pub fn fallback_synced(&self, state: &FilterState, frame: &Frame) -> Result<Bits, SpecError> {
         let active: Vec<&Term> = state
             .active
             .ones_fast()
             .filter_map(|ti| self.terms.get(ti))
             .collect();
-        self.solve(&active)
+        self.solve(&active, &self.safe_vector(frame))
     }
 }
 
 /// Largest support (number of context variables) for which [`check_fallback_exists`]
-/// enumerates every context.
+/// enumerates every context (of the whole set, or of one output component).
 pub const EXHAUSTIVE_SUPPORT_LIMIT: usize = 22;
+
+/// One product term as the ST export and the decomposed checks see it.
+#[derive(Clone, Debug)]
+pub struct TermView<'a> {
+    /// Index of its constraint.
+    pub constraint: usize,
+    /// Its literals on everything but the outputs at t.
+    pub context: &'a [Literal],
+    /// Its literals on outputs at t: (output, positive).
+    pub outputs: &'a [(u32, bool)],
+}
+
+impl Filter {
+    /// Every product term, in file order.
+    pub fn term_views(&self) -> impl Iterator<Item = TermView<'_>> {
+        self.terms.iter().map(|t| TermView {
+            constraint: t.constraint as usize,
+            context: &t.context,
+            outputs: &t.outputs,
+        })
+    }
+
+    /// Number of outputs.
+    pub fn n_outputs(&self) -> usize {
+        self.n_outputs
+    }
+
+    /// The outputs split into components: two outputs are in the same component when a
+    /// term with several output literals names both. The fallback decomposes over them
+    /// (fewest outputs away from their safe value overall is fewest in every
+    /// component, and the lexicographic tie-break of the whole vector is that of each
+    /// component in output order). Sorted, each component sorted.
+    pub fn output_components(&self) -> Vec<Vec<usize>> {
+        let n = self.n_outputs;
+        let mut parent: Vec<usize> = (0..n).collect();
+        fn find(p: &mut [usize], mut x: usize) -> usize {
+            while p[x] != x {
+                p[x] = p[p[x]];
+                x = p[x];
+            }
+            x
+        }
+        for t in &self.terms {
+            let mut it = t
+                .outputs
+                .iter()
+                .map(|&(k, _)| k as usize)
+                .filter(|&k| k < n);
+            if let Some(first) = it.next() {
+                for k in it {
+                    let (a, b) = (find(&mut parent, first), find(&mut parent, k));
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+        let mut groups: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+        for k in 0..n {
+            let r = find(&mut parent, k);
+            groups.entry(r).or_default().push(k);
+        }
+        groups.into_values().collect()
+    }
+}
+
+/// What [`fallback_report`] proved about the existence of a fallback.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct FallbackReport {
+    /// Number of variables the constraints read besides the outputs at t.
+    pub support: usize,
+    /// How the proof went: `whole` (every context of the support enumerated),
+    /// `components` (every context of each output component's own support), or
+    /// `not_proved`.
+    pub method: &'static str,
+    /// Contexts checked (summed over the components).
+    pub contexts: u64,
+    /// Per output component: its outputs, its support size, whether it was proved.
+    pub components: Vec<ComponentReport>,
+}
+
+/// One output component in a [`FallbackReport`].
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct ComponentReport {
+    /// Its outputs, by name.
+    pub outputs: Vec<String>,
+    /// Variables read by its terms besides the outputs at t (and by the invariants that
+    /// share one of them).
+    pub support: usize,
+    /// True when every context of its support was enumerated.
+    pub proved: bool,
+}
+
+impl FallbackReport {
+    /// True when a fallback was proved to exist in every reachable context.
+    pub fn proved(&self) -> bool {
+        self.method != "not_proved"
+    }
+}
 
 /// The context variables (everything but outputs at t) read by the constraints, sorted.
 pub fn support(filter: &Filter) -> Vec<crate::symbols::Var> {
@@ -436,10 +625,109 @@ pub fn check_fallback_exists(
     symbols: &crate::symbols::Symbols,
     invariants: &ConstraintSet,
 ) -> Result<u64, (SpecError, String)> {
+    fallback_report(filter, symbols, invariants).map(|r| r.contexts)
+}
+
+/// [`check_fallback_exists`] with what was proved: every context of the support when it
+/// has at most [`EXHAUSTIVE_SUPPORT_LIMIT`] variables; otherwise every context of each
+/// output component's support (the variables its terms read, and those of the
+/// invariants that share one of them), which is exact since the fallback decomposes
+/// over the components; a component whose support is still larger is reported not
+/// proved, with its size.
+pub fn fallback_report(
+    filter: &Filter,
+    symbols: &crate::symbols::Symbols,
+    invariants: &ConstraintSet,
+) -> Result<FallbackReport, (SpecError, String)> {
     let vars = support(filter);
-    if vars.len() > EXHAUSTIVE_SUPPORT_LIMIT {
-        return Ok(0);
+    let name = |k: usize| {
+        symbols
+            .name(Space::Output, u32::try_from(k).unwrap_or(0))
+            .to_string()
+    };
+    if vars.len() <= EXHAUSTIVE_SUPPORT_LIMIT {
+        let all: Vec<&crate::constraints::Constraint> = invariants.constraints.iter().collect();
+        let contexts = enumerate_contexts(filter, symbols, &all, &vars, None)?;
+        return Ok(FallbackReport {
+            support: vars.len(),
+            method: "whole",
+            contexts,
+            components: vec![ComponentReport {
+                outputs: (0..filter.n_outputs).map(name).collect(),
+                support: vars.len(),
+                proved: true,
+            }],
+        });
     }
+    let mut report = FallbackReport {
+        support: vars.len(),
+        method: "components",
+        contexts: 0,
+        components: Vec::new(),
+    };
+    for comp in filter.output_components() {
+        let in_comp = |t: &Term| t.outputs.iter().any(|&(k, _)| comp.contains(&(k as usize)));
+        let mut cvars: Vec<crate::symbols::Var> = filter
+            .terms
+            .iter()
+            .filter(|t| in_comp(t))
+            .flat_map(|t| t.context.iter().map(|l| l.var))
+            .collect();
+        cvars.sort();
+        cvars.dedup();
+        // The invariants that share a variable with the component, whole.
+        let related: Vec<&crate::constraints::Constraint> = invariants
+            .constraints
+            .iter()
+            .filter(|inv| {
+                inv.dnf
+                    .iter()
+                    .flatten()
+                    .any(|l| cvars.binary_search(&l.var).is_ok())
+            })
+            .collect();
+        for inv in &related {
+            cvars.extend(inv.dnf.iter().flatten().map(|l| l.var));
+        }
+        cvars.sort();
+        cvars.dedup();
+        let proved = cvars.len() <= EXHAUSTIVE_SUPPORT_LIMIT;
+        if proved {
+            report.contexts += enumerate_contexts(filter, symbols, &related, &cvars, Some(&comp))?;
+        } else {
+            report.method = "not_proved";
+        }
+        report.components.push(ComponentReport {
+            outputs: comp.iter().map(|&k| name(k)).collect(),
+            support: cvars.len(),
+            proved,
+        });
+    }
+    Ok(report)
+}
+
+/// Enumerates every assignment of `vars` (skipping those one of `invariants` excludes;
+/// they read only `vars`) and searches a fallback in each, for the terms of the outputs
+/// `only` (all terms when `None`); the number of contexts checked, or the first failing
+/// one as a witness.
+fn enumerate_contexts(
+    filter: &Filter,
+    symbols: &crate::symbols::Symbols,
+    invariants: &[&crate::constraints::Constraint],
+    vars: &[crate::symbols::Var],
+    only: Option<&[usize]>,
+) -> Result<u64, (SpecError, String)> {
+    let sub;
+    let filter = match only {
+        None => filter,
+        Some(comp) => {
+            let mut f = filter.clone();
+            f.terms
+                .retain(|t| t.outputs.iter().any(|&(k, _)| comp.contains(&(k as usize))));
+            sub = f;
+            &sub
+        }
+    };
     let mut frame = Frame::new(symbols.sizes());
     let total = 1u64 << vars.len();
     let mut checked = 0;
@@ -453,7 +741,6 @@ pub fn check_fallback_exists(
             table[v.space as usize].set(v.index as usize, (assignment >> i) & 1 == 1);
         }
         if invariants
-            .constraints
             .iter()
             .any(|inv| crate::expr::eval_dnf(&inv.dnf, &frame))
         {

@@ -64,6 +64,11 @@ impl Frame {
         &self.prev[space as usize]
     }
 
+    /// Mutable values at t-1 of a space.
+    pub fn prev_mut(&mut self, space: Space) -> &mut Bits {
+        &mut self.prev[space as usize]
+    }
+
     /// Ends a cycle: the values at t become the values at t-1.
     pub fn shift(&mut self) {
         for s in Space::ALL {

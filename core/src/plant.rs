@@ -42,6 +42,19 @@ impl std::fmt::Display for Address {
     }
 }
 
+/// The value an output takes when the filter stops the plant in a safe state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SafeValue {
+    /// OFF (the paper's rest state; the default).
+    #[default]
+    Zero,
+    /// ON: the actuator moves when its output is 0 (a monostable cylinder held
+    /// extended, a lift whose "down" output off means "up").
+    One,
+    /// Keep the value last applied (an actuator that must neither start nor stop).
+    Hold,
+}
+
 /// One signal of the plant.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -58,6 +71,43 @@ pub struct Signal {
     /// Optional fieldbus address.
     #[serde(default)]
     pub address: Option<Address>,
+    /// Actuators: the value the fallback prefers (Zero by default, see
+    /// [`SafeValue`]).
+    #[serde(default)]
+    pub safe: SafeValue,
+    /// Actuators: what the plant does when the output is OFF, in words ("the table
+    /// returns to the loading position"), shown in explanations.
+    #[serde(default)]
+    pub off: Option<String>,
+    /// The value before the first cycle (a cold start's previous values; 0 by default).
+    #[serde(default)]
+    pub initial: bool,
+}
+
+impl Signal {
+    /// A signal with the defaults of the optional fields.
+    pub fn new(id: impl Into<String>, kind: SignalKind, description: impl Into<String>) -> Self {
+        Self {
+            id: id.into(),
+            kind,
+            description: description.into(),
+            element: String::new(),
+            address: None,
+            safe: SafeValue::Zero,
+            off: None,
+            initial: false,
+        }
+    }
+
+    /// What the output does at `value`, for explanations: "A4 OFF: the table returns
+    /// to the loading position".
+    pub fn meaning(&self, value: bool) -> String {
+        match (value, &self.off) {
+            (false, Some(off)) => format!("{} OFF: {off}", self.id),
+            (false, None) => format!("{} OFF", self.id),
+            (true, _) => format!("{} ON: {}", self.id, self.description),
+        }
+    }
 }
 
 /// The plant file as written.

@@ -468,13 +468,7 @@ pub fn faudes_export(c: &Component) -> (String, String) {
 /// signals.
 pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile) {
     use crate::plant::{Signal, SignalKind};
-    let sig = |id: String, kind| Signal {
-        id,
-        kind,
-        description: String::new(),
-        element: String::new(),
-        address: None,
-    };
+    let sig = |id: String, kind| Signal::new(id, kind, String::new());
     let mut inputs = Vec::new();
     let mut outputs = Vec::new();
     let mut comps = Vec::new();

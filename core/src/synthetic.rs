@@ -64,22 +64,10 @@ pub fn generate(signals: usize, constraints: usize, seed: u64) -> Synthetic {
     let n_in = signals / 2;
     let n_out = signals - n_in;
     let inputs = (0..n_in)
-        .map(|i| Signal {
-            id: format!("C{i}"),
-            kind: SignalKind::Sensor,
-            description: String::new(),
-            element: String::new(),
-            address: None,
-        })
+        .map(|i| Signal::new(format!("C{i}"), SignalKind::Sensor, String::new()))
         .collect();
     let outputs = (0..n_out)
-        .map(|k| Signal {
-            id: format!("A{k}"),
-            kind: SignalKind::Actuator,
-            description: String::new(),
-            element: String::new(),
-            address: None,
-        })
+        .map(|k| Signal::new(format!("A{k}"), SignalKind::Actuator, String::new()))
         .collect();
     let plant = Plant::new("synthetic", inputs, outputs);
     let symbols = plant.symbols();

@@ -31,7 +31,7 @@ fn station_st() -> String {
     let tasks = TaskSet::load(&dir.join("tasks.ron")).unwrap();
     let plant = Plant::load(&dir.join("plant.ron")).unwrap();
     let (bundle, _) = PlantBundle::from_plant(&dir, plant, &tasks.aux_names());
-    vigie_core::export::st::generate(&bundle, Some(&tasks))
+    vigie_core::export::st::generate(&bundle, Some(&tasks)).unwrap()
 }
 
 fn blark_parse(name: &str, text: &str) -> (bool, String) {

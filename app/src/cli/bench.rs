@@ -88,7 +88,7 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         observers.update(black_box(&mut trip));
         filter.sync(&mut state, black_box(&trip));
         filter.violations_synced(&state, black_box(&trip), &mut violations);
-        let fb = filter.fallback_synced(&state);
+        let fb = filter.fallback_synced(&state, &trip);
         black_box(&fb);
     });
     let fb = filter.fallback(&trip).map_err(|e| anyhow::anyhow!("{e}"))?;
@@ -172,14 +172,14 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         black_box(&violations);
     });
     let s_fallback = median_ns(21, heavy.min(200), || {
-        let fb = sfilter.fallback_synced(black_box(&sstate));
+        let fb = sfilter.fallback_synced(black_box(&sstate), &tripping);
         black_box(&fb);
     });
     let s_fallback_full = median_ns(21, heavy.min(200), || {
         let fb = sfilter.fallback(black_box(&tripping));
         black_box(&fb);
     });
-    let ok = sfilter.fallback_synced(&sstate).is_ok();
+    let ok = sfilter.fallback_synced(&sstate, &tripping).is_ok();
     writeln!(
         out,
         "synthetic plant (seed 42: {} signals, {} constraints)",

@@ -7,7 +7,8 @@ use std::process::ExitCode;
 
 pub(crate) fn run(dir: &Path, out: Option<&Path>) -> anyhow::Result<ExitCode> {
     let bundle = super::load_valid_bundle(dir)?;
-    let st = vigie_core::export::st::generate(&bundle, bundle.tasks.as_ref());
+    let st = vigie_core::export::st::generate(&bundle, bundle.tasks.as_ref())
+        .map_err(|e| anyhow::anyhow!("cannot export {}: {e}", dir.display()))?;
     match out {
         Some(path) => std::fs::write(path, st)
             .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?,

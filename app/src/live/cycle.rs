@@ -654,9 +654,10 @@ impl GatewayCycle {
     /// The outputs safe whatever the stale inputs are and whatever the PLC commands.
     fn safe_now(&mut self, now: Millis) -> Bits {
         let stale = self.inputs.stale(now, &self.bounds);
+        let frame = self.engine.frame();
         self.guard
-            .safe_outputs(self.engine.frame(), &stale)
-            .unwrap_or_else(|_| Bits::zeros(self.control.0.len()))
+            .safe_outputs(frame, &stale)
+            .unwrap_or_else(|_| self.guard.safe_vector(frame))
     }
 
     /// Resets a latched trip when asked (automatic reset or the console's operator).

@@ -6,11 +6,14 @@
 //! architecture places the filter. Per cycle it calls, in order:
 //! 1. `FB_Observers` — the observers of `observers.ron` (memories and counters);
 //! 2. `FB_Filter` — constraint evaluation on the commanded outputs, the trip latch and
-//!    the fallback vector (priority to zero). The fallback is exported as a function of
-//!    the context: every valuation of the variables the constraints read besides the
-//!    outputs at t is enumerated, the native fallback is computed for each, and each
-//!    output becomes a sum of products (prime implicants found greedily) of the contexts
-//!    where the fallback sets it to 1;
+//!    the fallback vector, decided as the engine decides it (see `crate::filter`): each
+//!    output as close to its safe value as the active constraints allow. The search is
+//!    exported, not its table, so it works at any size: every product term's context
+//!    is evaluated (`FT_<n>`), unit terms force their output (`F0_<id>`, `F1_<id>`),
+//!    and each output component (outputs linked by a term on several of them) tries
+//!    its candidate vectors in the engine's order (fewest outputs away from their safe
+//!    value `FS_<id>`, then lexicographic) as one `IF … ELSIF` chain; with no candidate,
+//!    or two unit terms in conflict, every output takes its safe value;
 //! 3. `FB_Tasks` — the task monitors, with each stopwatch stored as an offset variable
 //!    (`T_<task>_DX`, `T_<task>_DY`) and the entry time of the current state
 //!    (`T_<task>_SINCE`), as in the thesis's chapter 6: `x = δx + (NOW_MS − since)` while
@@ -38,8 +41,27 @@ use crate::tasks::spec::{Slowdown, Unexpected};
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
-/// Largest number of context variables for which the fallback is enumerated.
+/// Largest number of context variables for which [`fallback_cover`] enumerates the
+/// fallback.
 pub const FALLBACK_SUPPORT_LIMIT: usize = 20;
+
+/// Largest output component (outputs linked by terms on several of them) whose search
+/// is exported: its candidates are unrolled, 2^n of them.
+pub const COMPONENT_LIMIT: usize = 10;
+
+/// Why the Structured Text cannot be generated.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ExportError {
+    /// An output component too large to unroll its search.
+    #[error(
+        "the outputs {} are linked by combined constraints into one component of {} outputs; its exported search would try 2^{} candidates (the limit is {COMPONENT_LIMIT} outputs): split the combined constraints",
+        outputs.join(", "), outputs.len(), outputs.len()
+    )]
+    ComponentTooLarge {
+        /// The component's outputs.
+        outputs: Vec<String>,
+    },
+}
 
 /// An identifier-safe rendering of a name.
 pub fn mangle(name: &str) -> String {
@@ -165,7 +187,7 @@ fn section(out: &mut String, kind: &str, vars: impl Iterator<Item = (String, &'s
 /// The Structured Text of the bundle's observers and filter, and of the task monitors
 /// when `tasks` is given (their event expressions are resolved against the bundle's
 /// symbols; an expression that does not resolve is exported as `FALSE` with a comment).
-pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
+pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String, ExportError> {
     let symbols = &bundle.symbols;
     let mut out = String::new();
     let _ = writeln!(
@@ -233,10 +255,9 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
 
     // Filter.
     let n_out = bundle.plant.outputs.len();
-    let filter = Filter::new(&bundle.constraints, n_out);
+    let filter = Filter::for_plant(&bundle.constraints, &bundle.plant);
     let mut fil = Fb::new("FB_Filter");
     let mut viol = Vec::new();
-    let mut support: BTreeSet<Var> = BTreeSet::new();
     for c in &bundle.constraints.constraints {
         let v = format!("V_{}", mangle(&c.id));
         let e = render_dnf(symbols, &c.dnf, true, &mut fil.inputs);
@@ -246,11 +267,6 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
             c.id,
             c.source.replace("*)", "* )")
         );
-        for l in c.dnf.iter().flatten() {
-            if l.var.space != Space::Output || l.var.prev {
-                support.insert(l.var);
-            }
-        }
         fil.outputs.push((v.clone(), "BOOL"));
         viol.push(v);
     }
@@ -272,29 +288,9 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
     };
     let _ = writeln!(
         fil.body,
-        "VIOLATION := {any};\nIF VIOLATION AND NOT LATCHED THEN\n    LATCHED := TRUE;\nEND_IF;\nIF LATCHED THEN\n    (* Fallback: fewest outputs ON in this context (priority to zero). *)"
+        "VIOLATION := {any};\nIF VIOLATION AND NOT LATCHED THEN\n    LATCHED := TRUE;\nEND_IF;\nIF LATCHED THEN\n    (* Fallback: each output as close to its safe value as the constraints allow. *)"
     );
-    let support: Vec<Var> = support.into_iter().collect();
-    let fallback = fallback_cover(&filter, symbols, &support, n_out);
-    for k in 0..n_out {
-        let q = ident(
-            symbols,
-            Var {
-                space: Space::Output,
-                index: u32::try_from(k).unwrap_or(0),
-                prev: false,
-            },
-            false,
-        );
-        let e = match &fallback {
-            Some(cubes) => {
-                let dnf: Dnf = cubes[k].clone();
-                render_dnf(symbols, &dnf, true, &mut fil.inputs)
-            }
-            None => "FALSE (* context too large to enumerate *)".into(),
-        };
-        let _ = writeln!(fil.body, "    {q} := {e};");
-    }
+    fallback_search(&filter, symbols, &mut fil)?;
     let _ = writeln!(fil.body, "ELSE");
     for k in 0..n_out {
         let v = Var {
@@ -470,7 +466,179 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> String {
         );
     }
     let _ = writeln!(out, "END_PROGRAM");
-    out
+    Ok(out)
+}
+
+fn output_var(k: usize, prev: bool) -> Var {
+    Var {
+        space: Space::Output,
+        index: u32::try_from(k).unwrap_or(0),
+        prev,
+    }
+}
+
+/// The fallback search of `filter` as statements of `fil` (inside `IF LATCHED`), see
+/// the module documentation.
+fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(), ExportError> {
+    let n_out = filter.n_outputs();
+    let name = |k: usize| mangle(symbols.name(Space::Output, u32::try_from(k).unwrap_or(0)));
+    let q = |k: usize| ident(symbols, output_var(k, false), false);
+    let b = &mut fil.body;
+    // Terms whose context holds.
+    let terms: Vec<_> = filter
+        .term_views()
+        .filter(|t| !t.outputs.is_empty())
+        .collect();
+    for (i, t) in terms.iter().enumerate() {
+        let ctx = if t.context.is_empty() {
+            "TRUE".to_string()
+        } else {
+            t.context
+                .iter()
+                .map(|l| render_lit(symbols, *l, true, &mut fil.inputs))
+                .collect::<Vec<_>>()
+                .join(" AND ")
+        };
+        let _ = writeln!(b, "    FT_{i} := {ctx};");
+        fil.locals.push((format!("FT_{i}"), "BOOL"));
+    }
+    // Safe values.
+    for (k, safe) in filter.safe_values().iter().enumerate() {
+        let v = match safe {
+            crate::plant::SafeValue::Zero => "FALSE".to_string(),
+            crate::plant::SafeValue::One => "TRUE".to_string(),
+            crate::plant::SafeValue::Hold => {
+                let id = ident(symbols, output_var(k, true), true);
+                fil.inputs.insert(id.clone());
+                id
+            }
+        };
+        let _ = writeln!(b, "    FS_{} := {v};", name(k));
+        fil.locals.push((format!("FS_{}", name(k)), "BOOL"));
+    }
+    // Unit terms force their output; two opposite ones conflict.
+    let mut conflict = Vec::new();
+    for k in 0..n_out {
+        for (force, positive) in [("F0", true), ("F1", false)] {
+            let by: Vec<String> = terms
+                .iter()
+                .enumerate()
+                .filter(|(_, t)| t.outputs == [(u32::try_from(k).unwrap_or(0), positive)])
+                .map(|(i, _)| format!("FT_{i}"))
+                .collect();
+            let e = if by.is_empty() {
+                "FALSE".to_string()
+            } else {
+                by.join(" OR ")
+            };
+            let _ = writeln!(b, "    {force}_{} := {e};", name(k));
+            fil.locals.push((format!("{force}_{}", name(k)), "BOOL"));
+        }
+        conflict.push(format!("(F0_{n} AND F1_{n})", n = name(k)));
+    }
+    let _ = writeln!(
+        b,
+        "    CONFLICT := {};",
+        if conflict.is_empty() {
+            "FALSE".to_string()
+        } else {
+            conflict.join(" OR ")
+        }
+    );
+    fil.locals.push(("CONFLICT".into(), "BOOL"));
+    for comp in filter.output_components() {
+        let multi: Vec<(usize, &crate::filter::TermView<'_>)> = terms
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.outputs.len() > 1 && comp.contains(&(t.outputs[0].0 as usize)))
+            .collect();
+        if multi.is_empty() {
+            for &k in &comp {
+                let n = name(k);
+                let _ = writeln!(b, "    {} := NOT F0_{n} AND (F1_{n} OR FS_{n});", q(k));
+            }
+            continue;
+        }
+        if comp.len() > COMPONENT_LIMIT {
+            return Err(ExportError::ComponentTooLarge {
+                outputs: comp
+                    .iter()
+                    .map(|&k| {
+                        symbols
+                            .name(Space::Output, u32::try_from(k).unwrap_or(0))
+                            .to_string()
+                    })
+                    .collect(),
+            });
+        }
+        let m = comp.len();
+        // Candidates: d_j = 1 when output comp[j] is away from its safe value; fewest
+        // away first, then lexicographic with comp[0] most significant, 0 first.
+        let mut order: Vec<u32> = (0..(1u32 << m)).collect();
+        order.sort_by_key(|&d| (d.count_ones(), d.reverse_bits() >> (32 - m)));
+        let value = |j: usize, d: u32| {
+            let n = name(comp[j]);
+            if d >> j & 1 == 1 {
+                format!("NOT FS_{n}")
+            } else {
+                format!("FS_{n}")
+            }
+        };
+        let _ = writeln!(
+            b,
+            "    (* Outputs {}: {} candidates. *)",
+            comp.iter().map(|&k| name(k)).collect::<Vec<_>>().join(", "),
+            order.len()
+        );
+        for (c, &d) in order.iter().enumerate() {
+            let mut ok = Vec::new();
+            for j in 0..m {
+                let (n, x) = (name(comp[j]), value(j, d));
+                // x = 1 against F0, x = 0 against F1.
+                if d >> j & 1 == 1 {
+                    ok.push(format!(
+                        "NOT (F0_{n} AND NOT FS_{n}) AND NOT (F1_{n} AND FS_{n})"
+                    ));
+                } else {
+                    ok.push(format!(
+                        "NOT (F0_{n} AND FS_{n}) AND NOT (F1_{n} AND NOT FS_{n})"
+                    ));
+                }
+                let _ = x;
+            }
+            for (i, t) in &multi {
+                let lits: Vec<String> = t
+                    .outputs
+                    .iter()
+                    .map(|&(k, positive)| {
+                        let j = comp.iter().position(|&o| o == k as usize).unwrap_or(0);
+                        let x = value(j, d);
+                        if positive {
+                            format!("({x})")
+                        } else {
+                            format!("NOT ({x})")
+                        }
+                    })
+                    .collect();
+                ok.push(format!("NOT (FT_{i} AND {})", lits.join(" AND ")));
+            }
+            let kw = if c == 0 { "IF" } else { "ELSIF" };
+            let _ = writeln!(b, "    {kw} {} THEN", ok.join(" AND "));
+            for j in 0..m {
+                let _ = writeln!(b, "        {} := {};", q(comp[j]), value(j, d));
+            }
+        }
+        let _ = writeln!(b, "    ELSE\n        CONFLICT := TRUE;\n    END_IF;");
+    }
+    let _ = writeln!(
+        b,
+        "    IF CONFLICT THEN\n        (* No vector satisfies every constraint: the safe values. *)"
+    );
+    for k in 0..n_out {
+        let _ = writeln!(b, "        {} := FS_{};", q(k), name(k));
+    }
+    let _ = writeln!(b, "    END_IF;");
+    Ok(())
 }
 
 /// Per output, the fallback's ON-set over the context `support` as a cover of cubes, or

@@ -56,7 +56,7 @@ fn i(m: &Machine, name: &str) -> i64 {
 #[test]
 fn generated_st_parses_with_the_interpreter() {
     let (bundle, set) = station();
-    let text = st::generate(&bundle, Some(&set));
+    let text = st::generate(&bundle, Some(&set)).unwrap();
     let unit = interp::parse(&text).unwrap();
     Machine::new(unit, "Vigie_Safety").unwrap();
     assert!(text.contains("FUNCTION_BLOCK FB_Tasks"));
@@ -69,7 +69,7 @@ fn generated_st_parses_with_the_interpreter() {
 #[test]
 fn fallback_is_exact_in_every_context() {
     let (bundle, _) = station();
-    let text = st::generate(&bundle, None);
+    let text = st::generate(&bundle, None).unwrap();
     let unit = interp::parse(&text).unwrap();
     let n_out = bundle.plant.outputs.len();
     let filter = Filter::new(&bundle.constraints, n_out);
@@ -123,7 +123,7 @@ fn fallback_is_exact_in_every_context() {
 #[test]
 fn st_conforms_to_the_native_engine() {
     let (bundle, set) = station();
-    let text = st::generate(&bundle, Some(&set));
+    let text = st::generate(&bundle, Some(&set)).unwrap();
     let unit = interp::parse(&text).unwrap();
     let sym = &bundle.symbols;
     let n_in = bundle.plant.inputs.len();
@@ -275,4 +275,121 @@ fn task_outputs_are_constraint_literals() {
         (crate::tasks::AlarmCode::T001, Millis(4600), "turn_out")
     );
     assert_eq!(alarm.earlier_by_ms, Some(1500));
+}
+
+/// A plant of 120 signals (support far past any enumeration), outputs with every kind
+/// of safe value, combined constraints chaining outputs into components of several,
+/// and conflicting constraints: the interpreted ST and the engine decide the same
+/// outputs on every cycle of random traces, fallbacks and specification errors
+/// included.
+#[test]
+fn st_conforms_to_the_engine_on_a_large_plant_with_safe_values() {
+    use crate::plant::SafeValue;
+    let syn = crate::synthetic::generate(120, 150, 11);
+    let mut plant = syn.plant.clone();
+    for (k, s) in plant.outputs.iter_mut().enumerate() {
+        s.safe = match k % 5 {
+            1 => SafeValue::One,
+            3 => SafeValue::Hold,
+            _ => SafeValue::Zero,
+        };
+    }
+    // Chains of combined constraints (components of three and four outputs) and pairs
+    // of simple constraints that force one output both ways in some contexts.
+    let mut text = syn.text.clone();
+    text.push_str("CSx1 = C1 . /A2 . /A3\nCSx2 = C2 . A3 . /A4\nCSx3 = C3 . A4 . A5\n");
+    text.push_str("CSx4 = C5 . /A11 . A12\nCSx5 = C6 . A12 . A13\nCSx6 = C7 . /A13 . /A14\nCSx7 = C8 . A14 . /A11\n");
+    text.push_str("CSx8 = C9 . C10 . A21\nCSx9 = C9 . C10 . /A21\n");
+    let (constraints, problems) = crate::constraints::ConstraintSet::parse(
+        &text,
+        std::path::Path::new("big.txt"),
+        &syn.symbols,
+    );
+    assert!(problems.iter().all(|p| !p.is_error()), "{problems:#?}");
+    let bundle = PlantBundle {
+        dir: PathBuf::from("."),
+        plant,
+        symbols: syn.symbols.clone(),
+        observers: crate::observers::Observers::empty(),
+        constraints,
+        invariants: crate::constraints::ConstraintSet::default(),
+        discharged: Vec::new(),
+        tasks: None,
+    };
+    let filter = Filter::for_plant(&bundle.constraints, &bundle.plant);
+    assert!(crate::filter::support(&filter).len() > 40);
+    assert!(filter.output_components().iter().any(|c| c.len() >= 4));
+    let text = st::generate(&bundle, None).unwrap();
+    let unit = interp::parse(&text).unwrap();
+    let sym = &bundle.symbols;
+    let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
+    let name = |space, k: usize, filter| {
+        st::ident(
+            sym,
+            Var {
+                space,
+                index: k as u32,
+                prev: false,
+            },
+            filter,
+        )
+    };
+    let (mut tripped_cycles, mut away_from_zero, mut spec_errors) = (0, 0, 0);
+    for seed in 1..=40u64 {
+        let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+        let mut engine = Engine::new(&bundle, FilterMode::Enforce, 1);
+        let mut m = Machine::new(unit.clone(), "Vigie_Safety").unwrap();
+        let mut inputs = Bits::zeros(n_in);
+        let mut cmd = Bits::zeros(n_out);
+        for cycle in 0..150 {
+            for k in 0..n_in {
+                if rng.chance(8) {
+                    inputs.set(k, !inputs.get(k));
+                }
+            }
+            for k in 0..n_out {
+                if rng.chance(6) {
+                    cmd.set(k, !cmd.get(k));
+                }
+            }
+            engine.cycle(Millis(cycle * 10), &inputs, &mut Commanded(cmd.clone()));
+            let errors = engine
+                .drain_events()
+                .iter()
+                .filter(|e| matches!(e, crate::engine::Event::SpecificationError { .. }))
+                .count();
+            spec_errors += errors;
+            m.set("NOW_MS", Val::Int(cycle as i64 * 10)).unwrap();
+            for k in 0..n_in {
+                m.set(&name(Space::Input, k, false), Val::Bool(inputs.get(k)))
+                    .unwrap();
+            }
+            for k in 0..n_out {
+                m.set(&name(Space::Output, k, true), Val::Bool(cmd.get(k)))
+                    .unwrap();
+            }
+            m.scan().unwrap();
+            let at = format!("seed {seed}, cycle {cycle}");
+            for k in 0..n_out {
+                assert_eq!(
+                    b(&m, &name(Space::Output, k, false)),
+                    engine.applied().get(k),
+                    "{at}: output {}",
+                    sym.name(Space::Output, k as u32)
+                );
+            }
+            assert_eq!(b(&m, "TRIPPED"), engine.is_tripped(), "{at}: trip");
+            if engine.is_tripped() {
+                tripped_cycles += 1;
+                away_from_zero += engine.applied().count_ones();
+            }
+        }
+    }
+    // The traces exercise the fallback, the safe values and the conflicts.
+    assert!(tripped_cycles > 2000, "tripped cycles {tripped_cycles}");
+    assert!(
+        away_from_zero > 1000,
+        "outputs ON under the fallback {away_from_zero}"
+    );
+    assert!(spec_errors > 5, "specification errors {spec_errors}");
 }

@@ -335,14 +335,16 @@ fn combined_nogoods_are_searched_with_the_tie_break() {
 
 #[test]
 fn conflicting_constraints_are_a_specification_error() {
+    // Z is active too but takes no part in the conflict: the error names the smallest
+    // set of conflicting constraints, not every active one.
     let (b, f) = filter_for("X = C0 . /A0\nY = C0 . A0\nZ = C1 . A1");
     let err = f
         .fallback(&frame_with(&b.symbols, &["C0", "C1"]))
         .unwrap_err();
-    assert_eq!(err.constraints, ["X", "Y", "Z"]);
+    assert_eq!(err.constraints, ["X", "Y"]);
     assert_eq!(
         err.to_string(),
-        "no output vector satisfies every constraint: X, Y, Z"
+        "no output vector satisfies every constraint: X, Y"
     );
     assert!(f.fallback(&frame_with(&b.symbols, &["C1"])).is_ok());
     // Combined nogoods only: every value of (A0, A1) is forbidden.
@@ -453,5 +455,111 @@ proptest! {
         let filter = Filter::new(&b.constraints, b.plant.outputs.len());
         let vars: Vec<Var> = (0..3).map(|i| Var { space: Space::Input, index: i, prev: false }).collect();
         exhaustive_with(&b, &filter, &vars, false);
+    }
+}
+
+#[test]
+fn the_fallback_prefers_each_outputs_safe_value() {
+    use crate::plant::SafeValue::{Hold, One, Zero};
+    // A1 is a monostable lift held up by its output (safe value One): a trip drives A0
+    // OFF and keeps A1 ON, where priority to zero would let the lift drop.
+    let (b, f) = filter_for("X = C0 . A0");
+    let f = f.with_safe_values(vec![Zero, One, Zero, Zero, Zero, Zero, Zero]);
+    let out = f.fallback(&frame_with(&b.symbols, &["C0"])).unwrap();
+    assert_eq!(out.to_string(), "0100000");
+    // A constraint that forbids the safe value wins over it.
+    let (b, f) = filter_for("X = C0 . A1");
+    let f = f.with_safe_values(vec![Zero, One, Zero, Zero, Zero, Zero, Zero]);
+    assert_eq!(
+        f.fallback(&frame_with(&b.symbols, &["C0"]))
+            .unwrap()
+            .to_string(),
+        "0000000"
+    );
+    // Hold keeps the previous applied value, in either direction.
+    let (b, f) = filter_for("X = C0 . A0");
+    let f = f.with_safe_values(vec![Zero, Hold, Hold, Zero, Zero, Zero, Zero]);
+    let mut frame = frame_with(&b.symbols, &["C0"]);
+    frame.prev_mut(Space::Output).set(1, true);
+    assert_eq!(f.fallback(&frame).unwrap().to_string(), "0100000");
+    frame.prev_mut(Space::Output).set(1, false);
+    frame.prev_mut(Space::Output).set(2, true);
+    assert_eq!(f.fallback(&frame).unwrap().to_string(), "0010000");
+    // Combined: one of A0, A1 must leave its safe value; with A0 safe at 1 and A1 safe
+    // at 0, "A0 . A1 forbidden" keeps A0 (first output) and moves nothing else.
+    let (b, f) = filter_for("X = C0 . A0 . /A1");
+    let f = f.with_safe_values(vec![One, Zero, Zero, Zero, Zero, Zero, Zero]);
+    assert_eq!(
+        f.fallback(&frame_with(&b.symbols, &["C0"]))
+            .unwrap()
+            .to_string(),
+        "1100000"
+    );
+    // On a conflict, every output takes its safe value.
+    let (b, f) = filter_for("X = C0 . /A0\nY = C0 . A0");
+    let f = f.with_safe_values(vec![Zero, One, Hold, Zero, Zero, Zero, Zero]);
+    let mut frame = frame_with(&b.symbols, &["C0"]);
+    frame.prev_mut(Space::Output).set(2, true);
+    assert!(f.fallback(&frame).is_err());
+    assert_eq!(f.safe_vector(&frame).to_string(), "0110000");
+}
+
+/// The priority to the safe values is the priority to zero read relative to them:
+/// exhaustive over every safe-value assignment of three outputs and every context of
+/// a small combined set, against brute force over all output vectors.
+#[test]
+fn safe_value_fallback_matches_brute_force() {
+    use crate::plant::SafeValue::{self, Hold, One, Zero};
+    let (b, f0) =
+        filter_for("X = C0 . /A0 . /A1\nY = C1 . A1 . A2\nZ = C2 . /A2\nW = C0 . C1 . A0 . /A2");
+    let kinds = [Zero, One, Hold];
+    for a in kinds {
+        for bb in kinds {
+            for c in kinds {
+                let safe: Vec<SafeValue> = vec![a, bb, c, Zero, Zero, Zero, Zero];
+                let f = f0.clone().with_safe_values(safe.clone());
+                for ctx in 0..(1u32 << 6) {
+                    let mut frame = Frame::new(b.symbols.sizes());
+                    for i in 0..3 {
+                        frame.now_mut(Space::Input).set(i, ctx >> i & 1 == 1);
+                        frame
+                            .prev_mut(Space::Output)
+                            .set(i, ctx >> (i + 3) & 1 == 1);
+                    }
+                    let pref = f.safe_vector(&frame);
+                    // Brute force: the satisfying vector with the fewest outputs away
+                    // from their safe value, then lexicographic (A0 first, safe first).
+                    let mut best: Option<(u32, Vec<bool>, crate::bits::Bits)> = None;
+                    for v in 0..(1u32 << 7) {
+                        let mut fr = frame.clone();
+                        for k in 0..7 {
+                            fr.now_mut(Space::Output).set(k, v >> k & 1 == 1);
+                        }
+                        if !f.violations(&fr).is_empty() {
+                            continue;
+                        }
+                        let away: Vec<bool> =
+                            (0..7).map(|k| (v >> k & 1 == 1) != pref.get(k)).collect();
+                        let n = away.iter().filter(|x| **x).count() as u32;
+                        let key = (n, away.clone());
+                        if best
+                            .as_ref()
+                            .is_none_or(|(bn, ba, _)| key < (*bn, ba.clone()))
+                        {
+                            best = Some((n, away, fr.now(Space::Output).clone()));
+                        }
+                    }
+                    match (f.fallback(&frame), best) {
+                        (Ok(out), Some((_, _, want))) => {
+                            assert_eq!(out, want, "safe {safe:?} context {ctx:#b}");
+                        }
+                        (Err(_), None) => {}
+                        (got, want) => {
+                            panic!("safe {safe:?} context {ctx:#b}: {got:?} vs {want:?}")
+                        }
+                    }
+                }
+            }
+        }
     }
 }

@@ -148,6 +148,7 @@ pub struct StaleGuard {
     set: ConstraintSet,
     n_outputs: usize,
     deps: Vec<Bits>,
+    safe: Vec<crate::plant::SafeValue>,
     cached: Option<(Stale, Filter)>,
 }
 
@@ -157,6 +158,7 @@ impl StaleGuard {
         Self {
             set: bundle.constraints.clone(),
             n_outputs: bundle.plant.outputs.len(),
+            safe: bundle.plant.outputs.iter().map(|s| s.safe).collect(),
             deps: observer_inputs(&bundle.observers, &bundle.symbols),
             cached: None,
         }
@@ -179,7 +181,8 @@ impl StaleGuard {
     fn filter_for(&mut self, stale_inputs: &Bits) -> Option<&Filter> {
         let stale = self.stale(stale_inputs);
         if self.cached.as_ref().is_none_or(|(s, _)| *s != stale) {
-            let filter = Filter::new(&quantify(&self.set, &stale), self.n_outputs);
+            let filter = Filter::new(&quantify(&self.set, &stale), self.n_outputs)
+                .with_safe_values(self.safe.clone());
             self.cached = Some((stale, filter));
         }
         self.cached.as_ref().map(|(_, f)| f)
@@ -187,13 +190,21 @@ impl StaleGuard {
 
     /// The safe outputs for the frame's context whatever the PLC commands (the outputs at
     /// t are ignored) and whatever the stale inputs are: the fallback of the quantified
-    /// set. Used when the PLC is lost. On a specification error the caller drives every
-    /// output to 0.
+    /// set. Used when the PLC is lost. On a specification error the caller applies
+    /// [`StaleGuard::safe_vector`].
     pub fn safe_outputs(&mut self, frame: &Frame, stale_inputs: &Bits) -> Result<Bits, SpecError> {
         match self.filter_for(stale_inputs) {
             Some(f) => f.fallback(frame),
             None => Ok(Bits::zeros(self.n_outputs)),
         }
+    }
+
+    /// Every output at its safe value in the frame's context (`Hold` keeps the previous
+    /// output): the outputs when no fallback exists.
+    pub fn safe_vector(&self, frame: &Frame) -> Bits {
+        Filter::new(&ConstraintSet::default(), self.n_outputs)
+            .with_safe_values(self.safe.clone())
+            .safe_vector(frame)
     }
 
     /// Checks the frame's outputs at t against the quantified constraints. With no stale

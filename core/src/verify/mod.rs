@@ -770,8 +770,7 @@ pub fn verify(
     opts: &Options,
 ) -> Result<VerifyReport, Problem> {
     let model = Model::new(bundle, layout, opts.max_boxes)?;
-    let n_out = bundle.plant.outputs.len();
-    let filter = Filter::new(&bundle.constraints, n_out);
+    let filter = Filter::for_plant(&bundle.constraints, &bundle.plant);
     let full = explore(&model, &filter);
     let invariants = bundle
         .invariants
@@ -809,11 +808,10 @@ pub fn necessity(
     max_boxes: usize,
 ) -> Result<Vec<ConstraintRole>, Problem> {
     let model = Model::new(bundle, layout, max_boxes)?;
-    let n_out = bundle.plant.outputs.len();
     let mut roles = Vec::new();
     for i in 0..bundle.constraints.constraints.len() {
         let set = without(&bundle.constraints, i);
-        let e = explore(&model, &Filter::new(&set, n_out));
+        let e = explore(&model, &Filter::for_plant(&set, &bundle.plant));
         let steps = e.hazard.as_ref().map(|(_, t)| t.steps.len());
         roles.push(ConstraintRole {
             id: bundle.constraints.constraints[i].id.clone(),
