@@ -135,6 +135,18 @@ pub enum Event {
     Reset,
 }
 
+/// What the engine takes as the values at t-1 in its first cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub enum FirstCycle {
+    /// A cold start, as a PLC's first scan: every previous value is the signal's
+    /// initial value (`initial` in `plant.ron`, 0 by default). The plant starts at rest.
+    #[default]
+    Cold,
+    /// An attach to a running plant (a live link, a trace recorded mid-production): the
+    /// previous values are the first observation, so the first cycle shows no edge.
+    Attach,
+}
+
 /// Why a reset was refused.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum ResetRefused {
@@ -165,6 +177,8 @@ pub struct Engine {
     previous_violations: Vec<usize>,
     latched: bool,
     hold: bool,
+    /// The next cycle takes its observation as the previous values (an attach).
+    attach_pending: bool,
     /// The specification error reported last, while it lasts (reported once, not every cycle).
     spec_error: Option<String>,
     cycles: u64,
@@ -178,9 +192,19 @@ pub struct Engine {
 }
 
 impl Engine {
-    /// Builds an engine for a loaded plant folder.
+    /// Builds an engine for a loaded plant folder (a cold start, see [`FirstCycle`]).
     pub fn new(bundle: &PlantBundle, mode: FilterMode, history_cycles: usize) -> Self {
         let n_out = bundle.plant.outputs.len();
+        let mut frame = Frame::new(bundle.symbols.sizes());
+        // The first cycle's shift makes these the values at t-1: the initial values.
+        for (space, signals) in [
+            (Space::Input, &bundle.plant.inputs),
+            (Space::Output, &bundle.plant.outputs),
+        ] {
+            for (i, sig) in signals.iter().enumerate() {
+                frame.now_mut(space).set(i, sig.initial);
+            }
+        }
         Self {
             symbols: bundle.symbols.clone(),
             observers: bundle.observers.clone(),
@@ -193,12 +217,13 @@ impl Engine {
                 .map(|c| c.source.clone())
                 .collect(),
             mode,
-            frame: Frame::new(bundle.symbols.sizes()),
+            frame,
             commanded: Bits::zeros(n_out),
             scratch: Vec::new(),
             previous_violations: Vec::new(),
             latched: false,
             hold: false,
+            attach_pending: false,
             spec_error: None,
             cycles: 0,
             now: Millis::ZERO,
@@ -232,6 +257,18 @@ impl Engine {
     /// True while the operator's pause holds the plant.
     pub fn is_held(&self) -> bool {
         self.hold
+    }
+
+    /// Chooses the first cycle's previous values (call before the first cycle).
+    pub fn set_first_cycle(&mut self, first: FirstCycle) {
+        self.attach_pending = first == FirstCycle::Attach;
+    }
+
+    /// Attaches at the next cycle: its inputs, observers and commanded outputs are
+    /// also taken as the values at t-1 (no edge). A live link calls it when the plant
+    /// is first read, its values until then unknown.
+    pub fn attach_next_cycle(&mut self) {
+        self.attach_pending = true;
     }
 
     /// True while a trip is latched.
@@ -304,11 +341,24 @@ impl Engine {
     ) -> &Bits {
         self.now = now;
         self.cycles += 1;
+        let attach = std::mem::take(&mut self.attach_pending);
         self.frame.shift();
         self.frame.now_mut(Space::Input).copy_from(inputs);
+        if attach {
+            self.frame.prev_mut(Space::Input).copy_from(inputs);
+        }
         self.observers.update(&mut self.frame);
+        if attach {
+            let observed = self.frame.now(Space::Observer).clone();
+            self.frame.prev_mut(Space::Observer).copy_from(&observed);
+        }
         control.scan(now, &self.frame, &mut self.commanded);
         self.frame.now_mut(Space::Output).copy_from(&self.commanded);
+        if attach {
+            self.frame
+                .prev_mut(Space::Output)
+                .copy_from(&self.commanded);
+        }
 
         if self.mode != FilterMode::Off {
             let mut violations = std::mem::take(&mut self.scratch);

@@ -3,13 +3,14 @@
 use std::io::Write as _;
 use std::path::Path;
 use std::process::ExitCode;
-use vigie_core::engine::{Commanded, Engine, FilterMode};
+use vigie_core::engine::{Commanded, Engine, FilterMode, FirstCycle};
 
 pub(crate) fn run(
     dir: &Path,
     trace_path: &Path,
     reset_after_trip: bool,
     explain: bool,
+    cold_start: bool,
 ) -> anyhow::Result<ExitCode> {
     let bundle = super::load_valid_bundle(dir)?;
     let text = std::fs::read_to_string(trace_path)
@@ -17,6 +18,13 @@ pub(crate) fn run(
     let rows = vigie_core::trace::parse(&text, trace_path, &bundle.plant)
         .map_err(|p| anyhow::anyhow!("{p}"))?;
     let mut engine = Engine::new(&bundle, FilterMode::Enforce, 6000);
+    // A trace recorded mid-production: its first row is the values at t-1 too (no
+    // edge), unless it starts with the plant, cold.
+    engine.set_first_cycle(if cold_start {
+        FirstCycle::Cold
+    } else {
+        FirstCycle::Attach
+    });
     let mut control = Commanded::default();
     let mut out = std::io::stdout().lock();
     for row in &rows {

@@ -112,6 +112,11 @@ pub(crate) enum Command {
         /// projection, needs the plant emulator: see `vigie run`).
         #[arg(long)]
         explain: bool,
+        /// The trace starts with the plant (a PLC's first scan: every previous value
+        /// is the signal's initial value); by default the first row is also taken as
+        /// the values at t-1, for a trace recorded mid-production.
+        #[arg(long)]
+        cold_start: bool,
     },
     /// Run a scenario (emulator + control program + filter).
     Run {
@@ -215,7 +220,14 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             trace,
             reset_after_trip,
             explain,
-        }) => filter::run(&dir.unwrap_or(cli.plant), &trace, reset_after_trip, explain),
+            cold_start,
+        }) => filter::run(
+            &dir.unwrap_or(cli.plant),
+            &trace,
+            reset_after_trip,
+            explain,
+            cold_start,
+        ),
         Some(Command::Gateway(args)) => gateway::run(&args),
         Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
         Some(Command::Learn {

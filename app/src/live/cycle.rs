@@ -411,6 +411,8 @@ impl Liveness {
 /// The monitor's cycle.
 struct MonitorCycle {
     clock: Clock,
+    /// Attach to the running plant at the first values read (`first_cycle: Attach`).
+    attach: bool,
     peer: std::net::SocketAddr,
     side: Arc<Mutex<PeerSide>>,
     beat: Heartbeat,
@@ -447,6 +449,9 @@ impl Cycle for MonitorCycle {
         };
         let what = format!("monitored peer {}", self.peer);
         if heard != self.heard {
+            if self.heard.is_none() && self.attach {
+                self.engine.attach_next_cycle();
+            }
             self.heard = heard;
             if let Some(h) = heard {
                 let t = self.dog.heard(h);
@@ -570,6 +575,7 @@ pub(crate) async fn monitor(
     let stop = Arc::new(AtomicBool::new(false));
     let cycle = MonitorCycle {
         clock,
+        attach: config.first_cycle == vigie_core::engine::FirstCycle::Attach,
         peer,
         side: Arc::clone(&io.side),
         beat: io.heartbeat.clone(),
@@ -620,6 +626,8 @@ pub(crate) async fn monitor(
 /// The gateway's cycle.
 struct GatewayCycle {
     clock: Clock,
+    /// Attach to the running plant at the first values read (`first_cycle: Attach`).
+    attach: bool,
     plant_peer: std::net::SocketAddr,
     side: Arc<Mutex<PeerSide>>,
     beat: Heartbeat,
@@ -695,6 +703,9 @@ impl Cycle for GatewayCycle {
         };
         let what = format!("plant {}", self.plant_peer);
         if heard != self.plant_heard {
+            if self.plant_heard.is_none() && self.attach {
+                self.engine.attach_next_cycle();
+            }
             self.plant_heard = heard;
             if let Some(h) = heard {
                 let t = self.plant_dog.heard(h);
@@ -948,6 +959,7 @@ pub(crate) async fn gateway(
     let stop = Arc::new(AtomicBool::new(false));
     let cycle = GatewayCycle {
         clock,
+        attach: config.first_cycle == vigie_core::engine::FirstCycle::Attach,
         plant_peer,
         side: Arc::clone(&io.side),
         beat: io.heartbeat.clone(),

@@ -306,3 +306,65 @@ fn specification_error_drives_every_output_to_zero_once_reported() {
     run.cycle(&["C0"], &[]);
     assert_eq!(run.drain(), [Event::SpecificationError { message }]);
 }
+
+/// A trace recorded mid-production: the table already at its unloading position with
+/// A4 held (C5, A4). A cold start reads it as a rising edge of A4 away from C4
+/// (CSs14 = /C4 . RE(A4)) and trips on the first row; attaching takes the first row
+/// as the previous values too and sees no edge. Both see a real edge after it.
+#[test]
+fn attaching_to_a_running_plant_shows_no_edge_on_the_first_cycle() {
+    let mut cold = Run::new(FilterMode::Enforce);
+    cold.cycle(&["C5", "C6"], &["A4"]);
+    assert!(
+        cold.engine.is_tripped(),
+        "a cold start sees RE(A4) away from C4"
+    );
+    let mut attached = Run::new(FilterMode::Enforce);
+    attached.engine.set_first_cycle(FirstCycle::Attach);
+    assert_eq!(attached.cycle(&["C5", "C6"], &["A4"]), ["A4"]);
+    assert!(!attached.engine.is_tripped());
+    attached.cycle(&["C5", "C6"], &["A4"]);
+    assert!(!attached.engine.is_tripped());
+    // Released at C5 and pressed again before C4: a real rising edge away from C4.
+    attached.cycle(&["C6"], &[]);
+    attached.cycle(&["C6"], &["A4"]);
+    assert!(
+        attached.engine.is_tripped(),
+        "the edges after the first cycle are real"
+    );
+}
+
+/// The initial values of `plant.ron` are a cold start's previous values: an output
+/// that starts ON has no rising edge in the first cycle.
+#[test]
+fn a_cold_start_reads_the_initial_values_as_the_previous_ones() {
+    let mut b = station();
+    let a4 = b.plant.output("A4").unwrap();
+    b.plant.outputs[a4].initial = true;
+    let mut run = Run::with_bundle(b, FilterMode::Enforce);
+    run.cycle(&["C5", "C6"], &["A4"]);
+    assert!(!run.engine.is_tripped(), "A4 was ON before the first cycle");
+}
+
+/// A trip restored after a restart holds the fallback from the first cycle until a
+/// reset whose commands comply, as if it had just happened.
+#[test]
+fn a_restored_trip_holds_the_fallback_until_the_reset() {
+    let mut first = Run::new(FilterMode::Enforce);
+    first.cycle(&["C0"], &["A0"]);
+    assert!(first.engine.is_tripped(), "CSc1 = C0 . A0 . /A1");
+    let trip = first.engine.trips.last().cloned().unwrap();
+    let mut again = Run::new(FilterMode::Enforce);
+    again.engine.restore_trip(trip.clone());
+    assert!(again.engine.is_tripped());
+    // The PLC commands something allowed: the latch holds anyway.
+    assert_eq!(again.cycle(&[], &["A0", "A1"]), Vec::<String>::new());
+    assert!(again.engine.drain_events().is_empty(), "no new trip event");
+    assert_eq!(again.engine.trips, vec![trip]);
+    again.engine.reset().unwrap();
+    assert_eq!(again.cycle(&[], &["A0", "A1"]), ["A0", "A1"]);
+    // Report-only engines do not latch.
+    let mut monitor = Run::new(FilterMode::ReportOnly);
+    monitor.engine.restore_trip(first.engine.trips[0].clone());
+    assert!(!monitor.engine.is_tripped());
+}

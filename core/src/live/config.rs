@@ -204,6 +204,12 @@ pub struct GatewayConfig {
     /// priority with a warning. By default 50 when `realtime` is on.
     #[serde(default)]
     pub cycle_priority: Option<u8>,
+    /// The first cycle's previous values: `Attach` (the default) takes the first
+    /// values read from the plant (or the monitored PLC) as the values at t-1, so
+    /// that attaching to a running plant shows no edge; `Cold` starts from the
+    /// signals' initial values, as a PLC's first scan.
+    #[serde(default = "default_first_cycle")]
+    pub first_cycle: crate::engine::FirstCycle,
     /// Take a real-time priority when the process may have one (true by default);
     /// false runs every thread at normal priority.
     #[serde(default = "default_realtime")]
@@ -228,6 +234,10 @@ fn default_diagnosers() -> bool {
 
 fn default_realtime() -> bool {
     true
+}
+
+fn default_first_cycle() -> crate::engine::FirstCycle {
+    crate::engine::FirstCycle::Attach
 }
 
 fn default_mode() -> Mode {
