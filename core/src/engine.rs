@@ -179,6 +179,8 @@ pub struct Engine {
     hold: bool,
     /// The next cycle takes its observation as the previous values (an attach).
     attach_pending: bool,
+    /// Per output, what the plant does when it is OFF (`off` in `plant.ron`).
+    off_meanings: Vec<Option<String>>,
     /// The specification error reported last, while it lasts (reported once, not every cycle).
     spec_error: Option<String>,
     cycles: u64,
@@ -224,6 +226,7 @@ impl Engine {
             latched: false,
             hold: false,
             attach_pending: false,
+            off_meanings: bundle.plant.outputs.iter().map(|s| s.off.clone()).collect(),
             spec_error: None,
             cycles: 0,
             now: Millis::ZERO,
@@ -269,6 +272,12 @@ impl Engine {
     /// is first read, its values until then unknown.
     pub fn attach_next_cycle(&mut self) {
         self.attach_pending = true;
+    }
+
+    /// What the plant does when output `k` is OFF, when `plant.ron` says it (`off`):
+    /// "the table returns to the loading position".
+    pub fn off_meaning(&self, k: usize) -> Option<&str> {
+        self.off_meanings.get(k).and_then(|m| m.as_deref())
     }
 
     /// True while a trip is latched.

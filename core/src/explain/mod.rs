@@ -225,7 +225,7 @@ pub fn explain(engine: &Engine, index: usize) -> Option<Explanation> {
             title: "Projection".into(),
             ..Level::default()
         },
-        before_stop: before_stop(symbols, trip, at_trip),
+        before_stop: before_stop(engine, trip, at_trip),
         advanced: advanced(engine, trip, at_trip, before),
         hypothesis: hypothesis(engine, trip),
     })
@@ -292,6 +292,16 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
             format!("Stopped (OFF): {}.", off.join(", ")),
             &[("outputs", off.join(","))],
         ));
+        // An output OFF that moves something (a monostable actuator): say what.
+        for (k, name) in symbols.names(Space::Output).iter().enumerate() {
+            if let Some(m) = engine.off_meaning(k).filter(|_| !rec.applied.get(k)) {
+                level.items.push(Item::new(
+                    "X004",
+                    format!("{name} OFF: {m}."),
+                    &[("output", name.clone()), ("meaning", m.to_string())],
+                ));
+            }
+        }
         for (o, def) in engine.observers.defs.iter().enumerate() {
             if rec.observers.get(o) {
                 level.highlights.push(Highlight {
@@ -321,7 +331,8 @@ fn lowercase_first(s: &str) -> String {
     }
 }
 
-fn before_stop(symbols: &Symbols, trip: &Trip, at_trip: Option<&CycleRecord>) -> Level {
+fn before_stop(engine: &Engine, trip: &Trip, at_trip: Option<&CycleRecord>) -> Level {
+    let symbols = &engine.symbols;
     let mut level = Level {
         title: "Before stop".into(),
         ..Level::default()
@@ -380,10 +391,22 @@ fn before_stop(symbols: &Symbols, trip: &Trip, at_trip: Option<&CycleRecord>) ->
             element: a.output.clone(),
             mark,
         });
+        // What the program's command would have done, when the plant says it.
+        let meaning = symbols
+            .lookup(&a.output)
+            .and_then(|(_, k)| engine.off_meaning(k as usize))
+            .filter(|_| !a.commanded);
+        let text = match meaning {
+            Some(m) => format!("The filter {verb} {} ({} OFF: {m}).", a.output, a.output),
+            None => format!("The filter {verb} {}.", a.output),
+        };
         level.items.push(Item::new(
             code,
-            format!("The filter {verb} {}.", a.output),
-            &[("output", a.output.clone())],
+            text,
+            &[
+                ("output", a.output.clone()),
+                ("meaning", meaning.unwrap_or_default().to_string()),
+            ],
         ));
     }
     level

@@ -85,6 +85,21 @@ fn cs10_matches_the_paper_figures() {
         element: "A3".into(),
         mark: Mark::ForcedOff
     }));
+    // What the program's release of A4 would have done, in the plant's own words
+    // (`off` of A4 in plant.ron): the turntable returns and shears the box at C7.
+    let a4 = ex
+        .before_stop
+        .items
+        .iter()
+        .find(|i| i.code == "X202")
+        .expect("A4 held ON");
+    assert!(
+        a4.text.contains(
+            "held ON (commanded OFF) A4 (A4 OFF: the turntable returns to the loading position)"
+        ),
+        "{}",
+        a4.text
+    );
 
     // Level 3: C7 0→1, A3 stays ON, A6 0→1, A4 1→0.
     let marks = &ex.advanced.highlights;
