@@ -129,7 +129,11 @@ pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result
             "  sensor -> output (ms) p50 {:.2}  p99 {:.2}  max {:.2}  ({} edges)",
             f.latency_ms[0], f.latency_ms[1], f.latency_ms[2], f.edges
         );
-        println!("  false link alarms     {}", f.false_alarms.len());
+        println!(
+            "  false link alarms     {}   (safe outputs for stale inputs: {})",
+            f.false_alarms.len(),
+            f.stale_holds
+        );
         for a in &f.false_alarms {
             println!("    {a}");
         }

@@ -373,6 +373,7 @@ impl LiveDiagnosers {
 #[derive(Clone, Copy, Debug)]
 struct Liveness {
     grace: Millis,
+    link: Millis,
     hard: Millis,
 }
 
@@ -381,6 +382,7 @@ impl Liveness {
         let grace = Millis(request_timeout_ms);
         Self {
             grace,
+            link: config.link_timeout(),
             hard: Millis((config.link_timeout() + grace).0.saturating_mul(4)),
         }
     }
@@ -396,15 +398,17 @@ impl Liveness {
         dog.check_seen(now, beat.seen(), failed, self.grace, self.hard)
     }
 
-    /// The PLC, which writes to us: no grace, its silence is measured up to the
-    /// runtime's heartbeat.
+    /// The PLC, which writes to us, its silence measured up to the runtime's
+    /// heartbeat: while its connection is open (a PLC late on a loaded machine) it gets
+    /// one more link timeout; a closed connection (a PLC that died) none.
     fn check_plc(
         self,
         dog: &mut Watchdog,
         now: Millis,
         beat: &Heartbeat,
+        connected: bool,
     ) -> Option<vigie_core::live::age::Transition> {
-        dog.check_seen(now, beat.seen(), true, Millis::ZERO, self.hard)
+        dog.check_seen(now, beat.seen(), !connected, self.link, self.hard)
     }
 }
 
@@ -719,17 +723,19 @@ impl Cycle for GatewayCycle {
         self.board
             .watch(&mut *self.emit, now, "link:plant", &what, t);
         // 2. The PLC: heard when it writes its outputs.
-        let (heard, server_exceptions) = {
+        let (heard, server_exceptions, plc_connected) = {
             let s = lock(&self.shared);
             self.control.0.copy_from(&s.outputs);
-            (s.plc_heard, s.exceptions)
+            (s.plc_heard, s.exceptions, s.writer.is_some())
         };
         if heard.is_some() && heard != self.plc_last {
             self.plc_last = heard;
             let t = self.plc_dog.heard(heard.map_or(now, |h| self.clock.at(h)));
             self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
         }
-        let t = self.liveness.check_plc(&mut self.plc_dog, now, &self.beat);
+        let t = self
+            .liveness
+            .check_plc(&mut self.plc_dog, now, &self.beat, plc_connected);
         self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
         // 3. The engine; a change of the latch is on disk before it is reported.
         let reset = self.reset_if_asked(now);

@@ -95,6 +95,8 @@ struct Session {
     takeover_after: Duration,
     image: Arc<ServerImage>,
     shared: SharedImage,
+    /// Refused requests of this connection (logged 1st, 2nd, 4th…).
+    refused: AtomicU64,
 }
 
 impl Drop for Session {
@@ -148,9 +150,9 @@ impl Session {
         let shared = &mut *shared;
         let write = is_write(&request);
         let result = if slave != self.unit {
-            if write {
-                tracing::warn!(peer = %self.peer, "write to unit {slave} refused: this server is unit {}", self.unit);
-            }
+            log_power_of_two(&self.refused, |n| {
+                tracing::warn!(peer = %self.peer, "request to unit {slave} refused (exception 0B): this server is unit {} ({n} refused on this connection)", self.unit);
+            });
             Err(ExceptionCode::GatewayTargetDevice)
         } else if write && !self.claim_writer(shared) {
             Err(ExceptionCode::IllegalFunction)
@@ -170,7 +172,9 @@ impl Session {
     /// link timeout).
     fn claim_writer(&self, s: &mut Shared) -> bool {
         if !self.plc {
-            tracing::warn!(peer = %self.peer, "write refused: only the configured PLC endpoint may write");
+            log_power_of_two(&self.refused, |n| {
+                tracing::warn!(peer = %self.peer, "write refused (exception 01): only the configured PLC endpoint may write ({n} refused on this connection)");
+            });
             return false;
         }
         match s.writer {
@@ -179,7 +183,9 @@ impl Session {
                 if s.plc_heard
                     .is_some_and(|h| h.elapsed() <= self.takeover_after) =>
             {
-                tracing::warn!(peer = %self.peer, writer = %w, "write refused: the PLC already writes on another connection");
+                log_power_of_two(&self.refused, |n| {
+                    tracing::warn!(peer = %self.peer, writer = %w, "write refused (exception 01): the PLC already writes on another connection ({n} refused on this one)");
+                });
                 false
             }
             previous => {
@@ -345,6 +351,7 @@ impl Acceptor {
             takeover_after: self.takeover_after,
             image: Arc::clone(&self.image),
             shared: Arc::clone(&self.shared),
+            refused: AtomicU64::new(0),
         };
         let conn = Connection {
             stream,

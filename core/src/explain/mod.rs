@@ -209,7 +209,6 @@ pub fn overbar_notation(source: &str) -> String {
 /// emulator and is filled by [`crate::sim`]. Returns `None` for an unknown trip.
 pub fn explain(engine: &Engine, index: usize) -> Option<Explanation> {
     let trip = engine.trips.get(index)?;
-    let symbols = &engine.symbols;
     let at_trip = engine.history.iter().find(|r| r.time.0 == trip.time_ms);
     let before = at_trip.and_then(|r| engine.history.iter().rev().find(|p| p.time < r.time));
     Some(Explanation {
