@@ -417,6 +417,8 @@ struct MonitorCycle {
     clock: Clock,
     /// Attach to the running plant at the first values read (`first_cycle: Attach`).
     attach: bool,
+    /// The engine attaches in this cycle (for the console's mirror).
+    attached_now: bool,
     peer: std::net::SocketAddr,
     side: Arc<Mutex<PeerSide>>,
     beat: Heartbeat,
@@ -455,6 +457,7 @@ impl Cycle for MonitorCycle {
         if heard != self.heard {
             if self.heard.is_none() && self.attach {
                 self.engine.attach_next_cycle();
+                self.attached_now = true;
             }
             self.heard = heard;
             if let Some(h) = heard {
@@ -524,6 +527,8 @@ impl Cycle for MonitorCycle {
                     applied: self.outputs.values().clone(),
                     reset: false,
                     diagnosers,
+                    attach: std::mem::take(&mut self.attached_now),
+                    restored: None,
                 },
                 |st| {
                     st.client = status;
@@ -580,6 +585,7 @@ pub(crate) async fn monitor(
     let cycle = MonitorCycle {
         clock,
         attach: config.first_cycle == vigie_core::engine::FirstCycle::Attach,
+        attached_now: false,
         peer,
         side: Arc::clone(&io.side),
         beat: io.heartbeat.clone(),
@@ -632,6 +638,8 @@ struct GatewayCycle {
     clock: Clock,
     /// Attach to the running plant at the first values read (`first_cycle: Attach`).
     attach: bool,
+    /// The engine attaches in this cycle (for the console's mirror).
+    attached_now: bool,
     plant_peer: std::net::SocketAddr,
     side: Arc<Mutex<PeerSide>>,
     beat: Heartbeat,
@@ -640,6 +648,8 @@ struct GatewayCycle {
     latch: LatchStore,
     /// The latch state last handed to `latch`.
     latched: bool,
+    /// A trip restored at start, for the console's mirror (sent with the first cycle).
+    restored: Option<vigie_core::engine::Trip>,
     shared: SharedImage,
     out: watch::Sender<Option<Bits>>,
     bundle: PlantBundle,
@@ -709,6 +719,7 @@ impl Cycle for GatewayCycle {
         if heard != self.plant_heard {
             if self.plant_heard.is_none() && self.attach {
                 self.engine.attach_next_cycle();
+                self.attached_now = true;
             }
             self.plant_heard = heard;
             if let Some(h) = heard {
@@ -853,6 +864,8 @@ impl Cycle for GatewayCycle {
                     applied,
                     reset,
                     diagnosers,
+                    attach: std::mem::take(&mut self.attached_now),
+                    restored: self.restored.take(),
                 },
                 |st| {
                     st.client = status;
@@ -966,12 +979,14 @@ pub(crate) async fn gateway(
     let cycle = GatewayCycle {
         clock,
         attach: config.first_cycle == vigie_core::engine::FirstCycle::Attach,
+        attached_now: false,
         plant_peer,
         side: Arc::clone(&io.side),
         beat: io.heartbeat.clone(),
         liveness,
         latch,
         latched: restored.is_some(),
+        restored: restored.clone(),
         shared,
         out: out_tx,
         engine,

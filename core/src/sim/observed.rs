@@ -36,6 +36,12 @@ pub struct ObservedCycle {
     pub reset: bool,
     /// What the link's diagnosers did in this cycle (the mirror's do the same).
     pub diagnosers: LinkStep,
+    /// The link's engine attached to the running plant at this cycle (its first
+    /// values read are also its values at t-1, see [`crate::engine::FirstCycle`]).
+    pub attach: bool,
+    /// A trip latched before the link restarted, restored by its engine before this
+    /// cycle (the mirror restores it too).
+    pub restored: Option<crate::engine::Trip>,
 }
 
 impl Simulation {
@@ -62,6 +68,23 @@ impl Simulation {
         self.live_now = Some(now);
         if cycle.reset && self.engine.is_tripped() {
             let _ = self.act(&OperatorAction::Reset);
+        }
+        if let Some(trip) = &cycle.restored {
+            self.engine.restore_trip(trip.clone());
+            self.log(
+                "trip",
+                format!(
+                    "a trip latched before the link restarted holds ({})",
+                    trip.constraints
+                        .iter()
+                        .map(|c| c.id.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            );
+        }
+        if cycle.attach {
+            self.engine.attach_next_cycle();
         }
         let mut control = Commanded(cycle.commanded.clone());
         self.engine.cycle(now, &cycle.inputs, &mut control);

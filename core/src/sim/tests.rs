@@ -355,6 +355,8 @@ fn observed(time: u64, inputs: &str, commanded: &str, applied: &str, reset: bool
         applied: bits(applied),
         reset,
         diagnosers: diagnosis::LinkStep::Skipped,
+        attach: false,
+        restored: None,
     }
 }
 
@@ -632,4 +634,29 @@ fn a_followed_link_does_not_step_the_diagnosers_the_link_skipped() {
     );
     let d = sim.diagnosers.as_ref().expect("diagnosers on");
     assert!(d.diagnoses.is_empty(), "{:?}", d.diagnoses);
+}
+
+/// A gateway restarted with a latched trip, attaching to a running plant: the mirror
+/// restores the same trip and attaches at the same cycle, so it holds the same
+/// fallback and sees the same edges (none on the first values read).
+#[test]
+fn a_followed_link_restores_its_latched_trip_and_attaches_with_it() {
+    let mut earlier = following(FilterMode::Enforce);
+    // The PLC commands A0 with a box at C0 and A1 off: CSc1.
+    earlier.observe(&observed(10, "10000000000", "1000000", "0000000", false));
+    assert!(earlier.engine.is_tripped());
+    let trip = earlier.engine.trips.last().cloned().unwrap();
+    let mut sim = following(FilterMode::Enforce);
+    // The first values read: the table at its unloading position with A4 held; with
+    // no attach the mirror would read RE(A4) away from C4 (CSs14).
+    let mut first = observed(10, "00000100000", "0000100", "0000100", false);
+    first.attach = true;
+    first.restored = Some(trip.clone());
+    sim.observe(&first);
+    assert!(sim.engine.is_tripped(), "the restored trip holds");
+    assert_eq!(
+        sim.engine.trips,
+        vec![trip],
+        "no new trip on the attached cycle"
+    );
 }
