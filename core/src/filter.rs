@@ -307,7 +307,17 @@ impl Filter {
                 active.push(t);
             }
         }
-        self.solve(&active, &self.safe_vector(frame))
+        self.solve_in(&active, frame)
+    }
+
+    /// The search on the active terms in the context of `frame` (priority to zero, the
+    /// common case, without building the safe vector).
+    fn solve_in(&self, active: &[&Term], frame: &Frame) -> Result<Bits, SpecError> {
+        if self.safe.iter().all(|s| *s == SafeValue::Zero) {
+            return solve_min_ones(self.n_outputs, active, self.search_budget)
+                .ok_or_else(|| self.conflict(active));
+        }
+        self.solve(active, &self.safe_vector(frame))
     }
 
     /// The search on the active terms, with every output's literals read relative to
@@ -499,7 +509,7 @@ impl Filter {
             .ones_fast()
             .filter_map(|ti| self.terms.get(ti))
             .collect();
-        self.solve(&active, &self.safe_vector(frame))
+        self.solve_in(&active, frame)
     }
 }
 
