@@ -245,13 +245,19 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         });
         let mut probe =
             tokio_modbus::client::tcp::connect_slave(plant_addr, tokio_modbus::Slave(1)).await?;
+        // Every probe read is bounded: a plant that stops answering ends the bench
+        // with an error instead of hanging it.
         let mut read_a1 = async move || -> anyhow::Result<bool> {
-            Ok(probe
-                .read_coils(1, 1)
-                .await??
-                .first()
-                .copied()
-                .unwrap_or(false))
+            Ok(
+                tokio::time::timeout(Duration::from_secs(5), probe.read_coils(1, 1))
+                    .await
+                    .map_err(|_| {
+                        anyhow::anyhow!("the plant did not answer the probe within 5 s")
+                    })???
+                    .first()
+                    .copied()
+                    .unwrap_or(false),
+            )
         };
         // Wait for A1 at the plant.
         let deadline = Instant::now() + Duration::from_secs(10);
