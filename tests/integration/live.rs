@@ -188,7 +188,7 @@ impl Plc {
         self.0.ask("di")
     }
 
-    fn status(&mut self) -> (u64, u64, String) {
+    pub(crate) fn status(&mut self) -> (u64, u64, String) {
         let line = self.0.ask("status");
         let w: Vec<&str> = line.split_whitespace().collect();
         (

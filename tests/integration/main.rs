@@ -1,8 +1,10 @@
 //! Integration tests: one binary.
 
+mod adversary;
 mod console;
 mod console_link;
 mod diagnoser;
 mod export_st;
+mod filter_trace;
 mod fuzz_loaders;
 mod live;

@@ -175,11 +175,21 @@ async fn peer_io(
                 lock(&side).status.clone_from(client.status());
             }
             Wake::Poll => {
-                // Outputs first: a new connection gets the last outputs before any read.
+                // Outputs first: a new connection gets the last outputs before any read,
+                // and only the write connects (the poll below must not open a
+                // connection when the backoff ends between the two and read first).
                 if let PeerClient::Plant(w) = &mut client
                     && pending.due(w)
                 {
                     pending.write(w, &clock, &events).await;
+                    if !w.is_connected() {
+                        let mut s = lock(&side);
+                        s.failed = true;
+                        s.status.clone_from(w.status());
+                        drop(s);
+                        k = next_poll(&clock, period, lead, k);
+                        continue;
+                    }
                 }
                 let now = clock.now();
                 let ok = client.poll(now, &mut inputs, &mut outputs).await;
@@ -195,15 +205,20 @@ async fn peer_io(
                     }
                     s.status.clone_from(client.status());
                 }
-                let due = next_tick(
-                    Instant::now().saturating_duration_since(clock.0) + lead,
-                    period,
-                );
-                k = (k + 1).max(due);
+                k = next_poll(&clock, period, lead, k);
             }
         }
     }
     client
+}
+
+/// The tick after poll `k`: the next one, or the first not yet past when polls ran late.
+fn next_poll(clock: &Clock, period: Duration, lead: Duration, k: u64) -> u64 {
+    let due = next_tick(
+        Instant::now().saturating_duration_since(clock.0) + lead,
+        period,
+    );
+    (k + 1).max(due)
 }
 
 /// The runtime's heartbeat: the time (ms since the start of the run) at which the
