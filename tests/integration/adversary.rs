@@ -364,15 +364,17 @@ fn plant_misbehaving_at_random_moments_always_receives_the_safe_outputs() {
 // ---------------------------------------------------------------------------------
 // 2. Only the PLC writes, and only its writes keep it alive.
 
+/// A program on the PLC's own address (as every local program is when the PLC is
+/// 127.0.0.1) polls the gateway while the PLC dies: its reads are no liveness.
 #[test]
 fn a_client_that_only_reads_does_not_keep_a_dead_plc_alive() {
     let mut rig = misbehaviour_rig(21);
     let reads = Arc::new(AtomicU64::new(0));
     let stop = Arc::new(AtomicBool::new(false));
-    let mut reader = RawClient::connect(rig.server, from_ip([127, 0, 0, 1])).unwrap();
+    let mut reader = RawClient::connect(rig.server, from_ip([127, 0, 0, 2])).unwrap();
     let (r, s) = (Arc::clone(&reads), Arc::clone(&stop));
     let poller = std::thread::Builder::new()
-        .name("reader-127.0.0.1".into())
+        .name("reader-127.0.0.2".into())
         .spawn(move || {
             for _ in 0..20_000 {
                 if s.load(Ordering::Acquire) {
