@@ -488,3 +488,31 @@ impl Writer {
         &self.0.status
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::describe_io;
+    use std::io::{Error, ErrorKind};
+
+    #[test]
+    fn peer_errors_read_as_words_with_the_system_text_after() {
+        let closed = describe_io(&Error::from(ErrorKind::ConnectionReset));
+        assert!(
+            closed.starts_with("the peer closed the connection ("),
+            "{closed}"
+        );
+        let eof = describe_io(&Error::from(ErrorKind::UnexpectedEof));
+        assert!(eof.starts_with("the peer closed the connection"), "{eof}");
+        // EINPROGRESS, what a connection to a closed peer used to be logged as.
+        let in_progress = describe_io(&Error::from_raw_os_error(115));
+        assert!(
+            in_progress.starts_with("the connection was not established")
+                && in_progress.contains("115"),
+            "{in_progress}"
+        );
+        let refused = describe_io(&Error::from(ErrorKind::ConnectionRefused));
+        assert!(refused.contains("nothing listens"), "{refused}");
+        let fds = describe_io(&Error::from_raw_os_error(24));
+        assert!(fds.starts_with("no file descriptor left"), "{fds}");
+    }
+}
