@@ -146,6 +146,16 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         .and_then(|p| p.parse().ok())
         .with_context(|| format!("unexpected plant output {line:?}"))?;
     let plant_addr: SocketAddr = ([127, 0, 0, 1], port).into();
+    // The plant answers every command with a line: drain them, or its stdout fills
+    // after some 20,000 edges and the plant stops answering Modbus too.
+    std::thread::Builder::new()
+        .name("bench-plant-stdout".into())
+        .spawn(move || {
+            let mut sink = String::new();
+            while plant_out.read_line(&mut sink).is_ok_and(|n| n > 0) {
+                sink.clear();
+            }
+        })?;
 
     let state = std::env::temp_dir().join(format!("vigie-gateway-bench-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&state);
