@@ -37,6 +37,43 @@ impl Rng {
     fn chance(&mut self, one_in: u64) -> bool {
         self.next().is_multiple_of(one_in)
     }
+    /// Flips each bit with probability `1/one_in`.
+    fn flip_some(&mut self, bits: &mut Bits, one_in: u64) {
+        for k in 0..bits.len() {
+            if self.chance(one_in) {
+                bits.set(k, !bits.get(k));
+            }
+        }
+    }
+}
+
+fn st_name(sym: &crate::symbols::Symbols, space: Space, k: usize, filter: bool) -> String {
+    st::ident(
+        sym,
+        Var {
+            space,
+            index: k as u32,
+            prev: false,
+        },
+        filter,
+    )
+}
+
+/// One scan of the generated program at `now` with these inputs and commands.
+fn scan_st(m: &mut Machine, sym: &crate::symbols::Symbols, now: u64, inputs: &Bits, cmd: &Bits) {
+    m.set("NOW_MS", Val::Int(now as i64)).unwrap();
+    for k in 0..inputs.len() {
+        m.set(
+            &st_name(sym, Space::Input, k, false),
+            Val::Bool(inputs.get(k)),
+        )
+        .unwrap();
+    }
+    for k in 0..cmd.len() {
+        m.set(&st_name(sym, Space::Output, k, true), Val::Bool(cmd.get(k)))
+            .unwrap();
+    }
+    m.scan().unwrap();
 }
 
 fn b(m: &Machine, name: &str) -> bool {
@@ -129,17 +166,7 @@ fn st_conforms_to_the_native_engine() {
     let n_in = bundle.plant.inputs.len();
     let n_out = bundle.plant.outputs.len();
     let frame_tasks = FrameTasks::compile(&set, sym).unwrap();
-    let name = |space, k: usize, filter| {
-        st::ident(
-            sym,
-            Var {
-                space,
-                index: k as u32,
-                prev: false,
-            },
-            filter,
-        )
-    };
+    let name = |space, k: usize, filter| st_name(sym, space, k, filter);
     let (mut trips, mut task_changes, mut faults) = (0, 0, 0);
     for seed in 1..=120u64 {
         let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
@@ -154,30 +181,13 @@ fn st_conforms_to_the_native_engine() {
         let mut last_states = vec![0i64; set.tasks.len()];
         for cycle in 0..400 {
             now += 1 + rng.next() % 400;
-            for k in 0..n_in {
-                if rng.chance(p_in) {
-                    inputs.set(k, !inputs.get(k));
-                }
-            }
-            for k in 0..n_out {
-                if rng.chance(p_out) {
-                    cmd.set(k, !cmd.get(k));
-                }
-            }
+            rng.flip_some(&mut inputs, p_in);
+            rng.flip_some(&mut cmd, p_out);
             engine.cycle(Millis(now), &inputs, &mut Commanded(cmd.clone()));
             frame_tasks.step(&mut monitor, Millis(now), engine.frame());
             frame_tasks.publish(&monitor, engine.frame_mut());
 
-            m.set("NOW_MS", Val::Int(now as i64)).unwrap();
-            for k in 0..n_in {
-                m.set(&name(Space::Input, k, false), Val::Bool(inputs.get(k)))
-                    .unwrap();
-            }
-            for k in 0..n_out {
-                m.set(&name(Space::Output, k, true), Val::Bool(cmd.get(k)))
-                    .unwrap();
-            }
-            m.scan().unwrap();
+            scan_st(&mut m, sym, now, &inputs, &cmd);
 
             let at = format!("seed {seed}, cycle {cycle}, t = {now} ms");
             for k in 0..n_out {
@@ -323,17 +333,7 @@ fn st_conforms_to_the_engine_on_a_large_plant_with_safe_values() {
     let unit = interp::parse(&text).unwrap();
     let sym = &bundle.symbols;
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
-    let name = |space, k: usize, filter| {
-        st::ident(
-            sym,
-            Var {
-                space,
-                index: k as u32,
-                prev: false,
-            },
-            filter,
-        )
-    };
+    let name = |space, k: usize, filter| st_name(sym, space, k, filter);
     let (mut tripped_cycles, mut away_from_zero, mut spec_errors) = (0, 0, 0);
     for seed in 1..=40u64 {
         let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
@@ -342,16 +342,8 @@ fn st_conforms_to_the_engine_on_a_large_plant_with_safe_values() {
         let mut inputs = Bits::zeros(n_in);
         let mut cmd = Bits::zeros(n_out);
         for cycle in 0..150 {
-            for k in 0..n_in {
-                if rng.chance(8) {
-                    inputs.set(k, !inputs.get(k));
-                }
-            }
-            for k in 0..n_out {
-                if rng.chance(6) {
-                    cmd.set(k, !cmd.get(k));
-                }
-            }
+            rng.flip_some(&mut inputs, 8);
+            rng.flip_some(&mut cmd, 6);
             engine.cycle(Millis(cycle * 10), &inputs, &mut Commanded(cmd.clone()));
             let errors = engine
                 .drain_events()
@@ -359,16 +351,7 @@ fn st_conforms_to_the_engine_on_a_large_plant_with_safe_values() {
                 .filter(|e| matches!(e, crate::engine::Event::SpecificationError { .. }))
                 .count();
             spec_errors += errors;
-            m.set("NOW_MS", Val::Int(cycle as i64 * 10)).unwrap();
-            for k in 0..n_in {
-                m.set(&name(Space::Input, k, false), Val::Bool(inputs.get(k)))
-                    .unwrap();
-            }
-            for k in 0..n_out {
-                m.set(&name(Space::Output, k, true), Val::Bool(cmd.get(k)))
-                    .unwrap();
-            }
-            m.scan().unwrap();
+            scan_st(&mut m, sym, cycle * 10, &inputs, &cmd);
             let at = format!("seed {seed}, cycle {cycle}");
             for k in 0..n_out {
                 assert_eq!(
