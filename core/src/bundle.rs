@@ -30,10 +30,52 @@ pub struct PlantBundle {
     pub tasks: Option<crate::tasks::TaskSet>,
 }
 
+/// The files of a plant folder its loaders may read (besides `programs/*.ron`), each
+/// checked against [`crate::diag::MAX_FILE_BYTES`] before anything is read.
+pub const FOLDER_FILES: [&str; 9] = [
+    "plant.ron",
+    "observers.ron",
+    "constraints.txt",
+    "invariants.txt",
+    "tasks.ron",
+    "layout.ron",
+    "diagnosers.ron",
+    "faults.ron",
+    "io-map.ron",
+];
+
+/// The problems of the folder's files that its loaders must not read: larger than
+/// [`crate::diag::MAX_FILE_BYTES`] (`V0003`), or a device, a pipe or a socket (`V0002`),
+/// found from their metadata only ([`crate::diag::check_size`]).
+pub fn refused_files(dir: &Path) -> Vec<Problem> {
+    let programs = std::fs::read_dir(dir.join("programs"))
+        .map(|entries| {
+            let mut v: Vec<PathBuf> = entries
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+                .collect();
+            v.sort();
+            v
+        })
+        .unwrap_or_default();
+    FOLDER_FILES
+        .iter()
+        .map(|f| dir.join(f))
+        .chain(programs)
+        .filter_map(|p| crate::diag::check_size(&p).err())
+        .collect()
+}
+
 impl PlantBundle {
     /// Loads a plant folder. Returns the bundle (possibly partial) with every problem
     /// found, or only problems when the plant file itself cannot be used.
+    /// A file of the folder larger than [`crate::diag::MAX_FILE_BYTES`], or not a
+    /// regular file, refuses the folder before any file is read ([`refused_files`]).
     pub fn load(dir: &Path) -> Result<(Self, Vec<Problem>), Vec<Problem>> {
+        let refused = refused_files(dir);
+        if !refused.is_empty() {
+            return Err(refused);
+        }
         let plant = Plant::load(&dir.join("plant.ron"))?;
         let (tasks, mut problems) = crate::tasks::TaskSet::load_optional(dir);
         let aux = tasks
@@ -55,9 +97,20 @@ impl PlantBundle {
             let _ = symbols.declare(name, crate::symbols::Space::Aux);
         }
         let mut problems = Vec::new();
-        let (observers, mut p) = Observers::load(&dir.join("observers.ron"), &mut symbols);
+        let observers_path = dir.join("observers.ron");
+        let (observers, mut p) = match crate::diag::check_size(&observers_path) {
+            Ok(()) => Observers::load(&observers_path, &mut symbols),
+            Err(p) => (Observers::empty(), vec![p]),
+        };
         problems.append(&mut p);
-        let (constraints, mut p) = ConstraintSet::load(&dir.join("constraints.txt"), &symbols);
+        let constraints_path = dir.join("constraints.txt");
+        let exists = std::fs::symlink_metadata(&constraints_path).is_ok();
+        let constraints_at = problems.len();
+        let (constraints, mut p) = if exists {
+            ConstraintSet::load(&constraints_path, &symbols)
+        } else {
+            (ConstraintSet::default(), Vec::new())
+        };
         problems.append(&mut p);
         let (invariants, mut p) =
             ConstraintSet::load_invariants(&dir.join("invariants.txt"), &symbols);
@@ -68,28 +121,94 @@ impl PlantBundle {
         if let Err((err, witness)) =
             crate::filter::check_fallback_exists(&filter, &symbols, &invariants)
         {
-            problems.push(Problem::error(
-                "V0107",
-                format!("{err} when {witness}"),
-                Some(crate::diag::Location::new(
-                    &dir.join("constraints.txt"),
-                    1,
-                    1,
-                )),
+            problems.push(conflict_problem(
+                &constraints,
+                &constraints_path,
+                &err,
+                &witness,
             ));
         }
-        (
-            Self {
-                dir: dir.to_path_buf(),
-                plant,
-                symbols,
-                observers,
-                constraints,
-                invariants,
-                discharged,
-                tasks: None,
-            },
-            problems,
-        )
+        let bundle = Self {
+            dir: dir.to_path_buf(),
+            plant,
+            symbols,
+            observers,
+            constraints,
+            invariants,
+            discharged,
+            tasks: None,
+        };
+        // Said before the other problems of the constraints: it matters most.
+        if let Some(warning) = bundle.unprotected() {
+            problems.insert(constraints_at, warning);
+        }
+        (bundle, problems)
+    }
+
+    /// The `V0110` warning when no safety constraint protects the plant: its
+    /// `constraints.txt` is absent, empty, or every line of it was rejected (the stops
+    /// the diagnosers add, `DSTOP_…`, are not safety constraints). The filter then lets
+    /// every command through. The load reports it among its problems, and the console
+    /// shows it as a banner.
+    pub fn unprotected(&self) -> Option<Problem> {
+        let path = self.dir.join("constraints.txt");
+        let generated = |c: &crate::constraints::Constraint| {
+            c.id.starts_with("DSTOP_") && c.location.file != path
+        };
+        if !self.constraints.constraints.iter().all(generated) {
+            return None;
+        }
+        let exists = std::fs::symlink_metadata(&path).is_ok();
+        Some(unprotected_warning(&path, exists))
     }
 }
+
+/// The `V0110` warning: no constraint protects the plant.
+fn unprotected_warning(path: &Path, exists: bool) -> Problem {
+    let why = if exists {
+        "holds no constraint"
+    } else {
+        "does not exist"
+    };
+    Problem::warning(
+        "V0110",
+        format!(
+            "the plant is unprotected: {} {why}, so the filter lets every command through",
+            path.display()
+        ),
+        Some(crate::diag::Location::new(path, 1, 1)),
+    )
+}
+
+/// The `V0107` error of a context with no fallback vector, at the first (in file
+/// order) of the conflicting constraints, the message giving the line of each.
+fn conflict_problem(
+    set: &ConstraintSet,
+    path: &Path,
+    err: &crate::filter::SpecError,
+    witness: &str,
+) -> Problem {
+    let mut located: Vec<&crate::constraints::Constraint> = err
+        .constraints
+        .iter()
+        .filter_map(|id| set.get(id))
+        .collect();
+    located.sort_by_key(|c| (c.location.line, c.location.column));
+    let lines = located
+        .iter()
+        .map(|c| format!("{} on line {}", c.id, c.location.line))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let location = located.first().map_or_else(
+        || crate::diag::Location::new(path, 1, 1),
+        |c| c.location.clone(),
+    );
+    Problem::error(
+        "V0107",
+        format!("{err} when {witness} ({lines})"),
+        Some(location),
+    )
+}
+
+#[cfg(test)]
+mod tests;

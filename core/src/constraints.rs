@@ -148,17 +148,12 @@ impl ConstraintSet {
         Self::load_kind(path, symbols, SetKind::Invariants)
     }
 
+    /// Reads in bounded memory ([`crate::diag::read_text`]: a file larger than
+    /// [`crate::diag::MAX_FILE_BYTES`] is a `V0003` problem, not read).
     fn load_kind(path: &Path, symbols: &Symbols, kind: SetKind) -> (Self, Vec<Problem>) {
-        match std::fs::read_to_string(path) {
+        match crate::diag::read_text(path) {
             Ok(text) => Self::parse_kind(&text, path, symbols, kind),
-            Err(e) => (
-                Self::default(),
-                vec![Problem::error(
-                    "V0002",
-                    format!("cannot read {}: {e}", path.display()),
-                    None,
-                )],
-            ),
+            Err(p) => (Self::default(), vec![p]),
         }
     }
 

@@ -102,15 +102,76 @@ impl std::fmt::Display for Problem {
     }
 }
 
-/// Reads a text file; a failure is a `V0002` problem naming the file.
+/// Largest file a plant loader reads (RON files, `constraints.txt`, `invariants.txt`,
+/// scenarios), bytes: the committed files are a few tens of KiB, so the limit only
+/// stops a wrong file (a trace, a dump, `/dev/zero`) before it fills the memory.
+pub const MAX_FILE_BYTES: u64 = 8 * 1024 * 1024;
+
+/// A `V0003` problem: `path` holds `size` bytes, more than [`MAX_FILE_BYTES`] (`None`:
+/// a file whose size is not known, read up to the limit).
+fn too_large(path: &Path, size: Option<u64>) -> Problem {
+    let limit = format!(
+        "the limit of {MAX_FILE_BYTES} bytes ({} MiB)",
+        MAX_FILE_BYTES / 1_048_576
+    );
+    let message = match size {
+        Some(size) => format!(
+            "{} is {size} bytes ({:.1} MiB), more than {limit}: not read",
+            path.display(),
+            size as f64 / 1_048_576.0,
+        ),
+        None => format!("{} holds more than {limit}: not read", path.display()),
+    };
+    Problem::error("V0003", message, None)
+}
+
+fn cannot_read(path: &Path, e: &dyn std::fmt::Display) -> Problem {
+    Problem::error(
+        "V0002",
+        format!("cannot read {}: {e}", path.display()),
+        None,
+    )
+}
+
+/// Checks the size of `path` before it is read: more than [`MAX_FILE_BYTES`] is a
+/// `V0003` problem naming the file, its size and the limit; a device, a pipe or a
+/// socket (which may never end, or block the open) is a `V0002` problem. A file that
+/// cannot be looked at passes (its reader reports why).
+pub fn check_size(path: &Path) -> Result<(), Problem> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.len() > MAX_FILE_BYTES => Err(too_large(path, Some(m.len()))),
+        Ok(m) if !m.is_file() && !m.is_dir() => Err(cannot_read(
+            path,
+            &"not a regular file (a device, a pipe or a socket)",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Reads a text file in bounded memory: its size is checked first ([`check_size`],
+/// `V0003`), and the read stops after [`MAX_FILE_BYTES`] whatever the file says (a
+/// device or a file that grows). Any other failure, invalid UTF-8 included, is a
+/// `V0002` problem naming the file.
 pub fn read_text(path: &Path) -> Result<String, Problem> {
-    std::fs::read_to_string(path).map_err(|e| {
-        Problem::error(
-            "V0002",
-            format!("cannot read {}: {e}", path.display()),
-            None,
-        )
-    })
+    use std::io::Read as _;
+    check_size(path)?;
+    let file = std::fs::File::open(path).map_err(|e| cannot_read(path, &e))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| cannot_read(path, &e))?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(too_large(path, None));
+    }
+    String::from_utf8(bytes).map_err(|e| cannot_read(path, &e))
+}
+
+/// As [`read_text`], `None` when the file does not exist.
+pub fn read_text_optional(path: &Path) -> Result<Option<String>, Problem> {
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        _ => read_text(path).map(Some),
+    }
 }
 
 /// Converts a `ron` parse error into a problem at its file position.
@@ -130,3 +191,301 @@ pub fn render(problems: &[Problem]) -> String {
         .collect::<Vec<_>>()
         .join("\n")
 }
+
+/// A field of a RON text (`name: value`) and where its value is written, so that a
+/// semantic check can point at the value it rejects (serde gives no positions).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RonField {
+    /// The field name.
+    pub name: String,
+    /// Names of the fields whose values hold this one, outermost first (`["signals"]`
+    /// for the `id` of a signal in `plant.ron`).
+    pub path: Vec<String>,
+    /// Byte offset of the bracket that opens the struct holding the field: the fields
+    /// of one struct share it.
+    pub container: usize,
+    /// Byte range of the value as written (`Ms(50)` in `lo: Ms(50),`).
+    pub value: std::ops::Range<usize>,
+    /// Line of the value's first character, from 1.
+    pub line: usize,
+    /// Column of the value's first character, in characters, from 1.
+    pub column: usize,
+}
+
+impl RonField {
+    /// Where the value is written, in `file`.
+    pub fn location(&self, file: &Path) -> Location {
+        Location::new(file, self.line, self.column)
+    }
+
+    /// Whether the field sits at `path` (names of the enclosing fields, outermost first).
+    pub fn is_at(&self, path: &[&str]) -> bool {
+        self.path.len() == path.len() && self.path.iter().zip(path).all(|(a, b)| a == b)
+    }
+}
+
+/// The `nth` (from 0) field called `name` at `path` in `fields`.
+pub fn ron_field<'a>(
+    fields: &'a [RonField],
+    path: &[&str],
+    name: &str,
+    nth: usize,
+) -> Option<&'a RonField> {
+    fields
+        .iter()
+        .filter(|f| f.name == name && f.is_at(path))
+        .nth(nth)
+}
+
+/// The fields of a RON text in the order they are written. The scan knows strings, raw
+/// strings, characters and nested comments; it does not validate (the parser does),
+/// and on a text the parser would reject it returns what it could see, never panics.
+pub fn ron_fields(text: &str) -> Vec<RonField> {
+    struct Open {
+        at: usize,
+        field: Option<usize>,
+    }
+    let b = text.as_bytes();
+    let mut out: Vec<RonField> = Vec::new();
+    let mut stack = vec![Open { at: 0, field: None }];
+    // The field whose value has not started yet, and the end of the last token.
+    let mut awaiting: Option<usize> = None;
+    let mut last_end = 0;
+    let mut i = 0;
+    let finish = |out: &mut Vec<RonField>, open: &mut Open, last_end: usize| {
+        if let Some(k) = open.field.take()
+            && let Some(f) = out.get_mut(k)
+        {
+            f.value.end = last_end.max(f.value.start);
+        }
+    };
+    while i < b.len() {
+        let c = b[i];
+        // Whitespace and comments are not tokens.
+        if c.is_ascii_whitespace() {
+            i += 1;
+            continue;
+        }
+        if c == b'/' && b.get(i + 1) == Some(&b'/') {
+            i = skip_line_comment(b, i);
+            continue;
+        }
+        if c == b'/' && b.get(i + 1) == Some(&b'*') {
+            i = skip_block_comment(b, i);
+            continue;
+        }
+        let start = i;
+        if let Some(k) = awaiting.take()
+            && let Some(f) = out.get_mut(k)
+        {
+            f.value = start..start;
+        }
+        match c {
+            b'"' => i = skip_string(b, i + 1),
+            b'\'' => i = skip_char(b, i + 1),
+            b'r' if raw_string_start(b, i).is_some() => {
+                i = skip_raw_string(b, i);
+            }
+            b'(' | b'[' | b'{' => {
+                stack.push(Open { at: i, field: None });
+                i += 1;
+            }
+            b')' | b']' | b'}' => {
+                if stack.len() > 1
+                    && let Some(mut open) = stack.pop()
+                {
+                    finish(&mut out, &mut open, last_end);
+                }
+                i += 1;
+            }
+            b',' => {
+                if let Some(open) = stack.last_mut() {
+                    finish(&mut out, open, last_end);
+                }
+                i += 1;
+                last_end = i;
+                continue;
+            }
+            c if c.is_ascii_digit() => i = skip_number(b, i),
+            c if c.is_ascii_alphabetic() || c == b'_' => {
+                let mut name_start = i;
+                if c == b'r'
+                    && b.get(i + 1) == Some(&b'#')
+                    && b.get(i + 2)
+                        .is_some_and(|&d| d.is_ascii_alphabetic() || d == b'_')
+                {
+                    name_start = i + 2;
+                }
+                i = name_start;
+                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                    i += 1;
+                }
+                let colon = skip_trivia(b, i);
+                if b.get(colon) == Some(&b':') && b.get(colon + 1) != Some(&b':') {
+                    let path = stack
+                        .iter()
+                        .take(stack.len() - 1)
+                        .filter_map(|o| o.field.and_then(|k| out.get(k)))
+                        .map(|f| f.name.clone())
+                        .collect();
+                    let Some(open) = stack.last_mut() else {
+                        break;
+                    };
+                    finish(&mut out, open, last_end);
+                    out.push(RonField {
+                        name: text.get(name_start..i).unwrap_or("").to_string(),
+                        path,
+                        container: open.at,
+                        value: colon + 1..colon + 1,
+                        line: 0,
+                        column: 0,
+                    });
+                    open.field = Some(out.len() - 1);
+                    awaiting = Some(out.len() - 1);
+                    i = colon + 1;
+                    last_end = i;
+                    continue;
+                }
+            }
+            _ => {
+                i += text
+                    .get(i..)
+                    .and_then(|s| s.chars().next())
+                    .map_or(1, char::len_utf8);
+            }
+        }
+        last_end = i.min(b.len());
+    }
+    while let Some(mut open) = stack.pop() {
+        finish(&mut out, &mut open, last_end);
+    }
+    // Lines and columns of the values.
+    let line_starts: Vec<usize> = std::iter::once(0)
+        .chain(text.match_indices('\n').map(|(k, _)| k + 1))
+        .collect();
+    for f in &mut out {
+        let line = line_starts.partition_point(|&s| s <= f.value.start);
+        let from = line_starts.get(line.wrapping_sub(1)).copied().unwrap_or(0);
+        f.line = line.max(1);
+        f.column = text
+            .get(from..f.value.start)
+            .map_or(0, |s| s.chars().count())
+            + 1;
+    }
+    out
+}
+
+fn skip_line_comment(b: &[u8], i: usize) -> usize {
+    b[i..]
+        .iter()
+        .position(|&c| c == b'\n')
+        .map_or(b.len(), |k| i + k + 1)
+}
+
+/// Past a block comment (RON nests them).
+fn skip_block_comment(b: &[u8], mut i: usize) -> usize {
+    let mut depth = 0usize;
+    while i < b.len() {
+        if b[i] == b'/' && b.get(i + 1) == Some(&b'*') {
+            depth += 1;
+            i += 2;
+        } else if b[i] == b'*' && b.get(i + 1) == Some(&b'/') {
+            depth -= 1;
+            i += 2;
+            if depth == 0 {
+                return i;
+            }
+        } else {
+            i += 1;
+        }
+    }
+    b.len()
+}
+
+/// Past the closing quote of a string whose content starts at `i`.
+fn skip_string(b: &[u8], mut i: usize) -> usize {
+    while i < b.len() {
+        match b[i] {
+            b'\\' => i += 2,
+            b'"' => return i + 1,
+            _ => i += 1,
+        }
+    }
+    b.len()
+}
+
+/// Past the closing quote of a character whose content starts at `i`.
+fn skip_char(b: &[u8], mut i: usize) -> usize {
+    if b.get(i) == Some(&b'\\') {
+        i += 2;
+    } else {
+        i += 1;
+    }
+    match b
+        .get(i..)
+        .and_then(|r| r.iter().position(|&c| c == b'\'' || c == b'\n'))
+    {
+        Some(k) if b[i + k] == b'\'' => i + k + 1,
+        Some(k) => i + k,
+        None => b.len(),
+    }
+}
+
+/// The number of `#` of a raw string `r#"…"#` starting at `i`.
+fn raw_string_start(b: &[u8], i: usize) -> Option<usize> {
+    if i > 0 && (b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_') {
+        return None;
+    }
+    let hashes = b[i + 1..].iter().take_while(|&&c| c == b'#').count();
+    (b.get(i + 1 + hashes) == Some(&b'"')).then_some(hashes)
+}
+
+fn skip_raw_string(b: &[u8], i: usize) -> usize {
+    let hashes = raw_string_start(b, i).unwrap_or(0);
+    let mut k = i + hashes + 2;
+    while k < b.len() {
+        if b[k] == b'"'
+            && b[k + 1..]
+                .iter()
+                .take(hashes)
+                .filter(|&&c| c == b'#')
+                .count()
+                == hashes
+        {
+            return k + 1 + hashes;
+        }
+        k += 1;
+    }
+    b.len()
+}
+
+fn skip_number(b: &[u8], mut i: usize) -> usize {
+    while i < b.len() {
+        let c = b[i];
+        let exponent_sign = (c == b'+' || c == b'-') && matches!(b[i - 1], b'e' | b'E');
+        if c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || exponent_sign {
+            i += 1;
+        } else {
+            break;
+        }
+    }
+    i
+}
+
+/// Past whitespace and comments.
+fn skip_trivia(b: &[u8], mut i: usize) -> usize {
+    loop {
+        if i < b.len() && b[i].is_ascii_whitespace() {
+            i += 1;
+        } else if b.get(i) == Some(&b'/') && b.get(i + 1) == Some(&b'/') {
+            i = skip_line_comment(b, i);
+        } else if b.get(i) == Some(&b'/') && b.get(i + 1) == Some(&b'*') {
+            i = skip_block_comment(b, i);
+        } else {
+            return i;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

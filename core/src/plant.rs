@@ -6,7 +6,7 @@
 use crate::diag::{Location, Problem, ron_problem};
 use crate::symbols::{Space, Symbols};
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeSet;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Direction of a signal, seen from the PLC.
@@ -141,7 +141,7 @@ impl Plant {
     /// Parses a plant from RON text; `file` is used in messages only.
     pub fn from_ron(text: &str, file: &Path) -> Result<Self, Vec<Problem>> {
         let parsed: PlantFile = ron::from_str(text).map_err(|e| vec![ron_problem(file, &e)])?;
-        Self::from_file(parsed, file)
+        Self::validate(parsed, file, Some(text))
     }
 
     /// Loads `plant.ron` from disk.
@@ -150,24 +150,42 @@ impl Plant {
         Self::from_ron(&text, path)
     }
 
-    /// Validates a parsed file.
+    /// Validates a parsed file (problems at 1:1: without the text, positions are not
+    /// known; [`Plant::from_ron`] gives them).
     pub fn from_file(file: PlantFile, path: &Path) -> Result<Self, Vec<Problem>> {
+        Self::validate(file, path, None)
+    }
+
+    /// Validates a parsed file; `text`, when given, is what it was parsed from, and a
+    /// bad or repeated id is reported where that signal's `id` is written.
+    fn validate(file: PlantFile, path: &Path, text: Option<&str>) -> Result<Self, Vec<Problem>> {
+        let fields = text.map(crate::diag::ron_fields).unwrap_or_default();
+        let id_at = |i: usize| {
+            Some(
+                crate::diag::ron_field(&fields, &["signals"], "id", i)
+                    .map_or_else(|| Location::new(path, 1, 1), |f| f.location(path)),
+            )
+        };
         let mut problems = Vec::new();
-        let mut seen = BTreeSet::new();
-        for s in &file.signals {
+        let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
+        for (i, s) in file.signals.iter().enumerate() {
             if !is_valid_name(&s.id) {
                 problems.push(Problem::error(
                     "V0010",
                     format!("signal id `{}` must be letters, digits and `_`", s.id),
-                    Some(Location::new(path, 1, 1)),
+                    id_at(i),
                 ));
             }
-            if !seen.insert(s.id.clone()) {
+            if let Some(&first) = seen.get(s.id.as_str()) {
+                let at = crate::diag::ron_field(&fields, &["signals"], "id", first)
+                    .map_or(String::new(), |f| format!(" (first on line {})", f.line));
                 problems.push(Problem::error(
                     "V0011",
-                    format!("signal `{}` is declared twice", s.id),
-                    Some(Location::new(path, 1, 1)),
+                    format!("signal `{}` is declared twice{at}", s.id),
+                    id_at(i),
                 ));
+            } else {
+                seen.insert(&s.id, i);
             }
         }
         if !problems.is_empty() {
@@ -229,3 +247,6 @@ pub fn is_valid_name(name: &str) -> bool {
         && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
         && !name.chars().all(|c| c.is_ascii_digit())
 }
+
+#[cfg(test)]
+mod tests;

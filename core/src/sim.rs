@@ -125,18 +125,22 @@ pub struct Scenario {
 }
 
 impl Scenario {
-    /// Loads a scenario file.
+    /// Loads a scenario file: durations, periods and times are checked
+    /// ([`scenario`], `V0401`, `V0403`..`V0406`).
     pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
         let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
-        let s: Self = ron::from_str(&text).map_err(|e| vec![ron_problem(path, &e)])?;
-        if s.cycle_ms == 0 {
-            return Err(vec![Problem::error(
-                "V0401",
-                "cycle_ms must be at least 1",
-                Some(Location::new(path, 1, 1)),
-            )]);
+        Self::from_ron(&text, path)
+    }
+
+    /// Parses and checks scenario text; `path` is used in messages only.
+    pub fn from_ron(text: &str, path: &Path) -> Result<Self, Vec<Problem>> {
+        let s: Self = ron::from_str(text).map_err(|e| vec![ron_problem(path, &e)])?;
+        let problems = scenario::check(&s, text, path);
+        if problems.is_empty() {
+            Ok(s)
+        } else {
+            Err(problems)
         }
-        Ok(s)
     }
 }
 
@@ -983,6 +987,7 @@ fn hazard_verb(h: &Hazard) -> String {
 
 pub mod diagnosis;
 mod observed;
+pub mod scenario;
 
 pub use observed::ObservedCycle;
 

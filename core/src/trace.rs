@@ -24,25 +24,39 @@ pub struct TraceRow {
     pub outputs: Bits,
 }
 
-/// Parses a trace for `plant`. Every plant signal must have a column.
+/// Parses a trace for `plant`. Every plant signal must have exactly one column, and
+/// the time must increase from row to row (a cycle is recorded once, in order).
 pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Problem> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = text
         .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty());
-    let Some((_, header)) = lines.next() else {
+    let Some((header_index, header)) = lines.next() else {
         return Err(Problem::error(
             "V0301",
             "empty trace: expected a header `time_ms,<signals>`",
             Some(Location::new(file, 1, 1)),
         ));
     };
+    let header_line = header_index + 1;
     // column → (is_output, index); None for time.
     let mut columns: Vec<Option<(bool, usize)>> = Vec::new();
+    // Name → column number (1-based character position of its cell).
+    let mut names: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
     let mut has_time = false;
     let mut col = 1;
     for cell in header.split(',') {
         let name = cell.trim();
+        if let Some(first) = names.insert(name, col) {
+            return Err(Problem::error(
+                "V0330",
+                format!(
+                    "column `{name}` appears twice in the trace header (first at column {first})"
+                ),
+                Some(Location::new(file, header_line, col)),
+            ));
+        }
         if name == "time_ms" {
             has_time = true;
             columns.push(None);
@@ -54,7 +68,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
             return Err(Problem::error(
                 "V0302",
                 format!("unknown signal `{name}` in trace header"),
-                Some(Location::new(file, 1, col)),
+                Some(Location::new(file, header_line, col)),
             ));
         }
         col += cell.chars().count() + 1;
@@ -63,7 +77,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
         return Err(Problem::error(
             "V0303",
             "trace header has no `time_ms` column",
-            Some(Location::new(file, 1, 1)),
+            Some(Location::new(file, header_line, 1)),
         ));
     }
     for s in plant.inputs.iter().chain(&plant.outputs) {
@@ -78,11 +92,13 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
             return Err(Problem::error(
                 "V0304",
                 format!("trace has no column for signal `{}`", s.id),
-                Some(Location::new(file, 1, 1)),
+                Some(Location::new(file, header_line, 1)),
             ));
         }
     }
-    let mut rows = Vec::new();
+    let mut rows: Vec<TraceRow> = Vec::new();
+    // The line of the previous row, for the time check.
+    let mut previous_line = 0;
     for (i, line) in lines {
         let line_no = i + 1;
         let mut row = TraceRow {
@@ -110,6 +126,23 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
                             Some(Location::new(file, line_no, col)),
                         )
                     })?);
+                    if let Some(prev) = rows.last()
+                        && row.time <= prev.time
+                    {
+                        let how = if row.time == prev.time {
+                            "repeats"
+                        } else {
+                            "goes backwards from"
+                        };
+                        return Err(Problem::error(
+                            "V0331",
+                            format!(
+                                "time {} ms {how} {} ms on line {previous_line}: the time of a trace must increase",
+                                row.time.0, prev.time.0
+                            ),
+                            Some(Location::new(file, line_no, col)),
+                        ));
+                    }
                 }
                 Some((out, idx)) => {
                     let b = match v {
@@ -133,6 +166,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
             col += cell.chars().count() + 1;
         }
         rows.push(row);
+        previous_line = line_no;
     }
     Ok(rows)
 }

@@ -49,3 +49,76 @@ fn a_trace_recorded_mid_production_does_not_trip_on_its_first_row() {
     assert!(ok, "{out}");
     assert!(out.contains("CSs14"), "{out}");
 }
+
+/// A plant whose constraints read 36 variables: `vigie check` proves the fallback per
+/// output component, names the component whose own support is too large (26
+/// variables) as not proved, and never claims more, in text and JSON.
+#[test]
+fn check_states_what_it_proved_and_what_it_could_not_on_a_large_plant() {
+    let dir = TempDir::new("check-large");
+    let mut signals = String::new();
+    for i in 0..36 {
+        signals.push_str(&format!(
+            "(id: \"S{i}\", kind: Sensor, description: \"sensor {i}\"),\n"
+        ));
+    }
+    for k in 0..6 {
+        signals.push_str(&format!(
+            "(id: \"Q{k}\", kind: Actuator, description: \"actuator {k}\"),\n"
+        ));
+    }
+    std::fs::write(
+        dir.0.join("plant.ron"),
+        format!("Plant(name: \"large\", signals: [\n{signals}])\n"),
+    )
+    .unwrap();
+    std::fs::write(dir.0.join("observers.ron"), "(observers: [])\n").unwrap();
+    // Q0 and Q1 are linked by combined constraints reading S0..S25; Q2..Q5 each by
+    // simple constraints on the other sensors.
+    let mut text = String::new();
+    for i in 0..13 {
+        text.push_str(&format!(
+            "CSc{i} = S{} . S{} . Q0 . /Q1\n",
+            2 * i,
+            2 * i + 1
+        ));
+    }
+    for (n, i) in (26..36).enumerate() {
+        text.push_str(&format!("CSs{n} = S{i} . Q{}\n", 2 + n % 4));
+    }
+    std::fs::write(dir.0.join("constraints.txt"), text).unwrap();
+    let run = |json: bool| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_vigie"));
+        cmd.arg("check").arg(&dir.0);
+        if json {
+            cmd.arg("--json");
+        }
+        let out = cmd.output().unwrap();
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr)
+    };
+    let text = run(false);
+    assert!(text.contains("the constraints read 36 variables"), "{text}");
+    assert!(
+        text.contains("Q0,Q1") && text.contains("support  26  NOT PROVED"),
+        "{text}"
+    );
+    assert!(
+        text.contains("Q2") && text.contains("proved: a fallback in every reachable context"),
+        "{text}"
+    );
+    assert!(text.contains("NOT PROVED for every context"), "{text}");
+    assert!(
+        !text.contains("a fallback exists in every reachable context, every name"),
+        "never claims what it did not prove: {text}"
+    );
+    let json: serde_json::Value = serde_json::from_str(&run(true)).unwrap();
+    assert_eq!(json["fallback"]["method"], "not_proved");
+    assert_eq!(json["fallback"]["support"], 36);
+    let comps = json["fallback"]["components"].as_array().unwrap();
+    let q01 = comps.iter().find(|c| c["outputs"][0] == "Q0").unwrap();
+    assert_eq!(
+        (q01["support"].as_u64(), q01["proved"].as_bool()),
+        (Some(26), Some(false))
+    );
+    assert!(comps.iter().filter(|c| c["proved"] == true).count() >= 4);
+}

@@ -201,3 +201,151 @@ fn fuzz_observers_file() {
         })
         .unwrap();
 }
+
+/// The station's header and `rows` rows, 10 ms apart, with a few sensors on.
+fn station_trace(rows: usize) -> String {
+    let plant = station_plant();
+    let mut text = vigie_core::trace::header(&plant);
+    text.push('\n');
+    for i in 0..rows {
+        let inputs = vigie_core::bits::Bits::from_bools(
+            &(0..plant.inputs.len())
+                .map(|k| (i + k) % 3 == 0)
+                .collect::<Vec<_>>(),
+        );
+        let outputs = vigie_core::bits::Bits::from_bools(
+            &(0..plant.outputs.len())
+                .map(|k| (i * k) % 2 == 1)
+                .collect::<Vec<_>>(),
+        );
+        vigie_core::trace::write_row(
+            &mut text,
+            vigie_core::Millis(10 * i as u64 + 10),
+            &inputs,
+            &outputs,
+        );
+    }
+    text
+}
+
+#[test]
+fn fuzz_trace_file() {
+    let plant = station_plant();
+    let file = Path::new("trace.csv");
+    runner()
+        .run(&input(station_trace(6)), |text| {
+            match vigie_core::trace::parse(&text, file, &plant) {
+                Ok(rows) => {
+                    // What loads has strictly increasing times.
+                    prop_assert!(rows.windows(2).all(|w| w[0].time < w[1].time));
+                }
+                Err(p) => {
+                    check_problems(std::slice::from_ref(&p), file, true)?;
+                    let lines = text.lines().count().max(1);
+                    let loc = p.location.as_ref().unwrap();
+                    prop_assert!(loc.line <= lines, "{} beyond {} lines", p, lines);
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn fuzz_scenario_file() {
+    use vigie_core::sim::Scenario;
+    use vigie_core::sim::scenario::{MAX_CYCLE_MS, MAX_RUN_MS};
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+    let base = std::fs::read_to_string(dir.join("scenarios/c4-stuck-degraded.ron")).unwrap();
+    let file = Path::new("s.ron");
+    runner()
+        .run(&input(base), |text| {
+            match Scenario::from_ron(&text, file) {
+                Ok(s) => {
+                    prop_assert!((1..=MAX_CYCLE_MS).contains(&s.cycle_ms));
+                    prop_assert!((1..=MAX_RUN_MS).contains(&s.duration_ms));
+                    prop_assert!(s.actions.iter().all(|a| a.at_ms < s.duration_ms));
+                }
+                Err(problems) => {
+                    prop_assert!(!problems.is_empty());
+                    check_problems(&problems, file, true)?;
+                    let lines = text.lines().count().max(1);
+                    for p in &problems {
+                        let loc = p.location.as_ref().unwrap();
+                        prop_assert!(loc.line <= lines, "{} beyond {} lines", p, lines);
+                    }
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn fuzz_layout_file() {
+    let file = Path::new("layout.ron");
+    runner()
+        .run(&input(station_file("layout.ron")), |text| {
+            if let Err(problems) = vigie_core::emulator::Layout::from_ron(&text, file) {
+                prop_assert!(!problems.is_empty());
+                check_problems(&problems, file, true)?;
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// Whatever the diagnoser file looks like, as long as it parses, `vigie learn` writes
+/// new window bounds in place: the result reads back with exactly those bounds (the
+/// rewrite checks it) and the text outside the bounds is unchanged.
+#[test]
+fn fuzz_learn_rewrite() {
+    use vigie_core::pop::model::{Bound, DiagnoserFile};
+    let file = Path::new("diagnosers.ron");
+    let parsed = std::cell::Cell::new(0u32);
+    runner()
+        .run(&input(station_file("diagnosers.ron")), |text| {
+            let Ok(before) = DiagnoserFile::from_ron(&text, file) else {
+                return Ok(());
+            };
+            parsed.set(parsed.get() + 1);
+            let mut learned = before.clone();
+            for iv in learned.components.iter_mut().flat_map(|c| &mut c.intervals) {
+                if let (Bound::Ms(lo), Bound::Ms(hi)) = (&iv.lo, &iv.hi) {
+                    let (lo, hi) = (lo.saturating_add(1), hi.saturating_add(1000));
+                    iv.lo = Bound::Ms(lo);
+                    iv.hi = Bound::Ms(hi);
+                }
+            }
+            let out = match vigie_core::pop::learn::rewrite(&text, file, &learned) {
+                Ok(out) => out,
+                Err(p) => return Err(TestCaseError::fail(format!("{p}\n{text}"))),
+            };
+            // Same text once the values of the bounds are cut out.
+            let blank = |t: &str| {
+                let mut s = String::new();
+                let mut done = 0;
+                for f in vigie_core::diag::ron_fields(t) {
+                    if (f.name == "lo" || f.name == "hi") && f.is_at(&["components", "intervals"]) {
+                        s.push_str(&t[done..f.value.start]);
+                        done = f.value.end;
+                    }
+                }
+                s.push_str(&t[done..]);
+                s
+            };
+            let (a, b) = (blank(&text), blank(&out));
+            if a != b {
+                let k = a.bytes().zip(b.bytes()).take_while(|(x, y)| x == y).count();
+                let from = k.saturating_sub(80);
+                return Err(TestCaseError::fail(format!(
+                    "differs at byte {k}: {:?} / {:?}",
+                    a.get(from..(k + 80).min(a.len())),
+                    b.get(from..(k + 80).min(b.len()))
+                )));
+            }
+            Ok(())
+        })
+        .unwrap();
+    assert!(parsed.get() > 0, "no mutation parsed");
+}

@@ -1,6 +1,7 @@
 //! Integration tests: one binary.
 
 mod adversary;
+mod bad_input;
 mod console;
 mod console_link;
 mod diagnoser;

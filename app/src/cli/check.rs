@@ -24,6 +24,11 @@ struct Report<'a> {
     constraints: Vec<ConstraintRow<'a>>,
     invariants: Vec<&'a str>,
     property6_discharged: &'a [vigie_core::constraints::Discharged],
+    /// No safety constraint protects the plant (`V0110`, also among the problems).
+    unprotected: bool,
+    /// What the existence check of a fallback proved, and what it could not (support
+    /// sizes); absent when the check found a context without any.
+    fallback: Option<vigie_core::filter::FallbackReport>,
     problems: &'a [Problem],
 }
 
@@ -75,12 +80,32 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
             .map(|c| c.id.as_str())
             .collect(),
         property6_discharged: &bundle.discharged,
+        unprotected: bundle.unprotected().is_some(),
+        fallback: vigie_core::filter::fallback_report(
+            &vigie_core::filter::Filter::for_plant(&bundle.constraints, &bundle.plant),
+            &bundle.symbols,
+            &bundle.invariants,
+        )
+        .ok(),
         problems: &problems,
     };
     let mut out = std::io::stdout().lock();
     if json {
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
     } else {
+        // First, before anything else: nothing stops a dangerous command.
+        if let Some(w) = bundle.unprotected() {
+            let detail = w
+                .message
+                .strip_prefix("the plant is unprotected: ")
+                .unwrap_or(&w.message);
+            writeln!(
+                out,
+                "WARNING[{}]: THE PLANT IS UNPROTECTED: {detail}",
+                w.code
+            )?;
+            writeln!(out)?;
+        }
         writeln!(
             out,
             "{}: {} sensors, {} actuators, observers {}",
@@ -132,11 +157,22 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
                 )?;
             }
         }
-        if problems.is_empty() {
+        if let Some(f) = &report.fallback {
+            write_fallback(&mut out, f)?;
+        }
+        let fallback_proved = report.fallback.as_ref().is_some_and(|f| f.proved());
+        if problems.is_empty() && fallback_proved {
             writeln!(
                 out,
                 "static checks passed: property (6) holds for every output in every reachable situation \
                  ({} invariants), a fallback exists in every reachable context, every name is known",
+                report.invariants.len()
+            )?;
+        } else if problems.is_empty() {
+            writeln!(
+                out,
+                "static checks passed except the fallback's existence, NOT PROVED for the components above: \
+                 property (6) holds for every output in every reachable situation ({} invariants), every name is known",
                 report.invariants.len()
             )?;
         } else {
@@ -148,4 +184,48 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// What the fallback's existence check proved, in words: the whole support enumerated,
+/// or each output component's, and which were too large.
+fn write_fallback(
+    out: &mut impl std::io::Write,
+    f: &vigie_core::filter::FallbackReport,
+) -> std::io::Result<()> {
+    match f.method {
+        "whole" => writeln!(
+            out,
+            "fallback: exists in every reachable context, {} contexts of the {} variables the constraints read enumerated",
+            f.contexts, f.support
+        ),
+        method => {
+            writeln!(
+                out,
+                "fallback: the constraints read {} variables, too many to enumerate at once (limit {}); checked per output component ({} contexts):",
+                f.support,
+                vigie_core::filter::EXHAUSTIVE_SUPPORT_LIMIT,
+                f.contexts
+            )?;
+            for c in &f.components {
+                writeln!(
+                    out,
+                    "  {:<28} support {:>3}  {}",
+                    c.outputs.join(","),
+                    c.support,
+                    if c.proved {
+                        "proved: a fallback in every reachable context"
+                    } else {
+                        "NOT PROVED: support too large to enumerate"
+                    }
+                )?;
+            }
+            if method == "not_proved" {
+                writeln!(
+                    out,
+                    "fallback: NOT PROVED for every context; the engine still searches one every cycle and drives the outputs to their safe values when none exists"
+                )?;
+            }
+            Ok(())
+        }
+    }
 }

@@ -7,15 +7,22 @@ use std::process::ExitCode;
 use std::time::Instant;
 use vigie_core::pop;
 
-/// Learns the intervals of `diagnosers.ron` from normal-run traces and rewrites it.
+/// Learns the intervals of `diagnosers.ron` from normal-run traces and writes the
+/// learned bounds into it in place (`pop::learn::rewrite`: comments and layout kept);
+/// the statistics are printed.
 pub(crate) fn learn(
     dir: &Path,
     traces: &[PathBuf],
     alpha: Option<f64>,
     dry_run: bool,
 ) -> anyhow::Result<ExitCode> {
-    let (db, _) =
-        pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let render =
+        |p: &[vigie_core::diag::Problem]| anyhow::anyhow!("{}", vigie_core::diag::render(p));
+    let path = dir.join("diagnosers.ron");
+    let plant = vigie_core::plant::Plant::load(&dir.join("plant.ron")).map_err(|p| render(&p))?;
+    // Read once: the text learned from is the text rewritten.
+    let text = vigie_core::diag::read_text(&path).map_err(|p| render(&[p]))?;
+    let (db, _) = pop::from_text(dir, plant, &text, &path).map_err(|p| render(&p))?;
     let mut rows = Vec::new();
     for t in traces {
         let text = std::fs::read_to_string(t)
@@ -46,12 +53,13 @@ pub(crate) fn learn(
         )?;
     }
     if !dry_run {
-        std::fs::write(dir.join("diagnosers.ron"), file.to_ron())?;
+        let rewritten = pop::learn::rewrite(&text, &path, &file).map_err(|p| render(&[p]))?;
+        std::fs::write(&path, rewritten)?;
         writeln!(
             out,
-            "wrote {} intervals into {}",
+            "learned {} intervals: their window bounds written into {} (comments and layout kept; the statistics above are not written)",
             done.len(),
-            dir.join("diagnosers.ron").display()
+            path.display()
         )?;
     }
     Ok(ExitCode::SUCCESS)

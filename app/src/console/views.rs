@@ -15,6 +15,7 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
     egui::Panel::top("toolbar")
         .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.panel))
         .show(ui, |ui| toolbar_ui(c, ui, out));
+    unprotected_ui(c, ui);
     // Below the toolbar: the degraded-mode banner and the diagnosers' table.
     super::diagnosers::panel_ui(c, ui, out);
     egui::Panel::bottom("status").show(ui, |ui| status_ui(c, ui));
@@ -67,6 +68,29 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
             } else {
                 synoptic_panel_ui(c, ui);
             }
+        });
+}
+
+/// The text of the red banner shown while no safety constraint protects the plant.
+pub(crate) const UNPROTECTED_BANNER: &str =
+    "UNPROTECTED: no safety constraint, the filter lets every command through";
+
+/// The red banner under the toolbar while no safety constraint protects the plant
+/// (`V0110`: `constraints.txt` absent, empty or rejected); its hover text is the warning.
+fn unprotected_ui(c: &Console, ui: &mut egui::Ui) {
+    let Some(warning) = c.sim.bundle.unprotected() else {
+        return;
+    };
+    egui::Panel::top("unprotected")
+        .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.trip))
+        .show(ui, |ui| {
+            ui.label(
+                RichText::new(UNPROTECTED_BANNER)
+                    .strong()
+                    .size(16.0)
+                    .color(Color32::WHITE),
+            )
+            .on_hover_text(warning.to_string());
         });
 }
 

@@ -232,7 +232,9 @@ pub struct Layout {
     /// The file it came from (messages only).
     #[serde(skip)]
     pub file: PathBuf,
-    /// First position of each quoted string in the source text (messages only).
+    /// First position of each quoted string in the source text, and of the value of
+    /// each field under the key `path.name:` (`source.arrivals.period_ms:`), for
+    /// messages only.
     #[serde(skip)]
     pub positions: BTreeMap<String, (usize, usize)>,
 }
@@ -249,6 +251,15 @@ impl Layout {
         let mut layout: Layout = ron::from_str(text).map_err(|e| vec![ron_problem(file, &e)])?;
         layout.file = file.to_path_buf();
         layout.positions = quoted_positions(text);
+        for f in crate::diag::ron_fields(text) {
+            let mut key = f.path.join(".");
+            if !key.is_empty() {
+                key.push('.');
+            }
+            key.push_str(&f.name);
+            key.push(':');
+            layout.positions.entry(key).or_insert((f.line, f.column));
+        }
         let problems = layout.check();
         if problems.is_empty() {
             Ok(layout)
@@ -263,6 +274,11 @@ impl Layout {
         Some(Location::new(&self.file, line, col))
     }
 
+    /// Where the value of field `name` (`source.small`) is written, for messages.
+    fn field_location(&self, name: &str) -> Option<Location> {
+        self.location_of(&format!("{name}:"))
+    }
+
     fn part_exists(&self, id: &str) -> bool {
         id == self.table.id || self.conveyors.iter().any(|c| c.id == id)
     }
@@ -270,12 +286,43 @@ impl Layout {
     /// Internal consistency: parts referenced exist, sizes are positive.
     pub fn check(&self) -> Vec<Problem> {
         let mut out = Vec::new();
+        if !(1..=MAX_STEP_MS).contains(&self.step_ms) {
+            out.push(Problem::error(
+                "V0301",
+                format!(
+                    "step_ms is {} ms: the simulation step is from 1 to {MAX_STEP_MS} ms",
+                    self.step_ms
+                ),
+                self.field_location("step_ms"),
+            ));
+        }
+        if let ArrivalPlan::Periodic {
+            period_ms,
+            jitter_ms,
+            ..
+        } = &self.source.arrivals
+        {
+            let max = crate::sim::scenario::MAX_RUN_MS;
+            if !(1..=max).contains(period_ms) {
+                out.push(Problem::error(
+                    "V0301",
+                    format!(
+                        "period_ms is {period_ms} ms: an arrival period is from 1 ms to {max} ms"
+                    ),
+                    self.field_location("source.arrivals.period_ms"),
+                ));
+            }
+            if *jitter_ms > max {
+                out.push(Problem::error(
+                    "V0301",
+                    format!("jitter_ms is {jitter_ms} ms: at most {max} ms"),
+                    self.field_location("source.arrivals.jitter_ms"),
+                ));
+            }
+        }
         let mut err = |id: &str, msg: String| {
             out.push(Problem::error("V0301", msg, self.location_of(id)));
         };
-        if self.step_ms == 0 {
-            err("step_ms", "step_ms must be at least 1".into());
-        }
         for c in &self.conveyors {
             if c.start == c.end || c.speed_mm_s < 0 {
                 err(
@@ -298,10 +345,10 @@ impl Layout {
             }
         }
         if self.sensors.len() > 64 {
-            err("sensors", "at most 64 sensors".into());
+            err("sensors:", "at most 64 sensors".into());
         }
         if self.conveyors.len() > 60 {
-            err("conveyors", "at most 60 conveyors".into());
+            err("conveyors:", "at most 60 conveyors".into());
         }
         if !self.conveyors.iter().any(|c| c.id == self.source.conveyor) {
             err(
@@ -317,9 +364,12 @@ impl Layout {
                 );
             }
         }
-        for d in [self.source.small, self.source.large] {
+        for (name, d) in [("small", self.source.small), ("large", self.source.large)] {
             if d.length_mm <= 0 || d.width_mm <= 0 || d.height_mm <= 0 {
-                err("small", "box dimensions must be positive".into());
+                err(
+                    &format!("source.{name}:"),
+                    format!("{name} box dimensions must be positive"),
+                );
             }
         }
         if self.table.half_length_mm <= 0 || self.table.loading_mdeg >= self.table.unloading_mdeg {
@@ -373,6 +423,9 @@ impl Layout {
     }
 }
 
+/// Longest internal simulation step of a layout, ms.
+const MAX_STEP_MS: u64 = 1_000;
+
 /// Line and column (1-based) of the first occurrence of each `"…"` string.
 fn quoted_positions(text: &str) -> BTreeMap<String, (usize, usize)> {
     let mut map = BTreeMap::new();
@@ -391,3 +444,6 @@ fn quoted_positions(text: &str) -> BTreeMap<String, (usize, usize)> {
     }
     map
 }
+
+#[cfg(test)]
+mod tests;

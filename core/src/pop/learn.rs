@@ -3,13 +3,18 @@
 //! clock event to the expected evolution it frames, and the tolerance ΔT = α·σ; only
 //! evolutions of normally completed cycles (the clock phase ended with every
 //! observation explained by the normal model) are counted.
+//!
+//! [`rewrite`] writes the learned bounds into the file's text in place: comments,
+//! layout and every other value are kept byte for byte.
 
 use super::build::Compiled;
 use super::model::{Bound, DiagnoserFile, Learned};
+use crate::diag::{Location, Problem, RonField};
 use crate::frame::Frame;
 use crate::symbols::Space;
 use crate::trace::TraceRow;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// Running estimator of annex B: mean and variance updated after each measure.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -173,3 +178,107 @@ pub fn apply(file: &mut DiagnoserFile, measures: &BTreeMap<String, Estimator>) -
     }
     done
 }
+
+/// The text of the diagnoser file `text` (read from `path`) with the interval bounds of
+/// `learned` (the file after [`apply`]): only the value of each `lo` or `hi` that
+/// changed is replaced, so comments, layout, order and every other value stay byte for
+/// byte (the learned statistics and α are printed by `vigie learn`, not written). The
+/// result is parsed again and must give the bounds asked for; anything unexpected is a
+/// `V0514` problem and nothing is written.
+pub fn rewrite(text: &str, path: &Path, learned: &DiagnoserFile) -> Result<String, Problem> {
+    let fail = |message: String, at: Option<&RonField>| {
+        Problem::error(
+            "V0514",
+            format!("cannot write the learned bounds in place: {message}"),
+            Some(at.map_or_else(|| Location::new(path, 1, 1), |f| f.location(path))),
+        )
+    };
+    let before = DiagnoserFile::from_ron(text, path)?;
+    let fields = crate::diag::ron_fields(text);
+    let at = ["components", "intervals"];
+    let ids: Vec<&RonField> = fields
+        .iter()
+        .filter(|f| f.name == "id" && f.is_at(&at))
+        .collect();
+    let old: Vec<_> = before
+        .components
+        .iter()
+        .flat_map(|c| &c.intervals)
+        .collect();
+    let new: Vec<_> = learned
+        .components
+        .iter()
+        .flat_map(|c| &c.intervals)
+        .collect();
+    if ids.len() != old.len() || new.len() != old.len() {
+        return Err(fail(
+            format!(
+                "{} intervals written, {} parsed, {} learned",
+                ids.len(),
+                old.len(),
+                new.len()
+            ),
+            None,
+        ));
+    }
+    let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
+    let mut expected = before.clone();
+    for (((id, o), n), e) in ids.iter().zip(&old).zip(&new).zip(
+        expected
+            .components
+            .iter_mut()
+            .flat_map(|c| &mut c.intervals),
+    ) {
+        let written: Option<String> = text
+            .get(id.value.clone())
+            .and_then(|v| ron::from_str(v).ok());
+        if written.as_deref() != Some(o.id.as_str()) || n.id != o.id {
+            return Err(fail(
+                format!("interval `{}` is not where expected", n.id),
+                Some(id),
+            ));
+        }
+        for (name, old_bound, new_bound, slot) in [
+            ("lo", &o.lo, &n.lo, &mut e.lo),
+            ("hi", &o.hi, &n.hi, &mut e.hi),
+        ] {
+            if old_bound == new_bound {
+                continue;
+            }
+            let field = fields
+                .iter()
+                .find(|f| f.container == id.container && f.name == name && f.is_at(&at));
+            let (Some(field), Ok(value)) = (field, ron::to_string(new_bound)) else {
+                return Err(fail(
+                    format!("no `{name}` found for interval `{}`", n.id),
+                    Some(id),
+                ));
+            };
+            edits.push((field.value.clone(), value));
+            slot.clone_from(new_bound);
+        }
+    }
+    edits.sort_by_key(|(r, _)| r.start);
+    let mut out = String::with_capacity(text.len());
+    let mut done = 0;
+    for (range, value) in &edits {
+        let Some(kept) = text.get(done..range.start) else {
+            return Err(fail("overlapping values".into(), None));
+        };
+        out.push_str(kept);
+        out.push_str(value);
+        done = range.end;
+    }
+    out.push_str(text.get(done..).unwrap_or_default());
+    match DiagnoserFile::from_ron(&out, path) {
+        Ok(got) if got == expected => Ok(out),
+        Ok(_) => Err(fail("the rewritten file reads differently".into(), None)),
+        Err(p) => Err(fail(
+            format!("the rewritten file does not parse ({})", p.message),
+            None,
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests;

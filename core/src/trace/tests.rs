@@ -122,3 +122,79 @@ fn errors_have_line_and_column() {
         "t.csv:1:1: error[V0301]: empty trace: expected a header `time_ms,<signals>`",
     );
 }
+
+#[test]
+fn time_that_goes_backwards_or_repeats_is_an_error_at_its_cell() {
+    // Rows at 10, 20, 30 ms on lines 2, 3, 4.
+    let good = trace_text(3);
+    assert_eq!(parse(&good, Path::new("t.csv"), &plant()).unwrap().len(), 3);
+    check_error(
+        &good.replacen("\n30,", "\n5,", 1),
+        "t.csv:4:1: error[V0331]: time 5 ms goes backwards from 20 ms on line 3: the time of a trace must increase",
+    );
+    check_error(
+        &good.replacen("\n30,", "\n20,", 1),
+        "t.csv:4:1: error[V0331]: time 20 ms repeats 20 ms on line 3: the time of a trace must increase",
+    );
+    // Blank lines do not count as rows, but lines are the file's.
+    check_error(
+        &good.replacen("\n20,", "\n\n\n10,", 1),
+        "t.csv:5:1: error[V0331]: time 10 ms repeats 10 ms on line 2: the time of a trace must increase",
+    );
+    // The time column anywhere: its own column is reported.
+    let p = plant();
+    let names: Vec<&str> = p
+        .inputs
+        .iter()
+        .chain(&p.outputs)
+        .map(|s| s.id.as_str())
+        .collect();
+    let zeros = vec!["0"; names.len()].join(",");
+    let text = format!("{},time_ms\n{zeros},7\n{zeros},3\n", names.join(","));
+    check_error(
+        &text,
+        &format!(
+            "t.csv:3:{}: error[V0331]: time 3 ms goes backwards from 7 ms on line 2: the time of a trace must increase",
+            zeros.len() + 2
+        ),
+    );
+}
+
+#[test]
+fn a_repeated_column_is_an_error_at_its_header_cell() {
+    let good = trace_text(1);
+    // `C3` twice: the second one is at column 21 (where `C4` was).
+    check_error(
+        &good.replacen(",C4,", ",C3,", 1),
+        "t.csv:1:21: error[V0330]: column `C3` appears twice in the trace header (first at column 18)",
+    );
+    // A second time column, and a name repeated with spaces around it.
+    check_error(
+        &good.replacen(",A6", ",time_ms", 1),
+        "t.csv:1:61: error[V0330]: column `time_ms` appears twice in the trace header (first at column 1)",
+    );
+    check_error(
+        &good.replacen(",A0,", ", A1 ,", 1),
+        "t.csv:1:48: error[V0330]: column `A1` appears twice in the trace header (first at column 43)",
+    );
+}
+
+#[test]
+fn header_problems_are_reported_on_the_header_line() {
+    // Blank lines and a byte-order mark before the header: the line is the header's.
+    let good = trace_text(1);
+    check_error(
+        &format!("\n \n{}", good.replacen(",C3,", ",X3,", 1)),
+        "t.csv:3:18: error[V0302]: unknown signal `X3` in trace header",
+    );
+    check_error(
+        &format!("\n\n{}", good.replacen(",C1,", ",", 1)),
+        "t.csv:3:1: error[V0304]: trace has no column for signal `C1`",
+    );
+    check_error(
+        "\n\u{feff}C0,C1\n",
+        "t.csv:2:1: error[V0302]: unknown signal `\u{feff}C0` in trace header",
+    );
+    let bom = format!("\u{feff}{good}");
+    assert_eq!(parse(&bom, Path::new("t.csv"), &plant()).unwrap().len(), 1);
+}

@@ -1,0 +1,76 @@
+use super::*;
+
+fn station_text() -> String {
+    std::fs::read_to_string(crate::test_support::station_dir().join("layout.ron")).unwrap()
+}
+
+/// `line:col` just after the first occurrence of `needle` in `text`.
+fn after(text: &str, needle: &str) -> String {
+    let start = text.find(needle).unwrap() + needle.len();
+    let line = text[..start].matches('\n').count() + 1;
+    let from = text[..start].rfind('\n').map_or(0, |n| n + 1);
+    format!("{line}:{}", text[from..start].chars().count() + 1)
+}
+
+fn problems(text: &str) -> Vec<String> {
+    match Layout::from_ron(text, Path::new("layout.ron")) {
+        Ok(_) => Vec::new(),
+        Err(p) => p
+            .iter()
+            .map(|p| p.to_string().trim_start_matches("layout.ron:").to_string())
+            .collect(),
+    }
+}
+
+#[test]
+fn the_station_layout_passes() {
+    assert_eq!(problems(&station_text()), Vec::<String>::new());
+}
+
+#[test]
+fn a_zero_or_absurd_period_or_step_is_reported_at_its_value() {
+    let text = station_text()
+        .replacen("period_ms: 8000", "period_ms: 0", 1)
+        .replacen("jitter_ms: 1000", "jitter_ms: 99999999999", 1)
+        .replacen("step_ms: 1,", "step_ms: 0,", 1);
+    assert_eq!(
+        problems(&text),
+        [
+            format!(
+                "{}: error[V0301]: step_ms is 0 ms: the simulation step is from 1 to 1000 ms",
+                after(&text, "step_ms: ")
+            ),
+            format!(
+                "{}: error[V0301]: period_ms is 0 ms: an arrival period is from 1 ms to 604800000 ms",
+                after(&text, "period_ms: ")
+            ),
+            format!(
+                "{}: error[V0301]: jitter_ms is 99999999999 ms: at most 604800000 ms",
+                after(&text, "jitter_ms: ")
+            ),
+        ]
+    );
+    let text = station_text().replacen("step_ms: 1,", "step_ms: 60000,", 1);
+    assert_eq!(
+        problems(&text),
+        [format!(
+            "{}: error[V0301]: step_ms is 60000 ms: the simulation step is from 1 to 1000 ms",
+            after(&text, "step_ms: ")
+        )]
+    );
+}
+
+#[test]
+fn bad_box_dimensions_are_reported_at_the_box() {
+    let text = station_text();
+    let large = text.find("large:").unwrap();
+    let (head, tail) = text.split_at(large);
+    let text = format!("{head}{}", tail.replacen("height_mm: ", "height_mm: -", 1));
+    assert_eq!(
+        problems(&text),
+        [format!(
+            "{}: error[V0301]: large box dimensions must be positive",
+            after(&text, "large: ")
+        )]
+    );
+}

@@ -1,0 +1,85 @@
+use super::*;
+
+fn station_text() -> String {
+    std::fs::read_to_string(crate::test_support::station_dir().join("plant.ron")).unwrap()
+}
+
+/// The problems of a plant text, rendered.
+fn problems(text: &str) -> Vec<String> {
+    match Plant::from_ron(text, Path::new("plant.ron")) {
+        Ok(p) => panic!("expected problems, loaded {} signals", p.inputs.len()),
+        Err(problems) => problems.iter().map(ToString::to_string).collect(),
+    }
+}
+
+#[test]
+fn the_station_loads() {
+    let p = Plant::from_ron(&station_text(), Path::new("plant.ron")).unwrap();
+    assert_eq!((p.inputs.len(), p.outputs.len()), (11, 7));
+}
+
+#[test]
+fn a_duplicate_id_is_reported_where_the_duplicate_is_written() {
+    // The last signal of the station copied after it, behind a comment that quotes it.
+    let text = station_text();
+    let (n, a6) = text
+        .lines()
+        .enumerate()
+        .find(|(_, l)| l.contains("id: \"A6\""))
+        .unwrap();
+    let column = a6.find("\"A6\"").unwrap() + 1;
+    let text = text.replacen(
+        &format!("{a6}\n"),
+        &format!("{a6}\n        // A6 again: {a6}\n{a6}\n"),
+        1,
+    );
+    assert_eq!(
+        problems(&text),
+        [format!(
+            "plant.ron:{}:{column}: error[V0011]: signal `A6` is declared twice (first on line {})",
+            n + 3,
+            n + 1
+        )]
+    );
+}
+
+#[test]
+fn duplicates_behind_comments_strings_and_line_breaks() {
+    // Fake `id:` in a comment and in a description must not shift the count; the
+    // third `C1` is reported at its own place too, each against the first.
+    let text = r#"Plant(
+    name: "p",
+    signals: [
+        (id: "C0", kind: Sensor, description: "id: \"C1\""),
+        // (id: "C1", kind: Sensor, description: "commented out"),
+        (id: "C1", kind: Sensor, description: "first"),
+        /* (id: "C0", kind: Sensor), */
+        (
+            kind: Sensor,
+            description: "second",
+            id:
+                "C1",
+        ),
+        (description: "third", kind: Actuator, id: "C1"),
+        (id: "C 2", kind: Sensor, description: "bad name"),
+    ],
+)
+"#;
+    assert_eq!(
+        problems(text),
+        [
+            "plant.ron:12:17: error[V0011]: signal `C1` is declared twice (first on line 6)",
+            "plant.ron:14:52: error[V0011]: signal `C1` is declared twice (first on line 6)",
+            "plant.ron:15:14: error[V0010]: signal id `C 2` must be letters, digits and `_`",
+        ]
+    );
+}
+
+#[test]
+fn a_sensor_and_an_actuator_with_one_id_are_a_duplicate() {
+    let text = "Plant(name: \"p\", signals: [(id: \"X\", kind: Sensor, description: \"\"), (id: \"X\", kind: Actuator, description: \"\")])";
+    assert_eq!(
+        problems(text),
+        ["plant.ron:1:75: error[V0011]: signal `X` is declared twice (first on line 1)"]
+    );
+}
