@@ -89,6 +89,10 @@ pub(crate) struct BenchArgs {
     /// Keep timing edges until this many seconds have passed (at least `--edges`).
     #[arg(long, default_value_t = 0)]
     pub(crate) seconds: u64,
+    /// Run the peers (pymodbus plant, PLC, probe) at real-time priority 40 when
+    /// permitted: they stand for devices of their own that the load must not starve.
+    #[arg(long)]
+    pub(crate) rt_peers: bool,
 }
 
 /// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
@@ -101,6 +105,7 @@ pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result
             seconds: args.seconds,
             rt_priority: args.rt_priority,
             load: args.load,
+            rt_peers: args.rt_peers,
         },
     )?;
     if args.json {
@@ -116,6 +121,7 @@ pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result
                 |p| format!("at real-time priority {p} (if granted, see the log)")
             )
         );
+        println!("  peers                 {} priority", f.peers);
         println!("  cycle rate            {:.2} Hz", f.rate_hz);
         println!(
             "  period jitter (ms)    p50 {:.3}  p99 {:.3}  max {:.3}",

@@ -50,6 +50,8 @@ pub struct Figures {
     pub stale_holds: usize,
     /// The cycle thread's real-time priority, when one was asked for.
     pub rt_priority: Option<u8>,
+    /// The peers' priority.
+    pub peers: String,
 }
 
 /// What a run does.
@@ -63,6 +65,24 @@ pub struct Options {
     pub rt_priority: Option<u8>,
     /// Busy background processes.
     pub load: usize,
+    /// Run the peers (the pymodbus plant, the PLC and the probe) at real-time priority
+    /// 40 when the process may: they stand for devices of their own that the
+    /// background load must not starve, so that what is measured is the gateway (the
+    /// probe then sleeps 0.5 ms between its reads instead of polling in a busy loop).
+    pub rt_peers: bool,
+}
+
+/// Gives every thread of process `pid` real-time priority 40 through `chrt`
+/// (util-linux); returns why not when refused.
+fn raise_peer_priority(pid: u32) -> Option<String> {
+    match Command::new("chrt")
+        .args(["-a", "-f", "-p", "40", &pid.to_string()])
+        .output()
+    {
+        Ok(o) if o.status.success() => None,
+        Ok(o) => Some(String::from_utf8_lossy(&o.stderr).trim().to_string()),
+        Err(e) => Some(format!("chrt: {e}")),
+    }
 }
 
 /// Busy processes, killed when dropped.
@@ -120,6 +140,7 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         seconds,
         rt_priority: cycle_priority,
         load,
+        rt_peers,
     } = opts;
     let _load = Load::start(load)?;
     let root = repo_root();
@@ -136,6 +157,14 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         .stdout(Stdio::piped())
         .spawn()
         .context("cannot start the pymodbus plant")?;
+    let peers = if rt_peers {
+        raise_peer_priority(plant.id()).map_or_else(
+            || "real-time 40".to_string(),
+            |why| format!("normal (real-time refused: {why})"),
+        )
+    } else {
+        "normal".to_string()
+    };
     let mut plant_in = plant.stdin.take().context("plant stdin")?;
     let mut plant_out = BufReader::new(plant.stdout.take().context("plant stdout")?);
     let mut line = String::new();
@@ -237,7 +266,19 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         .recv_timeout(Duration::from_secs(10))
         .context("the gateway did not start")?;
 
-    // The PLC (A1 ON, every 5 ms) and the probe on a second runtime.
+    // The PLC (A1 ON, every 5 ms) and the probe on a second runtime (this thread).
+    if rt_peers {
+        let p = super::cycle::Priority {
+            value: 40,
+            explicit: true,
+        };
+        super::cycle::raise_priority(p, "bench PLC and probe");
+    }
+    let probe_pause = if rt_peers {
+        Duration::from_micros(500)
+    } else {
+        Duration::ZERO
+    };
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;
@@ -273,6 +314,9 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         let deadline = Instant::now() + Duration::from_secs(10);
         while !read_a1().await? {
             anyhow::ensure!(Instant::now() < deadline, "A1 never reached the plant");
+            if !probe_pause.is_zero() {
+                tokio::time::sleep(probe_pause).await;
+            }
         }
         measuring.store(true, std::sync::atomic::Ordering::Release);
         let started = Instant::now();
@@ -289,6 +333,9 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
             loop {
                 if read_a1().await? != rising {
                     break;
+                }
+                if !probe_pause.is_zero() {
+                    tokio::time::sleep(probe_pause).await;
                 }
                 anyhow::ensure!(
                     Instant::now() < deadline,
@@ -343,5 +390,6 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         false_alarms,
         stale_holds: stale.load(std::sync::atomic::Ordering::Relaxed),
         rt_priority: cycle_priority,
+        peers,
     })
 }
