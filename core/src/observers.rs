@@ -115,17 +115,10 @@ impl Observers {
 
     /// Loads `observers.ron` from disk; a missing file means no observers.
     pub fn load(path: &Path, symbols: &mut Symbols) -> (Self, Vec<Problem>) {
-        match std::fs::read_to_string(path) {
-            Ok(text) => Self::from_ron(&text, path, symbols),
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => (Self::empty(), Vec::new()),
-            Err(e) => (
-                Self::empty(),
-                vec![Problem::error(
-                    "V0002",
-                    format!("cannot read {}: {e}", path.display()),
-                    None,
-                )],
-            ),
+        match crate::diag::read_text_optional(path) {
+            Ok(Some(text)) => Self::from_ron(&text, path, symbols),
+            Ok(None) => (Self::empty(), Vec::new()),
+            Err(p) => (Self::empty(), vec![Problem::error(p.code, p.message, None)]),
         }
     }
 

@@ -51,13 +51,7 @@ pub struct DiagBundle {
 pub fn load(dir: &Path) -> Result<(DiagBundle, Vec<Problem>), Vec<Problem>> {
     let plant = Plant::load(&dir.join("plant.ron"))?;
     let path = dir.join("diagnosers.ron");
-    let text = std::fs::read_to_string(&path).map_err(|e| {
-        vec![Problem::error(
-            "V0002",
-            format!("cannot read {}: {e}", path.display()),
-            None,
-        )]
-    })?;
+    let text = crate::diag::read_text(&path).map_err(|p| vec![p])?;
     from_text(dir, plant, &text, &path)
 }
 

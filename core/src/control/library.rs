@@ -219,15 +219,7 @@ pub struct ErrorLibrary {
 impl ErrorLibrary {
     /// Loads `errors.ron` and its reference program, applies and compiles every patch.
     pub fn load(path: &Path, plant: &Plant) -> Result<Self, Vec<Problem>> {
-        let read = |p: &Path| {
-            std::fs::read_to_string(p).map_err(|e| {
-                vec![Problem::error(
-                    "V0002",
-                    format!("cannot read {}: {e}", p.display()),
-                    None,
-                )]
-            })
-        };
+        let read = |p: &Path| crate::diag::read_text(p).map_err(|problem| vec![problem]);
         let text = read(path)?;
         let file: ErrorsFile = ron::from_str(&text).map_err(|e| vec![ron_problem(path, &e)])?;
         let reference_file = path

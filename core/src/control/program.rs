@@ -617,13 +617,7 @@ impl CompiledProgram {
 
     /// Loads and compiles a program file.
     pub fn load(path: &Path, plant: &Plant) -> Result<Self, Vec<Problem>> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            vec![Problem::error(
-                "V0002",
-                format!("cannot read {}: {e}", path.display()),
-                None,
-            )]
-        })?;
+        let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
         let program = Program::from_ron(&text, path)?;
         Self::new(&program, plant, &Origin::new(path, &text))
     }

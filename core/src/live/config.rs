@@ -353,13 +353,8 @@ impl GatewayConfig {
 
     /// Loads a configuration file.
     pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            vec![Problem::error(
-                "V0619",
-                format!("cannot read {}: {e}", path.display()),
-                None,
-            )]
-        })?;
+        let text = crate::diag::read_text(path)
+            .map_err(|p| vec![Problem::error("V0619", p.message, None)])?;
         Self::from_ron(&text, path)
     }
 

@@ -172,13 +172,8 @@ impl IoMap {
     /// Loads and validates a map file against `plant`. Warnings come back with the map;
     /// errors alone when the map cannot be used.
     pub fn load(path: &Path, plant: &Plant) -> Result<(Self, Vec<Problem>), Vec<Problem>> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            vec![Problem::error(
-                "V0601",
-                format!("cannot read {}: {e}", path.display()),
-                None,
-            )]
-        })?;
+        let text = crate::diag::read_text(path)
+            .map_err(|p| vec![Problem::error("V0601", p.message, None)])?;
         Self::from_ron(&text, path, plant)
     }
 

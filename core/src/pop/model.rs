@@ -250,13 +250,7 @@ impl DiagnoserFile {
 
     /// Reads and parses a file.
     pub fn load(path: &Path) -> Result<Self, Problem> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            Problem::error(
-                "V0002",
-                format!("cannot read {}: {e}", path.display()),
-                None,
-            )
-        })?;
+        let text = crate::diag::read_text(path)?;
         Self::from_ron(&text, path)
     }
 
