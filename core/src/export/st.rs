@@ -33,17 +33,12 @@
 use crate::bundle::PlantBundle;
 use crate::expr::{self, Dnf};
 use crate::filter::Filter;
-use crate::frame::Frame;
 use crate::observers::Rule;
 use crate::symbols::{Literal, Space, Symbols, Var};
 use crate::tasks::TaskSet;
 use crate::tasks::spec::{Slowdown, Unexpected};
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
-
-/// Largest number of context variables for which [`fallback_cover`] enumerates the
-/// fallback.
-pub const FALLBACK_SUPPORT_LIMIT: usize = 20;
 
 /// Largest output component (outputs linked by terms on several of them) whose search
 /// is exported: its candidates are unrolled, 2^n of them.
@@ -593,7 +588,7 @@ fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(
         for (c, &d) in order.iter().enumerate() {
             let mut ok = Vec::new();
             for j in 0..m {
-                let (n, x) = (name(comp[j]), value(j, d));
+                let n = name(comp[j]);
                 // x = 1 against F0, x = 0 against F1.
                 if d >> j & 1 == 1 {
                     ok.push(format!(
@@ -604,7 +599,6 @@ fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(
                         "NOT (F0_{n} AND FS_{n}) AND NOT (F1_{n} AND NOT FS_{n})"
                     ));
                 }
-                let _ = x;
             }
             for (i, t) in &multi {
                 let lits: Vec<String> = t
@@ -639,83 +633,6 @@ fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(
     }
     let _ = writeln!(b, "    END_IF;");
     Ok(())
-}
-
-/// Per output, the fallback's ON-set over the context `support` as a cover of cubes, or
-/// `None` when the support is too large to enumerate.
-pub fn fallback_cover(
-    filter: &Filter,
-    symbols: &Symbols,
-    support: &[Var],
-    n_out: usize,
-) -> Option<Vec<Dnf>> {
-    let n = support.len();
-    if n > FALLBACK_SUPPORT_LIMIT {
-        return None;
-    }
-    let mut on: Vec<Vec<bool>> = vec![vec![false; 1 << n]; n_out];
-    let mut frame = Frame::new(symbols.sizes());
-    for m in 0..(1usize << n) {
-        for (j, v) in support.iter().enumerate() {
-            let table = if v.prev {
-                &mut frame.prev
-            } else {
-                &mut frame.now
-            };
-            table[v.space as usize].set(v.index as usize, (m >> j) & 1 == 1);
-        }
-        if let Ok(bits) = filter.fallback(&frame) {
-            for (k, set) in on.iter_mut().enumerate() {
-                set[m] = bits.get(k);
-            }
-        }
-    }
-    Some(on.iter().map(|set| cover(set, n, support)).collect())
-}
-
-/// Greedy prime-implicant cover of an ON-set over `n` variables.
-fn cover(on: &[bool], n: usize, support: &[Var]) -> Dnf {
-    let mut covered = vec![false; on.len()];
-    let mut cubes: Dnf = Vec::new();
-    for m in 0..on.len() {
-        if !on[m] || covered[m] {
-            continue;
-        }
-        // A cube: `care` bits fixed to the bits of `m`.
-        let mut care: usize = (1 << n) - 1;
-        for j in 0..n {
-            let trial = care & !(1 << j);
-            if cube_members(m, trial, n).all(|x| on[x]) {
-                care = trial;
-            }
-        }
-        for x in cube_members(m, care, n) {
-            covered[x] = true;
-        }
-        let term = (0..n)
-            .filter(|j| care >> j & 1 == 1)
-            .map(|j| Literal {
-                var: support[j],
-                positive: m >> j & 1 == 1,
-            })
-            .collect();
-        cubes.push(term);
-    }
-    cubes
-}
-
-fn cube_members(m: usize, care: usize, n: usize) -> impl Iterator<Item = usize> {
-    let free: Vec<usize> = (0..n).filter(|j| care >> j & 1 == 0).collect();
-    let base = m & care;
-    (0..(1usize << free.len())).map(move |s| {
-        let mut x = base;
-        for (b, j) in free.iter().enumerate() {
-            if s >> b & 1 == 1 {
-                x |= 1 << j;
-            }
-        }
-        x
-    })
 }
 
 fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
