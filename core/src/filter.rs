@@ -171,17 +171,7 @@ impl Filter {
     /// reads the output applied in the previous cycle). The fallback's preference, and
     /// the outputs when no fallback exists.
     pub fn safe_vector(&self, frame: &Frame) -> Bits {
-        let mut out = Bits::zeros(self.n_outputs);
-        let prev = frame.prev(Space::Output);
-        for (k, s) in self.safe.iter().enumerate() {
-            let v = match s {
-                SafeValue::Zero => false,
-                SafeValue::One => true,
-                SafeValue::Hold => prev.get(k),
-            };
-            out.set(k, v);
-        }
-        out
+        safe_vector(&self.safe, frame)
     }
 
     /// Number of constraints.
@@ -373,6 +363,22 @@ impl Filter {
         ids.dedup();
         SpecError { constraints: ids }
     }
+}
+
+/// Each output at its safe value in the context of `frame` (`Hold` reads the output
+/// applied in the previous cycle).
+pub fn safe_vector(safe: &[SafeValue], frame: &Frame) -> Bits {
+    let mut out = Bits::zeros(safe.len());
+    let prev = frame.prev(Space::Output);
+    for (k, s) in safe.iter().enumerate() {
+        let v = match s {
+            SafeValue::Zero => false,
+            SafeValue::One => true,
+            SafeValue::Hold => prev.get(k),
+        };
+        out.set(k, v);
+    }
+    out
 }
 
 /// Incremental evaluation state for one [`Filter`]: the number of false context literals

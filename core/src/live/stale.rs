@@ -202,9 +202,7 @@ impl StaleGuard {
     /// Every output at its safe value in the frame's context (`Hold` keeps the previous
     /// output): the outputs when no fallback exists.
     pub fn safe_vector(&self, frame: &Frame) -> Bits {
-        Filter::new(&ConstraintSet::default(), self.n_outputs)
-            .with_safe_values(self.safe.clone())
-            .safe_vector(frame)
+        crate::filter::safe_vector(&self.safe, frame)
     }
 
     /// Checks the frame's outputs at t against the quantified constraints. With no stale
