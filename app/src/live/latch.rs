@@ -89,9 +89,7 @@ impl LatchStore {
                 loop {
                     let job = {
                         let (lock, cv) = &*m;
-                        let mut g = lock
-                            .lock()
-                            .unwrap_or_else(std::sync::PoisonError::into_inner);
+                        let mut g = super::cycle::lock(lock);
                         while g.state.is_none() && g.events.is_empty() && !g.stop {
                             g = cv
                                 .wait(g)
@@ -127,9 +125,7 @@ impl LatchStore {
     /// Saves the latch (`trip` while tripped), then releases `events`.
     pub(crate) fn save(&self, trip: Option<Trip>, events: Vec<serde_json::Value>) {
         let (lock, cv) = &*self.mailbox;
-        let mut g = lock
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mut g = super::cycle::lock(lock);
         g.state = Some(LatchFile {
             tripped: trip.is_some(),
             trip,
@@ -144,9 +140,7 @@ impl Drop for LatchStore {
     fn drop(&mut self) {
         {
             let (lock, cv) = &*self.mailbox;
-            let mut g = lock
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            let mut g = super::cycle::lock(lock);
             g.stop = true;
             cv.notify_one();
         }

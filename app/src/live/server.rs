@@ -55,11 +55,7 @@ pub(crate) struct Shared {
 /// A handle on the shared image.
 pub(crate) type SharedImage = Arc<Mutex<Shared>>;
 
-fn lock(shared: &SharedImage) -> std::sync::MutexGuard<'_, Shared> {
-    shared
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner)
-}
+use super::cycle::lock;
 
 /// Counters of what the server refused (for the link-state panel and the tests).
 #[derive(Debug, Default)]
