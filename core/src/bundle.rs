@@ -25,6 +25,10 @@ pub struct PlantBundle {
     pub invariants: ConstraintSet,
     /// Property (6) conflicts shown unreachable by an invariant.
     pub discharged: Vec<crate::constraints::Discharged>,
+    /// What the load's check of a fallback in every reachable context proved (per
+    /// output component, with support sizes); `None` when it found a context without
+    /// any (a `V0107` among the problems).
+    pub fallback: Option<crate::filter::FallbackReport>,
     /// Timed task specifications (`tasks.ron`), when the plant has them; their outputs
     /// (`<task>:running`, `:interrupted`, `:infeasible`) are auxiliary variables.
     pub tasks: Option<crate::tasks::TaskSet>,
@@ -118,16 +122,18 @@ impl PlantBundle {
         let (mut p, discharged) = constraints.check_property_6(&symbols, &invariants);
         problems.append(&mut p);
         let filter = crate::filter::Filter::for_plant(&constraints, &plant);
-        if let Err((err, witness)) =
-            crate::filter::check_fallback_exists(&filter, &symbols, &invariants)
-        {
-            problems.push(conflict_problem(
-                &constraints,
-                &constraints_path,
-                &err,
-                &witness,
-            ));
-        }
+        let fallback = match crate::filter::fallback_report(&filter, &symbols, &invariants) {
+            Ok(report) => Some(report),
+            Err((err, witness)) => {
+                problems.push(conflict_problem(
+                    &constraints,
+                    &constraints_path,
+                    &err,
+                    &witness,
+                ));
+                None
+            }
+        };
         let bundle = Self {
             dir: dir.to_path_buf(),
             plant,
@@ -136,6 +142,7 @@ impl PlantBundle {
             constraints,
             invariants,
             discharged,
+            fallback,
             tasks: None,
         };
         // Said before the other problems of the constraints: it matters most.

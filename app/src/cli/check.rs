@@ -81,12 +81,7 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
             .collect(),
         property6_discharged: &bundle.discharged,
         unprotected: bundle.unprotected().is_some(),
-        fallback: vigie_core::filter::fallback_report(
-            &vigie_core::filter::Filter::for_plant(&bundle.constraints, &bundle.plant),
-            &bundle.symbols,
-            &bundle.invariants,
-        )
-        .ok(),
+        fallback: bundle.fallback.clone(),
         problems: &problems,
     };
     let mut out = std::io::stdout().lock();

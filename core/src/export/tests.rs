@@ -324,6 +324,7 @@ fn st_conforms_to_the_engine_on_a_large_plant_with_safe_values() {
         constraints,
         invariants: crate::constraints::ConstraintSet::default(),
         discharged: Vec::new(),
+        fallback: None,
         tasks: None,
     };
     let filter = Filter::for_plant(&bundle.constraints, &bundle.plant);
