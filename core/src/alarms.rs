@@ -24,6 +24,8 @@ pub enum AlarmKind {
     Specification,
     /// A dangerous state of the plant (emulator hazard).
     Hazard,
+    /// A sensor's edge the plant's physics does not allow was held (a suspect sensor).
+    Plausibility,
 }
 
 /// ISA-18.2 alarm state.

@@ -32,6 +32,8 @@ pub struct PlantBundle {
     /// Timed task specifications (`tasks.ron`), when the plant has them; their outputs
     /// (`<task>:running`, `:interrupted`, `:infeasible`) are auxiliary variables.
     pub tasks: Option<crate::tasks::TaskSet>,
+    /// The sensors' timed plausibility rules, compiled (`plausible` in `plant.ron`).
+    pub plausibility: crate::plausibility::Plausibility,
 }
 
 /// The files of a plant folder its loaders may read (besides `programs/*.ron`), each
@@ -97,7 +99,7 @@ impl PlantBundle {
     /// interval variables, estimates, task monitor outputs).
     pub fn from_plant(dir: &Path, plant: Plant, aux: &[String]) -> (Self, Vec<Problem>) {
         let mut symbols = plant.symbols();
-        for name in aux {
+        for name in crate::plausibility::suspect_names(&plant).iter().chain(aux) {
             let _ = symbols.declare(name, crate::symbols::Space::Aux);
         }
         let mut problems = Vec::new();
@@ -110,17 +112,35 @@ impl PlantBundle {
         let constraints_path = dir.join("constraints.txt");
         let exists = std::fs::symlink_metadata(&constraints_path).is_ok();
         let constraints_at = problems.len();
-        let (constraints, mut p) = if exists {
+        let (mut constraints, mut p) = if exists {
             ConstraintSet::load(&constraints_path, &symbols)
         } else {
             (ConstraintSet::default(), Vec::new())
         };
         problems.append(&mut p);
+        // A suspect sensor (an implausible edge held) is read as possibly either value.
+        problems.extend(crate::plausibility::suspect_constraints(
+            &mut constraints,
+            &plant,
+            &symbols,
+        ));
         let (invariants, mut p) =
             ConstraintSet::load_invariants(&dir.join("invariants.txt"), &symbols);
         problems.append(&mut p);
         let (mut p, discharged) = constraints.check_property_6(&symbols, &invariants);
         problems.append(&mut p);
+        let plausibility = match crate::plausibility::Plausibility::new(&plant, &symbols) {
+            Ok(p) => p,
+            Err(mut p) => {
+                for q in &mut p {
+                    q.location.get_or_insert_with(|| {
+                        crate::diag::Location::new(&dir.join("plant.ron"), 1, 1)
+                    });
+                }
+                problems.append(&mut p);
+                crate::plausibility::Plausibility::default()
+            }
+        };
         let filter = crate::filter::Filter::for_plant(&constraints, &plant);
         let fallback = match crate::filter::fallback_report(&filter, &symbols, &invariants) {
             Ok(report) => Some(report),
@@ -144,6 +164,7 @@ impl PlantBundle {
             discharged,
             fallback,
             tasks: None,
+            plausibility,
         };
         // Said before the other problems of the constraints: it matters most.
         if let Some(warning) = bundle.unprotected() {

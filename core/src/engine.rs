@@ -167,6 +167,14 @@ pub struct Engine {
     pub symbols: Symbols,
     /// Observers and their state.
     pub observers: Observers,
+    /// The sensors' timed plausibility (the first stage of a cycle).
+    pub plausibility: crate::plausibility::Plausibility,
+    /// The plausibility stage runs (on by default).
+    plausibility_on: bool,
+    /// Sensors the diagnosers estimate: (input, flag auxiliary, estimate auxiliary).
+    estimates: Vec<(usize, usize, usize)>,
+    /// Per entry of `estimates`: read from the estimate in the previous cycle.
+    estimated: Vec<bool>,
     filter: Filter,
     filter_state: FilterState,
     notation: Vec<String>,
@@ -210,6 +218,10 @@ impl Engine {
         Self {
             symbols: bundle.symbols.clone(),
             observers: bundle.observers.clone(),
+            plausibility: bundle.plausibility.clone(),
+            plausibility_on: true,
+            estimates: Vec::new(),
+            estimated: Vec::new(),
             filter_state: Filter::new(&bundle.constraints, n_out).new_state(),
             filter: Filter::for_plant(&bundle.constraints, &bundle.plant),
             notation: bundle
@@ -356,6 +368,11 @@ impl Engine {
         if attach {
             self.frame.prev_mut(Space::Input).copy_from(inputs);
         }
+        if self.plausibility_on {
+            self.plausibility
+                .step(now, &mut self.frame, attach || self.cycles == 1);
+        }
+        self.read_estimates();
         self.observers.update(&mut self.frame);
         if attach {
             let observed = self.frame.now(Space::Observer).clone();
@@ -407,7 +424,7 @@ impl Engine {
         }
 
         let held = self.holds_outputs();
-        after_filter(now, &mut self.frame, held);
+        self.with_raw_inputs(|frame| after_filter(now, frame, held));
         let tripped = self.latched;
         let frame = &self.frame;
         let commanded = &self.commanded;
@@ -444,10 +461,79 @@ impl Engine {
     /// auxiliaries it wrote, as [`Engine::cycle_with`] records them.
     pub fn after_filter(&mut self, stage: &mut dyn FnMut(Millis, &mut Frame, bool)) {
         let held = self.holds_outputs();
-        stage(self.now, &mut self.frame, held);
+        let now = self.now;
+        self.with_raw_inputs(|frame| stage(now, frame, held));
         if let Some(r) = self.history.last_mut() {
             r.aux.copy_from(self.frame.now(Space::Aux));
         }
+    }
+
+    /// The sensors the diagnosers estimate, as [`crate::sim::diagnosis::estimate_map`]
+    /// gives them: while a sensor's flag is set, the observers, the control program and
+    /// the constraints read its estimate (the cooperation, seed 004 section 4).
+    pub fn set_estimates(&mut self, estimates: Vec<(usize, usize, usize)>) {
+        self.estimated = vec![false; estimates.len()];
+        self.estimates = estimates;
+    }
+
+    /// Runs the sensors' plausibility stage or not (a trace or a test peer that moves
+    /// the plant faster than its physics: every edge is then taken as read). On by
+    /// default; the rules are `plausible` in `plant.ron`.
+    pub fn set_plausibility(&mut self, on: bool) {
+        self.plausibility_on = on;
+    }
+
+    /// True when the plausibility stage runs.
+    pub fn plausibility_on(&self) -> bool {
+        self.plausibility_on
+    }
+
+    /// The sensors the diagnosers estimate (see [`Engine::set_estimates`]).
+    pub fn estimates(&self) -> &[(usize, usize, usize)] {
+        &self.estimates
+    }
+
+    /// Replaces each flagged sensor by its estimate (the flags and estimates the
+    /// diagnosers wrote at the end of the previous cycle). Switching between the
+    /// reading and the estimate is not an edge: the value at t-1 takes the value at t
+    /// in that cycle, so an observer never counts a box the switch made up.
+    fn read_estimates(&mut self) {
+        for (k, &(input, def, est)) in self.estimates.iter().enumerate() {
+            let aux = self.frame.now(Space::Aux);
+            if def >= aux.len() || est >= aux.len() || input >= self.frame.now(Space::Input).len() {
+                continue;
+            }
+            let flagged = aux.get(def);
+            if flagged {
+                let v = aux.get(est);
+                self.frame.now_mut(Space::Input).set(input, v);
+            }
+            if flagged != self.estimated[k] {
+                let v = self.frame.now(Space::Input).get(input);
+                self.frame.prev_mut(Space::Input).set(input, v);
+                self.estimated[k] = flagged;
+            }
+        }
+    }
+
+    /// Runs `f` on the frame with the inputs as read (at t and t-1), before the
+    /// plausibility stage held any edge: the diagnosers diagnose the sensors from what
+    /// they really read. The held values are put back afterwards.
+    fn with_raw_inputs(&mut self, f: impl FnOnce(&mut Frame)) {
+        if self.plausibility.is_empty() || !self.plausibility_on {
+            f(&mut self.frame);
+            return;
+        }
+        let held = (
+            self.frame.now(Space::Input).clone(),
+            self.frame.prev(Space::Input).clone(),
+        );
+        let (raw, raw_prev) = self.plausibility.raw();
+        self.frame.now_mut(Space::Input).copy_from(raw);
+        self.frame.prev_mut(Space::Input).copy_from(raw_prev);
+        f(&mut self.frame);
+        self.frame.now_mut(Space::Input).copy_from(&held.0);
+        self.frame.prev_mut(Space::Input).copy_from(&held.1);
     }
 
     fn apply_fallback(&mut self) {

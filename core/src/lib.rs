@@ -4,6 +4,7 @@
 //! - [`plant`]: the I/O model (sensors C0..C10, actuators A0..A6 for the sorting station).
 //! - [`expr`], [`symbols`]: the logic notation of the paper and its name table.
 //! - [`constraints`]: safety constraints, classification and static checks.
+//! - [`plausibility`]: timed plausibility of the sensors' edges (the first stage).
 //! - [`observers`]: sequential rebuilders of unobservable state (P36, P67, 2P).
 //! - [`filter`]: constraint evaluation and the fallback with priority to zero.
 //! - [`engine`]: one PLC cycle, one function; [`history`]: the recorder.
@@ -32,6 +33,7 @@ pub mod history;
 pub mod live;
 pub mod observers;
 pub mod plant;
+pub mod plausibility;
 pub mod pop;
 pub mod sim;
 pub mod symbols;

@@ -82,6 +82,44 @@ pub struct Signal {
     /// The value before the first cycle (a cold start's previous values; 0 by default).
     #[serde(default)]
     pub initial: bool,
+    /// Sensors: when the plant's physics lets the reading change
+    /// ([`crate::plausibility`]); an edge outside it is held and the sensor is suspect.
+    #[serde(default)]
+    pub plausible: Option<PlausibleRule>,
+}
+
+/// The timed plausibility of a sensor's edges, from the plant's physics: a beam cannot
+/// fall sooner than the shortest item takes to cross it (`min_on_ms`), an axis cannot
+/// leave a position before its motion is ordered (`fall_when: "A4*"`).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlausibleRule {
+    /// A fall sooner than this after the last accepted rise is implausible, ms.
+    #[serde(default)]
+    pub min_on_ms: u64,
+    /// A rise sooner than this after the last accepted fall is implausible, ms.
+    #[serde(default)]
+    pub min_off_ms: u64,
+    /// A rise is plausible only when this holds (logic notation, over the inputs read
+    /// now and every value of the previous cycle: `A2* + A3*`).
+    #[serde(default)]
+    pub rise_when: Option<String>,
+    /// A fall is plausible only when this holds.
+    #[serde(default)]
+    pub fall_when: Option<String>,
+    /// A plausible rise is taken once the reading has stayed 1 this long, ms (a
+    /// shorter pulse is filtered).
+    #[serde(default)]
+    pub rise_confirm_ms: u64,
+    /// A plausible fall is taken once the reading has stayed 0 this long, ms (a beam
+    /// whose fall releases a motion: a shorter dropout is filtered).
+    #[serde(default)]
+    pub fall_confirm_ms: u64,
+    /// While the sensor is suspect, the constraints read it as possibly either value
+    /// (the held one and the one read) instead of the held value only. The load's
+    /// property (6) and fallback checks say where that leaves no safe output.
+    #[serde(default)]
+    pub both_values: bool,
 }
 
 impl Signal {
@@ -96,6 +134,7 @@ impl Signal {
             safe: SafeValue::Zero,
             off: None,
             initial: false,
+            plausible: None,
         }
     }
 
@@ -173,6 +212,13 @@ impl Plant {
                 problems.push(Problem::error(
                     "V0010",
                     format!("signal id `{}` must be letters, digits and `_`", s.id),
+                    id_at(i),
+                ));
+            }
+            if s.plausible.is_some() && s.kind != SignalKind::Sensor {
+                problems.push(Problem::error(
+                    "V0012",
+                    format!("`plausible` is for sensors; `{}` is an actuator", s.id),
                     id_at(i),
                 ));
             }

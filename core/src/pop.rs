@@ -19,6 +19,7 @@ pub mod coop;
 pub mod learn;
 pub mod model;
 pub mod runtime;
+pub mod transients;
 
 use crate::bundle::PlantBundle;
 use crate::diag::Problem;

@@ -122,6 +122,15 @@ pub struct Scenario {
     /// Run the diagnosers of `diagnosers.ron` (with the rewritten constraints).
     #[serde(default)]
     pub diagnosers: bool,
+    /// Run the sensors' plausibility stage (`plausible` in `plant.ron`); true by
+    /// default. A scenario that places boxes by hand faster than the physics may say
+    /// `plausibility: false`.
+    #[serde(default = "default_plausibility")]
+    pub plausibility: bool,
+}
+
+fn default_plausibility() -> bool {
+    true
 }
 
 impl Scenario {
@@ -342,6 +351,7 @@ impl Simulation {
             }
         };
         let mut sim = Self::new(bundle, program, scenario.seed, options)?;
+        sim.engine.set_plausibility(scenario.plausibility);
         if scenario.diagnosers {
             sim.enable_diagnosers()?;
         }
@@ -415,7 +425,9 @@ impl Simulation {
     pub fn enable_diagnosers(&mut self) -> Result<(), Vec<Problem>> {
         let db = diagnosis::load(&self.bundle.dir)?;
         let mode = self.engine.mode();
+        let plausibility = self.engine.plausibility_on();
         self.engine = Engine::new(&db.bundle, mode, self.options.history_cycles);
+        self.engine.set_plausibility(plausibility);
         // The auxiliaries moved: the task monitors are compiled again on the new table.
         self.tasks = match &db.bundle.tasks {
             Some(set) => Some(TaskMonitors {
@@ -425,6 +437,11 @@ impl Simulation {
             }),
             None => None,
         };
+        self.engine.set_estimates(diagnosis::estimate_map(
+            &db.compiled,
+            &db.bundle.plant,
+            &db.bundle.symbols,
+        ));
         self.diagnosers = Some(crate::pop::Diagnosers::new(db.compiled, &db.bundle.symbols));
         self.bundle = db.bundle;
         Ok(())
@@ -584,6 +601,7 @@ impl Simulation {
             }
         };
         self.diagnosis_events(now);
+        self.plausibility_events(now);
         let tripped = self.record_events(now);
         if let (Some(index), true) = (tripped, self.options.explain) {
             // The emulator is still at the start of the tripping cycle (the engine only
@@ -722,6 +740,21 @@ impl Simulation {
             self.alarms
                 .raise(now, &n.key, AlarmKind::Diagnosis, n.text.clone());
             self.log("diagnosis", n.text);
+        }
+    }
+
+    /// Sensors whose implausible edge was held this cycle (an alarm while suspect) or
+    /// that are plausible again (the alarm ends).
+    fn plausibility_events(&mut self, now: Millis) {
+        for n in self.engine.plausibility.take_notices() {
+            let key = format!("plausibility:{}", n.sensor);
+            if n.suspect {
+                self.alarms
+                    .raise(now, &key, AlarmKind::Plausibility, n.text.clone());
+            } else {
+                self.alarms.clear(now, &key);
+            }
+            self.log("plausibility", n.text);
         }
     }
 

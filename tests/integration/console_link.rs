@@ -70,7 +70,11 @@ fn console_follows_a_monitor_link_to_pymodbus() {
     let mut opts = ConsoleOptions::new(&repo().join("layouts/sorting-station"));
     // The paper's constraints as written: with the diagnosers they are shown rewritten
     // for the cooperation (CSs10 = C7 . /A4 . /def_P).
-    opts.link = Some(monitor_config(&dir, port, "diagnosers: false"));
+    opts.link = Some(monitor_config(
+        &dir,
+        port,
+        "diagnosers: false, plausibility: false",
+    ));
     opts.data_dir = None;
     let mut h = harness(opts);
 
@@ -148,7 +152,7 @@ fn gateway_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 10, \
          client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
          server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), \
-         diagnosers: false, state_dir: {:?})", // the table moves in milliseconds: a fault for its diagnoser
+         diagnosers: false, plausibility: false, state_dir: {:?})", // the table moves in milliseconds: a fault for its diagnoser, edges the physics does not allow
         station.display().to_string(),
         dir.0.join("state").display().to_string()
     );

@@ -360,9 +360,10 @@ fn gateway_round_trip_with_pymodbus() {
 }
 
 /// The tests of the filter move the turntable from C4 to C5 in a few milliseconds,
-/// which the table's diagnoser rightly takes for a fault (and may stop the plant for):
-/// they run without the diagnosers.
-const NO_DIAGNOSERS: &str = "diagnosers: false";
+/// which the table's diagnoser rightly takes for a fault (and may stop the plant for)
+/// and the plausibility stage for edges the physics does not allow (it holds them):
+/// they run without either.
+const NO_DIAGNOSERS: &str = "diagnosers: false, plausibility: false";
 
 #[test]
 fn gateway_enforces_the_hold_of_a4() {

@@ -9,3 +9,4 @@ mod export_st;
 mod filter_trace;
 mod fuzz_loaders;
 mod live;
+mod transients;

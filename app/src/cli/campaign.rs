@@ -14,6 +14,10 @@ pub(crate) enum Kind {
     /// Fault campaign of the diagnosers: every injectable fault over many seeds, and
     /// fault-free hours (`vigie campaign diagnoser`).
     Diagnoser,
+    /// Transient sensor faults (dropouts, pulses, flicker, pairs) and welded and dead
+    /// actuators, with the filter and the diagnosers on: hazards, wrong diagnoses and
+    /// recovery after the reset (`vigie campaign transients`).
+    Transients,
 }
 
 pub(crate) fn run(

@@ -187,6 +187,99 @@ pub(crate) fn campaign(
     })
 }
 
+/// `vigie campaign transients`: transient sensor faults, pairs, and welded and dead
+/// actuators at the highest sustained arrival rate (`vigie_core::pop::transients`).
+pub(crate) fn transients(
+    dir: &Path,
+    (first_seed, seeds): (u64, u64),
+    fault_free_hours: u64,
+    only: Option<&str>,
+    threads: Option<usize>,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    use vigie_core::pop::transients;
+    let config = transients::Config {
+        seeds,
+        first_seed,
+        fault_free_hours,
+        only: only.map(str::to_string),
+        threads: threads
+            .or_else(|| std::thread::available_parallelism().ok().map(usize::from))
+            .unwrap_or(1)
+            .max(1),
+        ..transients::Config::default()
+    };
+    let start = Instant::now();
+    let r = transients::run(dir, &config).map_err(|p| {
+        anyhow::anyhow!("cannot run the campaign:\n{}", vigie_core::diag::render(&p))
+    })?;
+    let (runs, hazards, wrong, restored, not_restored) = r.totals();
+    let ff = &r.fault_free;
+    let ok = hazards == 0
+        && wrong == 0
+        && not_restored == 0
+        && ff.trips + ff.hazards + ff.diagnoses == 0
+        && ff.held_edges == 0;
+    let mut out = std::io::stdout().lock();
+    if json {
+        writeln!(out, "{}", serde_json::to_string_pretty(&r)?)?;
+        return Ok(if ok {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        });
+    }
+    writeln!(
+        out,
+        "transient-fault campaign: {} seeds per case, filter Enforce, diagnosers on; transients at one item every {} ms (+0..{} ms), actuator faults at the sustained period {} ms ({:.0} s wall)",
+        r.seeds,
+        r.transient_period_ms.0,
+        r.transient_period_ms.1,
+        r.sustained_period_ms,
+        start.elapsed().as_secs_f64()
+    )?;
+    writeln!(
+        out,
+        "{:<26} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}",
+        "case", "runs", "struck", "trips", "hazard", "wrong", "right", "restor", "stuck"
+    )?;
+    for row in &r.rows {
+        writeln!(
+            out,
+            "{:<26} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}",
+            row.name,
+            row.runs,
+            row.injected,
+            row.trips,
+            row.hazards,
+            row.wrong,
+            row.right,
+            row.restored,
+            row.not_restored
+        )?;
+        for f in &row.failures {
+            writeln!(out, "      FAILURE {f}")?;
+        }
+    }
+    writeln!(
+        out,
+        "total: {runs} runs, {hazards} hazards, {wrong} wrong certain diagnoses, production restored after {restored} transients, not after {not_restored}"
+    )?;
+    writeln!(
+        out,
+        "fault-free: {} simulated hours, {} items delivered, {} trips, {} hazards, {} certain diagnoses, {} sensor edges held as implausible",
+        ff.hours, ff.delivered, ff.trips, ff.hazards, ff.diagnoses, ff.held_edges
+    )?;
+    for e in &ff.examples {
+        writeln!(out, "      FAULT-FREE {e}")?;
+    }
+    Ok(if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
 /// Wall-clock limit of one libFAUDES construction in `vigie bench-diag`, s.
 const LIBFAUDES_LIMIT_S: u64 = 60;
 

@@ -168,16 +168,16 @@ pub(crate) enum Command {
         /// Print the full JSON report.
         #[arg(long)]
         json: bool,
-        /// `diagnoser`: seeds per fault.
+        /// `diagnoser`, `transients`: seeds per fault.
         #[arg(long, default_value_t = 100)]
         seeds: u64,
-        /// `diagnoser`: the first seed (`--from-seed 66 --seeds 1` replays seed 66).
+        /// `diagnoser`, `transients`: the first seed (`--from-seed 66 --seeds 1` replays seed 66).
         #[arg(long, default_value_t = 0)]
         from_seed: u64,
-        /// `diagnoser`: simulated hours of fault-free runs.
+        /// `diagnoser`, `transients`: simulated hours of fault-free runs.
         #[arg(long, default_value_t = 10)]
         hours: u64,
-        /// `diagnoser`: only faults whose name contains this.
+        /// `diagnoser`, `transients`: only faults (cases) whose name contains this.
         #[arg(long)]
         only: Option<String>,
     },
@@ -271,6 +271,22 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             threads,
             json,
         }) => learn::campaign(
+            &cli.plant,
+            (from_seed, seeds),
+            hours,
+            only.as_deref(),
+            threads,
+            json,
+        ),
+        Some(Command::Campaign {
+            kind: campaign::Kind::Transients,
+            seeds,
+            from_seed,
+            hours,
+            only,
+            threads,
+            json,
+        }) => learn::transients(
             &cli.plant,
             (from_seed, seeds),
             hours,

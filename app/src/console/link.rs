@@ -58,6 +58,13 @@ pub(crate) fn runs_diagnosers(config: &Path) -> Result<bool, String> {
     Ok(c.runs_diagnosers())
 }
 
+/// Whether the run of a link configuration runs the plausibility stage (its mirror then
+/// runs it too).
+pub(crate) fn runs_plausibility(config: &Path) -> Result<bool, String> {
+    let c = GatewayConfig::load(config).map_err(|p| vigie_core::diag::render(&p))?;
+    Ok(c.plausibility)
+}
+
 impl LinkSession {
     /// Loads `config` and starts its run on a thread of its own.
     pub fn start(config: &Path) -> Result<Self, String> {

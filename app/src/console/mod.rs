@@ -393,6 +393,7 @@ impl Console {
             // The mirror of a live run replays the run's own engine cycle by cycle: with
             // the diagnosers and their constraint rewrite exactly when the run has them.
             source.scenario.diagnosers = link::runs_diagnosers(config)?;
+            source.scenario.plausibility = link::runs_plausibility(config)?;
         }
         let plant_dir = source
             .path

@@ -298,6 +298,26 @@ struct LiveDiagnosers {
     reset_pending: bool,
 }
 
+/// The engine with the sensors the diagnosers estimate (a flagged sensor is read from
+/// its estimate by the observers and the constraints) and the plausibility stage on or
+/// off as configured.
+fn with_estimates(
+    mut engine: Engine,
+    compiled: Option<&vigie_core::pop::build::Compiled>,
+    bundle: &PlantBundle,
+    plausibility: bool,
+) -> Engine {
+    engine.set_plausibility(plausibility);
+    if let Some(c) = compiled {
+        engine.set_estimates(vigie_core::sim::diagnosis::estimate_map(
+            c,
+            &bundle.plant,
+            &bundle.symbols,
+        ));
+    }
+    engine
+}
+
 impl LiveDiagnosers {
     fn new(compiled: Option<Compiled>, bundle: &PlantBundle, acts: Cooperation) -> Option<Self> {
         Some(Self {
@@ -591,7 +611,12 @@ pub(crate) async fn monitor(
         beat: io.heartbeat.clone(),
         liveness,
         layout: vigie_core::emulator::Layout::load(&bundle.dir.join("layout.ron")).ok(),
-        engine: Engine::new(&bundle, FilterMode::ReportOnly, 6000),
+        engine: with_estimates(
+            Engine::new(&bundle, FilterMode::ReportOnly, 6000),
+            diagnosers.as_ref(),
+            &bundle,
+            config.plausibility,
+        ),
         guard: StaleGuard::new(&bundle),
         control: Commanded(Bits::zeros(n_out)),
         inputs: AgedBits::new(n_in),
@@ -921,7 +946,12 @@ pub(crate) async fn gateway(
         raise_priority(p.below(), "I/O runtime thread");
     }
     // A trip latched by an earlier run (a crash, a kill) holds from the first cycle.
-    let mut engine = Engine::new(&bundle, FilterMode::Enforce, 6000);
+    let mut engine = with_estimates(
+        Engine::new(&bundle, FilterMode::Enforce, 6000),
+        diagnosers.as_ref(),
+        &bundle,
+        config.plausibility,
+    );
     let restored = super::latch::load(&state_dir)?;
     if let Some(trip) = restored.clone() {
         engine.restore_trip(trip);

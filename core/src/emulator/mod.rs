@@ -326,24 +326,27 @@ impl Emulator {
                 .position(|s| s.id == id)
                 .map(|i| i as u8)
         };
-        let t = &layout.table;
-        let role = |id: &str| {
-            layout
-                .conveyors
-                .iter()
-                .map(|c| c.actuator.as_str())
-                .chain([
-                    t.plus_actuator.as_str(),
-                    t.minus_actuator.as_str(),
-                    t.rotate_actuator.as_str(),
-                ])
-                .position(|a| a == id)
-                .map(|i| i as u8)
-        };
+        let roles = self.actuators();
+        let role = |id: &str| roles.iter().position(|a| a == id).map(|i| i as u8);
         let s = Scheduled::new(fault, sensor, role, &self.symbols)?;
         self.has_conditions |= s.condition.is_some();
         self.faults.push(s);
         Ok(())
+    }
+
+    /// The actuators the emulator drives, by role (the ids a fault may name).
+    pub fn actuators(&self) -> Vec<String> {
+        let t = &self.layout.table;
+        self.layout
+            .conveyors
+            .iter()
+            .map(|c| c.actuator.clone())
+            .chain([
+                t.plus_actuator.clone(),
+                t.minus_actuator.clone(),
+                t.rotate_actuator.clone(),
+            ])
+            .collect()
     }
 
     /// Faults that could not be scheduled.

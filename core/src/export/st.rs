@@ -34,6 +34,7 @@ use crate::bundle::PlantBundle;
 use crate::expr::{self, Dnf};
 use crate::filter::Filter;
 use crate::observers::Rule;
+use crate::plausibility::ExportRule;
 use crate::symbols::{Literal, Space, Symbols, Var};
 use crate::tasks::TaskSet;
 use crate::tasks::spec::{Slowdown, Unexpected};
@@ -345,20 +346,10 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
         out,
         "(* One call per PLC cycle, after the control program. *)\nPROGRAM Vigie_Safety"
     );
+    let rules = bundle.plausibility.export_rules();
     let mut inputs: Vec<(String, &'static str)> = vec![("NOW_MS".into(), "LINT")];
     for i in 0..symbols.len(Space::Input) {
-        inputs.push((
-            ident(
-                symbols,
-                Var {
-                    space: Space::Input,
-                    index: u32::try_from(i).unwrap_or(0),
-                    prev: false,
-                },
-                false,
-            ),
-            "BOOL",
-        ));
+        inputs.push((input_name(symbols, &rules, i), "BOOL"));
     }
     for k in 0..n_out {
         inputs.push((
@@ -420,12 +411,15 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
         .filter(|v| v.prev)
         .map(|v| (ident(symbols, *v, false), "BOOL"))
         .collect();
+    let (stage, mut stage_locals) = plausibility_stage(symbols, &rules);
+    locals.append(&mut stage_locals);
     locals.push(("fbObservers".into(), "FB_Observers"));
     locals.push(("fbFilter".into(), "FB_Filter"));
     if tfb.is_some() {
         locals.push(("fbTasks".into(), "FB_Tasks"));
     }
     section(&mut out, "VAR", locals.into_iter());
+    out.push_str(&stage);
     out.push_str(&obs.call("fbObservers"));
     for (n, _) in &obs.outputs {
         let _ = writeln!(out, "{n} := fbObservers.{n};");
@@ -462,6 +456,171 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
     }
     let _ = writeln!(out, "END_PROGRAM");
     Ok(out)
+}
+
+/// The name of input `i` in the program's `VAR_INPUT`: its identifier, or, for a sensor
+/// with a plausibility rule, the identifier with `_RAW` (the identifier itself is then
+/// the accepted value the stage computes).
+pub fn input_name(symbols: &Symbols, rules: &[ExportRule<'_>], i: usize) -> String {
+    let id = ident(
+        symbols,
+        Var {
+            space: Space::Input,
+            index: u32::try_from(i).unwrap_or(0),
+            prev: false,
+        },
+        false,
+    );
+    if rules.iter().any(|r| r.input == i) {
+        format!("{id}_RAW")
+    } else {
+        id
+    }
+}
+
+/// The plausibility stage of [`crate::plausibility`] in ST, run first in the program:
+/// every rule decides on the readings (`…_RAW`) and writes the accepted value and its
+/// `sus_` flag. Returns the statements and the locals they need.
+fn plausibility_stage(
+    symbols: &Symbols,
+    rules: &[ExportRule<'_>],
+) -> (String, Vec<(String, &'static str)>) {
+    let mut out = String::new();
+    let mut locals: Vec<(String, &'static str)> = Vec::new();
+    if rules.is_empty() {
+        return (out, locals);
+    }
+    let cond = |d: Option<&Dnf>| -> String {
+        let Some(d) = d else {
+            return "TRUE".into();
+        };
+        if d.is_empty() {
+            return "FALSE".into();
+        }
+        d.iter()
+            .map(|term| {
+                if term.is_empty() {
+                    return "TRUE".to_string();
+                }
+                let lits: Vec<String> = term
+                    .iter()
+                    .map(|l| {
+                        let raw = l.var.space == Space::Input && !l.var.prev;
+                        let id = if raw {
+                            input_name(symbols, rules, l.var.index as usize)
+                        } else {
+                            ident(symbols, l.var, false)
+                        };
+                        if l.positive { id } else { format!("NOT {id}") }
+                    })
+                    .collect();
+                format!("({})", lits.join(" AND "))
+            })
+            .collect::<Vec<_>>()
+            .join(" OR ")
+    };
+    let since = |k: &str, w: u64| {
+        if w == 0 {
+            "TRUE".to_string()
+        } else {
+            format!("(NOT PL_{k}_K OR NOW_MS - PL_{k}_T >= {w})")
+        }
+    };
+    let _ = writeln!(
+        out,
+        "(* Plausibility of the sensors (plant.ron, `plausible`): an edge the physics does not allow is held. *)"
+    );
+    let mut first = String::new();
+    let mut body = String::new();
+    for r in rules {
+        let raw = input_name(symbols, rules, r.input);
+        let acc = ident(
+            symbols,
+            Var {
+                space: Space::Input,
+                index: u32::try_from(r.input).unwrap_or(0),
+                prev: false,
+            },
+            false,
+        );
+        let sus = ident(
+            symbols,
+            Var {
+                space: Space::Aux,
+                index: u32::try_from(r.aux).unwrap_or(0),
+                prev: false,
+            },
+            false,
+        );
+        let k = mangle(symbols.name(Space::Input, u32::try_from(r.input).unwrap_or(0)));
+        let confirm = |c: u64| {
+            if c == 0 {
+                "TRUE".to_string()
+            } else {
+                format!("NOW_MS - PL_{k}_PS >= {c}")
+            }
+        };
+        let _ = writeln!(
+            first,
+            "    {acc} := {raw};
+    {sus} := FALSE;
+    PL_{k}_K := FALSE;
+    PL_{k}_PK := FALSE;"
+        );
+        let _ = writeln!(
+            body,
+            "    IF {raw} <> {acc} THEN
+        IF {raw} THEN
+            PL_OK := {} AND ({});
+            PL_CF := {};
+        ELSE
+            PL_OK := {} AND ({});
+            PL_CF := {};
+        END_IF;
+        IF NOT PL_OK THEN
+            {sus} := TRUE;
+            PL_{k}_PK := FALSE;
+        ELSE
+            {sus} := FALSE;
+            IF NOT PL_{k}_PK THEN
+                PL_{k}_PK := TRUE;
+                PL_{k}_PS := NOW_MS;
+            END_IF;
+            IF PL_CF THEN
+                {acc} := {raw};
+                PL_{k}_T := NOW_MS;
+                PL_{k}_K := TRUE;
+                PL_{k}_PK := FALSE;
+            END_IF;
+        END_IF;
+    ELSE
+        {sus} := FALSE;
+        PL_{k}_PK := FALSE;
+    END_IF;",
+            since(&k, r.min_off_ms),
+            cond(r.rise_when),
+            confirm(r.rise_confirm_ms),
+            since(&k, r.min_on_ms),
+            cond(r.fall_when),
+            confirm(r.fall_confirm_ms),
+        );
+        locals.push((acc, "BOOL"));
+        for (n, t) in [("K", "BOOL"), ("T", "LINT"), ("PK", "BOOL"), ("PS", "LINT")] {
+            locals.push((format!("PL_{k}_{n}"), t));
+        }
+    }
+    let _ = write!(
+        out,
+        "IF NOT PL_STARTED THEN
+{first}ELSE
+{body}END_IF;
+PL_STARTED := TRUE;
+"
+    );
+    locals.push(("PL_STARTED".into(), "BOOL"));
+    locals.push(("PL_OK".into(), "BOOL"));
+    locals.push(("PL_CF".into(), "BOOL"));
+    (out, locals)
 }
 
 fn output_var(k: usize, prev: bool) -> Var {

@@ -60,14 +60,13 @@ fn st_name(sym: &crate::symbols::Symbols, space: Space, k: usize, filter: bool) 
 }
 
 /// One scan of the generated program at `now` with these inputs and commands.
-fn scan_st(m: &mut Machine, sym: &crate::symbols::Symbols, now: u64, inputs: &Bits, cmd: &Bits) {
+fn scan_st(m: &mut Machine, bundle: &PlantBundle, now: u64, inputs: &Bits, cmd: &Bits) {
+    let sym = &bundle.symbols;
+    let rules = bundle.plausibility.export_rules();
     m.set("NOW_MS", Val::Int(now as i64)).unwrap();
     for k in 0..inputs.len() {
-        m.set(
-            &st_name(sym, Space::Input, k, false),
-            Val::Bool(inputs.get(k)),
-        )
-        .unwrap();
+        m.set(&st::input_name(sym, &rules, k), Val::Bool(inputs.get(k)))
+            .unwrap();
     }
     for k in 0..cmd.len() {
         m.set(&st_name(sym, Space::Output, k, true), Val::Bool(cmd.get(k)))
@@ -159,78 +158,97 @@ fn fallback_is_exact_in_every_context() {
 /// through the interpreted ST: identical decisions cycle by cycle.
 #[test]
 fn st_conforms_to_the_native_engine() {
-    let (bundle, set) = station();
-    let text = st::generate(&bundle, Some(&set)).unwrap();
-    let unit = interp::parse(&text).unwrap();
-    let sym = &bundle.symbols;
-    let n_in = bundle.plant.inputs.len();
-    let n_out = bundle.plant.outputs.len();
-    let frame_tasks = FrameTasks::compile(&set, sym).unwrap();
-    let name = |space, k: usize, filter| st_name(sym, space, k, filter);
+    let (station_bundle, set) = station();
     let (mut trips, mut task_changes, mut faults) = (0, 0, 0);
-    for seed in 1..=120u64 {
-        let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
-        let mut engine = Engine::new(&bundle, FilterMode::Enforce, 1);
-        let mut monitor = Monitor::new(&set, Millis(0));
-        let mut m = Machine::new(unit.clone(), "Vigie_Safety").unwrap();
-        let mut inputs = Bits::zeros(n_in);
-        let mut cmd = Bits::zeros(n_out);
-        let mut now = 0u64;
-        // Quiet traces trip later, so the pre-trip behaviour is covered too.
-        let (p_in, p_out) = if seed % 2 == 0 { (6, 5) } else { (12, 25) };
-        let mut last_states = vec![0i64; set.tasks.len()];
-        for cycle in 0..400 {
-            now += 1 + rng.next() % 400;
-            rng.flip_some(&mut inputs, p_in);
-            rng.flip_some(&mut cmd, p_out);
-            engine.cycle(Millis(now), &inputs, &mut Commanded(cmd.clone()));
-            frame_tasks.step(&mut monitor, Millis(now), engine.frame());
-            frame_tasks.publish(&monitor, engine.frame_mut());
-
-            scan_st(&mut m, sym, now, &inputs, &cmd);
-
-            let at = format!("seed {seed}, cycle {cycle}, t = {now} ms");
-            for k in 0..n_out {
-                assert_eq!(
-                    b(&m, &name(Space::Output, k, false)),
-                    engine.applied().get(k),
-                    "{at}: output {k}"
-                );
-            }
-            assert_eq!(b(&m, "TRIPPED"), engine.is_tripped(), "{at}: trip");
-            for k in 0..sym.len(Space::Observer) {
-                assert_eq!(
-                    b(&m, &name(Space::Observer, k, false)),
-                    engine.frame().now(Space::Observer).get(k),
-                    "{at}: observer {k}"
-                );
-            }
-            for (ti, t) in set.tasks.iter().enumerate() {
-                let code = i(&m, &format!("T_{}_STATE", st::mangle(&t.id)));
-                let native = monitor.tasks[ti].state.st_code();
-                assert_eq!(
-                    code, native,
-                    "{at}: task {} ({:?})",
-                    t.id, monitor.tasks[ti]
-                );
-                if code != last_states[ti] {
-                    task_changes += 1;
-                    if code == 4 {
-                        faults += 1;
-                    }
-                }
-                last_states[ti] = code;
-            }
-            for k in 0..sym.len(Space::Aux) {
-                assert_eq!(
-                    b(&m, &name(Space::Aux, k, false)),
-                    engine.frame().now(Space::Aux).get(k),
-                    "{at}: aux {k}"
-                );
-            }
+    let mut held = 0;
+    // With the station's plausibility rules (random traces break its physics all the
+    // time), and without them (the traces then reach the task monitors' states).
+    for with_rules in [true, false] {
+        let mut bundle = station_bundle.clone();
+        if !with_rules {
+            bundle.plausibility = Default::default();
         }
-        trips += usize::from(engine.is_tripped());
+        let text = st::generate(&bundle, Some(&set)).unwrap();
+        let unit = interp::parse(&text).unwrap();
+        let sym = &bundle.symbols;
+        let n_in = bundle.plant.inputs.len();
+        let n_out = bundle.plant.outputs.len();
+        let frame_tasks = FrameTasks::compile(&set, sym).unwrap();
+        let name = |space, k: usize, filter| st_name(sym, space, k, filter);
+        for seed in 1..=120u64 {
+            let mut rng = Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+            let mut engine = Engine::new(&bundle, FilterMode::Enforce, 1);
+            let mut monitor = Monitor::new(&set, Millis(0));
+            let mut m = Machine::new(unit.clone(), "Vigie_Safety").unwrap();
+            let mut inputs = Bits::zeros(n_in);
+            let mut cmd = Bits::zeros(n_out);
+            let mut now = 0u64;
+            // Quiet traces trip later, so the pre-trip behaviour is covered too.
+            let (p_in, p_out) = if seed % 2 == 0 { (6, 5) } else { (12, 25) };
+            let mut last_states = vec![0i64; set.tasks.len()];
+            for cycle in 0..400 {
+                now += 1 + rng.next() % 400;
+                rng.flip_some(&mut inputs, p_in);
+                rng.flip_some(&mut cmd, p_out);
+                engine.cycle(Millis(now), &inputs, &mut Commanded(cmd.clone()));
+                frame_tasks.step(&mut monitor, Millis(now), engine.frame());
+                frame_tasks.publish(&monitor, engine.frame_mut());
+
+                scan_st(&mut m, &bundle, now, &inputs, &cmd);
+
+                let at = format!("seed {seed}, cycle {cycle}, t = {now} ms");
+                for k in 0..n_out {
+                    assert_eq!(
+                        b(&m, &name(Space::Output, k, false)),
+                        engine.applied().get(k),
+                        "{at}: output {k}"
+                    );
+                }
+                assert_eq!(b(&m, "TRIPPED"), engine.is_tripped(), "{at}: trip");
+                for k in 0..sym.len(Space::Observer) {
+                    assert_eq!(
+                        b(&m, &name(Space::Observer, k, false)),
+                        engine.frame().now(Space::Observer).get(k),
+                        "{at}: observer {k}"
+                    );
+                }
+                for (ti, t) in set.tasks.iter().enumerate() {
+                    let code = i(&m, &format!("T_{}_STATE", st::mangle(&t.id)));
+                    let native = monitor.tasks[ti].state.st_code();
+                    assert_eq!(
+                        code, native,
+                        "{at}: task {} ({:?})",
+                        t.id, monitor.tasks[ti]
+                    );
+                    if code != last_states[ti] {
+                        task_changes += 1;
+                        if code == 4 {
+                            faults += 1;
+                        }
+                    }
+                    last_states[ti] = code;
+                }
+                for k in 0..sym.len(Space::Aux) {
+                    assert_eq!(
+                        b(&m, &name(Space::Aux, k, false)),
+                        engine.frame().now(Space::Aux).get(k),
+                        "{at}: aux {k}"
+                    );
+                }
+                // The values the plausibility stage accepted.
+                for k in 0..n_in {
+                    assert_eq!(
+                        b(&m, &name(Space::Input, k, false)),
+                        engine.frame().now(Space::Input).get(k),
+                        "{at}: input {k} as accepted"
+                    );
+                }
+            }
+            trips += usize::from(engine.is_tripped());
+            held += engine.plausibility.held_edges;
+        }
     }
+    assert!(held > 1000, "held edges {held}");
     // The traces exercise what they claim to.
     assert!(trips > 30, "trips {trips}");
     assert!(task_changes > 1000, "task changes {task_changes}");
@@ -326,6 +344,7 @@ fn st_conforms_to_the_engine_on_a_large_plant_with_safe_values() {
         discharged: Vec::new(),
         fallback: None,
         tasks: None,
+        plausibility: Default::default(),
     };
     let filter = Filter::for_plant(&bundle.constraints, &bundle.plant);
     assert!(crate::filter::support(&filter).len() > 40);
@@ -352,7 +371,7 @@ fn st_conforms_to_the_engine_on_a_large_plant_with_safe_values() {
                 .filter(|e| matches!(e, crate::engine::Event::SpecificationError { .. }))
                 .count();
             spec_errors += errors;
-            scan_st(&mut m, sym, cycle * 10, &inputs, &cmd);
+            scan_st(&mut m, &bundle, cycle * 10, &inputs, &cmd);
             let at = format!("seed {seed}, cycle {cycle}");
             for k in 0..n_out {
                 assert_eq!(

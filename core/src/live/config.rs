@@ -226,6 +226,11 @@ pub struct GatewayConfig {
     /// for the cooperation; true by default. Ignored in emulator mode.
     #[serde(default = "default_diagnosers")]
     pub diagnosers: bool,
+    /// Run the sensors' plausibility stage (`plausible` in `plant.ron`) in the monitor
+    /// and gateway cycles; true by default. `false` takes every edge as read (a test
+    /// peer that moves the plant faster than its physics).
+    #[serde(default = "default_diagnosers")]
+    pub plausibility: bool,
 }
 
 fn default_diagnosers() -> bool {

@@ -274,7 +274,7 @@ fn simulation(shared: &Shared, seed: u64) -> Result<Simulation, Vec<Problem>> {
 }
 
 /// SplitMix64 of the seed: the injection time.
-fn mix(seed: u64) -> u64 {
+pub(crate) fn mix(seed: u64) -> u64 {
     let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -400,7 +400,7 @@ fn verdict_of(
     }
 }
 
-fn parallel<T: Send + Sync, R: Send>(
+pub(crate) fn parallel<T: Send + Sync, R: Send>(
     items: &[T],
     threads: usize,
     f: &(dyn Fn(&T) -> R + Sync),

@@ -140,6 +140,35 @@ pub fn estimated_inputs(d: &Diagnosers, plant: &Plant, symbols: &Symbols) -> Vec
         .collect()
 }
 
+/// Every sensor the diagnosers can estimate: (input index, auxiliary of its partition's
+/// flag `def_<partition>`, auxiliary of `EST(sensor)`), for [`crate::engine::Engine::set_estimates`].
+pub fn estimate_map(
+    compiled: &crate::pop::build::Compiled,
+    plant: &Plant,
+    symbols: &Symbols,
+) -> Vec<(usize, usize, usize)> {
+    let mut out = Vec::new();
+    for c in &compiled.components {
+        for p in &c.partitions {
+            let Some(s) = &p.sensor else { continue };
+            let aux = |name: &str| match symbols.lookup(name) {
+                Some((Space::Aux, i)) => Some(i as usize),
+                _ => None,
+            };
+            if let (Some(input), Some(def), Some(est)) = (
+                plant.input(s),
+                aux(&format!("def_{}", p.id)),
+                aux(&crate::symbols::estimate_name(s)),
+            ) {
+                out.push((input, def, est));
+            }
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
 /// The frame as the control program and the task monitors read it in degraded mode:
 /// each estimated sensor replaced, at t and at t−1, by its estimate. None when no sensor
 /// is estimated (they read `frame` itself).

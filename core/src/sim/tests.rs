@@ -27,6 +27,7 @@ fn scenario(
         cycle_ms: 10,
         projection_ms: 10_000,
         diagnosers: false,
+        plausibility: true,
     }
 }
 
@@ -361,12 +362,14 @@ fn observed(time: u64, inputs: &str, commanded: &str, applied: &str, reset: bool
 }
 
 fn following(mode: FilterMode) -> Simulation {
-    let s = scenario(
+    let mut s = scenario(
         ProgramChoice::Reference,
         FilterMode::Enforce,
         three_boxes(),
         0,
     );
+    // The observed cycles are scripted, not a plant: every edge taken as read.
+    s.plausibility = false;
     let mut sim =
         Simulation::from_scenario(&s, &station_dir().join("scenario.ron"), Options::default())
             .expect("scenario");
@@ -457,6 +460,7 @@ fn following_with_diagnosers(mode: FilterMode) -> Simulation {
         0,
     );
     s.diagnosers = true;
+    s.plausibility = false; // scripted cycles
     let mut sim =
         Simulation::from_scenario(&s, &station_dir().join("scenario.ron"), Options::default())
             .expect("scenario");

@@ -115,6 +115,7 @@ pub fn scenario(trace: &Trace, plant_dir: &str, step_us: i64, seed: u64) -> Scen
         cycle_ms: 1,
         projection_ms: 2_000,
         diagnosers: false,
+        plausibility: true,
     }
 }
 

@@ -1,0 +1,236 @@
+use super::*;
+use crate::bundle::PlantBundle;
+use crate::engine::{Commanded, Engine, FilterMode};
+
+fn station() -> PlantBundle {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+    PlantBundle::load(&dir).unwrap().0
+}
+
+/// Runs one 10 ms cycle at `t` with the sensors `on` and the outputs `out` commanded;
+/// returns what the rest of the cycle read for `sensor` and its `sus_` flag.
+struct Rig {
+    engine: Engine,
+    plant: crate::plant::Plant,
+    control: Commanded,
+}
+
+impl Rig {
+    fn new(bundle: &PlantBundle) -> Self {
+        Self {
+            engine: Engine::new(bundle, FilterMode::Off, 16),
+            plant: bundle.plant.clone(),
+            control: Commanded(Bits::zeros(bundle.plant.outputs.len())),
+        }
+    }
+
+    fn cycle(&mut self, t: u64, on: &[&str], out: &[&str]) {
+        let mut inputs = Bits::zeros(self.plant.inputs.len());
+        for s in on {
+            inputs.set(self.plant.input(s).unwrap(), true);
+        }
+        self.control.0 = Bits::zeros(self.plant.outputs.len());
+        for a in out {
+            self.control.0.set(self.plant.output(a).unwrap(), true);
+        }
+        self.engine.cycle(Millis(t), &inputs, &mut self.control);
+    }
+
+    fn read(&self, sensor: &str) -> (bool, bool) {
+        let f = self.engine.frame();
+        let (_, sus) = self.engine.symbols.lookup(&suspect_name(sensor)).unwrap();
+        (
+            f.now(Space::Input).get(self.plant.input(sensor).unwrap()),
+            f.now(Space::Aux).get(sus as usize),
+        )
+    }
+}
+
+#[test]
+fn a_dropout_shorter_than_a_crossing_is_held_and_the_real_fall_is_taken() {
+    let b = station();
+    let mut r = Rig::new(&b);
+    let drives = ["A3", "A6"];
+    r.cycle(0, &[], &drives);
+    r.cycle(10, &["C7"], &drives);
+    assert_eq!(r.read("C7"), (true, false), "the box arrives");
+    // 300 ms later the beam drops out for 50 ms: no box crosses C7 that fast.
+    r.cycle(310, &[], &drives);
+    assert_eq!(r.read("C7"), (true, true), "held at 1, suspect");
+    r.cycle(320, &[], &drives);
+    assert_eq!(r.read("C7"), (true, true));
+    r.cycle(360, &["C7"], &drives);
+    assert_eq!(r.read("C7"), (true, false), "the reading agrees again");
+    assert_eq!(b.plausibility.held_edges, 0);
+    assert_eq!(r.engine.plausibility.held_edges, 1);
+    // The box leaves 1.2 s after it came: plausible, taken at once.
+    r.cycle(1210, &[], &drives);
+    assert_eq!(r.read("C7"), (false, false));
+    let notices = r.engine.plausibility.take_notices();
+    assert_eq!(notices.len(), 2, "{notices:?}");
+    assert!(notices[0].suspect && notices[0].text.contains("C7 suspect"));
+    assert!(!notices[1].suspect);
+}
+
+#[test]
+fn a_long_dropout_is_taken_once_the_shortest_crossing_has_passed() {
+    let b = station();
+    let mut r = Rig::new(&b);
+    let drives = ["A3", "A6"];
+    r.cycle(0, &[], &drives);
+    r.cycle(10, &["C7"], &drives);
+    for t in (300..900).step_by(10) {
+        r.cycle(t, &[], &drives);
+        assert_eq!(r.read("C7"), (true, true), "at {t} ms");
+    }
+    r.cycle(910, &[], &drives);
+    assert_eq!(
+        r.read("C7"),
+        (false, false),
+        "900 ms after the rise a fall is plausible"
+    );
+}
+
+#[test]
+fn a_pulse_while_nothing_under_the_beam_moves_is_held_at_0() {
+    let b = station();
+    let mut r = Rig::new(&b);
+    r.cycle(0, &[], &[]);
+    r.cycle(10, &[], &[]);
+    r.cycle(20, &["C7"], &[]);
+    assert_eq!(r.read("C7"), (false, true));
+    r.cycle(30, &[], &[]);
+    assert_eq!(r.read("C7"), (false, false));
+    // With the rollers running (applied in the previous cycle) the same rise is real.
+    r.cycle(40, &[], &["A3"]);
+    r.cycle(50, &["C7"], &["A3"]);
+    assert_eq!(r.read("C7"), (true, false));
+}
+
+#[test]
+fn the_table_leaves_c4_only_once_a4_is_ordered() {
+    let b = station();
+    let mut r = Rig::new(&b);
+    r.cycle(0, &["C4"], &[]);
+    r.cycle(10, &[], &[]);
+    assert_eq!(
+        r.read("C4"),
+        (true, true),
+        "C4 falls with A4 off: held at 1"
+    );
+    r.cycle(20, &["C4"], &["A4"]);
+    assert_eq!(r.read("C4"), (true, false));
+    r.cycle(100, &[], &["A4"]);
+    assert_eq!(r.read("C4"), (false, false), "A4 applied: the table leaves");
+}
+
+#[test]
+fn the_first_cycle_takes_what_it_reads() {
+    let b = station();
+    let mut r = Rig::new(&b);
+    r.cycle(0, &["C7", "C4"], &[]);
+    assert_eq!(r.read("C7"), (true, false));
+    assert_eq!(r.read("C4"), (true, false));
+}
+
+#[test]
+fn the_diagnosers_read_the_raw_sensors() {
+    let b = station();
+    let mut r = Rig::new(&b);
+    r.cycle(0, &["C4"], &[]);
+    let mut seen = None;
+    let mut inputs = Bits::zeros(b.plant.inputs.len());
+    let mut control = Commanded(Bits::zeros(b.plant.outputs.len()));
+    r.engine
+        .cycle_with(Millis(10), &inputs, &mut control, &mut |_, f, _| {
+            seen = Some((f.now(Space::Input).get(4), f.prev(Space::Input).get(4)));
+        });
+    assert_eq!(seen, Some((false, true)), "the diagnosers see C4 fall");
+    assert!(
+        r.engine.frame().now(Space::Input).get(4),
+        "the rest reads it held"
+    );
+    inputs.set(4, true);
+    r.engine.cycle(Millis(20), &inputs, &mut control);
+}
+
+#[test]
+fn a_rule_with_a_bad_condition_names_the_sensor_and_the_column() {
+    let mut plant = station().plant;
+    plant.inputs[7].plausible = Some(crate::plant::PlausibleRule {
+        rise_when: Some("A3* + Nope".into()),
+        ..Default::default()
+    });
+    let mut symbols = plant.symbols();
+    for n in suspect_names(&plant) {
+        symbols.declare(&n, Space::Aux).unwrap();
+    }
+    let err = Plausibility::new(&plant, &symbols).unwrap_err();
+    assert_eq!(err[0].code, "V0013");
+    assert!(err[0].message.contains("`C7`"), "{}", err[0].message);
+    assert!(err[0].message.contains("column 7"), "{}", err[0].message);
+}
+
+#[test]
+fn both_values_makes_a_literal_possibly_true_whatever_its_polarity() {
+    let e = crate::expr::parse_str("C3 . /C4 . A1 + RE(C4) . A2").unwrap();
+    let s = suspect_expr(&e, &["C4".to_string()]);
+    let mut symbols = crate::symbols::Symbols::new();
+    for (n, sp) in [
+        ("C3", Space::Input),
+        ("C4", Space::Input),
+        ("A1", Space::Output),
+        ("A2", Space::Output),
+        ("sus_C4", Space::Aux),
+    ] {
+        symbols.declare(n, sp).unwrap();
+    }
+    let dnf = simplify(&s.to_dnf(&symbols).unwrap());
+    let text = crate::expr::render_dnf(&dnf, &symbols);
+    for term in [
+        "C3 . /C4 . A1",
+        "C3 . A1 . sus_C4",
+        "C4 . /C4* . A2",
+        "C4 . A2 . sus_C4*",
+        "/C4* . A2 . sus_C4",
+        "A2 . sus_C4 . sus_C4*",
+    ] {
+        assert!(text.contains(term), "{term} missing in {text}");
+    }
+}
+
+#[test]
+fn switching_to_the_estimate_and_back_is_not_an_edge() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+    let (db, _) = crate::pop::load(&dir).unwrap();
+    let mut e = Engine::new(&db.bundle, FilterMode::Off, 16);
+    e.set_estimates(crate::sim::diagnosis::estimate_map(
+        &db.compiled,
+        &db.bundle.plant,
+        &db.bundle.symbols,
+    ));
+    let sym = &db.bundle.symbols;
+    let (_, def) = sym.lookup("def_C4").unwrap();
+    let (_, est) = sym.lookup("EST(C4)").unwrap();
+    let c4 = db.bundle.plant.input("C4").unwrap();
+    let mut inputs = Bits::zeros(db.bundle.plant.inputs.len());
+    inputs.set(c4, true);
+    let mut control = Commanded(Bits::zeros(db.bundle.plant.outputs.len()));
+    e.cycle(Millis(0), &inputs, &mut control);
+    // The diagnosers flag C4 and estimate it at 0 (written at the end of a cycle).
+    e.frame_mut().now_mut(Space::Aux).set(def as usize, true);
+    e.frame_mut().now_mut(Space::Aux).set(est as usize, false);
+    e.cycle(Millis(10), &inputs, &mut control);
+    let f = e.frame();
+    assert!(!f.now(Space::Input).get(c4), "C4 read from its estimate");
+    assert!(
+        !f.prev(Space::Input).get(c4),
+        "no falling edge made up by the switch"
+    );
+    e.cycle(Millis(20), &inputs, &mut control);
+    assert!(!e.frame().now(Space::Input).get(c4));
+    e.frame_mut().now_mut(Space::Aux).set(def as usize, false);
+    e.cycle(Millis(30), &inputs, &mut control);
+    let f = e.frame();
+    assert!(f.now(Space::Input).get(c4) && f.prev(Space::Input).get(c4));
+}

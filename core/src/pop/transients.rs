@@ -1,0 +1,784 @@
+//! The transient-fault campaign (`vigie campaign transients`): the faults real sensors
+//! and actuators have and the diagnoser campaign does not inject, with the filter and
+//! the diagnosers on, over many seeds.
+//!
+//! - **Transients of every sensor** of the layout: dropouts (the reading falls to 0
+//!   while the sensor is on, for instance while an item crosses a beam) and spurious
+//!   pulses (it reads 1 while off), of every length of [`Config::lengths_ms`], and
+//!   flicker (a burst of short inversions), each at a random moment of production.
+//! - **Pairs**: two transients of two sensors, the second shortly after the first (so
+//!   sometimes during the trip the first caused).
+//! - **Welded and dead actuators** (stuck on, stuck off for good) at the highest
+//!   arrival rate the program sustains without fault ([`sustained_period`]).
+//!
+//! Every run counts the hazards of the emulator and the *wrong* certain diagnoses (a
+//! certain diagnosis naming a partition that does not hold the faulted element, or any
+//! certain diagnosis before the fault). After a transient the operator does what the
+//! console tells him: the filter's reset if it tripped, the diagnosers' reset if a
+//! partition is flagged, then Start; production counts as *restored* when items are
+//! delivered again and the filter is not tripped at the end of the watch.
+
+use super::Diagnosis;
+use super::campaign::{mix, parallel};
+use crate::bundle::PlantBundle;
+use crate::control::CompiledProgram;
+use crate::diag::Problem;
+use crate::emulator::{ArrivalPlan, FaultKind, FaultSpec, SizeMix, Trigger};
+use crate::sim::{OperatorAction, Options, Simulation};
+use crate::time::Millis;
+use serde::Serialize;
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+use std::sync::Arc;
+
+/// Settings.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Seeds per case.
+    pub seeds: u64,
+    /// The first seed (`first_seed..first_seed + seeds`): replays one run.
+    pub first_seed: u64,
+    /// Only cases whose name contains this.
+    pub only: Option<String>,
+    /// Worker threads.
+    pub threads: usize,
+    /// Faults strike between `first_ms` and `first_ms + spread_ms`.
+    pub first_ms: u64,
+    /// See `first_ms`.
+    pub spread_ms: u64,
+    /// Lengths of the dropouts and pulses, ms.
+    pub lengths_ms: Vec<u64>,
+    /// After the fault has ended, the time before the operator acts, ms.
+    pub settle_ms: u64,
+    /// Watch after the operator's reset, ms.
+    pub recover_ms: u64,
+    /// Watch of a permanent actuator fault, ms.
+    pub actuator_watch_ms: u64,
+    /// Items that must be delivered after the reset for production to count as
+    /// restored.
+    pub restored_items: u32,
+    /// Simulated hours of fault-free production (one run per hour, its own seed).
+    pub fault_free_hours: u64,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            seeds: 100,
+            first_seed: 0,
+            only: None,
+            threads: 2,
+            first_ms: 20_000,
+            spread_ms: 60_000,
+            lengths_ms: vec![5, 10, 20, 50, 100, 200, 500],
+            settle_ms: 2_000,
+            recover_ms: 90_000,
+            actuator_watch_ms: 60_000,
+            restored_items: 2,
+            fault_free_hours: 10,
+        }
+    }
+}
+
+/// One transient of a sensor.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub enum Transient {
+    /// Reads 0 for this long while on.
+    Dropout(u64),
+    /// Reads 1 for this long while off.
+    Pulse(u64),
+    /// A burst of short inversions (lengths and gaps drawn from the seed).
+    Flicker,
+}
+
+/// What a case injects.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub enum CaseKind {
+    /// One transient of one sensor.
+    Sensor {
+        /// Sensor id.
+        sensor: String,
+        /// The transient.
+        transient: Transient,
+    },
+    /// Two transients of two sensors drawn from the seed.
+    Pair,
+    /// An actuator stuck for good: on (welded) or off (dead).
+    Actuator {
+        /// Actuator (output) id.
+        actuator: String,
+        /// Stuck on.
+        on: bool,
+    },
+}
+
+/// One case of the campaign.
+#[derive(Clone, Debug, Serialize)]
+pub struct Case {
+    /// Readable name.
+    pub name: String,
+    /// What it injects.
+    pub kind: CaseKind,
+}
+
+/// Figures of one case over every seed.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Row {
+    /// Case name.
+    pub name: String,
+    /// Runs.
+    pub runs: usize,
+    /// Runs where the fault changed what the sensor read (a dropout needs the sensor on).
+    pub injected: usize,
+    /// Hazards over all runs.
+    pub hazards: usize,
+    /// Wrong certain diagnoses over all runs.
+    pub wrong: usize,
+    /// Right certain diagnoses (the faulted element's partition).
+    pub right: usize,
+    /// Runs where the filter tripped.
+    pub trips: usize,
+    /// Transients only: runs where production came back after the reset.
+    pub restored: usize,
+    /// Transients only: runs where it did not.
+    pub not_restored: usize,
+    /// Pairs: runs whose second fault struck while the filter was tripped.
+    pub during_trip: usize,
+    /// Examples of failures (seed and text), at most five.
+    pub failures: Vec<String>,
+    /// The journal of the first failed run (seed, then its lines).
+    pub first_failure_journal: Vec<String>,
+}
+
+/// The campaign report.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Report {
+    /// Seeds per case.
+    pub seeds: u64,
+    /// The arrival plan of the transient runs: period and jitter, ms.
+    pub transient_period_ms: (u64, u64),
+    /// The shortest arrival period the program sustains without fault, ms (actuator
+    /// runs).
+    pub sustained_period_ms: u64,
+    /// One row per case.
+    pub rows: Vec<Row>,
+    /// The fault-free hours.
+    pub fault_free: FaultFree,
+}
+
+/// Fault-free production with the plausibility rules, the filter and the diagnosers.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FaultFree {
+    /// Simulated hours.
+    pub hours: u64,
+    /// Items delivered.
+    pub delivered: u64,
+    /// Trips.
+    pub trips: usize,
+    /// Hazards.
+    pub hazards: usize,
+    /// Certain diagnoses (each one false).
+    pub diagnoses: usize,
+    /// Sensor edges held as implausible (each one a wrong rule).
+    pub held_edges: u64,
+    /// Examples of held edges and false diagnoses.
+    pub examples: Vec<String>,
+}
+
+impl Report {
+    /// Totals: (runs, hazards, wrong, restored, not restored).
+    pub fn totals(&self) -> (usize, usize, usize, usize, usize) {
+        self.rows.iter().fold((0, 0, 0, 0, 0), |t, r| {
+            (
+                t.0 + r.runs,
+                t.1 + r.hazards,
+                t.2 + r.wrong,
+                t.3 + r.restored,
+                t.4 + r.not_restored,
+            )
+        })
+    }
+}
+
+/// The cases of a plant: transients of every sensor of the layout, pairs, and both
+/// stuck faults of every output the emulator drives.
+pub fn cases(sensors: &[String], actuators: &[String], lengths: &[u64]) -> Vec<Case> {
+    let mut v = Vec::new();
+    for s in sensors {
+        for &l in lengths {
+            v.push(Case {
+                name: format!("{s} dropout {l} ms"),
+                kind: CaseKind::Sensor {
+                    sensor: s.clone(),
+                    transient: Transient::Dropout(l),
+                },
+            });
+            v.push(Case {
+                name: format!("{s} pulse {l} ms"),
+                kind: CaseKind::Sensor {
+                    sensor: s.clone(),
+                    transient: Transient::Pulse(l),
+                },
+            });
+        }
+        v.push(Case {
+            name: format!("{s} flicker"),
+            kind: CaseKind::Sensor {
+                sensor: s.clone(),
+                transient: Transient::Flicker,
+            },
+        });
+    }
+    if sensors.len() >= 2 {
+        v.push(Case {
+            name: "pair of transients".into(),
+            kind: CaseKind::Pair,
+        });
+    }
+    for a in actuators {
+        for on in [true, false] {
+            v.push(Case {
+                name: format!("{a} {}", if on { "welded" } else { "dead" }),
+                kind: CaseKind::Actuator {
+                    actuator: a.clone(),
+                    on,
+                },
+            });
+        }
+    }
+    v
+}
+
+struct Shared {
+    bundle: PlantBundle,
+    program: Arc<CompiledProgram>,
+    /// Partitions holding each sensor or actuator.
+    partitions: BTreeMap<String, BTreeSet<String>>,
+    /// The layout's sensors.
+    sensors: Vec<String>,
+    /// The actuators the emulator drives.
+    actuators: Vec<String>,
+}
+
+fn simulation(shared: &Shared, seed: u64, plan: &ArrivalPlan) -> Result<Simulation, Vec<Problem>> {
+    let mut sim = Simulation::new(
+        shared.bundle.clone(),
+        (*shared.program).clone(),
+        seed,
+        Options {
+            history_cycles: 16,
+            explain: false,
+        },
+    )?;
+    sim.enable_diagnosers()?;
+    sim.emulator.set_arrivals(plan.clone());
+    let _ = sim.act(&OperatorAction::Start);
+    Ok(sim)
+}
+
+/// A small deterministic generator for the draws of one run.
+struct Draw(u64);
+
+impl Draw {
+    fn next(&mut self, n: u64) -> u64 {
+        self.0 = mix(self.0);
+        self.0 % n.max(1)
+    }
+}
+
+/// What one run found.
+#[derive(Default)]
+struct Outcome {
+    injected: bool,
+    hazards: Vec<String>,
+    wrong: Vec<String>,
+    right: usize,
+    tripped: bool,
+    restored: Option<bool>,
+    during_trip: bool,
+    note: String,
+    journal: Vec<String>,
+}
+
+fn sensor_value(sim: &Simulation, input: usize) -> bool {
+    sim.emulator.sensors().get(input)
+}
+
+/// Runs until `input` reads `value` and has for a random 0..hold ms (a random moment of
+/// that state), bounded by `limit`. False when it never did.
+fn wait_for(sim: &mut Simulation, input: usize, value: bool, hold: u64, limit: Millis) -> bool {
+    let mut since: Option<Millis> = None;
+    while sim.now() < limit {
+        if sensor_value(sim, input) == value {
+            let s = *since.get_or_insert(sim.now());
+            if sim.now().0 >= s.0 + hold {
+                return true;
+            }
+        } else {
+            since = None;
+        }
+        sim.cycle();
+    }
+    false
+}
+
+/// Schedules a transient of `sensor` now; returns its end (ms) and whether the plant's
+/// reading really changed, or None when the sensor never showed the state it needs.
+fn strike(
+    sim: &mut Simulation,
+    sensor: &str,
+    t: &Transient,
+    draw: &mut Draw,
+) -> Result<Option<u64>, Vec<Problem>> {
+    let Some(input) = sim.bundle.plant.input(sensor) else {
+        return Ok(None);
+    };
+    let limit = Millis(sim.now().0 + 180_000);
+    let (value, pulses): (bool, Vec<(u64, u64)>) = match t {
+        Transient::Dropout(l) => (true, vec![(0, *l)]),
+        Transient::Pulse(l) => (false, vec![(0, *l)]),
+        Transient::Flicker => {
+            let value = draw.next(2) == 0;
+            let n = 3 + draw.next(6);
+            let mut at = 0;
+            let mut v = Vec::new();
+            for _ in 0..n {
+                let len = 5 + draw.next(46);
+                v.push((at, len));
+                at += len + 5 + draw.next(96);
+            }
+            (value, v)
+        }
+    };
+    // A random moment of the state: while an item crosses the beam (its crossing takes
+    // 1 to 1.3 s on the station; a draw past the crossing waits for the next item).
+    let hold = draw.next(if value { 1_300 } else { 3_000 });
+    if !wait_for(sim, input, value, hold, limit) {
+        return Ok(None);
+    }
+    let now = sim.now().0;
+    let mut end = now;
+    for (offset, len) in pulses {
+        let fault = if value {
+            FaultKind::SpuriousFall {
+                sensor: sensor.to_string(),
+                pulse_ms: len,
+            }
+        } else {
+            FaultKind::SpuriousRise {
+                sensor: sensor.to_string(),
+                pulse_ms: len,
+            }
+        };
+        sim.inject(FaultSpec {
+            trigger: Trigger::At(now + offset),
+            fault,
+            duration_ms: None,
+        })
+        .map_err(|p| vec![p])?;
+        end = end.max(now + offset + len);
+    }
+    Ok(Some(end))
+}
+
+/// The operator's recovery, as the console asks for it: the filter's reset while it is
+/// tripped (retried each second while refused), the diagnosers' reset when a partition
+/// is flagged, then Start.
+fn recover(sim: &mut Simulation) {
+    let limit = Millis(sim.now().0 + 30_000);
+    while sim.engine.is_tripped() && sim.now() < limit {
+        if sim.act(&OperatorAction::Reset).is_ok() {
+            break;
+        }
+        let next = Millis(sim.now().0 + 1_000);
+        sim.run_until(next);
+    }
+    if sim
+        .diagnosers
+        .as_ref()
+        .is_some_and(|d| !d.flagged().is_empty())
+    {
+        let _ = sim.act(&OperatorAction::ResetDiagnosers);
+    }
+    let _ = sim.act(&OperatorAction::Start);
+}
+
+fn delivered(sim: &Simulation) -> u32 {
+    let s = sim.emulator.stats();
+    s.delivered_left + s.delivered_right
+}
+
+fn judge(sim: &Simulation, expected: &BTreeSet<String>, at: u64, out: &mut Outcome) {
+    out.hazards = sim
+        .emulator
+        .hazards()
+        .iter()
+        .map(|h| {
+            format!(
+                "{} ms {:?} of item {} at {}",
+                h.time_ms, h.kind, h.box_id, h.place
+            )
+        })
+        .collect();
+    let Some(d) = sim.diagnosers.as_ref() else {
+        return;
+    };
+    for x in d.diagnoses.iter().filter(|x| !x.partition.is_empty()) {
+        if x.time_ms >= at && expected.contains(&x.partition) {
+            out.right += 1;
+        } else {
+            out.wrong.push(describe(x, at));
+        }
+    }
+}
+
+fn describe(d: &Diagnosis, at: u64) -> String {
+    format!(
+        "{} ms ({:+} ms from the fault) {}/{} {}",
+        d.time_ms,
+        d.time_ms as i64 - at as i64,
+        d.component,
+        d.partition,
+        d.fault
+    )
+}
+
+fn run_one(
+    shared: &Shared,
+    case: &Case,
+    seed: u64,
+    config: &Config,
+    plans: &(ArrivalPlan, ArrivalPlan),
+) -> Result<Outcome, Vec<Problem>> {
+    let mut draw = Draw(seed ^ mix(case.name.len() as u64 ^ 0x5EED));
+    for b in case.name.bytes() {
+        draw.0 = mix(draw.0 ^ u64::from(b));
+    }
+    let actuator = matches!(case.kind, CaseKind::Actuator { .. });
+    let plan = if actuator { &plans.1 } else { &plans.0 };
+    let mut sim = simulation(shared, seed + 1, plan)?;
+    let at = config.first_ms + draw.next(config.spread_ms);
+    sim.run_until(Millis(at));
+    let mut out = Outcome::default();
+    let none = BTreeSet::new();
+    let parts = |id: &str| shared.partitions.get(id).unwrap_or(&none).clone();
+    let (expected, end, struck_at) = match &case.kind {
+        CaseKind::Actuator { actuator, on } => {
+            let at = sim.now().0;
+            sim.inject(FaultSpec {
+                trigger: Trigger::At(at),
+                fault: if *on {
+                    FaultKind::ActuatorStuckOn(actuator.clone())
+                } else {
+                    FaultKind::ActuatorStuckOff(actuator.clone())
+                },
+                duration_ms: None,
+            })
+            .map_err(|p| vec![p])?;
+            out.injected = true;
+            sim.run_until(Millis(at + config.actuator_watch_ms));
+            out.tripped = !sim.engine.trips.is_empty();
+            judge(&sim, &parts(actuator), at, &mut out);
+            out.journal = sim
+                .journal()
+                .iter()
+                .map(|j| format!("{} ms {}: {}", j.time_ms, j.kind, j.text))
+                .collect();
+            return Ok(out);
+        }
+        CaseKind::Sensor { sensor, transient } => {
+            let Some(end) = strike(&mut sim, sensor, transient, &mut draw)? else {
+                out.note = format!("{sensor} never showed the state the fault needs");
+                judge(&sim, &parts(sensor), u64::MAX, &mut out);
+                return Ok(out);
+            };
+            (parts(sensor), end, sim.now().0)
+        }
+        CaseKind::Pair => {
+            let sensors: Vec<&String> = shared.sensors.iter().collect();
+            let a = sensors[draw.next(sensors.len() as u64) as usize].clone();
+            let mut b = sensors[draw.next(sensors.len() as u64) as usize].clone();
+            if b == a {
+                b = sensors
+                    [(sensors.iter().position(|s| **s == a).unwrap_or(0) + 1) % sensors.len()]
+                .clone();
+            }
+            let pick = |draw: &mut Draw| {
+                let l = config.lengths_ms[draw.next(config.lengths_ms.len() as u64) as usize];
+                match draw.next(3) {
+                    0 => Transient::Dropout(l),
+                    1 => Transient::Pulse(l),
+                    _ => Transient::Flicker,
+                }
+            };
+            let (ta, tb) = (pick(&mut draw), pick(&mut draw));
+            let gap = draw.next(3_000);
+            out.note = format!("{a} {ta:?} then {b} {tb:?} {gap} ms later");
+            let Some(end_a) = strike(&mut sim, &a, &ta, &mut draw)? else {
+                judge(&sim, &parts(&a), u64::MAX, &mut out);
+                return Ok(out);
+            };
+            let first = sim.now().0;
+            sim.run_until(Millis(first + gap));
+            out.during_trip = sim.engine.is_tripped();
+            let end_b = strike(&mut sim, &b, &tb, &mut draw)?.unwrap_or(end_a);
+            let mut e = parts(&a);
+            e.extend(parts(&b));
+            (e, end_a.max(end_b), first)
+        }
+    };
+    out.injected = true;
+    sim.run_until(Millis(end + config.settle_ms));
+    let before = delivered(&sim);
+    recover(&mut sim);
+    let reset_at = sim.now().0;
+    sim.run_until(Millis(reset_at + config.recover_ms));
+    out.tripped = !sim.engine.trips.is_empty();
+    out.restored =
+        Some(!sim.engine.is_tripped() && delivered(&sim) >= before + config.restored_items);
+    judge(&sim, &expected, struck_at, &mut out);
+    out.journal = sim
+        .journal()
+        .iter()
+        .map(|j| format!("{} ms {}: {}", j.time_ms, j.kind, j.text))
+        .collect();
+    if out.restored == Some(false) {
+        out.note = format!(
+            "{} not restored: {} items delivered in {} s after the reset at {reset_at} ms, filter {}",
+            out.note,
+            delivered(&sim) - before,
+            config.recover_ms / 1000,
+            if sim.engine.is_tripped() {
+                "tripped"
+            } else {
+                "not tripped"
+            }
+        );
+    }
+    Ok(out)
+}
+
+/// The shortest arrival period, among the layout's own and shorter ones (a step of
+/// 500 ms down to 1 s), at which `minutes` of fault-free production with the filter and
+/// the diagnosers on give no trip, no hazard, no certain diagnosis and deliver every
+/// item but the last few (the queue does not grow).
+pub fn sustained_period(
+    shared_dir: &Path,
+    minutes: u64,
+    threads: usize,
+) -> Result<u64, Vec<Problem>> {
+    let shared = load(shared_dir)?;
+    sustained(&shared, minutes, threads)
+}
+
+fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {
+    let layout = crate::emulator::Layout::load(&shared.bundle.dir.join("layout.ron"))?;
+    Ok(match layout.source.arrivals {
+        ArrivalPlan::Periodic {
+            period_ms,
+            jitter_ms,
+            ..
+        } => (period_ms, jitter_ms),
+        _ => (15_000, 0),
+    })
+}
+
+fn sustained(shared: &Shared, minutes: u64, threads: usize) -> Result<u64, Vec<Problem>> {
+    let (nominal, _) = layout_plan(shared)?;
+    let periods: Vec<u64> = (0..)
+        .map(|k| nominal.saturating_sub(500 * k))
+        .take_while(|&p| p >= 1_000)
+        .collect();
+    let duration = minutes * 60_000;
+    let ok = parallel(&periods, threads, &|&p| -> Result<bool, Vec<Problem>> {
+        let plan = ArrivalPlan::Periodic {
+            period_ms: p,
+            jitter_ms: 0,
+            mix: SizeMix::Alternate,
+            count: None,
+        };
+        let mut sim = simulation(shared, 77, &plan)?;
+        sim.run_until(Millis(duration));
+        let diagnosed = sim
+            .diagnosers
+            .as_ref()
+            .is_some_and(|d| d.diagnoses.iter().any(|x| !x.partition.is_empty()));
+        let expected = (duration / p) as u32;
+        Ok(sim.engine.trips.is_empty()
+            && sim.emulator.hazards().is_empty()
+            && !diagnosed
+            && delivered(&sim) + 4 >= expected)
+    });
+    let mut best = nominal;
+    for (p, r) in periods.iter().zip(ok) {
+        if r? {
+            best = *p;
+        } else {
+            break;
+        }
+    }
+    Ok(best)
+}
+
+fn load(dir: &Path) -> Result<Shared, Vec<Problem>> {
+    let (bundle, _) = PlantBundle::load(dir)?;
+    let program = Arc::new(CompiledProgram::load(
+        &dir.join("programs/reference.ron"),
+        &bundle.plant,
+    )?);
+    let file =
+        super::model::DiagnoserFile::load(&dir.join("diagnosers.ron")).map_err(|p| vec![p])?;
+    let mut partitions: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for c in &file.components {
+        for p in &c.partitions {
+            if let Some(s) = &p.sensor {
+                partitions
+                    .entry(s.clone())
+                    .or_default()
+                    .insert(p.id.clone());
+            }
+            for a in &p.actuators {
+                partitions
+                    .entry(a.clone())
+                    .or_default()
+                    .insert(p.id.clone());
+            }
+        }
+    }
+    let layout = crate::emulator::Layout::load(&dir.join("layout.ron"))?;
+    let sensors: Vec<String> = layout.sensors.iter().map(|s| s.id.clone()).collect();
+    let actuators = crate::emulator::Emulator::new(&layout, &bundle.plant, 0)
+        .map_err(|p| vec![p])?
+        .actuators();
+    Ok(Shared {
+        bundle,
+        program,
+        partitions,
+        sensors,
+        actuators,
+    })
+}
+
+/// Runs the campaign on the plant in `dir`.
+pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
+    let shared = load(dir)?;
+    let (period, jitter) = layout_plan(&shared)?;
+    let sustained_ms = sustained(&shared, 20, config.threads)?;
+    let plans = (
+        ArrivalPlan::Periodic {
+            period_ms: period,
+            jitter_ms: jitter,
+            mix: SizeMix::Alternate,
+            count: None,
+        },
+        ArrivalPlan::Periodic {
+            period_ms: sustained_ms,
+            jitter_ms: 0,
+            mix: SizeMix::Alternate,
+            count: None,
+        },
+    );
+    let all: Vec<Case> = cases(&shared.sensors, &shared.actuators, &config.lengths_ms)
+        .into_iter()
+        .filter(|c| config.only.as_deref().is_none_or(|o| c.name.contains(o)))
+        .collect();
+    let seeds = config.first_seed..config.first_seed.saturating_add(config.seeds);
+    let jobs: Vec<(usize, u64)> = (0..all.len())
+        .flat_map(|i| seeds.clone().map(move |s| (i, s)))
+        .collect();
+    let results = parallel(&jobs, config.threads, &|&(i, s)| {
+        run_one(&shared, &all[i], s, config, &plans)
+    });
+    let mut rows: Vec<Row> = all
+        .iter()
+        .map(|c| Row {
+            name: c.name.clone(),
+            ..Row::default()
+        })
+        .collect();
+    for (&(i, seed), r) in jobs.iter().zip(results) {
+        let o = r?;
+        let row = &mut rows[i];
+        row.runs += 1;
+        row.injected += usize::from(o.injected);
+        row.hazards += o.hazards.len();
+        row.wrong += o.wrong.len();
+        row.right += o.right;
+        row.trips += usize::from(o.tripped);
+        row.during_trip += usize::from(o.during_trip);
+        match o.restored {
+            Some(true) => row.restored += 1,
+            Some(false) => row.not_restored += 1,
+            None => {}
+        }
+        let mut fail = |t: String| {
+            if row.failures.len() < 5 {
+                row.failures.push(format!("seed {seed}: {t}"));
+            }
+        };
+        for h in &o.hazards {
+            fail(format!("hazard {h} ({})", o.note));
+        }
+        for w in &o.wrong {
+            fail(format!("wrong diagnosis {w} ({})", o.note));
+        }
+        if o.restored == Some(false) {
+            fail(o.note.clone());
+        }
+        let failed = !o.hazards.is_empty() || !o.wrong.is_empty() || o.restored == Some(false);
+        if failed && row.first_failure_journal.is_empty() {
+            row.first_failure_journal.push(format!("seed {seed}"));
+            row.first_failure_journal.extend(o.journal);
+        }
+    }
+    let hours: Vec<u64> = (0..config.fault_free_hours).collect();
+    let free = parallel(&hours, config.threads, &|&h| -> Result<
+        FaultFree,
+        Vec<Problem>,
+    > {
+        let mut sim = simulation(&shared, 20_000 + h, &plans.0)?;
+        sim.run_until(Millis(3_600_000));
+        let mut examples: Vec<String> = sim
+            .journal()
+            .iter()
+            .filter(|j| j.kind == "plausibility" || j.kind == "diagnosis")
+            .take(3)
+            .map(|j| format!("hour {h}, {} ms {}: {}", j.time_ms, j.kind, j.text))
+            .collect();
+        examples.truncate(3);
+        Ok(FaultFree {
+            hours: 1,
+            delivered: u64::from(delivered(&sim)),
+            trips: sim.engine.trips.len(),
+            hazards: sim.emulator.hazards().len(),
+            diagnoses: sim.diagnosers.as_ref().map_or(0, |d| {
+                d.diagnoses
+                    .iter()
+                    .filter(|x| !x.partition.is_empty())
+                    .count()
+            }),
+            held_edges: sim.engine.plausibility.held_edges,
+            examples,
+        })
+    });
+    let mut fault_free = FaultFree::default();
+    for f in free {
+        let f = f?;
+        fault_free.hours += f.hours;
+        fault_free.delivered += f.delivered;
+        fault_free.trips += f.trips;
+        fault_free.hazards += f.hazards;
+        fault_free.diagnoses += f.diagnoses;
+        fault_free.held_edges += f.held_edges;
+        if fault_free.examples.len() < 5 {
+            fault_free.examples.extend(f.examples);
+        }
+    }
+    Ok(Report {
+        seeds: config.seeds,
+        transient_period_ms: (period, jitter),
+        sustained_period_ms: sustained_ms,
+        rows,
+        fault_free,
+    })
+}
