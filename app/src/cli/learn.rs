@@ -240,18 +240,19 @@ pub(crate) fn transients(
     )?;
     writeln!(
         out,
-        "{:<26} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}",
-        "case", "runs", "struck", "trips", "hazard", "wrong", "right", "restor", "stuck"
+        "{:<26} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}",
+        "case", "runs", "struck", "trips", "hazard", "own", "wrong", "right", "restor", "stuck"
     )?;
     for row in &r.rows {
         writeln!(
             out,
-            "{:<26} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}",
+            "{:<26} {:>5} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6} {:>6}",
             row.name,
             row.runs,
             row.injected,
             row.trips,
             row.hazards,
+            row.own_hazards,
             row.wrong,
             row.right,
             row.restored,

@@ -22,6 +22,10 @@ pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
     d.flagged()
         .into_iter()
         .map(|(p, stop, sensor)| match (stop, sensor, monitor) {
+            (false, Some(s), _) if !vigie_core::sim::diagnosis::has_estimate(d, &s) => (
+                format!("{s} at fault (certain): no estimate in its model, {s} is still read"),
+                false,
+            ),
             (true, _, false) => (
                 format!("Actuator partition {p} at fault: the whole system is stopped"),
                 true,

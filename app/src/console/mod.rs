@@ -195,6 +195,7 @@ impl Source {
                 cycle_ms: 10,
                 projection_ms: 10_000,
                 diagnosers: plant_dir.join("diagnosers.ron").exists(),
+                plausibility: true,
             },
             path: plant_dir.join("console.ron"),
         }

@@ -132,6 +132,10 @@ pub struct Row {
     pub injected: usize,
     /// Hazards over all runs.
     pub hazards: usize,
+    /// Actuator faults: the hazards whose elements include the faulted actuator itself
+    /// (a welded conveyor that keeps pushing, a dead one that stops a box under a
+    /// moving neighbour), which no other output can always prevent.
+    pub own_hazards: usize,
     /// Wrong certain diagnoses over all runs.
     pub wrong: usize,
     /// Right certain diagnoses (the faulted element's partition).
@@ -291,6 +295,7 @@ impl Draw {
 struct Outcome {
     injected: bool,
     hazards: Vec<String>,
+    own_hazards: usize,
     wrong: Vec<String>,
     right: usize,
     tripped: bool,
@@ -479,6 +484,12 @@ fn run_one(
             sim.run_until(Millis(at + config.actuator_watch_ms));
             out.tripped = !sim.engine.trips.is_empty();
             judge(&sim, &parts(actuator), at, &mut out);
+            out.own_hazards = sim
+                .emulator
+                .hazards()
+                .iter()
+                .filter(|h| h.elements.iter().any(|e| e == actuator))
+                .count();
             out.journal = sim
                 .journal()
                 .iter()
@@ -702,6 +713,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         row.runs += 1;
         row.injected += usize::from(o.injected);
         row.hazards += o.hazards.len();
+        row.own_hazards += o.own_hazards;
         row.wrong += o.wrong.len();
         row.right += o.right;
         row.trips += usize::from(o.tripped);

@@ -89,6 +89,13 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
                     true,
                     None,
                 ),
+                Some((_, false, Some(s))) if !has_estimate(d, s) => (
+                    format!(
+                        "Diagnosis: fault {f} on sensor {s} (certain); {s} has no estimate in the {c} model: the constraints and the program still read {s}"
+                    ),
+                    false,
+                    None,
+                ),
                 Some((_, false, Some(s))) => (
                     if acts.estimate {
                         format!(
@@ -115,6 +122,15 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
             }
         })
         .collect()
+}
+
+/// True when a component of `d` estimates `sensor` (`EST(sensor)`).
+pub fn has_estimate(d: &Diagnosers, sensor: &str) -> bool {
+    let name = crate::symbols::estimate_name(sensor);
+    d.compiled
+        .components
+        .iter()
+        .any(|c| c.estimates.iter().any(|(n, _)| *n == name))
 }
 
 /// `Ĉ4`: a sensor's name with a hat on its first letter (its estimate).
