@@ -195,13 +195,14 @@ pub(crate) fn transients(
     fault_free_hours: u64,
     only: Option<&str>,
     threads: Option<usize>,
-    json: bool,
+    (json, plausibility): (bool, bool),
 ) -> anyhow::Result<ExitCode> {
     use vigie_core::pop::transients;
     let config = transients::Config {
         seeds,
         first_seed,
         fault_free_hours,
+        plausibility,
         only: only.map(str::to_string),
         threads: threads
             .or_else(|| std::thread::available_parallelism().ok().map(usize::from))
@@ -231,8 +232,9 @@ pub(crate) fn transients(
     }
     writeln!(
         out,
-        "transient-fault campaign: {} seeds per case, filter Enforce, diagnosers on; transients at one item every {} ms (+0..{} ms), actuator faults at the sustained period {} ms ({:.0} s wall)",
+        "transient-fault campaign: {} seeds per case, filter Enforce, diagnosers on, plausibility stage {}; transients at one item every {} ms (+0..{} ms), actuator faults at the sustained period {} ms ({:.0} s wall)",
         r.seeds,
+        if r.plausibility { "on" } else { "off" },
         r.transient_period_ms.0,
         r.transient_period_ms.1,
         r.sustained_period_ms,

@@ -180,6 +180,9 @@ pub(crate) enum Command {
         /// `diagnoser`, `transients`: only faults (cases) whose name contains this.
         #[arg(long)]
         only: Option<String>,
+        /// `transients`: without the plausibility stage (every edge as read), to compare.
+        #[arg(long)]
+        no_plausibility: bool,
     },
     /// Verify the constraint set on the abstract plant model (safety, permissiveness,
     /// invariants, necessity), optionally against SPIN, with benchmarks.
@@ -270,6 +273,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             only,
             threads,
             json,
+            ..
         }) => learn::campaign(
             &cli.plant,
             (from_seed, seeds),
@@ -286,13 +290,14 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             only,
             threads,
             json,
+            no_plausibility,
         }) => learn::transients(
             &cli.plant,
             (from_seed, seeds),
             hours,
             only.as_deref(),
             threads,
-            json,
+            (json, !no_plausibility),
         ),
         Some(Command::Campaign {
             kind,

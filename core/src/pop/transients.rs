@@ -59,6 +59,9 @@ pub struct Config {
     pub restored_items: u32,
     /// Simulated hours of fault-free production (one run per hour, its own seed).
     pub fault_free_hours: u64,
+    /// Run the plausibility stage (false: every edge as read, the filter as it was
+    /// before the stage, for a comparison).
+    pub plausibility: bool,
 }
 
 impl Default for Config {
@@ -76,6 +79,7 @@ impl Default for Config {
             actuator_watch_ms: 60_000,
             restored_items: 2,
             fault_free_hours: 10,
+            plausibility: true,
         }
     }
 }
@@ -164,6 +168,8 @@ pub struct Report {
     /// The shortest arrival period the program sustains without fault, ms (actuator
     /// runs).
     pub sustained_period_ms: u64,
+    /// The plausibility stage ran.
+    pub plausibility: bool,
     /// One row per case.
     pub rows: Vec<Row>,
     /// The fault-free hours.
@@ -265,6 +271,15 @@ struct Shared {
 }
 
 fn simulation(shared: &Shared, seed: u64, plan: &ArrivalPlan) -> Result<Simulation, Vec<Problem>> {
+    simulation_with(shared, seed, plan, true)
+}
+
+fn simulation_with(
+    shared: &Shared,
+    seed: u64,
+    plan: &ArrivalPlan,
+    plausibility: bool,
+) -> Result<Simulation, Vec<Problem>> {
     let mut sim = Simulation::new(
         shared.bundle.clone(),
         (*shared.program).clone(),
@@ -274,6 +289,7 @@ fn simulation(shared: &Shared, seed: u64, plan: &ArrivalPlan) -> Result<Simulati
             explain: false,
         },
     )?;
+    sim.engine.set_plausibility(plausibility);
     sim.enable_diagnosers()?;
     sim.emulator.set_arrivals(plan.clone());
     let _ = sim.act(&OperatorAction::Start);
@@ -461,7 +477,7 @@ fn run_one(
     }
     let actuator = matches!(case.kind, CaseKind::Actuator { .. });
     let plan = if actuator { &plans.1 } else { &plans.0 };
-    let mut sim = simulation(shared, seed + 1, plan)?;
+    let mut sim = simulation_with(shared, seed + 1, plan, config.plausibility)?;
     let at = config.first_ms + draw.next(config.spread_ms);
     sim.run_until(Millis(at));
     let mut out = Outcome::default();
@@ -748,7 +764,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         FaultFree,
         Vec<Problem>,
     > {
-        let mut sim = simulation(&shared, 20_000 + h, &plans.0)?;
+        let mut sim = simulation_with(&shared, 20_000 + h, &plans.0, config.plausibility)?;
         sim.run_until(Millis(3_600_000));
         let mut examples: Vec<String> = sim
             .journal()
@@ -790,6 +806,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         seeds: config.seeds,
         transient_period_ms: (period, jitter),
         sustained_period_ms: sustained_ms,
+        plausibility: config.plausibility,
         rows,
         fault_free,
     })
