@@ -258,16 +258,19 @@ impl Plausibility {
                 self.held_edges += 1;
                 let edge = if read { "fall" } else { "rise" };
                 let confirm = if read { r.fall_confirm } else { r.rise_confirm };
-                self.notices.push(Notice {
-                    time_ms: t,
-                    sensor: self.names[k].clone(),
-                    suspect: false,
-                    text: format!(
-                        "{}: a {edge} of {} ms filtered (shorter than its {confirm} ms confirmation)",
-                        self.names[k],
-                        t.saturating_sub(from)
-                    ),
-                });
+                push_bounded(
+                    &mut self.notices,
+                    Notice {
+                        time_ms: t,
+                        sensor: self.names[k].clone(),
+                        suspect: false,
+                        text: format!(
+                            "{}: a {edge} of {} ms filtered (shorter than its {confirm} ms confirmation)",
+                            self.names[k],
+                            t.saturating_sub(from)
+                        ),
+                    },
+                );
             }
             match (suspect, st.suspect_since) {
                 (true, None) => {
@@ -275,28 +278,34 @@ impl Plausibility {
                     self.held_edges += 1;
                     let edge = if read { "rise" } else { "fall" };
                     let held = u8::from(st.accepted);
-                    self.notices.push(Notice {
-                        time_ms: t,
-                        sensor: self.names[k].clone(),
-                        suspect: true,
-                        text: format!(
-                            "{} suspect: implausible {edge} (the plant's physics does not allow it now); {} held at {held}",
-                            self.names[k], self.names[k]
-                        ),
-                    });
+                    push_bounded(
+                        &mut self.notices,
+                        Notice {
+                            time_ms: t,
+                            sensor: self.names[k].clone(),
+                            suspect: true,
+                            text: format!(
+                                "{} suspect: implausible {edge} (the plant's physics does not allow it now); {} held at {held}",
+                                self.names[k], self.names[k]
+                            ),
+                        },
+                    );
                 }
                 (false, Some(from)) => {
                     st.suspect_since = None;
-                    self.notices.push(Notice {
-                        time_ms: t,
-                        sensor: self.names[k].clone(),
-                        suspect: false,
-                        text: format!(
-                            "{} plausible again after {} ms",
-                            self.names[k],
-                            t.saturating_sub(from)
-                        ),
-                    });
+                    push_bounded(
+                        &mut self.notices,
+                        Notice {
+                            time_ms: t,
+                            sensor: self.names[k].clone(),
+                            suspect: false,
+                            text: format!(
+                                "{} plausible again after {} ms",
+                                self.names[k],
+                                t.saturating_sub(from)
+                            ),
+                        },
+                    );
                 }
                 _ => {}
             }
@@ -345,6 +354,16 @@ impl Plausibility {
             .filter(|(s, _)| s.suspect_since.is_some())
             .map(|(_, n)| n.clone())
             .collect()
+    }
+}
+
+/// Notices kept until taken; a caller that never takes them (a benchmark, a replay)
+/// keeps the first ones only.
+const MAX_NOTICES: usize = 1024;
+
+fn push_bounded(notices: &mut Vec<Notice>, n: Notice) {
+    if notices.len() < MAX_NOTICES {
+        notices.push(n);
     }
 }
 

@@ -745,7 +745,7 @@ impl Simulation {
 
     /// Sensors whose implausible edge was held this cycle (an alarm while suspect) or
     /// that are plausible again (the alarm ends).
-    fn plausibility_events(&mut self, now: Millis) {
+    pub(crate) fn plausibility_events(&mut self, now: Millis) {
         for n in self.engine.plausibility.take_notices() {
             let key = format!("plausibility:{}", n.sensor);
             if n.suspect {

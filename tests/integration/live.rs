@@ -404,6 +404,79 @@ fn gateway_enforces_the_hold_of_a4() {
     gw.stop();
 }
 
+/// Issue 17's first finding behind a gateway: the beam at the right exit drops out
+/// while a box leaves the table, the PLC (which reads the plant's own inputs) takes it
+/// for the box's departure and releases A4; the gateway's plausibility stage holds C7 (no
+/// box crosses a beam that fast), so the trip names CSs10 = C7 . /A4 (C7 read as 1)
+/// and the table stays held.
+#[test]
+fn gateway_holds_the_table_through_a_dropout_of_c7() {
+    let mut plant = Plant::start(None);
+    let mut gw = Gateway::start(&gateway_config(plant.port, "diagnosers: false"));
+    let server = gw.listening();
+    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    // Edges as the physics allows them: a box comes onto the table while A1 runs, the
+    // table leaves C4 once A4 is applied and reaches C5, the box reaches C7 while the
+    // rollers and the exit conveyor run (it still covers C6: CSs8 holds the table too,
+    // and only a C7 read as 1 adds CSs10 to the trip).
+    plant.set_inputs(&[(C4, true)]);
+    wait_until("the PLC to see C4", || plc.sensors() == "di 00001000000");
+    plc.command("0100000");
+    wait_until("the plant to run A1", || plant.coils() == "0100000");
+    plant.set_inputs(&[(C6, true)]);
+    wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
+    plc.command("0000100");
+    wait_until("the plant to rotate", || plant.coils() == "0000100");
+    plant.set_inputs(&[(C4, false)]);
+    wait_until("the PLC to see the table leave", || {
+        plc.sensors() == "di 00000010000"
+    });
+    plant.set_inputs(&[(C5, true)]);
+    wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
+    plc.command("0001101");
+    wait_until("the plant to evacuate right", || plant.coils() == "0001101");
+    plant.set_inputs(&[(C7, true)]);
+    wait_until("the PLC to see C5 C6 C7", || {
+        plc.sensors() == "di 00000111000"
+    });
+    // The dropout: the PLC sees C7 fall and releases A4.
+    plant.set_inputs(&[(C7, false)]);
+    wait_until("the PLC to see C7 drop out", || {
+        plc.sensors() == "di 00000110000"
+    });
+    let held = gw.event("C7 suspect", |e| {
+        e["event"] == "alarm" && e["key"] == "plausibility:C7"
+    });
+    assert!(
+        held["message"].as_str().unwrap().contains("C7 held at 1"),
+        "{held}"
+    );
+    plc.command("0001001");
+    let trip = gw.event("trip on CSs10", |e| {
+        e["event"] == "trip"
+            && e["record"]["constraints"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|c| c["id"] == "CSs10"))
+    });
+    assert_eq!(trip["record"]["enforced"], true);
+    wait_until("the plant to keep A4 on", || {
+        plant.coils().as_bytes()[4] == b'1'
+    });
+    for _ in 0..20 {
+        assert_eq!(
+            plant.coils().as_bytes()[4],
+            b'1',
+            "A4 must stay ON under the box"
+        );
+    }
+    // The beam sees the box again: the suspicion ends.
+    plant.set_inputs(&[(C7, true)]);
+    gw.event("C7 plausible again", |e| {
+        e["event"] == "alarm_cleared" && e["key"] == "plausibility:C7"
+    });
+    let _ = gw.stop();
+}
+
 #[test]
 fn plc_killed_gives_safe_outputs_then_recovers() {
     let mut plant = Plant::start(None);

@@ -298,6 +298,30 @@ struct LiveDiagnosers {
     reset_pending: bool,
 }
 
+/// The plausibility stage's notices of this cycle as events and alarms: an alarm
+/// `plausibility:<sensor>` while a sensor is suspect (an edge its physics does not allow
+/// held), cleared when its reading is plausible again.
+fn plausibility_events(engine: &mut Engine, board: &mut AlarmBoard, emit: Emit<'_>) {
+    for n in engine.plausibility.take_notices() {
+        let key = format!("plausibility:{}", n.sensor);
+        let now = Millis(n.time_ms);
+        if n.suspect {
+            board.raise(emit, now, &key, AlarmKind::Plausibility, n.text);
+        } else {
+            emit(
+                json!({"event": "plausibility", "sensor": n.sensor, "text": n.text, "time_ms": n.time_ms}),
+            );
+            if board
+                .alarms
+                .active_keys(AlarmKind::Plausibility)
+                .contains(&key)
+            {
+                board.clear(emit, now, &key);
+            }
+        }
+    }
+}
+
 /// The engine with the sensors the diagnosers estimate (a flagged sensor is read from
 /// its estimate by the observers and the constraints) and the plausibility stage on or
 /// off as configured.
@@ -515,6 +539,7 @@ impl Cycle for MonitorCycle {
             ),
             None => LinkStep::Skipped,
         };
+        plausibility_events(&mut self.engine, &mut self.board, &mut *self.emit);
         if let Some(t) = &mut self.tasks {
             let d = self.diagnosers.as_ref();
             t.step(&mut self.engine, now, d, &mut self.board, &mut *self.emit);
@@ -863,6 +888,7 @@ impl Cycle for GatewayCycle {
             ),
             None => LinkStep::Skipped,
         };
+        plausibility_events(&mut self.engine, &mut self.board, &mut *self.emit);
         if let Some(t) = &mut self.tasks {
             let d = self.diagnosers.as_ref();
             t.step(&mut self.engine, now, d, &mut self.board, &mut *self.emit);

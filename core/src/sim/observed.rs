@@ -106,6 +106,7 @@ impl Simulation {
             }
         }
         self.diagnosis_events(now);
+        self.plausibility_events(now);
         if let Some(index) = self.record_events(now)
             && self.options.explain
             && let Some((ex, projected)) = explain_live_projected(
