@@ -204,7 +204,7 @@ impl Plausibility {
 
     /// Starts from `frame`'s inputs at t as accepted values (a cold start or an attach):
     /// no edge before them is known.
-    pub fn restart(&mut self, frame: &Frame) {
+    fn restart(&mut self, frame: &Frame) {
         for (r, st) in self.rules.iter().zip(&mut self.states) {
             *st = State {
                 accepted: frame.now(Space::Input).get(r.input),
@@ -258,19 +258,12 @@ impl Plausibility {
                 self.held_edges += 1;
                 let edge = if read { "fall" } else { "rise" };
                 let confirm = if read { r.fall_confirm } else { r.rise_confirm };
-                push_bounded(
-                    &mut self.notices,
-                    Notice {
-                        time_ms: t,
-                        sensor: self.names[k].clone(),
-                        suspect: false,
-                        text: format!(
-                            "{}: a {edge} of {} ms filtered (shorter than its {confirm} ms confirmation)",
-                            self.names[k],
-                            t.saturating_sub(from)
-                        ),
-                    },
+                let name = &self.names[k];
+                let text = format!(
+                    "{name}: a {edge} of {} ms filtered (shorter than its {confirm} ms confirmation)",
+                    t.saturating_sub(from)
                 );
+                notice(&mut self.notices, t, name, false, text);
             }
             match (suspect, st.suspect_since) {
                 (true, None) => {
@@ -278,34 +271,18 @@ impl Plausibility {
                     self.held_edges += 1;
                     let edge = if read { "rise" } else { "fall" };
                     let held = u8::from(st.accepted);
-                    push_bounded(
-                        &mut self.notices,
-                        Notice {
-                            time_ms: t,
-                            sensor: self.names[k].clone(),
-                            suspect: true,
-                            text: format!(
-                                "{} suspect: implausible {edge} (the plant's physics does not allow it now); {} held at {held}",
-                                self.names[k], self.names[k]
-                            ),
-                        },
+                    let name = &self.names[k];
+                    let text = format!(
+                        "{name} suspect: implausible {edge} (the plant's physics does not allow it now); {name} held at {held}"
                     );
+                    notice(&mut self.notices, t, name, true, text);
                 }
                 (false, Some(from)) => {
                     st.suspect_since = None;
-                    push_bounded(
-                        &mut self.notices,
-                        Notice {
-                            time_ms: t,
-                            sensor: self.names[k].clone(),
-                            suspect: false,
-                            text: format!(
-                                "{} plausible again after {} ms",
-                                self.names[k],
-                                t.saturating_sub(from)
-                            ),
-                        },
-                    );
+                    let name = &self.names[k];
+                    let text =
+                        format!("{name} plausible again after {} ms", t.saturating_sub(from));
+                    notice(&mut self.notices, t, name, false, text);
                 }
                 _ => {}
             }
@@ -345,25 +322,20 @@ impl Plausibility {
     pub fn take_notices(&mut self) -> Vec<Notice> {
         std::mem::take(&mut self.notices)
     }
-
-    /// The sensors suspect now.
-    pub fn suspects(&self) -> Vec<String> {
-        self.states
-            .iter()
-            .zip(&self.names)
-            .filter(|(s, _)| s.suspect_since.is_some())
-            .map(|(_, n)| n.clone())
-            .collect()
-    }
 }
 
 /// Notices kept until taken; a caller that never takes them (a benchmark, a replay)
 /// keeps the first ones only.
 const MAX_NOTICES: usize = 1024;
 
-fn push_bounded(notices: &mut Vec<Notice>, n: Notice) {
+fn notice(notices: &mut Vec<Notice>, time_ms: u64, sensor: &str, suspect: bool, text: String) {
     if notices.len() < MAX_NOTICES {
-        notices.push(n);
+        notices.push(Notice {
+            time_ms,
+            sensor: sensor.to_string(),
+            suspect,
+            text,
+        });
     }
 }
 

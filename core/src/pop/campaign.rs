@@ -438,8 +438,18 @@ pub(crate) fn parallel<T: Send + Sync, R: Send>(
         .collect()
 }
 
-/// Runs the campaign on the plant in `dir`.
-pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
+/// What the diagnosers' campaigns load from a plant folder: the bundle, its reference
+/// program compiled, and its diagnoser file.
+pub(crate) fn load_reference(
+    dir: &Path,
+) -> Result<
+    (
+        PlantBundle,
+        Arc<CompiledProgram>,
+        super::model::DiagnoserFile,
+    ),
+    Vec<Problem>,
+> {
     let (bundle, _) = PlantBundle::load(dir)?;
     let program = Arc::new(CompiledProgram::load(
         &dir.join("programs/reference.ron"),
@@ -447,6 +457,12 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
     )?);
     let file =
         super::model::DiagnoserFile::load(&dir.join("diagnosers.ron")).map_err(|p| vec![p])?;
+    Ok((bundle, program, file))
+}
+
+/// Runs the campaign on the plant in `dir`.
+pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
+    let (bundle, program, file) = load_reference(dir)?;
     let shared = Shared { bundle, program };
     let injections: Vec<Injection> = library(&file)
         .into_iter()

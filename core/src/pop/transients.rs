@@ -9,7 +9,7 @@
 //! - **Pairs**: two transients of two sensors, the second shortly after the first (so
 //!   sometimes during the trip the first caused).
 //! - **Welded and dead actuators** (stuck on, stuck off for good) at the highest
-//!   arrival rate the program sustains without fault ([`sustained_period`]).
+//!   arrival rate the program sustains without fault (searched first).
 //!
 //! Every run counts the hazards of the emulator and the *wrong* certain diagnoses (a
 //! certain diagnosis naming a partition that does not hold the faulted element, or any
@@ -270,11 +270,7 @@ struct Shared {
     actuators: Vec<String>,
 }
 
-fn simulation(shared: &Shared, seed: u64, plan: &ArrivalPlan) -> Result<Simulation, Vec<Problem>> {
-    simulation_with(shared, seed, plan, true)
-}
-
-fn simulation_with(
+fn simulation(
     shared: &Shared,
     seed: u64,
     plan: &ArrivalPlan,
@@ -477,7 +473,7 @@ fn run_one(
     }
     let actuator = matches!(case.kind, CaseKind::Actuator { .. });
     let plan = if actuator { &plans.1 } else { &plans.0 };
-    let mut sim = simulation_with(shared, seed + 1, plan, config.plausibility)?;
+    let mut sim = simulation(shared, seed + 1, plan, config.plausibility)?;
     let at = config.first_ms + draw.next(config.spread_ms);
     sim.run_until(Millis(at));
     let mut out = Outcome::default();
@@ -585,19 +581,6 @@ fn run_one(
     Ok(out)
 }
 
-/// The shortest arrival period, among the layout's own and shorter ones (a step of
-/// 500 ms down to 1 s), at which `minutes` of fault-free production with the filter and
-/// the diagnosers on give no trip, no hazard, no certain diagnosis and deliver every
-/// item but the last few (the queue does not grow).
-pub fn sustained_period(
-    shared_dir: &Path,
-    minutes: u64,
-    threads: usize,
-) -> Result<u64, Vec<Problem>> {
-    let shared = load(shared_dir)?;
-    sustained(&shared, minutes, threads)
-}
-
 fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {
     let layout = crate::emulator::Layout::load(&shared.bundle.dir.join("layout.ron"))?;
     Ok(match layout.source.arrivals {
@@ -610,6 +593,10 @@ fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {
     })
 }
 
+/// The shortest arrival period, among the layout's own and shorter ones (a step of
+/// 500 ms down to 1 s), at which `minutes` of fault-free production with the filter and
+/// the diagnosers on give no trip, no hazard, no certain diagnosis and deliver every
+/// item but the last few (the queue does not grow).
 fn sustained(shared: &Shared, minutes: u64, threads: usize) -> Result<u64, Vec<Problem>> {
     let (nominal, _) = layout_plan(shared)?;
     let periods: Vec<u64> = (0..)
@@ -624,7 +611,7 @@ fn sustained(shared: &Shared, minutes: u64, threads: usize) -> Result<u64, Vec<P
             mix: SizeMix::Alternate,
             count: None,
         };
-        let mut sim = simulation(shared, 77, &plan)?;
+        let mut sim = simulation(shared, 77, &plan, true)?;
         sim.run_until(Millis(duration));
         let diagnosed = sim
             .diagnosers
@@ -648,13 +635,7 @@ fn sustained(shared: &Shared, minutes: u64, threads: usize) -> Result<u64, Vec<P
 }
 
 fn load(dir: &Path) -> Result<Shared, Vec<Problem>> {
-    let (bundle, _) = PlantBundle::load(dir)?;
-    let program = Arc::new(CompiledProgram::load(
-        &dir.join("programs/reference.ron"),
-        &bundle.plant,
-    )?);
-    let file =
-        super::model::DiagnoserFile::load(&dir.join("diagnosers.ron")).map_err(|p| vec![p])?;
+    let (bundle, program, file) = super::campaign::load_reference(dir)?;
     let mut partitions: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     for c in &file.components {
         for p in &c.partitions {
@@ -764,7 +745,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         FaultFree,
         Vec<Problem>,
     > {
-        let mut sim = simulation_with(&shared, 20_000 + h, &plans.0, config.plausibility)?;
+        let mut sim = simulation(&shared, 20_000 + h, &plans.0, config.plausibility)?;
         sim.run_until(Millis(3_600_000));
         let mut examples: Vec<String> = sim
             .journal()
