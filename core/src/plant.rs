@@ -107,6 +107,13 @@ pub struct PlausibleRule {
     /// A fall is plausible only when this holds.
     #[serde(default)]
     pub fall_when: Option<String>,
+    /// The rise condition must have held without a break this long, ms (a travel
+    /// time: the turntable reaches C5 no sooner than 2.7 s after A4 was applied).
+    #[serde(default)]
+    pub rise_when_for_ms: u64,
+    /// The fall condition must have held without a break this long, ms.
+    #[serde(default)]
+    pub fall_when_for_ms: u64,
     /// A plausible rise is taken once the reading has stayed 1 this long, ms (a
     /// shorter pulse is filtered).
     #[serde(default)]

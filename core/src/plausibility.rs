@@ -9,6 +9,9 @@
 //! - while its `rise_when` / `fall_when` condition holds (an item moves only while a
 //!   drive under it runs; an axis leaves a position only once its motion is ordered).
 //!
+//! A condition may also have to hold for a time (`rise_when_for_ms`): a travel time
+//! after the order (the turntable cannot reach C5 sooner than the rotation takes).
+//!
 //! A plausible edge may also wait for a confirmation (`rise_confirm_ms`,
 //! `fall_confirm_ms`): it is taken once the reading has kept its new value that long
 //! since the edge became plausible, and a shorter transient is filtered (a beam whose
@@ -65,6 +68,8 @@ struct Rule {
     fall: Option<Dnf>,
     rise_confirm: u64,
     fall_confirm: u64,
+    rise_for: u64,
+    fall_for: u64,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -77,6 +82,9 @@ struct State {
     suspect_since: Option<u64>,
     /// A plausible edge waits for its confirmation since then.
     pending_since: Option<u64>,
+    /// The rise / fall condition has held without a break since then.
+    rise_cond_since: Option<u64>,
+    fall_cond_since: Option<u64>,
 }
 
 /// A change of a sensor's suspicion, for the journal and the alarms.
@@ -112,6 +120,10 @@ pub struct ExportRule<'a> {
     pub rise_confirm_ms: u64,
     /// See [`crate::plant::PlausibleRule`].
     pub fall_confirm_ms: u64,
+    /// See [`crate::plant::PlausibleRule`].
+    pub rise_when_for_ms: u64,
+    /// See [`crate::plant::PlausibleRule`].
+    pub fall_when_for_ms: u64,
 }
 
 /// The compiled rules of a plant and their state.
@@ -178,6 +190,8 @@ impl Plausibility {
                 fall,
                 rise_confirm: r.rise_confirm_ms,
                 fall_confirm: r.fall_confirm_ms,
+                rise_for: r.rise_when_for_ms,
+                fall_for: r.fall_when_for_ms,
             });
             names.push(s.id.clone());
         }
@@ -211,6 +225,8 @@ impl Plausibility {
                 since: None,
                 suspect_since: None,
                 pending_since: None,
+                rise_cond_since: None,
+                fall_cond_since: None,
             };
         }
     }
@@ -234,16 +250,36 @@ impl Plausibility {
         decided.clear();
         for (k, r) in self.rules.iter().enumerate() {
             let st = &mut self.states[k];
+            // The conditions held for a time are tracked every cycle.
+            let holds = |d: &Option<Dnf>| d.as_ref().is_none_or(|d| eval_dnf(d, frame));
+            let held_for = |c: bool, since: &mut Option<u64>| {
+                if c {
+                    t.saturating_sub(*since.get_or_insert(t))
+                } else {
+                    *since = None;
+                    0
+                }
+            };
+            let rise_ok = if r.rise_for > 0 {
+                held_for(holds(&r.rise), &mut st.rise_cond_since) >= r.rise_for
+            } else {
+                true
+            };
+            let fall_ok = if r.fall_for > 0 {
+                held_for(holds(&r.fall), &mut st.fall_cond_since) >= r.fall_for
+            } else {
+                true
+            };
             let read = frame.now(Space::Input).get(r.input);
             let mut suspect = false;
             if read != st.accepted {
                 let since = st.since.map_or(u64::MAX, |s| t.saturating_sub(s));
-                let (window, cond) = if read {
-                    (r.min_off, &r.rise)
+                let (window, cond, timed) = if read {
+                    (r.min_off, &r.rise, rise_ok)
                 } else {
-                    (r.min_on, &r.fall)
+                    (r.min_on, &r.fall, fall_ok)
                 };
-                let plausible = since >= window && cond.as_ref().is_none_or(|d| eval_dnf(d, frame));
+                let plausible = since >= window && timed && holds(cond);
                 let confirm = if read { r.rise_confirm } else { r.fall_confirm };
                 if !plausible {
                     suspect = true;
@@ -309,6 +345,8 @@ impl Plausibility {
                 fall_when: r.fall.as_ref(),
                 rise_confirm_ms: r.rise_confirm,
                 fall_confirm_ms: r.fall_confirm,
+                rise_when_for_ms: r.rise_for,
+                fall_when_for_ms: r.fall_for,
             })
             .collect()
     }

@@ -321,6 +321,7 @@ fn gateway_config(plant_port: u16, extra: &str) -> String {
 }
 
 // Sensor addresses of the sorting station (discrete inputs) and actuator positions.
+const C3: u16 = 3;
 const C4: u16 = 4;
 const C5: u16 = 5;
 const C6: u16 = 6;
@@ -404,6 +405,27 @@ fn gateway_enforces_the_hold_of_a4() {
     gw.stop();
 }
 
+/// A box crosses C3 onto the table at C4 with A1 and the rollers A2 on (CSc2: never
+/// onto stopped rollers): the beam rises, then falls; the gateway holds the fall until
+/// the shortest box could have crossed (900 ms) and says when it takes it. Then the
+/// PLC stops the rollers again (A1 only), as the program does before the box reaches
+/// C6 (CSs6).
+fn cross_c3(plant: &mut Plant, plc: &mut Plc, gw: &mut Gateway) {
+    plc.command("0110000");
+    wait_until("the plant to run A1 A2", || plant.coils() == "0110000");
+    plant.set_inputs(&[(C3, true)]);
+    wait_until("the PLC to see C3", || plc.sensors().as_bytes()[6] == b'1');
+    plant.set_inputs(&[(C3, false)]);
+    wait_until("the PLC to see C3 clear", || {
+        plc.sensors().as_bytes()[6] == b'0'
+    });
+    gw.event("the fall of C3 taken", |e| {
+        e["event"] == "plausibility" && e["sensor"] == "C3"
+    });
+    plc.command("0100000");
+    wait_until("the plant to run A1 only", || plant.coils() == "0100000");
+}
+
 /// Issue 17's first finding behind a gateway: the beam at the right exit drops out
 /// while a box leaves the table, the PLC (which reads the plant's own inputs) takes it
 /// for the box's departure and releases A4; the gateway's plausibility stage holds C7 (no
@@ -412,17 +434,19 @@ fn gateway_enforces_the_hold_of_a4() {
 #[test]
 fn gateway_holds_the_table_through_a_dropout_of_c7() {
     let mut plant = Plant::start(None);
+    // The empty table at C4 before the gateway starts (its first cycle takes it).
+    plant.set_inputs(&[(C4, true)]);
     let mut gw = Gateway::start(&gateway_config(plant.port, "diagnosers: false"));
     let server = gw.listening();
     let mut plc = Plc::start(server, Some("127.0.0.2"));
-    // Edges as the physics allows them: a box comes onto the table while A1 runs, the
-    // table leaves C4 once A4 is applied and reaches C5, the box reaches C7 while the
-    // rollers and the exit conveyor run (it still covers C6: CSs8 holds the table too,
-    // and only a C7 read as 1 adds CSs10 to the trip).
-    plant.set_inputs(&[(C4, true)]);
+    // Edges as the physics allows them (plant.ron `plausible`): a box crosses C3 while
+    // A1 runs and comes onto the table, the table leaves C4 once A4 is applied and
+    // reaches C5 a rotation later, the box clears C6 while the rollers run to the right
+    // and reaches C7. The gateway holds what comes sooner and says when it takes it.
     wait_until("the PLC to see C4", || plc.sensors() == "di 00001000000");
     plc.command("0100000");
     wait_until("the plant to run A1", || plant.coils() == "0100000");
+    cross_c3(&mut plant, &mut plc, &mut gw);
     plant.set_inputs(&[(C6, true)]);
     wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
     plc.command("0000100");
@@ -433,16 +457,22 @@ fn gateway_holds_the_table_through_a_dropout_of_c7() {
     });
     plant.set_inputs(&[(C5, true)]);
     wait_until("the PLC to see C5 C6", || plc.sensors() == "di 00000110000");
+    gw.event(
+        "the table taken at C5 once the rotation has had its time",
+        |e| e["event"] == "plausibility" && e["sensor"] == "C5",
+    );
     plc.command("0001101");
     wait_until("the plant to evacuate right", || plant.coils() == "0001101");
-    plant.set_inputs(&[(C7, true)]);
-    wait_until("the PLC to see C5 C6 C7", || {
-        plc.sensors() == "di 00000111000"
+    plant.set_inputs(&[(C6, false)]);
+    wait_until("the PLC to see the box leave C6", || {
+        plc.sensors() == "di 00000100000"
     });
+    plant.set_inputs(&[(C7, true)]);
+    wait_until("the PLC to see C5 C7", || plc.sensors() == "di 00000101000");
     // The dropout: the PLC sees C7 fall and releases A4.
     plant.set_inputs(&[(C7, false)]);
     wait_until("the PLC to see C7 drop out", || {
-        plc.sensors() == "di 00000110000"
+        plc.sensors() == "di 00000100000"
     });
     let held = gw.event("C7 suspect", |e| {
         e["event"] == "alarm" && e["key"] == "plausibility:C7"
@@ -756,6 +786,7 @@ fn gateway_stops_the_plant_on_a_certain_fault_of_the_table_drive() {
     // A box comes onto the table with the intermediate conveyor.
     plc.command("0100000");
     wait_until("the plant to receive A1", || plant.coils() == "0100000");
+    cross_c3(&mut plant, &mut plc, &mut gw);
     plant.set_inputs(&[(C6, true)]);
     wait_until("the PLC to see C4 C6", || plc.sensors() == "di 00001010000");
     // The PLC orders the rotation; the table does not move (blocked at C4): no fall of

@@ -7,8 +7,15 @@
 //!   (`plausible` in `plant.ron`) holds such a fall: no box crosses a beam that fast.
 //! - The campaign's dropouts of C6 and C7 (the beams of the table and of the right
 //!   exit), of every length, at random moments of the crossing: no hazard, and
-//!   production restored by the reset in most runs (see `docs/transients.md` for what
-//!   is left: a dropout of C8 in the last fifth of a large box's crossing).
+//!   production restored by the reset in most runs.
+//! - A dropout of C8 late in a large box's crossing (after the 900 ms of the shortest
+//!   box) released the table under the box: C8 now falls no sooner than 350 ms after
+//!   the box has cleared C6 (its rear passes C8 400 ms later, whatever its length).
+//! - A pulse of C4 while the table came back made the program load a box onto a table
+//!   still turning: C4 rises no sooner than 2.85 s after A4 was released, and the
+//!   diagnosers' estimate of C4 waits for the end of the table's arrival window.
+//! - A pulse of C7 or C8 with no box leaving the table tripped the filter and stopped
+//!   production: a box reaches an exit only from the table at C5 with its rollers on.
 
 #![allow(clippy::unwrap_used)] // test helpers: a failure is a test failure
 
@@ -51,28 +58,26 @@ fn production(seed: u64) -> Simulation {
     sim
 }
 
-/// Runs until `sensor` has been on for `after_ms` (bounded), then drops it out for
-/// `length_ms`; returns the time of the dropout.
-fn drop_out_while_a_box_crosses(
+/// Runs until `input` has read `value` without a break for `after_ms` (bounded), then
+/// injects `fault`; returns its time.
+fn strike_after(
     sim: &mut Simulation,
-    sensor: &str,
+    input: &str,
+    value: bool,
     after_ms: u64,
-    length_ms: u64,
+    fault: FaultKind,
 ) -> u64 {
-    let input = sim.bundle.plant.input(sensor).unwrap();
+    let i = sim.bundle.plant.input(input).unwrap();
     let limit = Millis(sim.now().0 + 120_000);
     let mut since = None;
     while sim.now() < limit {
-        if sim.emulator.sensors().get(input) {
+        if sim.emulator.sensors().get(i) == value {
             let s = *since.get_or_insert(sim.now().0);
             if sim.now().0 >= s + after_ms {
                 let at = sim.now().0;
                 sim.inject(FaultSpec {
                     trigger: Trigger::At(at),
-                    fault: FaultKind::SpuriousFall {
-                        sensor: sensor.into(),
-                        pulse_ms: length_ms,
-                    },
+                    fault,
                     duration_ms: None,
                 })
                 .unwrap();
@@ -83,7 +88,39 @@ fn drop_out_while_a_box_crosses(
         }
         sim.cycle();
     }
-    panic!("{sensor} never stayed on {after_ms} ms");
+    panic!("{input} never read {value} for {after_ms} ms");
+}
+
+/// Runs until `sensor` has been on for `after_ms` (bounded), then drops it out for
+/// `length_ms`; returns the time of the dropout.
+fn drop_out_while_a_box_crosses(
+    sim: &mut Simulation,
+    sensor: &str,
+    after_ms: u64,
+    length_ms: u64,
+) -> u64 {
+    let fault = FaultKind::SpuriousFall {
+        sensor: sensor.into(),
+        pulse_ms: length_ms,
+    };
+    strike_after(sim, sensor, true, after_ms, fault)
+}
+
+/// Runs until `input` has read `value` for `after_ms` (bounded), then a pulse of
+/// `sensor` of `length_ms`; returns its time.
+fn pulse_after(
+    sim: &mut Simulation,
+    input: &str,
+    value: bool,
+    after_ms: u64,
+    sensor: &str,
+    length_ms: u64,
+) -> u64 {
+    let fault = FaultKind::SpuriousRise {
+        sensor: sensor.into(),
+        pulse_ms: length_ms,
+    };
+    strike_after(sim, input, value, after_ms, fault)
 }
 
 #[test]
@@ -118,6 +155,150 @@ fn a_dropout_of_c7_while_a_box_leaves_to_the_right_shears_nothing() {
 }
 
 #[test]
+fn a_late_dropout_of_an_exit_beam_releases_no_table_under_a_box() {
+    // Alternate sizes and sides: the boxes leaving left are large (1.27 s at C8), those
+    // leaving right small (1 s at C7).
+    for (seed, sensor, after, length) in [
+        (1, "C8", 950, 300),
+        (2, "C8", 1_050, 100),
+        (3, "C8", 1_100, 500),
+        (4, "C8", 1_000, 20),
+        (5, "C7", 950, 200),
+        (6, "C7", 920, 50),
+    ] {
+        let mut sim = production(seed);
+        sim.run_until(Millis(20_000));
+        let at = drop_out_while_a_box_crosses(&mut sim, sensor, after, length);
+        sim.run_until(Millis(at + 30_000));
+        assert!(
+            sim.emulator.hazards().is_empty(),
+            "seed {seed}, {sensor} out {length} ms {after} ms into the crossing: {:?}",
+            sim.emulator.hazards()
+        );
+        assert!(sim.engine.trips.is_empty(), "seed {seed}: a trip");
+        let s = sim.emulator.stats();
+        assert!(
+            s.delivered_left + s.delivered_right >= 4,
+            "seed {seed}: production goes on"
+        );
+    }
+}
+
+#[test]
+fn a_pulse_of_c4_while_the_table_comes_back_loads_no_box_onto_it() {
+    // C5 off and C4 off: the table is on its way back (or out); the pulse comes late
+    // in the return, when a box waits at C3 for the table.
+    for (seed, after, length) in [
+        (1, 2_400, 20),
+        (2, 2_600, 100),
+        (3, 1_500, 500),
+        (4, 2_550, 10),
+    ] {
+        let mut sim = production(seed);
+        sim.run_until(Millis(20_000));
+        // Wait for the table to leave C5 (its return), then `after` ms of C4 off.
+        let c5 = sim.bundle.plant.input("C5").unwrap();
+        let limit = Millis(sim.now().0 + 60_000);
+        while !sim.emulator.sensors().get(c5) && sim.now() < limit {
+            sim.cycle();
+        }
+        while sim.emulator.sensors().get(c5) && sim.now() < limit {
+            sim.cycle();
+        }
+        assert!(sim.now() < limit, "seed {seed}: the table never came back");
+        let left = sim.now().0;
+        let at = pulse_after(&mut sim, "C4", false, after, "C4", length);
+        assert!(
+            at - left < 2_900,
+            "seed {seed}: the pulse came after the table"
+        );
+        sim.run_until(Millis(at + 30_000));
+        assert!(
+            sim.emulator.hazards().is_empty(),
+            "seed {seed}, pulse of {length} ms {} ms into the return: {:?}",
+            at - left,
+            sim.emulator.hazards()
+        );
+        let s = sim.emulator.stats();
+        assert!(s.delivered_left + s.delivered_right >= 4, "seed {seed}");
+    }
+}
+
+#[test]
+fn a_pulse_of_an_exit_beam_with_the_table_empty_neither_trips_nor_stops_production() {
+    for (seed, sensor, length) in [(1, "C7", 50), (2, "C8", 200), (3, "C7", 500), (4, "C8", 10)] {
+        let mut sim = production(seed);
+        sim.run_until(Millis(20_000));
+        // The table at C4 and empty (C6 off) for a while.
+        let c6 = sim.bundle.plant.input("C6").unwrap();
+        let limit = Millis(sim.now().0 + 60_000);
+        while sim.now() < limit
+            && (sim.emulator.sensors().get(c6)
+                || !sim
+                    .emulator
+                    .sensors()
+                    .get(sim.bundle.plant.input("C4").unwrap()))
+        {
+            sim.cycle();
+        }
+        let at = pulse_after(&mut sim, "C6", false, 300, sensor, length);
+        sim.run_until(Millis(at + 40_000));
+        assert!(
+            sim.emulator.hazards().is_empty(),
+            "seed {seed}: {:?}",
+            sim.emulator.hazards()
+        );
+        assert!(
+            sim.engine.trips.is_empty(),
+            "seed {seed}, pulse of {sensor}: a trip"
+        );
+        assert!(
+            sim.journal()
+                .iter()
+                .any(|j| j.kind == "plausibility" && j.text.contains(&format!("{sensor} suspect"))),
+            "seed {seed}: the held rise is journaled"
+        );
+        let s = sim.emulator.stats();
+        assert!(
+            s.delivered_left + s.delivered_right >= 5,
+            "seed {seed}: production goes on"
+        );
+    }
+}
+
+#[test]
+fn the_campaigns_table_and_exit_pulses_give_no_hazard_and_production_comes_back() {
+    let config = Config {
+        seeds: 4,
+        only: Some("pulse".into()),
+        threads: 2,
+        fault_free_hours: 0,
+        ..Config::default()
+    };
+    let report = run(&station(), &config).unwrap();
+    let rows: Vec<_> = report
+        .rows
+        .iter()
+        .filter(|r| {
+            ["C4 ", "C5 ", "C7 ", "C8 "]
+                .iter()
+                .any(|s| r.name.starts_with(s))
+        })
+        .collect();
+    assert_eq!(rows.len(), 4 * config.lengths_ms.len());
+    for r in &rows {
+        assert!(r.injected > 0, "{}", r.name);
+        assert_eq!(r.hazards, 0, "{}: {:?}", r.name, r.failures);
+        assert_eq!(r.not_restored, 0, "{}: {:?}", r.name, r.failures);
+        // Still open (docs/transients.md): a pulse of C5 sometimes ends, seconds later,
+        // in a certain diagnosis of the right exit's C7.
+        if !r.name.starts_with("C5 ") {
+            assert_eq!(r.wrong, 0, "{}: {:?}", r.name, r.failures);
+        }
+    }
+}
+
+#[test]
 fn the_campaigns_beam_dropouts_give_no_hazard_and_production_comes_back() {
     let config = Config {
         seeds: 6,
@@ -130,9 +311,9 @@ fn the_campaigns_beam_dropouts_give_no_hazard_and_production_comes_back() {
     let rows: Vec<_> = report
         .rows
         .iter()
-        .filter(|r| ["C6 ", "C7 "].iter().any(|s| r.name.starts_with(s)))
+        .filter(|r| ["C6 ", "C7 ", "C8 "].iter().any(|s| r.name.starts_with(s)))
         .collect();
-    assert_eq!(rows.len(), 2 * config.lengths_ms.len());
+    assert_eq!(rows.len(), 3 * config.lengths_ms.len());
     for r in &rows {
         assert!(r.injected > 0, "{}", r.name);
         assert_eq!(r.hazards, 0, "{}: {:?}", r.name, r.failures);

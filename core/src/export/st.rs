@@ -531,6 +531,7 @@ fn plausibility_stage(
         "(* Plausibility of the sensors (plant.ron, `plausible`): an edge the physics does not allow is held. *)"
     );
     let mut first = String::new();
+    let mut track = String::new();
     let mut body = String::new();
     for r in rules {
         let raw = input_name(symbols, rules, r.input);
@@ -560,6 +561,30 @@ fn plausibility_stage(
                 format!("NOW_MS - PL_{k}_PS >= {c}")
             }
         };
+        // A condition held for a time: tracked every cycle, before the decision.
+        let mut timed = |edge: &str, d: Option<&Dnf>, ms: u64| -> String {
+            if ms == 0 {
+                return "TRUE".to_string();
+            }
+            let _ = writeln!(first, "    PL_{k}_{edge}K := FALSE;");
+            let _ = writeln!(
+                track,
+                "IF {} THEN
+    IF NOT PL_{k}_{edge}K THEN
+        PL_{k}_{edge}K := TRUE;
+        PL_{k}_{edge}S := NOW_MS;
+    END_IF;
+ELSE
+    PL_{k}_{edge}K := FALSE;
+END_IF;",
+                cond(d)
+            );
+            locals.push((format!("PL_{k}_{edge}K"), "BOOL"));
+            locals.push((format!("PL_{k}_{edge}S"), "LINT"));
+            format!("PL_{k}_{edge}K AND NOW_MS - PL_{k}_{edge}S >= {ms}")
+        };
+        let rise_timed = timed("R", r.rise_when, r.rise_when_for_ms);
+        let fall_timed = timed("F", r.fall_when, r.fall_when_for_ms);
         let _ = writeln!(
             first,
             "    {acc} := {raw};
@@ -571,10 +596,10 @@ fn plausibility_stage(
             body,
             "    IF {raw} <> {acc} THEN
         IF {raw} THEN
-            PL_OK := {} AND ({});
+            PL_OK := {} AND ({}) AND ({rise_timed});
             PL_CF := {};
         ELSE
-            PL_OK := {} AND ({});
+            PL_OK := {} AND ({}) AND ({fall_timed});
             PL_CF := {};
         END_IF;
         IF NOT PL_OK THEN
@@ -612,7 +637,8 @@ fn plausibility_stage(
     let _ = write!(
         out,
         "IF NOT PL_STARTED THEN
-{first}ELSE
+{first}END_IF;
+{track}IF PL_STARTED THEN
 {body}END_IF;
 PL_STARTED := TRUE;
 "

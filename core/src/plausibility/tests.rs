@@ -50,25 +50,25 @@ impl Rig {
 fn a_dropout_shorter_than_a_crossing_is_held_and_the_real_fall_is_taken() {
     let b = station();
     let mut r = Rig::new(&b);
-    let drives = ["A3", "A6"];
+    let drives = ["A1"];
     r.cycle(0, &[], &drives);
-    r.cycle(10, &["C7"], &drives);
-    assert_eq!(r.read("C7"), (true, false), "the box arrives");
+    r.cycle(10, &["C3"], &drives);
+    assert_eq!(r.read("C3"), (true, false), "the box arrives");
     // 300 ms later the beam drops out for 50 ms: no box crosses C7 that fast.
     r.cycle(310, &[], &drives);
-    assert_eq!(r.read("C7"), (true, true), "held at 1, suspect");
+    assert_eq!(r.read("C3"), (true, true), "held at 1, suspect");
     r.cycle(320, &[], &drives);
-    assert_eq!(r.read("C7"), (true, true));
-    r.cycle(360, &["C7"], &drives);
-    assert_eq!(r.read("C7"), (true, false), "the reading agrees again");
+    assert_eq!(r.read("C3"), (true, true));
+    r.cycle(360, &["C3"], &drives);
+    assert_eq!(r.read("C3"), (true, false), "the reading agrees again");
     assert_eq!(b.plausibility.held_edges, 0);
     assert_eq!(r.engine.plausibility.held_edges, 1);
     // The box leaves 1.2 s after it came: plausible, taken at once.
     r.cycle(1210, &[], &drives);
-    assert_eq!(r.read("C7"), (false, false));
+    assert_eq!(r.read("C3"), (false, false));
     let notices = r.engine.plausibility.take_notices();
     assert_eq!(notices.len(), 2, "{notices:?}");
-    assert!(notices[0].suspect && notices[0].text.contains("C7 suspect"));
+    assert!(notices[0].suspect && notices[0].text.contains("C3 suspect"));
     assert!(!notices[1].suspect);
 }
 
@@ -76,16 +76,16 @@ fn a_dropout_shorter_than_a_crossing_is_held_and_the_real_fall_is_taken() {
 fn a_long_dropout_is_taken_once_the_shortest_crossing_has_passed() {
     let b = station();
     let mut r = Rig::new(&b);
-    let drives = ["A3", "A6"];
+    let drives = ["A1"];
     r.cycle(0, &[], &drives);
-    r.cycle(10, &["C7"], &drives);
+    r.cycle(10, &["C3"], &drives);
     for t in (300..900).step_by(10) {
         r.cycle(t, &[], &drives);
-        assert_eq!(r.read("C7"), (true, true), "at {t} ms");
+        assert_eq!(r.read("C3"), (true, true), "at {t} ms");
     }
     r.cycle(910, &[], &drives);
     assert_eq!(
-        r.read("C7"),
+        r.read("C3"),
         (false, false),
         "900 ms after the rise a fall is plausible"
     );
@@ -97,14 +97,14 @@ fn a_pulse_while_nothing_under_the_beam_moves_is_held_at_0() {
     let mut r = Rig::new(&b);
     r.cycle(0, &[], &[]);
     r.cycle(10, &[], &[]);
-    r.cycle(20, &["C7"], &[]);
-    assert_eq!(r.read("C7"), (false, true));
+    r.cycle(20, &["C3"], &[]);
+    assert_eq!(r.read("C3"), (false, true));
     r.cycle(30, &[], &[]);
-    assert_eq!(r.read("C7"), (false, false));
-    // With the rollers running (applied in the previous cycle) the same rise is real.
-    r.cycle(40, &[], &["A3"]);
-    r.cycle(50, &["C7"], &["A3"]);
-    assert_eq!(r.read("C7"), (true, false));
+    assert_eq!(r.read("C3"), (false, false));
+    // With the belt running (applied in the previous cycle) the same rise is real.
+    r.cycle(40, &[], &["A1"]);
+    r.cycle(50, &["C3"], &["A1"]);
+    assert_eq!(r.read("C3"), (true, false));
 }
 
 #[test]
@@ -162,10 +162,15 @@ fn a_rule_with_a_bad_condition_names_the_sensor_and_the_column() {
         ..Default::default()
     });
     let mut symbols = plant.symbols();
+    // The station's rules read its observers (`P36*` for C6, `P67*` for C7).
+    for o in ["P36", "P67", "2P"] {
+        symbols.declare(o, Space::Observer).unwrap();
+    }
     for n in suspect_names(&plant) {
         symbols.declare(&n, Space::Aux).unwrap();
     }
     let err = Plausibility::new(&plant, &symbols).unwrap_err();
+    assert_eq!(err.len(), 1, "{err:?}");
     assert_eq!(err[0].code, "V0013");
     assert!(err[0].message.contains("`C7`"), "{}", err[0].message);
     assert!(err[0].message.contains("column 7"), "{}", err[0].message);
@@ -233,4 +238,108 @@ fn switching_to_the_estimate_and_back_is_not_an_edge() {
     e.cycle(Millis(30), &inputs, &mut control);
     let f = e.frame();
     assert!(f.now(Space::Input).get(c4) && f.prev(Space::Input).get(c4));
+}
+
+/// Cycles every 10 ms from `from` to `to` (excluded) with the same readings and orders.
+fn hold(r: &mut Rig, from: u64, to: u64, on: &[&str], out: &[&str]) {
+    for t in (from..to).step_by(10) {
+        r.cycle(t, on, out);
+    }
+}
+
+#[test]
+fn the_table_reaches_c5_no_sooner_than_the_rotation_takes() {
+    // C5: `rise_when: "A4*"` held for 2850 ms (the rotation takes about 2.9 s).
+    let b = station();
+    let mut r = Rig::new(&b);
+    hold(&mut r, 0, 100, &["C4"], &["A4"]);
+    hold(&mut r, 100, 1_000, &[], &["A4"]);
+    // A pulse of C5 half-way: the table cannot be there yet.
+    r.cycle(1_000, &["C5"], &["A4"]);
+    assert_eq!(r.read("C5"), (false, true), "held at 0, suspect");
+    hold(&mut r, 1_010, 2_850, &[], &["A4"]);
+    assert_eq!(r.read("C5"), (false, false));
+    // A4* has held since the cycle at 10 ms: at 2850 ms it has held 2840 ms.
+    r.cycle(2_850, &["C5"], &["A4"]);
+    assert_eq!(r.read("C5"), (false, true), "2840 ms of rotation: too soon");
+    r.cycle(2_860, &["C5"], &["A4"]);
+    assert_eq!(
+        r.read("C5"),
+        (true, false),
+        "2850 ms of rotation: the table is there"
+    );
+}
+
+#[test]
+fn releasing_a4_restarts_the_rotation_time() {
+    // The table released half-way comes back: the rise of C5 must wait a whole
+    // rotation again once A4 is applied anew.
+    let b = station();
+    let mut r = Rig::new(&b);
+    hold(&mut r, 0, 2_000, &[], &["A4"]);
+    hold(&mut r, 2_000, 2_100, &[], &[]);
+    hold(&mut r, 2_100, 3_000, &[], &["A4"]);
+    r.cycle(3_000, &["C5"], &["A4"]);
+    assert_eq!(r.read("C5"), (false, true), "890 ms since A4 again");
+}
+
+/// The box on the table at C5, leaving to the left (A2): C8 rises while C6 is still on.
+fn box_leaving_left(r: &mut Rig) {
+    hold(r, 0, 100, &["C5", "C6"], &["A2", "A4", "A5"]);
+    r.cycle(100, &["C5", "C6", "C8"], &["A2", "A4", "A5"]);
+    assert_eq!(r.read("C8"), (true, false), "the box reaches C8");
+}
+
+#[test]
+fn c8_falls_no_sooner_than_400_ms_after_the_box_has_cleared_c6() {
+    // C8: `fall_when: "/C6* . (…)"` held for 350 ms: the rear of a box passes C8 400 ms
+    // after it passes C6, whatever the box's length. A dropout of C8 late in a large
+    // box's crossing (after the 900 ms of the shortest box) is held until then.
+    let b = station();
+    let mut r = Rig::new(&b);
+    box_leaving_left(&mut r);
+    hold(&mut r, 110, 1_000, &["C5", "C6", "C8"], &["A2", "A4", "A5"]);
+    hold(&mut r, 1_000, 1_100, &["C5", "C8"], &["A2", "A4", "A5"]);
+    assert_eq!(r.read("C6"), (false, false), "the rear clears C6");
+    // 100 ms later C8 drops out: the rear cannot have reached C8 yet.
+    hold(&mut r, 1_100, 1_200, &["C5"], &["A2", "A4", "A5"]);
+    assert_eq!(r.read("C8"), (true, true), "held at 1: the table stays");
+    hold(&mut r, 1_200, 1_350, &["C5"], &["A2", "A4", "A5"]);
+    assert_eq!(r.read("C8"), (true, true));
+    hold(&mut r, 1_350, 1_420, &["C5"], &["A2", "A4", "A5"]);
+    assert_eq!(
+        r.read("C8"),
+        (false, false),
+        "350 ms after C6: the box is off the table"
+    );
+}
+
+#[test]
+fn a_pulse_of_c7_or_c8_with_no_box_leaving_the_table_is_held() {
+    // The table at C4, empty: nothing can reach the exits (C7 needs P67, the table at
+    // C5 and A3; C8 a box on the table at C5 and A2).
+    let b = station();
+    let mut r = Rig::new(&b);
+    hold(&mut r, 0, 100, &["C4"], &["A5", "A6"]);
+    r.cycle(100, &["C4", "C7", "C8"], &["A5", "A6"]);
+    assert_eq!(r.read("C7"), (false, true));
+    assert_eq!(r.read("C8"), (false, true));
+    r.cycle(110, &["C4"], &["A5", "A6"]);
+    assert_eq!(r.read("C7"), (false, false));
+    assert_eq!(r.read("C8"), (false, false));
+}
+
+#[test]
+fn a_box_reaches_c6_only_from_c3() {
+    // C6: `rise_when: "P36* . (A1* + A2*)"`: a box on the table came from C3.
+    let b = station();
+    let mut r = Rig::new(&b);
+    hold(&mut r, 0, 100, &["C4"], &["A1", "A2"]);
+    r.cycle(100, &["C4", "C6"], &["A1", "A2"]);
+    assert_eq!(r.read("C6"), (false, true), "no box left C3: held at 0");
+    hold(&mut r, 110, 3_000, &["C4"], &["A1", "A2"]);
+    hold(&mut r, 3_000, 4_000, &["C3", "C4"], &["A1", "A2"]);
+    hold(&mut r, 4_000, 4_200, &["C4"], &["A1", "A2"]);
+    r.cycle(4_200, &["C4", "C6"], &["A1", "A2"]);
+    assert_eq!(r.read("C6"), (true, false), "the box that left C3 arrives");
 }

@@ -1155,9 +1155,13 @@ fn decide(
         // Faults of the partition still possible, in fault order.
         let inside = || (0..nf).filter(|&f| modes[f] && p.faults.contains(&f));
         let n = inside().count();
+        // A component that lost track of its plant (an evolution nothing of its model
+        // explains, `unexplained`) restarted on a guess: a fault outside its model (an
+        // actuator of no partition, a welded one) may explain what follows as well as
+        // its own faults do, so it decides nothing with certainty until the reset.
         let certainty = if n == 0 {
             Certainty::Normal
-        } else if n == count {
+        } else if n == count && !r.unexplained {
             Certainty::Certain
         } else {
             Certainty::Ambiguous
