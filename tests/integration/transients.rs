@@ -334,3 +334,52 @@ fn the_campaigns_beam_dropouts_give_no_hazard_and_production_comes_back() {
     assert_eq!(ff.trips + ff.hazards + ff.diagnoses, 0, "{:?}", ff.examples);
     assert!(ff.delivered > 300, "{}", ff.delivered);
 }
+
+/// A rule that holds a rise on what an upstream sensor said (a box reaches C6 only after
+/// it left C3, C7 only after it cleared C6: tried) blinds the constraints when that
+/// sensor sticks: stuck at 1, C3 never falls, the box on the table went unseen (held at
+/// 0) and was pushed off it (18 hazards on 20 seeds, 0 without the rules); C6 stuck at
+/// 1 hid every box at C7 and the table was released under it (12, 0 without). A sensor
+/// stuck at 1 must never give more hazards with the rules than read as it is.
+/// (Stuck at 0, C0, C3 and C6 give hazards with or without the rules: a dead beam
+/// blinds the constraints that read it, and which box meets it depends on when the
+/// production stops.)
+#[test]
+fn a_sensor_stuck_at_1_gives_no_more_hazards_with_the_plausibility_rules_than_without() {
+    let sensors = [
+        "C0", "C1", "C2", "C3", "C4", "C5", "C6", "C7", "C8", "C9", "C10",
+    ];
+    for sensor in sensors {
+        for one in [true] {
+            let mut hazards = [0usize; 2];
+            for (k, rules) in [false, true].into_iter().enumerate() {
+                for seed in 0..6u64 {
+                    let mut sim = production(seed);
+                    sim.engine.set_plausibility(rules);
+                    let at = 20_000 + (seed * 7_919) % 40_000;
+                    sim.run_until(Millis(at));
+                    let fault = if one {
+                        FaultKind::SensorStuckAt1(sensor.into())
+                    } else {
+                        FaultKind::SensorStuckAt0(sensor.into())
+                    };
+                    sim.inject(FaultSpec {
+                        trigger: Trigger::At(at),
+                        fault,
+                        duration_ms: None,
+                    })
+                    .unwrap();
+                    sim.run_until(Millis(at + 60_000));
+                    hazards[k] += sim.emulator.hazards().len();
+                }
+            }
+            assert!(
+                hazards[1] <= hazards[0],
+                "{sensor} stuck at {}: {} hazards with the rules, {} without",
+                u8::from(one),
+                hazards[1],
+                hazards[0]
+            );
+        }
+    }
+}

@@ -316,8 +316,8 @@ fn c8_falls_no_sooner_than_400_ms_after_the_box_has_cleared_c6() {
 
 #[test]
 fn a_pulse_of_c7_or_c8_with_no_box_leaving_the_table_is_held() {
-    // The table at C4, empty: nothing can reach the exits (C7 needs P67, the table at
-    // C5 and A3; C8 a box on the table at C5 and A2).
+    // The table at C4: nothing can reach the exits (C7 needs the table at C5 and A3, C8
+    // the table at C5 and A2).
     let b = station();
     let mut r = Rig::new(&b);
     hold(&mut r, 0, 100, &["C4"], &["A5", "A6"]);
@@ -330,16 +330,26 @@ fn a_pulse_of_c7_or_c8_with_no_box_leaving_the_table_is_held() {
 }
 
 #[test]
-fn a_box_reaches_c6_only_from_c3() {
-    // C6: `rise_when: "P36* . (A1* + A2*)"`: a box on the table came from C3.
+fn a_box_reaches_c6_only_at_the_loading_position() {
+    // C6: `rise_when: "C4* . (A1* + A2*)"`: a box comes onto the table at C4, pushed by
+    // A1 or drawn by the rollers. (Not "after it left C3", `P36*`: with C3 stuck at 1
+    // that hid every box on the table.)
     let b = station();
     let mut r = Rig::new(&b);
-    hold(&mut r, 0, 100, &["C4"], &["A1", "A2"]);
-    r.cycle(100, &["C4", "C6"], &["A1", "A2"]);
-    assert_eq!(r.read("C6"), (false, true), "no box left C3: held at 0");
-    hold(&mut r, 110, 3_000, &["C4"], &["A1", "A2"]);
-    hold(&mut r, 3_000, 4_000, &["C3", "C4"], &["A1", "A2"]);
-    hold(&mut r, 4_000, 4_200, &["C4"], &["A1", "A2"]);
-    r.cycle(4_200, &["C4", "C6"], &["A1", "A2"]);
-    assert_eq!(r.read("C6"), (true, false), "the box that left C3 arrives");
+    hold(&mut r, 0, 100, &["C5"], &["A2", "A4"]);
+    r.cycle(100, &["C5", "C6"], &["A2", "A4"]);
+    assert_eq!(
+        r.read("C6"),
+        (false, true),
+        "at C5 nothing comes on: held at 0"
+    );
+    hold(&mut r, 110, 200, &["C5"], &["A2", "A4"]);
+    let mut r = Rig::new(&b);
+    hold(&mut r, 0, 100, &["C4"], &["A1"]);
+    r.cycle(100, &["C4", "C6"], &["A1"]);
+    assert_eq!(
+        r.read("C6"),
+        (true, false),
+        "at C4 with A1 on: the box arrives"
+    );
 }
