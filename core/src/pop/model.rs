@@ -61,7 +61,7 @@ pub struct ComponentDef {
     pub faults: Vec<FaultDef>,
     /// Fault partitions: one `def_<id>` flag each.
     pub partitions: Vec<PartitionDef>,
-    /// Sensor estimates from the intervals (`EST(C4) = I1 + I2 + I9 + I10`).
+    /// Sensor estimates from the intervals (`EST(C4) = I1 + I2 + I10`).
     #[serde(default)]
     pub estimates: Vec<EstimateDef>,
     /// The model also describes the plant under the filter's safe state (outputs forced
