@@ -655,12 +655,15 @@ fn monitor_reports_with_explanations_and_never_writes() {
          client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
         plant.port
     );
-    let mut gw = Gateway::start(&body);
-    gw.event("monitoring", Gateway::kind("monitoring"));
     // The PLC (here the pymodbus server exposing sensors and commanded coils) lets A4
-    // go while C7 = 1.
+    // go while C7 = 1. The values are there before the monitor's first read: set
+    // later, they would be edges the plausibility stage holds (the table cannot reach
+    // C5 sooner than a rotation after A4, a box reaches C7 only from the table at C5
+    // with A3 on), or not, depending on when the monitor first read the peer.
     plant.set_inputs(&[(C5, true), (C7, true)]);
     assert_eq!(plant.peer.ask("co 4 0"), "ok");
+    let mut gw = Gateway::start(&body);
+    gw.event("monitoring", Gateway::kind("monitoring"));
     let v = gw.event("violation of CSs10", |e| {
         e["event"] == "violation"
             && e["record"]["constraints"]
