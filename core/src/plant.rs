@@ -108,7 +108,8 @@ pub struct PlausibleRule {
     #[serde(default)]
     pub fall_when: Option<String>,
     /// The rise condition must have held without a break this long, ms (a travel
-    /// time: the turntable reaches C5 no sooner than 2.7 s after A4 was applied).
+    /// time: a turntable reaches its far position no sooner than its rotation takes
+    /// after the order).
     #[serde(default)]
     pub rise_when_for_ms: u64,
     /// The fall condition must have held without a break this long, ms.

@@ -250,26 +250,21 @@ impl Plausibility {
         decided.clear();
         for (k, r) in self.rules.iter().enumerate() {
             let st = &mut self.states[k];
-            // The conditions held for a time are tracked every cycle.
             let holds = |d: &Option<Dnf>| d.as_ref().is_none_or(|d| eval_dnf(d, frame));
-            let held_for = |c: bool, since: &mut Option<u64>| {
-                if c {
-                    t.saturating_sub(*since.get_or_insert(t))
-                } else {
-                    *since = None;
-                    0
-                }
+            // A condition held for a time is tracked every cycle (Some: it has held that
+            // long, so it holds now); an untimed one is read only for an edge (None).
+            let timed = |d: &Option<Dnf>, ms: u64, since: &mut Option<u64>| {
+                (ms > 0).then(|| {
+                    if holds(d) {
+                        t.saturating_sub(*since.get_or_insert(t)) >= ms
+                    } else {
+                        *since = None;
+                        false
+                    }
+                })
             };
-            let rise_ok = if r.rise_for > 0 {
-                held_for(holds(&r.rise), &mut st.rise_cond_since) >= r.rise_for
-            } else {
-                true
-            };
-            let fall_ok = if r.fall_for > 0 {
-                held_for(holds(&r.fall), &mut st.fall_cond_since) >= r.fall_for
-            } else {
-                true
-            };
+            let rise_ok = timed(&r.rise, r.rise_for, &mut st.rise_cond_since);
+            let fall_ok = timed(&r.fall, r.fall_for, &mut st.fall_cond_since);
             let read = frame.now(Space::Input).get(r.input);
             let mut suspect = false;
             if read != st.accepted {
@@ -279,7 +274,7 @@ impl Plausibility {
                 } else {
                     (r.min_on, &r.fall, fall_ok)
                 };
-                let plausible = since >= window && timed && holds(cond);
+                let plausible = since >= window && timed.unwrap_or_else(|| holds(cond));
                 let confirm = if read { r.rise_confirm } else { r.fall_confirm };
                 if !plausible {
                     suspect = true;

@@ -405,6 +405,18 @@ fn gateway_enforces_the_hold_of_a4() {
     gw.stop();
 }
 
+/// A plant with the empty table at rest at C4 (A4 off) before the gateway starts, so
+/// that the gateway's first cycle takes it as read, the gateway (`extra` added to its
+/// configuration) and a PLC behind it.
+fn gateway_with_the_table_at_c4(extra: &str) -> (Plant, Gateway, Plc) {
+    let mut plant = Plant::start(None);
+    plant.set_inputs(&[(C4, true)]);
+    let mut gw = Gateway::start(&gateway_config(plant.port, extra));
+    let server = gw.listening();
+    let plc = Plc::start(server, Some("127.0.0.2"));
+    (plant, gw, plc)
+}
+
 /// A box crosses C3 onto the table at C4 with A1 and the rollers A2 on (CSc2: never
 /// onto stopped rollers): the beam rises, then falls; the gateway holds the fall until
 /// the shortest box could have crossed (900 ms) and says when it takes it. Then the
@@ -433,12 +445,7 @@ fn cross_c3(plant: &mut Plant, plc: &mut Plc, gw: &mut Gateway) {
 /// and the table stays held.
 #[test]
 fn gateway_holds_the_table_through_a_dropout_of_c7() {
-    let mut plant = Plant::start(None);
-    // The empty table at C4 before the gateway starts (its first cycle takes it).
-    plant.set_inputs(&[(C4, true)]);
-    let mut gw = Gateway::start(&gateway_config(plant.port, "diagnosers: false"));
-    let server = gw.listening();
-    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    let (mut plant, mut gw, mut plc) = gateway_with_the_table_at_c4("diagnosers: false");
     // Edges as the physics allows them (plant.ron `plausible`): a box crosses C3 while
     // A1 runs and comes onto the table, the table leaves C4 once A4 is applied and
     // reaches C5 a rotation later, the box clears C6 while the rollers run to the right
@@ -703,12 +710,7 @@ fn diagnosis_of(partition: &'static str) -> impl Fn(&serde_json::Value) -> bool 
 
 #[test]
 fn gateway_diagnoses_c4_stuck_at_rest_and_the_plc_and_filter_read_its_estimate() {
-    let mut plant = Plant::start(None);
-    // The empty table rests at C4, A4 off, before the gateway starts.
-    plant.set_inputs(&[(C4, true)]);
-    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
-    let server = gw.listening();
-    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    let (mut plant, mut gw, mut plc) = gateway_with_the_table_at_c4("");
     plc.command("0000000");
     // The diagnosers start on the plant in its initial state.
     gw.event("the diagnosers' start", |e| {
@@ -777,12 +779,7 @@ fn gateway_diagnoses_c4_stuck_at_rest_and_the_plc_and_filter_read_its_estimate()
 
 #[test]
 fn gateway_stops_the_plant_on_a_certain_fault_of_the_table_drive() {
-    let mut plant = Plant::start(None);
-    // The empty table at C4 (the initial state) before the gateway starts.
-    plant.set_inputs(&[(C4, true)]);
-    let mut gw = Gateway::start(&gateway_config(plant.port, ""));
-    let server = gw.listening();
-    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    let (mut plant, mut gw, mut plc) = gateway_with_the_table_at_c4("");
     gw.event("the diagnosers' start", |e| {
         e["event"] == "diagnosers" && e["state"] == "started"
     });

@@ -400,6 +400,15 @@ fn verdict_of(
     }
 }
 
+/// Every (case, seed) pair of a campaign: `cases` cases, each over the seeds
+/// `first_seed..first_seed + seeds`, case by case.
+pub(crate) fn jobs(cases: usize, first_seed: u64, seeds: u64) -> Vec<(usize, u64)> {
+    let seeds = first_seed..first_seed.saturating_add(seeds);
+    (0..cases)
+        .flat_map(|i| seeds.clone().map(move |s| (i, s)))
+        .collect()
+}
+
 pub(crate) fn parallel<T: Send + Sync, R: Send>(
     items: &[T],
     threads: usize,
@@ -468,10 +477,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         .into_iter()
         .filter(|i| config.only.as_deref().is_none_or(|o| i.name.contains(o)))
         .collect();
-    let seeds = config.first_seed..config.first_seed.saturating_add(config.seeds);
-    let jobs: Vec<(usize, u64)> = (0..injections.len())
-        .flat_map(|i| seeds.clone().map(move |s| (i, s)))
-        .collect();
+    let jobs = jobs(injections.len(), config.first_seed, config.seeds);
     let results = parallel(&jobs, config.threads, &|&(i, s)| {
         run_one(&shared, &injections[i], s, config)
     });

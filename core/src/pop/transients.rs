@@ -19,7 +19,7 @@
 //! delivered again and the filter is not tripped at the end of the watch.
 
 use super::Diagnosis;
-use super::campaign::{mix, parallel};
+use super::campaign::{jobs, mix, parallel};
 use crate::bundle::PlantBundle;
 use crate::control::CompiledProgram;
 use crate::diag::Problem;
@@ -690,10 +690,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         .into_iter()
         .filter(|c| config.only.as_deref().is_none_or(|o| c.name.contains(o)))
         .collect();
-    let seeds = config.first_seed..config.first_seed.saturating_add(config.seeds);
-    let jobs: Vec<(usize, u64)> = (0..all.len())
-        .flat_map(|i| seeds.clone().map(move |s| (i, s)))
-        .collect();
+    let jobs = jobs(all.len(), config.first_seed, config.seeds);
     let results = parallel(&jobs, config.threads, &|&(i, s)| {
         run_one(&shared, &all[i], s, config, &plans)
     });
