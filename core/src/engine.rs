@@ -154,11 +154,22 @@ pub enum ResetRefused {
     #[error("the filter has not tripped")]
     NotTripped,
     /// Constraints would be violated again by the current commands.
-    #[error("reset refused: {} still violated by the commanded outputs", constraints.join(", "))]
+    #[error("reset refused: {} still violated by the commanded outputs{}", constraints.join(", "), observers_hint(observers))]
     StillViolated {
         /// Ids of the constraints.
         constraints: Vec<String>,
+        /// The observers at 1 in the violated terms, in index order (a box an observer
+        /// still believes in after a transient shows here).
+        observers: Vec<String>,
     },
+}
+
+fn observers_hint(observers: &[String]) -> String {
+    if observers.is_empty() {
+        String::new()
+    } else {
+        format!(" (with {} = 1)", observers.join(" = 1, "))
+    }
 }
 
 /// The engine of one plant run: observers, filter and recorder around a control program.
@@ -656,6 +667,7 @@ impl Engine {
         let applied = self.frame.now(Space::Output).clone();
         self.frame.now_mut(Space::Output).copy_from(&self.commanded);
         let violations = self.filter.violations(&self.frame);
+        let observers = self.observers_in(&violations);
         self.frame.now_mut(Space::Output).copy_from(&applied);
         if !violations.is_empty() {
             return Err(ResetRefused::StillViolated {
@@ -663,11 +675,29 @@ impl Engine {
                     .iter()
                     .map(|&i| self.filter.id(i).to_string())
                     .collect(),
+                observers,
             });
         }
         self.latched = false;
         self.events.push(Event::Reset);
         Ok(())
+    }
+
+    /// The observers at 1 in the true terms of `violations` (evaluated with the
+    /// commanded outputs in the frame), in index order.
+    fn observers_in(&self, violations: &[usize]) -> Vec<String> {
+        let mut idx: Vec<usize> = violations
+            .iter()
+            .filter_map(|&ci| self.filter.true_term(ci, &self.frame))
+            .flatten()
+            .filter(|l| l.var.space == Space::Observer && !l.var.prev && l.positive)
+            .map(|l| l.var.index as usize)
+            .collect();
+        idx.sort_unstable();
+        idx.dedup();
+        idx.into_iter()
+            .map(|i| self.symbols.name(Space::Observer, i as u32).to_string())
+            .collect()
     }
 }
 

@@ -28,9 +28,11 @@
 //! With `both_values: true` a rule asks more: the constraints are rewritten (by
 //! [`suspect_constraints`]) so that a literal on the suspect sensor counts as possibly
 //! true whichever its polarity, and the filter protects both the value held and the
-//! value read. On the sorting station that leaves the turntable without a safe command
-//! in some contexts (CSs13 forbids rotating an "empty" table that CSs10 must hold), so
-//! its rules keep the held value, as the paper's cooperation keeps one estimate.
+//! value read. On the sorting station C3 says it (a held arrival at the end of the belt
+//! must still stop the belt); for C4 to C8 it would leave the turntable without a safe
+//! command in some contexts (CSs13 forbids rotating an "empty" table that CSs10 must
+//! hold), so their rules keep the held value, as the paper's cooperation keeps one
+//! estimate.
 //!
 //! Deterministic: time enters as the cycle's `now` only.
 

@@ -16,6 +16,10 @@
 //!   diagnosers' estimate of C4 waits for the end of the table's arrival window.
 //! - A pulse of C7 or C8 with no box leaving the table tripped the filter and stopped
 //!   production: a box reaches an exit only from the table at C5 with its rollers on.
+//! - A pulse of C3 while a box is on its way to it became a box for the program, and
+//!   the real box's arrival, soon after that one "left", was held as implausible: the
+//!   belt pushed it onto the turning table. C3 is read as possibly on by the
+//!   constraints while it is suspect (`both_values`): a held arrival still stops A1.
 
 #![allow(clippy::unwrap_used)] // test helpers: a failure is a test failure
 
@@ -221,6 +225,26 @@ fn a_pulse_of_c4_while_the_table_comes_back_loads_no_box_onto_it() {
         );
         let s = sim.emulator.stats();
         assert!(s.delivered_left + s.delivered_right >= 4, "seed {seed}");
+    }
+}
+
+/// A pulse of C3 while a box is on its way (10 seeds of every length: 5 hazards
+/// before C3 was read as possibly on while suspect), its dropouts and its flicker.
+#[test]
+fn the_campaigns_c3_transients_push_no_box_onto_the_table() {
+    let config = Config {
+        seeds: 10,
+        only: Some("C3 ".into()),
+        threads: 2,
+        fault_free_hours: 0,
+        ..Config::default()
+    };
+    let report = run(&station(), &config).unwrap();
+    assert_eq!(report.rows.len(), 2 * config.lengths_ms.len() + 1);
+    for r in &report.rows {
+        assert!(r.injected > 0, "{}", r.name);
+        assert_eq!(r.hazards, 0, "{}: {:?}", r.name, r.failures);
+        assert_eq!(r.wrong, 0, "{}: {:?}", r.name, r.failures);
     }
 }
 

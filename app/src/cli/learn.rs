@@ -266,7 +266,8 @@ pub(crate) fn transients(
     }
     writeln!(
         out,
-        "total: {runs} runs, {hazards} hazards, {wrong} wrong certain diagnoses, production restored after {restored} transients, not after {not_restored}"
+        "total: {runs} runs, {hazards} hazards, {wrong} wrong certain diagnoses, production restored after {restored} transients, not after {not_restored} ({again} tripped again later and were recovered again)",
+        again = r.rows.iter().map(|row| row.tripped_again).sum::<usize>()
     )?;
     writeln!(
         out,

@@ -169,7 +169,8 @@ fn reset_is_refused_while_the_commands_still_violate() {
     assert_eq!(
         run.engine.reset(),
         Err(ResetRefused::StillViolated {
-            constraints: vec!["CSs10".into()]
+            constraints: vec!["CSs10".into()],
+            observers: vec![],
         })
     );
     run.drain();
@@ -185,8 +186,33 @@ fn reset_is_refused_while_the_commands_still_violate() {
     assert_eq!(
         run.engine.reset(),
         Err(ResetRefused::StillViolated {
-            constraints: vec!["CSs10".into()]
+            constraints: vec!["CSs10".into()],
+            observers: vec![],
         })
+    );
+}
+
+#[test]
+fn a_refused_reset_names_the_observers_that_hold_it() {
+    let mut run = Run::new(FilterMode::Enforce);
+    // A box leaves the table at C5 to the right: C6 falls, P67 holds the rotation.
+    assert_eq!(run.cycle(&["C4", "C6"], &["A4"]), ["A4"]);
+    assert_eq!(run.cycle(&["C5", "C6"], &["A3", "A4"]), ["A3", "A4"]);
+    assert_eq!(run.cycle(&["C5"], &["A3", "A4"]), ["A3", "A4"]);
+    // The program releases A4 with the box between C6 and C7: CSs11 trips.
+    run.cycle(&["C5"], &["A3"]);
+    assert!(run.engine.is_tripped());
+    let refused = run.engine.reset().unwrap_err();
+    assert_eq!(
+        refused,
+        ResetRefused::StillViolated {
+            constraints: vec!["CSs11".into()],
+            observers: vec!["P67".into()],
+        }
+    );
+    assert_eq!(
+        refused.to_string(),
+        "reset refused: CSs11 still violated by the commanded outputs (with P67 = 1)"
     );
 }
 

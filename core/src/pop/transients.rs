@@ -150,6 +150,10 @@ pub struct Row {
     pub restored: usize,
     /// Transients only: runs where it did not.
     pub not_restored: usize,
+    /// Transients only: runs where the filter tripped again after the operator's
+    /// recovery (a consequence of the transient met later, such as a box an observer
+    /// still believed in), and the operator recovered again as the console asked.
+    pub tripped_again: usize,
     /// Pairs: runs whose second fault struck while the filter was tripped.
     pub during_trip: usize,
     /// Examples of failures (seed and text), at most five.
@@ -312,6 +316,7 @@ struct Outcome {
     right: usize,
     tripped: bool,
     restored: Option<bool>,
+    tripped_again: bool,
     during_trip: bool,
     note: String,
     journal: Vec<String>,
@@ -399,8 +404,8 @@ fn strike(
 }
 
 /// The operator's recovery, as the console asks for it: the filter's reset while it is
-/// tripped (retried each second while refused), the diagnosers' reset when a partition
-/// is flagged, then Start.
+/// tripped (retried each second while refused), the diagnosers' reset
+/// when a partition is flagged, then Start.
 fn recover(sim: &mut Simulation) {
     let limit = Millis(sim.now().0 + 30_000);
     while sim.engine.is_tripped() && sim.now() < limit {
@@ -555,7 +560,19 @@ fn run_one(
     let before = delivered(&sim);
     recover(&mut sim);
     let reset_at = sim.now().0;
-    sim.run_until(Millis(reset_at + config.recover_ms));
+    // The operator stays at the console for the watch: a later trip (a consequence of
+    // the transient met later) gets the same recovery, at most twice.
+    let watch_end = reset_at + config.recover_ms;
+    let mut again = 0;
+    while sim.now().0 < watch_end {
+        let next = (sim.now().0 + 1_000).min(watch_end);
+        sim.run_until(Millis(next));
+        if sim.engine.is_tripped() && again < 2 && sim.now().0 < watch_end {
+            again += 1;
+            out.tripped_again = true;
+            recover(&mut sim);
+        }
+    }
     out.tripped = !sim.engine.trips.is_empty();
     out.restored =
         Some(!sim.engine.is_tripped() && delivered(&sim) >= before + config.restored_items);
@@ -712,6 +729,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         row.right += o.right;
         row.trips += usize::from(o.tripped);
         row.during_trip += usize::from(o.during_trip);
+        row.tripped_again += usize::from(o.tripped_again);
         match o.restored {
             Some(true) => row.restored += 1,
             Some(false) => row.not_restored += 1,
