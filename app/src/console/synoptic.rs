@@ -741,6 +741,23 @@ fn circle_points(c: Pos2, r: f32) -> Vec<Pos2> {
         .collect()
 }
 
+/// A formula in the paper's notation, wrapped between its terms (a constraint rewritten
+/// with its estimates and suspect flags runs over several lines rather than widening
+/// the panel that shows it).
+pub fn overbar_formula(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) {
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 0.0;
+        let terms: Vec<&str> = text.split(" + ").collect();
+        for (k, term) in terms.iter().enumerate() {
+            if k + 1 < terms.len() {
+                overbar_label(ui, &format!("{term} + "), size, color);
+            } else {
+                overbar_label(ui, term, size, color);
+            }
+        }
+    });
+}
+
 /// A label in the paper's notation: characters followed by U+0305 are drawn with a bar
 /// above them (egui does not compose combining marks). Its accessible name is the text.
 pub fn overbar_label(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) -> egui::Response {

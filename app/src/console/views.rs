@@ -333,7 +333,7 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             .color(c.palette.trip),
     );
     for k in &ex.constraints {
-        synoptic::overbar_label(ui, k, 20.0, c.palette.text);
+        synoptic::overbar_formula(ui, k, 20.0, c.palette.text);
     }
     if let Some(t) = c.sim.engine.trips.get(trip) {
         for fc in &t.constraints {
@@ -365,7 +365,7 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         .color(c.palette.text_dim),
                 );
                 if item.text.contains('\u{305}') {
-                    synoptic::overbar_label(ui, &item.text, 14.0, c.palette.text);
+                    synoptic::overbar_formula(ui, &item.text, 14.0, c.palette.text);
                 } else {
                     ui.label(&item.text);
                 }
