@@ -33,6 +33,25 @@ fn station() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
 }
 
+/// `vigie campaign transients --only ONLY` on the station over `seeds`, with
+/// `fault_free_hours` of production after it (two threads).
+fn campaign(
+    only: &str,
+    seeds: std::ops::Range<u64>,
+    fault_free_hours: u64,
+) -> (Config, vigie_core::pop::transients::Report) {
+    let config = Config {
+        first_seed: seeds.start,
+        seeds: seeds.end - seeds.start,
+        only: Some(only.into()),
+        threads: 2,
+        fault_free_hours,
+        ..Config::default()
+    };
+    let report = run(&station(), &config).unwrap();
+    (config, report)
+}
+
 fn production(seed: u64) -> Simulation {
     let dir = station();
     let (bundle, _) = vigie_core::bundle::PlantBundle::load(&dir).unwrap();
@@ -232,14 +251,7 @@ fn a_pulse_of_c4_while_the_table_comes_back_loads_no_box_onto_it() {
 /// before C3 was read as possibly on while suspect), its dropouts and its flicker.
 #[test]
 fn the_campaigns_c3_transients_push_no_box_onto_the_table() {
-    let config = Config {
-        seeds: 10,
-        only: Some("C3 ".into()),
-        threads: 2,
-        fault_free_hours: 0,
-        ..Config::default()
-    };
-    let report = run(&station(), &config).unwrap();
+    let (config, report) = campaign("C3 ", 0..10, 0);
     assert_eq!(report.rows.len(), 2 * config.lengths_ms.len() + 1);
     for r in &report.rows {
         assert!(r.injected > 0, "{}", r.name);
@@ -254,15 +266,7 @@ fn the_campaigns_c3_transients_push_no_box_onto_the_table() {
 /// table's return takes 2.90 s at the fastest on the rule's clock).
 #[test]
 fn a_pulse_of_c4_just_before_the_table_docks_loads_no_box_onto_it() {
-    let config = Config {
-        first_seed: 40,
-        seeds: 60,
-        only: Some("C4 pulse".into()),
-        threads: 2,
-        fault_free_hours: 0,
-        ..Config::default()
-    };
-    let report = run(&station(), &config).unwrap();
+    let (config, report) = campaign("C4 pulse", 40..100, 0);
     assert_eq!(report.rows.len(), config.lengths_ms.len());
     for r in &report.rows {
         assert!(r.injected > 0, "{}", r.name);
@@ -314,14 +318,7 @@ fn a_pulse_of_an_exit_beam_with_the_table_empty_neither_trips_nor_stops_producti
 
 #[test]
 fn the_campaigns_table_and_exit_pulses_give_no_hazard_and_production_comes_back() {
-    let config = Config {
-        seeds: 4,
-        only: Some("pulse".into()),
-        threads: 2,
-        fault_free_hours: 0,
-        ..Config::default()
-    };
-    let report = run(&station(), &config).unwrap();
+    let (config, report) = campaign("pulse", 0..4, 0);
     let rows: Vec<_> = report
         .rows
         .iter()
@@ -346,14 +343,7 @@ fn the_campaigns_table_and_exit_pulses_give_no_hazard_and_production_comes_back(
 
 #[test]
 fn the_campaigns_beam_dropouts_give_no_hazard_and_production_comes_back() {
-    let config = Config {
-        seeds: 6,
-        only: Some("dropout".into()),
-        threads: 2,
-        fault_free_hours: 1,
-        ..Config::default()
-    };
-    let report = run(&station(), &config).unwrap();
+    let (config, report) = campaign("dropout", 0..6, 1);
     let rows: Vec<_> = report
         .rows
         .iter()
