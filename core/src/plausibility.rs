@@ -50,6 +50,11 @@ pub fn suspect_name(sensor: &str) -> String {
     format!("sus_{sensor}")
 }
 
+/// The sensor a suspect flag is about: `sus_C7` → `C7`.
+pub fn suspect_sensor(flag: &str) -> Option<&str> {
+    flag.strip_prefix("sus_")
+}
+
 /// The names of the suspect flags of the plant's rules, in input order.
 pub fn suspect_names(plant: &Plant) -> Vec<String> {
     plant

@@ -101,9 +101,10 @@ pub fn hypothesis_from(
     }
     // Suspects first, then expected actions.
     level.items.sort_by_key(|i| match i.code {
-        "X401" | "X402" => 0,
-        "X404" | "X405" => 1,
-        _ => 2,
+        "X414" => 0,
+        "X401" | "X402" => 1,
+        "X404" | "X405" => 2,
+        _ => 3,
     });
     level
 }
@@ -137,6 +138,35 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
         .collect();
     let expected_text = expected_actions(&outputs, prev, &c.id);
 
+    // A sensor of the term the plausibility stage holds (read as possibly either value
+    // by the constraint): the sensor's reading, not the program, is the first suspect.
+    for l in c
+        .literals
+        .iter()
+        .filter(|l| l.space == Space::Aux && !l.previous && l.value)
+    {
+        let Some(sensor) = crate::plausibility::suspect_sensor(&l.name) else {
+            continue;
+        };
+        out.push((
+            Item::new(
+                "X414",
+                format!(
+                    "{sensor} is suspect: its reading made an edge the plant's physics does not allow, the plausibility stage holds its last plausible value and {} reads it as possibly either value. Check {sensor} (beam, reflector, cable) before the program.",
+                    c.id
+                ),
+                &[
+                    ("category", "sensor".into()),
+                    ("constraint", c.id.clone()),
+                    ("sensor", sensor.to_string()),
+                ],
+            ),
+            vec![Highlight {
+                element: sensor.to_string(),
+                mark: Mark::Suspect,
+            }],
+        ));
+    }
     // (a) sensors of the constraint that changed.
     for (name, from, to) in d
         .inputs

@@ -280,8 +280,9 @@ pub fn program_suspects(
     out.into_iter().map(|s| (s.item, s.highlights)).collect()
 }
 
-/// Inserts the program suspects at the head of the hypothesis level of `ex` (before the
-/// paper's (a)/(b)/(d) suspects): the first suspect is then the most specific one.
+/// Inserts the program suspects at the head of the hypothesis level of `ex` (after a
+/// suspect sensor, X414, before the paper's (a)/(b)/(d) suspects): the first suspect is
+/// then the most specific one.
 pub fn add_program_hypothesis(
     ex: &mut Explanation,
     trip: &Trip,
@@ -291,6 +292,9 @@ pub fn add_program_hypothesis(
     let suspects = program_suspects(trip, before, after);
     let level = &mut ex.hypothesis;
     let mut items = Vec::with_capacity(suspects.len() + level.items.len());
+    // A suspect sensor (X414) stays first: the program read what the stage held.
+    let sensors = level.items.iter().take_while(|i| i.code == "X414").count();
+    items.extend(level.items.drain(..sensors));
     for (item, highlights) in suspects {
         for h in highlights {
             if !level.highlights.contains(&h) {

@@ -303,7 +303,25 @@ fn every_hypothesis_case_of_the_station() {
                 enforced: true,
             };
             let level = hypothesis_from(symbols, &trip, &prev, &cur);
-            let first = &level.items[0];
+            // A suspect sensor in the term (`sus_C3`, C3 read as possibly on) comes
+            // first (X414); the paper's suspects follow.
+            let suspect = term
+                .iter()
+                .find(|l| l.var.space == Space::Aux && l.positive)
+                .map(|l| symbols.name(l.var.space, l.var.index));
+            let first = match suspect {
+                Some(flag) => {
+                    assert_eq!(level.items[0].code, "X414", "{:?}", level.items);
+                    assert_eq!(
+                        Some(level.items[0].fields["sensor"].as_str()),
+                        crate::plausibility::suspect_sensor(flag),
+                        "{:?}",
+                        level.items
+                    );
+                    &level.items[1]
+                }
+                None => &level.items[0],
+            };
             let ctx = format!("{} mask {mask:b}: {:?}", c.id, level.items);
             assert!(level.items.iter().any(|i| i.code == "X403"), "{ctx}");
             if !changed_sensors.is_empty() {
@@ -340,6 +358,54 @@ fn every_hypothesis_case_of_the_station() {
     // CSs15 read A4 at t-1, which is not a sensor; the constraints on C3 also read
     // `sus_C3`, C3 counting as possibly on while it is suspect).
     assert_eq!(cases, 296);
+}
+
+/// A C3 pulse while a box runs to C3 (issue 17): the real box's arrival is held as
+/// implausible, CSs2 and CSs4 trip on `sus_C3`, and level 4 names C3 before the program
+/// (whose equation of A1 only read what the stage held).
+#[test]
+fn a_trip_on_a_suspect_sensor_names_the_sensor_first() {
+    use crate::sim::{Options, Scenario, Simulation};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../layouts/sorting-station/scenarios/c3-pulse-test.ron");
+    let scenario = Scenario::from_ron(
+        r#"Scenario(
+            name: "C3 pulse while a box is on its way",
+            description: "A 100 ms pulse of C3 while the box runs from C1 to C3.",
+            program: Reference,
+            seed: 8,
+            arrivals: Some(Periodic(period_ms: 8000, jitter_ms: 1000, mix: Alternate)),
+            faults: [(trigger: At(73250), fault: SpuriousRise(sensor: "C3", pulse_ms: 100))],
+            actions: [(at_ms: 0, action: Start)],
+            duration_ms: 90000,
+            filter: Enforce,
+            diagnosers: true,
+        )"#,
+        &path,
+    )
+    .expect("scenario");
+    let mut sim =
+        Simulation::from_scenario(&scenario, &path, Options::default()).expect("simulation");
+    while sim.engine.trips.is_empty() && sim.now().0 < scenario.duration_ms {
+        sim.cycle();
+    }
+    assert!(
+        sim.emulator.hazards().is_empty(),
+        "{:?}",
+        sim.emulator.hazards()
+    );
+    let trip = &sim.engine.trips[0];
+    assert!(
+        trip.constraints
+            .iter()
+            .flat_map(|c| &c.literals)
+            .any(|l| l.name == "sus_C3" && l.value),
+        "{trip:?}"
+    );
+    let ex = &sim.explanations[&0];
+    let first = &ex.hypothesis.items[0];
+    assert_eq!(first.code, "X414", "{:?}", ex.hypothesis.items);
+    assert_eq!(first.fields["sensor"], "C3");
 }
 
 /// The paper's CSs10 case through the real closed loop: scenario `cs10-paper.ron`
