@@ -404,8 +404,8 @@ fn strike(
 }
 
 /// The operator's recovery, as the console asks for it: the filter's reset while it is
-/// tripped (retried each second while refused), the diagnosers' reset
-/// when a partition is flagged, then Start.
+/// tripped (retried each second while refused), the diagnosers' reset when a partition
+/// is flagged, then Start.
 fn recover(sim: &mut Simulation) {
     let limit = Millis(sim.now().0 + 30_000);
     while sim.engine.is_tripped() && sim.now() < limit {
