@@ -128,6 +128,13 @@ pub struct PlausibleRule {
     /// property (6) and fallback checks say where that leaves no safe output.
     #[serde(default)]
     pub both_values: bool,
+    /// An edge sooner than `min_on_ms` / `min_off_ms` after the last accepted one shows
+    /// that this one was a transient, not an item (a beam on for less than the shortest
+    /// box): the sensor stays held until the reading comes back, not only until the
+    /// window has passed (a 500 ms pulse is not taken, 900 ms later, for a box that
+    /// has left).
+    #[serde(default)]
+    pub hold_until_back: bool,
 }
 
 impl Signal {

@@ -77,6 +77,7 @@ struct Rule {
     fall_confirm: u64,
     rise_for: u64,
     fall_for: u64,
+    hold_until_back: bool,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -92,6 +93,9 @@ struct State {
     /// The rise / fall condition has held without a break since then.
     rise_cond_since: Option<u64>,
     fall_cond_since: Option<u64>,
+    /// An edge came too soon after the accepted one (`hold_until_back`): held until the
+    /// reading agrees again.
+    latched: bool,
 }
 
 /// A change of a sensor's suspicion, for the journal and the alarms.
@@ -131,6 +135,8 @@ pub struct ExportRule<'a> {
     pub rise_when_for_ms: u64,
     /// See [`crate::plant::PlausibleRule`].
     pub fall_when_for_ms: u64,
+    /// See [`crate::plant::PlausibleRule`].
+    pub hold_until_back: bool,
 }
 
 /// The compiled rules of a plant and their state.
@@ -199,6 +205,7 @@ impl Plausibility {
                 fall_confirm: r.fall_confirm_ms,
                 rise_for: r.rise_when_for_ms,
                 fall_for: r.fall_when_for_ms,
+                hold_until_back: r.hold_until_back,
             });
             names.push(s.id.clone());
         }
@@ -234,6 +241,7 @@ impl Plausibility {
                 pending_since: None,
                 rise_cond_since: None,
                 fall_cond_since: None,
+                latched: false,
             };
         }
     }
@@ -281,27 +289,32 @@ impl Plausibility {
                 } else {
                     (r.min_on, &r.fall, fall_ok)
                 };
-                let plausible = since >= window && timed.unwrap_or_else(|| holds(cond));
+                let in_window = since < window;
+                let plausible = !st.latched && !in_window && timed.unwrap_or_else(|| holds(cond));
                 let confirm = if read { r.rise_confirm } else { r.fall_confirm };
                 if !plausible {
                     suspect = true;
                     st.pending_since = None;
+                    st.latched |= r.hold_until_back && in_window;
                 } else if t.saturating_sub(*st.pending_since.get_or_insert(t)) >= confirm {
                     st.accepted = read;
                     st.since = Some(t);
                     st.pending_since = None;
                 }
-            } else if let Some(from) = st.pending_since.take() {
-                // The reading came back before the confirmation: a transient filtered.
-                self.held_edges += 1;
-                let edge = if read { "fall" } else { "rise" };
-                let confirm = if read { r.fall_confirm } else { r.rise_confirm };
-                let name = &self.names[k];
-                let text = format!(
-                    "{name}: a {edge} of {} ms filtered (shorter than its {confirm} ms confirmation)",
-                    t.saturating_sub(from)
-                );
-                notice(&mut self.notices, t, name, false, text);
+            } else {
+                st.latched = false;
+                if let Some(from) = st.pending_since.take() {
+                    // The reading came back before the confirmation: a transient filtered.
+                    self.held_edges += 1;
+                    let edge = if read { "fall" } else { "rise" };
+                    let confirm = if read { r.fall_confirm } else { r.rise_confirm };
+                    let name = &self.names[k];
+                    let text = format!(
+                        "{name}: a {edge} of {} ms filtered (shorter than its {confirm} ms confirmation)",
+                        t.saturating_sub(from)
+                    );
+                    notice(&mut self.notices, t, name, false, text);
+                }
             }
             match (suspect, st.suspect_since) {
                 (true, None) => {
@@ -310,8 +323,15 @@ impl Plausibility {
                     let edge = if read { "rise" } else { "fall" };
                     let held = u8::from(st.accepted);
                     let name = &self.names[k];
+                    let until = if st.latched {
+                        format!(
+                            " until it reads {held} again (so soon after the last edge, the last one was a transient)"
+                        )
+                    } else {
+                        String::new()
+                    };
                     let text = format!(
-                        "{name} suspect: implausible {edge} (the plant's physics does not allow it now); {name} held at {held}"
+                        "{name} suspect: implausible {edge} (the plant's physics does not allow it now); {name} held at {held}{until}"
                     );
                     notice(&mut self.notices, t, name, true, text);
                 }
@@ -349,6 +369,7 @@ impl Plausibility {
                 fall_confirm_ms: r.fall_confirm,
                 rise_when_for_ms: r.rise_for,
                 fall_when_for_ms: r.fall_for,
+                hold_until_back: r.hold_until_back,
             })
             .collect()
     }

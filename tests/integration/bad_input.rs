@@ -25,7 +25,7 @@ fn fixture(name: &str) -> PathBuf {
 }
 
 /// A copy of the sorting station in a fresh temporary folder.
-fn station_copy(name: &str) -> PathBuf {
+pub(crate) fn station_copy(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("vigie-bad-input-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     copy_dir(&station(), &dir);

@@ -281,6 +281,60 @@ fn a_pulse_of_c4_just_before_the_table_docks_loads_no_box_onto_it() {
     }
 }
 
+/// A dropout of C0 while a box waits there and A1 runs for the box ahead was taken as
+/// the box leaving (the fall was plausible with A1 on): the program ran A0, and once
+/// C3's fall stopped A1 the box was pushed against the stopped belt, with CSc1 blind
+/// (11 hazards of 200 and 500 ms dropouts in seeds 7 to 31). A box leaves C0 only with
+/// its front already at C1: C0 falls only while C1 is on.
+#[test]
+fn a_dropout_of_c0_while_the_box_waits_pushes_it_against_no_stopped_belt() {
+    let (config, report) = campaign("C0 dropout", 0..32, 0);
+    assert_eq!(report.rows.len(), config.lengths_ms.len());
+    for r in &report.rows {
+        assert!(r.injected > 0, "{}", r.name);
+        assert_eq!(r.hazards, 0, "{}: {:?}", r.name, r.failures);
+        assert_eq!(r.wrong, 0, "{}: {:?}", r.name, r.failures);
+    }
+}
+
+/// Replaying one run gives its changes of signals, so that a technician can read what
+/// the program, the observers and the stage did around the failure.
+#[test]
+fn a_replayed_run_gives_its_changes_of_signals() {
+    let config = Config {
+        first_seed: 7,
+        seeds: 1,
+        only: Some("C0 dropout 500 ms".into()),
+        threads: 1,
+        fault_free_hours: 0,
+        changes: true,
+        ..Config::default()
+    };
+    // The station as it was before C0's fall waited for C1, where seed 7 fails (a
+    // failed run's changes are reported).
+    let dir = crate::bad_input::station_copy("transients-c0-old-rule");
+    let plant = dir.join("plant.ron");
+    let text = std::fs::read_to_string(&plant).unwrap();
+    let old = text.replace(
+        r#"fall_when: Some("C1* . (A0* + A1*)")"#,
+        r#"fall_when: Some("A0* + A1*")"#,
+    );
+    assert_ne!(old, text, "C0's fall rule is in plant.ron");
+    std::fs::write(&plant, old).unwrap();
+    let report = run(&dir, &config).unwrap();
+    let row = &report.rows[0];
+    assert_eq!(row.hazards, 1, "{:?}", row.failures);
+    let changes = &row.first_failure_changes;
+    assert!(
+        changes
+            .iter()
+            .any(|l| l.contains("C0=0") && l.contains("A0=1")),
+        "the dropout and the program's A0 in one cycle: {changes:?}"
+    );
+    assert!(changes.iter().all(|l| l.contains(" ms: ")));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_pulse_of_an_exit_beam_with_the_table_empty_neither_trips_nor_stops_production() {
     for (seed, sensor, length) in [(1, "C7", 50), (2, "C8", 200), (3, "C7", 500), (4, "C8", 10)] {

@@ -203,6 +203,8 @@ pub(crate) fn transients(
         first_seed,
         fault_free_hours,
         plausibility,
+        // Replaying one run: its changes of signals in the JSON report.
+        changes: seeds == 1,
         only: only.map(str::to_string),
         threads: threads
             .or_else(|| std::thread::available_parallelism().ok().map(usize::from))

@@ -171,7 +171,8 @@ pub(crate) enum Command {
         /// `diagnoser`, `transients`: seeds per fault.
         #[arg(long, default_value_t = 100)]
         seeds: u64,
-        /// `diagnoser`, `transients`: the first seed (`--from-seed 66 --seeds 1` replays seed 66).
+        /// `diagnoser`, `transients`: the first seed (`--from-seed 66 --seeds 1` replays seed 66;
+        /// `transients --seeds 1 --json` adds every change of a signal of the failed run).
         #[arg(long, default_value_t = 0)]
         from_seed: u64,
         /// `diagnoser`, `transients`: simulated hours of fault-free runs.

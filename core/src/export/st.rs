@@ -592,19 +592,42 @@ END_IF;",
     PL_{k}_K := FALSE;
     PL_{k}_PK := FALSE;"
         );
+        // `hold_until_back`: an edge inside the window latches the hold until the
+        // reading agrees again (PL_k_L).
+        let (latch_ok, latch_set, latch_clear) = if r.hold_until_back {
+            let _ = writeln!(first, "    PL_{k}_L := FALSE;");
+            locals.push((format!("PL_{k}_L"), "BOOL"));
+            (
+                format!(" AND NOT PL_{k}_L"),
+                format!(
+                    "
+            IF NOT PL_W THEN
+                PL_{k}_L := TRUE;
+            END_IF;"
+                ),
+                format!(
+                    "
+        PL_{k}_L := FALSE;"
+                ),
+            )
+        } else {
+            (String::new(), String::new(), String::new())
+        };
         let _ = writeln!(
             body,
             "    IF {raw} <> {acc} THEN
         IF {raw} THEN
-            PL_OK := {} AND ({}) AND ({rise_timed});
+            PL_W := {};
+            PL_OK := PL_W AND ({}) AND ({rise_timed}){latch_ok};
             PL_CF := {};
         ELSE
-            PL_OK := {} AND ({}) AND ({fall_timed});
+            PL_W := {};
+            PL_OK := PL_W AND ({}) AND ({fall_timed}){latch_ok};
             PL_CF := {};
         END_IF;
         IF NOT PL_OK THEN
             {sus} := TRUE;
-            PL_{k}_PK := FALSE;
+            PL_{k}_PK := FALSE;{latch_set}
         ELSE
             {sus} := FALSE;
             IF NOT PL_{k}_PK THEN
@@ -620,7 +643,7 @@ END_IF;",
         END_IF;
     ELSE
         {sus} := FALSE;
-        PL_{k}_PK := FALSE;
+        PL_{k}_PK := FALSE;{latch_clear}
     END_IF;",
             since(&k, r.min_off_ms),
             cond(r.rise_when),
@@ -645,6 +668,7 @@ PL_STARTED := TRUE;
     );
     locals.push(("PL_STARTED".into(), "BOOL"));
     locals.push(("PL_OK".into(), "BOOL"));
+    locals.push(("PL_W".into(), "BOOL"));
     locals.push(("PL_CF".into(), "BOOL"));
     (out, locals)
 }

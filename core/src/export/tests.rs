@@ -164,10 +164,21 @@ fn st_conforms_to_the_native_engine() {
     let mut held = 0;
     // With the station's plausibility rules (random traces break its physics all the
     // time), and without them (the traces then reach the task monitors' states).
-    for with_rules in [true, false] {
+    // Third pass: every rule with `hold_until_back` (an edge inside its window holds
+    // the sensor until the reading comes back).
+    for (pass, with_rules) in [(0, true), (1, false), (2, true)] {
         let mut bundle = station_bundle.clone();
         if !with_rules {
             bundle.plausibility = Default::default();
+        }
+        if pass == 2 {
+            for s in &mut bundle.plant.inputs {
+                if let Some(r) = &mut s.plausible {
+                    r.hold_until_back = true;
+                }
+            }
+            bundle.plausibility =
+                crate::plausibility::Plausibility::new(&bundle.plant, &bundle.symbols).unwrap();
         }
         let text = st::generate(&bundle, Some(&set)).unwrap();
         let unit = interp::parse(&text).unwrap();

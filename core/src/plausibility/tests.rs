@@ -353,3 +353,42 @@ fn a_box_reaches_c6_only_at_the_loading_position() {
         "at C4 with A1 on: the box arrives"
     );
 }
+
+/// `hold_until_back`: a C3 pulse of 500 ms while the belt runs (shorter than any box)
+/// is held at 1 until the reading comes back, not taken as a box leaving 900 ms after
+/// it came; without the option the fall is taken once the window has passed.
+#[test]
+fn an_edge_inside_its_window_is_held_until_the_reading_comes_back_with_hold_until_back() {
+    for hold in [false, true] {
+        let mut b = station();
+        let c3 = b.plant.input("C3").unwrap();
+        b.plant.inputs[c3]
+            .plausible
+            .as_mut()
+            .unwrap()
+            .hold_until_back = hold;
+        b.plausibility = Plausibility::new(&b.plant, &b.symbols).unwrap();
+        let mut r = Rig::new(&b);
+        let drives = ["A1"];
+        r.cycle(0, &[], &drives);
+        r.cycle(10, &["C3"], &drives);
+        assert_eq!(r.read("C3"), (true, false), "the rise is plausible (A1 on)");
+        r.cycle(510, &[], &drives);
+        assert_eq!(r.read("C3"), (true, true), "a fall 500 ms after: held");
+        r.cycle(1000, &[], &drives);
+        if hold {
+            assert_eq!(r.read("C3"), (true, true), "still held past the window");
+            r.cycle(5000, &[], &drives);
+            assert_eq!(r.read("C3"), (true, true), "until the reading comes back");
+            let n = r.engine.plausibility.take_notices();
+            assert!(n[0].text.contains("until it reads 1 again"), "{n:?}");
+            // The real box: the reading agrees again, and its fall is taken.
+            r.cycle(5010, &["C3"], &drives);
+            assert_eq!(r.read("C3"), (true, false));
+            r.cycle(6300, &[], &drives);
+            assert_eq!(r.read("C3"), (false, false), "the real box leaves");
+        } else {
+            assert_eq!(r.read("C3"), (false, false), "taken once the window passed");
+        }
+    }
+}

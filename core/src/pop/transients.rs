@@ -62,6 +62,9 @@ pub struct Config {
     /// Run the plausibility stage (false: every edge as read, the filter as it was
     /// before the stage, for a comparison).
     pub plausibility: bool,
+    /// Record every cycle of a run and give the first failed run's changes of signals
+    /// (`Row::first_failure_changes`): for replaying one run (`--seeds 1`).
+    pub changes: bool,
 }
 
 impl Default for Config {
@@ -80,6 +83,7 @@ impl Default for Config {
             restored_items: 2,
             fault_free_hours: 10,
             plausibility: true,
+            changes: false,
         }
     }
 }
@@ -156,10 +160,15 @@ pub struct Row {
     pub tripped_again: usize,
     /// Pairs: runs whose second fault struck while the filter was tripped.
     pub during_trip: usize,
-    /// Examples of failures (seed and text), at most five.
+    /// Examples of failures (seed and text), at most five of each kind (hazard, wrong
+    /// diagnosis, not restored).
     pub failures: Vec<String>,
     /// The journal of the first failed run (seed, then its lines).
     pub first_failure_journal: Vec<String>,
+    /// With [`Config::changes`]: every change of a signal in the first failed run, one
+    /// line per cycle (`43830 ms: C0=0 | A0=1 (commanded 1) | P01=1 | sus_C0=1`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub first_failure_changes: Vec<String>,
 }
 
 /// The campaign report.
@@ -279,13 +288,14 @@ fn simulation(
     seed: u64,
     plan: &ArrivalPlan,
     plausibility: bool,
+    history_cycles: usize,
 ) -> Result<Simulation, Vec<Problem>> {
     let mut sim = Simulation::new(
         shared.bundle.clone(),
         (*shared.program).clone(),
         seed,
         Options {
-            history_cycles: 16,
+            history_cycles,
             explain: false,
         },
     )?;
@@ -320,6 +330,7 @@ struct Outcome {
     during_trip: bool,
     note: String,
     journal: Vec<String>,
+    changes: Vec<String>,
 }
 
 fn sensor_value(sim: &Simulation, input: usize) -> bool {
@@ -454,6 +465,61 @@ fn judge(sim: &Simulation, expected: &BTreeSet<String>, at: u64, out: &mut Outco
     }
 }
 
+/// Every change of a signal over the recorded cycles, one line per cycle that changed
+/// something: the raw inputs, the applied outputs (with the commanded value where it
+/// differs), the observers and the auxiliary variables (suspect flags, estimates,
+/// diagnoser flags), and the trip.
+fn changes(sim: &Simulation) -> Vec<String> {
+    use crate::symbols::Space;
+    let plant = &sim.bundle.plant;
+    let symbols = &sim.engine.symbols;
+    let mut lines = Vec::new();
+    let mut previous: Option<&crate::history::CycleRecord> = None;
+    for r in sim.engine.history.iter() {
+        let mut parts = Vec::new();
+        let get = |b: &crate::bits::Bits, i: usize| i < b.len() && b.get(i);
+        let differs = |f: fn(&crate::history::CycleRecord) -> &crate::bits::Bits, i: usize| {
+            previous.is_none_or(|p| get(f(p), i) != get(f(r), i))
+        };
+        for (i, s) in plant.inputs.iter().enumerate() {
+            if differs(|r| &r.inputs, i) {
+                parts.push(format!("{}={}", s.id, u8::from(get(&r.inputs, i))));
+            }
+        }
+        for (k, s) in plant.outputs.iter().enumerate() {
+            if differs(|r| &r.applied, k) || differs(|r| &r.commanded, k) {
+                let (a, c) = (get(&r.applied, k), get(&r.commanded, k));
+                parts.push(if a == c {
+                    format!("{}={}", s.id, u8::from(a))
+                } else {
+                    format!("{}={} (commanded {})", s.id, u8::from(a), u8::from(c))
+                });
+            }
+        }
+        for (space, f) in [
+            (
+                Space::Observer,
+                (|r| &r.observers) as fn(&crate::history::CycleRecord) -> &crate::bits::Bits,
+            ),
+            (Space::Aux, |r| &r.aux),
+        ] {
+            for (i, name) in symbols.names(space).iter().enumerate() {
+                if differs(f, i) {
+                    parts.push(format!("{name}={}", u8::from(get(f(r), i))));
+                }
+            }
+        }
+        if previous.is_none_or(|p| p.tripped != r.tripped) {
+            parts.push(format!("tripped={}", u8::from(r.tripped)));
+        }
+        if !parts.is_empty() {
+            lines.push(format!("{} ms: {}", r.time.0, parts.join(" | ")));
+        }
+        previous = Some(r);
+    }
+    lines
+}
+
 fn describe(d: &Diagnosis, at: u64) -> String {
     format!(
         "{} ms ({:+} ms from the fault) {}/{} {}",
@@ -478,7 +544,8 @@ fn run_one(
     }
     let actuator = matches!(case.kind, CaseKind::Actuator { .. });
     let plan = if actuator { &plans.1 } else { &plans.0 };
-    let mut sim = simulation(shared, seed + 1, plan, config.plausibility)?;
+    let history = if config.changes { 100_000 } else { 16 };
+    let mut sim = simulation(shared, seed + 1, plan, config.plausibility, history)?;
     let at = config.first_ms + draw.next(config.spread_ms);
     sim.run_until(Millis(at));
     let mut out = Outcome::default();
@@ -512,6 +579,9 @@ fn run_one(
                 .iter()
                 .map(|j| format!("{} ms {}: {}", j.time_ms, j.kind, j.text))
                 .collect();
+            if config.changes {
+                out.changes = changes(&sim);
+            }
             return Ok(out);
         }
         CaseKind::Sensor { sensor, transient } => {
@@ -582,6 +652,9 @@ fn run_one(
         .iter()
         .map(|j| format!("{} ms {}: {}", j.time_ms, j.kind, j.text))
         .collect();
+    if config.changes {
+        out.changes = changes(&sim);
+    }
     if out.restored == Some(false) {
         out.note = format!(
             "{} not restored: {} items delivered in {} s after the reset at {reset_at} ms, filter {}",
@@ -628,7 +701,7 @@ fn sustained(shared: &Shared, minutes: u64, threads: usize) -> Result<u64, Vec<P
             mix: SizeMix::Alternate,
             count: None,
         };
-        let mut sim = simulation(shared, 77, &plan, true)?;
+        let mut sim = simulation(shared, 77, &plan, true, 16)?;
         sim.run_until(Millis(duration));
         let diagnosed = sim
             .diagnosers
@@ -718,6 +791,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
             ..Row::default()
         })
         .collect();
+    let mut examples: BTreeMap<(usize, &str), usize> = BTreeMap::new();
     for (&(i, seed), r) in jobs.iter().zip(results) {
         let o = r?;
         let row = &mut rows[i];
@@ -735,24 +809,31 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
             Some(false) => row.not_restored += 1,
             None => {}
         }
-        let mut fail = |t: String| {
-            if row.failures.len() < 5 {
+        // At most five examples of each kind of failure, hazards first.
+        let mut fail = |kind: &'static str, t: String| {
+            let n = examples.entry((i, kind)).or_insert(0);
+            if *n < 5 {
+                *n += 1;
                 row.failures.push(format!("seed {seed}: {t}"));
             }
         };
         for h in &o.hazards {
-            fail(format!("hazard {h} ({})", o.note));
+            fail("hazard", format!("hazard {h} ({})", o.note));
         }
         for w in &o.wrong {
-            fail(format!("wrong diagnosis {w} ({})", o.note));
+            fail(
+                "wrong diagnosis",
+                format!("wrong diagnosis {w} ({})", o.note),
+            );
         }
         if o.restored == Some(false) {
-            fail(o.note.clone());
+            fail("not restored", o.note.clone());
         }
         let failed = !o.hazards.is_empty() || !o.wrong.is_empty() || o.restored == Some(false);
         if failed && row.first_failure_journal.is_empty() {
             row.first_failure_journal.push(format!("seed {seed}"));
             row.first_failure_journal.extend(o.journal);
+            row.first_failure_changes = o.changes;
         }
     }
     let hours: Vec<u64> = (0..config.fault_free_hours).collect();
@@ -760,7 +841,7 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         FaultFree,
         Vec<Problem>,
     > {
-        let mut sim = simulation(&shared, 20_000 + h, &plans.0, config.plausibility)?;
+        let mut sim = simulation(&shared, 20_000 + h, &plans.0, config.plausibility, 16)?;
         sim.run_until(Millis(3_600_000));
         let mut examples: Vec<String> = sim
             .journal()
