@@ -465,48 +465,59 @@ fn judge(sim: &Simulation, expected: &BTreeSet<String>, at: u64, out: &mut Outco
     }
 }
 
+/// Keeps what the run's journal says and, with [`Config::changes`], its changes of
+/// signals.
+fn record(sim: &Simulation, config: &Config, out: &mut Outcome) {
+    out.journal = sim
+        .journal()
+        .iter()
+        .map(|j| format!("{} ms {}: {}", j.time_ms, j.kind, j.text))
+        .collect();
+    if config.changes {
+        out.changes = changes(sim);
+    }
+}
+
 /// Every change of a signal over the recorded cycles, one line per cycle that changed
 /// something: the raw inputs, the applied outputs (with the commanded value where it
 /// differs), the observers and the auxiliary variables (suspect flags, estimates,
 /// diagnoser flags), and the trip.
 fn changes(sim: &Simulation) -> Vec<String> {
+    use crate::bits::Bits;
+    use crate::history::CycleRecord;
     use crate::symbols::Space;
-    let plant = &sim.bundle.plant;
+    fn bits(r: &CycleRecord, space: Space) -> &Bits {
+        match space {
+            Space::Input => &r.inputs,
+            Space::Output => &r.applied,
+            Space::Observer => &r.observers,
+            Space::Aux => &r.aux,
+        }
+    }
+    let bit = |b: &Bits, i: usize| i < b.len() && b.get(i);
     let symbols = &sim.engine.symbols;
     let mut lines = Vec::new();
-    let mut previous: Option<&crate::history::CycleRecord> = None;
+    let mut previous: Option<&CycleRecord> = None;
     for r in sim.engine.history.iter() {
         let mut parts = Vec::new();
-        let get = |b: &crate::bits::Bits, i: usize| i < b.len() && b.get(i);
-        let differs = |f: fn(&crate::history::CycleRecord) -> &crate::bits::Bits, i: usize| {
-            previous.is_none_or(|p| get(f(p), i) != get(f(r), i))
-        };
-        for (i, s) in plant.inputs.iter().enumerate() {
-            if differs(|r| &r.inputs, i) {
-                parts.push(format!("{}={}", s.id, u8::from(get(&r.inputs, i))));
-            }
-        }
-        for (k, s) in plant.outputs.iter().enumerate() {
-            if differs(|r| &r.applied, k) || differs(|r| &r.commanded, k) {
-                let (a, c) = (get(&r.applied, k), get(&r.commanded, k));
-                parts.push(if a == c {
-                    format!("{}={}", s.id, u8::from(a))
-                } else {
-                    format!("{}={} (commanded {})", s.id, u8::from(a), u8::from(c))
-                });
-            }
-        }
-        for (space, f) in [
-            (
-                Space::Observer,
-                (|r| &r.observers) as fn(&crate::history::CycleRecord) -> &crate::bits::Bits,
-            ),
-            (Space::Aux, |r| &r.aux),
-        ] {
+        for space in Space::ALL {
             for (i, name) in symbols.names(space).iter().enumerate() {
-                if differs(f, i) {
-                    parts.push(format!("{name}={}", u8::from(get(f(r), i))));
+                let value = bit(bits(r, space), i);
+                // An output also shows where the filter changed the program's command.
+                let commanded = (space == Space::Output).then(|| bit(&r.commanded, i));
+                let changed = previous.is_none_or(|p| {
+                    bit(bits(p, space), i) != value
+                        || commanded.is_some_and(|c| bit(&p.commanded, i) != c)
+                });
+                if !changed {
+                    continue;
                 }
+                parts.push(match commanded {
+                    Some(c) if c != value => {
+                        format!("{name}={} (commanded {})", u8::from(value), u8::from(c))
+                    }
+                    _ => format!("{name}={}", u8::from(value)),
+                });
             }
         }
         if previous.is_none_or(|p| p.tripped != r.tripped) {
@@ -574,14 +585,7 @@ fn run_one(
                 .iter()
                 .filter(|h| h.elements.iter().any(|e| e == actuator))
                 .count();
-            out.journal = sim
-                .journal()
-                .iter()
-                .map(|j| format!("{} ms {}: {}", j.time_ms, j.kind, j.text))
-                .collect();
-            if config.changes {
-                out.changes = changes(&sim);
-            }
+            record(&sim, config, &mut out);
             return Ok(out);
         }
         CaseKind::Sensor { sensor, transient } => {
@@ -647,14 +651,7 @@ fn run_one(
     out.restored =
         Some(!sim.engine.is_tripped() && delivered(&sim) >= before + config.restored_items);
     judge(&sim, &expected, struck_at, &mut out);
-    out.journal = sim
-        .journal()
-        .iter()
-        .map(|j| format!("{} ms {}: {}", j.time_ms, j.kind, j.text))
-        .collect();
-    if config.changes {
-        out.changes = changes(&sim);
-    }
+    record(&sim, config, &mut out);
     if out.restored == Some(false) {
         out.note = format!(
             "{} not restored: {} items delivered in {} s after the reset at {reset_at} ms, filter {}",
