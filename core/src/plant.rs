@@ -135,6 +135,23 @@ pub struct PlausibleRule {
     /// has left).
     #[serde(default)]
     pub hold_until_back: bool,
+    /// A rise sooner than `ms` after the last cycle where `event` held is implausible (a
+    /// travel time from an upstream event: a box that leaves the belt's end sensor
+    /// reaches the middle of the table no sooner than its shortest travel takes).
+    #[serde(default)]
+    pub rise_not_after: Option<AfterEvent>,
+}
+
+/// An event and a time after it, for [`PlausibleRule::rise_not_after`]:
+/// `(event: "FE(C3)", ms: 100)`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AfterEvent {
+    /// The event (logic notation, over the inputs read now and every value of the
+    /// previous cycle: `FE(C3)`).
+    pub event: String,
+    /// How long after it a rise stays implausible, ms.
+    pub ms: u64,
 }
 
 impl Signal {

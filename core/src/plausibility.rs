@@ -10,7 +10,10 @@
 //!   drive under it runs; an axis leaves a position only once its motion is ordered).
 //!
 //! A condition may also have to hold for a time (`rise_when_for_ms`): a travel time
-//! after the order (the turntable cannot reach C5 sooner than the rotation takes).
+//! after the order (the turntable cannot reach C5 sooner than the rotation takes). A
+//! rise may be implausible for a time after an event (`rise_not_after`: a box reaches
+//! the middle of the table no sooner than 100 ms after it left the belt's end sensor);
+//! an upstream sensor stuck at 1 never gives the event, so the rule then holds nothing.
 //!
 //! A plausible edge may also wait for a confirmation (`rise_confirm_ms`,
 //! `fall_confirm_ms`): it is taken once the reading has kept its new value that long
@@ -78,6 +81,8 @@ struct Rule {
     rise_for: u64,
     fall_for: u64,
     hold_until_back: bool,
+    /// `rise_not_after`: the event and the time after it.
+    rise_after: Option<(Dnf, u64)>,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -96,6 +101,8 @@ struct State {
     /// An edge came too soon after the accepted one (`hold_until_back`): held until the
     /// reading agrees again.
     latched: bool,
+    /// The last cycle where the `rise_not_after` event held.
+    event_at: Option<u64>,
 }
 
 /// A change of a sensor's suspicion, for the journal and the alarms.
@@ -137,6 +144,8 @@ pub struct ExportRule<'a> {
     pub fall_when_for_ms: u64,
     /// See [`crate::plant::PlausibleRule`].
     pub hold_until_back: bool,
+    /// See [`crate::plant::PlausibleRule`]: the event and the time after it.
+    pub rise_not_after: Option<(&'a Dnf, u64)>,
 }
 
 /// The compiled rules of a plant and their state.
@@ -182,6 +191,10 @@ impl Plausibility {
             };
             let rise = cond("rise_when", &r.rise_when);
             let fall = cond("fall_when", &r.fall_when);
+            let rise_after = r
+                .rise_not_after
+                .as_ref()
+                .and_then(|a| cond("rise_not_after", &Some(a.event.clone())).map(|d| (d, a.ms)));
             let Some((Space::Aux, aux)) = symbols.lookup(&suspect_name(&s.id)) else {
                 problems.push(Problem::error(
                     "V0013",
@@ -206,6 +219,7 @@ impl Plausibility {
                 rise_for: r.rise_when_for_ms,
                 fall_for: r.fall_when_for_ms,
                 hold_until_back: r.hold_until_back,
+                rise_after,
             });
             names.push(s.id.clone());
         }
@@ -242,6 +256,7 @@ impl Plausibility {
                 rise_cond_since: None,
                 fall_cond_since: None,
                 latched: false,
+                event_at: None,
             };
         }
     }
@@ -280,6 +295,13 @@ impl Plausibility {
             };
             let rise_ok = timed(&r.rise, r.rise_for, &mut st.rise_cond_since);
             let fall_ok = timed(&r.fall, r.fall_for, &mut st.fall_cond_since);
+            // The event is tracked every cycle; a rise is plausible only `ms` after it.
+            let after_event = r.rise_after.as_ref().is_none_or(|(event, ms)| {
+                if eval_dnf(event, frame) {
+                    st.event_at = Some(t);
+                }
+                st.event_at.is_none_or(|at| t.saturating_sub(at) >= *ms)
+            });
             let read = frame.now(Space::Input).get(r.input);
             let mut suspect = false;
             if read != st.accepted {
@@ -290,7 +312,10 @@ impl Plausibility {
                     (r.min_on, &r.fall, fall_ok)
                 };
                 let in_window = since < window;
-                let plausible = !st.latched && !in_window && timed.unwrap_or_else(|| holds(cond));
+                let plausible = !st.latched
+                    && !in_window
+                    && (!read || after_event)
+                    && timed.unwrap_or_else(|| holds(cond));
                 let confirm = if read { r.rise_confirm } else { r.fall_confirm };
                 if !plausible {
                     suspect = true;
@@ -370,6 +395,7 @@ impl Plausibility {
                 rise_when_for_ms: r.rise_for,
                 fall_when_for_ms: r.fall_for,
                 hold_until_back: r.hold_until_back,
+                rise_not_after: r.rise_after.as_ref().map(|(d, ms)| (d, *ms)),
             })
             .collect()
     }

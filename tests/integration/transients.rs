@@ -298,6 +298,17 @@ fn a_dropout_of_c0_while_the_box_waits_pushes_it_against_no_stopped_belt() {
     assert_struck_without_hazard(&report, true);
 }
 
+/// A pulse of C6 just after C3 falls (the real box's front still 130 ms from C6) was
+/// taken for the box: the program stopped the rollers and turned the table with the box
+/// on its edge (4 hazards in 100 seeds, in seeds 60 to 89). C6 rises no sooner than
+/// 100 ms after C3 falls (`rise_not_after`).
+#[test]
+fn a_pulse_of_c6_just_after_c3_falls_turns_no_table_under_a_box() {
+    let (config, report) = campaign("C6 pulse", 60..90, 0);
+    assert_eq!(report.rows.len(), config.lengths_ms.len());
+    assert_struck_without_hazard(&report, false);
+}
+
 /// Replaying one run gives its changes of signals, so that a technician can read what
 /// the program, the observers and the stage did around the failure.
 #[test]

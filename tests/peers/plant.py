@@ -57,7 +57,11 @@ async def main() -> None:
         if not words or words[0] == "quit":
             break
         if words[0] == "di":
-            await server.async_setValues(1, 2, int(words[1]), [words[2] == "1"])
+            # `di A V [A V ...]`: every pair in one step of the loop, so that a reader
+            # sees them change in the same scan.
+            pairs = words[1:]
+            for a, v in zip(pairs[0::2], pairs[1::2]):
+                await server.async_setValues(1, 2, int(a), [v == "1"])
             print("ok", flush=True)
         elif words[0] == "co":
             await server.async_setValues(1, 5, int(words[1]), [words[2] == "1"])

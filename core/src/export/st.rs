@@ -583,8 +583,24 @@ END_IF;",
             locals.push((format!("PL_{k}_{edge}S"), "LINT"));
             format!("PL_{k}_{edge}K AND NOW_MS - PL_{k}_{edge}S >= {ms}")
         };
-        let rise_timed = timed("R", r.rise_when, r.rise_when_for_ms);
+        let mut rise_timed = timed("R", r.rise_when, r.rise_when_for_ms);
         let fall_timed = timed("F", r.fall_when, r.fall_when_for_ms);
+        // `rise_not_after`: the event's last cycle is tracked every cycle (PL_k_EK,
+        // PL_k_ES); a rise is plausible only that long after it.
+        if let Some((event, ms)) = r.rise_not_after {
+            let _ = writeln!(first, "    PL_{k}_EK := FALSE;");
+            let _ = writeln!(
+                track,
+                "IF {} THEN
+    PL_{k}_EK := TRUE;
+    PL_{k}_ES := NOW_MS;
+END_IF;",
+                cond(Some(event))
+            );
+            locals.push((format!("PL_{k}_EK"), "BOOL"));
+            locals.push((format!("PL_{k}_ES"), "LINT"));
+            rise_timed = format!("{rise_timed} AND (NOT PL_{k}_EK OR NOW_MS - PL_{k}_ES >= {ms})");
+        }
         let _ = writeln!(
             first,
             "    {acc} := {raw};

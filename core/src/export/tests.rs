@@ -165,16 +165,25 @@ fn st_conforms_to_the_native_engine() {
     // With the station's plausibility rules (random traces break its physics all the
     // time), and without them (the traces then reach the task monitors' states).
     // Third pass: every rule with `hold_until_back` (an edge inside its window holds
-    // the sensor until the reading comes back).
-    for (pass, with_rules) in [(0, true), (1, false), (2, true)] {
+    // the sensor until the reading comes back). Fourth pass: every rule's rise waits
+    // 300 ms after an event (`rise_not_after`).
+    for (pass, with_rules) in [(0, true), (1, false), (2, true), (3, true)] {
         let mut bundle = station_bundle.clone();
         if !with_rules {
             bundle.plausibility = Default::default();
         }
-        if pass == 2 {
+        if pass >= 2 {
+            let first = bundle.plant.inputs[0].id.clone();
             for s in &mut bundle.plant.inputs {
                 if let Some(r) = &mut s.plausible {
-                    r.hold_until_back = true;
+                    if pass == 2 {
+                        r.hold_until_back = true;
+                    } else {
+                        r.rise_not_after = Some(crate::plant::AfterEvent {
+                            event: format!("FE({first}) + RE({})", s.id),
+                            ms: 300,
+                        });
+                    }
                 }
             }
             bundle.plausibility =

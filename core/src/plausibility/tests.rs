@@ -392,3 +392,32 @@ fn an_edge_inside_its_window_is_held_until_the_reading_comes_back_with_hold_unti
         }
     }
 }
+
+/// `rise_not_after` (C6: `(event: "FE(C3)", ms: 100)`): a box that leaves C3 reaches
+/// the middle of the table 130 ms later at the soonest, so a C6 rise 50 ms after C3
+/// falls is held; the real one, 150 ms after, is taken. With C3 stuck at 1 the event
+/// never comes and C6's rises are taken as before (the rule hides no box).
+#[test]
+fn a_rise_soon_after_its_event_is_held_and_a_stuck_upstream_sensor_holds_nothing() {
+    let b = station();
+    let mut r = Rig::new(&b);
+    let drives = ["A1", "A2"];
+    hold(&mut r, 0, 1500, &["C3", "C4"], &drives);
+    r.cycle(1500, &["C4"], &drives);
+    r.cycle(1550, &["C4", "C6"], &drives);
+    assert_eq!(
+        r.read("C6"),
+        (false, true),
+        "50 ms after C3 fell: held at 0"
+    );
+    r.cycle(1560, &["C4"], &drives);
+    assert_eq!(r.read("C6"), (false, false), "the pulse is over");
+    r.cycle(1650, &["C4", "C6"], &drives);
+    assert_eq!(r.read("C6"), (true, false), "150 ms after: the box arrives");
+
+    // C3 stuck at 1: no fall of C3, and the box's C6 rise is taken.
+    let mut r = Rig::new(&b);
+    hold(&mut r, 0, 1500, &["C3", "C4"], &drives);
+    r.cycle(1500, &["C3", "C4", "C6"], &drives);
+    assert_eq!(r.read("C6"), (true, false));
+}
