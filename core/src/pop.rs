@@ -550,6 +550,7 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
         // The neighbours whose sensors a component assumes are not in the synthetic
         // plant: each copy stands alone.
         c.assumes.clear();
+        c.assumes_item.clear();
         c.independent = c.independent.iter().map(|a| format!("{a}_{i}")).collect();
         for e in &mut c.estimates {
             e.sensor = format!("{}_{i}", e.sensor);

@@ -300,13 +300,31 @@ fn a_dropout_of_c0_while_the_box_waits_pushes_it_against_no_stopped_belt() {
 
 /// A pulse of C6 just after C3 falls (the real box's front still 130 ms from C6) was
 /// taken for the box: the program stopped the rollers and turned the table with the box
-/// on its edge (4 hazards in 100 seeds, in seeds 60 to 89). C6 rises no sooner than
-/// 100 ms after C3 falls (`rise_not_after`).
+/// on its edge (4 hazards in 100 seeds, 2 in seeds 60 to 89). C6 rises no sooner than
+/// 100 ms after C3 falls (`rise_not_after`). A pulse taken for a box sends a phantom to
+/// an exit, whose model then blamed C7 with certainty (5 wrong in seeds 60 to 89): its
+/// beam partitions wait while the c6 model suspects C6 (`assumes_item`).
 #[test]
 fn a_pulse_of_c6_just_after_c3_falls_turns_no_table_under_a_box() {
     let (config, report) = campaign("C6 pulse", 60..90, 0);
     assert_eq!(report.rows.len(), config.lengths_ms.len());
-    assert_struck_without_hazard(&report, false);
+    assert_struck_without_hazard(&report, true);
+}
+
+/// A dropout of C5 while the table has just reached it (its arrival window I4 still
+/// open) was diagnosed, rightly, as a fault of C5, but C5's estimate from the windows
+/// (pessimistic: reached once I4 has closed) read the table as gone: CSs5 tripped with
+/// the box half out, and after the restart the right exit blamed C7 with certainty (17
+/// wrong, 27 trips in 700 runs; 14 wrong in seeds 40 to 99). The model saw the table
+/// arrive and explains the dropout by C5: the estimate is the plant state's value.
+#[test]
+fn a_dropout_of_c5_at_the_tables_arrival_neither_trips_nor_blames_c7() {
+    let (config, report) = campaign("C5 dropout", 40..100, 0);
+    assert_eq!(report.rows.len(), config.lengths_ms.len());
+    assert_struck_without_hazard(&report, true);
+    for r in &report.rows {
+        assert_eq!(r.trips, 0, "{}: {:?}", r.name, r.failures);
+    }
 }
 
 /// Replaying one run gives its changes of signals, so that a technician can read what

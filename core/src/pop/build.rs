@@ -147,6 +147,9 @@ pub struct Component {
     pub sensors_first: bool,
     /// Sensors of other components this model takes as true.
     pub assumes: Vec<String>,
+    /// Sensors of other components this model takes as saying an item is there (its
+    /// sensor partitions wait on them).
+    pub assumes_item: Vec<String>,
     /// How long a certain decision waits for those neighbours at least, ms.
     pub settle_ms: u64,
     /// Generated unexpected evolutions.
@@ -1340,13 +1343,15 @@ fn compile_one(
     if ctx.problems.len() > before {
         return None;
     }
-    for a in &c.assumes {
-        if !matches!(symbols.lookup(a), Some((Space::Input, _))) {
-            ctx.err(
-                "V0503",
-                a,
-                format!("`assumes`: `{a}` is not a sensor of the plant"),
-            );
+    for (field, list) in [("assumes", &c.assumes), ("assumes_item", &c.assumes_item)] {
+        for a in list {
+            if !matches!(symbols.lookup(a), Some((Space::Input, _))) {
+                ctx.err(
+                    "V0503",
+                    a,
+                    format!("`{field}`: `{a}` is not a sensor of the plant"),
+                );
+            }
         }
     }
     for a in &c.independent {
@@ -1368,6 +1373,7 @@ fn compile_one(
         follows_safe_state: c.follows_safe_state,
         sensors_first: c.sensors_first,
         assumes: c.assumes.clone(),
+        assumes_item: c.assumes_item.clone(),
         settle_ms: c.settle_ms,
         id: c.id.clone(),
         signals,

@@ -83,6 +83,14 @@ pub struct ComponentDef {
     /// that neighbour's fault) or has lost track of its plant.
     #[serde(default)]
     pub assumes: Vec<String>,
+    /// Sensors of other components that this model takes as saying an item is there
+    /// (the box C6 saw come onto the table, which the exits then evacuate). While
+    /// another component has lost its normal hypothesis with a fault of one of them
+    /// possible, the certain decisions of this model's sensor partitions wait (an item
+    /// that never comes may be a phantom of that sensor, not a fault of this beam); its
+    /// drive partitions do not (a drive that does not move an item that is there).
+    #[serde(default)]
+    pub assumes_item: Vec<String>,
     /// How long a certain decision waits at least for the neighbours whose sensors it
     /// `assumes`, ms: a neighbour's window on that sensor may still be open when this
     /// model sees the anomaly (C2 falls without C1 a few ms before the feed's C1

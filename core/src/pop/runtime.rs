@@ -47,6 +47,22 @@ pub struct Diagnosis {
     pub certainty: Certainty,
 }
 
+/// Which certain decisions of a component wait on its interface (see
+/// [`Diagnosers::interface_blocks`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Wait {
+    /// Every partition's (a neighbour suspects a sensor the model `assumes`).
+    all: bool,
+    /// The sensor partitions' (a neighbour suspects a sensor it `assumes_item`).
+    sensors: bool,
+}
+
+impl Wait {
+    fn applies_to(self, p: &super::build::Partition) -> bool {
+        self.all || (self.sensors && p.sensor.is_some())
+    }
+}
+
 #[derive(Clone, Debug)]
 struct Run {
     h: Vec<(u32, i64)>,
@@ -75,6 +91,9 @@ struct Run {
     def_aux: Vec<Option<u32>>,
     interval_aux: Vec<Option<u32>>,
     estimate_aux: Vec<Option<u32>>,
+    /// Per estimate: the sensor's signal index in the component and the fault indices
+    /// of the partition about it (see [`state_value`]).
+    estimate_of: Vec<Option<(usize, Vec<usize>)>>,
 }
 
 /// The diagnosers of a plant.
@@ -99,8 +118,8 @@ pub struct Diagnosers {
     /// The filter held the outputs in the previous cycle.
     was_held: bool,
     /// Per component: the partitions of other components that cover a sensor it
-    /// assumes (component, partition).
-    interface: Vec<Vec<(usize, usize)>>,
+    /// assumes (component, partition, and true for a sensor it `assumes_item`).
+    interface: Vec<Vec<(usize, usize, bool)>>,
     /// The components with such an interface (the only ones whose decisions can wait).
     with_interface: Vec<usize>,
 }
@@ -369,6 +388,7 @@ impl Diagnosers {
                     .collect(),
                 interval_aux: c.intervals.iter().map(|i| aux(&i.id)).collect(),
                 estimate_aux: c.estimates.iter().map(|(n, _)| aux(n)).collect(),
+                estimate_of: c.estimates.iter().map(|(n, _)| estimate_of(c, n)).collect(),
             });
         }
         let mut shared: std::collections::HashMap<Vec<u64>, std::sync::Arc<Tables>> =
@@ -389,7 +409,7 @@ impl Diagnosers {
                     .clone()
             })
             .collect();
-        let interface: Vec<Vec<(usize, usize)>> = compiled
+        let interface: Vec<Vec<(usize, usize, bool)>> = compiled
             .components
             .iter()
             .enumerate()
@@ -397,8 +417,14 @@ impl Diagnosers {
                 let mut v = Vec::new();
                 for (j, o) in compiled.components.iter().enumerate() {
                     for (pj, p) in o.partitions.iter().enumerate() {
-                        if j != i && p.sensor.as_ref().is_some_and(|s| c.assumes.contains(s)) {
-                            v.push((j, pj));
+                        let Some(s) = p.sensor.as_ref().filter(|_| j != i) else {
+                            continue;
+                        };
+                        if c.assumes.contains(s) {
+                            v.push((j, pj, false));
+                        }
+                        if c.assumes_item.contains(s) {
+                            v.push((j, pj, true));
                         }
                     }
                 }
@@ -556,17 +582,24 @@ impl Diagnosers {
         // does, they keep waiting).
         for k in 0..self.with_interface.len() {
             let i = self.with_interface[k];
-            if self.runs[i].deferred.is_some() && !self.interface_blocks(i, t) {
+            if self.runs[i].deferred.is_none() {
+                continue;
+            }
+            let wait = self.interface_blocks(i, t);
+            if !wait.all {
                 let c = &self.compiled.components[i];
                 let r = &mut self.runs[i];
-                r.deferred = None;
+                // Issued now, unless a sensor partition still waits on an item sensor.
+                if !wait.sensors {
+                    r.deferred = None;
+                }
                 decide(
                     c,
                     &self.tables[i],
                     r,
                     t,
                     &mut self.work,
-                    false,
+                    wait,
                     &mut self.diagnoses,
                 );
             }
@@ -608,22 +641,35 @@ impl Diagnosers {
     /// hypothesis while a fault of its partition covering the sensor is possible (the
     /// local anomaly may be that neighbour's fault), or lost track of its plant (it
     /// cannot vouch for the sensor until the operator's reset).
-    fn interface_blocks(&self, ci: usize, t: i64) -> bool {
-        if self.interface[ci].is_empty() {
-            return false;
+    ///
+    /// The sensors it `assumes_item` make its sensor partitions wait likewise
+    /// ([`Wait::sensors`]), not its drive partitions.
+    fn interface_blocks(&self, ci: usize, t: i64) -> Wait {
+        let iface = &self.interface[ci];
+        if iface.is_empty() {
+            return Wait::default();
         }
         let settle = i64::try_from(self.compiled.components[ci].settle_ms).unwrap_or(i64::MAX);
-        self.runs[ci]
+        let settling = self.runs[ci]
             .deferred
-            .is_none_or(|since| t.saturating_sub(since) < settle)
-            || self.interface[ci].iter().any(|&(j, pj)| {
-                let r = &self.runs[j];
-                r.unexplained
-                    || (!r.normal_possible
-                        && r.decisions
-                            .get(pj)
-                            .is_some_and(|(c, _)| *c != Certainty::Normal))
-            })
+            .is_none_or(|since| t.saturating_sub(since) < settle);
+        let blocks = |item: bool| {
+            let mut of_kind = iface.iter().filter(|e| e.2 == item).peekable();
+            of_kind.peek().is_some()
+                && (settling
+                    || of_kind.any(|&(j, pj, _)| {
+                        let r = &self.runs[j];
+                        r.unexplained
+                            || (!r.normal_possible
+                                && r.decisions
+                                    .get(pj)
+                                    .is_some_and(|(c, _)| *c != Certainty::Normal))
+                    }))
+        };
+        Wait {
+            all: blocks(false),
+            sensors: blocks(true),
+        }
     }
 
     /// One cycle of component `ci`; with `orders_forced` (the first cycle the filter
@@ -769,14 +815,51 @@ impl Diagnosers {
                 }
             }
             r.next_boundary = next;
-            for ((_, d), a) in c.estimates.iter().zip(&r.estimate_aux) {
-                let v = eval_dnf(d, frame);
+            for (((_, d), a), of) in c.estimates.iter().zip(&r.estimate_aux).zip(&r.estimate_of)
+            {
+                let v = state_value(c, r, of.as_ref()).unwrap_or_else(|| eval_dnf(d, frame));
                 if let Some(a) = a {
                     frame.now_mut(Space::Aux).set(*a as usize, v);
                 }
             }
         }
     }
+}
+
+/// The signal index in `c` of the sensor that the estimate `name` (`EST(C5)`) is about,
+/// and the faults of the partition about it.
+fn estimate_of(c: &Component, name: &str) -> Option<(usize, Vec<usize>)> {
+    let i = c
+        .signals
+        .iter()
+        .position(|s| crate::symbols::estimate_name(&s.name) == name)?;
+    let p = c
+        .partitions
+        .iter()
+        .find(|p| p.sensor.as_ref().is_some_and(|s| c.signals[i].name == *s))?;
+    Some((i, p.faults.clone()))
+}
+
+/// The estimate from the plant's state: when every hypothesis explains the sensor by a
+/// fault of its partition (the model saw the sensor lie and still follows the plant),
+/// and every plant state they follow gives the sensor the same value, that value (the
+/// table seen arriving at C5 before a dropout is at C5, even while its arrival window
+/// is still open). None otherwise: the estimate's expression over the intervals, which
+/// is pessimistic, decides (after a restart on the observed values, a faulty reading
+/// may have chosen the states).
+fn state_value(c: &Component, r: &Run, of: Option<&(usize, Vec<usize>)>) -> Option<bool> {
+    let (i, faults) = of?;
+    if !r.started || r.unexplained || r.clock_unknown || r.clock.is_none() {
+        return None;
+    }
+    let mut values = r.h.iter().map(|&(q, _)| {
+        let g = &c.g[q as usize];
+        g.mode
+            .is_some_and(|m| faults.contains(&m))
+            .then_some(c.values[g.x] >> i & 1 == 1)
+    });
+    let first = values.next()??;
+    values.all(|v| v == Some(first)).then_some(first)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -881,6 +964,7 @@ fn empty_run() -> Run {
         def_aux: Vec::new(),
         interval_aux: Vec::new(),
         estimate_aux: Vec::new(),
+        estimate_of: Vec::new(),
     }
 }
 
@@ -1137,7 +1221,7 @@ fn decide(
     r: &mut Run,
     t: i64,
     ws: &mut Work,
-    wait: bool,
+    wait: Wait,
     log: &mut Vec<Diagnosis>,
 ) {
     if r.h.is_empty() {
@@ -1175,7 +1259,7 @@ fn decide(
         *old_certainty = certainty;
         old.clear();
         old.extend(inside());
-        if certainty == Certainty::Certain && wait {
+        if certainty == Certainty::Certain && wait.applies_to(p) {
             r.deferred.get_or_insert(t);
         } else if certainty == Certainty::Certain {
             r.deferred = None;

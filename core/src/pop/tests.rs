@@ -134,12 +134,26 @@ fn malformed_file_gives_file_line_and_column() {
         "signals: [\"A4\", \"C4\", \"C5\"]",
         "signals: [\"A4\", \"C44\", \"C5\"]",
     );
-    let Err(p) = from_text(&dir, plant, &text, &path) else {
+    let Err(p) = from_text(&dir, plant.clone(), &text, &path) else {
         panic!("accepted");
     };
     let at = p[0].location.as_ref().unwrap();
     assert_eq!(p[0].code, "V0503", "{p:?}");
     assert!(at.line > 1 && at.column > 1, "{at:?}");
+    // An item sensor that is no sensor of the plant, at its own line.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.contains("assumes_item: [\"C6\"]"))
+        .unwrap()
+        + 1;
+    let text = text.replacen("assumes_item: [\"C6\"]", "assumes_item: [\"C66\"]", 1);
+    let Err(p) = from_text(&dir, plant, &text, &path) else {
+        panic!("accepted");
+    };
+    let at = p[0].location.as_ref().unwrap();
+    assert_eq!((p[0].code, at.line), ("V0503", line), "{p:?}");
+    assert!(p[0].message.contains("`assumes_item`: `C66`"), "{p:?}");
 }
 
 #[test]
