@@ -815,8 +815,7 @@ impl Diagnosers {
                 }
             }
             r.next_boundary = next;
-            for (((_, d), a), of) in c.estimates.iter().zip(&r.estimate_aux).zip(&r.estimate_of)
-            {
+            for (((_, d), a), of) in c.estimates.iter().zip(&r.estimate_aux).zip(&r.estimate_of) {
                 let v = state_value(c, r, of.as_ref()).unwrap_or_else(|| eval_dnf(d, frame));
                 if let Some(a) = a {
                     frame.now_mut(Space::Aux).set(*a as usize, v);
