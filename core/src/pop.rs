@@ -82,7 +82,8 @@ pub fn from_text(
         &bundle.symbols,
         Some(&bundle.constraints),
     )?;
-    let rewritten = coop::rewrite(&bundle.constraints, &bundle.symbols, &compiled)
+    let safe: Vec<_> = bundle.plant.outputs.iter().map(|s| s.safe).collect();
+    let rewritten = coop::rewrite(&bundle.constraints, &bundle.symbols, &compiled, &safe)
         .map_err(|m| vec![Problem::error("V0513", m, None)])?;
     let file_name = dir.join("constraints.txt (rewritten by the diagnosers)");
     let (set, mut p2) =

@@ -31,7 +31,6 @@ const ALWAYS: &[&str] = &[
     "table blocked at C5",
     "A4 stuck off",
     "A4 stuck on",
-    "C0 stuck at 1",
     "C1 stuck at 0",
     "C1 stuck at 1",
     "C7 stuck at 0",

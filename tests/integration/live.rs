@@ -809,20 +809,21 @@ fn gateway_stops_the_plant_on_a_certain_fault_of_the_table_drive() {
     assert_eq!(d["component"], "table", "{d}");
     assert_eq!(d["stop"], true, "{d}");
     assert!(d["fault"].as_str().unwrap().contains("F5"), "{d}");
-    // From the next cycle on, DSTOP_P drives every output to 0, whatever the PLC
-    // commands, as in the simulation.
+    // From the next cycle on, DSTOP_P drives every output to its safe value (0),
+    // whatever the PLC commands, as in the simulation, except what a constraint forces:
+    // A4, once applied, is released only at C5 (CSs15), so it stays on; A1 stops.
     gw.event("the stop", |e| {
         e["event"] == "trip"
             && e["record"]["constraints"]
                 .as_array()
                 .is_some_and(|c| c.iter().any(|c| c["id"] == "DSTOP_P"))
     });
-    wait_until("the plant to be stopped", || plant.coils() == "0000000");
+    wait_until("the plant to be stopped", || plant.coils() == "0000100");
     for _ in 0..10 {
-        assert_eq!(plant.coils(), "0000000", "the PLC's A1 A4 must not pass");
+        assert_eq!(plant.coils(), "0000100", "the PLC's A1 must not pass");
     }
     let stopped = gw.stop();
-    assert_eq!(stopped["outputs"], "0000000");
+    assert_eq!(stopped["outputs"], "0000100");
     assert!(
         stopped["diagnoses"]
             .as_array()

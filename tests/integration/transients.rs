@@ -496,3 +496,31 @@ fn a_sensor_stuck_at_1_gives_no_more_hazards_with_the_plausibility_rules_than_wi
         }
     }
 }
+
+/// Issue 17: a dead intermediate belt under a box pushed from C0 reads, for a while,
+/// like a C1 stuck at 0 (the feed model cannot tell them apart), and the entry conveyor
+/// went on bringing boxes that collided with the stuck one (48 hazards of other
+/// elements than A1 in 100 seeds; seed 2: boxes 5, 6 and 7). The feed model, certainly
+/// faulty with a stopping fault among its candidates, now stops the plant on the safe
+/// side: only the pushed box itself is damaged (the push that meets a dead belt, which
+/// no sensor shows before it happens), and the stop says it is ambiguous.
+#[test]
+fn a_dead_belt_under_a_pushed_box_stops_the_plant_before_the_next_box_collides() {
+    let (_, report) = campaign("A1 dead", 0..12, 0);
+    let row = &report.rows[0];
+    assert!(row.runs == 12 && row.injected == 12, "{row:?}");
+    assert_eq!(row.hazards, row.own_hazards, "{:?}", row.failures);
+    assert!(
+        row.hazards <= row.runs,
+        "one damaged box per run at most: {:?}",
+        row.failures
+    );
+    assert_eq!(row.wrong, 0, "{:?}", row.failures);
+    assert!(
+        row.first_failure_journal
+            .iter()
+            .any(|l| l.contains("ambiguous between") && l.contains("safe side")),
+        "{:#?}",
+        row.first_failure_journal
+    );
+}

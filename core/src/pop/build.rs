@@ -127,6 +127,8 @@ pub struct Component {
     pub initial: usize,
     /// Fault labels.
     pub faults: Vec<String>,
+    /// Per fault: it stops items (a `Blocked` behaviour: a dead drive, a jammed table).
+    pub blocking: Vec<bool>,
     /// Partitions.
     pub partitions: Vec<Partition>,
     /// Clock events: signal index, rising.
@@ -152,6 +154,8 @@ pub struct Component {
     pub assumes_item: Vec<String>,
     /// How long a certain decision waits for those neighbours at least, ms.
     pub settle_ms: u64,
+    /// See [`super::model::ComponentDef::doubt_ms`].
+    pub doubt_ms: Option<u64>,
     /// Generated unexpected evolutions.
     pub unexpected: Vec<Unexpected>,
     /// The symbol `tmo(pulse)`: a spurious value lasted longer than `pulse_max_ms`.
@@ -606,6 +610,15 @@ fn compile_one(
     let values: Vec<u64> = values.iter().map(|v| v.unwrap_or(init_val)).collect();
     // Faults and partitions.
     let faults: Vec<String> = c.faults.iter().map(|f| f.id.clone()).collect();
+    let blocking: Vec<bool> = c
+        .faults
+        .iter()
+        .map(|f| {
+            f.behaviours
+                .iter()
+                .any(|b| matches!(b, Behaviour::Blocked(_)))
+        })
+        .collect();
     let mut partitions = Vec::new();
     for p in &c.partitions {
         let mut fs = Vec::new();
@@ -1375,12 +1388,14 @@ fn compile_one(
         assumes: c.assumes.clone(),
         assumes_item: c.assumes_item.clone(),
         settle_ms: c.settle_ms,
+        doubt_ms: c.doubt_ms,
         id: c.id.clone(),
         signals,
         states,
         values,
         initial,
         faults,
+        blocking,
         partitions,
         clocks,
         initial_clock,

@@ -353,7 +353,12 @@ fn run_one(
     // An "unexplained" note claims no fault (no flag, no stop): the model lost track of
     // the plant and restarted from the observed values. It is counted apart (`lost`),
     // and the verdict goes to the first diagnosis that names a partition.
-    let first_named = d.diagnoses.iter().position(|x| !x.partition.is_empty());
+    // A stop on the safe side (`ambiguous`: a stopping fault among the candidates) is
+    // no verdict: it leaves the decision open, as the component does.
+    let first_named = d
+        .diagnoses
+        .iter()
+        .position(|x| !x.partition.is_empty() && x.certainty == Certainty::Certain);
     let lost = d.diagnoses[..first_named.unwrap_or(d.diagnoses.len())]
         .iter()
         .find(|x| x.partition.is_empty())
@@ -387,6 +392,12 @@ fn verdict_of(
         .into_iter()
         .filter(|(c, _, dec)| *c == inj.component && dec.certainty != Certainty::Normal)
         .map(|(_, p, dec)| format!("{} ({p})", dec.faults.join("|")))
+        .chain(
+            d.diagnoses
+                .iter()
+                .filter(|x| x.certainty == Certainty::Ambiguous && x.component == inj.component)
+                .map(|x| format!("{} (stopped on the safe side, {})", x.fault, x.partition)),
+        )
         .collect();
     if !effect {
         (Verdict::NoEffect, context)

@@ -97,6 +97,15 @@ pub struct ComponentDef {
     /// window closes).
     #[serde(default)]
     pub settle_ms: u64,
+    /// The safe side of an ambiguous fault, ms: when the component is certainly faulty
+    /// but cannot tell a stopping fault that stops items (`Blocked`: a dead drive) from
+    /// a fault of a sensor the cooperation cannot estimate, and is still so after this
+    /// long (its longest window that could decide: a box that reaches C3 shows the
+    /// belt runs and C1 was the fault), it stops the plant (the stopping partitions
+    /// still possible are flagged; the journal says `ambiguous`). None: it waits for
+    /// the evidence, however long.
+    #[serde(default)]
+    pub doubt_ms: Option<u64>,
     /// Sensors of a part that the component's blocking faults do not stop (the next box
     /// reaching C0 on the entry conveyor while the intermediate belt is stopped): a
     /// blocked plant still shows their edges where the expected evolutions foresee them.

@@ -43,7 +43,9 @@ pub struct Diagnosis {
     pub partition: String,
     /// The fault (several labels when they cannot be told apart).
     pub fault: String,
-    /// Certainty (always certain in the report; `unexplained` entries say so in `fault`).
+    /// Certainty: certain, or `ambiguous` for a stop on the safe side (the component is
+    /// certainly faulty and a stopping partition is among its candidates, all listed in
+    /// `fault`); `unexplained` entries say so in `fault`.
     pub certainty: Certainty,
 }
 
@@ -85,6 +87,10 @@ struct Run {
     deferred: Option<i64>,
     /// The normal mode is among the hypotheses.
     normal_possible: bool,
+    /// Since when the component is in doubt between a stopping fault that stops items
+    /// and a sensor fault it cannot estimate, and those candidates (see
+    /// [`safe_side_stop`]).
+    doubt: Option<(i64, String)>,
     /// The clock is not known (after a hold): every window is open and nothing times
     /// out until the next clock event.
     clock_unknown: bool,
@@ -380,6 +386,7 @@ impl Diagnosers {
                 held: false,
                 deferred: None,
                 normal_possible: true,
+                doubt: None,
                 clock_unknown: false,
                 def_aux: c
                     .partitions
@@ -518,6 +525,7 @@ impl Diagnosers {
             r.latched.iter_mut().for_each(|l| *l = false);
             r.started = false;
             r.unexplained = false;
+            r.doubt = None;
             // Restarted mid-motion (an order of the reset's cycle is taken as a value,
             // not as a clock event): the clock is unknown until the next clock event,
             // as after a hold.
@@ -785,6 +793,9 @@ impl Diagnosers {
             decide(c, tab, r, t, ws, wait, &mut self.diagnoses);
             r.next_boundary = i64::MIN;
         }
+        if !stopped {
+            safe_side_stop(c, r, t, &mut self.diagnoses);
+        }
         // Flags, intervals, estimates.
         let aux = frame.now_mut(Space::Aux);
         for (p, a) in r.latched.iter().zip(&r.def_aux) {
@@ -959,6 +970,7 @@ fn empty_run() -> Run {
         held: false,
         deferred: None,
         normal_possible: true,
+        doubt: None,
         clock_unknown: false,
         def_aux: Vec::new(),
         interval_aux: Vec::new(),
@@ -1274,6 +1286,86 @@ fn decide(
                 certainty,
             });
             r.latched[pi] = true;
+        }
+    }
+    if wait.all || wait.sensors {
+        r.doubt = None;
+    } else {
+        doubt(c, r, modes, t);
+    }
+}
+
+/// Whether the component is in doubt (issue 17): certainly faulty (no normal hypothesis
+/// left, nothing unexplained) without telling a stopping fault that stops items (a
+/// `Blocked` behaviour: a dead drive, a jammed table) from a fault of a sensor the
+/// cooperation cannot replace (no estimate). Keeps `r.doubt` (since when, and the
+/// candidates); [`safe_side_stop`] stops the plant once it has lasted `doubt_ms`. A
+/// motion without its order (a `Moves` fault) is no doubt that stops: every transient
+/// of a beam reads like one, and a stop in the middle of a transfer costs more than it
+/// saves (a box half on the table). A sensor the cooperation covers (C4, C5: the
+/// paper's degraded mode) keeps the decision open.
+fn doubt(c: &Component, r: &mut Run, modes: &[bool], t: i64) {
+    let nf = c.faults.len();
+    let stop_of = |f: usize| c.partitions.iter().any(|p| p.stop && p.faults.contains(&f));
+    let covered = |f: usize| {
+        c.partitions.iter().any(|p| {
+            p.faults.contains(&f)
+                && p.sensor.as_ref().is_some_and(|s| {
+                    let name = crate::symbols::estimate_name(s);
+                    c.estimates.iter().any(|(n, _)| *n == name)
+                })
+        })
+    };
+    let blocking_stop = |f: usize| stop_of(f) && c.blocking.get(f).copied().unwrap_or(false);
+    let possible = || (0..nf).filter(|&f| modes[f]);
+    let doubtful = c.doubt_ms.is_some()
+        && !r.unexplained
+        && !modes[nf]
+        && possible().any(blocking_stop)
+        && !possible().all(|f| stop_of(f) || covered(f));
+    if !doubtful {
+        r.doubt = None;
+        return;
+    }
+    let candidates = possible()
+        .map(|f| c.faults[f].as_str())
+        .collect::<Vec<_>>()
+        .join("|");
+    let since = r.doubt.as_ref().map_or(t, |d| d.0);
+    r.doubt = Some((since, candidates));
+}
+
+/// The safe side of a doubt that lasted the component's `doubt_ms` (see [`doubt`]):
+/// rather than wait longer for the evidence that would decide, the plant stops. A
+/// belt that died under a box pushed from C0 reads, for a while, like a C1 stuck at 0,
+/// and the entry conveyor brings the next box against the stuck one; within the
+/// feed's longest window a box that reaches C3 shows the belt runs. The stopping
+/// partitions still possible are flagged (their `DSTOP_` holds, the operator's reset
+/// clears them, as for a certain fault), and the log says `ambiguous` with every
+/// candidate.
+fn safe_side_stop(c: &Component, r: &mut Run, t: i64, log: &mut Vec<Diagnosis>) {
+    let (Some(wait), Some((since, _))) = (c.doubt_ms, r.doubt.as_ref()) else {
+        return;
+    };
+    let due = since.saturating_add(i64::try_from(wait).unwrap_or(i64::MAX));
+    if t < due {
+        r.next_deadline = r.next_deadline.min(due - 1);
+        return;
+    }
+    let Some((_, candidates)) = r.doubt.take() else {
+        return;
+    };
+    for (pi, p) in c.partitions.iter().enumerate() {
+        if p.stop && !r.latched[pi] && !r.decisions[pi].1.is_empty() {
+            r.latched[pi] = true;
+            r.deferred = None;
+            log.push(Diagnosis {
+                time_ms: u64::try_from(t).unwrap_or(0),
+                component: c.id.clone(),
+                partition: p.id.clone(),
+                fault: candidates.clone(),
+                certainty: Certainty::Ambiguous,
+            });
         }
     }
 }

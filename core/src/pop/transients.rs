@@ -142,7 +142,8 @@ pub struct Row {
     pub hazards: usize,
     /// Actuator faults: the hazards whose elements include the faulted actuator itself
     /// (a welded conveyor that keeps pushing, a dead one that stops a box under a
-    /// moving neighbour), which no other output can always prevent.
+    /// moving neighbour), which no other output can always prevent, and what follows
+    /// to an item one of them already damaged.
     pub own_hazards: usize,
     /// Wrong certain diagnoses over all runs.
     pub wrong: usize,
@@ -414,10 +415,21 @@ fn strike(
     Ok(Some(end))
 }
 
-/// The operator's recovery, as the console asks for it: the filter's reset while it is
-/// tripped (retried each second while refused), the diagnosers' reset when a partition
-/// is flagged, then Start.
+/// The operator's recovery, as the console asks for it: the diagnosers' reset first when
+/// a stop partition is flagged, the filter's reset while it is tripped (retried each
+/// second while refused), the diagnosers' reset when a partition is flagged, then
+/// Start.
 fn recover(sim: &mut Simulation) {
+    // A flagged stop partition (a certain actuator fault, or a stop on the safe side)
+    // refuses the filter's reset until the diagnosers' reset after the check, as the
+    // console says.
+    if sim
+        .diagnosers
+        .as_ref()
+        .is_some_and(|d| d.flagged().iter().any(|(_, stop, _)| *stop))
+    {
+        let _ = sim.act(&OperatorAction::ResetDiagnosers);
+    }
     let limit = Millis(sim.now().0 + 30_000);
     while sim.engine.is_tripped() && sim.now() < limit {
         if sim.act(&OperatorAction::Reset).is_ok() {
@@ -456,7 +468,13 @@ fn judge(sim: &Simulation, expected: &BTreeSet<String>, at: u64, out: &mut Outco
     let Some(d) = sim.diagnosers.as_ref() else {
         return;
     };
-    for x in d.diagnoses.iter().filter(|x| !x.partition.is_empty()) {
+    // A stop on the safe side (`ambiguous`) claims no fault: it is neither right nor
+    // wrong (its trip and the recovery after it are counted).
+    for x in d
+        .diagnoses
+        .iter()
+        .filter(|x| !x.partition.is_empty() && x.certainty == super::Certainty::Certain)
+    {
         if x.time_ms >= at && expected.contains(&x.partition) {
             out.right += 1;
         } else {
@@ -579,12 +597,7 @@ fn run_one(
             sim.run_until(Millis(at + config.actuator_watch_ms));
             out.tripped = !sim.engine.trips.is_empty();
             judge(&sim, &parts(actuator), at, &mut out);
-            out.own_hazards = sim
-                .emulator
-                .hazards()
-                .iter()
-                .filter(|h| h.elements.iter().any(|e| e == actuator))
-                .count();
+            out.own_hazards = own_hazards(sim.emulator.hazards(), actuator);
             record(&sim, config, &mut out);
             return Ok(out);
         }
@@ -666,6 +679,24 @@ fn run_one(
         );
     }
     Ok(out)
+}
+
+/// The hazards of a faulted actuator itself: those whose elements include it (a welded
+/// table that turns under a box being loaded, 80 ms after the weld and before any
+/// sensor can show it), and what follows to an item such a hazard already damaged (the
+/// sheared box then falls off the belt's end as the table turns away).
+fn own_hazards(hazards: &[crate::emulator::Hazard], actuator: &str) -> usize {
+    let mut damaged = BTreeSet::new();
+    hazards
+        .iter()
+        .filter(|h| {
+            let own = h.elements.iter().any(|e| e == actuator) || damaged.contains(&h.box_id);
+            if own {
+                damaged.insert(h.box_id);
+            }
+            own
+        })
+        .count()
 }
 
 fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {

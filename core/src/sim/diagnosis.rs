@@ -13,7 +13,7 @@ use crate::bits::Bits;
 use crate::diag::Problem;
 use crate::frame::Frame;
 use crate::plant::Plant;
-use crate::pop::{DiagBundle, Diagnosers, Diagnosis};
+use crate::pop::{Certainty, DiagBundle, Diagnosers, Diagnosis};
 use crate::symbols::{Space, Symbols};
 use crate::time::Millis;
 use serde::Serialize;
@@ -76,6 +76,19 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
             let flag = flagged.iter().find(|(p, _, _)| *p == n.partition);
             let (f, p, c) = (&n.fault, &n.partition, &n.component);
             let (text, stop, estimated) = match flag {
+                Some((_, true, _)) if n.certainty == Certainty::Ambiguous => (
+                    format!(
+                        "Diagnosis: {c} is faulty, ambiguous between {}: {p} (a drive) may be at fault, {}",
+                        f.replace('|', ", "),
+                        if acts.stop {
+                            "the whole system is stopped on the safe side; check it, then reset the diagnosers"
+                        } else {
+                            "the filter only reports, the system is not stopped"
+                        }
+                    ),
+                    true,
+                    None,
+                ),
                 Some((_, true, _)) => (
                     if acts.stop {
                         format!(
