@@ -422,24 +422,27 @@ fn gateway_with_the_table_at_c4(extra: &str) -> (Plant, Gateway, Plc) {
 }
 
 /// A box crosses C3 onto the table at C4 with A1 and the rollers A2 on (CSc2: never
-/// onto stopped rollers): the beam rises, then falls; the gateway holds the fall until
-/// the shortest box could have crossed (900 ms) and says when it takes it. Then the
-/// PLC stops the rollers again (A1 only), as the program does before the box reaches
-/// C6 (CSs6).
+/// onto stopped rollers): the beam rises and, the box's length later, falls (the
+/// shortest box takes 1 s at 300 mm/s; a fall sooner than 900 ms would be a transient,
+/// which the gateway holds until the beam reads 1 again: `hold_until_back` on C3). Then
+/// the PLC stops the rollers again (A1 only), as the program does before the box
+/// reaches C6 (CSs6).
 fn cross_c3(plant: &mut Plant, plc: &mut Plc, gw: &mut Gateway) {
     plc.command("0110000");
     wait_until("the plant to run A1 A2", || plant.coils() == "0110000");
     plant.set_inputs(&[(C3, true)]);
     wait_until("the PLC to see C3", || plc.sensors().as_bytes()[6] == b'1');
+    // The plant peer plays the physics: the box is under the beam for its length.
+    let crossing = Instant::now();
+    wait_until("the box to cross C3 (1 s)", || {
+        crossing.elapsed() >= Duration::from_millis(1_000)
+    });
     // The box leaves C3 and comes onto the table: this peer shows C6 in the same scan,
     // faster than the physics (130 ms at the soonest), so the gateway holds C6 until
     // 100 ms after it took the fall of C3 (`rise_not_after`) and says when it takes it.
     plant.set_inputs(&[(C3, false), (C6, true)]);
     wait_until("the PLC to see C3 clear", || {
         plc.sensors().as_bytes()[6] == b'0'
-    });
-    gw.event("the fall of C3 taken", |e| {
-        e["event"] == "plausibility" && e["sensor"] == "C3"
     });
     plc.command("0100000");
     wait_until("the plant to run A1 only", || plant.coils() == "0100000");

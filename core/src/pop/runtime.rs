@@ -87,6 +87,9 @@ struct Run {
     deferred: Option<i64>,
     /// The normal mode is among the hypotheses.
     normal_possible: bool,
+    /// The plausibility stage holds a sensor the component assumes (see
+    /// [`Diagnosers::follow_held_assumptions`]).
+    tainted: bool,
     /// Since when the component is in doubt between a stopping fault that stops items
     /// and a sensor fault it cannot estimate, and those candidates (see
     /// [`safe_side_stop`]).
@@ -128,6 +131,10 @@ pub struct Diagnosers {
     interface: Vec<Vec<(usize, usize, bool)>>,
     /// The components with such an interface (the only ones whose decisions can wait).
     with_interface: Vec<usize>,
+    /// Per component: the `sus_` auxiliaries of the sensors it `assumes` (its orders
+    /// are given on them), set while the plausibility stage holds the sensor. Not those
+    /// it `assumes_item`: a box held on C6 is still evidence about the exit's drive.
+    held_assumed: Vec<Vec<u32>>,
 }
 
 /// What the run time derives once from a compiled component.
@@ -387,6 +394,7 @@ impl Diagnosers {
                 deferred: None,
                 normal_possible: true,
                 doubt: None,
+                tainted: false,
                 clock_unknown: false,
                 def_aux: c
                     .partitions
@@ -438,8 +446,18 @@ impl Diagnosers {
                 v
             })
             .collect();
+        let held_assumed: Vec<Vec<u32>> = compiled
+            .components
+            .iter()
+            .map(|c| {
+                c.assumes
+                    .iter()
+                    .filter_map(|s| aux(&crate::plausibility::suspect_name(s)))
+                    .collect()
+            })
+            .collect();
         let with_interface = (0..compiled.components.len())
-            .filter(|&i| !interface[i].is_empty())
+            .filter(|&i| !interface[i].is_empty() || !held_assumed[i].is_empty())
             .collect();
         let mut work = Work::default();
         for c in &compiled.components {
@@ -458,6 +476,7 @@ impl Diagnosers {
             was_held: false,
             interface,
             with_interface,
+            held_assumed,
         }
     }
 
@@ -575,6 +594,7 @@ impl Diagnosers {
                 touched.push(i);
             }
         }
+        self.follow_held_assumptions(frame, &mut touched);
         touched.sort_unstable();
         touched.dedup();
         for &i in &touched {
@@ -630,6 +650,33 @@ impl Diagnosers {
         }
     }
 
+    /// A component whose model assumes a sensor (the loading ordered on C3) while the
+    /// plausibility stage holds that sensor (`sus_C3`: a pulse the program took for a
+    /// box) follows orders given on a lie: the certain decisions of its sensor
+    /// partitions wait while the hold lasts (see [`Diagnosers::interface_blocks`]; its
+    /// drive partitions do not: a welded roller still stops the plant), and when it ends the component
+    /// restarts from the observed values with its clock unknown (as after the filter's
+    /// hold), its flags kept: the windows it opened on the lie (the rollers run for a
+    /// box that is still on the belt) would only time out into a wrong diagnosis.
+    fn follow_held_assumptions(&mut self, frame: &Frame, touched: &mut Vec<usize>) {
+        let aux = frame.now(Space::Aux);
+        for k in 0..self.with_interface.len() {
+            let i = self.with_interface[k];
+            let held = self.held_assumed[i].iter().any(|&a| aux.get(a as usize));
+            let r = &mut self.runs[i];
+            if held && !r.tainted {
+                r.tainted = true;
+            } else if !held && r.tainted {
+                r.tainted = false;
+                r.started = false;
+                r.held = true;
+                r.doubt = None;
+                self.wake[i] = i64::MIN;
+                touched.push(i);
+            }
+        }
+    }
+
     /// When component `i` must next be looked at without an edge.
     fn rewake(&mut self, i: usize) {
         let r = &self.runs[i];
@@ -653,7 +700,14 @@ impl Diagnosers {
     /// The sensors it `assumes_item` make its sensor partitions wait likewise
     /// ([`Wait::sensors`]), not its drive partitions.
     fn interface_blocks(&self, ci: usize, t: i64) -> Wait {
+        let tainted = self.runs[ci].tainted;
         let iface = &self.interface[ci];
+        if tainted && iface.is_empty() {
+            return Wait {
+                all: false,
+                sensors: true,
+            };
+        }
         if iface.is_empty() {
             return Wait::default();
         }
@@ -676,7 +730,7 @@ impl Diagnosers {
         };
         Wait {
             all: blocks(false),
-            sensors: blocks(true),
+            sensors: tainted || blocks(true),
         }
     }
 
@@ -971,6 +1025,7 @@ fn empty_run() -> Run {
         deferred: None,
         normal_possible: true,
         doubt: None,
+        tainted: false,
         clock_unknown: false,
         def_aux: Vec::new(),
         interval_aux: Vec::new(),
