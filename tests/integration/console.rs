@@ -244,3 +244,32 @@ fn maintenance_verifies_the_constraint_set() {
         h.state().status
     );
 }
+
+/// Issue 17: a dead intermediate belt under a pushed box (`scenarios/a1-dead-belt.ron`)
+/// leaves the feed in doubt between the dead belt and a dead beam; after 4 s it stops
+/// the plant on the safe side. The operator reads that no fault is certain, the
+/// candidates, and what to do; the diagnosers' header counts the stop apart from the
+/// certain diagnoses.
+#[test]
+fn a_stop_on_the_safe_side_says_it_is_in_doubt_and_what_to_do() {
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.scenario = Some(root().join("layouts/sorting-station/scenarios/a1-dead-belt.ron"));
+    o.run_until_ms = Some(36_000);
+    o.paused = true;
+    let mut h = harness(o);
+    h.run_steps(3);
+    let banner = h.get_by_label_contains("Stopped on the safe side");
+    let text = format!("{banner:?}");
+    for part in [
+        "feed in doubt between",
+        "M1_blocked",
+        "reset the diagnosers",
+    ] {
+        assert!(text.contains(part), "{part}: {text}");
+    }
+    assert!(
+        h.query_by_label_contains("at fault: the whole system is stopped")
+            .is_none()
+    );
+    h.get_by_label_contains("0 certain diagnoses, 1 stops on the safe side");
+}

@@ -19,9 +19,31 @@ pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
         return Vec::new();
     };
     let monitor = c.link.as_ref().is_some_and(|l| l.mode == Mode::Monitor);
+    // A stop on the safe side (the component in doubt between a dead drive and a
+    // sensor it cannot estimate) says so, with its candidates: no fault is certain.
+    let doubt = |p: &str| {
+        d.diagnoses
+            .iter()
+            .rev()
+            .find(|x| x.partition == p)
+            .filter(|x| x.certainty == Certainty::Ambiguous)
+            .map(|x| (x.component.clone(), x.fault.replace('|', ", ")))
+    };
     d.flagged()
         .into_iter()
         .map(|(p, stop, sensor)| match (stop, sensor, monitor) {
+            (true, _, _) if let Some((comp, faults)) = doubt(&p) => (
+                if monitor {
+                    format!(
+                        "{comp} in doubt between {faults} ({p}, a drive, may be at fault; monitor: reported, not stopped)"
+                    )
+                } else {
+                    format!(
+                        "Stopped on the safe side: {comp} in doubt between {faults} ({p}, a drive, may be at fault). Check the plant, then reset the diagnosers"
+                    )
+                },
+                true,
+            ),
             (false, Some(s), _) if !vigie_core::sim::diagnosis::has_estimate(d, &s) => (
                 format!("{s} at fault (certain): no estimate in its model, {s} is still read"),
                 false,
@@ -80,10 +102,19 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         {
             out.push(Command::Plant(OperatorAction::ResetDiagnosers));
         }
-        egui::CollapsingHeader::new(format!(
-            "Diagnosers ({} certain diagnoses)",
-            d.diagnoses.len()
-        ))
+        let doubts = d
+            .diagnoses
+            .iter()
+            .filter(|x| x.certainty == Certainty::Ambiguous)
+            .count();
+        egui::CollapsingHeader::new(if doubts == 0 {
+            format!("Diagnosers ({} certain diagnoses)", d.diagnoses.len())
+        } else {
+            format!(
+                "Diagnosers ({} certain diagnoses, {doubts} stops on the safe side)",
+                d.diagnoses.len() - doubts
+            )
+        })
         .id_salt("diagnosers-table")
         .show(ui, |ui| {
             egui::Grid::new("diagnosers-grid")
