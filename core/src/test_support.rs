@@ -1,6 +1,8 @@
 //! Fixtures shared by the unit tests: the sorting station of seed 004.
 
 use crate::bundle::PlantBundle;
+use crate::frame::Frame;
+use crate::symbols::{Symbols, Var};
 use std::path::PathBuf;
 
 /// `layouts/sorting-station`, found from the crate's manifest directory.
@@ -29,4 +31,32 @@ pub(crate) fn station() -> PlantBundle {
         crate::diag::render(&unexpected)
     );
     bundle
+}
+
+/// Sets one variable of a frame (at t, or at t-1 for a previous value).
+pub(crate) fn set_var(frame: &mut Frame, var: Var, value: bool) {
+    let table = if var.prev {
+        &mut frame.prev
+    } else {
+        &mut frame.now
+    };
+    table[var.space as usize].set(var.index as usize, value);
+}
+
+/// The variable `name` (`A4*` for its previous value); panics on an unknown name.
+pub(crate) fn var(symbols: &Symbols, name: &str) -> Var {
+    let prev = name.ends_with('*');
+    let (space, index) = symbols
+        .lookup(name.trim_end_matches('*'))
+        .unwrap_or_else(|| panic!("unknown variable `{name}`"));
+    Var { space, index, prev }
+}
+
+/// A frame with the named variables set (`A4*` for a previous value), all else 0.
+pub(crate) fn frame_with(symbols: &Symbols, ones: &[&str]) -> Frame {
+    let mut f = Frame::new(symbols.sizes());
+    for name in ones {
+        set_var(&mut f, var(symbols, name), true);
+    }
+    f
 }

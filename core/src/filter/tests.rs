@@ -1,33 +1,9 @@
 use super::*;
 use crate::bundle::PlantBundle;
 use crate::symbols::{Symbols, Var};
-use crate::test_support::station;
+use crate::test_support::{frame_with, set_var, station, var};
 use proptest::prelude::*;
 use std::path::Path;
-
-fn set_var(frame: &mut Frame, var: Var, value: bool) {
-    let table = if var.prev {
-        &mut frame.prev
-    } else {
-        &mut frame.now
-    };
-    table[var.space as usize].set(var.index as usize, value);
-}
-
-fn var(symbols: &Symbols, name: &str) -> Var {
-    let prev = name.ends_with('*');
-    let (space, index) = symbols.lookup(name.trim_end_matches('*')).unwrap();
-    Var { space, index, prev }
-}
-
-/// A frame with the named variables set (`A4*` for a previous value), all else 0.
-fn frame_with(symbols: &Symbols, ones: &[&str]) -> Frame {
-    let mut f = Frame::new(symbols.sizes());
-    for name in ones {
-        set_var(&mut f, var(symbols, name), true);
-    }
-    f
-}
 
 fn station_filter() -> (PlantBundle, Filter) {
     let b = station();

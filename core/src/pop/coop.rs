@@ -92,41 +92,43 @@ pub fn rewrite(
     if stops.is_empty() {
         return Ok(out);
     }
-    let outputs = symbols.names(Space::Output);
+    // Per output, "o away from its safe value while nothing forces that value", the
+    // same for every stop: (output, text).
+    let mut away: Vec<(&str, String)> = Vec::new();
+    for (o, name) in symbols.names(Space::Output).iter().enumerate() {
+        let index = u32::try_from(o).map_err(|_| "too many outputs".to_string())?;
+        // " . /(condition)" while a term may force the value, "" when none does; None
+        // when a term always forces it (the stop leaves the output alone).
+        let unless = |positive: bool| match forcing(&all_terms, index, positive) {
+            None => Some(String::new()),
+            Some(c) if c.iter().any(Vec::is_empty) => None,
+            Some(c) => Some(format!(" . /({})", render_dnf(&c, symbols))),
+        };
+        let texts = match safe.get(o).copied().unwrap_or_default() {
+            SafeValue::Zero => vec![unless(false).map(|u| format!("{name}{u}"))],
+            SafeValue::One => vec![unless(true).map(|u| format!("/{name}{u}"))],
+            SafeValue::Hold => vec![
+                unless(false).map(|u| format!("{name} . /{name}*{u}")),
+                unless(true).map(|u| format!("/{name} . {name}*{u}")),
+            ],
+        };
+        away.extend(texts.into_iter().flatten().map(|t| (name.as_str(), t)));
+    }
     for f in &stops {
         let mut terms: Dnf = Vec::new();
-        for (o, name) in outputs.iter().enumerate() {
-            let index = u32::try_from(o).map_err(|_| "too many outputs".to_string())?;
-            let value = safe.get(o).copied().unwrap_or_default();
-            // " . /(condition)" while a term may force the value, "" when none does;
-            // None when a term always forces it (the stop leaves the output alone).
-            let unless = |positive: bool| match forcing(&all_terms, index, positive) {
-                None => Some(String::new()),
-                Some(c) if c.iter().any(Vec::is_empty) => None,
-                Some(c) => Some(format!(" . /({})", render_dnf(&c, symbols))),
-            };
-            // "o away from its safe value while nothing forces that value".
-            let away = match value {
-                SafeValue::Zero => vec![unless(false).map(|u| format!("{f} . {name}{u}"))],
-                SafeValue::One => vec![unless(true).map(|u| format!("{f} . /{name}{u}"))],
-                SafeValue::Hold => vec![
-                    unless(false).map(|u| format!("{f} . {name} . /{name}*{u}")),
-                    unless(true).map(|u| format!("{f} . /{name} . {name}*{u}")),
-                ],
-            };
-            for text in away.into_iter().flatten() {
-                let e = parse_str(&text).map_err(|m| format!("DSTOP of {name}: {}", m.message))?;
-                let dnf = e
-                    .to_dnf(symbols)
-                    .map_err(|m| format!("DSTOP of {name}: {}", m.message))?;
-                terms.extend(simplify(&dnf));
-                if terms.len() > MAX_STOP_TERMS {
-                    return Err(format!(
-                        "the stop of {} has more than {MAX_STOP_TERMS} terms (the conditions \
-                         that force {name} are too many to negate)",
-                        f.trim_start_matches("def_")
-                    ));
-                }
+        for (name, a) in &away {
+            let e = parse_str(&format!("{f} . {a}"))
+                .map_err(|m| format!("DSTOP of {name}: {}", m.message))?;
+            let dnf = e
+                .to_dnf(symbols)
+                .map_err(|m| format!("DSTOP of {name}: {}", m.message))?;
+            terms.extend(simplify(&dnf));
+            if terms.len() > MAX_STOP_TERMS {
+                return Err(format!(
+                    "the stop of {} has more than {MAX_STOP_TERMS} terms (the conditions \
+                     that force {name} are too many to negate)",
+                    f.trim_start_matches("def_")
+                ));
             }
         }
         out.push_str(&format!(

@@ -702,14 +702,11 @@ impl Diagnosers {
     fn interface_blocks(&self, ci: usize, t: i64) -> Wait {
         let tainted = self.runs[ci].tainted;
         let iface = &self.interface[ci];
-        if tainted && iface.is_empty() {
+        if iface.is_empty() {
             return Wait {
                 all: false,
-                sensors: true,
+                sensors: tainted,
             };
-        }
-        if iface.is_empty() {
-            return Wait::default();
         }
         let settle = i64::try_from(self.compiled.components[ci].settle_ms).unwrap_or(i64::MAX);
         let settling = self.runs[ci]
@@ -1362,14 +1359,12 @@ fn decide(
 fn doubt(c: &Component, r: &mut Run, modes: &[bool], t: i64) {
     let nf = c.faults.len();
     let stop_of = |f: usize| c.partitions.iter().any(|p| p.stop && p.faults.contains(&f));
+    // A fault of a sensor partition whose sensor has an estimate (`estimate_of`).
     let covered = |f: usize| {
-        c.partitions.iter().any(|p| {
-            p.faults.contains(&f)
-                && p.sensor.as_ref().is_some_and(|s| {
-                    let name = crate::symbols::estimate_name(s);
-                    c.estimates.iter().any(|(n, _)| *n == name)
-                })
-        })
+        r.estimate_of
+            .iter()
+            .flatten()
+            .any(|(_, faults)| faults.contains(&f))
     };
     let blocking_stop = |f: usize| stop_of(f) && c.blocking.get(f).copied().unwrap_or(false);
     let possible = || (0..nf).filter(|&f| modes[f]);

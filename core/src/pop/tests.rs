@@ -509,17 +509,7 @@ fn after_the_repair_the_operators_reset_ends_the_degraded_mode() {
 fn stop_vector(d: &DiagBundle, ones: &[&str]) -> Vec<(String, bool)> {
     let b = &d.bundle;
     let filter = crate::filter::Filter::for_plant(&b.constraints, &b.plant);
-    let mut frame = crate::frame::Frame::new(b.symbols.sizes());
-    for name in ones {
-        let prev = name.ends_with('*');
-        let (space, index) = b.symbols.lookup(name.trim_end_matches('*')).unwrap();
-        let table = if prev {
-            &mut frame.prev
-        } else {
-            &mut frame.now
-        };
-        table[space as usize].set(index as usize, true);
-    }
+    let frame = crate::test_support::frame_with(&b.symbols, ones);
     let v = filter.fallback(&frame).unwrap_or_else(|e| panic!("{e:?}"));
     b.plant
         .outputs
