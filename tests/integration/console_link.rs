@@ -149,7 +149,7 @@ fn gateway_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
         .canonicalize()
         .unwrap();
     let text = format!(
-        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 10, \
+        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 50, \
          client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
          server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), \
          diagnosers: false, plausibility: false, state_dir: {:?})", // the table moves in milliseconds: a fault for its diagnoser, edges the physics does not allow

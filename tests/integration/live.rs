@@ -245,9 +245,20 @@ impl Gateway {
                 dir.0.join("state").display().to_string()
             )
         };
+        // The station's I/O map with a staleness bound of 200 ms in place of 30 ms:
+        // the Python plant peer can miss a few polls on a loaded machine, and a stale
+        // guard that steps in for one cycle changes the sequence a test follows (the
+        // stale guard has its own test, which kills the plant).
+        let map = std::fs::read_to_string(station.join("io-map.ron"))
+            .unwrap()
+            .replace("max_age_ms: 30,", "max_age_ms: 200,");
+        assert!(map.contains("max_age_ms: 200,"), "the station's io-map.ron changed");
+        let map_path = dir.0.join("io-map.ron");
+        std::fs::write(&map_path, map).unwrap();
         let text = format!(
-            "Gateway(plant: {:?}, {state}{config_body})",
-            station.display().to_string()
+            "Gateway(plant: {:?}, io_map: Some({:?}), {state}{config_body})",
+            station.display().to_string(),
+            map_path.display().to_string()
         );
         let path = dir.0.join("gateway.ron");
         std::fs::write(&path, text).unwrap();
@@ -316,9 +327,13 @@ impl Gateway {
     }
 }
 
+/// A PLC or plant silent for 50 cycles (500 ms) is lost: on a loaded 2-core machine a
+/// peer can miss 100 ms, and a stale guard that takes the outputs to their fallback in
+/// the middle of a test's sequence changes what the test sees (the test of the stale
+/// guard itself kills the PLC and waits for it).
 fn gateway_config(plant_port: u16, extra: &str) -> String {
     format!(
-        "mode: Gateway, cycle_ms: 10, link_timeout_cycles: 10, auto_reset: true, \
+        "mode: Gateway, cycle_ms: 10, link_timeout_cycles: 50, auto_reset: true, \
          client: (address: \"127.0.0.1:{plant_port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
          server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), {extra}"
     )
