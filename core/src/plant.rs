@@ -115,6 +115,16 @@ pub struct PlausibleRule {
     /// The fall condition must have held without a break this long, ms.
     #[serde(default)]
     pub fall_when_for_ms: u64,
+    /// The rise condition must have held this long in all since the last accepted
+    /// fall, ms, counted across its breaks (a distance: the drive time that moves an
+    /// item its shortest length, which a stop and a restart half-way do not lose).
+    #[serde(default)]
+    pub rise_when_total_ms: u64,
+    /// The fall condition must have held this long in all since the last accepted
+    /// rise, ms, across its breaks (a box that waited at a beam leaves it only once the
+    /// drives under it have run long enough to move it its length).
+    #[serde(default)]
+    pub fall_when_total_ms: u64,
     /// A plausible rise is taken once the reading has stayed 1 this long, ms (a
     /// shorter pulse is filtered).
     #[serde(default)]

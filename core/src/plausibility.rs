@@ -10,7 +10,12 @@
 //!   drive under it runs; an axis leaves a position only once its motion is ordered).
 //!
 //! A condition may also have to hold for a time (`rise_when_for_ms`): a travel time
-//! after the order (the turntable cannot reach C5 sooner than the rotation takes). A
+//! after the order (the turntable cannot reach C5 sooner than the rotation takes). Or
+//! for a time in all since the last accepted edge, across its breaks
+//! (`fall_when_total_ms`): a distance (a box that waited at a beam leaves it only once
+//! the drives under it have run long enough to move it its length, however often they
+//! stopped on the way). Before the first accepted edge the time is unknown and the
+//! rule holds nothing. A
 //! rise may be implausible for a time after an event (`rise_not_after`: a box reaches
 //! the middle of the table no sooner than 100 ms after it left the belt's end sensor);
 //! an upstream sensor stuck at 1 never gives the event, so the rule then holds nothing.
@@ -80,6 +85,8 @@ struct Rule {
     fall_confirm: u64,
     rise_for: u64,
     fall_for: u64,
+    rise_total: u64,
+    fall_total: u64,
     hold_until_back: bool,
     /// `rise_not_after`: the event and the time after it.
     rise_after: Option<(Dnf, u64)>,
@@ -103,6 +110,10 @@ struct State {
     latched: bool,
     /// The last cycle where the `rise_not_after` event held.
     event_at: Option<u64>,
+    /// How long the rise / fall condition has held in all since the last accepted edge
+    /// (None: no edge accepted yet, the time is unknown).
+    rise_total: Option<u64>,
+    fall_total: Option<u64>,
 }
 
 /// A change of a sensor's suspicion, for the journal and the alarms.
@@ -143,6 +154,10 @@ pub struct ExportRule<'a> {
     /// See [`crate::plant::PlausibleRule`].
     pub fall_when_for_ms: u64,
     /// See [`crate::plant::PlausibleRule`].
+    pub rise_when_total_ms: u64,
+    /// See [`crate::plant::PlausibleRule`].
+    pub fall_when_total_ms: u64,
+    /// See [`crate::plant::PlausibleRule`].
     pub hold_until_back: bool,
     /// See [`crate::plant::PlausibleRule`]: the event and the time after it.
     pub rise_not_after: Option<(&'a Dnf, u64)>,
@@ -159,6 +174,8 @@ pub struct Plausibility {
     raw_prev: Bits,
     notices: Vec<Notice>,
     decided: Vec<(bool, bool)>,
+    /// The time of the last cycle (the `_total_ms` conditions add the time since).
+    last_t: u64,
     /// Edges held so far.
     pub held_edges: u64,
 }
@@ -218,6 +235,8 @@ impl Plausibility {
                 fall_confirm: r.fall_confirm_ms,
                 rise_for: r.rise_when_for_ms,
                 fall_for: r.fall_when_for_ms,
+                rise_total: r.rise_when_total_ms,
+                fall_total: r.fall_when_total_ms,
                 hold_until_back: r.hold_until_back,
                 rise_after,
             });
@@ -235,6 +254,7 @@ impl Plausibility {
             raw_prev: Bits::zeros(plant.inputs.len()),
             notices: Vec::new(),
             decided: Vec::new(),
+            last_t: 0,
             held_edges: 0,
         })
     }
@@ -257,6 +277,8 @@ impl Plausibility {
                 fall_cond_since: None,
                 latched: false,
                 event_at: None,
+                rise_total: None,
+                fall_total: None,
             };
         }
     }
@@ -269,11 +291,14 @@ impl Plausibility {
         }
         std::mem::swap(&mut self.raw, &mut self.raw_prev);
         self.raw.copy_from(frame.now(Space::Input));
+        let t = now.0;
         if first {
             self.raw_prev.copy_from(frame.prev(Space::Input));
             self.restart(frame);
+            self.last_t = t;
         }
-        let t = now.0;
+        let dt = t.saturating_sub(self.last_t);
+        self.last_t = t;
         // Every rule decides on the readings (its condition sees the raw values at t),
         // then the accepted values are written.
         let mut decided = std::mem::take(&mut self.decided);
@@ -295,6 +320,20 @@ impl Plausibility {
             };
             let rise_ok = timed(&r.rise, r.rise_for, &mut st.rise_cond_since);
             let fall_ok = timed(&r.fall, r.fall_for, &mut st.fall_cond_since);
+            // A condition held for a time in all: the time of every cycle where it held
+            // (it reads the outputs applied over that cycle) is added.
+            let total = |d: &Option<Dnf>, ms: u64, acc: &mut Option<u64>| {
+                ms == 0 || {
+                    if let Some(a) = acc.as_mut()
+                        && holds(d)
+                    {
+                        *a = a.saturating_add(dt);
+                    }
+                    acc.is_none_or(|a| a >= ms)
+                }
+            };
+            let rise_total_ok = total(&r.rise, r.rise_total, &mut st.rise_total);
+            let fall_total_ok = total(&r.fall, r.fall_total, &mut st.fall_total);
             // The event is tracked every cycle; a rise is plausible only `ms` after it.
             let after_event = r.rise_after.as_ref().is_none_or(|(event, ms)| {
                 if eval_dnf(event, frame) {
@@ -306,14 +345,15 @@ impl Plausibility {
             let mut suspect = false;
             if read != st.accepted {
                 let since = st.since.map_or(u64::MAX, |s| t.saturating_sub(s));
-                let (window, cond, timed) = if read {
-                    (r.min_off, &r.rise, rise_ok)
+                let (window, cond, timed, total_ok) = if read {
+                    (r.min_off, &r.rise, rise_ok, rise_total_ok)
                 } else {
-                    (r.min_on, &r.fall, fall_ok)
+                    (r.min_on, &r.fall, fall_ok, fall_total_ok)
                 };
                 let in_window = since < window;
                 let plausible = !st.latched
                     && !in_window
+                    && total_ok
                     && (!read || after_event)
                     && timed.unwrap_or_else(|| holds(cond));
                 let confirm = if read { r.rise_confirm } else { r.fall_confirm };
@@ -325,6 +365,8 @@ impl Plausibility {
                     st.accepted = read;
                     st.since = Some(t);
                     st.pending_since = None;
+                    st.rise_total = Some(0);
+                    st.fall_total = Some(0);
                 }
             } else {
                 st.latched = false;
@@ -394,6 +436,8 @@ impl Plausibility {
                 fall_confirm_ms: r.fall_confirm,
                 rise_when_for_ms: r.rise_for,
                 fall_when_for_ms: r.fall_for,
+                rise_when_total_ms: r.rise_total,
+                fall_when_total_ms: r.fall_total,
                 hold_until_back: r.hold_until_back,
                 rise_not_after: r.rise_after.as_ref().map(|(d, ms)| (d, *ms)),
             })

@@ -360,11 +360,13 @@ fn every_hypothesis_case_of_the_station() {
     assert_eq!(cases, 296);
 }
 
-/// A C3 dropout as the table starts pulling the box waiting at C3 (issue 17): the
-/// fall is taken for the box leaving (P36), the reading back is held as implausible,
-/// CSs4 trips on `sus_C3`, and level 4 names C3 before the program (whose equation of
-/// A1 only read what the stage held). (A C3 pulse no longer trips: C3 is held at 1
-/// until the real box has come, `hold_until_back`.)
+/// A C3 dropout late in a box's crossing (issue 17), once the drives have run the
+/// shortest box's length since it came (`fall_when_total_ms`): the stage cannot tell
+/// it from the box leaving, the fall is taken (P36), the reading back is held as
+/// implausible, CSs4 trips on `sus_C3`, and level 4 names C3 before the program (whose
+/// equation of A1 only read what the stage held). (A dropout in the first scans of the
+/// pull, 68,450 ms here, is now held and trips nothing; a C3 pulse no longer trips
+/// either: C3 is held at 1 until the real box has come, `hold_until_back`.)
 #[test]
 fn a_trip_on_a_suspect_sensor_names_the_sensor_first() {
     use crate::sim::{Options, Scenario, Simulation};
@@ -373,11 +375,11 @@ fn a_trip_on_a_suspect_sensor_names_the_sensor_first() {
     let scenario = Scenario::from_ron(
         r#"Scenario(
             name: "C3 dropout as the table pulls the box",
-            description: "A 200 ms dropout of C3 in the first scans of the table pulling the box that waited at C3: its fall is taken for the box leaving, its rise back is held.",
+            description: "A 200 ms dropout of C3 late in a box's crossing: its fall is taken for the box leaving, its rise back is held.",
             program: Reference,
             seed: 10,
             arrivals: Some(Periodic(period_ms: 8000, jitter_ms: 1000, mix: Alternate)),
-            faults: [(trigger: At(68450), fault: SpuriousFall(sensor: "C3", pulse_ms: 200))],
+            faults: [(trigger: At(69250), fault: SpuriousFall(sensor: "C3", pulse_ms: 200))],
             actions: [(at_ms: 0, action: Start)],
             duration_ms: 90000,
             filter: Enforce,

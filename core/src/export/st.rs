@@ -584,7 +584,34 @@ END_IF;",
             format!("PL_{k}_{edge}K AND NOW_MS - PL_{k}_{edge}S >= {ms}")
         };
         let mut rise_timed = timed("R", r.rise_when, r.rise_when_for_ms);
-        let fall_timed = timed("F", r.fall_when, r.fall_when_for_ms);
+        let mut fall_timed = timed("F", r.fall_when, r.fall_when_for_ms);
+        // A condition held for a time in all since the last accepted edge (PL_k_RA,
+        // PL_k_FA: the time of every cycle where it held; unknown before the first
+        // accepted edge, PL_k_K).
+        let mut reset_totals = String::new();
+        for (edge, d, ms, timed) in [
+            ("RA", r.rise_when, r.rise_when_total_ms, &mut rise_timed),
+            ("FA", r.fall_when, r.fall_when_total_ms, &mut fall_timed),
+        ] {
+            if ms == 0 {
+                continue;
+            }
+            let _ = writeln!(first, "    PL_{k}_{edge} := 0;");
+            let _ = writeln!(
+                track,
+                "IF {} THEN
+    PL_{k}_{edge} := PL_{k}_{edge} + (NOW_MS - PL_LAST);
+END_IF;",
+                cond(d)
+            );
+            let _ = write!(
+                reset_totals,
+                "
+                PL_{k}_{edge} := 0;"
+            );
+            locals.push((format!("PL_{k}_{edge}"), "LINT"));
+            *timed = format!("{timed} AND (NOT PL_{k}_K OR PL_{k}_{edge} >= {ms})");
+        }
         // `rise_not_after`: the event's last cycle is tracked every cycle (PL_k_EK,
         // PL_k_ES); a rise is plausible only that long after it.
         if let Some((event, ms)) = r.rise_not_after {
@@ -654,7 +681,7 @@ END_IF;",
                 {acc} := {raw};
                 PL_{k}_T := NOW_MS;
                 PL_{k}_K := TRUE;
-                PL_{k}_PK := FALSE;
+                PL_{k}_PK := FALSE;{reset_totals}
             END_IF;
         END_IF;
     ELSE
@@ -676,12 +703,15 @@ END_IF;",
     let _ = write!(
         out,
         "IF NOT PL_STARTED THEN
-{first}END_IF;
+{first}    PL_LAST := NOW_MS;
+END_IF;
 {track}IF PL_STARTED THEN
 {body}END_IF;
 PL_STARTED := TRUE;
+PL_LAST := NOW_MS;
 "
     );
+    locals.push(("PL_LAST".into(), "LINT"));
     locals.push(("PL_STARTED".into(), "BOOL"));
     locals.push(("PL_OK".into(), "BOOL"));
     locals.push(("PL_W".into(), "BOOL"));

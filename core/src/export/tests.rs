@@ -166,8 +166,10 @@ fn st_conforms_to_the_native_engine() {
     // time), and without them (the traces then reach the task monitors' states).
     // Third pass: every rule with `hold_until_back` (an edge inside its window holds
     // the sensor until the reading comes back). Fourth pass: every rule's rise waits
-    // 300 ms after an event (`rise_not_after`).
-    for (pass, with_rules) in [(0, true), (1, false), (2, true), (3, true)] {
+    // 300 ms after an event (`rise_not_after`). Fifth pass: every rule's conditions
+    // must have held 200 ms (rise) and 500 ms (fall) in all since the last edge
+    // (`_total_ms`).
+    for (pass, with_rules) in [(0, true), (1, false), (2, true), (3, true), (4, true)] {
         let mut bundle = station_bundle.clone();
         if !with_rules {
             bundle.plausibility = Default::default();
@@ -178,6 +180,9 @@ fn st_conforms_to_the_native_engine() {
                 if let Some(r) = &mut s.plausible {
                     if pass == 2 {
                         r.hold_until_back = true;
+                    } else if pass == 4 {
+                        r.rise_when_total_ms = 200;
+                        r.fall_when_total_ms = 500;
                     } else {
                         r.rise_not_after = Some(crate::plant::AfterEvent {
                             event: format!("FE({first}) + RE({})", s.id),

@@ -423,3 +423,47 @@ fn a_rise_soon_after_its_event_is_held_and_a_stuck_upstream_sensor_holds_nothing
     r.cycle(1500, &["C3", "C4", "C6"], &drives);
     assert_eq!(r.read("C6"), (true, false));
 }
+
+/// `fall_when_total_ms` (C3): a box that waited at the end of the belt leaves the beam
+/// only once the drives under it have run long enough in all to move it its length,
+/// however often they stopped on the way. A dropout in the first scans of the pull is
+/// held (the window since the rise passed long ago, and the drives run); a stop
+/// half-way and a restart do not lose the time already driven, so the real fall is
+/// taken when the total is reached, not a whole crossing after the restart.
+#[test]
+fn a_fall_waits_for_the_drive_time_in_all_since_the_rise_across_a_stop() {
+    for total in [0, 900] {
+        let mut b = station();
+        let c3 = b.plant.input("C3").unwrap();
+        let rule = b.plant.inputs[c3].plausible.as_mut().unwrap();
+        rule.fall_when_total_ms = total;
+        rule.hold_until_back = false;
+        b.plausibility = Plausibility::new(&b.plant, &b.symbols).unwrap();
+        let mut r = Rig::new(&b);
+        // The box arrives with A1 on, which stops at once: it waits at C3 for 5 s.
+        r.cycle(0, &[], &["A1"]);
+        r.cycle(10, &["C3"], &["A1"]);
+        assert_eq!(r.read("C3"), (true, false), "the box arrives");
+        hold(&mut r, 20, 5_000, &["C3"], &[]);
+        // The table pulls it (A1 and the rollers); 100 ms later the beam drops out.
+        hold(&mut r, 5_000, 5_100, &["C3"], &["A1", "A2"]);
+        r.cycle(5_100, &[], &["A1", "A2"]);
+        if total == 0 {
+            assert_eq!(r.read("C3"), (false, false), "taken: the window has passed");
+            continue;
+        }
+        assert_eq!(r.read("C3"), (true, true), "100 ms of drive: held");
+        hold(&mut r, 5_110, 5_400, &["C3"], &["A1", "A2"]);
+        assert_eq!(r.read("C3"), (true, false), "the reading is back");
+        // A trip stops the drives half-way for 2.6 s; the restart goes on.
+        hold(&mut r, 5_400, 8_000, &["C3"], &[]);
+        hold(&mut r, 8_000, 8_300, &["C3"], &["A1", "A2"]);
+        // 20 + 400 + 300 ms driven: a fall now is still too soon.
+        r.cycle(8_300, &[], &["A1", "A2"]);
+        assert_eq!(r.read("C3"), (true, true), "720 ms of drive in all: held");
+        hold(&mut r, 8_310, 8_500, &["C3"], &["A1", "A2"]);
+        // 910 ms driven in all: the box's rear leaves the beam.
+        r.cycle(8_500, &[], &["A1", "A2"]);
+        assert_eq!(r.read("C3"), (false, false), "the real fall is taken");
+    }
+}
