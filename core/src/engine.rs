@@ -198,6 +198,12 @@ pub struct Engine {
     hold: bool,
     /// The next cycle takes its observation as the previous values (an attach).
     attach_pending: bool,
+    /// The next cycle takes the sensors as read and clears the observers (the
+    /// operator's re-initialisation): `Some(true)` every observer (the plant emptied),
+    /// `Some(false)` those whose `empty_when` holds.
+    reinit_pending: Option<bool>,
+    /// The observers the last re-initialisation cleared.
+    pub reinit_cleared: Vec<String>,
     /// Per output, what the plant does when it is OFF (`off` in `plant.ron`).
     off_meanings: Vec<Option<String>>,
     /// The specification error reported last, while it lasts (reported once, not every cycle).
@@ -249,6 +255,8 @@ impl Engine {
             latched: false,
             hold: false,
             attach_pending: false,
+            reinit_pending: None,
+            reinit_cleared: Vec::new(),
             off_meanings: bundle.plant.outputs.iter().map(|s| s.off.clone()).collect(),
             spec_error: None,
             cycles: 0,
@@ -295,6 +303,29 @@ impl Engine {
     /// is first read, its values until then unknown.
     pub fn attach_next_cycle(&mut self) {
         self.attach_pending = true;
+    }
+
+    /// The operator's re-initialisation, after a check of the plant: the next cycle
+    /// takes the sensors as read (the plausibility stage restarts on the readings: its
+    /// holds end, no edge is seen) and clears the observers ([`Engine::reinit_cleared`]):
+    /// every one when the operator `emptied` the plant of its items (GEMMA's
+    /// preparation for a restart after a failure), otherwise only those whose
+    /// `empty_when` then holds (what the sensors show leaves no room for their item; the
+    /// others keep their value, an item no sensor sees stays protected). A latched trip
+    /// ends (the caller restarts the control program from its initial steps). The
+    /// outputs at t-1 stay what was applied, so a constraint on an output's edge (a
+    /// release the physics forbids) still holds, and the filter checks the next cycle's
+    /// commands as any other. Returns false, and does nothing, when the filter is not
+    /// tripped.
+    pub fn reinitialise(&mut self, emptied: bool) -> bool {
+        if !self.latched {
+            return false;
+        }
+        self.reinit_pending = Some(emptied);
+        self.latched = false;
+        self.previous_violations.clear();
+        self.events.push(Event::Reset);
+        true
     }
 
     /// What the plant does when output `k` is OFF, when `plant.ron` says it (`off`):
@@ -374,18 +405,31 @@ impl Engine {
         self.now = now;
         self.cycles += 1;
         let attach = std::mem::take(&mut self.attach_pending);
+        let reinit_mode = self.reinit_pending.take();
+        let reinit = reinit_mode.is_some();
         self.frame.shift();
         self.frame.now_mut(Space::Input).copy_from(inputs);
-        if attach {
+        if attach || reinit {
             self.frame.prev_mut(Space::Input).copy_from(inputs);
         }
         if self.plausibility_on {
             self.plausibility
-                .step(now, &mut self.frame, attach || self.cycles == 1);
+                .step(now, &mut self.frame, attach || reinit || self.cycles == 1);
         }
         self.read_estimates();
+        if let Some(emptied) = reinit_mode {
+            let cleared = if emptied {
+                self.observers.clear_all()
+            } else {
+                self.observers.clear_where_empty(&self.frame)
+            };
+            self.reinit_cleared = cleared
+                .iter()
+                .map(|&i| self.observers.defs[i].id.clone())
+                .collect();
+        }
         self.observers.update(&mut self.frame);
-        if attach {
+        if attach || reinit {
             let observed = self.frame.now(Space::Observer).clone();
             self.frame.prev_mut(Space::Observer).copy_from(&observed);
         }

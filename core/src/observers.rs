@@ -57,6 +57,14 @@ pub struct ObserverDef {
     pub description: String,
     /// How it evolves.
     pub rule: Rule,
+    /// At the operator's re-initialisation (after a check of the plant), the observer
+    /// is cleared when this holds over the sensors as read: what the sensors then show
+    /// leaves no room for the item it believes in (a box under C3 or at C6 fills the
+    /// zone between them, shorter than any box). Otherwise it keeps its value: an item
+    /// no sensor sees stays protected. Reads what a rule reads (inputs, previous
+    /// outputs, auxiliaries).
+    #[serde(default)]
+    pub empty_when: Option<String>,
 }
 
 /// The observers file.
@@ -87,6 +95,8 @@ pub struct Observers {
     /// Definitions, in index order.
     pub defs: Vec<ObserverDef>,
     compiled: Vec<Compiled>,
+    /// `empty_when`, compiled (None: kept at a re-initialisation).
+    empty: Vec<Option<Dnf>>,
     counts: Vec<u32>,
 }
 
@@ -99,6 +109,7 @@ impl Observers {
         Self {
             defs: Vec::new(),
             compiled: Vec::new(),
+            empty: Vec::new(),
             counts: Vec::new(),
         }
     }
@@ -131,6 +142,7 @@ impl Observers {
         let mut problems = Vec::new();
         let mut kept = Vec::new();
         let mut compiled = Vec::new();
+        let mut empties = Vec::new();
         // Expressions are resolved before any observer is declared: observers read
         // inputs, not each other.
         let resolve = |what: &str, id: &str, text: &str, problems: &mut Vec<Problem>| {
@@ -201,6 +213,13 @@ impl Observers {
                 }
             };
             let Some(c) = c else { continue };
+            let empty = match &def.empty_when {
+                Some(text) => match resolve("empty_when", &def.id, text, &mut problems) {
+                    Some(d) => Some(d),
+                    None => continue,
+                },
+                None => None,
+            };
             if !crate::plant::is_valid_name(&def.id) {
                 problems.push(Problem::error(
                     "V0203",
@@ -210,11 +229,13 @@ impl Observers {
                 continue;
             }
             compiled.push(c);
+            empties.push(empty);
             kept.push(def);
         }
         let mut defs = Vec::new();
         let mut comp = Vec::new();
-        for (def, c) in kept.into_iter().zip(compiled) {
+        let mut empty = Vec::new();
+        for ((def, c), e) in kept.into_iter().zip(compiled).zip(empties) {
             if symbols.declare(&def.id, Space::Observer).is_err() {
                 problems.push(Problem::error(
                     "V0204",
@@ -225,12 +246,14 @@ impl Observers {
             }
             defs.push(def);
             comp.push(c);
+            empty.push(e);
         }
         let n = defs.len();
         (
             Self {
                 defs,
                 compiled: comp,
+                empty,
                 counts: vec![0; n],
             },
             problems,
@@ -286,6 +309,33 @@ impl Observers {
             };
             frame.now_mut(Space::Observer).set(i, value);
         }
+    }
+
+    /// The operator's re-initialisation of an emptied plant: clears every observer;
+    /// returns the indices of those that were set.
+    pub fn clear_all(&mut self) -> Vec<usize> {
+        let mut cleared = Vec::new();
+        for (i, c) in self.counts.iter_mut().enumerate() {
+            if *c > 0 {
+                *c = 0;
+                cleared.push(i);
+            }
+        }
+        cleared
+    }
+
+    /// The operator's re-initialisation: clears every observer whose `empty_when` holds
+    /// over `frame` (the sensors as read); returns their indices. The others keep their
+    /// value.
+    pub fn clear_where_empty(&mut self, frame: &Frame) -> Vec<usize> {
+        let mut cleared = Vec::new();
+        for (i, e) in self.empty.iter().enumerate() {
+            if e.as_ref().is_some_and(|d| expr::eval_dnf(d, frame)) && self.counts[i] > 0 {
+                self.counts[i] = 0;
+                cleared.push(i);
+            }
+        }
+        cleared
     }
 
     /// Internal state (memory bit or count) of each observer, for the history and the

@@ -58,6 +58,19 @@ pub enum OperatorAction {
     /// ends; the models restart from the observed values, and a fault still present is
     /// diagnosed again.
     ResetDiagnosers,
+    /// After a trip that the reset cannot clear (the program or an observer still
+    /// believes what a transient made it believe: a box gone that is still under its
+    /// beam, a phantom box on the table) and a check of the plant: the control program
+    /// back to its initial steps, the sensors taken as read, and the trip ended. With
+    /// `emptied`, the operator took every item off the plant first (GEMMA's preparation
+    /// for a restart after a failure; the emulator's boxes are removed) and every
+    /// observer restarts empty; without, the items stay where the sensors show them
+    /// and an observer is cleared only where the sensors leave no room for its item
+    /// (`empty_when`). Refused when the filter is not tripped.
+    Reinitialise {
+        /// The operator emptied the plant of its items.
+        emptied: bool,
+    },
 }
 
 /// An operator action at a time.
@@ -487,6 +500,25 @@ impl Simulation {
                 }
                 None => Err("this run has no diagnosers".to_string()),
             },
+            &OperatorAction::Reinitialise { emptied } => {
+                if self.engine.reinitialise(emptied) {
+                    if emptied {
+                        let n = self.emulator.remove_items();
+                        self.log(
+                            "plant_emptied",
+                            format!("the operator took {n} items off the plant"),
+                        );
+                    }
+                    self.program = ProgramRuntime::new(self.program.program().clone());
+                    self.program_before = self.program.clone();
+                    if let Some(d) = self.diagnosers.as_mut() {
+                        d.reinitialised_in(self.engine.frame_mut());
+                    }
+                    Ok(())
+                } else {
+                    Err("the filter is not tripped: nothing to re-initialise".to_string())
+                }
+            }
             OperatorAction::Pause => {
                 self.engine.set_hold(true);
                 Ok(())
@@ -504,6 +536,33 @@ impl Simulation {
                 self.log("reset", "operator reset of the filter".into());
             }
             (Err(e), OperatorAction::Reset) => self.log("reset_refused", e.clone()),
+            (Ok(()), &OperatorAction::Reinitialise { emptied }) => {
+                for key in self.alarms.active_keys(AlarmKind::FilterTrip) {
+                    self.alarms.clear(now, &key);
+                }
+                if self.diagnosers.is_some() {
+                    self.diagnosers_cleared(
+                        now,
+                        "diagnosers restarted with the re-initialisation: fault flags cleared, \
+                         sensors read again, no certain decision until each model is back in \
+                         its initial state",
+                    );
+                }
+                let observers = if emptied {
+                    "the plant emptied, every observer restarts empty"
+                } else {
+                    "the items left in place, the observers cleared where the sensors \
+                     leave no room for their item (the others kept)"
+                };
+                self.log(
+                    "reinitialise",
+                    format!(
+                        "operator re-initialisation after a check of the plant: the \
+                         control program back to its initial steps, the sensors taken as \
+                         read, {observers}, the trip ended"
+                    ),
+                );
+            }
             (Ok(()), OperatorAction::ResetDiagnosers) => self.diagnosers_cleared(
                 now,
                 "operator reset of the diagnosers after a repair: fault flags cleared, \

@@ -252,7 +252,10 @@ impl Gateway {
         let map = std::fs::read_to_string(station.join("io-map.ron"))
             .unwrap()
             .replace("max_age_ms: 30,", "max_age_ms: 200,");
-        assert!(map.contains("max_age_ms: 200,"), "the station's io-map.ron changed");
+        assert!(
+            map.contains("max_age_ms: 200,"),
+            "the station's io-map.ron changed"
+        );
         let map_path = dir.0.join("io-map.ron");
         std::fs::write(&map_path, map).unwrap();
         let text = format!(

@@ -354,6 +354,8 @@ pub struct Console {
     pub(crate) score: Score,
     pub(crate) wall_s: f64,
     pub(crate) alarm_filter_shelved: bool,
+    /// The re-initialisation's confirmation is open (it asks for a check of the plant).
+    pub(crate) reinit_confirm: bool,
     pub(crate) verification: verification::Verification,
     visuals_set: bool,
     /// Commands emitted by the last frame's views, applied at the next `logic`.
@@ -471,6 +473,7 @@ impl Console {
             },
             wall_s: 0.0,
             alarm_filter_shelved: false,
+            reinit_confirm: false,
             verification: verification::Verification::default(),
             visuals_set: false,
             pending: Vec::new(),
@@ -592,9 +595,22 @@ impl Console {
             }
             Command::Plant(action) => {
                 let result = self.sim.act(&action);
-                self.status = match result {
-                    Ok(()) => format!("{action:?}: done"),
-                    Err(e) => format!("{action:?}: {e}"),
+                self.status = match (result, &action) {
+                    (Ok(()), OperatorAction::Reinitialise { emptied: true }) => {
+                        "Re-initialised: the plant emptied, the program at its initial \
+                         steps; press Start"
+                            .to_string()
+                    }
+                    (Ok(()), OperatorAction::Reinitialise { emptied: false }) => {
+                        "Re-initialised with the items in place, the program at its \
+                         initial steps; press Start"
+                            .to_string()
+                    }
+                    (Ok(()), _) => format!("{action:?}: done"),
+                    (Err(e), OperatorAction::Reset) => {
+                        format!("Reset: {e}. Still refused? Check the plant, then Re-initialise…")
+                    }
+                    (Err(e), _) => format!("{action:?}: {e}"),
                 };
                 self.drain_journal();
             }

@@ -16,6 +16,7 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.panel))
         .show(ui, |ui| toolbar_ui(c, ui, out));
     unprotected_ui(c, ui);
+    reinit_confirm_ui(c, ui, out);
     // Below the toolbar: the degraded-mode banner and the diagnosers' table.
     super::diagnosers::panel_ui(c, ui, out);
     egui::Panel::bottom("status").show(ui, |ui| status_ui(c, ui));
@@ -166,6 +167,25 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         {
             out.push(Command::Plant(OperatorAction::Reset));
         }
+        if ui
+            .add_enabled(
+                tripped && c.link.is_none(),
+                egui::Button::new("Re-initialise…"),
+            )
+            .on_hover_text(
+                "When the reset is refused because the program or an observer still \
+                 believes what a transient made it believe: after a check of the plant \
+                 (emptied, or every item where a sensor shows it), the program back to \
+                 its initial steps, the sensors taken as read",
+            )
+            .on_disabled_hover_text(
+                "Only after a trip, on the emulator (on a live link the PLC's program is \
+                 re-initialised on the PLC)",
+            )
+            .clicked()
+        {
+            c.reinit_confirm = true;
+        }
         ui.separator();
         let unack = c.sim.alarms.unacknowledged();
         let (txt, col) = if tripped {
@@ -184,14 +204,73 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     });
 }
 
+/// The re-initialisation's confirmation: what to check on the plant first, and what it
+/// does.
+fn reinit_confirm_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    if !c.reinit_confirm {
+        return;
+    }
+    if !c.sim.engine.is_tripped() {
+        c.reinit_confirm = false;
+        return;
+    }
+    let modal = egui::Modal::new(egui::Id::unique("reinit_confirm")).show(ui.ctx(), |ui| {
+        ui.set_max_width(460.0);
+        ui.heading("Re-initialise after a check of the plant");
+        ui.label(
+            "The control program goes back to its initial steps, as at the start of a \
+             shift, the sensors are taken as read and the trip ends. The filter checks \
+             the next commands as any other, and the diagnosers decide nothing with \
+             certainty until each model is back in its initial state.",
+        );
+        ui.label(
+            "Empty the plant first: take every item off by hand, fallen ones included \
+             (the initial steps expect no item half-way). Every observer then restarts \
+             empty.",
+        );
+        ui.weak("On the emulator, the emulated items are taken off for you.");
+        ui.label(
+            "Or leave the items in place, each where a sensor shows it, none between \
+             the sensors: an observer is then cleared only where the sensors leave no \
+             room for its item, and the program may stop again on an item it does not \
+             expect.",
+        );
+        ui.horizontal(|ui| {
+            if ui.button("Plant emptied: re-initialise").clicked() {
+                out.push(Command::Plant(OperatorAction::Reinitialise {
+                    emptied: true,
+                }));
+                c.reinit_confirm = false;
+            }
+            if ui.button("Items left in place: re-initialise").clicked() {
+                out.push(Command::Plant(OperatorAction::Reinitialise {
+                    emptied: false,
+                }));
+                c.reinit_confirm = false;
+            }
+            if ui.button("Cancel").clicked() {
+                c.reinit_confirm = false;
+            }
+        });
+    });
+    if modal.should_close() {
+        c.reinit_confirm = false;
+    }
+}
+
 fn status_ui(c: &Console, ui: &mut egui::Ui) {
     ui.horizontal(|ui| {
         if super::link::status_ui(c, ui) {
             return;
         }
         let s = c.sim.emulator.stats();
+        let removed = if s.removed > 0 {
+            format!(", {} taken off", s.removed)
+        } else {
+            String::new()
+        };
         ui.label(format!(
-            "{} — boxes: {} created, {} left, {} right, {} damaged",
+            "{} — boxes: {} created, {} left, {} right, {} damaged{removed}",
             c.source.scenario.name, s.created, s.delivered_left, s.delivered_right, s.damaged
         ));
         ui.separator();

@@ -414,6 +414,24 @@ impl Emulator {
         Ok(id)
     }
 
+    /// The operator takes every box off the plant by hand, those in transit and those
+    /// that fell (before a re-initialisation of an emptied plant); returns how many.
+    /// Arrivals go on as planned.
+    pub fn remove_items(&mut self) -> u32 {
+        let fallen = self
+            .done
+            .iter()
+            .filter(|(v, _)| v.state == BoxState::Fallen)
+            .count();
+        let n = (self.bodies.len() + fallen) as u32;
+        self.bodies.clear();
+        self.done.retain(|(v, _)| v.state != BoxState::Fallen);
+        self.stats.removed += n;
+        self.compute_sensors();
+        self.publish();
+        n
+    }
+
     /// Sets the table angle (live-mode initialisation), millidegrees.
     pub fn set_table_angle_mdeg(&mut self, a: i32) {
         self.angle = a as i64 * 1000;

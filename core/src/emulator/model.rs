@@ -115,6 +115,9 @@ pub struct BoxStats {
     pub delivered_right: u32,
     /// Boxes damaged by at least one hazard.
     pub damaged: u32,
+    /// Boxes taken off the plant by hand (the operator emptying it before a
+    /// re-initialisation), fallen ones included.
+    pub removed: u32,
 }
 
 /// The dangerous states the emulator detects.

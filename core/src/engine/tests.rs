@@ -399,3 +399,98 @@ fn a_restored_trip_holds_the_fallback_until_the_reset() {
     monitor.engine.restore_trip(first.engine.trips[0].clone());
     assert!(!monitor.engine.is_tripped());
 }
+
+/// The operator's re-initialisation (issue 17, recovery). A pulse of C6 at the loading
+/// position while the rollers run is a box for the stage (a rise is plausible there),
+/// the filter trips on CSs6, and C6's fall at C4 is not plausible (a box leaves the
+/// table only at C5): C6 stays held at 1 and every reset is refused. After a check of
+/// the plant, the re-initialisation takes the sensors as read and ends the trip. The
+/// outputs at t-1 stay what was applied: a release of the table away from C5 is still
+/// an edge of A4 (CSs15), and the filter trips again on it.
+#[test]
+fn the_reinitialisation_takes_the_sensors_as_read_and_keeps_the_applied_outputs() {
+    let mut run = Run::new(FilterMode::Enforce);
+    run.engine.set_plausibility(true);
+    assert!(!run.engine.reinitialise(false), "nothing to re-initialise");
+    for _ in 0..300 {
+        run.cycle(&["C4"], &["A1", "A2"]);
+    }
+    run.cycle(&["C4", "C6"], &["A1", "A2"]);
+    assert!(run.engine.is_tripped());
+    for _ in 0..100 {
+        assert!(
+            !run.cycle(&["C4"], &["A1", "A2"])
+                .contains(&"A2".to_string())
+        );
+    }
+    let refused = run.engine.reset().unwrap_err();
+    assert!(refused.to_string().contains("CSs6"), "{refused}");
+    assert!(run.engine.reinitialise(false));
+    assert!(!run.engine.is_tripped());
+    assert_eq!(run.cycle(&["C4"], &["A1", "A2"]), ["A1", "A2"]);
+    let c6 = run.plant.input("C6").unwrap();
+    assert!(
+        !run.engine.frame().now(Space::Input).get(c6),
+        "C6 taken as read"
+    );
+    assert!(!run.engine.is_tripped());
+
+    let mut run = Run::new(FilterMode::Enforce);
+    run.cycle(&["C4", "C6"], &["A4"]);
+    run.cycle(&["C6"], &["A4"]);
+    // Released half-way: CSs15 trips and the fallback holds A4.
+    assert_eq!(run.cycle(&["C6"], &[]), ["A4"]);
+    assert!(run.engine.is_tripped());
+    assert!(run.engine.reinitialise(false));
+    assert_eq!(run.cycle(&["C6"], &[]), ["A4"], "still held away from C5");
+    assert!(run.engine.is_tripped());
+}
+
+/// At the re-initialisation an observer is cleared only where the sensors as read leave
+/// no room for its item (`empty_when`, P36: `C3 + C6`); otherwise it keeps its value
+/// and what it protects stays protected (a box between C3 and C6 that no sensor sees).
+#[test]
+fn the_reinitialisation_clears_an_observer_only_where_the_sensors_leave_no_room() {
+    for (after, cleared) in [(&[][..], false), (&["C3"][..], true)] {
+        let mut run = Run::new(FilterMode::Enforce);
+        let (_, p36) = run.engine.symbols.lookup("P36").unwrap();
+        let p36 = p36 as usize;
+        run.cycle(&["C3", "C4"], &["A1"]);
+        run.cycle(&["C4"], &["A1"]);
+        assert!(
+            run.engine.frame().now(Space::Observer).get(p36),
+            "FE(C3) sets P36"
+        );
+        // The table leaves C4 with the belt on and a box at its end: CSs2 trips.
+        run.cycle(&["C3"], &["A1"]);
+        assert!(run.engine.is_tripped());
+        assert!(run.engine.reinitialise(false));
+        run.cycle(after, &[]);
+        assert_eq!(
+            !run.engine.frame().now(Space::Observer).get(p36),
+            cleared,
+            "sensors {after:?}"
+        );
+        let expected: Vec<String> = if cleared { vec!["P36".into()] } else { vec![] };
+        assert_eq!(run.engine.reinit_cleared, expected);
+    }
+}
+
+/// The plant emptied by the operator before the re-initialisation: every observer
+/// restarts empty, whatever the sensors show (P36 set, no sensor on).
+#[test]
+fn the_reinitialisation_of_an_emptied_plant_clears_every_observer() {
+    let mut run = Run::new(FilterMode::Enforce);
+    let (_, p36) = run.engine.symbols.lookup("P36").unwrap();
+    let p36 = p36 as usize;
+    run.cycle(&["C3", "C4"], &["A1"]);
+    run.cycle(&["C4"], &["A1"]);
+    run.cycle(&["C3"], &["A1"]);
+    assert!(run.engine.is_tripped());
+    assert!(run.engine.frame().now(Space::Observer).get(p36));
+    assert!(run.engine.reinitialise(true));
+    run.cycle(&[], &[]);
+    assert!(!run.engine.frame().now(Space::Observer).get(p36));
+    assert_eq!(run.engine.reinit_cleared, ["P36"]);
+    assert!(!run.engine.is_tripped());
+}

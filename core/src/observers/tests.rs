@@ -176,6 +176,23 @@ fn observer_file_errors_name_the_observer() {
         &memory("C0", "C0", "C1"),
         &["observers.ron:1:1: error[V0204]: observer `C0` has the name of another signal"],
     );
+    // `empty_when` (read at the re-initialisation) is checked like the rule.
+    check_load(
+        r#"(observers: [(id: "P", rule: Memory(set: "C0", reset: "C1"), empty_when: Some("C3 + C6"))])"#,
+        &[],
+    );
+    check_load(
+        r#"(observers: [(id: "P", rule: Memory(set: "C0", reset: "C1"), empty_when: Some("C3 + X"))])"#,
+        &[
+            "observers.ron:1:1: error[V0202]: observer `P`: `empty_when`: unknown signal `X` (column 6)",
+        ],
+    );
+    check_load(
+        r#"(observers: [(id: "P", rule: Memory(set: "C0", reset: "C1"), empty_when: Some("A4"))])"#,
+        &[
+            "observers.ron:1:1: error[V0201]: observer `P`: `empty_when` may read inputs, previous outputs and auxiliaries only",
+        ],
+    );
     // Observers read inputs, not each other.
     check_load(
         r#"(observers: [(id: "P", rule: Memory(set: "C0", reset: "C1")), (id: "Q", rule: Memory(set: "P", reset: "C1"))])"#,

@@ -78,6 +78,12 @@ struct Run {
     /// Per partition: certainty and the fault indices still possible.
     decisions: Vec<(Certainty, Vec<usize>)>,
     unexplained: bool,
+    /// Restarted after the operator's re-initialisation: the control program restarted
+    /// from its initial steps with items where they were, an evolution the model may
+    /// not know (a box fed while another still waits at the end of the belt); it
+    /// decides nothing with certainty until its estimate is back in its initial state
+    /// with the normal mode only.
+    resyncing: bool,
     started: bool,
     /// Suspended by the filter's hold, or reset by the operator: the restart does not
     /// know the clock.
@@ -389,6 +395,7 @@ impl Diagnosers {
                 latched: vec![false; c.partitions.len()],
                 decisions: vec![(Certainty::Normal, Vec::new()); c.partitions.len()],
                 unexplained: false,
+                resyncing: false,
                 started: false,
                 held: false,
                 deferred: None,
@@ -534,6 +541,18 @@ impl Diagnosers {
             for &a in r.def_aux.iter().flatten() {
                 aux.set(a as usize, false);
             }
+        }
+    }
+
+    /// As [`Diagnosers::reset_in`], after the operator's re-initialisation of the
+    /// control program and the observers: every component restarts on the observed
+    /// values and decides nothing with certainty until its estimate is back in its
+    /// initial state with the normal mode only (the restarted program may move the items
+    /// in an order the models do not know).
+    pub fn reinitialised_in(&mut self, frame: &mut Frame) {
+        self.reset_in(frame);
+        for r in &mut self.runs {
+            r.resyncing = true;
         }
     }
 
@@ -1017,6 +1036,7 @@ fn empty_run() -> Run {
         latched: Vec::new(),
         decisions: Vec::new(),
         unexplained: false,
+        resyncing: false,
         started: false,
         held: false,
         deferred: None,
@@ -1298,6 +1318,13 @@ fn decide(
     }
     let count = modes.iter().filter(|&&m| m).count();
     r.normal_possible = modes[nf];
+    if r.resyncing
+        && count == 1
+        && r.normal_possible
+        && r.h.iter().any(|&(q, _)| q as usize == c.initial)
+    {
+        r.resyncing = false;
+    }
     for (pi, p) in c.partitions.iter().enumerate() {
         // Faults of the partition still possible, in fault order.
         let inside = || (0..nf).filter(|&f| modes[f] && p.faults.contains(&f));
@@ -1308,7 +1335,7 @@ fn decide(
         // its own faults do, so it decides nothing with certainty until the reset.
         let certainty = if n == 0 {
             Certainty::Normal
-        } else if n == count && !r.unexplained {
+        } else if n == count && !r.unexplained && !r.resyncing {
             Certainty::Certain
         } else {
             Certainty::Ambiguous

@@ -419,6 +419,10 @@ fn strike(
 /// a stop partition is flagged, the filter's reset while it is tripped (retried each
 /// second while refused), the diagnosers' reset when a partition is flagged, then
 /// Start.
+/// How long the operator tries the reset (once a second) before a check of the plant
+/// and the re-initialisation.
+const RESET_TRIES_MS: u64 = 30_000;
+
 fn recover(sim: &mut Simulation) {
     // A flagged stop partition (a certain actuator fault, or a stop on the safe side)
     // refuses the filter's reset until the diagnosers' reset after the check, as the
@@ -430,13 +434,26 @@ fn recover(sim: &mut Simulation) {
     {
         let _ = sim.act(&OperatorAction::ResetDiagnosers);
     }
-    let limit = Millis(sim.now().0 + 30_000);
-    while sim.engine.is_tripped() && sim.now() < limit {
-        if sim.act(&OperatorAction::Reset).is_ok() {
-            break;
-        }
-        let next = Millis(sim.now().0 + 1_000);
-        sim.run_until(next);
+    try_reset(sim, RESET_TRIES_MS);
+    // Refused all along: a sensor the diagnosers flagged is read from its estimate,
+    // which may still say what the transient made it say; the operator resets them
+    // (the sensor is read again) and tries again.
+    if sim.engine.is_tripped()
+        && sim
+            .diagnosers
+            .as_ref()
+            .is_some_and(|d| !d.flagged().is_empty())
+    {
+        let _ = sim.act(&OperatorAction::ResetDiagnosers);
+        try_reset(sim, 5_000);
+    }
+    // Still refused: the program still believes what the transient made it believe (a
+    // box gone that is still under its beam, a phantom on the table), which no reset
+    // changes. The operator empties the plant and re-initialises, as the console
+    // proposes after a refused reset (the program's initial steps expect no box
+    // half-way).
+    if sim.engine.is_tripped() {
+        let _ = sim.act(&OperatorAction::Reinitialise { emptied: true });
     }
     if sim
         .diagnosers
@@ -446,6 +463,18 @@ fn recover(sim: &mut Simulation) {
         let _ = sim.act(&OperatorAction::ResetDiagnosers);
     }
     let _ = sim.act(&OperatorAction::Start);
+}
+
+/// The operator's reset, tried once a second for `ms` until it is accepted.
+fn try_reset(sim: &mut Simulation, ms: u64) {
+    let limit = Millis(sim.now().0 + ms);
+    while sim.engine.is_tripped() && sim.now() < limit {
+        if sim.act(&OperatorAction::Reset).is_ok() {
+            break;
+        }
+        let next = Millis(sim.now().0 + 1_000);
+        sim.run_until(next);
+    }
 }
 
 fn delivered(sim: &Simulation) -> u32 {
