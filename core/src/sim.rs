@@ -55,8 +55,10 @@ pub enum OperatorAction {
     Filter(FilterMode),
     /// After a repair: clear the diagnosers' fault flags (the operator's reset of the
     /// paper). The estimated sensors are read again and a stop by an actuator partition
-    /// ends; the models restart from the observed values, and a fault still present is
-    /// diagnosed again.
+    /// ends; the models restart from the observed values and decide nothing with
+    /// certainty until each is back in its initial state with the normal mode only (a
+    /// fault still present is then diagnosed again; one that keeps a model from ever
+    /// coming back, such as a table position beam dead at rest, is not).
     ResetDiagnosers,
     /// After a trip that the reset cannot clear (the program or an observer still
     /// believes what a transient made it believe: a box gone that is still under its
@@ -512,7 +514,7 @@ impl Simulation {
                     self.program = ProgramRuntime::new(self.program.program().clone());
                     self.program_before = self.program.clone();
                     if let Some(d) = self.diagnosers.as_mut() {
-                        d.reinitialised_in(self.engine.frame_mut());
+                        d.reset_in(self.engine.frame_mut());
                     }
                     Ok(())
                 } else {
@@ -566,7 +568,8 @@ impl Simulation {
             (Ok(()), OperatorAction::ResetDiagnosers) => self.diagnosers_cleared(
                 now,
                 "operator reset of the diagnosers after a repair: fault flags cleared, \
-                 sensors read again",
+                 sensors read again, no certain decision until each model is back in \
+                 its initial state",
             ),
             (Ok(()), a) => self.log("operator", format!("{a:?}")),
             (Err(e), a) => self.log("operator_refused", format!("{a:?}: {e}")),
