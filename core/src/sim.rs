@@ -480,12 +480,29 @@ impl Simulation {
         self.log("operator", "control program replaced and restarted".into());
     }
 
+    /// Presses the panel button the program names for the console's Start or Stop
+    /// (`start` / `stop` in its file).
+    fn press_role(&mut self, role: &str) -> Result<(), String> {
+        let program = &self.program.program().program;
+        let button = match role {
+            "start" => program.start.clone(),
+            _ => program.stop.clone(),
+        };
+        match button {
+            Some(b) => self.program.press(&b).map_err(|e| e.to_string()),
+            None => Err(format!(
+                "the program `{}` names no {role} button (`{role}: Some(\"…\")` in its file)",
+                program.name
+            )),
+        }
+    }
+
     /// Applies an operator action now; the result is journaled.
     pub fn act(&mut self, action: &OperatorAction) -> Result<(), String> {
         let now = self.now();
         let result = match action {
-            OperatorAction::Start => self.program.press("START").map_err(|e| e.to_string()),
-            OperatorAction::Stop => self.program.press("STOP").map_err(|e| e.to_string()),
+            OperatorAction::Start => self.press_role("start"),
+            OperatorAction::Stop => self.press_role("stop"),
             OperatorAction::Press(b) => self.program.press(b).map_err(|e| e.to_string()),
             OperatorAction::Switch(s, v) => {
                 self.program.set_switch(s, *v).map_err(|e| e.to_string())

@@ -11,7 +11,7 @@
 //!   of a reference program ([`ErrorLibrary`]).
 //! - [`mutation`]: enumeration of single mutations for localisation campaigns.
 //!
-//! Problem codes: V0301–V0314 program compilation, V0320–V0321 error library.
+//! Problem codes: V0301–V0315 program compilation, V0320–V0321 error library.
 
 pub mod library;
 pub mod mutation;

@@ -101,6 +101,13 @@ pub struct Program {
     /// Operator buttons and switches (`START`, `STOP`, `BY_SIZE`).
     #[serde(default)]
     pub panel: Vec<String>,
+    /// The panel button the console's Start presses (one of `panel`); none: the
+    /// console's Start is refused with a message.
+    #[serde(default)]
+    pub start: Option<String>,
+    /// The panel button the console's Stop presses (one of `panel`).
+    #[serde(default)]
+    pub stop: Option<String>,
     /// Internal memories (set by `S`/`R` actions or by equations).
     #[serde(default)]
     pub memories: Vec<String>,
@@ -417,6 +424,15 @@ impl CompiledProgram {
             let loc = Some(origin.location(origin.find_quoted(p, 0)));
             if let Some(aux) = declare(p, "panel input", loc, &mut problems, &mut symbols) {
                 panel_aux.push(aux);
+            }
+        }
+        for (what, button) in [("start", &program.start), ("stop", &program.stop)] {
+            if let Some(b) = button.as_ref().filter(|b| !program.panel.contains(b)) {
+                problems.push(Problem::error(
+                    "V0315",
+                    format!("`{what}`: `{b}` is not one of the panel's buttons"),
+                    Some(origin.location(origin.find_quoted(b, 0))),
+                ));
             }
         }
 

@@ -145,6 +145,25 @@ fn control_validation_errors() {
     assert!(has("equation `P36`"), "{msgs:#?}");
 }
 
+/// The console's Start and Stop press the buttons the program names (no button name
+/// in the code): a name that is not one of the panel's is an error at its place.
+#[test]
+fn start_and_stop_name_panel_buttons() {
+    let text = "Program(name: \"x\", panel: [\"GO\"],\n  start: Some(\"GO\"),\n  stop: Some(\"HALT\"),\n  charts: [Chart(name: \"g\", steps: [Step(id: \"S0\", initial: true)], transitions: [])])";
+    let msgs: Vec<String> = compile(text)
+        .unwrap_err()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    assert_eq!(msgs.len(), 1, "{msgs:#?}");
+    assert!(
+        msgs[0].contains(":3:")
+            && msgs[0].contains("V0315")
+            && msgs[0].contains("`stop`: `HALT` is not one of the panel's buttons"),
+        "{msgs:#?}"
+    );
+}
+
 #[test]
 fn control_qualifiers_timers_and_buttons() {
     let mut o = Open::new(MINI);

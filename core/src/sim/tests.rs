@@ -664,3 +664,40 @@ fn a_followed_link_restores_its_latched_trip_and_attaches_with_it() {
         "no new trip on the attached cycle"
     );
 }
+
+/// The console's Start presses the button the program names (`start`); a program that
+/// names none refuses Start with a message that says where to name it, and the refusal
+/// is journaled.
+#[test]
+fn start_presses_the_programs_start_button_or_says_it_has_none() {
+    let dir = station_dir();
+    let (bundle, _) = crate::bundle::PlantBundle::load(&dir).unwrap();
+    let path = dir.join("programs/reference.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut program = crate::control::Program::from_ron(&text, &path).unwrap();
+    let compiled = |p: &crate::control::Program| {
+        crate::control::CompiledProgram::new(
+            p,
+            &bundle.plant,
+            &crate::control::Origin::new(&path, &text),
+        )
+        .unwrap()
+    };
+    let mut sim =
+        Simulation::new(bundle.clone(), compiled(&program), 1, Options::default()).unwrap();
+    assert!(sim.program.is_active("X0"));
+    sim.act(&OperatorAction::Start).unwrap();
+    sim.cycle();
+    sim.cycle();
+    assert!(!sim.program.is_active("X0"), "t0 fired on START");
+    program.start = None;
+    let without = compiled(&program);
+    let mut sim = Simulation::new(bundle.clone(), without, 1, Options::default()).unwrap();
+    let e = sim.act(&OperatorAction::Start).unwrap_err();
+    assert!(e.contains("names no start button"), "{e}");
+    assert!(
+        sim.journal()
+            .iter()
+            .any(|j| j.text.contains("names no start button"))
+    );
+}

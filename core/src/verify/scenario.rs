@@ -74,6 +74,8 @@ pub fn program(trace: &Trace, plant: &Plant, step_us: i64) -> Program {
             trace.what
         ),
         panel: Vec::new(),
+        start: None,
+        stop: None,
         memories: Vec::new(),
         timers,
         charts: vec![Chart {
