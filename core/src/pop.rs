@@ -478,6 +478,8 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
         };
         let mut c = table.clone();
         c.id = format!("{}_{i}", table.id);
+        // The campaign's injections name the original signals: not copied.
+        c.injections.clear();
         for s in &table.signals {
             let kind = if s.starts_with('A') {
                 SignalKind::Actuator

@@ -651,6 +651,29 @@ fn compile_one(
             stop: p.stop,
         });
     }
+    for i in &c.injections {
+        for e in &i.expected {
+            if !c.partitions.iter().any(|p| &p.id == e) {
+                ctx.err(
+                    "V0510",
+                    &i.name,
+                    format!(
+                        "injection `{}` expects `{e}`, not a partition of `{}`",
+                        i.name, c.id
+                    ),
+                );
+            }
+        }
+        if let Some(when) = &i.when
+            && let Err(e) = parse_str(when).and_then(|x| x.to_dnf(symbols))
+        {
+            ctx.err(
+                "V0510",
+                when,
+                format!("injection `{}`: `when`: {}", i.name, e.message),
+            );
+        }
+    }
     if ctx.problems.len() > before {
         return None;
     }

@@ -148,9 +148,9 @@ impl Default for Config {
 }
 
 /// The injection library: the four sensor faults of every diagnosed sensor (expected:
-/// its own partition), the turntable's mechanical faults (expected: `P`), and both
-/// stuck faults of every actuator a partition lists in `actuators` (expected: those
-/// partitions).
+/// its own partition), each component's own `injections` (mechanical faults, a sensor
+/// fault in a given situation), and both stuck faults of every actuator a partition
+/// lists in `actuators` (expected: those partitions).
 pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
     let mut v = Vec::new();
     let pulse = 300;
@@ -169,13 +169,6 @@ pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
                 FaultKind::SensorStuckAt0(s.clone()),
                 None,
             ));
-            if c.id == "table" && s == "C4" {
-                v.push(one(
-                    "C4 stuck at 0, table at rest at C4".into(),
-                    FaultKind::SensorStuckAt0(s.clone()),
-                    Some("C4 . /A4 . /A4*"),
-                ));
-            }
             v.push(one(
                 format!("{s} stuck at 1"),
                 FaultKind::SensorStuckAt1(s.clone()),
@@ -199,20 +192,16 @@ pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
             ));
         }
     }
-    let table = |name: &str, kind: FaultKind| Injection {
-        name: name.into(),
-        kind,
-        expected: vec!["P".into()],
-        component: "table".into(),
-        when: None,
-    };
-    if file.components.iter().any(|c| c.id == "table") {
-        v.push(table("table blocked at C4", FaultKind::TableBlockedAtC4));
-        v.push(table("table blocked at C5", FaultKind::TableBlockedAtC5));
-        v.push(table(
-            "table blocked between",
-            FaultKind::TableBlockedBetween,
-        ));
+    for c in &file.components {
+        for i in &c.injections {
+            v.push(Injection {
+                name: i.name.clone(),
+                kind: i.fault.clone(),
+                expected: i.expected.clone(),
+                component: c.id.clone(),
+                when: i.when.clone(),
+            });
+        }
     }
     // Actuator faults: expected in every partition that lists the actuator.
     let mut actuators: BTreeMap<String, Vec<(String, String)>> = BTreeMap::new();

@@ -111,6 +111,28 @@ pub struct ComponentDef {
     /// blocked plant still shows their edges where the expected evolutions foresee them.
     #[serde(default)]
     pub independent: Vec<String>,
+    /// Faults the diagnoser campaign injects for this component besides the generated
+    /// ones (the four sensor faults of each sensor partition, both stuck faults of each
+    /// actuator a partition lists): mechanical faults of the emulator, or a sensor
+    /// fault injected only in a given situation.
+    #[serde(default)]
+    pub injections: Vec<InjectionDef>,
+}
+
+/// A fault the diagnoser campaign injects (`vigie campaign diagnoser`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InjectionDef {
+    /// The campaign row's name.
+    pub name: String,
+    /// The emulator's fault (as in a scenario's `faults`).
+    pub fault: crate::emulator::FaultKind,
+    /// The partitions a right diagnosis may name.
+    pub expected: Vec<String>,
+    /// Inject only once this expression over the frame holds after the random time
+    /// (`C4 . /A4 . /A4*`: the table rests at C4).
+    #[serde(default)]
+    pub when: Option<String>,
 }
 
 /// A normal state.

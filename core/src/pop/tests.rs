@@ -148,12 +148,36 @@ fn malformed_file_gives_file_line_and_column() {
         .unwrap()
         + 1;
     let text = text.replacen("assumes_item: [\"C6\"]", "assumes_item: [\"C66\"]", 1);
-    let Err(p) = from_text(&dir, plant, &text, &path) else {
+    let Err(p) = from_text(&dir, plant.clone(), &text, &path) else {
         panic!("accepted");
     };
     let at = p[0].location.as_ref().unwrap();
     assert_eq!((p[0].code, at.line), ("V0503", line), "{p:?}");
     assert!(p[0].message.contains("`assumes_item`: `C66`"), "{p:?}");
+    // A campaign injection that expects no partition of its component, or whose
+    // `when` reads an unknown signal, at its own line.
+    let text = std::fs::read_to_string(&path).unwrap();
+    let line = |text: &str, what: &str| text.lines().position(|l| l.contains(what)).unwrap() + 1;
+    for (from, to, says) in [
+        (
+            "fault: TableBlockedAtC5, expected: [\"P\"]",
+            "fault: TableBlockedAtC5, expected: [\"Q\"]",
+            "injection `table blocked at C5` expects `Q`, not a partition of `table`",
+        ),
+        (
+            "when: Some(\"C4 . /A4 . /A4*\")",
+            "when: Some(\"C4 . /A44\")",
+            "injection `C4 stuck at 0, table at rest at C4`: `when`: unknown signal `A44`",
+        ),
+    ] {
+        let bad = text.replacen(from, to, 1);
+        let Err(p) = from_text(&dir, plant.clone(), &bad, &path) else {
+            panic!("accepted: {to}");
+        };
+        let at = p[0].location.as_ref().unwrap();
+        assert_eq!((p[0].code, at.line), ("V0510", line(&text, from)), "{p:?}");
+        assert!(p[0].message.contains(says), "{p:?}");
+    }
 }
 
 #[test]
