@@ -365,3 +365,32 @@ fn learn_rewrites_only_the_interval_bounds_of_diagnosers_ron() {
     assert_eq!(after.ends_with('\n'), before.ends_with('\n'));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `vigie bench` reads the scenarios of the plant's own figures from its `bench.ron`
+/// (no scenario name in the code): a broken file is an error at its line and column,
+/// before anything is measured; a `trip` scenario that never trips is said, not
+/// measured on a frame that violates nothing.
+#[test]
+fn bench_reads_its_scenarios_from_the_plant_folder() {
+    let dir = station_copy("bench");
+    let d = path_str(&dir);
+    std::fs::write(
+        dir.join("bench.ron"),
+        "(\n    production: Some(\"scenarios/reference-hour.ron\"),\n    trips: 3,\n)\n",
+    )
+    .unwrap();
+    let out = vigie(&["--plant", d, "bench", "--iterations", "101"]);
+    let err = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("bench.ron:3:"), "{err}");
+    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+    std::fs::write(
+        dir.join("bench.ron"),
+        "(trip: Some(\"scenarios/reference-hour.ron\"))\n",
+    )
+    .unwrap();
+    let out = vigie(&["--plant", d, "bench", "--iterations", "101"]);
+    let err = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("the filter never trips"), "{err}");
+}

@@ -26,89 +26,149 @@ pub(crate) fn median_ns(batches: u32, per_batch: u32, mut f: impl FnMut()) -> f6
     samples[samples.len() / 2]
 }
 
-fn set(frame: &mut Frame, symbols: &vigie_core::symbols::Symbols, name: &str, prev: bool, v: bool) {
-    if let Some((space, index)) = symbols.lookup(name) {
-        let table = if prev {
-            &mut frame.prev
-        } else {
-            &mut frame.now
-        };
-        table[space as usize].set(index as usize, v);
+/// `bench.ron` in the plant folder: the scenarios the plant's own figures run (paths
+/// relative to the plant folder). Without the file those figures are skipped, said.
+#[derive(serde::Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct BenchFile {
+    /// Production without a trip, timed as a closed loop (simulated / wall time).
+    #[serde(default)]
+    production: Option<std::path::PathBuf>,
+    /// A scenario that trips the filter: the filter cycle is timed on its last frame
+    /// before the trip and on the tripping frame, and the explanation of the trip.
+    #[serde(default)]
+    trip: Option<std::path::PathBuf>,
+}
+
+fn bench_file(plant_dir: &Path) -> anyhow::Result<BenchFile> {
+    let path = plant_dir.join("bench.ron");
+    if !path.exists() {
+        return Ok(BenchFile::default());
     }
+    let text = std::fs::read_to_string(&path)?;
+    ron::Options::default().from_str(&text).map_err(|e| {
+        anyhow::anyhow!(
+            "{}:{}:{}: {}",
+            path.display(),
+            e.span.start.line,
+            e.span.start.col,
+            e.code
+        )
+    })
+}
+
+fn load_scenario(path: &Path) -> anyhow::Result<vigie_core::sim::Scenario> {
+    vigie_core::sim::Scenario::load(path)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))
+}
+
+/// The frames of the trip scenario: the last one before the first trip (the outputs
+/// as commanded and applied) and the tripping one (the outputs as commanded, which
+/// violate), with the violated constraints and the outputs the engine applied.
+struct TripFrames {
+    before: Frame,
+    trip: Frame,
+    violated: Vec<String>,
+    applied: vigie_core::bits::Bits,
+}
+
+fn trip_frames(path: &Path) -> anyhow::Result<TripFrames> {
+    use vigie_core::sim::{Options, Simulation};
+    let scenario = load_scenario(path)?;
+    let mut sim = Simulation::from_scenario(&scenario, path, Options::default())
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let end = vigie_core::Millis(scenario.duration_ms);
+    let mut before = sim.engine.frame().clone();
+    while sim.now() < end && sim.engine.trips.is_empty() {
+        before = sim.engine.frame().clone();
+        sim.cycle();
+    }
+    let Some(t) = sim.engine.trips.first() else {
+        anyhow::bail!("{}: the filter never trips", path.display());
+    };
+    let violated = t.constraints.iter().map(|c| c.id.clone()).collect();
+    let mut trip = sim.engine.frame().clone();
+    let commanded = sim.engine.commanded().clone();
+    trip.now_mut(Space::Output).copy_from(&commanded);
+    Ok(TripFrames {
+        before,
+        trip,
+        violated,
+        applied: sim.engine.applied().clone(),
+    })
 }
 
 pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode> {
     let mut out = std::io::stdout().lock();
     let (bundle, _) = super::load_bundle(plant_dir)?;
     let filter = Filter::new(&bundle.constraints, bundle.plant.outputs.len());
-    let symbols = &bundle.symbols;
     let batches = 101;
     let per_batch = (iterations / batches).max(1);
+    let files = bench_file(plant_dir)?;
 
-    // Sorting station, production without trip: a box on A1, the table waiting at C4.
-    let mut frame = Frame::new(symbols.sizes());
-    for (n, v) in [
-        ("C1", true),
-        ("C4", true),
-        ("A0", true),
-        ("A1", true),
-        ("A5", true),
-        ("A6", true),
-    ] {
-        set(&mut frame, symbols, n, false, v);
+    writeln!(
+        out,
+        "{} ({} sensors, {} actuators, {} observers, {} constraints)",
+        bundle.plant.name,
+        bundle.plant.inputs.len(),
+        bundle.plant.outputs.len(),
+        bundle.observers.defs.len(),
+        bundle.constraints.constraints.len()
+    )?;
+    match &files.trip {
+        None => writeln!(
+            out,
+            "  filter cycle: no `trip` scenario in {}/bench.ron, not measured",
+            plant_dir.display()
+        )?,
+        Some(trip_path) => {
+            let frames = trip_frames(&plant_dir.join(trip_path))?;
+            let mut frame = frames.before;
+            let mut observers = bundle.observers.clone();
+            let mut violations = Vec::new();
+            let mut state = filter.new_state();
+            let no_trip = median_ns(batches, per_batch, || {
+                observers.update(black_box(&mut frame));
+                filter.sync(&mut state, black_box(&frame));
+                filter.violations_synced(&state, black_box(&frame), &mut violations);
+                black_box(&violations);
+            });
+            anyhow::ensure!(
+                violations.is_empty(),
+                "the frame before the trip unexpectedly violates {violations:?}"
+            );
+            let mut trip = frames.trip;
+            let mut state = filter.new_state();
+            let with_trip = median_ns(batches, per_batch, || {
+                filter.sync(&mut state, black_box(&trip));
+                filter.violations_synced(&state, black_box(&trip), &mut violations);
+                let fb = filter.fallback_synced(&state, &trip);
+                black_box(&fb);
+            });
+            anyhow::ensure!(
+                !violations.is_empty(),
+                "the tripping frame violates nothing"
+            );
+            observers.update(&mut trip);
+            let fb = filter.fallback(&trip).map_err(|e| anyhow::anyhow!("{e}"))?;
+            anyhow::ensure!(
+                fb == frames.applied,
+                "the fallback differs from what the engine applied at the trip"
+            );
+            writeln!(
+                out,
+                "  filter cycle, no trip (observers + constraints): {no_trip:>10.1} ns   goal <= 1000 ns"
+            )?;
+            writeln!(
+                out,
+                "  filter cycle with the {} trip (+ fallback): {with_trip:>10.1} ns   goal <= 1000 ns",
+                frames.violated.join(", ")
+            )?;
+        }
     }
-    let mut observers = bundle.observers.clone();
-    let mut violations = Vec::new();
-    let mut state = filter.new_state();
-    let no_trip = median_ns(batches, per_batch, || {
-        observers.update(black_box(&mut frame));
-        filter.sync(&mut state, black_box(&frame));
-        filter.violations_synced(&state, black_box(&frame), &mut violations);
-        black_box(&violations);
-    });
-    anyhow::ensure!(
-        violations.is_empty(),
-        "benchmark state unexpectedly violates {violations:?}"
-    );
-
-    // The paper's CSs10 trip: box at C7, A4 released at C5.
-    let mut trip = Frame::new(symbols.sizes());
-    for (n, v) in [
-        ("C5", true),
-        ("C7", true),
-        ("A3", true),
-        ("A5", true),
-        ("A6", true),
-    ] {
-        set(&mut trip, symbols, n, false, v);
-    }
-    set(&mut trip, symbols, "A4", true, true);
-    let mut state = filter.new_state();
-    let with_trip = median_ns(batches, per_batch, || {
-        observers.update(black_box(&mut trip));
-        filter.sync(&mut state, black_box(&trip));
-        filter.violations_synced(&state, black_box(&trip), &mut violations);
-        let fb = filter.fallback_synced(&state, &trip);
-        black_box(&fb);
-    });
-    let fb = filter.fallback(&trip).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let a4 = bundle.plant.output("A4").unwrap_or(0);
-    anyhow::ensure!(fb.get(a4), "CSs10 fallback must hold A4 ON");
-
-    writeln!(
-        out,
-        "sorting station (11 sensors, 7 actuators, 3 observers, 17 constraints)"
-    )?;
-    writeln!(
-        out,
-        "  filter cycle, no trip (observers + constraints): {no_trip:>10.1} ns   goal <= 1000 ns"
-    )?;
-    writeln!(
-        out,
-        "  filter cycle with CSs10 trip (+ fallback):       {with_trip:>10.1} ns   goal <= 1000 ns"
-    )?;
 
     // Synthetic plant: 10,000 signals, 10,000 constraints.
+    let mut violations = Vec::new();
     let synth = vigie_core::synthetic::generate(10_000, 10_000, 42);
     let sfilter = Filter::new(&synth.constraints, synth.plant.outputs.len());
     let mut sframe = Frame::new(synth.symbols.sizes());
@@ -212,12 +272,22 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         "  (fallback re-evaluating every term:              {:>10.1} µs)",
         s_fallback_full / 1000.0
     )?;
-    closed_loop(&mut out, plant_dir)?;
+    match &files.production {
+        Some(p) => closed_loop(&mut out, &plant_dir.join(p))?,
+        None => writeln!(
+            out,
+            "closed loop: no `production` scenario in {}/bench.ron, not measured",
+            plant_dir.display()
+        )?,
+    }
     task_monitors(&mut out)?;
-    if let Some((ms, worst)) = explanations_ms(plant_dir, 21)? {
+    if let Some(trip) = &files.trip
+        && let Some((ms, worst)) = explanations_ms(&plant_dir.join(trip), 21)?
+    {
         writeln!(
             out,
-            "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms (CSs10 trip of cs10-paper.ron)"
+            "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms (the trip of {})",
+            trip.display()
         )?;
         writeln!(
             out,
@@ -277,15 +347,13 @@ pub(crate) fn thread_cpu() -> Option<std::time::Duration> {
     Some(std::time::Duration::from_nanos(ns))
 }
 
-/// Simulated time / wall time of the closed loop: the emulator at a 1 ms step, the
-/// reference program scanned every 10 ms, observers, filter and recorder, one hour of
-/// production (`scenarios/reference-hour.ron`).
-fn closed_loop(out: &mut impl std::io::Write, plant_dir: &Path) -> anyhow::Result<()> {
-    use vigie_core::sim::{Options, Scenario, Simulation};
-    let path = plant_dir.join("scenarios/reference-hour.ron");
-    let scenario =
-        Scenario::load(&path).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
-    let mut sim = Simulation::from_scenario(&scenario, &path, Options::default())
+/// Simulated time / wall time of the closed loop: the emulator at its step, the
+/// program scanned every cycle, observers, filter and recorder, over the `production`
+/// scenario of `bench.ron` (the station: an hour, `scenarios/reference-hour.ron`).
+fn closed_loop(out: &mut impl std::io::Write, path: &Path) -> anyhow::Result<()> {
+    use vigie_core::sim::{Options, Simulation};
+    let scenario = load_scenario(path)?;
+    let mut sim = Simulation::from_scenario(&scenario, path, Options::default())
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let cpu0 = thread_cpu();
     let start = Instant::now();
@@ -316,24 +384,17 @@ fn closed_loop(out: &mut impl std::io::Write, plant_dir: &Path) -> anyhow::Resul
     Ok(())
 }
 
-/// The five explanation levels of the paper's CSs10 trip (scenario `cs10-paper.ron` of
-/// the plant, variant E01) with a 10 s projection: the closed loop runs to the trip, then
+/// The five explanation levels of the first trip of the `trip` scenario of `bench.ron`
+/// (the station: the paper's CSs10 trip, `cs10-paper.ron`, variant E01) with a 10 s
+/// projection: the closed loop runs to the trip, then
 /// [`vigie_core::sim::Simulation::explanation`] is timed on copies of the states at the
 /// start of the tripping cycle. Returns the median time in ms, `None` when the plant has
 /// no such scenario or it does not trip.
 /// The second figure is the worst case of the projection alone: the full 10 s horizon
 /// (no hazard predicted).
-pub(crate) fn explanations_ms(
-    plant_dir: &Path,
-    batches: u32,
-) -> anyhow::Result<Option<(f64, f64)>> {
-    use vigie_core::sim::{Options, Scenario, Simulation};
-    let path = plant_dir.join("scenarios/cs10-paper.ron");
-    if !path.exists() {
-        return Ok(None);
-    }
-    let scenario =
-        Scenario::load(&path).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+pub(crate) fn explanations_ms(path: &Path, batches: u32) -> anyhow::Result<Option<(f64, f64)>> {
+    use vigie_core::sim::{Options, Simulation};
+    let scenario = load_scenario(path)?;
     anyhow::ensure!(
         scenario.projection_ms == 10_000,
         "the benchmark needs a 10 s projection horizon"
@@ -342,7 +403,7 @@ pub(crate) fn explanations_ms(
         history_cycles: 30_000,
         explain: false,
     };
-    let mut sim = Simulation::from_scenario(&scenario, &path, options)
+    let mut sim = Simulation::from_scenario(&scenario, path, options)
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let end = vigie_core::Millis(scenario.duration_ms);
     let mut before = None;
