@@ -167,11 +167,23 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         {
             out.push(Command::Plant(OperatorAction::Reset));
         }
+        // The reset was refused since the trip: the re-initialisation is the next step,
+        // shown in the alarm colour.
+        let refused = tripped
+            && c.sim
+                .journal()
+                .iter()
+                .rev()
+                .find(|e| matches!(e.kind.as_str(), "trip" | "reset" | "reset_refused"))
+                .is_some_and(|e| e.kind == "reset_refused");
+        let reinit = if refused {
+            egui::Button::new(RichText::new("Re-initialise…").color(Color32::BLACK))
+                .fill(c.palette.alarm)
+        } else {
+            egui::Button::new("Re-initialise…")
+        };
         if ui
-            .add_enabled(
-                tripped && c.link.is_none(),
-                egui::Button::new("Re-initialise…"),
-            )
+            .add_enabled(tripped && c.link.is_none(), reinit)
             .on_hover_text(
                 "When the reset is refused because the program or an observer still \
                  believes what a transient made it believe: after a check of the plant \
