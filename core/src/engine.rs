@@ -418,11 +418,7 @@ impl Engine {
         }
         self.read_estimates();
         if let Some(emptied) = reinit_mode {
-            let cleared = if emptied {
-                self.observers.clear_all()
-            } else {
-                self.observers.clear_where_empty(&self.frame)
-            };
+            let cleared = self.observers.clear_at_reinit(&self.frame, emptied);
             self.reinit_cleared = cleared
                 .iter()
                 .map(|&i| self.observers.defs[i].id.clone())

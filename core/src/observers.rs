@@ -311,27 +311,15 @@ impl Observers {
         }
     }
 
-    /// The operator's re-initialisation of an emptied plant: clears every observer;
-    /// returns the indices of those that were set.
-    pub fn clear_all(&mut self) -> Vec<usize> {
+    /// The operator's re-initialisation: clears every observer when the plant was
+    /// `emptied`, otherwise those whose `empty_when` holds over `frame` (the sensors as
+    /// read; the others keep their value). Returns the indices of those that were set.
+    pub fn clear_at_reinit(&mut self, frame: &Frame, emptied: bool) -> Vec<usize> {
         let mut cleared = Vec::new();
-        for (i, c) in self.counts.iter_mut().enumerate() {
-            if *c > 0 {
-                *c = 0;
-                cleared.push(i);
-            }
-        }
-        cleared
-    }
-
-    /// The operator's re-initialisation: clears every observer whose `empty_when` holds
-    /// over `frame` (the sensors as read); returns their indices. The others keep their
-    /// value.
-    pub fn clear_where_empty(&mut self, frame: &Frame) -> Vec<usize> {
-        let mut cleared = Vec::new();
-        for (i, e) in self.empty.iter().enumerate() {
-            if e.as_ref().is_some_and(|d| expr::eval_dnf(d, frame)) && self.counts[i] > 0 {
-                self.counts[i] = 0;
+        for (i, (count, e)) in self.counts.iter_mut().zip(&self.empty).enumerate() {
+            let clear = emptied || e.as_ref().is_some_and(|d| expr::eval_dnf(d, frame));
+            if clear && *count > 0 {
+                *count = 0;
                 cleared.push(i);
             }
         }

@@ -475,9 +475,14 @@ impl Simulation {
     /// Replaces the control program (maintenance mode: after a correction) and restarts
     /// it from its initial steps.
     pub fn replace_program(&mut self, program: CompiledProgram) {
-        self.program = ProgramRuntime::new(Arc::new(program));
-        self.program_before = self.program.clone();
+        self.restart_program(Arc::new(program));
         self.log("operator", "control program replaced and restarted".into());
+    }
+
+    /// Runs `program` from its initial steps.
+    fn restart_program(&mut self, program: Arc<CompiledProgram>) {
+        self.program = ProgramRuntime::new(program);
+        self.program_before = self.program.clone();
     }
 
     /// Presses the panel button the program names for the console's Start or Stop
@@ -528,8 +533,7 @@ impl Simulation {
                             format!("the operator took {n} items off the plant"),
                         );
                     }
-                    self.program = ProgramRuntime::new(self.program.program().clone());
-                    self.program_before = self.program.clone();
+                    self.restart_program(self.program.program().clone());
                     if let Some(d) = self.diagnosers.as_mut() {
                         d.reset_in(self.engine.frame_mut());
                     }

@@ -374,23 +374,26 @@ fn learn_rewrites_only_the_interval_bounds_of_diagnosers_ron() {
 fn bench_reads_its_scenarios_from_the_plant_folder() {
     let dir = station_copy("bench");
     let d = path_str(&dir);
-    std::fs::write(
-        dir.join("bench.ron"),
-        "(\n    production: Some(\"scenarios/reference-hour.ron\"),\n    trips: 3,\n)\n",
-    )
-    .unwrap();
-    let out = vigie(&["--plant", d, "bench", "--iterations", "101"]);
-    let err = text(&out.stderr);
-    assert!(!out.status.success());
-    assert!(err.contains("bench.ron:3:"), "{err}");
-    assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
-    std::fs::write(
-        dir.join("bench.ron"),
-        "(trip: Some(\"scenarios/reference-hour.ron\"))\n",
-    )
-    .unwrap();
-    let out = vigie(&["--plant", d, "bench", "--iterations", "101"]);
-    let err = text(&out.stderr);
-    assert!(!out.status.success());
-    assert!(err.contains("the filter never trips"), "{err}");
+    // (bench.ron, what stderr says, nothing measured yet)
+    for (bench, says, before_any_figure) in [
+        (
+            "(\n    production: Some(\"scenarios/reference-hour.ron\"),\n    trips: 3,\n)\n",
+            "bench.ron:3:",
+            true,
+        ),
+        (
+            "(trip: Some(\"scenarios/reference-hour.ron\"))\n",
+            "the filter never trips",
+            false,
+        ),
+    ] {
+        std::fs::write(dir.join("bench.ron"), bench).unwrap();
+        let out = vigie(&["--plant", d, "bench", "--iterations", "101"]);
+        let err = text(&out.stderr);
+        assert!(!out.status.success());
+        assert!(err.contains(says), "{err}");
+        if before_any_figure {
+            assert!(out.stdout.is_empty(), "{}", text(&out.stdout));
+        }
+    }
 }

@@ -415,14 +415,15 @@ fn strike(
     Ok(Some(end))
 }
 
-/// The operator's recovery, as the console asks for it: the diagnosers' reset first when
-/// a stop partition is flagged, the filter's reset while it is tripped (retried each
-/// second while refused), the diagnosers' reset when a partition is flagged, then
-/// Start.
 /// How long the operator tries the reset (once a second) before a check of the plant
 /// and the re-initialisation.
 const RESET_TRIES_MS: u64 = 30_000;
 
+/// The operator's recovery, as the console asks for it: the diagnosers' reset first when
+/// a stop partition is flagged, the filter's reset while it is tripped (retried each
+/// second while refused, [`RESET_TRIES_MS`]; then, a sensor flagged, the diagnosers'
+/// reset and 5 s more), the re-initialisation of an emptied plant when it is still
+/// refused, the diagnosers' reset when a partition is flagged, then Start.
 fn recover(sim: &mut Simulation) {
     // A flagged stop partition (a certain actuator fault, or a stop on the safe side)
     // refuses the filter's reset until the diagnosers' reset after the check, as the
