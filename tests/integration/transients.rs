@@ -521,6 +521,48 @@ fn a_dead_belt_under_a_pushed_box_stops_the_plant_before_the_next_box_collides()
     );
 }
 
+/// Issue 17 (a welded actuator is not blamed on a sensor with certainty): a welded
+/// entry conveyor pushes the box waiting at C0 onto the belt behind the belt's own box.
+/// The feed follows one box: C1 rising there read as `C1_stuck1|C1_rise`, certain at
+/// once (84 of 100 runs blamed C1 or C3; seeds 1, 4 and 6 blamed C1). Its beams'
+/// decisions now wait `confirm_ms` (4 s): the pushed box clears C0 unordered, which no
+/// fault of a beam explains, and the feed loses track and claims nothing.
+#[test]
+fn a_welded_entry_conveyor_is_not_blamed_on_c1() {
+    for seed in [1, 4, 6] {
+        let (_, report) = campaign("A0 welded", seed..seed + 1, 0);
+        let row = &report.rows[0];
+        assert_eq!(row.injected, 1, "{row:?}");
+        assert_eq!(row.wrong, 0, "seed {seed}: {:?}", row.failures);
+        assert_eq!(row.hazards, row.own_hazards, "seed {seed}: {:?}", row.failures);
+        assert!(
+            row.first_failure_journal
+                .iter()
+                .any(|l| l.contains("unexplained") && l.contains("(feed)")),
+            "seed {seed}: the feed loses track: {:#?}",
+            row.first_failure_journal
+        );
+    }
+}
+
+/// Issue 17 (a welded actuator is not blamed on a sensor with certainty): a welded
+/// intermediate belt pushes the box at C3 onto the table while the rollers load it, and
+/// its front reaches C6 sooner than the rollers alone bring it (1.25 s after their
+/// order, against 1.38 s at the soonest). The table's model had only C6's own faults
+/// for that, and said `C6_stuck1|C6_rise|C6_fall` with certainty (seeds 5, 89, 98).
+/// `C6_pushed` (the loading's window, untimed) now explains it too: the sensor is not
+/// blamed, and the welded belt's damage stays its own.
+#[test]
+fn a_welded_belt_that_pushes_the_box_onto_the_table_is_not_blamed_on_c6() {
+    for seed in [5, 89, 98] {
+        let (_, report) = campaign("A1 welded", seed..seed + 1, 0);
+        let row = &report.rows[0];
+        assert_eq!(row.injected, 1, "{row:?}");
+        assert_eq!(row.wrong, 0, "seed {seed}: {:?}", row.failures);
+        assert_eq!(row.hazards, row.own_hazards, "seed {seed}: {:?}", row.failures);
+    }
+}
+
 /// Every struck run of `report` without hazard or wrong certain diagnosis, and with
 /// production restored by the reset.
 fn assert_restored(report: &vigie_core::pop::transients::Report) {

@@ -154,6 +154,8 @@ pub struct Component {
     pub assumes_item: Vec<String>,
     /// How long a certain decision waits for those neighbours at least, ms.
     pub settle_ms: u64,
+    /// See [`super::model::ComponentDef::confirm_ms`].
+    pub confirm_ms: Option<u64>,
     /// See [`super::model::ComponentDef::doubt_ms`].
     pub doubt_ms: Option<u64>,
     /// Generated unexpected evolutions.
@@ -1411,6 +1413,7 @@ fn compile_one(
         assumes: c.assumes.clone(),
         assumes_item: c.assumes_item.clone(),
         settle_ms: c.settle_ms,
+        confirm_ms: c.confirm_ms,
         doubt_ms: c.doubt_ms,
         id: c.id.clone(),
         signals,

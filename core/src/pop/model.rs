@@ -97,6 +97,15 @@ pub struct ComponentDef {
     /// window closes).
     #[serde(default)]
     pub settle_ms: u64,
+    /// How long a certain decision of a sensor partition waits for the plant to
+    /// confirm it, ms (None: it is issued at once). A welded actuator that moves an
+    /// item the model does not follow (the entry conveyor pushing the waiting box onto
+    /// the belt behind the belt's own box: two boxes, where the model follows one)
+    /// reads at first like a fault of a beam; within this time the plant shows more
+    /// than a beam's fault explains (the box clears C0 or reaches C3 unordered), the
+    /// model loses track and claims nothing. Drive partitions do not wait.
+    #[serde(default)]
+    pub confirm_ms: Option<u64>,
     /// The safe side of an ambiguous fault, ms: when the component is certainly faulty
     /// but cannot tell a stopping fault that stops items (`Blocked`: a dead drive) from
     /// a fault of a sensor the cooperation cannot estimate, and is still so after this

@@ -57,11 +57,14 @@ struct Wait {
     all: bool,
     /// The sensor partitions' (a neighbour suspects a sensor it `assumes_item`).
     sensors: bool,
+    /// The sensor partitions', for the plant to confirm (`confirm_ms`): unlike the
+    /// waits above, the doubt's safe-side stop still runs meanwhile.
+    confirm: bool,
 }
 
 impl Wait {
     fn applies_to(self, p: &super::build::Partition) -> bool {
-        self.all || (self.sensors && p.sensor.is_some())
+        self.all || ((self.sensors || self.confirm) && p.sensor.is_some())
     }
 }
 
@@ -463,7 +466,11 @@ impl Diagnosers {
             })
             .collect();
         let with_interface = (0..compiled.components.len())
-            .filter(|&i| !interface[i].is_empty() || !held_assumed[i].is_empty())
+            .filter(|&i| {
+                !interface[i].is_empty()
+                    || !held_assumed[i].is_empty()
+                    || compiled.components[i].confirm_ms.is_some()
+            })
             .collect();
         let mut work = Work::default();
         for c in &compiled.components {
@@ -630,7 +637,7 @@ impl Diagnosers {
                 let c = &self.compiled.components[i];
                 let r = &mut self.runs[i];
                 // Issued now, unless a sensor partition still waits on an item sensor.
-                if !wait.sensors {
+                if !wait.sensors && !wait.confirm {
                     r.deferred = None;
                 }
                 decide(
@@ -712,18 +719,25 @@ impl Diagnosers {
     /// The sensors it `assumes_item` make its sensor partitions wait likewise
     /// ([`Wait::sensors`]), not its drive partitions.
     fn interface_blocks(&self, ci: usize, t: i64) -> Wait {
+        let c = &self.compiled.components[ci];
+        let deferred = self.runs[ci].deferred;
+        // A sensor partition's certain decision waits `confirm_ms` for the plant to
+        // confirm it (see `ComponentDef::confirm_ms`).
+        let confirming = c.confirm_ms.is_some_and(|w| {
+            let w = i64::try_from(w).unwrap_or(i64::MAX);
+            deferred.is_none_or(|since| t.saturating_sub(since) < w)
+        });
         let tainted = self.runs[ci].tainted;
         let iface = &self.interface[ci];
         if iface.is_empty() {
             return Wait {
                 all: false,
                 sensors: tainted,
+                confirm: confirming,
             };
         }
-        let settle = i64::try_from(self.compiled.components[ci].settle_ms).unwrap_or(i64::MAX);
-        let settling = self.runs[ci]
-            .deferred
-            .is_none_or(|since| t.saturating_sub(since) < settle);
+        let settle = i64::try_from(c.settle_ms).unwrap_or(i64::MAX);
+        let settling = deferred.is_none_or(|since| t.saturating_sub(since) < settle);
         let blocks = |item: bool| {
             let mut of_kind = iface.iter().filter(|e| e.2 == item).peekable();
             of_kind.peek().is_some()
@@ -740,6 +754,7 @@ impl Diagnosers {
         Wait {
             all: blocks(false),
             sensors: tainted || blocks(true),
+            confirm: confirming,
         }
     }
 
