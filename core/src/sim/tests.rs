@@ -324,6 +324,66 @@ fn task_monitors_accept_operator_pauses_over_an_hour() {
     );
 }
 
+/// Issue 19: the task monitors raise no alarm in normal production, whatever the start
+/// delay or the arrival rate the reference program sustains. At the console's arrival
+/// rate (a box every 8 s) every run raised a false `entry` alarm after about 90 s: the
+/// task started at the box's arrival at C0, and a box waits there for the belt for up
+/// to about 10 s, which the task's total bound (4.5 s) counted. It now starts with the
+/// push (C0 . A0 . A1). Seeds 1 to 4, Start at 0, 5, 13 and 20 s, boxes every 7, 8 and
+/// 15 s, five minutes each.
+#[test]
+fn task_monitors_raise_no_alarm_in_normal_production_whatever_the_start_and_rate() {
+    let dir = station_dir().join("scenarios");
+    for (period, jitter) in [(7_000, 500), (8_000, 1_000), (15_000, 2_000)] {
+        for start in [0, 5_000, 13_000, 20_000] {
+            for seed in 1..=4 {
+                let text = format!(
+                    "Scenario(name: \"late start\", program: Reference, seed: {seed}, \
+                     arrivals: Some(Periodic(period_ms: {period}, jitter_ms: {jitter}, mix: Alternate)), \
+                     actions: [(at_ms: {start}, action: Start)], duration_ms: 300000, \
+                     filter: Enforce, diagnosers: true)"
+                );
+                let s: Scenario = ron::from_str(&text).expect("scenario");
+                let mut sim = Simulation::from_scenario(
+                    &s,
+                    &dir.join("late-start.ron"),
+                    Options::default(),
+                )
+                .expect("starts");
+                sim.run_until(Millis(s.duration_ms));
+                let report = sim.report(s.seed);
+                let case = format!("period {period} ms, Start at {start} ms, seed {seed}");
+                assert!(
+                    report.task_alarms.is_empty(),
+                    "{case}: {:?}",
+                    report.task_alarms.first()
+                );
+                assert!(report.trips.is_empty() && report.hazards.is_empty(), "{case}");
+                assert!(report.boxes.delivered_left + report.boxes.delivered_right > 15, "{case}");
+            }
+        }
+    }
+}
+
+/// The `entry` task, now started by the push, still alarms when the pushed box never
+/// shows at C1 (C1 dead from 20 s): its effective time passes β (1.5 s), at the same
+/// moment as when it started at the box's arrival.
+#[test]
+fn the_entry_task_alarms_when_the_pushed_box_never_shows_at_c1() {
+    let text = "Scenario(name: \"C1 dead\", program: Reference, seed: 1, \
+                faults: [(trigger: At(20000), fault: SensorStuckAt0(\"C1\"))], \
+                actions: [(at_ms: 0, action: Start)], duration_ms: 60000, \
+                filter: Enforce, diagnosers: true)";
+    let s: Scenario = ron::from_str(text).expect("scenario");
+    let path = station_dir().join("scenarios").join("c1-dead.ron");
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(s.duration_ms));
+    let report = sim.report(s.seed);
+    let a = report.task_alarms.first().expect("an alarm");
+    assert_eq!((a.subject.as_str(), a.time), ("entry", Millis(28_490)), "{a:?}");
+    assert_eq!(a.y_ms, Some(1_500), "past beta: {a:?}");
+}
+
 /// A permanent blocking of the turntable mid-rotation: the rotation task alarms when its
 /// effective time passes β, earlier than the classical watchdog at start + γ.
 #[test]
