@@ -137,7 +137,8 @@ pub struct Diagnosers {
     /// Per component: the partitions of other components that cover a sensor it
     /// assumes (component, partition, and true for a sensor it `assumes_item`).
     interface: Vec<Vec<(usize, usize, bool)>>,
-    /// The components with such an interface (the only ones whose decisions can wait).
+    /// The components with such an interface, or with a `confirm_ms` (the only ones
+    /// whose decisions can wait).
     with_interface: Vec<usize>,
     /// Per component: the `sus_` auxiliaries of the sensors it `assumes` (its orders
     /// are given on them), set while the plausibility stage holds the sensor. Not those
@@ -717,16 +718,19 @@ impl Diagnosers {
     /// cannot vouch for the sensor until the operator's reset).
     ///
     /// The sensors it `assumes_item` make its sensor partitions wait likewise
-    /// ([`Wait::sensors`]), not its drive partitions.
+    /// ([`Wait::sensors`]), not its drive partitions; so does its `confirm_ms`
+    /// ([`Wait::confirm`]), for any component.
     fn interface_blocks(&self, ci: usize, t: i64) -> Wait {
         let c = &self.compiled.components[ci];
         let deferred = self.runs[ci].deferred;
+        // Whether the certain decision (deferred since then) has waited less than `ms`.
+        let waiting = |ms: u64| {
+            let w = i64::try_from(ms).unwrap_or(i64::MAX);
+            deferred.is_none_or(|since| t.saturating_sub(since) < w)
+        };
         // A sensor partition's certain decision waits `confirm_ms` for the plant to
         // confirm it (see `ComponentDef::confirm_ms`).
-        let confirming = c.confirm_ms.is_some_and(|w| {
-            let w = i64::try_from(w).unwrap_or(i64::MAX);
-            deferred.is_none_or(|since| t.saturating_sub(since) < w)
-        });
+        let confirming = c.confirm_ms.is_some_and(waiting);
         let tainted = self.runs[ci].tainted;
         let iface = &self.interface[ci];
         if iface.is_empty() {
@@ -736,8 +740,7 @@ impl Diagnosers {
                 confirm: confirming,
             };
         }
-        let settle = i64::try_from(c.settle_ms).unwrap_or(i64::MAX);
-        let settling = deferred.is_none_or(|since| t.saturating_sub(since) < settle);
+        let settling = waiting(c.settle_ms);
         let blocks = |item: bool| {
             let mut of_kind = iface.iter().filter(|e| e.2 == item).peekable();
             of_kind.peek().is_some()

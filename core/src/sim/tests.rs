@@ -283,6 +283,16 @@ fn load_station_scenario(name: &str) -> (Scenario, Simulation) {
     (s, sim)
 }
 
+/// Runs the scenario written in `text` on the station to its end (as if it were a file
+/// of its `scenarios/` folder) and returns its report.
+fn run_station_text(text: &str) -> RunReport {
+    let s: Scenario = ron::from_str(text).expect("scenario");
+    let path = station_dir().join("scenarios").join("inline.ron");
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(s.duration_ms));
+    sim.report(s.seed)
+}
+
 /// One hour with an operator pause every 5 minutes: the pauses interrupt the tasks in
 /// progress (acceptable interruptions) and no task alarm is raised.
 #[test]
@@ -333,7 +343,6 @@ fn task_monitors_accept_operator_pauses_over_an_hour() {
 /// 15 s, five minutes each.
 #[test]
 fn task_monitors_raise_no_alarm_in_normal_production_whatever_the_start_and_rate() {
-    let dir = station_dir().join("scenarios");
     for (period, jitter) in [(7_000, 500), (8_000, 1_000), (15_000, 2_000)] {
         for start in [0, 5_000, 13_000, 20_000] {
             for seed in 1..=4 {
@@ -343,23 +352,21 @@ fn task_monitors_raise_no_alarm_in_normal_production_whatever_the_start_and_rate
                      actions: [(at_ms: {start}, action: Start)], duration_ms: 300000, \
                      filter: Enforce, diagnosers: true)"
                 );
-                let s: Scenario = ron::from_str(&text).expect("scenario");
-                let mut sim = Simulation::from_scenario(
-                    &s,
-                    &dir.join("late-start.ron"),
-                    Options::default(),
-                )
-                .expect("starts");
-                sim.run_until(Millis(s.duration_ms));
-                let report = sim.report(s.seed);
+                let report = run_station_text(&text);
                 let case = format!("period {period} ms, Start at {start} ms, seed {seed}");
                 assert!(
                     report.task_alarms.is_empty(),
                     "{case}: {:?}",
                     report.task_alarms.first()
                 );
-                assert!(report.trips.is_empty() && report.hazards.is_empty(), "{case}");
-                assert!(report.boxes.delivered_left + report.boxes.delivered_right > 15, "{case}");
+                assert!(
+                    report.trips.is_empty() && report.hazards.is_empty(),
+                    "{case}"
+                );
+                assert!(
+                    report.boxes.delivered_left + report.boxes.delivered_right > 15,
+                    "{case}"
+                );
             }
         }
     }
@@ -374,13 +381,13 @@ fn the_entry_task_alarms_when_the_pushed_box_never_shows_at_c1() {
                 faults: [(trigger: At(20000), fault: SensorStuckAt0(\"C1\"))], \
                 actions: [(at_ms: 0, action: Start)], duration_ms: 60000, \
                 filter: Enforce, diagnosers: true)";
-    let s: Scenario = ron::from_str(text).expect("scenario");
-    let path = station_dir().join("scenarios").join("c1-dead.ron");
-    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
-    sim.run_until(Millis(s.duration_ms));
-    let report = sim.report(s.seed);
+    let report = run_station_text(text);
     let a = report.task_alarms.first().expect("an alarm");
-    assert_eq!((a.subject.as_str(), a.time), ("entry", Millis(28_490)), "{a:?}");
+    assert_eq!(
+        (a.subject.as_str(), a.time),
+        ("entry", Millis(28_490)),
+        "{a:?}"
+    );
     assert_eq!(a.y_ms, Some(1_500), "past beta: {a:?}");
 }
 
