@@ -55,6 +55,8 @@ struct PaletteFile {
     forced: [u8; 3],
     ghost: [u8; 3],
     highlight: [u8; 3],
+    caution: [u8; 3],
+    normal: [u8; 3],
 }
 
 /// Colours of the console.
@@ -96,6 +98,10 @@ pub struct Palette {
     pub ghost: Color32,
     /// Explanation marks that are not abnormal (changes, expected actions).
     pub highlight: Color32,
+    /// Third alarm priority (medium), and the degraded state.
+    pub caution: Color32,
+    /// The plant producing normally (the state indicator only).
+    pub normal: Color32,
 }
 
 fn c([r, g, b]: [u8; 3]) -> Color32 {
@@ -125,6 +131,8 @@ impl Palette {
             forced: c(f.forced),
             ghost: c(f.ghost),
             highlight: c(f.highlight),
+            caution: c(f.caution),
+            normal: c(f.normal),
         })
     }
 
@@ -167,6 +175,8 @@ impl Default for Palette {
                     forced: Color32::ORANGE,
                     ghost: Color32::BLUE,
                     highlight: Color32::BLUE,
+                    caution: Color32::YELLOW,
+                    normal: Color32::DARK_GREEN,
                 }
             }
         }

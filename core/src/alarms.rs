@@ -1,12 +1,74 @@
 //! Alarm management after ISA-18.2: each alarm is unacknowledged while new, acknowledged
 //! by the operator (with an optional note), and cleared when its condition returns to
 //! normal; an alarm cleared before it is acknowledged stays in the list as
-//! *cleared-unacknowledged* until it is. Alarms can be shelved for a limited time. The
-//! first alarm of a burst (raised while no other unacknowledged alarm is active) is
-//! marked *first-out*.
+//! *cleared-unacknowledged* until it is.
+//!
+//! - **Priority** follows from the alarm's kind ([`AlarmKind::priority`]): a trip of the
+//!   safety filter and a hazard are urgent; the list is ordered by priority, then
+//!   unacknowledged first, then newest first.
+//! - **Shelving** needs a reason and a duration of at most [`MAX_SHELVING`]; a safety
+//!   alarm (trip, hazard, specification error, live link) is never shelvable.
+//! - **First-out** marks the first alarm of the event that stops the plant: the first
+//!   alarm of a kind that can stop it ([`AlarmKind::can_stop`]) raised while no other
+//!   such alarm is active or unacknowledged. A task monitor's prediction never stops
+//!   the plant and is never first-out.
+//! - Each alarm has an operator text (the plant's own names and descriptions) and an
+//!   engineer's detail (formulas, codes), shown one click away.
+
+pub mod texts;
 
 use crate::time::Millis;
 use serde::Serialize;
+
+/// An alarm's operator text and the engineer's detail.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct AlarmText {
+    /// In the operator's words.
+    pub message: String,
+    /// Formula, codes, internal names; may be empty.
+    pub detail: String,
+}
+
+impl From<&str> for AlarmText {
+    fn from(message: &str) -> Self {
+        message.to_string().into()
+    }
+}
+
+impl From<String> for AlarmText {
+    fn from(message: String) -> Self {
+        Self {
+            message,
+            detail: String::new(),
+        }
+    }
+}
+
+/// The longest shelving: one shift.
+pub const MAX_SHELVING: Millis = Millis(8 * 3_600_000);
+
+/// ISA-18.2 priority; the order is the urgency (`Urgent` first).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AlarmPriority {
+    /// Act now: the plant is stopped or damaged.
+    Urgent,
+    /// Act soon: the plant runs unprotected, degraded or blind.
+    High,
+    /// Look at it: a prediction or a suspect reading that did not stop the plant.
+    Medium,
+}
+
+impl AlarmPriority {
+    /// `1`, `2`, `3`: the number shown beside the alarm.
+    pub fn rank(self) -> u8 {
+        match self {
+            Self::Urgent => 1,
+            Self::High => 2,
+            Self::Medium => 3,
+        }
+    }
+}
 
 /// Where an alarm comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
@@ -26,6 +88,53 @@ pub enum AlarmKind {
     Hazard,
     /// A sensor's edge the plant's physics does not allow was held (a suspect sensor).
     Plausibility,
+}
+
+impl AlarmKind {
+    /// Its name in texts.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::FilterTrip => "safety filter trip",
+            Self::Diagnosis => "diagnosis",
+            Self::Task => "task monitor",
+            Self::Link => "live link",
+            Self::Specification => "specification error",
+            Self::Hazard => "hazard",
+            Self::Plausibility => "implausible sensor",
+        }
+    }
+
+    /// The priority of every alarm of this kind.
+    pub fn priority(self) -> AlarmPriority {
+        match self {
+            Self::FilterTrip | Self::Hazard => AlarmPriority::Urgent,
+            Self::Specification | Self::Link | Self::Diagnosis => AlarmPriority::High,
+            Self::Task | Self::Plausibility => AlarmPriority::Medium,
+        }
+    }
+
+    /// A safety alarm (trip, hazard, a constraint set without fallback, the live link)
+    /// is never shelved.
+    pub fn shelvable(self) -> bool {
+        matches!(self, Self::Diagnosis | Self::Task | Self::Plausibility)
+    }
+
+    /// Alarms of this kind may start the event that stops the plant (candidates for
+    /// first-out); a task monitor's prediction never stops it.
+    pub fn can_stop(self) -> bool {
+        !matches!(self, Self::Task)
+    }
+}
+
+/// A shelving: when, until when, and why.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Shelving {
+    /// When it was shelved.
+    pub at: Millis,
+    /// Hidden until this time.
+    pub until: Millis,
+    /// The operator's reason.
+    pub reason: String,
 }
 
 /// ISA-18.2 alarm state.
@@ -51,17 +160,19 @@ pub struct Alarm {
     pub key: String,
     /// Origin.
     pub kind: AlarmKind,
-    /// Text shown to the operator.
+    /// Text shown to the operator, from the plant's own names and descriptions.
     pub message: String,
+    /// The engineer's detail (formula, codes), shown on demand; may be empty.
+    pub detail: String,
     /// When it was raised.
     pub raised: Millis,
     /// Acknowledgement time and note.
     pub acknowledged: Option<(Millis, String)>,
     /// When the condition returned to normal.
     pub cleared: Option<Millis>,
-    /// Hidden until this time.
-    pub shelved_until: Option<Millis>,
-    /// First alarm of its burst.
+    /// The current or last shelving.
+    pub shelving: Option<Shelving>,
+    /// First alarm of the event that stops the plant.
     pub first_out: bool,
 }
 
@@ -78,7 +189,17 @@ impl Alarm {
 
     /// True while shelved at `now`.
     pub fn is_shelved(&self, now: Millis) -> bool {
-        self.shelved_until.is_some_and(|t| now < t)
+        self.shelving.as_ref().is_some_and(|s| now < s.until)
+    }
+
+    /// Its priority.
+    pub fn priority(&self) -> AlarmPriority {
+        self.kind.priority()
+    }
+
+    /// Active or unacknowledged.
+    fn is_open(&self) -> bool {
+        self.state() != AlarmState::Normal
     }
 }
 
@@ -94,6 +215,15 @@ pub enum AlarmError {
     /// Shelving needs a positive duration.
     #[error("shelving needs a duration of at least 1 ms")]
     EmptyShelving,
+    /// Shelving is limited to [`MAX_SHELVING`].
+    #[error("shelving is limited to {} h (one shift)", MAX_SHELVING.0 / 3_600_000)]
+    ShelvingTooLong,
+    /// Shelving needs the operator's reason.
+    #[error("shelving needs a reason")]
+    NoReason,
+    /// A safety alarm is never shelved.
+    #[error("alarm #{0} is a safety alarm ({1}): it cannot be shelved")]
+    NotShelvable(u64, &'static str),
 }
 
 /// The alarm list.
@@ -110,7 +240,14 @@ impl AlarmList {
     }
 
     /// Raises an alarm for `key` unless one is already active; returns its id.
-    pub fn raise(&mut self, now: Millis, key: &str, kind: AlarmKind, message: String) -> u64 {
+    pub fn raise(
+        &mut self,
+        now: Millis,
+        key: &str,
+        kind: AlarmKind,
+        text: impl Into<AlarmText>,
+    ) -> u64 {
+        let AlarmText { message, detail } = text.into();
         if let Some(a) = self
             .alarms
             .iter()
@@ -118,20 +255,19 @@ impl AlarmList {
         {
             return a.id;
         }
-        let first_out = !self
-            .alarms
-            .iter()
-            .any(|a| a.state() == AlarmState::Unacknowledged);
+        let first_out =
+            kind.can_stop() && !self.alarms.iter().any(|a| a.kind.can_stop() && a.is_open());
         self.next_id += 1;
         self.alarms.push(Alarm {
             id: self.next_id,
             key: key.to_string(),
             kind,
             message,
+            detail,
             raised: now,
             acknowledged: None,
             cleared: None,
-            shelved_until: None,
+            shelving: None,
             first_out,
         });
         self.next_id
@@ -172,39 +308,83 @@ impl AlarmList {
         Ok(())
     }
 
-    /// Hides an alarm for `duration`.
-    pub fn shelve(&mut self, now: Millis, id: u64, duration: Millis) -> Result<(), AlarmError> {
+    /// Acknowledges every unacknowledged alarm among `ids` (all of them for `None`),
+    /// shelved ones included; returns the ids acknowledged, in raising order.
+    pub fn acknowledge_all(&mut self, now: Millis, ids: Option<&[u64]>, note: &str) -> Vec<u64> {
+        let mut done = Vec::new();
+        for a in self
+            .alarms
+            .iter_mut()
+            .filter(|a| a.acknowledged.is_none() && ids.is_none_or(|ids| ids.contains(&a.id)))
+        {
+            a.acknowledged = Some((now, note.to_string()));
+            done.push(a.id);
+        }
+        done
+    }
+
+    /// Hides an alarm for `duration` (at most [`MAX_SHELVING`]), with the operator's
+    /// `reason`; refused for a safety alarm.
+    pub fn shelve(
+        &mut self,
+        now: Millis,
+        id: u64,
+        duration: Millis,
+        reason: &str,
+    ) -> Result<(), AlarmError> {
+        let a = self
+            .alarms
+            .iter_mut()
+            .find(|a| a.id == id)
+            .ok_or(AlarmError::Unknown(id))?;
+        if !a.kind.shelvable() {
+            return Err(AlarmError::NotShelvable(id, a.kind.name()));
+        }
         if duration.0 == 0 {
             return Err(AlarmError::EmptyShelving);
         }
+        if duration > MAX_SHELVING {
+            return Err(AlarmError::ShelvingTooLong);
+        }
+        if reason.trim().is_empty() {
+            return Err(AlarmError::NoReason);
+        }
+        a.shelving = Some(Shelving {
+            at: now,
+            until: now + duration,
+            reason: reason.trim().to_string(),
+        });
+        Ok(())
+    }
+
+    /// Shows a shelved alarm again (its shelving ends now).
+    pub fn unshelve(&mut self, now: Millis, id: u64) -> Result<(), AlarmError> {
         let a = self
             .alarms
             .iter_mut()
             .find(|a| a.id == id)
             .ok_or(AlarmError::Unknown(id))?;
-        a.shelved_until = Some(now + duration);
+        if let Some(s) = a.shelving.as_mut() {
+            s.until = s.until.min(now);
+        }
         Ok(())
     }
 
-    /// Shows a shelved alarm again.
-    pub fn unshelve(&mut self, id: u64) -> Result<(), AlarmError> {
-        let a = self
-            .alarms
-            .iter_mut()
-            .find(|a| a.id == id)
-            .ok_or(AlarmError::Unknown(id))?;
-        a.shelved_until = None;
-        Ok(())
-    }
-
-    /// Alarms to show at `now`: not back to normal, not shelved; newest first.
+    /// Alarms to show at `now`, not back to normal and not shelved: by priority, then
+    /// unacknowledged first, then newest first.
     pub fn visible(&self, now: Millis) -> Vec<&Alarm> {
         let mut v: Vec<&Alarm> = self
             .alarms
             .iter()
-            .filter(|a| a.state() != AlarmState::Normal && !a.is_shelved(now))
+            .filter(|a| a.is_open() && !a.is_shelved(now))
             .collect();
-        v.reverse();
+        v.sort_by_key(|a| {
+            (
+                a.priority(),
+                a.acknowledged.is_some(),
+                std::cmp::Reverse(a.id),
+            )
+        });
         v
     }
 
@@ -239,20 +419,15 @@ mod tests {
     #[test]
     fn isa_18_2_lifecycle() {
         let mut l = AlarmList::new();
-        let a = l.raise(
-            Millis(10),
-            "trip:CSs10",
-            AlarmKind::FilterTrip,
-            "CSs10".into(),
-        );
+        let a = l.raise(Millis(10), "trip:CSs10", AlarmKind::FilterTrip, "CSs10");
         assert_eq!(l.get(a).map(Alarm::state), Some(AlarmState::Unacknowledged));
         assert!(l.get(a).is_some_and(|x| x.first_out));
         // Same condition again: no duplicate.
         assert_eq!(
-            l.raise(Millis(20), "trip:CSs10", AlarmKind::FilterTrip, "x".into()),
+            l.raise(Millis(20), "trip:CSs10", AlarmKind::FilterTrip, "x"),
             a
         );
-        let b = l.raise(Millis(30), "link:plant", AlarmKind::Link, "link".into());
+        let b = l.raise(Millis(30), "link:plant", AlarmKind::Link, "link");
         assert!(
             l.get(b).is_some_and(|x| !x.first_out),
             "second of the burst"
@@ -272,27 +447,129 @@ mod tests {
         );
         l.acknowledge(Millis(60), a, "").unwrap();
         assert_eq!(l.get(a).map(Alarm::state), Some(AlarmState::Acknowledged));
-        // A new burst after everything is acknowledged starts a new first-out.
-        let c = l.raise(Millis(70), "diag:C4", AlarmKind::Diagnosis, "C4".into());
+        // A new event, once the last one's alarms are cleared and acknowledged, starts
+        // a new first-out.
+        l.clear(Millis(65), "trip:CSs10");
+        let c = l.raise(Millis(70), "diag:C4", AlarmKind::Diagnosis, "C4");
         assert!(l.get(c).is_some_and(|x| x.first_out));
         assert_eq!(l.all().len(), 3, "nothing is ever removed");
     }
 
     #[test]
-    fn shelving_is_time_limited() {
+    fn shelving_needs_a_reason_and_a_bounded_duration_and_never_hides_a_safety_alarm() {
         let mut l = AlarmList::new();
-        let a = l.raise(Millis(0), "k", AlarmKind::Hazard, "m".into());
+        let a = l.raise(Millis(0), "k", AlarmKind::Task, "m");
         assert_eq!(
-            l.shelve(Millis(0), a, Millis(0)),
+            l.shelve(Millis(0), a, Millis(0), "known"),
             Err(AlarmError::EmptyShelving)
         );
-        l.shelve(Millis(100), a, Millis(1000)).unwrap();
+        assert_eq!(
+            l.shelve(Millis(0), a, Millis(1000), "  "),
+            Err(AlarmError::NoReason)
+        );
+        assert_eq!(
+            l.shelve(Millis(0), a, MAX_SHELVING + Millis(1), "known"),
+            Err(AlarmError::ShelvingTooLong)
+        );
+        l.shelve(Millis(100), a, Millis(1000), " belt being cleaned ")
+            .unwrap();
+        assert_eq!(
+            l.get(a)
+                .and_then(|x| x.shelving.as_ref())
+                .map(|s| s.reason.as_str()),
+            Some("belt being cleaned")
+        );
         assert!(l.visible(Millis(500)).is_empty());
         assert_eq!(l.shelved(Millis(500)).len(), 1);
         assert_eq!(l.visible(Millis(1100)).len(), 1, "shelving expired");
-        l.shelve(Millis(1100), a, Millis(1000)).unwrap();
-        l.unshelve(a).unwrap();
+        l.shelve(Millis(1100), a, Millis(1000), "again").unwrap();
+        l.unshelve(Millis(1200), a).unwrap();
         assert_eq!(l.visible(Millis(1200)).len(), 1);
-        assert_eq!(l.unshelve(99), Err(AlarmError::Unknown(99)));
+        assert_eq!(
+            l.get(a).and_then(|x| x.shelving.as_ref()).map(|s| s.until),
+            Some(Millis(1200)),
+            "the shelving stays on record, ended"
+        );
+        assert_eq!(l.unshelve(Millis(0), 99), Err(AlarmError::Unknown(99)));
+        // Every safety kind is refused, whatever the reason and duration.
+        for kind in [
+            AlarmKind::FilterTrip,
+            AlarmKind::Hazard,
+            AlarmKind::Specification,
+            AlarmKind::Link,
+        ] {
+            let id = l.raise(Millis(0), &format!("{kind:?}"), kind, "m");
+            assert_eq!(
+                l.shelve(Millis(0), id, Millis(1000), "nuisance"),
+                Err(AlarmError::NotShelvable(id, kind.name()))
+            );
+            assert!(l.get(id).is_some_and(|x| x.shelving.is_none()));
+        }
+    }
+
+    #[test]
+    fn the_list_is_ordered_by_priority_then_unacknowledged_then_newest() {
+        let mut l = AlarmList::new();
+        let task = l.raise(Millis(0), "task", AlarmKind::Task, "t");
+        let trip = l.raise(Millis(10), "trip", AlarmKind::FilterTrip, "x");
+        let diag = l.raise(Millis(20), "diag", AlarmKind::Diagnosis, "d");
+        let plaus = l.raise(Millis(30), "pl", AlarmKind::Plausibility, "p");
+        let ids =
+            |l: &AlarmList| -> Vec<u64> { l.visible(Millis(40)).iter().map(|a| a.id).collect() };
+        assert_eq!(ids(&l), vec![trip, diag, plaus, task]);
+        l.acknowledge(Millis(40), plaus, "").unwrap();
+        assert_eq!(ids(&l), vec![trip, diag, task, plaus]);
+        let trip2 = l.raise(Millis(50), "trip2", AlarmKind::FilterTrip, "y");
+        assert_eq!(ids(&l), vec![trip2, trip, diag, task, plaus]);
+        assert!(AlarmPriority::Urgent < AlarmPriority::Medium);
+        assert_eq!(AlarmKind::FilterTrip.priority().rank(), 1);
+    }
+
+    #[test]
+    fn acknowledge_all_or_a_page() {
+        let mut l = AlarmList::new();
+        let a = l.raise(Millis(0), "a", AlarmKind::Task, "a");
+        let b = l.raise(Millis(0), "b", AlarmKind::Diagnosis, "b");
+        let c = l.raise(Millis(0), "c", AlarmKind::FilterTrip, "c");
+        l.acknowledge(Millis(1), a, "").unwrap();
+        assert_eq!(l.acknowledge_all(Millis(2), Some(&[a, b]), "page"), vec![b]);
+        assert_eq!(l.unacknowledged(), 1);
+        assert_eq!(l.acknowledge_all(Millis(3), None, ""), vec![c]);
+        assert_eq!(l.unacknowledged(), 0);
+        assert!(l.acknowledge_all(Millis(4), None, "").is_empty());
+        assert_eq!(
+            l.get(b).and_then(|x| x.acknowledged.clone()),
+            Some((Millis(2), "page".to_string()))
+        );
+    }
+
+    #[test]
+    fn first_out_is_the_first_alarm_of_the_stopping_event_never_a_task_prediction() {
+        let mut l = AlarmList::new();
+        // A task alarm first (a prediction, it stops nothing), then the trip.
+        let task = l.raise(Millis(0), "task", AlarmKind::Task, "t");
+        let trip = l.raise(Millis(10), "trip", AlarmKind::FilterTrip, "x");
+        let hazard = l.raise(Millis(20), "hz", AlarmKind::Hazard, "h");
+        let first = |l: &AlarmList| -> Vec<u64> {
+            l.all()
+                .iter()
+                .filter(|a| a.first_out)
+                .map(|a| a.id)
+                .collect()
+        };
+        assert_eq!(first(&l), vec![trip]);
+        // A suspect sensor before the trip is the trip's first-out.
+        let mut m = AlarmList::new();
+        let sus = m.raise(Millis(0), "pl", AlarmKind::Plausibility, "p");
+        m.raise(Millis(5), "trip", AlarmKind::FilterTrip, "x");
+        assert_eq!(first(&m), vec![sus]);
+        // Once the event's alarms are cleared and acknowledged, a new event starts.
+        for k in ["trip", "hz"] {
+            l.clear(Millis(30), k);
+        }
+        l.acknowledge_all(Millis(30), Some(&[trip, hazard]), "");
+        let trip2 = l.raise(Millis(40), "trip", AlarmKind::FilterTrip, "x");
+        assert_eq!(first(&l), vec![trip, trip2]);
+        assert!(l.get(task).is_some_and(|a| !a.first_out));
     }
 }

@@ -38,6 +38,10 @@ pub struct Constraint {
     pub outputs: Vec<u32>,
     /// Where the constraint is written.
     pub location: Location,
+    /// What it protects, in the operator's words: the comment after `#` on its line,
+    /// without a leading reference such as the paper's equation number `(18)`; empty
+    /// when the line has no comment.
+    pub description: String,
 }
 
 /// The constraints of a plant, in file order.
@@ -72,7 +76,7 @@ impl ConstraintSet {
         let mut seen: BTreeMap<String, usize> = BTreeMap::new();
         for (i, raw) in text.lines().enumerate() {
             let line_no = i + 1;
-            let content = raw.split('#').next().unwrap_or("");
+            let (content, comment) = raw.split_once('#').unwrap_or((raw, ""));
             if content.trim().is_empty() {
                 continue;
             }
@@ -125,8 +129,9 @@ impl ConstraintSet {
             seen.insert(id.to_string(), line_no);
             let location = Location::new(file, line_no, id_col);
             match Constraint::build(id, source, expr, &raw_dnf, location, symbols, kind) {
-                Ok((c, mut warnings)) => {
+                Ok((mut c, mut warnings)) => {
                     problems.append(&mut warnings);
+                    c.description = description_of(comment);
                     set.constraints.push(c);
                 }
                 Err(p) => problems.push(p),
@@ -349,6 +354,7 @@ impl Constraint {
                     class: Class::Simple,
                     outputs: Vec::new(),
                     location,
+                    description: String::new(),
                 },
                 warnings,
             ));
@@ -404,10 +410,22 @@ impl Constraint {
                 class,
                 outputs,
                 location,
+                description: String::new(),
             },
             warnings,
         ))
     }
+}
+
+/// A constraint's comment as its description: trimmed, without a leading reference in
+/// parentheses (`(18) box leaving to the right` → `box leaving to the right`).
+fn description_of(comment: &str) -> String {
+    let c = comment.trim();
+    let c = match c.strip_prefix('(').and_then(|r| r.split_once(')')) {
+        Some((reference, rest)) if !reference.contains(' ') => rest.trim(),
+        _ => c,
+    };
+    c.to_string()
 }
 
 fn first_non_space_col(s: &str) -> usize {

@@ -665,9 +665,27 @@ impl Engine {
     }
 
     fn fired(&self, ci: usize) -> FiredConstraint {
+        self.fired_in(ci, &self.frame)
+    }
+
+    /// The constraints that `outputs` would violate if applied at the next cycle, the
+    /// inputs and observers staying as they are now (the check of a manual request),
+    /// each with its true term.
+    pub fn check_request(&self, outputs: &Bits) -> Vec<FiredConstraint> {
+        let mut frame = self.frame.clone();
+        frame.shift();
+        frame.now_mut(Space::Output).copy_from(outputs);
+        self.filter
+            .violations(&frame)
+            .into_iter()
+            .map(|ci| self.fired_in(ci, &frame))
+            .collect()
+    }
+
+    fn fired_in(&self, ci: usize, frame: &Frame) -> FiredConstraint {
         let literals = self
             .filter
-            .true_term(ci, &self.frame)
+            .true_term(ci, frame)
             .unwrap_or_default()
             .into_iter()
             .map(|l| LiteralValue {
@@ -675,7 +693,7 @@ impl Engine {
                 name: self.symbols.name(l.var.space, l.var.index).to_string(),
                 space: l.var.space,
                 previous: l.var.prev,
-                value: self.frame.get(l.var),
+                value: frame.get(l.var),
             })
             .collect();
         FiredConstraint {
@@ -701,34 +719,39 @@ impl Engine {
     /// The operator's reset after a trip. Refused while a constraint is still violated
     /// by the outputs the control program commands.
     pub fn reset(&mut self) -> Result<(), ResetRefused> {
+        self.reset_check()?;
+        self.latched = false;
+        self.events.push(Event::Reset);
+        Ok(())
+    }
+
+    /// What [`Engine::reset`] would answer now, changing nothing (the console's
+    /// next-step panel says whether Reset is possible before it is pressed).
+    pub fn reset_check(&self) -> Result<(), ResetRefused> {
         if !self.latched {
             return Err(ResetRefused::NotTripped);
         }
-        let applied = self.frame.now(Space::Output).clone();
-        self.frame.now_mut(Space::Output).copy_from(&self.commanded);
-        let violations = self.filter.violations(&self.frame);
-        let observers = self.observers_in(&violations);
-        self.frame.now_mut(Space::Output).copy_from(&applied);
+        let mut frame = self.frame.clone();
+        frame.now_mut(Space::Output).copy_from(&self.commanded);
+        let violations = self.filter.violations(&frame);
         if !violations.is_empty() {
             return Err(ResetRefused::StillViolated {
                 constraints: violations
                     .iter()
                     .map(|&i| self.filter.id(i).to_string())
                     .collect(),
-                observers,
+                observers: self.observers_in(&violations, &frame),
             });
         }
-        self.latched = false;
-        self.events.push(Event::Reset);
         Ok(())
     }
 
     /// The observers at 1 in the true terms of `violations` (evaluated with the
     /// commanded outputs in the frame), in index order.
-    fn observers_in(&self, violations: &[usize]) -> Vec<String> {
+    fn observers_in(&self, violations: &[usize], frame: &Frame) -> Vec<String> {
         let mut idx: Vec<usize> = violations
             .iter()
-            .filter_map(|&ci| self.filter.true_term(ci, &self.frame))
+            .filter_map(|&ci| self.filter.true_term(ci, frame))
             .flatten()
             .filter(|l| l.var.space == Space::Observer && !l.var.prev && l.positive)
             .map(|l| l.var.index as usize)

@@ -8,12 +8,13 @@
 //! hazards, resets) become alarms and journal entries. A trip is explained at once, with
 //! the projection computed on clones of the emulator and of the program.
 
-use crate::alarms::{AlarmKind, AlarmList};
+use crate::alarms::{AlarmKind, AlarmList, texts};
+use crate::bits::Bits;
 use crate::bundle::PlantBundle;
 use crate::control::{CompiledProgram, ErrorLibrary, ProgramRuntime};
 use crate::diag::{Location, Problem, ron_problem};
 use crate::emulator::{ArrivalPlan, BoxView, Emulator, FaultSpec, Hazard, Layout};
-use crate::engine::{Control as _, Engine, Event, FilterMode};
+use crate::engine::{Commanded, Control as _, Engine, Event, FilterMode};
 use crate::explain::{self, Explanation, Highlight, Item, Mark};
 use crate::symbols::Space;
 use crate::time::Millis;
@@ -31,6 +32,26 @@ pub enum ProgramChoice {
     Error(String),
     /// A program file, relative to the scenario file.
     File(String),
+}
+
+/// The plant's state at a glance, as the console shows it from across the room.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlantState {
+    /// The safety filter holds the outputs in its safe state until the operator's reset.
+    Tripped,
+    /// The diagnosers stopped the plant (an actuator at fault, or a doubt on the safe
+    /// side) until their reset after a check.
+    Stopped,
+    /// The operator drives the outputs (manual mode), every request through the filter.
+    Manual,
+    /// Producing with a sensor read from its estimate or held as suspect.
+    Degraded,
+    /// The control program is at rest in its initial situation (before Start, after
+    /// Stop).
+    Idle,
+    /// The control program runs.
+    Running,
 }
 
 /// An operator action.
@@ -73,6 +94,16 @@ pub enum OperatorAction {
         /// The operator emptied the plant of its items.
         emptied: bool,
     },
+    /// Enter (`true`) or leave manual mode (seed 004, section 7). Entering keeps the
+    /// outputs as they are (a bumpless transfer) and stops scanning the program; it is
+    /// refused while the filter holds the plant and on a live link. Leaving restarts the
+    /// program from its initial steps (it did not follow what the operator did): press
+    /// Start.
+    Manual(bool),
+    /// Manual mode: request an output ON or OFF. The request is checked against every
+    /// constraint with the plant as it is; one that would violate a constraint is
+    /// refused with the constraint's own description and never reaches the plant.
+    ManualSet(String, bool),
 }
 
 /// An operator action at a time.
@@ -259,6 +290,9 @@ pub struct Simulation {
     pub diagnosers: Option<crate::pop::Diagnosers>,
     diag_seen: usize,
     degraded: Vec<(usize, usize)>,
+    /// Manual mode: the outputs the operator requested, in place of the program's (not
+    /// scanned meanwhile); every request was checked against the constraints.
+    manual: Option<Bits>,
 }
 
 /// The plant's task monitors, stepped after the filter every cycle.
@@ -431,6 +465,7 @@ impl Simulation {
             diagnosers: None,
             diag_seen: 0,
             degraded: Vec::new(),
+            manual: None,
         })
     }
 
@@ -502,11 +537,149 @@ impl Simulation {
         }
     }
 
+    /// The plant's state at a glance, the most serious first.
+    pub fn plant_state(&self) -> PlantState {
+        if self.engine.is_tripped() {
+            return PlantState::Tripped;
+        }
+        if self.manual.is_some() {
+            return PlantState::Manual;
+        }
+        let flagged = self
+            .diagnosers
+            .as_ref()
+            .map(crate::pop::Diagnosers::flagged)
+            .unwrap_or_default();
+        if self.engine.mode() == FilterMode::Enforce && flagged.iter().any(|f| f.1) {
+            return PlantState::Stopped;
+        }
+        if !self.degraded.is_empty() || !self.alarms.active_keys(AlarmKind::Plausibility).is_empty()
+        {
+            return PlantState::Degraded;
+        }
+        if self.program.at_initial_situation() {
+            PlantState::Idle
+        } else {
+            PlantState::Running
+        }
+    }
+
+    /// The outputs requested by hand, in manual mode.
+    pub fn manual_outputs(&self) -> Option<&Bits> {
+        self.manual.as_ref()
+    }
+
+    fn enter_manual(&mut self) -> Result<(), String> {
+        if self.manual.is_some() {
+            return Err("already in manual mode".into());
+        }
+        if self.is_live() {
+            return Err(
+                "manual mode drives the emulator; on a live link the PLC's own \
+                        manual mode applies"
+                    .into(),
+            );
+        }
+        if self.engine.is_tripped() {
+            return Err(format!(
+                "refused: the safety filter holds the plant ({}); Reset first",
+                self.latched_constraints().join(", ")
+            ));
+        }
+        self.manual = Some(self.engine.frame().now(Space::Output).clone());
+        Ok(())
+    }
+
+    fn leave_manual(&mut self) -> Result<(), String> {
+        if self.manual.take().is_none() {
+            return Err("not in manual mode".into());
+        }
+        self.restart_program(self.program.program().clone());
+        // The task monitors did not run by hand: they restart with the program.
+        let now = self.now();
+        if let (Some(t), Some(set)) = (self.tasks.as_mut(), self.bundle.tasks.as_ref()) {
+            t.monitor = crate::tasks::Monitor::new(set, now);
+            t.seen = 0;
+        }
+        Ok(())
+    }
+
+    /// A manual request, checked against the constraints before it is taken.
+    fn manual_set(&mut self, id: &str, on: bool) -> Result<(), String> {
+        let Some(current) = self.manual.as_ref() else {
+            return Err("not in manual mode: enter manual mode first".into());
+        };
+        let Some(k) = self.bundle.plant.outputs.iter().position(|s| s.id == id) else {
+            return Err(format!("no output `{id}` in the plant"));
+        };
+        let mut candidate = current.clone();
+        candidate.set(k, on);
+        let refused = self.engine.check_request(&candidate);
+        if refused.is_empty() {
+            self.manual = Some(candidate);
+            return Ok(());
+        }
+        let signal = &self.bundle.plant.outputs[k];
+        let what = match (&signal.off, on) {
+            (Some(off), false) => format!("{id} OFF ({off})"),
+            _ => format!("{id} {}", if on { "ON" } else { "OFF" }),
+        };
+        let why: Vec<String> = refused
+            .iter()
+            .map(|fc| {
+                let context: Vec<String> = fc
+                    .literals
+                    .iter()
+                    .filter(|l| {
+                        matches!(l.space, Space::Input | Space::Observer)
+                            || (l.space == Space::Output && l.previous)
+                    })
+                    .map(|l| format!("{} = {}", l.name, u8::from(l.value)))
+                    .collect();
+                let with = if context.is_empty() {
+                    String::new()
+                } else {
+                    format!(", with {}", context.join(", "))
+                };
+                match self.bundle.constraints.get(&fc.id).map(|c| &c.description) {
+                    Some(d) if !d.is_empty() => format!("{d} ({}{with})", fc.id),
+                    _ => format!("constraint {}{with}", fc.id),
+                }
+            })
+            .collect();
+        Err(format!("{what} refused: {}", why.join("; ")))
+    }
+
+    /// The constraints of the trip that holds the plant, if it is tripped.
+    pub fn latched_constraints(&self) -> Vec<String> {
+        match self.engine.trips.last() {
+            Some(t) if self.engine.is_tripped() => {
+                t.constraints.iter().map(|c| c.id.clone()).collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
     /// Applies an operator action now; the result is journaled.
     pub fn act(&mut self, action: &OperatorAction) -> Result<(), String> {
         let now = self.now();
         let result = match action {
+            OperatorAction::Start | OperatorAction::Stop if self.manual.is_some() => Err(
+                "refused in manual mode: leave manual mode first (the program restarts \
+                 from its initial steps)"
+                    .to_string(),
+            ),
+            OperatorAction::Manual(true) => self.enter_manual(),
+            OperatorAction::Manual(false) => self.leave_manual(),
+            OperatorAction::ManualSet(id, on) => self.manual_set(id, *on),
+            OperatorAction::Start if self.engine.is_tripped() => Err(format!(
+                "refused: the safety filter has stopped the plant ({}); Reset first, then \
+                 Start",
+                self.latched_constraints().join(", ")
+            )),
             OperatorAction::Start => self.press_role("start"),
+            // Stop always works: while tripped, the program stops too and does not
+            // restart at the reset.
             OperatorAction::Stop => self.press_role("stop"),
             OperatorAction::Press(b) => self.program.press(b).map_err(|e| e.to_string()),
             OperatorAction::Switch(s, v) => {
@@ -586,6 +759,21 @@ impl Simulation {
                     ),
                 );
             }
+            (Ok(()), OperatorAction::Manual(true)) => self.log(
+                "manual",
+                "manual mode: the program is no longer scanned, the outputs stay as they \
+                 are; every command is checked against the safety constraints"
+                    .into(),
+            ),
+            (Ok(()), OperatorAction::Manual(false)) => self.log(
+                "manual",
+                "automatic mode: the program restarted from its initial steps; press Start".into(),
+            ),
+            (Ok(()), OperatorAction::ManualSet(id, on)) => self.log(
+                "manual",
+                format!("{id} {} by hand", if *on { "ON" } else { "OFF" }),
+            ),
+            (Err(e), OperatorAction::ManualSet(..)) => self.log("manual_refused", e.clone()),
             (Ok(()), OperatorAction::ResetDiagnosers) => self.diagnosers_cleared(
                 now,
                 "operator reset of the diagnosers after a repair: fault flags cleared, \
@@ -642,6 +830,34 @@ impl Simulation {
             .collect()
     }
 
+    /// The sensors held as suspect now (an edge their physics did not allow), those
+    /// whose plausibility alarm is active, in raising order.
+    pub fn suspect_sensors(&self) -> Vec<String> {
+        self.alarms
+            .active_keys(AlarmKind::Plausibility)
+            .into_iter()
+            .filter_map(|k| k.strip_prefix("plausibility:").map(str::to_string))
+            .collect()
+    }
+
+    /// What the synoptic marks live: the sensors read from their estimates and those
+    /// held as suspect.
+    pub fn live_marks(&self) -> Vec<Highlight> {
+        let mut marks: Vec<Highlight> = self
+            .degraded_sensors()
+            .into_iter()
+            .map(|element| Highlight {
+                element,
+                mark: Mark::Estimated,
+            })
+            .collect();
+        marks.extend(self.suspect_sensors().into_iter().map(|element| Highlight {
+            element,
+            mark: Mark::Suspect,
+        }));
+        marks
+    }
+
     /// The whole journal of the run.
     pub fn journal(&self) -> &[JournalEntry] {
         &self.journal
@@ -663,12 +879,25 @@ impl Simulation {
         if self.options.explain {
             self.program_before.copy_state_from(&self.program);
         }
-        let applied = match self.diagnosers.as_mut() {
-            None => self
+        let applied = match (self.diagnosers.as_mut(), self.manual.as_ref()) {
+            (None, Some(m)) => self
+                .engine
+                .cycle(now, self.emulator.sensors(), &mut Commanded(m.clone()))
+                .clone(),
+            (Some(d), Some(m)) => self
+                .engine
+                .cycle_with(
+                    now,
+                    self.emulator.sensors(),
+                    &mut Commanded(m.clone()),
+                    &mut |t, f, held| d.update_held(t, f, held),
+                )
+                .clone(),
+            (None, None) => self
                 .engine
                 .cycle(now, self.emulator.sensors(), &mut self.program)
                 .clone(),
-            Some(d) => {
+            (Some(d), None) => {
                 let mut control = DegradedControl {
                     inner: &mut self.program,
                     subs: &self.degraded,
@@ -686,7 +915,9 @@ impl Simulation {
         self.diagnosis_events(now);
         self.plausibility_events(now);
         let tripped = self.record_events(now);
-        if let (Some(index), true) = (tripped, self.options.explain) {
+        // By hand, the program did not run: no explanation from it (the alarm and the
+        // next-step panel still say why).
+        if let (Some(index), true, None) = (tripped, self.options.explain, &self.manual) {
             // The emulator is still at the start of the tripping cycle (the engine only
             // read it); the program has just computed the erroneous command.
             self.explain_trip(index, self.emulator.clone(), self.program_before.clone());
@@ -703,7 +934,7 @@ impl Simulation {
                     Millis(h.time_ms),
                     &format!("hazard:{}:{:?}", h.box_id, h.kind),
                     AlarmKind::Hazard,
-                    text.clone(),
+                    texts::hazard(&h),
                 );
                 self.log("hazard", text);
             }
@@ -744,12 +975,8 @@ impl Simulation {
                         .map(|c| c.id.clone())
                         .collect();
                     let key = format!("trip:{}", ids.join("+"));
-                    self.alarms.raise(
-                        now,
-                        &key,
-                        AlarmKind::FilterTrip,
-                        format!("Safety filter: {} at {} ms", ids.join(", "), now.0),
-                    );
+                    let text = texts::trip(&self.bundle, &self.engine.trips[*index]);
+                    self.alarms.raise(now, &key, AlarmKind::FilterTrip, text);
                     self.log("trip", format!("filter tripped on {}", ids.join(", ")));
                     tripped = Some(*index);
                 }
@@ -767,6 +994,11 @@ impl Simulation {
     /// Task monitors: events of this cycle (on the frame after the filter), alarms, and
     /// their outputs published for the constraints of the next cycle.
     fn step_tasks(&mut self, now: Millis) {
+        // By hand, no task runs as the monitors expect: they restart when the program
+        // does.
+        if self.manual.is_some() {
+            return;
+        }
         // The first scan sees every sensor that is on as a rising edge (nothing before
         // it): task events start from the second cycle.
         let Some(t) = self.tasks.as_mut().filter(|_| self.engine.cycles() > 1) else {
@@ -787,7 +1019,7 @@ impl Simulation {
                     a.time,
                     &format!("task:{}:{:?}", a.subject, a.code),
                     AlarmKind::Task,
-                    a.text.clone(),
+                    texts::task(self.bundle.tasks.as_ref(), &a),
                 );
             }
             self.log(
@@ -820,8 +1052,9 @@ impl Simulation {
         }
         self.degraded = diagnosis::estimated_inputs(d, &self.bundle.plant, &self.engine.symbols);
         for n in notices {
-            self.alarms
-                .raise(now, &n.key, AlarmKind::Diagnosis, n.text.clone());
+            let sensor = n.estimated.as_deref().unwrap_or(&n.diagnosis.partition);
+            let text = texts::about_signal(&self.bundle.plant, sensor, &n.text);
+            self.alarms.raise(now, &n.key, AlarmKind::Diagnosis, text);
             self.log("diagnosis", n.text);
         }
     }
@@ -832,8 +1065,8 @@ impl Simulation {
         for n in self.engine.plausibility.take_notices() {
             let key = format!("plausibility:{}", n.sensor);
             if n.suspect {
-                self.alarms
-                    .raise(now, &key, AlarmKind::Plausibility, n.text.clone());
+                let text = texts::about_signal(&self.bundle.plant, &n.sensor, &n.text);
+                self.alarms.raise(now, &key, AlarmKind::Plausibility, text);
             } else {
                 self.alarms.clear(now, &key);
             }

@@ -3,7 +3,7 @@
 //! items, acknowledge the alarm, reset; plus image snapshots (wgpu, lavapipe on CI).
 
 use egui_kittest::Harness;
-use egui_kittest::kittest::Queryable as _;
+use egui_kittest::kittest::{NodeT as _, Queryable as _};
 use std::path::PathBuf;
 use vigie_app::{Command, Console, ConsoleOptions, Mode};
 
@@ -334,4 +334,349 @@ fn a_refused_reset_after_a_phantom_box_is_cleared_by_the_reinitialisation() {
         "{before:?} then {s:?}"
     );
     assert!(h.state().sim.emulator.hazards().is_empty());
+}
+
+/// The y of the first label `text` on screen.
+fn label_y(h: &Harness<'static, Console>, text: &str) -> f32 {
+    h.get_by_label(text).rect().min.y
+}
+
+/// Issue 19, ISA-18.2: the trip is the most urgent alarm, listed first, in the
+/// operator's words (the formula one click away), first-out rather than the task alarm
+/// raised before it; it cannot be shelved; a task alarm can, only with a reason, and
+/// the shelving is journaled with it.
+#[test]
+fn alarms_by_priority_a_trip_never_shelved_and_shelving_needs_a_reason() {
+    let data = temp_dir("priorities");
+    let mut h = harness(options(Some(data.clone())));
+    h.run_steps(2);
+    // A task alarm before the trip (a prediction: it stops nothing).
+    let task = h.state_mut().sim.alarms.raise(
+        vigie_core::time::Millis(100),
+        "task:test",
+        vigie_core::alarms::AlarmKind::Task,
+        "Box carried by the intermediate conveyor: slower than normal",
+    );
+    h.get_by_label("Start").click();
+    h.run_steps(2);
+    run_to_trip(&mut h);
+    let trip = h
+        .state()
+        .sim
+        .alarms
+        .all()
+        .iter()
+        .find(|a| a.kind == vigie_core::alarms::AlarmKind::FilterTrip)
+        .map(|a| a.id)
+        .expect("trip alarm");
+    // Priority badges, the trip first although raised last.
+    assert!(label_y(&h, "P1 URGENT") < label_y(&h, "P3 MEDIUM"));
+    h.get_by_label(
+        "Safety stop: box leaving to the right: hold the rotation (CSs10). Held ON: A4 \
+         (Turntable). Stopped: A0 (Entry conveyor), A5 (Left exit conveyor), A6 (Right exit \
+         conveyor)",
+    );
+    assert!(h.query_by_label_contains("Safety filter: CSs10").is_none());
+    // First-out is the trip, not the earlier task alarm.
+    let first: Vec<u64> = h
+        .state()
+        .sim
+        .alarms
+        .all()
+        .iter()
+        .filter(|a| a.first_out)
+        .map(|a| a.id)
+        .collect();
+    assert_eq!(first, vec![trip]);
+    assert_eq!(h.get_all_by_label("FIRST OUT").count(), 1);
+    // The formula, one click away.
+    assert!(
+        h.query_by_label("CSs10 = C7 . /A4 (true at 11680 ms)")
+            .is_none()
+    );
+    h.get_all_by_label("Detail").next().expect("detail").click();
+    h.run_steps(2);
+    h.get_by_label("CSs10 = C7 . /A4 (true at 11680 ms)");
+
+    // The trip's Shelve button is disabled; even a command is refused by the core.
+    let label = format!("Shelve #{trip}…");
+    assert!(h.get_by_label(&label).accesskit_node().is_disabled());
+    h.state_mut().apply(Command::Shelve {
+        id: trip,
+        ms: 60_000,
+        reason: "nuisance".into(),
+    });
+    h.run_steps(2);
+    assert!(
+        h.state()
+            .status
+            .contains("is a safety alarm (safety filter trip): it cannot be shelved"),
+        "{}",
+        h.state().status
+    );
+    assert!(
+        h.state()
+            .sim
+            .alarms
+            .get(trip)
+            .is_some_and(|a| a.shelving.is_none())
+    );
+
+    // The task alarm: no reason, refused; with one, shelved and journaled.
+    h.get_by_label(&format!("Shelve #{task}…")).click();
+    h.run_steps(2);
+    h.get_by_label(&format!("Shelve #{task} now")).click();
+    h.run_steps(2);
+    assert_eq!(h.state().status, "Shelving needs a reason");
+    assert!(
+        h.state()
+            .sim
+            .alarms
+            .get(task)
+            .is_some_and(|a| a.shelving.is_none())
+    );
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Reason")
+        .focus();
+    h.run_steps(1);
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Reason")
+        .type_text("sensor being cleaned");
+    h.run_steps(2);
+    h.get_by_label(&format!("Shelve #{task} now")).click();
+    h.run_steps(2);
+    assert!(h.query_by_label("P3 MEDIUM").is_none(), "shelved: hidden");
+    let shelving = h
+        .state()
+        .sim
+        .alarms
+        .get(task)
+        .and_then(|a| a.shelving.clone())
+        .expect("shelved");
+    assert_eq!(shelving.reason, "sensor being cleaned");
+    assert_eq!(shelving.until.0 - shelving.at.0, 15 * 60_000);
+    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
+    assert!(
+        journal.contains(&format!(
+            "alarm {task} shelved for 15 min: sensor being cleaned"
+        )),
+        "{journal}"
+    );
+    assert!(journal.contains("shelve_refused"), "{journal}");
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+/// Acknowledge all: every unacknowledged alarm at once, one journal line naming them.
+#[test]
+fn acknowledge_all_acknowledges_every_alarm_and_journals_them() {
+    let data = temp_dir("ackall");
+    let mut h = harness(options(Some(data.clone())));
+    h.run_steps(2);
+    for k in 0..3 {
+        h.state_mut().sim.alarms.raise(
+            vigie_core::time::Millis(k),
+            &format!("task:{k}"),
+            vigie_core::alarms::AlarmKind::Task,
+            format!("task alarm {k}"),
+        );
+    }
+    h.run_steps(2);
+    h.get_by_label("3 unacknowledged");
+    h.get_by_label("Acknowledge all (3)").click();
+    h.run_steps(2);
+    assert_eq!(h.state().sim.alarms.unacknowledged(), 0);
+    assert!(h.query_by_label_contains("unacknowledged").is_none());
+    assert!(
+        h.get_by_label("Acknowledge all (0)")
+            .accesskit_node()
+            .is_disabled()
+    );
+    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
+    assert!(
+        journal.contains("alarms #1, #2, #3 acknowledged together"),
+        "{journal}"
+    );
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+/// More alarms than a page: the list pages, and "Acknowledge page" acknowledges only
+/// the alarms shown.
+#[test]
+fn the_alarm_list_pages_and_acknowledges_a_page() {
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    for k in 0..11 {
+        h.state_mut().sim.alarms.raise(
+            vigie_core::time::Millis(k),
+            &format!("task:{k}"),
+            vigie_core::alarms::AlarmKind::Task,
+            format!("task alarm {k}"),
+        );
+    }
+    h.run_steps(2);
+    h.get_by_label("Page 1 of 2");
+    // Newest first: 10 down to 3 on the first page.
+    h.get_by_label("task alarm 10");
+    assert!(h.query_by_label("task alarm 2").is_none());
+    h.get_by_label("Acknowledge page").click();
+    h.run_steps(2);
+    assert_eq!(h.state().sim.alarms.unacknowledged(), 3);
+    // The three left unacknowledged come first now; the acknowledged ones follow.
+    h.get_by_label("task alarm 2");
+    h.get_by_label("task alarm 0");
+    h.get_by_label("Next ▶").click();
+    h.run_steps(2);
+    h.get_by_label("Page 2 of 2");
+    h.get_by_label("task alarm 3");
+    assert!(h.query_by_label("task alarm 0").is_none());
+}
+
+/// State at a glance and the next step after a trip: IDLE before Start, RUNNING after;
+/// TRIPPED with a panel that says why, what to check and whether Reset is possible;
+/// Start refused while tripped with the reason, and the plant stays held.
+#[test]
+fn the_state_and_the_next_step_after_a_trip_and_start_refused_while_tripped() {
+    // The reference program with the layout's arrivals, not started.
+    let mut h = harness(ConsoleOptions::new(&root().join("layouts/sorting-station")));
+    h.run_steps(2);
+    h.get_by_label("IDLE");
+    h.get_by_label("Start").click();
+    h.state_mut().apply(Command::Run);
+    h.run_steps(5);
+    h.get_by_label("RUNNING");
+    // The paper's CSs10 case (started by its scenario).
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    run_to_trip(&mut h);
+    h.get_by_label("TRIPPED");
+    h.get_by_label("What to do now (stopped at 11.68 s)");
+    h.get_by_label_contains("1. Why: Safety stop: box leaving to the right");
+    h.get_by_label("2. Check on the machine: Right exit conveyor (C7); Turntable (A4).");
+    h.get_by_label_contains("3. Reset is refused now (reset refused: CSs10 still violated");
+    h.get_by_label("Start").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().status,
+        "Start: refused: the safety filter has stopped the plant (CSs10); Reset first, \
+         then Start"
+    );
+    assert!(h.state().sim.engine.is_tripped());
+    h.get_by_label("TRIPPED");
+}
+
+/// Degraded mode is unmistakable: the state reads DEGRADED (not RUNNING) while C4 is
+/// read from its estimate, and the synoptic marks C4 itself as estimated.
+#[test]
+fn degraded_mode_is_shown_as_such_and_the_estimated_sensor_is_marked() {
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.scenario = Some(root().join("layouts/sorting-station/scenarios/c4-stuck-degraded.ron"));
+    let mut h = harness(o);
+    h.run_steps(2);
+    h.state_mut().apply(Command::SetSpeed(100.0));
+    h.state_mut().apply(Command::Run);
+    for _ in 0..2000 {
+        h.step();
+        if !h.state().sim.degraded_sensors().is_empty() {
+            break;
+        }
+    }
+    h.state_mut().apply(Command::Pause);
+    h.run_steps(2);
+    assert_eq!(h.state().sim.degraded_sensors(), ["C4"]);
+    h.get_by_label("DEGRADED");
+    assert!(h.query_by_label("RUNNING").is_none());
+    let marks: Vec<(String, vigie_core::explain::Mark)> = h
+        .state()
+        .sim
+        .live_marks()
+        .into_iter()
+        .map(|m| (m.element, m.mark))
+        .collect();
+    assert!(
+        marks.contains(&("C4".to_string(), vigie_core::explain::Mark::Estimated)),
+        "{marks:?}"
+    );
+}
+
+/// Manual mode from the console: entered deliberately (a confirmation), shown as
+/// MANUAL; a refused command is explained in the operator's terms in the panel and the
+/// status bar, journaled, and the plant's output does not change; an allowed one
+/// reaches the plant; leaving restarts the program (IDLE).
+#[test]
+fn manual_mode_refuses_a_command_with_its_reason_and_the_plant_does_not_move() {
+    let data = temp_dir("manual");
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.data_dir = Some(data.clone());
+    let mut h = harness(o);
+    h.run_steps(2);
+    h.get_by_label("IDLE");
+    h.get_by_label("Manual…").click();
+    h.run_steps(2);
+    h.get_by_label("Enter manual mode").click();
+    h.run_steps(2);
+    h.get_by_label("MANUAL");
+    h.get_by_label("Manual mode");
+    let a4 = h
+        .state()
+        .sim
+        .bundle
+        .plant
+        .outputs
+        .iter()
+        .position(|s| s.id == "A4")
+        .expect("A4");
+    h.get_by_label("A4 ON").click();
+    h.run_steps(3);
+    let refusal = "A4 ON refused: no rotation of an empty table (CSs13, with C4 = 1, C6 = 0)";
+    assert_eq!(h.state().status, refusal);
+    assert_eq!(h.state().manual_refusal.as_deref(), Some(refusal));
+    assert!(h.get_all_by_label(refusal).count() >= 1);
+    h.state_mut().apply(Command::Step);
+    h.run_steps(2);
+    assert!(
+        !h.state()
+            .sim
+            .engine
+            .frame()
+            .now(vigie_core::symbols::Space::Output)
+            .get(a4),
+        "the refused command never reached the plant"
+    );
+    // Allowed: the intermediate conveyor on by hand.
+    h.get_by_label("A1 ON").click();
+    h.run_steps(2);
+    h.state_mut().apply(Command::Step);
+    h.run_steps(2);
+    let a1 = h
+        .state()
+        .sim
+        .bundle
+        .plant
+        .outputs
+        .iter()
+        .position(|s| s.id == "A1")
+        .expect("A1");
+    assert!(
+        h.state()
+            .sim
+            .engine
+            .frame()
+            .now(vigie_core::symbols::Space::Output)
+            .get(a1)
+    );
+    assert!(h.state().manual_refusal.is_none());
+    h.get_by_label("Leave manual").click();
+    h.run_steps(2);
+    h.get_by_label("IDLE");
+    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
+    for needle in [
+        "\"manual_refused\"",
+        refusal,
+        "A1 ON by hand",
+        "automatic mode",
+    ] {
+        assert!(
+            journal.contains(needle),
+            "journal lacks {needle}:\n{journal}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&data);
 }

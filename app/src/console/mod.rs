@@ -82,15 +82,27 @@ pub enum Command {
         /// Note (may be empty).
         note: String,
     },
-    /// Shelve an alarm for a time.
+    /// Acknowledge several alarms at once: every unacknowledged one (`None`) or those
+    /// of the page shown.
+    AcknowledgeAll {
+        /// The alarms of the page, or `None` for all.
+        ids: Option<Vec<u64>>,
+        /// Note (may be empty).
+        note: String,
+    },
+    /// Shelve an alarm for a time, with a reason (refused for a safety alarm).
     Shelve {
         /// Alarm id.
         id: u64,
         /// Duration, ms of plant time.
         ms: u64,
+        /// The operator's reason.
+        reason: String,
     },
     /// Unshelve an alarm.
     Unshelve(u64),
+    /// Close the shelving form without shelving.
+    CloseShelveForm,
     /// Replay the synoptic at a recorded time (`None`: live).
     Scrub(Option<u64>),
     /// Export the journal to CSV.
@@ -354,14 +366,36 @@ pub struct Console {
     pub(crate) score: Score,
     pub(crate) wall_s: f64,
     pub(crate) alarm_filter_shelved: bool,
+    /// The alarm list's page (pages of [`ALARMS_PER_PAGE`]).
+    pub(crate) alarm_page: usize,
+    /// The shelving form open on one alarm.
+    pub(crate) shelve_form: Option<ShelveForm>,
     /// The re-initialisation's confirmation is open (it asks for a check of the plant).
     pub(crate) reinit_confirm: bool,
+    /// The confirmation of entering manual mode is open.
+    pub(crate) manual_confirm: bool,
+    /// The last manual request refused, in operator terms (cleared by the next one
+    /// taken).
+    pub manual_refusal: Option<String>,
+    /// The outputs jogged (ON while their Jog button is held).
+    pub(crate) jogging: BTreeSet<String>,
     pub(crate) verification: verification::Verification,
     visuals_set: bool,
     /// Commands emitted by the last frame's views, applied at the next `logic`.
     pending: Vec<Command>,
     /// The live link followed instead of the emulator (`link.rs`).
     pub link: Option<link::LinkSession>,
+}
+
+/// Alarms on one page of the list.
+pub const ALARMS_PER_PAGE: usize = 8;
+
+/// The shelving form: the reason and the duration the operator chooses.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct ShelveForm {
+    pub(crate) id: u64,
+    pub(crate) reason: String,
+    pub(crate) minutes: u64,
 }
 
 fn load_faults(plant_dir: &Path) -> Vec<(String, FaultSpec)> {
@@ -473,7 +507,12 @@ impl Console {
             },
             wall_s: 0.0,
             alarm_filter_shelved: false,
+            alarm_page: 0,
+            shelve_form: None,
             reinit_confirm: false,
+            manual_confirm: false,
+            manual_refusal: None,
+            jogging: BTreeSet::new(),
             verification: verification::Verification::default(),
             visuals_set: false,
             pending: Vec::new(),
@@ -595,6 +634,15 @@ impl Console {
             }
             Command::Plant(action) => {
                 let result = self.sim.act(&action);
+                match (&result, &action) {
+                    (Err(e), OperatorAction::ManualSet(..)) => {
+                        self.manual_refusal = Some(e.clone());
+                    }
+                    (Ok(()), OperatorAction::ManualSet(..) | OperatorAction::Manual(_)) => {
+                        self.manual_refusal = None;
+                    }
+                    _ => {}
+                }
                 self.status = match (result, &action) {
                     (Ok(()), OperatorAction::Reinitialise { emptied: true }) => {
                         "Re-initialised: the plant emptied, the program at its initial \
@@ -606,7 +654,19 @@ impl Console {
                          initial steps; press Start"
                             .to_string()
                     }
+                    (Ok(()), OperatorAction::Manual(true)) => {
+                        "Manual mode: every command is checked by the safety filter".to_string()
+                    }
+                    (Ok(()), OperatorAction::Manual(false)) => {
+                        "Automatic mode: the program restarted from its initial steps; press \
+                         Start"
+                            .to_string()
+                    }
+                    (Ok(()), OperatorAction::ManualSet(id, on)) => {
+                        format!("{id} {} by hand", if *on { "ON" } else { "OFF" })
+                    }
                     (Ok(()), _) => format!("{action:?}: done"),
+                    (Err(e), OperatorAction::ManualSet(..)) => e.clone(),
                     (Err(e), OperatorAction::Reset) => {
                         format!("Reset: {e}. Still refused? Check the plant, then Re-initialise…")
                     }
@@ -637,16 +697,47 @@ impl Console {
                     Err(e) => self.status = format!("acknowledge refused: {e}"),
                 }
             }
-            Command::Shelve { id, ms } => match self.sim.alarms.shelve(Millis(now), id, Millis(ms))
-            {
-                Ok(()) => self.journal.push(
-                    now,
-                    "shelve",
-                    &format!("alarm {id} shelved for {} s", ms / 1000),
-                ),
-                Err(e) => self.status = format!("shelve refused: {e}"),
-            },
-            Command::Unshelve(id) => match self.sim.alarms.unshelve(id) {
+            Command::AcknowledgeAll { ids, note } => {
+                let done = self
+                    .sim
+                    .alarms
+                    .acknowledge_all(Millis(now), ids.as_deref(), &note);
+                for id in &done {
+                    self.notes.remove(id);
+                }
+                let list: Vec<String> = done.iter().map(|id| format!("#{id}")).collect();
+                self.status = format!("{} alarm(s) acknowledged", done.len());
+                if !done.is_empty() {
+                    self.journal.push(
+                        now,
+                        "ack",
+                        &format!("alarms {} acknowledged together: {note}", list.join(", ")),
+                    );
+                }
+            }
+            Command::Shelve { id, ms, reason } => {
+                match self.sim.alarms.shelve(Millis(now), id, Millis(ms), &reason) {
+                    Ok(()) => {
+                        self.shelve_form = None;
+                        self.journal.push(
+                            now,
+                            "shelve",
+                            &format!(
+                                "alarm {id} shelved for {} min: {}",
+                                ms / 60_000,
+                                reason.trim()
+                            ),
+                        );
+                    }
+                    Err(e) => {
+                        self.status = format!("Shelving refused: {e}");
+                        self.journal
+                            .push(now, "shelve_refused", &self.status.clone());
+                    }
+                }
+            }
+            Command::CloseShelveForm => self.shelve_form = None,
+            Command::Unshelve(id) => match self.sim.alarms.unshelve(Millis(now), id) {
                 Ok(()) => self
                     .journal
                     .push(now, "unshelve", &format!("alarm {id} unshelved")),

@@ -656,6 +656,15 @@ pub fn synoptic_ui(
                 Color32::WHITE,
             ),
             Mark::InferredBox => put("inferred box", pal.highlight, Color32::WHITE),
+            Mark::Estimated => {
+                painter.add(Shape::dashed_line(
+                    &circle_points(p, lamp_r * 2.2),
+                    Stroke::new(2.5, pal.caution),
+                    5.0,
+                    4.0,
+                ));
+                put("estimated", pal.caution, pal.text);
+            }
         }
     }
     if let Some((text, col)) = &pic.banner {

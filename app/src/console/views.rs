@@ -2,11 +2,11 @@
 //! pushes [`Command`]s; none of them changes the simulation.
 
 use super::synoptic::{self, Geometry, Picture};
-use super::{Command, Console, LEVEL_NAMES, Mode};
+use super::{ALARMS_PER_PAGE, Command, Console, LEVEL_NAMES, Mode, ShelveForm};
 use egui::{Align2, Color32, FontId, RichText, Sense, Stroke, pos2, vec2};
 use std::collections::{BTreeMap, BTreeSet};
-use vigie_core::alarms::AlarmState;
-use vigie_core::sim::OperatorAction;
+use vigie_core::alarms::{AlarmPriority, AlarmState};
+use vigie_core::sim::{OperatorAction, PlantState};
 use vigie_core::time::Millis;
 
 /// The whole console.
@@ -17,6 +17,7 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         .show(ui, |ui| toolbar_ui(c, ui, out));
     unprotected_ui(c, ui);
     reinit_confirm_ui(c, ui, out);
+    manual_confirm_ui(c, ui, out);
     // Below the toolbar: the degraded-mode banner and the diagnosers' table.
     super::diagnosers::panel_ui(c, ui, out);
     egui::Panel::bottom("status").show(ui, |ui| status_ui(c, ui));
@@ -39,6 +40,7 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
                 .auto_shrink([false, false])
                 .show(ui, |ui| match c.mode {
                     Mode::Production => {
+                        manual_ui(c, ui, out);
                         explanation_ui(c, ui, out);
                         ui.separator();
                         alarms_ui(c, ui, out);
@@ -149,6 +151,25 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         {
             out.push(Command::Plant(OperatorAction::Stop));
         }
+        if c.sim.manual_outputs().is_some() {
+            if ui
+                .button("Leave manual")
+                .on_hover_text("Back to the program, restarted from its initial steps")
+                .clicked()
+            {
+                out.push(Command::Plant(OperatorAction::Manual(false)));
+            }
+        } else if ui
+            .add_enabled(
+                c.link.is_none() && !c.sim.engine.is_tripped(),
+                egui::Button::new("Manual…"),
+            )
+            .on_hover_text("Drive the actuators by hand, every command through the filter")
+            .on_disabled_hover_text("Not while the filter holds the plant, nor on a live link")
+            .clicked()
+        {
+            c.manual_confirm = true;
+        }
         let tripped = c.sim.engine.is_tripped();
         let reset = egui::Button::new(RichText::new("Reset").color(if tripped {
             Color32::WHITE
@@ -199,21 +220,152 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             c.reinit_confirm = true;
         }
         ui.separator();
-        let unack = c.sim.alarms.unacknowledged();
-        let (txt, col) = if tripped {
-            ("TRIPPED".to_string(), c.palette.trip)
-        } else if unack > 0 {
-            (format!("{unack} unacknowledged"), c.palette.alarm)
-        } else {
-            ("Normal".to_string(), c.palette.equipment_edge)
-        };
+        state_ui(c, ui);
+    });
+}
+
+/// The plant's state, unmistakable from across the room (large, coloured only when
+/// abnormal or running), the simulation's pause, and the unacknowledged alarms.
+fn state_ui(c: &Console, ui: &mut egui::Ui) {
+    let (txt, bg, fg) = match c.sim.plant_state() {
+        PlantState::Tripped => ("TRIPPED", c.palette.trip, Color32::WHITE),
+        PlantState::Stopped => ("STOPPED", c.palette.alarm, Color32::BLACK),
+        PlantState::Manual => ("MANUAL", c.palette.highlight, Color32::WHITE),
+        PlantState::Degraded => ("DEGRADED", c.palette.caution, Color32::BLACK),
+        PlantState::Idle => ("IDLE", c.palette.equipment, Color32::BLACK),
+        PlantState::Running => ("RUNNING", c.palette.normal, Color32::WHITE),
+    };
+    egui::Frame::new()
+        .fill(bg)
+        .inner_margin(egui::Margin::symmetric(10, 2))
+        .corner_radius(3.0)
+        .show(ui, |ui| {
+            ui.label(RichText::new(txt).strong().size(22.0).color(fg))
+        })
+        .inner
+        .on_hover_text(match c.sim.plant_state() {
+            PlantState::Tripped => "The safety filter holds the outputs in their safe state",
+            PlantState::Stopped => "The diagnosers stopped the plant: check it, then reset them",
+            PlantState::Manual => "The operator drives the outputs; every command is checked",
+            PlantState::Degraded => "A sensor is read from its estimate or held as suspect",
+            PlantState::Idle => "The control program is at rest: press Start to produce",
+            PlantState::Running => "The control program runs",
+        });
+    if !c.running {
         ui.label(
-            RichText::new(txt)
+            RichText::new("SIMULATION PAUSED")
                 .strong()
                 .color(Color32::WHITE)
-                .background_color(col),
+                .background_color(c.palette.highlight),
         );
+    }
+    let unack = c.sim.alarms.unacknowledged();
+    if unack > 0 {
+        ui.add(
+            egui::Label::new(
+                RichText::new(format!("{unack} unacknowledged"))
+                    .strong()
+                    .color(Color32::BLACK)
+                    .background_color(c.palette.alarm),
+            )
+            .wrap_mode(egui::TextWrapMode::Extend),
+        );
+    }
+}
+
+/// Entering manual mode is deliberate: what it does, confirmed.
+fn manual_confirm_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    if !c.manual_confirm {
+        return;
+    }
+    let modal = egui::Modal::new(egui::Id::unique("manual_confirm")).show(ui.ctx(), |ui| {
+        ui.set_max_width(460.0);
+        ui.heading("Drive the plant by hand?");
+        ui.label(
+            "The control program stops being scanned and the outputs stay as they are. \
+             You then switch each actuator on or off, or jog it while the button is held. \
+             Every command is checked against the safety constraints first: one that \
+             would break a constraint is refused with the reason and never reaches the \
+             plant. Leaving manual mode restarts the program from its initial steps.",
+        );
+        ui.horizontal(|ui| {
+            if ui.button("Enter manual mode").clicked() {
+                out.push(Command::Plant(OperatorAction::Manual(true)));
+                c.manual_confirm = false;
+            }
+            if ui.button("Cancel").clicked() {
+                c.manual_confirm = false;
+            }
+        });
     });
+    if modal.should_close() {
+        c.manual_confirm = false;
+    }
+}
+
+/// Manual mode: each actuator with its state, ON / OFF and Jog (ON while held); the
+/// last refusal in operator terms.
+fn manual_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let Some(requested) = c.sim.manual_outputs().cloned() else {
+        c.jogging.clear();
+        return;
+    };
+    ui.heading("Manual mode");
+    ui.label(
+        RichText::new(
+            "Every command is checked against the safety constraints; a refused one \
+             never reaches the plant.",
+        )
+        .color(c.palette.text_dim),
+    );
+    let outputs: Vec<(usize, String, String)> = c
+        .sim
+        .bundle
+        .plant
+        .outputs
+        .iter()
+        .enumerate()
+        .map(|(k, s)| (k, s.id.clone(), s.element.clone()))
+        .collect();
+    egui::Grid::new("manual_grid").striped(true).show(ui, |ui| {
+        for (k, id, element) in outputs {
+            let on = requested.get(k);
+            ui.label(RichText::new(&id).strong());
+            ui.label(RichText::new(element).color(c.palette.text_dim));
+            ui.label(if on { "ON" } else { "OFF" });
+            if ui
+                .add_enabled(!on, egui::Button::new(format!("{id} ON")))
+                .clicked()
+            {
+                out.push(Command::Plant(OperatorAction::ManualSet(id.clone(), true)));
+            }
+            if ui
+                .add_enabled(on, egui::Button::new(format!("{id} OFF")))
+                .clicked()
+            {
+                out.push(Command::Plant(OperatorAction::ManualSet(id.clone(), false)));
+            }
+            let jog = ui
+                .add(egui::Button::new(format!("Jog {id}")).sense(Sense::click_and_drag()))
+                .on_hover_text("ON while held");
+            let held = jog.is_pointer_button_down_on();
+            if held && !c.jogging.contains(&id) && !on {
+                c.jogging.insert(id.clone());
+                out.push(Command::Plant(OperatorAction::ManualSet(id.clone(), true)));
+            } else if !held && c.jogging.remove(&id) {
+                out.push(Command::Plant(OperatorAction::ManualSet(id.clone(), false)));
+            }
+            ui.end_row();
+        }
+    });
+    // Below the buttons, so that they do not move under the operator's pointer.
+    if let Some(r) = &c.manual_refusal {
+        egui::Frame::group(ui.style())
+            .stroke(Stroke::new(2.0, c.palette.trip))
+            .show(ui, |ui| {
+                ui.label(RichText::new(r).color(c.palette.trip));
+            });
+    }
 }
 
 /// The re-initialisation's confirmation: what to check on the plant first, and what it
@@ -341,7 +493,13 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
             time_ms = s.time.0;
         }
     }
-    let mut highlights: &[vigie_core::explain::Highlight] = &[];
+    // No level shown, live: the estimated and suspect sensors are marked.
+    let live_marks = if level.is_none() && replay_rec.is_none() {
+        sim.live_marks()
+    } else {
+        Vec::new()
+    };
+    let mut highlights: &[vigie_core::explain::Highlight] = &live_marks;
     let mut ghost = None;
     if let Some((l, t, ex)) = &level {
         let lv = ex.levels()[*l];
@@ -406,7 +564,48 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     c.synoptic_rect = Some(resp.rect);
 }
 
+/// After a trip, while the plant is held: what was stopped and why, what to check on
+/// the machine, and whether Reset is possible now (the engine's own check).
+fn next_step_ui(c: &Console, ui: &mut egui::Ui) {
+    if !c.sim.engine.is_tripped() {
+        return;
+    }
+    let Some(trip) = c.sim.engine.trips.last() else {
+        return;
+    };
+    let text = vigie_core::alarms::texts::trip(&c.sim.bundle, trip);
+    let look = vigie_core::alarms::texts::where_to_look(&c.sim.bundle, trip);
+    egui::Frame::group(ui.style())
+        .stroke(Stroke::new(2.0, c.palette.trip))
+        .show(ui, |ui| {
+            ui.label(
+                RichText::new(format!(
+                    "What to do now (stopped at {})",
+                    fmt_ms(trip.time_ms)
+                ))
+                .strong()
+                .color(c.palette.trip),
+            );
+            ui.label(format!("1. Why: {}.", text.message));
+            if !look.is_empty() {
+                ui.label(format!("2. Check on the machine: {}.", look.join("; ")));
+            }
+            let reset = match c.sim.engine.reset_check() {
+                Ok(()) => "3. Reset is possible now: press Reset, then Start if the \
+                           program was stopped."
+                    .to_string(),
+                Err(e) => format!(
+                    "3. Reset is refused now ({e}). Once the cause is gone (the item \
+                     has moved on, the sensor reads right), press Reset; if it stays \
+                     refused, check the plant and Re-initialise…"
+                ),
+            };
+            ui.label(reset);
+        });
+}
+
 fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    next_step_ui(c, ui);
     ui.heading("Explanation");
     let Some(trip) = c.latest_trip() else {
         ui.label(
@@ -481,85 +680,242 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     });
 }
 
+/// The badge of an alarm's priority: text and colours.
+pub(crate) fn priority_badge(c: &Console, p: AlarmPriority) -> (String, Color32, Color32) {
+    let (name, bg, fg) = match p {
+        AlarmPriority::Urgent => ("URGENT", c.palette.trip, Color32::WHITE),
+        AlarmPriority::High => ("HIGH", c.palette.alarm, Color32::BLACK),
+        AlarmPriority::Medium => ("MEDIUM", c.palette.caution, Color32::BLACK),
+    };
+    (format!("P{} {name}", p.rank()), bg, fg)
+}
+
+/// Shelving durations offered, minutes.
+const SHELVE_MINUTES: [u64; 4] = [15, 60, 240, 480];
+
 fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let now = c.sim.now();
-    ui.horizontal(|ui| {
+    let unack = c.sim.alarms.unacknowledged();
+    ui.horizontal_wrapped(|ui| {
         ui.heading("Alarms");
         ui.checkbox(&mut c.alarm_filter_shelved, "show shelved");
+        if ui
+            .add_enabled(
+                unack > 0,
+                egui::Button::new(format!("Acknowledge all ({unack})")),
+            )
+            .clicked()
+        {
+            out.push(Command::AcknowledgeAll {
+                ids: None,
+                note: String::new(),
+            });
+        }
     });
-    let mut list: Vec<&vigie_core::alarms::Alarm> = c.sim.alarms.visible(now);
+    let mut list: Vec<vigie_core::alarms::Alarm> =
+        c.sim.alarms.visible(now).into_iter().cloned().collect();
     if c.alarm_filter_shelved {
-        list.extend(c.sim.alarms.shelved(now));
+        list.extend(c.sim.alarms.shelved(now).into_iter().cloned());
     }
     if list.is_empty() {
         ui.label(RichText::new("No active alarm.").color(c.palette.text_dim));
+        return;
     }
-    for a in list {
-        let state = a.state();
-        let (state_txt, col) = match state {
-            AlarmState::Unacknowledged => ("UNACK", c.palette.alarm),
-            AlarmState::Acknowledged => ("ACK", c.palette.equipment_edge),
-            AlarmState::ClearedUnacknowledged => {
-                ("CLEARED-UNACK", c.palette.alarm.gamma_multiply(0.7))
+    let pages = list.len().div_ceil(ALARMS_PER_PAGE);
+    let page = c.alarm_page.min(pages - 1);
+    let shown: Vec<vigie_core::alarms::Alarm> = list
+        .into_iter()
+        .skip(page * ALARMS_PER_PAGE)
+        .take(ALARMS_PER_PAGE)
+        .collect();
+    if pages > 1 {
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(page > 0, egui::Button::new("◀ Previous"))
+                .clicked()
+            {
+                c.alarm_page = page - 1;
             }
-            _ => ("NORMAL", c.palette.equipment),
-        };
-        egui::Frame::group(ui.style()).show(ui, |ui| {
-            ui.horizontal_wrapped(|ui| {
-                if a.first_out {
-                    ui.label(
-                        RichText::new("FIRST OUT")
-                            .strong()
-                            .color(Color32::WHITE)
-                            .background_color(c.palette.trip),
-                    );
-                }
-                ui.label(
-                    RichText::new(state_txt)
-                        .strong()
-                        .color(Color32::WHITE)
-                        .background_color(col),
-                );
-                ui.label(fmt_ms(a.raised.0));
-                if a.is_shelved(now) {
-                    ui.label("(shelved)");
-                }
-            });
-            ui.label(&a.message);
-            if let Some((t, note)) = &a.acknowledged {
-                ui.label(
-                    RichText::new(format!("acknowledged at {}: {note}", fmt_ms(t.0)))
-                        .color(c.palette.text_dim),
-                );
-            } else {
-                ui.horizontal(|ui| {
-                    let note = c.notes.entry(a.id).or_default();
-                    ui.add(
-                        egui::TextEdit::singleline(note)
-                            .hint_text("note")
-                            .desired_width(160.0),
-                    );
-                    if ui.button(format!("Acknowledge #{}", a.id)).clicked() {
-                        out.push(Command::Acknowledge {
-                            id: a.id,
-                            note: note.clone(),
-                        });
-                    }
+            ui.label(format!("Page {} of {pages}", page + 1));
+            if ui
+                .add_enabled(page + 1 < pages, egui::Button::new("Next ▶"))
+                .clicked()
+            {
+                c.alarm_page = page + 1;
+            }
+            let ids: Vec<u64> = shown
+                .iter()
+                .filter(|a| a.acknowledged.is_none())
+                .map(|a| a.id)
+                .collect();
+            if ui
+                .add_enabled(!ids.is_empty(), egui::Button::new("Acknowledge page"))
+                .clicked()
+            {
+                out.push(Command::AcknowledgeAll {
+                    ids: Some(ids),
+                    note: String::new(),
                 });
             }
-            ui.horizontal(|ui| {
-                if a.is_shelved(now) {
-                    if ui.button(format!("Unshelve #{}", a.id)).clicked() {
-                        out.push(Command::Unshelve(a.id));
-                    }
-                } else if ui.button(format!("Shelve #{} 5 min", a.id)).clicked() {
-                    out.push(Command::Shelve {
+        });
+    }
+    for a in shown {
+        alarm_row_ui(c, ui, &a, now, out);
+    }
+}
+
+/// One alarm: priority, first-out, state, time and the operator's text; the detail one
+/// click away; acknowledge with a note; shelve with a reason (never a safety alarm).
+fn alarm_row_ui(
+    c: &mut Console,
+    ui: &mut egui::Ui,
+    a: &vigie_core::alarms::Alarm,
+    now: Millis,
+    out: &mut Vec<Command>,
+) {
+    let (state_txt, col) = match a.state() {
+        AlarmState::Unacknowledged => ("UNACK", c.palette.equipment_edge),
+        AlarmState::Acknowledged => ("ACK", c.palette.equipment),
+        AlarmState::ClearedUnacknowledged => ("CLEARED-UNACK", c.palette.equipment),
+        AlarmState::Normal => ("NORMAL", c.palette.equipment),
+    };
+    let (prio, prio_bg, prio_fg) = priority_badge(c, a.priority());
+    egui::Frame::group(ui.style()).show(ui, |ui| {
+        ui.horizontal_wrapped(|ui| {
+            ui.label(
+                RichText::new(prio)
+                    .strong()
+                    .color(prio_fg)
+                    .background_color(prio_bg),
+            );
+            if a.first_out {
+                ui.label(
+                    RichText::new("FIRST OUT")
+                        .strong()
+                        .color(Color32::WHITE)
+                        .background_color(c.palette.equipment_edge),
+                );
+            }
+            ui.label(
+                RichText::new(state_txt)
+                    .strong()
+                    .color(Color32::WHITE)
+                    .background_color(col),
+            );
+            ui.label(fmt_ms(a.raised.0));
+            if let Some(s) = a.shelving.as_ref().filter(|_| a.is_shelved(now)) {
+                ui.label(format!(
+                    "(shelved until {}: {})",
+                    fmt_ms(s.until.0),
+                    s.reason
+                ));
+            }
+        });
+        ui.label(&a.message);
+        if !a.detail.is_empty() {
+            egui::CollapsingHeader::new("Detail")
+                .id_salt(("alarm_detail", a.id))
+                .show(ui, |ui| {
+                    ui.label(
+                        RichText::new(&a.detail)
+                            .monospace()
+                            .color(c.palette.text_dim),
+                    );
+                });
+        }
+        if let Some((t, note)) = &a.acknowledged {
+            ui.label(
+                RichText::new(format!("acknowledged at {}: {note}", fmt_ms(t.0)))
+                    .color(c.palette.text_dim),
+            );
+        }
+        ui.horizontal_wrapped(|ui| {
+            if a.acknowledged.is_none() {
+                let note = c.notes.entry(a.id).or_default();
+                ui.add(
+                    egui::TextEdit::singleline(note)
+                        .hint_text("note")
+                        .desired_width(120.0),
+                );
+                if ui.button(format!("Acknowledge #{}", a.id)).clicked() {
+                    out.push(Command::Acknowledge {
                         id: a.id,
-                        ms: 300_000,
+                        note: note.clone(),
                     });
                 }
-            });
+            }
+            if a.is_shelved(now) {
+                if ui.button(format!("Unshelve #{}", a.id)).clicked() {
+                    out.push(Command::Unshelve(a.id));
+                }
+            } else if ui
+                .add_enabled(
+                    a.kind.shelvable(),
+                    egui::Button::new(format!("Shelve #{}…", a.id)),
+                )
+                .on_disabled_hover_text(
+                    "A safety alarm (trip, hazard, specification error, live link) is \
+                     never shelved",
+                )
+                .clicked()
+            {
+                c.shelve_form = Some(ShelveForm {
+                    id: a.id,
+                    reason: String::new(),
+                    minutes: SHELVE_MINUTES[0],
+                });
+            }
         });
+        if let Some(form) = c.shelve_form.as_mut().filter(|f| f.id == a.id) {
+            shelve_form_ui(form, ui, out, &mut c.status);
+        }
+    });
+}
+
+/// The shelving form: a reason (required) and a duration of at most one shift.
+fn shelve_form_ui(
+    form: &mut ShelveForm,
+    ui: &mut egui::Ui,
+    out: &mut Vec<Command>,
+    status: &mut String,
+) {
+    ui.horizontal_wrapped(|ui| {
+        let l = ui.label("Reason");
+        ui.add(
+            egui::TextEdit::singleline(&mut form.reason)
+                .hint_text("why (required)")
+                .desired_width(150.0),
+        )
+        .labelled_by(l.id);
+        egui::ComboBox::from_id_salt(("shelve_minutes", form.id))
+            .selected_text(fmt_minutes(form.minutes))
+            .show_ui(ui, |ui| {
+                for m in SHELVE_MINUTES {
+                    ui.selectable_value(&mut form.minutes, m, fmt_minutes(m));
+                }
+            });
+        if ui.button(format!("Shelve #{} now", form.id)).clicked() {
+            if form.reason.trim().is_empty() {
+                *status = "Shelving needs a reason".to_string();
+            } else {
+                out.push(Command::Shelve {
+                    id: form.id,
+                    ms: form.minutes * 60_000,
+                    reason: form.reason.clone(),
+                });
+            }
+        }
+        if ui.button("Cancel").clicked() {
+            out.push(Command::CloseShelveForm);
+        }
+    });
+}
+
+fn fmt_minutes(m: u64) -> String {
+    if m >= 60 {
+        format!("{} h", m / 60)
+    } else {
+        format!("{m} min")
     }
 }
 

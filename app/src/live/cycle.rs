@@ -227,6 +227,7 @@ fn event_sender(tx: mpsc::Sender<serde_json::Value>) -> Box<dyn FnMut(serde_json
 /// second one on, their outputs published for the constraints of the next cycle, as
 /// the console's `Simulation` does.
 struct LiveTasks {
+    set: vigie_core::tasks::TaskSet,
     monitor: vigie_core::tasks::Monitor,
     events: vigie_core::tasks::FrameTasks,
     seen: usize,
@@ -237,6 +238,7 @@ impl LiveTasks {
         let set = bundle.tasks.as_ref()?;
         match vigie_core::tasks::FrameTasks::compile(set, &bundle.symbols) {
             Ok(events) => Some(Self {
+                set: set.clone(),
                 monitor: vigie_core::tasks::Monitor::new(set, Millis::ZERO),
                 events,
                 seen: 0,
@@ -273,7 +275,8 @@ impl LiveTasks {
                 emit(json!({"event": "task_warning", "text": a.text, "time_ms": a.time.0}));
             } else {
                 let key = format!("task:{}:{:?}", a.subject, a.code);
-                board.raise(emit, a.time, &key, AlarmKind::Task, a.text.clone());
+                let text = vigie_core::alarms::texts::task(Some(&self.set), a);
+                board.raise(emit, a.time, &key, AlarmKind::Task, text);
             }
         }
         self.seen = self.monitor.alarms.len();
@@ -301,12 +304,18 @@ struct LiveDiagnosers {
 /// The plausibility stage's notices of this cycle as events and alarms: an alarm
 /// `plausibility:<sensor>` while a sensor is suspect (an edge its physics does not allow
 /// held), cleared when its reading is plausible again.
-fn plausibility_events(engine: &mut Engine, board: &mut AlarmBoard, emit: Emit<'_>) {
+fn plausibility_events(
+    engine: &mut Engine,
+    plant: &vigie_core::plant::Plant,
+    board: &mut AlarmBoard,
+    emit: Emit<'_>,
+) {
     for n in engine.plausibility.take_notices() {
         let key = format!("plausibility:{}", n.sensor);
         let now = Millis(n.time_ms);
         if n.suspect {
-            board.raise(emit, now, &key, AlarmKind::Plausibility, n.text);
+            let text = vigie_core::alarms::texts::about_signal(plant, &n.sensor, &n.text);
+            board.raise(emit, now, &key, AlarmKind::Plausibility, text);
         } else {
             emit(
                 json!({"event": "plausibility", "sensor": n.sensor, "text": n.text, "time_ms": n.time_ms}),
@@ -399,7 +408,9 @@ impl LiveDiagnosers {
             line["estimated"] = json!(n.estimated);
             line["text"] = json!(n.text);
             emit(line);
-            board.raise(emit, now, &n.key, AlarmKind::Diagnosis, n.text);
+            let sensor = n.estimated.as_deref().unwrap_or(&n.diagnosis.partition);
+            let text = vigie_core::alarms::texts::about_signal(&bundle.plant, sensor, &n.text);
+            board.raise(emit, now, &n.key, AlarmKind::Diagnosis, text);
         }
         step
     }
@@ -539,7 +550,12 @@ impl Cycle for MonitorCycle {
             ),
             None => LinkStep::Skipped,
         };
-        plausibility_events(&mut self.engine, &mut self.board, &mut *self.emit);
+        plausibility_events(
+            &mut self.engine,
+            &self.bundle.plant,
+            &mut self.board,
+            &mut *self.emit,
+        );
         if let Some(t) = &mut self.tasks {
             let d = self.diagnosers.as_ref();
             t.step(&mut self.engine, now, d, &mut self.board, &mut *self.emit);
@@ -888,7 +904,12 @@ impl Cycle for GatewayCycle {
             ),
             None => LinkStep::Skipped,
         };
-        plausibility_events(&mut self.engine, &mut self.board, &mut *self.emit);
+        plausibility_events(
+            &mut self.engine,
+            &self.bundle.plant,
+            &mut self.board,
+            &mut *self.emit,
+        );
         if let Some(t) = &mut self.tasks {
             let d = self.diagnosers.as_ref();
             t.step(&mut self.engine, now, d, &mut self.board, &mut *self.emit);

@@ -43,7 +43,7 @@ use std::future::Future;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tokio::time::MissedTickBehavior;
-use vigie_core::alarms::{AlarmKind, AlarmList};
+use vigie_core::alarms::{AlarmKind, AlarmList, AlarmText};
 use vigie_core::bundle::PlantBundle;
 use vigie_core::engine::{Engine, Event};
 use vigie_core::live::age::Transition;
@@ -215,10 +215,15 @@ impl AlarmBoard {
         now: Millis,
         key: &str,
         kind: AlarmKind,
-        message: String,
+        text: impl Into<AlarmText>,
     ) {
+        let text = text.into();
+        let message = &text.message;
         tracing::error!(key, "{message}");
-        emit(json!({"event": "alarm", "key": key, "message": message, "time_ms": now.0}));
+        emit(json!({
+            "event": "alarm", "key": key, "message": message, "detail": text.detail,
+            "priority": kind.priority(), "time_ms": now.0,
+        }));
         if let Some(tap) = &self.tap {
             tap.alarm(LinkAlarm::Raised {
                 key: key.to_string(),
@@ -226,7 +231,7 @@ impl AlarmBoard {
                 time: now,
             });
         }
-        self.alarms.raise(now, key, kind, message);
+        self.alarms.raise(now, key, kind, text);
     }
 
     pub(crate) fn clear(&mut self, emit: Emit<'_>, now: Millis, key: &str) {

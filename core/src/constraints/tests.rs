@@ -56,6 +56,36 @@ fn the_paper_set_loads_without_problems_and_classifies() {
     let c10 = set.get("CSs10").unwrap();
     assert_eq!(c10.location.to_string(), "constraints.txt:14:1");
     assert_eq!(c10.source, "C7 . /A4");
+    // The comment is the operator's description, without the paper's equation number.
+    assert_eq!(
+        c10.description,
+        "box leaving to the right: hold the rotation"
+    );
+}
+
+#[test]
+fn a_description_is_the_comment_without_a_leading_reference() {
+    let (set, problems) = load(
+        "K1 = C7 . /A4 # (18) box leaving: hold\n\
+         K2 = C8 . /A4\n\
+         K3 = C6 . A2   #   (a box on the table) rollers stop  \n\
+         K4 = C5 . A3 # #3 no (ref)\n",
+    );
+    assert!(problems.is_empty(), "{problems:?}");
+    let d: Vec<&str> = set
+        .constraints
+        .iter()
+        .map(|c| c.description.as_str())
+        .collect();
+    assert_eq!(
+        d,
+        [
+            "box leaving: hold",
+            "",
+            "(a box on the table) rollers stop",
+            "#3 no (ref)"
+        ]
+    );
 }
 
 /// Parses `text` against the station's symbols (inputs, outputs, observers) and returns

@@ -286,6 +286,15 @@ impl ProgramRuntime {
         self.get(Space::Aux, aux as usize, false)
     }
 
+    /// True in the initial situation: exactly the initial steps active (a program
+    /// waiting for its start, or back at rest after its stop).
+    pub fn at_initial_situation(&self) -> bool {
+        self.program
+            .steps
+            .iter()
+            .all(|s| self.step_active(s.aux) == s.initial)
+    }
+
     /// Ids of the active steps, in program order.
     pub fn active_steps(&self) -> Vec<&str> {
         self.program

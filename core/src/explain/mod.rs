@@ -66,6 +66,8 @@ pub enum Mark {
     },
     /// A box the observers infer.
     InferredBox,
+    /// A sensor read from its estimate (degraded mode), marked live on the synoptic.
+    Estimated,
 }
 
 /// One plant element to mark.

@@ -86,7 +86,17 @@ pub fn rewrite(
             .to_dnf(symbols)
             .map_err(|m| format!("{}: {}", c.id, m.message))?;
         let dnf = simplify(&dnf);
-        out.push_str(&format!("{} = {}\n", c.id, render_dnf(&dnf, symbols)));
+        // The description goes along as the line's comment (the operator's texts).
+        let comment = if c.description.is_empty() {
+            String::new()
+        } else {
+            format!("  # {}", c.description)
+        };
+        out.push_str(&format!(
+            "{} = {}{comment}\n",
+            c.id,
+            render_dnf(&dnf, symbols)
+        ));
         all_terms.extend(dnf);
     }
     if stops.is_empty() {
@@ -131,9 +141,9 @@ pub fn rewrite(
                 ));
             }
         }
+        let partition = f.trim_start_matches("def_");
         out.push_str(&format!(
-            "DSTOP_{} = {}\n",
-            f.trim_start_matches("def_"),
+            "DSTOP_{partition} = {}  # the diagnosers stop the plant: {partition} at fault\n",
             render_dnf(&simplify(&terms), symbols)
         ));
     }

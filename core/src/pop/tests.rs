@@ -568,6 +568,20 @@ fn a_stopping_fault_never_releases_the_table_under_a_box() {
         .lines()
         .find(|l| l.starts_with("DSTOP_C6_drive = "))
         .unwrap();
+    // The rewritten constraints keep their descriptions (the alarms' texts).
+    assert!(
+        d.rewritten.lines().any(|l| l.starts_with("CSs10 = ")
+            && l.ends_with("  # box leaving to the right: hold the rotation")),
+        "{}",
+        d.rewritten
+    );
+    // Its comment says what it is, for the operator's texts.
+    let (stop, comment) = stop.split_once('#').unwrap();
+    assert_eq!(
+        comment.trim(),
+        "the diagnosers stop the plant: C6_drive at fault"
+    );
+    let stop = stop.trim();
     let a4_terms: Vec<&str> = stop
         .trim_start_matches("DSTOP_C6_drive = ")
         .split(" + ")

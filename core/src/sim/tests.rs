@@ -239,6 +239,42 @@ fn the_papers_cs10_case_is_explained_with_a_projection() {
     // The held A4 is the filter's doing; operator reset refused while C7 is still on.
     assert!(sim.act(&OperatorAction::Reset).is_err());
     assert!(sim.journal().iter().any(|j| j.kind == "reset_refused"));
+    // The trip's alarm, in the operator's words from the constraint's own comment; the
+    // formula one click away.
+    let alarm = &sim.alarms.all()[0];
+    assert_eq!(
+        alarm.message,
+        "Safety stop: box leaving to the right: hold the rotation (CSs10). Held ON: A4 \
+         (Turntable). Stopped: A0 (Entry conveyor), A5 (Left exit conveyor), A6 (Right exit \
+         conveyor)"
+    );
+    assert_eq!(alarm.detail, "CSs10 = C7 . /A4 (true at 11680 ms)");
+    assert!(alarm.first_out);
+}
+
+/// While the filter holds the plant, Start is refused with the reason and the next step
+/// (it would otherwise be latched into the program and start the plant at the reset);
+/// Stop always works. Both are journaled; after the reset Start is taken again.
+#[test]
+fn start_is_refused_while_tripped_and_stop_always_works() {
+    let (s, mut sim) = load_station_scenario("cs10-paper.ron");
+    sim.run_until(Millis(s.duration_ms));
+    assert!(sim.engine.is_tripped());
+    let e = sim.act(&OperatorAction::Start).unwrap_err();
+    assert_eq!(
+        e,
+        "refused: the safety filter has stopped the plant (CSs10); Reset first, then Start"
+    );
+    assert!(
+        sim.journal()
+            .iter()
+            .any(|j| j.kind == "operator_refused" && j.text.contains("Reset first"))
+    );
+    sim.act(&OperatorAction::Stop).expect("Stop always works");
+    // Not tripped: Start is pressed again.
+    let mut fresh = load_station_scenario("cs10-paper.ron").1;
+    assert!(!fresh.engine.is_tripped());
+    fresh.act(&OperatorAction::Start).expect("Start taken");
 }
 
 #[test]
@@ -767,4 +803,179 @@ fn start_presses_the_programs_start_button_or_says_it_has_none() {
             .iter()
             .any(|j| j.text.contains("names no start button"))
     );
+}
+
+/// The value of input `id` the emulator shows now.
+fn sensor(sim: &Simulation, id: &str) -> bool {
+    let k = sim
+        .bundle
+        .plant
+        .inputs
+        .iter()
+        .position(|s| s.id == id)
+        .expect("input");
+    sim.emulator.sensors().get(k)
+}
+
+/// The value of output `id` the filter applied in the last cycle.
+fn applied(sim: &Simulation, id: &str) -> bool {
+    let k = sim
+        .bundle
+        .plant
+        .outputs
+        .iter()
+        .position(|s| s.id == id)
+        .expect("output");
+    sim.engine.frame().now(Space::Output).get(k)
+}
+
+/// Issue 19, manual mode (seed 004, section 7): while a box leaves the turntable to the
+/// right, the operator who switches the rotation off by hand is refused in his terms,
+/// from the constraint's own description and the sensor that shows the box; the table
+/// stays held, cycle after cycle. Entering is bumpless (the outputs stay as they were);
+/// Start is refused by hand; leaving restarts the program from its initial steps.
+#[test]
+fn a_manual_command_that_would_break_a_constraint_is_refused_and_never_reaches_the_plant() {
+    let s = scenario(
+        ProgramChoice::Reference,
+        FilterMode::Enforce,
+        three_boxes(),
+        60_000,
+    );
+    let path = station_dir().join("scenario.ron");
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    let mut n = 0;
+    while !sensor(&sim, "C7") {
+        sim.cycle();
+        n += 1;
+        assert!(n < 6_000, "no box reached C7 in 60 s");
+    }
+    sim.cycle();
+    assert!(
+        applied(&sim, "A4"),
+        "the table is held at C5 while the box leaves"
+    );
+    let before = sim.engine.frame().now(Space::Output).clone();
+    sim.act(&OperatorAction::Manual(true)).expect("manual");
+    assert_eq!(sim.plant_state(), PlantState::Manual);
+    assert_eq!(sim.manual_outputs(), Some(&before), "bumpless");
+    let e = sim
+        .act(&OperatorAction::ManualSet("A4".into(), false))
+        .unwrap_err();
+    assert_eq!(
+        e,
+        "A4 OFF (the turntable returns to the loading position) refused: box leaving to the \
+         right: hold the rotation (CSs10, with C7 = 1)"
+    );
+    assert!(
+        sim.journal()
+            .iter()
+            .any(|j| j.kind == "manual_refused" && j.text == e)
+    );
+    for _ in 0..20 {
+        sim.cycle();
+        assert!(
+            applied(&sim, "A4"),
+            "the refused command never reaches the plant"
+        );
+    }
+    assert!(!sim.engine.is_tripped());
+    // An allowed command is taken: the right exit conveyor off, then on again.
+    sim.act(&OperatorAction::ManualSet("A6".into(), false))
+        .expect("A6 off");
+    sim.cycle();
+    assert!(!applied(&sim, "A6"));
+    sim.act(&OperatorAction::ManualSet("A6".into(), true))
+        .expect("A6 on");
+    assert!(sim.act(&OperatorAction::Start).is_err(), "no Start by hand");
+    assert!(
+        sim.act(&OperatorAction::ManualSet("A9".into(), true))
+            .unwrap_err()
+            .contains("no output `A9`")
+    );
+    sim.act(&OperatorAction::Manual(false)).expect("automatic");
+    assert!(sim.program.at_initial_situation());
+    assert!(sim.manual_outputs().is_none());
+    assert!(
+        sim.act(&OperatorAction::ManualSet("A6".into(), true))
+            .is_err(),
+        "no manual request in automatic mode"
+    );
+}
+
+/// Every manual request the constraints allow is taken and every other refused, at the
+/// idle start (table empty at the loading position): a rotation of the empty table
+/// (CSs13) and the rollers of an empty table towards nothing are checked with the plant
+/// as it is; an edge constraint sees the request as the next cycle's value.
+#[test]
+fn each_manual_request_at_rest_is_checked_against_every_constraint() {
+    let s = scenario(
+        ProgramChoice::Reference,
+        FilterMode::Enforce,
+        ArrivalPlan::List(Vec::new()),
+        10_000,
+    );
+    let path = station_dir().join("scenario.ron");
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(200));
+    sim.act(&OperatorAction::Manual(true)).expect("manual");
+    let e = sim
+        .act(&OperatorAction::ManualSet("A4".into(), true))
+        .unwrap_err();
+    assert_eq!(
+        e,
+        "A4 ON refused: no rotation of an empty table (CSs13, with C4 = 1, C6 = 0)"
+    );
+    // Exhaustively: every output ON alone from rest, taken exactly when the engine's
+    // own check of that vector finds no violation, and then applied.
+    for k in 0..sim.bundle.plant.outputs.len() {
+        let id = sim.bundle.plant.outputs[k].id.clone();
+        let mut candidate = sim.manual_outputs().cloned().expect("manual");
+        candidate.set(k, true);
+        let allowed = sim.engine.check_request(&candidate).is_empty();
+        let r = sim.act(&OperatorAction::ManualSet(id.clone(), true));
+        assert_eq!(r.is_ok(), allowed, "{id}: {r:?}");
+        sim.cycle();
+        assert_eq!(applied(&sim, &id), allowed, "{id}");
+        if allowed {
+            sim.act(&OperatorAction::ManualSet(id.clone(), false))
+                .expect("off");
+            sim.cycle();
+        }
+    }
+    assert!(!sim.engine.is_tripped());
+    assert!(sim.emulator.hazards().is_empty());
+}
+
+/// A manual command allowed now may lead to a violation later (the plant moves on): the
+/// filter still runs every cycle and stops it. Both conveyors on by hand carry a box to
+/// the end of the belt; CSc2 trips before the box is pushed onto the stopped rollers,
+/// and no item is damaged.
+#[test]
+fn the_filter_still_stops_what_manual_commands_lead_to() {
+    let s = scenario(
+        ProgramChoice::Reference,
+        FilterMode::Enforce,
+        ArrivalPlan::List(vec![(0, crate::emulator::BoxSize::Small)]),
+        30_000,
+    );
+    let path = station_dir().join("scenario.ron");
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(100));
+    sim.act(&OperatorAction::Manual(true)).expect("manual");
+    sim.act(&OperatorAction::ManualSet("A1".into(), true))
+        .expect("A1");
+    sim.act(&OperatorAction::ManualSet("A0".into(), true))
+        .expect("A0");
+    sim.run_until(Millis(30_000));
+    assert_eq!(sim.engine.trips.len(), 1, "{:?}", sim.engine.trips);
+    assert_eq!(sim.engine.trips[0].constraints[0].id, "CSc2");
+    assert!(
+        sim.emulator.hazards().is_empty(),
+        "{:?}",
+        sim.emulator.hazards()
+    );
+    assert_eq!(sim.plant_state(), PlantState::Tripped);
+    // Tripped: manual requests are overridden by the fallback, leaving is allowed.
+    sim.act(&OperatorAction::Manual(false)).expect("leave");
 }

@@ -54,6 +54,20 @@ impl AlarmCode {
             AlarmCode::T008 => "T008",
         }
     }
+
+    /// What is wrong, in the operator's words.
+    pub fn meaning(self) -> &'static str {
+        match self {
+            AlarmCode::T001 => "stopped too long, it can no longer finish in time",
+            AlarmCode::T002 => "slower than normal",
+            AlarmCode::T003 => "not finished within its acceptable time",
+            AlarmCode::T004 => "finished sooner than possible (a sensor or a missed step?)",
+            AlarmCode::T005 => "finished outside its acceptable time",
+            AlarmCode::T006 => "the controller missed its time window",
+            AlarmCode::T007 => "an event came when none was expected",
+            AlarmCode::T008 => "two tasks out of step",
+        }
+    }
 }
 
 /// Alarm or warning.
