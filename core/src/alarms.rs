@@ -226,6 +226,74 @@ pub enum AlarmError {
     NotShelvable(u64, &'static str),
 }
 
+/// ISA-18.2's alarm flood: more than this many alarms in 10 minutes.
+pub const FLOOD_PER_10_MIN: usize = 10;
+
+/// Ten minutes, the ISA-18.2 measurement interval.
+const TEN_MIN_MS: u64 = 600_000;
+
+/// Alarm-system performance (ISA-18.2 section 16, EEMUA 191): rates per fixed 10-minute
+/// interval from the start of the run, floods, chattering and the most frequent sources.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct AlarmKpis {
+    /// Alarms raised in all.
+    pub total: usize,
+    /// Raised in the last 10 minutes (sliding, up to now).
+    pub last_10_min: usize,
+    /// Average per 10 minutes over the run (at least one interval).
+    pub average_per_10_min: f64,
+    /// The busiest fixed 10-minute interval.
+    pub peak_per_10_min: usize,
+    /// Fixed 10-minute intervals so far (the current one included).
+    pub intervals: usize,
+    /// Of those, intervals in flood (more than [`FLOOD_PER_10_MIN`]).
+    pub flood_intervals: usize,
+    /// The last 10 minutes are a flood.
+    pub flooding: bool,
+    /// Sources raised three times or more within a minute (chattering).
+    pub chattering: Vec<String>,
+    /// The five most frequent sources, most frequent first (ties by name).
+    pub most_frequent: Vec<(String, usize)>,
+}
+
+/// An alarm's source for the statistics: its key without the item numbers
+/// (`hazard:9:Collision` → `hazard:Collision`).
+pub fn source_of(key: &str) -> String {
+    key.split(':')
+        .filter(|seg| seg.is_empty() || !seg.chars().all(|c| c.is_ascii_digit()))
+        .collect::<Vec<_>>()
+        .join(":")
+}
+
+/// A filter of the alarm history.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct HistoryFilter {
+    /// Case-insensitive text found in the message, the detail or the key.
+    pub text: String,
+    /// Only this kind.
+    pub kind: Option<AlarmKind>,
+    /// Only this priority.
+    pub priority: Option<AlarmPriority>,
+}
+
+impl HistoryFilter {
+    /// True when `a` passes.
+    pub fn matches(&self, a: &Alarm) -> bool {
+        let needle = self.text.trim().to_lowercase();
+        self.kind.is_none_or(|k| a.kind == k)
+            && self.priority.is_none_or(|p| a.priority() == p)
+            && (needle.is_empty()
+                || [&a.message, &a.detail, &a.key]
+                    .iter()
+                    .any(|t| t.to_lowercase().contains(&needle)))
+    }
+}
+
+/// One CSV field, quoted.
+fn csv_field(text: &str) -> String {
+    format!("\"{}\"", text.replace('"', "\"\""))
+}
+
 /// The alarm list.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct AlarmList {
@@ -403,6 +471,100 @@ impl AlarmList {
         self.alarms.iter().find(|a| a.id == id)
     }
 
+    /// Every alarm `filter` passes, newest first (the history: cleared and
+    /// acknowledged ones included).
+    pub fn history(&self, filter: &HistoryFilter) -> Vec<&Alarm> {
+        self.alarms
+            .iter()
+            .rev()
+            .filter(|a| filter.matches(a))
+            .collect()
+    }
+
+    /// `alarms` as CSV, one line each with every field quoted; times in ms of plant
+    /// time, empty when not applicable.
+    pub fn history_csv(alarms: &[&Alarm]) -> String {
+        let mut s = String::from(
+            "id,raised_ms,priority,kind,state,first_out,message,detail,cleared_ms,\
+             acknowledged_ms,note,shelved_until_ms,shelving_reason\n",
+        );
+        let ms = |t: Option<Millis>| t.map(|t| t.0.to_string()).unwrap_or_default();
+        for a in alarms {
+            let state = serde_json::to_value(a.state())
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_string))
+                .unwrap_or_default();
+            let fields = [
+                a.id.to_string(),
+                a.raised.0.to_string(),
+                format!("P{}", a.priority().rank()),
+                a.kind.name().to_string(),
+                state,
+                a.first_out.to_string(),
+                a.message.clone(),
+                a.detail.clone(),
+                ms(a.cleared),
+                ms(a.acknowledged.as_ref().map(|x| x.0)),
+                a.acknowledged
+                    .as_ref()
+                    .map(|x| x.1.clone())
+                    .unwrap_or_default(),
+                ms(a.shelving.as_ref().map(|x| x.until)),
+                a.shelving
+                    .as_ref()
+                    .map(|x| x.reason.clone())
+                    .unwrap_or_default(),
+            ];
+            let line: Vec<String> = fields.iter().map(|f| csv_field(f)).collect();
+            s.push_str(&line.join(","));
+            s.push('\n');
+        }
+        s
+    }
+
+    /// The alarm-system figures at `now`.
+    pub fn kpis(&self, now: Millis) -> AlarmKpis {
+        let intervals = usize::try_from(now.0 / TEN_MIN_MS + 1).unwrap_or(usize::MAX);
+        let mut per: std::collections::BTreeMap<u64, usize> = std::collections::BTreeMap::new();
+        let mut by_source: std::collections::BTreeMap<String, Vec<u64>> =
+            std::collections::BTreeMap::new();
+        for a in &self.alarms {
+            *per.entry(a.raised.0 / TEN_MIN_MS).or_default() += 1;
+            by_source
+                .entry(source_of(&a.key))
+                .or_default()
+                .push(a.raised.0);
+        }
+        let last_10_min = self
+            .alarms
+            .iter()
+            .filter(|a| a.raised.0 + TEN_MIN_MS > now.0 && a.raised <= now)
+            .count();
+        let chattering = by_source
+            .iter()
+            .filter(|(_, times)| times.windows(3).any(|w| w[2] - w[0] <= 60_000))
+            .map(|(k, _)| k.clone())
+            .collect();
+        let mut most_frequent: Vec<(String, usize)> = by_source
+            .iter()
+            .map(|(k, t)| (k.clone(), t.len()))
+            .collect();
+        most_frequent.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+        most_frequent.truncate(5);
+        let elapsed = (now.0 as f64 / TEN_MIN_MS as f64).max(1.0);
+        AlarmKpis {
+            total: self.alarms.len(),
+            last_10_min,
+            average_per_10_min: self.alarms.len() as f64 / elapsed,
+            peak_per_10_min: per.values().copied().max().unwrap_or(0),
+            intervals,
+            flood_intervals: per.values().filter(|&&n| n > FLOOD_PER_10_MIN).count(),
+            flooding: last_10_min > FLOOD_PER_10_MIN,
+            chattering,
+            most_frequent,
+        }
+    }
+
     /// Number of unacknowledged alarms (active or cleared).
     pub fn unacknowledged(&self) -> usize {
         self.alarms
@@ -571,5 +733,96 @@ mod tests {
         let trip2 = l.raise(Millis(40), "trip", AlarmKind::FilterTrip, "x");
         assert_eq!(first(&l), vec![trip, trip2]);
         assert!(l.get(task).is_some_and(|a| !a.first_out));
+    }
+
+    #[test]
+    fn kpis_count_rates_floods_chattering_and_sources() {
+        let mut l = AlarmList::new();
+        assert_eq!(l.kpis(Millis(0)).total, 0);
+        // 12 hazards in the first 10 minutes (a flood), each on its own item.
+        for k in 0..12u64 {
+            l.raise(
+                Millis(k * 1000),
+                &format!("hazard:{k}:Collision"),
+                AlarmKind::Hazard,
+                "h",
+            );
+        }
+        // One task alarm later, three times within a minute (chattering).
+        for t in [700_000, 720_000, 750_000] {
+            l.raise(Millis(t), "task:entry:T002", AlarmKind::Task, "t");
+            l.clear(Millis(t + 1), "task:entry:T002");
+        }
+        let k = l.kpis(Millis(1_290_000));
+        assert_eq!(k.total, 15);
+        assert_eq!(k.intervals, 3);
+        assert_eq!(k.peak_per_10_min, 12);
+        assert_eq!(k.flood_intervals, 1);
+        assert_eq!(k.last_10_min, 3);
+        assert!(!k.flooding);
+        assert!((k.average_per_10_min - 15.0 / (1_290_000.0 / 600_000.0)).abs() < 1e-9);
+        assert_eq!(
+            k.chattering,
+            vec![
+                "hazard:Collision".to_string(),
+                "task:entry:T002".to_string()
+            ]
+        );
+        assert_eq!(
+            k.most_frequent,
+            vec![
+                ("hazard:Collision".to_string(), 12),
+                ("task:entry:T002".to_string(), 3)
+            ]
+        );
+        assert!(l.kpis(Millis(11_000)).flooding);
+        assert_eq!(source_of("hazard:9:Collision"), "hazard:Collision");
+        assert_eq!(source_of("trip:CSs10"), "trip:CSs10");
+    }
+
+    #[test]
+    fn the_history_filters_by_text_kind_and_priority_and_exports_csv() {
+        let mut l = AlarmList::new();
+        let a = l.raise(
+            Millis(10),
+            "trip:CSs10",
+            AlarmKind::FilterTrip,
+            AlarmText {
+                message: "Safety stop: box leaving".into(),
+                detail: "CSs10 = C7 . /A4".into(),
+            },
+        );
+        l.raise(Millis(20), "task:x:T002", AlarmKind::Task, "Box \"late\"");
+        l.acknowledge(Millis(30), a, "checked, ok").unwrap();
+        let all = HistoryFilter::default();
+        assert_eq!(l.history(&all).len(), 2);
+        let by_text = HistoryFilter {
+            text: " c7 ".into(),
+            ..HistoryFilter::default()
+        };
+        assert_eq!(
+            l.history(&by_text).iter().map(|x| x.id).collect::<Vec<_>>(),
+            [a]
+        );
+        let by_kind = HistoryFilter {
+            kind: Some(AlarmKind::Task),
+            ..HistoryFilter::default()
+        };
+        assert_eq!(l.history(&by_kind).len(), 1);
+        let by_priority = HistoryFilter {
+            priority: Some(AlarmPriority::Urgent),
+            ..HistoryFilter::default()
+        };
+        assert_eq!(l.history(&by_priority)[0].id, a);
+        let csv = AlarmList::history_csv(&l.history(&all));
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 3);
+        assert!(lines[0].starts_with("id,raised_ms,priority,kind,state"));
+        assert!(lines[1].contains("\"Box \"\"late\"\"\""), "{csv}");
+        assert!(
+            lines[2].starts_with("\"1\",\"10\",\"P1\",\"safety filter trip\",\"acknowledged\""),
+            "{csv}"
+        );
+        assert!(lines[2].contains("\"checked, ok\""));
     }
 }

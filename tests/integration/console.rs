@@ -680,3 +680,54 @@ fn manual_mode_refuses_a_command_with_its_reason_and_the_plant_does_not_move() {
     }
     let _ = std::fs::remove_dir_all(&data);
 }
+
+/// The alarm history: searched, filtered and exported to CSV under the data folder
+/// (never the current folder); the rate KPIs, and a flood shown as such.
+#[test]
+fn the_alarm_history_searches_filters_exports_and_the_rate_shows_a_flood() {
+    let data = temp_dir("history");
+    let mut h = harness(options(Some(data.clone())));
+    h.run_steps(2);
+    run_to_trip(&mut h);
+    for k in 0..11 {
+        h.state_mut().sim.alarms.raise(
+            vigie_core::time::Millis(11_000 + k),
+            &format!("task:{k}"),
+            vigie_core::alarms::AlarmKind::Task,
+            format!("task alarm {k}"),
+        );
+    }
+    h.run_steps(2);
+    h.get_by_label("Rate: 12 in the last 10 min (average 12.0, peak 12)");
+    h.get_by_label("ALARM FLOOD");
+    h.get_by_label("Alarm history (12)").click();
+    h.run_steps(2);
+    h.get_by_label("12 of 12");
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Search")
+        .focus();
+    h.run_steps(1);
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Search")
+        .type_text("rotation");
+    h.run_steps(2);
+    h.get_by_label("1 of 12");
+    h.get_by_label("Export alarms CSV").click();
+    h.run_steps(2);
+    let path = data.join("vigie-alarms.csv");
+    assert_eq!(
+        h.state().status,
+        format!("1 alarms exported to {}", path.display())
+    );
+    let csv = std::fs::read_to_string(&path).expect("alarm csv");
+    assert_eq!(csv.lines().count(), 2, "{csv}");
+    assert!(csv.contains("\"P1\",\"safety filter trip\""), "{csv}");
+    // By kind: the task alarms only.
+    h.state_mut().history_filter.text.clear();
+    h.state_mut().history_filter.kind = Some(vigie_core::alarms::AlarmKind::Task);
+    h.run_steps(2);
+    h.get_by_label("11 of 12");
+    // A relative journal export lands under the data folder too.
+    h.state_mut()
+        .apply(Command::ExportCsv("journal-export.csv".into()));
+    assert!(data.join("journal-export.csv").is_file());
+    let _ = std::fs::remove_dir_all(&data);
+}

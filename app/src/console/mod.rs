@@ -105,8 +105,11 @@ pub enum Command {
     CloseShelveForm,
     /// Replay the synoptic at a recorded time (`None`: live).
     Scrub(Option<u64>),
-    /// Export the journal to CSV.
+    /// Export the journal to CSV (a relative path is under the data folder).
     ExportCsv(PathBuf),
+    /// Export the alarm history, as filtered, to CSV (a relative path is under the data
+    /// folder).
+    ExportAlarms(PathBuf),
     /// Export the incident report (Markdown + one PNG per level) into a folder.
     ExportReport(PathBuf),
     /// Maintenance: recompile the edited program.
@@ -368,6 +371,11 @@ pub struct Console {
     pub(crate) alarm_filter_shelved: bool,
     /// The alarm list's page (pages of [`ALARMS_PER_PAGE`]).
     pub(crate) alarm_page: usize,
+    /// The alarm history's search and filters.
+    pub history_filter: vigie_core::alarms::HistoryFilter,
+    /// Where the journal and the exports go (`None`: the journal in memory only, the
+    /// exports under the temporary folder).
+    pub data_dir: Option<PathBuf>,
     /// The shelving form open on one alarm.
     pub(crate) shelve_form: Option<ShelveForm>,
     /// The re-initialisation's confirmation is open (it asks for a check of the plant).
@@ -508,6 +516,8 @@ impl Console {
             wall_s: 0.0,
             alarm_filter_shelved: false,
             alarm_page: 0,
+            history_filter: vigie_core::alarms::HistoryFilter::default(),
+            data_dir: opts.data_dir.clone(),
             shelve_form: None,
             reinit_confirm: false,
             manual_confirm: false,
@@ -604,6 +614,18 @@ impl Console {
 
     fn now(&self) -> Millis {
         self.sim.now()
+    }
+
+    /// Where an export goes: an absolute path as given, a relative one under the data
+    /// folder (the journal's), never the current folder.
+    pub fn export_path(&self, path: &Path) -> PathBuf {
+        if path.is_absolute() {
+            return path.to_path_buf();
+        }
+        self.data_dir
+            .clone()
+            .unwrap_or_else(|| std::env::temp_dir().join("vigie"))
+            .join(path)
     }
 
     fn enter_maintenance(&mut self) {
@@ -744,14 +766,30 @@ impl Console {
                 Err(e) => self.status = format!("unshelve refused: {e}"),
             },
             Command::Scrub(t) => self.replay = t,
+            Command::ExportAlarms(path) => {
+                let path = self.export_path(&path);
+                let list = self.sim.alarms.history(&self.history_filter);
+                let csv = vigie_core::alarms::AlarmList::history_csv(&list);
+                let n = list.len();
+                let written = path
+                    .parent()
+                    .map_or(Ok(()), std::fs::create_dir_all)
+                    .and_then(|()| std::fs::write(&path, csv));
+                self.status = match written {
+                    Ok(()) => format!("{n} alarms exported to {}", path.display()),
+                    Err(e) => format!("alarm export to {} failed: {e}", path.display()),
+                };
+                self.journal.push(now, "operator", &self.status.clone());
+            }
             Command::ExportCsv(path) => {
+                let path = self.export_path(&path);
                 self.status = match self.journal.export_csv(&path) {
                     Ok(()) => format!("journal exported to {}", path.display()),
                     Err(e) => format!("export failed: {e}"),
                 };
                 self.journal.push(now, "operator", &self.status.clone());
             }
-            Command::ExportReport(dir) => self.start_report(dir),
+            Command::ExportReport(dir) => self.start_report(self.export_path(&dir)),
             Command::Recompile => self.recompile(),
             Command::RestartWithEdit => {
                 if self.compiled_edit.is_none() {

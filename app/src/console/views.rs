@@ -5,7 +5,7 @@ use super::synoptic::{self, Geometry, Picture};
 use super::{ALARMS_PER_PAGE, Command, Console, LEVEL_NAMES, Mode, ShelveForm};
 use egui::{Align2, Color32, FontId, RichText, Sense, Stroke, pos2, vec2};
 use std::collections::{BTreeMap, BTreeSet};
-use vigie_core::alarms::{AlarmPriority, AlarmState};
+use vigie_core::alarms::{AlarmKind, AlarmPriority, AlarmState};
 use vigie_core::sim::{OperatorAction, PlantState};
 use vigie_core::time::Millis;
 
@@ -712,6 +712,8 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             });
         }
     });
+    kpi_ui(c, ui, now);
+    history_ui(c, ui, out);
     let mut list: Vec<vigie_core::alarms::Alarm> =
         c.sim.alarms.visible(now).into_iter().cloned().collect();
     if c.alarm_filter_shelved {
@@ -762,6 +764,134 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     for a in shown {
         alarm_row_ui(c, ui, &a, now, out);
     }
+}
+
+/// The alarm rate (ISA-18.2: alarms per 10 minutes, floods above 10), with the
+/// performance figures one click away.
+fn kpi_ui(c: &Console, ui: &mut egui::Ui, now: Millis) {
+    let k = c.sim.alarms.kpis(now);
+    ui.horizontal_wrapped(|ui| {
+        ui.label(
+            RichText::new(format!(
+                "Rate: {} in the last 10 min (average {:.1}, peak {})",
+                k.last_10_min, k.average_per_10_min, k.peak_per_10_min
+            ))
+            .color(c.palette.text_dim),
+        );
+        if k.flooding {
+            ui.label(
+                RichText::new("ALARM FLOOD")
+                    .strong()
+                    .color(Color32::BLACK)
+                    .background_color(c.palette.alarm),
+            );
+        }
+    });
+    egui::CollapsingHeader::new("Alarm performance")
+        .id_salt("alarm_kpis")
+        .show(ui, |ui| {
+            ui.label(format!(
+                "{} alarms in {} intervals of 10 min; {} in flood (more than {} alarms)",
+                k.total,
+                k.intervals,
+                k.flood_intervals,
+                vigie_core::alarms::FLOOD_PER_10_MIN
+            ));
+            if !k.chattering.is_empty() {
+                ui.label(format!(
+                    "Chattering (3 or more within a minute): {}",
+                    k.chattering.join(", ")
+                ));
+            }
+            for (source, n) in &k.most_frequent {
+                ui.label(format!("{n} × {source}"));
+            }
+        });
+}
+
+/// The alarm history: every alarm raised, searched and filtered, exported to CSV.
+fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let total = c.sim.alarms.all().len();
+    egui::CollapsingHeader::new(format!("Alarm history ({total})"))
+        .id_salt("alarm_history")
+        .show(ui, |ui| {
+            ui.horizontal_wrapped(|ui| {
+                let l = ui.label("Search");
+                ui.add(egui::TextEdit::singleline(&mut c.history_filter.text).desired_width(120.0))
+                    .labelled_by(l.id);
+                let kinds = [
+                    AlarmKind::FilterTrip,
+                    AlarmKind::Hazard,
+                    AlarmKind::Diagnosis,
+                    AlarmKind::Link,
+                    AlarmKind::Specification,
+                    AlarmKind::Plausibility,
+                    AlarmKind::Task,
+                ];
+                egui::ComboBox::from_id_salt("history_kind")
+                    .selected_text(c.history_filter.kind.map_or("every kind", AlarmKind::name))
+                    .show_ui(ui, |ui| {
+                        ui.selectable_value(&mut c.history_filter.kind, None, "every kind");
+                        for k in kinds {
+                            ui.selectable_value(&mut c.history_filter.kind, Some(k), k.name());
+                        }
+                    });
+                let prio = |p: Option<AlarmPriority>| {
+                    p.map_or("every priority".to_string(), |p| format!("P{}", p.rank()))
+                };
+                egui::ComboBox::from_id_salt("history_priority")
+                    .selected_text(prio(c.history_filter.priority))
+                    .show_ui(ui, |ui| {
+                        for p in [
+                            None,
+                            Some(AlarmPriority::Urgent),
+                            Some(AlarmPriority::High),
+                            Some(AlarmPriority::Medium),
+                        ] {
+                            ui.selectable_value(&mut c.history_filter.priority, p, prio(p));
+                        }
+                    });
+            });
+            let list = c.sim.alarms.history(&c.history_filter);
+            ui.horizontal(|ui| {
+                ui.label(format!("{} of {total}", list.len()));
+                if ui.button("Export alarms CSV").clicked() {
+                    out.push(Command::ExportAlarms("vigie-alarms.csv".into()));
+                }
+            });
+            const SHOWN: usize = 100;
+            for a in list.iter().take(SHOWN) {
+                let cleared = a
+                    .cleared
+                    .map_or(String::new(), |t| format!(", cleared {}", fmt_ms(t.0)));
+                let ack = a.acknowledged.as_ref().map_or(String::new(), |(t, n)| {
+                    format!(
+                        ", ack {}{}",
+                        fmt_ms(t.0),
+                        if n.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" ({n})")
+                        }
+                    )
+                });
+                ui.label(
+                    RichText::new(format!(
+                        "{:>9} P{} {}{cleared}{ack}",
+                        fmt_ms(a.raised.0),
+                        a.priority().rank(),
+                        a.message
+                    ))
+                    .size(11.0),
+                );
+            }
+            if list.len() > SHOWN {
+                ui.weak(format!(
+                    "… {} more: narrow the search or export",
+                    list.len() - SHOWN
+                ));
+            }
+        });
 }
 
 /// One alarm: priority, first-out, state, time and the operator's text; the detail one
@@ -948,6 +1078,10 @@ fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             out.push(Command::ExportCsv(c.csv_path.clone().into()));
         }
     });
+    ui.weak(format!(
+        "Exports go under {}",
+        c.export_path(std::path::Path::new("")).display()
+    ));
 }
 
 fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
