@@ -188,6 +188,12 @@ pub struct Engine {
     estimated: Vec<bool>,
     filter: Filter,
     filter_state: FilterState,
+    /// The constraint set as loaded, kept to rebuild the filter without the bypassed
+    /// constraints.
+    constraints: crate::constraints::ConstraintSet,
+    /// Constraints the filter does not enforce (a time-limited bypass, seed 004 section
+    /// 7); their ids stay in place (a bypassed constraint has no term).
+    bypassed: std::collections::BTreeSet<String>,
     notation: Vec<String>,
     mode: FilterMode,
     frame: Frame,
@@ -240,6 +246,8 @@ impl Engine {
             estimates: Vec::new(),
             estimated: Vec::new(),
             filter_state: Filter::new(&bundle.constraints, n_out).new_state(),
+            constraints: bundle.constraints.clone(),
+            bypassed: std::collections::BTreeSet::new(),
             filter: Filter::for_plant(&bundle.constraints, &bundle.plant),
             notation: bundle
                 .constraints
@@ -265,6 +273,27 @@ impl Engine {
             events: Vec::new(),
             history: History::new(history_cycles),
         }
+    }
+
+    /// Enforces every constraint but `ids` from the next cycle on (a bypass: each of
+    /// them is as if it had no term; the others, the fallback and the trip are
+    /// unchanged). An empty set restores the whole set.
+    pub fn set_bypassed(&mut self, ids: std::collections::BTreeSet<String>) {
+        let mut set = self.constraints.clone();
+        for c in &mut set.constraints {
+            if ids.contains(&c.id) {
+                c.dnf.clear();
+            }
+        }
+        let safe = self.filter.safe_values().to_vec();
+        self.filter = Filter::new(&set, self.commanded.len()).with_safe_values(safe);
+        self.filter_state = self.filter.new_state();
+        self.bypassed = ids;
+    }
+
+    /// The constraints bypassed now.
+    pub fn bypassed(&self) -> &std::collections::BTreeSet<String> {
+        &self.bypassed
     }
 
     /// The filter mode.

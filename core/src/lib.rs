@@ -14,6 +14,7 @@
 //!
 //! See `ARCHITECTURE.md` at the repository root for the data flow and the invariants.
 
+pub mod access;
 pub mod alarms;
 pub mod bits;
 pub mod bundle;

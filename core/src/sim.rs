@@ -100,10 +100,70 @@ pub enum OperatorAction {
     /// program from its initial steps (it did not follow what the operator did): press
     /// Start.
     Manual(bool),
+    /// Bypass one safety constraint for a limited time (seed 004, section 7: "invalidant
+    /// certaines contraintes de sécurité s'il y a lieu"), with a reason and who asked;
+    /// at most [`MAX_BYPASS_MIN`] minutes, refused on a live link. It ends by itself.
+    Bypass {
+        /// The constraint's id.
+        constraint: String,
+        /// Duration, minutes of plant time.
+        minutes: u64,
+        /// Why.
+        reason: String,
+        /// Who (the logged-in user).
+        by: String,
+    },
+    /// End a bypass now.
+    EndBypass(String),
+    /// The operator's answer to a diagnoser in doubt (seed 004, section 7): whether
+    /// an item is at `sensor`, looked at on the machine.
+    AnswerDoubt {
+        /// The component in doubt.
+        component: String,
+        /// The sensor asked about.
+        sensor: String,
+        /// The operator sees an item there.
+        item: bool,
+    },
     /// Manual mode: request an output ON or OFF. The request is checked against every
     /// constraint with the plant as it is; one that would violate a constraint is
     /// refused with the constraint's own description and never reaches the plant.
     ManualSet(String, bool),
+}
+
+/// A question the console asks the operator while a diagnoser is in doubt between a
+/// drive that stops items and a sensor it cannot estimate: the operator's eyes tell
+/// them apart.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct DoubtQuestion {
+    /// The component in doubt.
+    pub component: String,
+    /// The sensor to look at.
+    pub sensor: String,
+    /// What the sensor reads now.
+    pub reading: bool,
+    /// The question, in the plant's words.
+    pub question: String,
+    /// The candidates of the sensor's partition.
+    pub sensor_faults: Vec<String>,
+    /// The other candidates (the stopping drive's).
+    pub other_faults: Vec<String>,
+}
+
+/// The longest bypass of a constraint: one shift.
+pub const MAX_BYPASS_MIN: u64 = 480;
+
+/// A constraint the filter does not enforce for a while.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Bypass {
+    /// When it started.
+    pub from: Millis,
+    /// When it ends by itself.
+    pub until: Millis,
+    /// Why.
+    pub reason: String,
+    /// Who asked.
+    pub by: String,
 }
 
 /// An operator action at a time.
@@ -293,6 +353,10 @@ pub struct Simulation {
     /// Manual mode: the outputs the operator requested, in place of the program's (not
     /// scanned meanwhile); every request was checked against the constraints.
     manual: Option<Bits>,
+    /// The bypassed constraints, by id.
+    bypasses: BTreeMap<String, Bypass>,
+    /// The operator's answers to the diagnosers' doubts, by component: the conclusion.
+    answers: BTreeMap<String, String>,
 }
 
 /// The plant's task monitors, stepped after the filter every cycle.
@@ -466,6 +530,8 @@ impl Simulation {
             diag_seen: 0,
             degraded: Vec::new(),
             manual: None,
+            bypasses: BTreeMap::new(),
+            answers: BTreeMap::new(),
         })
     }
 
@@ -562,6 +628,175 @@ impl Simulation {
         } else {
             PlantState::Running
         }
+    }
+
+    /// The questions for the diagnosers in doubt now (a stop on the safe side between a
+    /// drive and a sensor without estimate), one per sensor among the candidates, not
+    /// yet answered.
+    pub fn doubt_questions(&self) -> Vec<DoubtQuestion> {
+        let Some(d) = self.diagnosers.as_ref() else {
+            return Vec::new();
+        };
+        let flagged = d.flagged();
+        let mut out = Vec::new();
+        for c in &d.compiled.components {
+            if self.answers.contains_key(&c.id) {
+                continue;
+            }
+            // The component's stop on the safe side, still flagged.
+            let Some(doubt) = d.diagnoses.iter().rev().find(|x| {
+                x.component == c.id
+                    && x.certainty == crate::pop::Certainty::Ambiguous
+                    && flagged
+                        .iter()
+                        .any(|(p, stop, _)| *stop && *p == x.partition)
+            }) else {
+                continue;
+            };
+            let candidates: Vec<&str> = doubt.fault.split('|').collect();
+            for p in c.partitions.iter().filter(|p| !p.stop) {
+                let Some(sensor) = p.sensor.as_deref() else {
+                    continue;
+                };
+                let of_p = |f: &str| p.faults.iter().any(|&i| c.faults[i] == f);
+                let (sensor_faults, other_faults): (Vec<&str>, Vec<&str>) =
+                    candidates.iter().partition(|f| of_p(f));
+                if sensor_faults.is_empty() {
+                    continue;
+                }
+                let sensor_faults: Vec<String> =
+                    sensor_faults.into_iter().map(str::to_string).collect();
+                let other_faults: Vec<String> =
+                    other_faults.into_iter().map(str::to_string).collect();
+                let Some(k) = self.bundle.plant.inputs.iter().position(|s| s.id == sensor) else {
+                    continue;
+                };
+                let signal = &self.bundle.plant.inputs[k];
+                let reading = self.emulator_or_link_input(k);
+                let place = if signal.element.is_empty() {
+                    String::new()
+                } else {
+                    format!("Look at the {}: ", signal.element)
+                };
+                out.push(DoubtQuestion {
+                    component: c.id.clone(),
+                    sensor: sensor.to_string(),
+                    reading,
+                    question: format!(
+                        "{place}is there an item at {sensor} ({})? {sensor} reads {}.",
+                        signal.description,
+                        u8::from(reading)
+                    ),
+                    sensor_faults,
+                    other_faults,
+                });
+            }
+        }
+        out
+    }
+
+    /// The raw reading of input `k` (the last cycle's, before any estimate).
+    fn emulator_or_link_input(&self, k: usize) -> bool {
+        self.engine
+            .history
+            .last()
+            .map_or(false, |r| r.inputs.get(k))
+    }
+
+    /// The operator's answers so far, by component (cleared by the diagnosers' reset).
+    pub fn doubt_answers(&self) -> &BTreeMap<String, String> {
+        &self.answers
+    }
+
+    fn answer_doubt(&mut self, component: &str, sensor: &str, item: bool) -> Result<(), String> {
+        let q = self
+            .doubt_questions()
+            .into_iter()
+            .find(|q| q.component == component && q.sensor == sensor)
+            .ok_or_else(|| format!("no open question about {sensor} for {component}"))?;
+        let seen = if item { "an item" } else { "no item" };
+        let conclusion = if item == q.reading {
+            format!(
+                "{component}: the operator sees {seen} at {sensor}, as {sensor} reads: \
+                 {sensor} is right, the cause is {} (check that drive), then reset the \
+                 diagnosers",
+                q.other_faults.join(" or ")
+            )
+        } else {
+            format!(
+                "{component}: the operator sees {seen} at {sensor}, which reads {}: \
+                 {sensor} is at fault ({}); repair it, then reset the diagnosers",
+                u8::from(q.reading),
+                q.sensor_faults.join(" or ")
+            )
+        };
+        self.answers.insert(component.to_string(), conclusion);
+        Ok(())
+    }
+
+    /// The constraints bypassed now, by id.
+    pub fn bypasses(&self) -> &BTreeMap<String, Bypass> {
+        &self.bypasses
+    }
+
+    fn bypass(&mut self, id: &str, minutes: u64, reason: &str, by: &str) -> Result<(), String> {
+        if self.is_live() {
+            return Err(
+                "a bypass acts on the filter that drives the plant: on a live link \
+                        that is the gateway's, not the console's mirror"
+                    .into(),
+            );
+        }
+        if self.bundle.constraints.get(id).is_none() || id.starts_with("DSTOP_") {
+            return Err(format!("no safety constraint `{id}`"));
+        }
+        if reason.trim().is_empty() {
+            return Err("a bypass needs a reason".into());
+        }
+        if minutes == 0 || minutes > MAX_BYPASS_MIN {
+            return Err(format!(
+                "a bypass lasts 1 to {MAX_BYPASS_MIN} min (one shift), not {minutes}"
+            ));
+        }
+        let now = self.now();
+        self.bypasses.insert(
+            id.to_string(),
+            Bypass {
+                from: now,
+                until: now + Millis(minutes * 60_000),
+                reason: reason.trim().to_string(),
+                by: by.to_string(),
+            },
+        );
+        self.apply_bypasses();
+        Ok(())
+    }
+
+    /// Gives the engine the set of bypassed constraints.
+    fn apply_bypasses(&mut self) {
+        self.engine
+            .set_bypassed(self.bypasses.keys().cloned().collect());
+    }
+
+    /// Ends the bypasses whose time is up (journaled).
+    fn expire_bypasses(&mut self, now: Millis) {
+        let ended: Vec<String> = self
+            .bypasses
+            .iter()
+            .filter(|(_, b)| b.until <= now)
+            .map(|(id, _)| id.clone())
+            .collect();
+        if ended.is_empty() {
+            return;
+        }
+        for id in &ended {
+            self.bypasses.remove(id);
+            self.log(
+                "bypass_end",
+                format!("{id} enforced again (the bypass's time is up)"),
+            );
+        }
+        self.apply_bypasses();
     }
 
     /// The outputs requested by hand, in manual mode.
@@ -672,6 +907,25 @@ impl Simulation {
             OperatorAction::Manual(true) => self.enter_manual(),
             OperatorAction::Manual(false) => self.leave_manual(),
             OperatorAction::ManualSet(id, on) => self.manual_set(id, *on),
+            OperatorAction::Bypass {
+                constraint,
+                minutes,
+                reason,
+                by,
+            } => self.bypass(constraint, *minutes, reason, by),
+            OperatorAction::AnswerDoubt {
+                component,
+                sensor,
+                item,
+            } => self.answer_doubt(component, sensor, *item),
+            OperatorAction::EndBypass(id) => {
+                if self.bypasses.remove(id).is_some() {
+                    self.apply_bypasses();
+                    Ok(())
+                } else {
+                    Err(format!("{id} is not bypassed"))
+                }
+            }
             OperatorAction::Start if self.engine.is_tripped() => Err(format!(
                 "refused: the safety filter has stopped the plant ({}); Reset first, then \
                  Start",
@@ -774,6 +1028,30 @@ impl Simulation {
                 format!("{id} {} by hand", if *on { "ON" } else { "OFF" }),
             ),
             (Err(e), OperatorAction::ManualSet(..)) => self.log("manual_refused", e.clone()),
+            (
+                Ok(()),
+                OperatorAction::Bypass {
+                    constraint,
+                    minutes,
+                    reason,
+                    by,
+                },
+            ) => self.log(
+                "bypass",
+                format!(
+                    "{constraint} bypassed for {minutes} min by {by}: {reason} (the filter \
+                     does not enforce it until {} ms)",
+                    now.0 + minutes * 60_000
+                ),
+            ),
+            (Err(e), OperatorAction::Bypass { .. }) => self.log("bypass_refused", e.clone()),
+            (Ok(()), OperatorAction::AnswerDoubt { component, .. }) => {
+                let conclusion = self.answers.get(component).cloned().unwrap_or_default();
+                self.log("operator_answer", conclusion);
+            }
+            (Ok(()), OperatorAction::EndBypass(id)) => {
+                self.log("bypass_end", format!("{id} enforced again (bypass ended)"));
+            }
             (Ok(()), OperatorAction::ResetDiagnosers) => self.diagnosers_cleared(
                 now,
                 "operator reset of the diagnosers after a repair: fault flags cleared, \
@@ -790,6 +1068,7 @@ impl Simulation {
     /// the sensors are read again and the diagnosis alarms end.
     fn diagnosers_cleared(&mut self, now: Millis, text: &str) {
         self.degraded.clear();
+        self.answers.clear();
         for key in self.alarms.active_keys(AlarmKind::Diagnosis) {
             self.alarms.clear(now, &key);
         }
@@ -871,6 +1150,7 @@ impl Simulation {
     /// Runs one PLC cycle.
     pub fn cycle(&mut self) {
         let now = self.now();
+        self.expire_bypasses(now);
         while self.pending.front().is_some_and(|a| a.at_ms <= now.0) {
             if let Some(a) = self.pending.pop_front() {
                 let _ = self.act(&a.action);

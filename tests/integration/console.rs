@@ -272,6 +272,26 @@ fn a_stop_on_the_safe_side_says_it_is_in_doubt_and_what_to_do() {
             .is_none()
     );
     h.get_by_label_contains("0 certain diagnoses, 1 stops on the safe side");
+    // The question that lifts the doubt (issue 19, seed 004 section 7), answered as the
+    // operator sees the machine: the box is held at C0 against the dead belt.
+    h.get_by_label(
+        "Question: Look at the Entry conveyor: is there an item at C0 (Box at the end of \
+         the entry conveyor)? C0 reads 1.",
+    );
+    h.get_by_label("Yes, an item is there (C0)").click();
+    h.run_steps(2);
+    h.get_by_label(
+        "Operator's answer: feed: the operator sees an item at C0, as C0 reads: C0 is \
+         right, the cause is M1_blocked (check that drive), then reset the diagnosers",
+    );
+    assert!(h.query_by_label_contains("Question:").is_none());
+    assert!(
+        h.state()
+            .sim
+            .journal()
+            .iter()
+            .any(|j| j.kind == "operator_answer")
+    );
 }
 
 /// Issue 17 (recovery) as an operator meets it: a C6 pulse while the table pulls a box
@@ -729,5 +749,172 @@ fn the_alarm_history_searches_filters_exports_and_the_rate_shows_a_flood() {
     h.state_mut()
         .apply(Command::ExportCsv("journal-export.csv".into()));
     assert!(data.join("journal-export.csv").is_file());
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+/// A data folder with two accounts: marie (maintenance) and tom (operator).
+fn data_with_accounts(name: &str) -> PathBuf {
+    let data = temp_dir(name);
+    let mut users = vigie_app::console::users::Users::default();
+    users
+        .set(
+            "marie",
+            vigie_core::access::Role::Maintenance,
+            "correct horse",
+        )
+        .unwrap();
+    users
+        .set("tom", vigie_core::access::Role::Operator, "battery staple")
+        .unwrap();
+    users.save(&data).unwrap();
+    data
+}
+
+/// Roles: the operator cannot open Maintenance on the production program (button
+/// disabled, the command refused and journaled); a wrong password is refused without
+/// saying which part was wrong and without journaling it; maintenance logs in, opens
+/// Maintenance, logs out and is back to the operator role.
+#[test]
+fn login_roles_and_a_refused_maintenance_action_for_the_operator() {
+    let data = data_with_accounts("roles");
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.data_dir = Some(data.clone());
+    let mut h = harness(o);
+    h.run_steps(2);
+    assert!(h.get_by_label("Maintenance").accesskit_node().is_disabled());
+    h.state_mut().apply(Command::SetMode(Mode::Maintenance));
+    h.run_steps(2);
+    assert_eq!(h.state().mode, Mode::Production);
+    assert_eq!(
+        h.state().status,
+        "Refused: editing the program needs the maintenance or administrator role \
+         (operator now): log in"
+    );
+    // A wrong password.
+    h.get_by_label("Log in…").click();
+    h.run_steps(2);
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "User")
+        .focus();
+    h.run_steps(1);
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "User")
+        .type_text("marie");
+    h.run_steps(1);
+    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
+        .focus();
+    h.run_steps(1);
+    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
+        .type_text("wrong one");
+    h.run_steps(1);
+    h.get_by_label("Log in").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().status,
+        "Login refused: unknown user or wrong password"
+    );
+    assert_eq!(h.state().role, vigie_core::access::Role::Operator);
+    // The right one (the dialog is still open, the password field emptied).
+    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
+        .focus();
+    h.run_steps(1);
+    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
+        .type_text("correct horse");
+    h.run_steps(1);
+    h.get_by_label("Log in").click();
+    h.run_steps(2);
+    assert_eq!(h.state().status, "marie logged in (maintenance)");
+    h.get_by_label("marie · maintenance");
+    h.get_by_label("Maintenance").click();
+    h.run_steps(2);
+    assert_eq!(h.state().mode, Mode::Maintenance);
+    h.get_by_label("Log out").click();
+    h.run_steps(2);
+    assert_eq!(h.state().mode, Mode::Production);
+    assert_eq!(h.state().role, vigie_core::access::Role::Operator);
+    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
+    for needle in [
+        "\"refused\"",
+        "\"login_refused\"",
+        "login refused for `marie`",
+        "\"login\"",
+        "marie logged out",
+    ] {
+        assert!(
+            journal.contains(needle),
+            "journal lacks {needle}:\n{journal}"
+        );
+    }
+    assert!(!journal.contains("wrong one") && !journal.contains("correct horse"));
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+/// A bypass of one constraint: refused for the operator; for maintenance, with a
+/// reason, shown on a banner on every screen while active, ended by hand, journaled at
+/// each step.
+#[test]
+fn a_bypass_needs_maintenance_shows_a_banner_and_is_journaled() {
+    let data = data_with_accounts("bypass");
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.data_dir = Some(data.clone());
+    let mut h = harness(o);
+    h.run_steps(2);
+    let bypass = Command::Plant(vigie_core::sim::OperatorAction::Bypass {
+        constraint: "CSs1".into(),
+        minutes: 15,
+        reason: "sensor C1 replaced".into(),
+        by: "tom".into(),
+    });
+    h.state_mut().apply(bypass);
+    assert!(h.state().sim.bypasses().is_empty());
+    assert!(
+        h.state()
+            .status
+            .starts_with("Refused: bypassing a safety constraint")
+    );
+    h.state_mut().apply(Command::Login {
+        name: "marie".into(),
+        password: "correct horse".into(),
+    });
+    h.get_by_label("Maintenance").click();
+    h.run_steps(2);
+    h.get_by_label("Bypass a constraint");
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Bypass reason")
+        .focus();
+    h.run_steps(1);
+    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Bypass reason")
+        .type_text("sensor C1 replaced");
+    h.run_steps(1);
+    h.get_by_label("Bypass now").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().sim.engine.bypassed().iter().collect::<Vec<_>>(),
+        ["CSs1"]
+    );
+    // The banner, on the production screen too.
+    h.get_by_label("Production").click();
+    h.run_steps(2);
+    h.get_by_label_contains(
+        "BYPASS: CSs1 (two boxes between C0 and C1: stop the entry conveyor) is not \
+         enforced until",
+    );
+    // The banner and the journal's line both say who and why.
+    assert_eq!(
+        h.get_all_by_label_contains("by marie: sensor C1 replaced")
+            .count(),
+        2
+    );
+    h.get_by_label("End bypass of CSs1").click();
+    h.run_steps(2);
+    assert!(h.state().sim.engine.bypassed().is_empty());
+    assert!(h.query_by_label_contains("BYPASS:").is_none());
+    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
+    for needle in [
+        "CSs1 bypassed for 15 min by marie: sensor C1 replaced",
+        "\"bypass_end\"",
+    ] {
+        assert!(
+            journal.contains(needle),
+            "journal lacks {needle}:\n{journal}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&data);
 }

@@ -207,6 +207,12 @@ pub(crate) enum Command {
     },
     /// Measure the diagnosers (per cycle, build) and libFAUDES' centralized diagnoser.
     BenchDiag,
+    /// The console's user accounts (roles, argon2id password hashes in
+    /// `users.ron` of the data folder).
+    User {
+        #[command(subcommand)]
+        action: UserAction,
+    },
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -216,8 +222,66 @@ pub(crate) enum Command {
 }
 
 /// Runs the parsed command line.
+/// What `vigie user` does.
+#[derive(clap::Subcommand, Debug)]
+pub(crate) enum UserAction {
+    /// Add an account, or replace its role and password; the password is the first
+    /// line of standard input (at least 8 characters), never an argument.
+    Add {
+        /// Login name (one word).
+        name: String,
+        /// operator, maintenance, trainer or administrator.
+        #[arg(long)]
+        role: String,
+        /// The data folder (default: `VIGIE_DATA_DIR`, else `$XDG_DATA_HOME/vigie`,
+        /// else `~/.local/share/vigie`).
+        #[arg(long)]
+        data_dir: Option<PathBuf>,
+    },
+    /// List the accounts and their roles.
+    List {
+        /// The data folder (as for `add`).
+        #[arg(long)]
+        data_dir: Option<PathBuf>,
+    },
+}
+
+fn user(action: UserAction) -> anyhow::Result<ExitCode> {
+    use vigie_app::console::users::Users;
+    let dir = |d: Option<PathBuf>| d.unwrap_or_else(vigie_app::console::journal::data_dir_from_env);
+    match action {
+        UserAction::Add {
+            name,
+            role,
+            data_dir,
+        } => {
+            let dir = dir(data_dir);
+            let role = vigie_core::access::Role::parse(&role).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "unknown role `{role}` (operator, maintenance, trainer, administrator)"
+                )
+            })?;
+            let mut password = String::new();
+            std::io::stdin().read_line(&mut password)?;
+            let password = password.trim_end_matches(['\n', '\r']);
+            let mut users = Users::load(&dir)?;
+            users.set(&name, role, password)?;
+            users.save(&dir)?;
+            println!("{name}: {} ({})", role.name(), Users::path(&dir).display());
+        }
+        UserAction::List { data_dir } => {
+            let dir = dir(data_dir);
+            for a in Users::load(&dir)?.accounts {
+                println!("{}\t{}", a.name, a.role.name());
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match cli.command {
+        Some(Command::User { action }) => user(action),
         Some(Command::Check { dir, json }) => check::run(&dir.unwrap_or(cli.plant), json),
         Some(Command::Filter {
             dir,

@@ -90,6 +90,30 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             };
             ui.label(RichText::new(line).strong().color(color));
         }
+        // Seed 004, section 7: the operator's eyes lift the doubt.
+        for q in c.sim.doubt_questions() {
+            egui::Frame::group(ui.style())
+                .stroke(egui::Stroke::new(2.0, c.palette.highlight))
+                .show(ui, |ui| {
+                    ui.horizontal_wrapped(|ui| {
+                        ui.label(RichText::new(format!("Question: {}", q.question)).strong());
+                        for (item, text) in
+                            [(true, "Yes, an item is there"), (false, "No item there")]
+                        {
+                            if ui.button(format!("{text} ({})", q.sensor)).clicked() {
+                                out.push(Command::Plant(OperatorAction::AnswerDoubt {
+                                    component: q.component.clone(),
+                                    sensor: q.sensor.clone(),
+                                    item,
+                                }));
+                            }
+                        }
+                    });
+                });
+        }
+        for conclusion in c.sim.doubt_answers().values() {
+            ui.label(RichText::new(format!("Operator's answer: {conclusion}")).strong());
+        }
         if !lines.is_empty()
             && ui
                 .button("Reset diagnosers (after repair)")

@@ -10,6 +10,7 @@ pub mod link;
 pub mod report;
 pub mod synoptic;
 mod training;
+pub mod users;
 mod verification;
 mod views;
 
@@ -17,6 +18,7 @@ use crate::theme::Palette;
 use journal::Journal;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+use vigie_core::access::{Permission, Role};
 use vigie_core::control::{CompiledProgram, ErrorLibrary, Origin, Program};
 use vigie_core::emulator::FaultSpec;
 use vigie_core::sim::{OperatorAction, Options, ProgramChoice, Scenario, Simulation};
@@ -122,6 +124,15 @@ pub enum Command {
     Restart,
     /// Training: load a variant of the control-error library.
     LoadVariant(String),
+    /// Log in with a name and a password (checked against `users.ron`).
+    Login {
+        /// Login name.
+        name: String,
+        /// Password (never stored nor journaled).
+        password: String,
+    },
+    /// Log out: back to the operator role.
+    Logout,
     /// Training: inject a fault of the fault library now.
     InjectFault(usize),
     /// Training: re-run the scenario with the compiled edit and score it.
@@ -393,6 +404,16 @@ pub struct Console {
     pending: Vec<Command>,
     /// The live link followed instead of the emulator (`link.rs`).
     pub link: Option<link::LinkSession>,
+    /// The accounts of the data folder.
+    pub(crate) users: users::Users,
+    /// Who is logged in (`None`: nobody, the operator role).
+    pub user: Option<String>,
+    /// The role in force.
+    pub role: Role,
+    /// The login dialog, open: the name and password typed.
+    pub(crate) login: Option<(String, String)>,
+    /// The bypass form: constraint, reason, minutes.
+    pub(crate) bypass_form: (String, String, u64),
 }
 
 /// Alarms on one page of the list.
@@ -527,12 +548,29 @@ impl Console {
             visuals_set: false,
             pending: Vec::new(),
             link: None,
+            users: match opts.data_dir.as_deref().map(users::Users::load) {
+                None => users::Users::default(),
+                Some(Ok(u)) => u,
+                Some(Err(e)) => {
+                    tracing::warn!("{e}");
+                    users::Users::default()
+                }
+            },
+            user: None,
+            role: Role::Operator,
+            login: None,
+            bypass_form: (String::new(), String::new(), 15),
         };
         c.attach_link(opts)?;
         c.drain_journal();
         c.follow_trip();
         if c.mode == Mode::Maintenance {
-            c.enter_maintenance();
+            if c.may(Permission::EditProgram) {
+                c.enter_maintenance();
+            } else {
+                c.mode = Mode::Production;
+                c.status = c.refusal(Permission::EditProgram);
+            }
         }
         Ok(c)
     }
@@ -616,6 +654,38 @@ impl Console {
         self.sim.now()
     }
 
+    /// A training exercise: an error-library variant on the emulator, which never drives
+    /// a plant; editing it is the exercise, open to every role.
+    pub fn is_exercise(&self) -> bool {
+        self.link.is_none() && matches!(self.source.scenario.program, ProgramChoice::Error(_))
+    }
+
+    /// True when the role in force may do `p` (editing an exercise is everyone's).
+    pub fn may(&self, p: Permission) -> bool {
+        self.role.may(p) || (p == Permission::EditProgram && self.is_exercise())
+    }
+
+    /// The refusal of `p` for the role in force.
+    fn refusal(&self, p: Permission) -> String {
+        format!(
+            "Refused: {} needs the {} role ({} now): log in",
+            p.what(),
+            p.roles().join(" or "),
+            self.role.name()
+        )
+    }
+
+    /// Checks `p`; a refusal is shown and journaled.
+    fn require(&mut self, p: Permission) -> bool {
+        if self.may(p) {
+            return true;
+        }
+        self.status = self.refusal(p);
+        let now = self.now().0;
+        self.journal.push(now, "refused", &self.status.clone());
+        false
+    }
+
     /// Where an export goes: an absolute path as given, a relative one under the data
     /// folder (the journal's), never the current folder.
     pub fn export_path(&self, path: &Path) -> PathBuf {
@@ -640,7 +710,48 @@ impl Console {
             return;
         }
         let now = self.now().0;
+        let needs = match &cmd {
+            Command::SetMode(Mode::Maintenance) | Command::Recompile | Command::RestartWithEdit => {
+                Some(Permission::EditProgram)
+            }
+            Command::Plant(OperatorAction::Filter(_)) => Some(Permission::ChangeFilterMode),
+            Command::Plant(OperatorAction::Bypass { .. }) => Some(Permission::BypassConstraint),
+            Command::InjectFault(_) => Some(Permission::Train),
+            _ => None,
+        };
+        if let Some(p) = needs
+            && !self.require(p)
+        {
+            return;
+        }
         match cmd {
+            Command::Login { name, password } => match self.users.verify(&name, &password) {
+                Ok(role) => {
+                    self.role = role;
+                    self.user = Some(name.trim().to_string());
+                    self.login = None;
+                    self.status = format!("{} logged in ({})", name.trim(), role.name());
+                    self.journal.push(now, "login", &self.status.clone());
+                }
+                Err(e) => {
+                    self.status = format!("Login refused: {e}");
+                    self.journal.push(
+                        now,
+                        "login_refused",
+                        &format!("login refused for `{}`: {e}", name.trim()),
+                    );
+                }
+            },
+            Command::Logout => {
+                if let Some(u) = self.user.take() {
+                    self.journal.push(now, "logout", &format!("{u} logged out"));
+                }
+                self.role = Role::Operator;
+                if self.mode == Mode::Maintenance && !self.may(Permission::EditProgram) {
+                    self.mode = Mode::Production;
+                }
+                self.status = "Logged out: operator role".into();
+            }
             Command::Run => self.running = true,
             Command::Pause => self.running = false,
             Command::Step => {
@@ -687,6 +798,29 @@ impl Console {
                     (Ok(()), OperatorAction::ManualSet(id, on)) => {
                         format!("{id} {} by hand", if *on { "ON" } else { "OFF" })
                     }
+                    (
+                        Ok(()),
+                        OperatorAction::Bypass {
+                            constraint,
+                            minutes,
+                            ..
+                        },
+                    ) => {
+                        self.bypass_form.1.clear();
+                        format!(
+                            "{constraint} bypassed for {minutes} min: the banner stays while it lasts"
+                        )
+                    }
+                    (Ok(()), OperatorAction::EndBypass(id)) => format!("{id} enforced again"),
+                    (Ok(()), OperatorAction::Start) => "Start pressed".to_string(),
+                    (Ok(()), OperatorAction::Stop) => "Stop pressed".to_string(),
+                    (Ok(()), OperatorAction::Reset) => {
+                        "Reset: the filter releases the plant".to_string()
+                    }
+                    (Ok(()), OperatorAction::ResetDiagnosers) => {
+                        "Diagnosers reset: the sensors are read again".to_string()
+                    }
+                    (Ok(()), OperatorAction::Press(b)) => format!("{b} pressed"),
                     (Ok(()), _) => format!("{action:?}: done"),
                     (Err(e), OperatorAction::ManualSet(..)) => e.clone(),
                     (Err(e), OperatorAction::Reset) => {

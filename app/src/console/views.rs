@@ -5,6 +5,7 @@ use super::synoptic::{self, Geometry, Picture};
 use super::{ALARMS_PER_PAGE, Command, Console, LEVEL_NAMES, Mode, ShelveForm};
 use egui::{Align2, Color32, FontId, RichText, Sense, Stroke, pos2, vec2};
 use std::collections::{BTreeMap, BTreeSet};
+use vigie_core::access::Permission;
 use vigie_core::alarms::{AlarmKind, AlarmPriority, AlarmState};
 use vigie_core::sim::{OperatorAction, PlantState};
 use vigie_core::time::Millis;
@@ -16,6 +17,8 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.panel))
         .show(ui, |ui| toolbar_ui(c, ui, out));
     unprotected_ui(c, ui);
+    bypass_banner_ui(c, ui, out);
+    login_ui(c, ui, out);
     reinit_confirm_ui(c, ui, out);
     manual_confirm_ui(c, ui, out);
     // Below the toolbar: the degraded-mode banner and the diagnosers' table.
@@ -48,6 +51,8 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
                         journal_ui(c, ui, out);
                     }
                     Mode::Maintenance => {
+                        bypass_form_ui(c, ui, out);
+                        ui.separator();
                         explanation_ui(c, ui, out);
                         ui.separator();
                         alarms_ui(c, ui, out);
@@ -109,7 +114,11 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             (Mode::Maintenance, "Maintenance"),
             (Mode::Training, "Training"),
         ] {
-            if ui.selectable_label(c.mode == m, name).clicked() && c.mode != m {
+            let allowed = m != Mode::Maintenance || c.may(Permission::EditProgram);
+            let r = ui.add_enabled(allowed, egui::Button::selectable(c.mode == m, name));
+            let r =
+                r.on_disabled_hover_text("Editing the program needs the maintenance role: log in");
+            if r.clicked() && c.mode != m {
                 out.push(Command::SetMode(m));
             }
         }
@@ -221,7 +230,184 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         }
         ui.separator();
         state_ui(c, ui);
+        ui.separator();
+        match &c.user {
+            Some(u) => {
+                ui.label(format!("{u} · {}", c.role.name()));
+                if ui.button("Log out").clicked() {
+                    out.push(Command::Logout);
+                }
+            }
+            None => {
+                if ui
+                    .button("Log in…")
+                    .on_hover_text(
+                        "Operator role until a maintenance, trainer or administrator login",
+                    )
+                    .clicked()
+                {
+                    c.login = Some((String::new(), String::new()));
+                }
+            }
+        }
     });
+}
+
+/// The login dialog: name and password (hidden), checked against the accounts of the
+/// data folder (`vigie user add`).
+fn login_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let no_accounts = c.users.accounts.is_empty();
+    let Some((name, password)) = c.login.as_mut() else {
+        return;
+    };
+    let mut close = false;
+    let mut enter = false;
+    let modal = egui::Modal::new(egui::Id::unique("login")).show(ui.ctx(), |ui| {
+        ui.set_min_width(360.0);
+        ui.set_max_width(380.0);
+        ui.heading("Log in to the console");
+        if no_accounts {
+            ui.label(
+                "No account in the data folder yet: an administrator creates them with \
+                 `vigie user add NAME --role maintenance` (the password on standard input).",
+            );
+        }
+        egui::Grid::new("login_grid").show(ui, |ui| {
+            let l = ui.label("User");
+            ui.add(egui::TextEdit::singleline(name).min_size(vec2(180.0, 0.0)))
+                .labelled_by(l.id);
+            ui.end_row();
+            let l = ui.label("Password");
+            let r = ui
+                .add(
+                    egui::TextEdit::singleline(password)
+                        .password(true)
+                        .min_size(vec2(180.0, 0.0)),
+                )
+                .labelled_by(l.id);
+            // Enter in the password field logs in.
+            enter = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+            ui.end_row();
+        });
+        ui.horizontal(|ui| {
+            if ui.button("Log in").clicked() || enter {
+                out.push(Command::Login {
+                    name: name.clone(),
+                    password: std::mem::take(password),
+                });
+            }
+            if ui.button("Cancel").clicked() {
+                close = true;
+            }
+        });
+    });
+    if close || modal.should_close() {
+        c.login = None;
+    }
+}
+
+/// While a constraint is bypassed: a banner on every screen, what is not enforced, until
+/// when, why and by whom, with its end at hand.
+fn bypass_banner_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let bypasses = c.sim.bypasses();
+    if bypasses.is_empty() {
+        return;
+    }
+    let now = c.sim.now();
+    egui::Panel::top("bypass_banner")
+        .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.alarm))
+        .show(ui, |ui| {
+            for (id, b) in bypasses {
+                ui.horizontal_wrapped(|ui| {
+                    let what = c
+                        .sim
+                        .bundle
+                        .constraints
+                        .get(id)
+                        .map(|k| k.description.clone())
+                        .filter(|d| !d.is_empty())
+                        .map_or(String::new(), |d| format!(" ({d})"));
+                    let left_s = b.until.0.saturating_sub(now.0) / 1000;
+                    ui.label(
+                        RichText::new(format!(
+                            "BYPASS: {id}{what} is not enforced until {} ({} min {} s left), by {}: {}",
+                            fmt_ms(b.until.0),
+                            left_s / 60,
+                            left_s % 60,
+                            b.by,
+                            b.reason
+                        ))
+                        .strong()
+                        .color(Color32::BLACK),
+                    );
+                    if ui.button(format!("End bypass of {id}")).clicked() {
+                        out.push(Command::Plant(OperatorAction::EndBypass(id.clone())));
+                    }
+                });
+            }
+        });
+}
+
+/// Maintenance: bypass one constraint for a limited time, with a reason.
+fn bypass_form_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    ui.heading("Bypass a constraint");
+    if !c.may(Permission::BypassConstraint) {
+        ui.label(
+            RichText::new("Bypassing a safety constraint needs the maintenance role: log in.")
+                .color(c.palette.text_dim),
+        );
+        return;
+    }
+    let ids: Vec<String> = c
+        .sim
+        .bundle
+        .constraints
+        .constraints
+        .iter()
+        .map(|k| k.id.clone())
+        .filter(|id| !id.starts_with("DSTOP_") && !c.sim.bypasses().contains_key(id))
+        .collect();
+    let form = &mut c.bypass_form;
+    if !ids.contains(&form.0) {
+        form.0 = ids.first().cloned().unwrap_or_default();
+    }
+    ui.horizontal_wrapped(|ui| {
+        egui::ComboBox::from_id_salt("bypass_constraint")
+            .selected_text(form.0.clone())
+            .show_ui(ui, |ui| {
+                for id in &ids {
+                    ui.selectable_value(&mut form.0, id.clone(), id);
+                }
+            });
+        egui::ComboBox::from_id_salt("bypass_minutes")
+            .selected_text(format!("{} min", form.2))
+            .show_ui(ui, |ui| {
+                for m in [15, 30, 60, 240, 480] {
+                    ui.selectable_value(&mut form.2, m, format!("{m} min"));
+                }
+            });
+        let l = ui.label("Bypass reason");
+        ui.add(egui::TextEdit::singleline(&mut form.1).desired_width(160.0))
+            .labelled_by(l.id);
+        if ui
+            .add_enabled(!form.0.is_empty(), egui::Button::new("Bypass now"))
+            .on_hover_text("The filter stops enforcing this constraint until the time is up")
+            .clicked()
+        {
+            out.push(Command::Plant(OperatorAction::Bypass {
+                constraint: form.0.clone(),
+                minutes: form.2,
+                reason: form.1.clone(),
+                by: c.user.clone().unwrap_or_else(|| c.role.name().to_string()),
+            }));
+        }
+    });
+    if let Some(k) = c.sim.bundle.constraints.get(&c.bypass_form.0) {
+        ui.label(
+            RichText::new(format!("{} = {}: {}", k.id, k.source, k.description))
+                .color(c.palette.text_dim),
+        );
+    }
 }
 
 /// The plant's state, unmistakable from across the room (large, coloured only when

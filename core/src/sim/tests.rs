@@ -979,3 +979,145 @@ fn the_filter_still_stops_what_manual_commands_lead_to() {
     // Tripped: manual requests are overridden by the fallback, leaving is allowed.
     sim.act(&OperatorAction::Manual(false)).expect("leave");
 }
+
+/// A bypass of one constraint (seed 004, section 7): refused without a reason, over a
+/// shift or for an unknown constraint; while active, the filter does not enforce that
+/// constraint (the paper's CSs10 case no longer trips on it) and only it; it ends by
+/// itself at its time and is journaled at each step.
+#[test]
+fn a_bypass_is_bounded_journaled_lifts_only_its_constraint_and_ends_by_itself() {
+    let (_, mut sim) = load_station_scenario("cs10-paper.ron");
+    let bypass = |constraint: &str, minutes: u64, reason: &str| OperatorAction::Bypass {
+        constraint: constraint.into(),
+        minutes,
+        reason: reason.into(),
+        by: "marie".into(),
+    };
+    assert!(
+        sim.act(&bypass("CSs99", 5, "test"))
+            .unwrap_err()
+            .contains("no safety constraint")
+    );
+    assert!(
+        sim.act(&bypass("CSs10", 5, " "))
+            .unwrap_err()
+            .contains("needs a reason")
+    );
+    assert!(
+        sim.act(&bypass("CSs10", 481, "test"))
+            .unwrap_err()
+            .contains("1 to 480 min")
+    );
+    assert!(sim.bypasses().is_empty());
+    sim.act(&bypass("CSs10", 1, "C7 being replaced"))
+        .expect("bypass");
+    assert_eq!(sim.engine.bypassed().iter().collect::<Vec<_>>(), ["CSs10"]);
+    sim.run_until(Millis(20_000));
+    assert!(
+        sim.engine
+            .trips
+            .iter()
+            .all(|t| t.constraints.iter().all(|c| c.id != "CSs10")),
+        "{:?}",
+        sim.engine.trips
+    );
+    assert!(sim.journal().iter().any(|j| {
+        j.kind == "bypass"
+            && j.text
+                .contains("CSs10 bypassed for 1 min by marie: C7 being replaced")
+    }));
+    sim.run_until(Millis(60_100));
+    assert!(sim.bypasses().is_empty());
+    assert!(sim.engine.bypassed().is_empty());
+    assert!(
+        sim.journal()
+            .iter()
+            .any(|j| j.kind == "bypass_end" && j.text.contains("time is up"))
+    );
+    // The same case without the bypass trips on CSs10 (the bypass made the difference).
+    let (s, mut plain) = load_station_scenario("cs10-paper.ron");
+    plain.run_until(Millis(s.duration_ms));
+    assert_eq!(plain.engine.trips[0].constraints[0].id, "CSs10");
+    // Ended early by hand.
+    plain.act(&bypass("CSs2", 30, "test")).expect("bypass");
+    plain
+        .act(&OperatorAction::EndBypass("CSs2".into()))
+        .expect("end");
+    assert!(plain.engine.bypassed().is_empty());
+    assert!(
+        plain
+            .act(&OperatorAction::EndBypass("CSs2".into()))
+            .is_err()
+    );
+}
+
+/// Issue 19, "operator and diagnoser" (seed 004, section 7): the belt dies under a
+/// pushed box; the feed is in doubt between a dead belt and a beam (here C0, on the
+/// box held against the stopped belt) and stops the plant on the safe side. The console
+/// asks the operator the question that tells them apart, in the plant's own words; the
+/// answer gives the conclusion, journaled; the question is not asked again; the
+/// diagnosers' reset forgets the answer.
+#[test]
+fn a_diagnoser_in_doubt_asks_the_operator_and_uses_the_answer() {
+    let (s, mut sim) = load_station_scenario("a1-dead-belt.ron");
+    sim.run_until(Millis(s.duration_ms));
+    let questions = sim.doubt_questions();
+    assert_eq!(questions.len(), 1, "{questions:?}");
+    let q = &questions[0];
+    assert_eq!(
+        (q.component.as_str(), q.sensor.as_str(), q.reading),
+        ("feed", "C0", true)
+    );
+    assert_eq!(
+        q.question,
+        "Look at the Entry conveyor: is there an item at C0 (Box at the end of the entry \
+         conveyor)? C0 reads 1."
+    );
+    assert_eq!(q.sensor_faults, ["C0_stuck1", "C0_rise"]);
+    assert_eq!(q.other_faults, ["M1_blocked"]);
+    // Were there no box at C0, the beam would be at fault.
+    let mut other = load_station_scenario("a1-dead-belt.ron").1;
+    other.run_until(Millis(s.duration_ms));
+    other
+        .act(&OperatorAction::AnswerDoubt {
+            component: "feed".into(),
+            sensor: "C0".into(),
+            item: false,
+        })
+        .expect("answer");
+    assert_eq!(
+        other.doubt_answers()["feed"],
+        "feed: the operator sees no item at C0, which reads 1: C0 is at fault (C0_stuck1 \
+         or C0_rise); repair it, then reset the diagnosers"
+    );
+    // The box is there (the truth: the belt is dead, the box held against it).
+    sim.act(&OperatorAction::AnswerDoubt {
+        component: "feed".into(),
+        sensor: "C0".into(),
+        item: true,
+    })
+    .expect("answer");
+    let conclusion = sim.doubt_answers()["feed"].clone();
+    assert_eq!(
+        conclusion,
+        "feed: the operator sees an item at C0, as C0 reads: C0 is right, the cause is \
+         M1_blocked (check that drive), then reset the diagnosers"
+    );
+    assert!(
+        sim.journal()
+            .iter()
+            .any(|j| j.kind == "operator_answer" && j.text == conclusion)
+    );
+    assert!(sim.doubt_questions().is_empty());
+    assert!(
+        sim.act(&OperatorAction::AnswerDoubt {
+            component: "feed".into(),
+            sensor: "C0".into(),
+            item: true,
+        })
+        .is_err(),
+        "answered once"
+    );
+    sim.act(&OperatorAction::ResetDiagnosers).expect("reset");
+    assert!(sim.doubt_answers().is_empty());
+}
