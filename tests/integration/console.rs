@@ -484,20 +484,26 @@ fn alarms_by_priority_a_trip_never_shelved_and_shelving_needs_a_reason() {
     let _ = std::fs::remove_dir_all(&data);
 }
 
+/// Raises `n` task alarms `task alarm 0`.. at `from_ms`, `from_ms + 1`…, as the task
+/// monitors would (key `task:<k>`).
+fn raise_task_alarms(h: &mut Harness<'static, Console>, n: u64, from_ms: u64) {
+    for k in 0..n {
+        h.state_mut().sim.alarms.raise(
+            vigie_core::time::Millis(from_ms + k),
+            &format!("task:{k}"),
+            vigie_core::alarms::AlarmKind::Task,
+            format!("task alarm {k}"),
+        );
+    }
+}
+
 /// Acknowledge all: every unacknowledged alarm at once, one journal line naming them.
 #[test]
 fn acknowledge_all_acknowledges_every_alarm_and_journals_them() {
     let data = temp_dir("ackall");
     let mut h = harness(options(Some(data.clone())));
     h.run_steps(2);
-    for k in 0..3 {
-        h.state_mut().sim.alarms.raise(
-            vigie_core::time::Millis(k),
-            &format!("task:{k}"),
-            vigie_core::alarms::AlarmKind::Task,
-            format!("task alarm {k}"),
-        );
-    }
+    raise_task_alarms(&mut h, 3, 0);
     h.run_steps(2);
     h.get_by_label("3 unacknowledged");
     h.get_by_label("Acknowledge all (3)").click();
@@ -523,14 +529,7 @@ fn acknowledge_all_acknowledges_every_alarm_and_journals_them() {
 fn the_alarm_list_pages_and_acknowledges_a_page() {
     let mut h = harness(options(None));
     h.run_steps(2);
-    for k in 0..11 {
-        h.state_mut().sim.alarms.raise(
-            vigie_core::time::Millis(k),
-            &format!("task:{k}"),
-            vigie_core::alarms::AlarmKind::Task,
-            format!("task alarm {k}"),
-        );
-    }
+    raise_task_alarms(&mut h, 11, 0);
     h.run_steps(2);
     h.get_by_label("Page 1 of 2");
     // Newest first: 10 down to 3 on the first page.
@@ -709,14 +708,7 @@ fn the_alarm_history_searches_filters_exports_and_the_rate_shows_a_flood() {
     let mut h = harness(options(Some(data.clone())));
     h.run_steps(2);
     run_to_trip(&mut h);
-    for k in 0..11 {
-        h.state_mut().sim.alarms.raise(
-            vigie_core::time::Millis(11_000 + k),
-            &format!("task:{k}"),
-            vigie_core::alarms::AlarmKind::Task,
-            format!("task alarm {k}"),
-        );
-    }
+    raise_task_alarms(&mut h, 11, 11_000);
     h.run_steps(2);
     h.get_by_label("Rate: 12 in the last 10 min (average 12.0, peak 12)");
     h.get_by_label("ALARM FLOOD");

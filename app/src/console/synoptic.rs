@@ -642,12 +642,7 @@ pub fn synoptic_ui(
                 Color32::WHITE,
             ),
             Mark::Suspect => {
-                painter.add(Shape::dashed_line(
-                    &circle_points(p, lamp_r * 2.2),
-                    Stroke::new(2.5, pal.alarm),
-                    5.0,
-                    4.0,
-                ));
+                painter.add(dashed_ring(p, lamp_r, pal.alarm));
                 put("suspect", pal.alarm, pal.text);
             }
             Mark::Expected { value } => put(
@@ -657,12 +652,7 @@ pub fn synoptic_ui(
             ),
             Mark::InferredBox => put("inferred box", pal.highlight, Color32::WHITE),
             Mark::Estimated => {
-                painter.add(Shape::dashed_line(
-                    &circle_points(p, lamp_r * 2.2),
-                    Stroke::new(2.5, pal.caution),
-                    5.0,
-                    4.0,
-                ));
+                painter.add(dashed_ring(p, lamp_r, pal.caution));
                 put("estimated", pal.caution, pal.text);
             }
         }
@@ -741,6 +731,18 @@ pub fn synoptic_ui(
     response
 }
 
+/// The dashed ring around a sensor's lamp that marks its reading as not taken as is
+/// (suspect, estimated).
+fn dashed_ring(p: egui::Pos2, lamp_r: f32, color: Color32) -> Vec<Shape> {
+    Shape::dashed_line(
+        &circle_points(p, lamp_r * 2.2),
+        Stroke::new(2.5, color),
+        5.0,
+        4.0,
+    )
+}
+
+/// 33 points around a circle (closed).
 fn circle_points(c: Pos2, r: f32) -> Vec<Pos2> {
     (0..=32)
         .map(|i| {

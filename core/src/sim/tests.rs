@@ -805,28 +805,24 @@ fn start_presses_the_programs_start_button_or_says_it_has_none() {
     );
 }
 
+/// The index of signal `id` among `signals`.
+fn index_of(signals: &[crate::plant::Signal], id: &str) -> usize {
+    signals.iter().position(|s| s.id == id).expect("signal")
+}
+
 /// The value of input `id` the emulator shows now.
 fn sensor(sim: &Simulation, id: &str) -> bool {
-    let k = sim
-        .bundle
-        .plant
-        .inputs
-        .iter()
-        .position(|s| s.id == id)
-        .expect("input");
-    sim.emulator.sensors().get(k)
+    sim.emulator
+        .sensors()
+        .get(index_of(&sim.bundle.plant.inputs, id))
 }
 
 /// The value of output `id` the filter applied in the last cycle.
 fn applied(sim: &Simulation, id: &str) -> bool {
-    let k = sim
-        .bundle
-        .plant
-        .outputs
-        .iter()
-        .position(|s| s.id == id)
-        .expect("output");
-    sim.engine.frame().now(Space::Output).get(k)
+    sim.engine
+        .frame()
+        .now(Space::Output)
+        .get(index_of(&sim.bundle.plant.outputs, id))
 }
 
 /// Issue 19, manual mode (seed 004, section 7): while a box leaves the turntable to the
