@@ -48,6 +48,19 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
+/// The journal the console wrote into `data`, checked to hold every one of `needles`.
+#[track_caller]
+fn journal_with(data: &std::path::Path, needles: &[&str]) -> String {
+    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal written");
+    for needle in needles {
+        assert!(
+            journal.contains(needle),
+            "journal lacks {needle}:\n{journal}"
+        );
+    }
+    journal
+}
+
 #[test]
 fn cs10_trip_levels_acknowledge_and_reset() {
     let data = temp_dir("cs10");
@@ -113,10 +126,7 @@ fn cs10_trip_levels_acknowledge_and_reset() {
     );
 
     // Everything reached the disk as it happened.
-    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal written");
-    for kind in ["\"trip\"", "\"ack\"", "\"reset_refused\""] {
-        assert!(journal.contains(kind), "journal lacks {kind}:\n{journal}");
-    }
+    journal_with(&data, &["\"trip\"", "\"ack\"", "\"reset_refused\""]);
     let _ = std::fs::remove_dir_all(&data);
 }
 
@@ -685,18 +695,15 @@ fn manual_mode_refuses_a_command_with_its_reason_and_the_plant_does_not_move() {
     h.get_by_label("Leave manual").click();
     h.run_steps(2);
     h.get_by_label("IDLE");
-    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
-    for needle in [
-        "\"manual_refused\"",
-        refusal,
-        "A1 ON by hand",
-        "automatic mode",
-    ] {
-        assert!(
-            journal.contains(needle),
-            "journal lacks {needle}:\n{journal}"
-        );
-    }
+    journal_with(
+        &data,
+        &[
+            "\"manual_refused\"",
+            refusal,
+            "A1 ON by hand",
+            "automatic mode",
+        ],
+    );
     let _ = std::fs::remove_dir_all(&data);
 }
 
@@ -822,19 +829,16 @@ fn login_roles_and_a_refused_maintenance_action_for_the_operator() {
     h.run_steps(2);
     assert_eq!(h.state().mode, Mode::Production);
     assert_eq!(h.state().role, vigie_core::access::Role::Operator);
-    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
-    for needle in [
-        "\"refused\"",
-        "\"login_refused\"",
-        "login refused for `marie`",
-        "\"login\"",
-        "marie logged out",
-    ] {
-        assert!(
-            journal.contains(needle),
-            "journal lacks {needle}:\n{journal}"
-        );
-    }
+    let journal = journal_with(
+        &data,
+        &[
+            "\"refused\"",
+            "\"login_refused\"",
+            "login refused for `marie`",
+            "\"login\"",
+            "marie logged out",
+        ],
+    );
     assert!(!journal.contains("wrong one") && !journal.contains("correct horse"));
     let _ = std::fs::remove_dir_all(&data);
 }
@@ -898,15 +902,12 @@ fn a_bypass_needs_maintenance_shows_a_banner_and_is_journaled() {
     h.run_steps(2);
     assert!(h.state().sim.engine.bypassed().is_empty());
     assert!(h.query_by_label_contains("BYPASS:").is_none());
-    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
-    for needle in [
-        "CSs1 bypassed for 15 min by marie: sensor C1 replaced",
-        "\"bypass_end\"",
-    ] {
-        assert!(
-            journal.contains(needle),
-            "journal lacks {needle}:\n{journal}"
-        );
-    }
+    journal_with(
+        &data,
+        &[
+            "CSs1 bypassed for 15 min by marie: sensor C1 replaced",
+            "\"bypass_end\"",
+        ],
+    );
     let _ = std::fs::remove_dir_all(&data);
 }
