@@ -7,7 +7,8 @@
 //!   safety filter and a hazard are urgent; the list is ordered by priority, then
 //!   unacknowledged first, then newest first.
 //! - **Shelving** needs a reason and a duration of at most [`MAX_SHELVING`]; a safety
-//!   alarm (trip, hazard, specification error, live link) is never shelvable.
+//!   alarm (trip, hazard, specification error, live link) is never shelvable. It is
+//!   for the source: the alarm raised again while the shelving lasts stays shelved.
 //! - **First-out** marks the first alarm of the event that stops the plant: the first
 //!   alarm of a kind that can stop it ([`AlarmKind::can_stop`]) raised while no other
 //!   such alarm is active or unacknowledged. A task monitor's prediction never stops
@@ -325,6 +326,15 @@ impl AlarmList {
         }
         let first_out =
             kind.can_stop() && !self.alarms.iter().any(|a| a.kind.can_stop() && a.is_open());
+        // Shelving is for the source (a chattering alarm clears and comes back): an
+        // alarm raised again while its key's shelving lasts stays shelved.
+        let shelving = self
+            .alarms
+            .iter()
+            .rev()
+            .find(|a| a.key == key)
+            .and_then(|a| a.shelving.clone())
+            .filter(|s| now < s.until);
         self.next_id += 1;
         self.alarms.push(Alarm {
             id: self.next_id,
@@ -335,7 +345,7 @@ impl AlarmList {
             raised: now,
             acknowledged: None,
             cleared: None,
-            shelving: None,
+            shelving,
             first_out,
         });
         self.next_id
@@ -653,6 +663,17 @@ mod tests {
             "the shelving stays on record, ended"
         );
         assert_eq!(l.unshelve(Millis(0), 99), Err(AlarmError::Unknown(99)));
+        // A chattering source: shelved, it clears and comes back while the shelving
+        // lasts, and stays hidden; after the shelving, it shows.
+        l.shelve(Millis(2000), a, Millis(10_000), "chattering beam")
+            .unwrap();
+        l.clear(Millis(2100), "k");
+        let again = l.raise(Millis(2200), "k", AlarmKind::Task, "m");
+        assert_ne!(again, a);
+        assert!(l.visible(Millis(2300)).iter().all(|x| x.id != again));
+        l.clear(Millis(12_100), "k");
+        let later = l.raise(Millis(12_100), "k", AlarmKind::Task, "m");
+        assert!(l.visible(Millis(12_200)).iter().any(|x| x.id == later));
         // Every safety kind is refused, whatever the reason and duration.
         for kind in [
             AlarmKind::FilterTrip,

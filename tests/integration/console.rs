@@ -911,3 +911,35 @@ fn a_bypass_needs_maintenance_shows_a_banner_and_is_journaled() {
     );
     let _ = std::fs::remove_dir_all(&data);
 }
+
+/// Guessing a password is slowed: after five failures in a row, even the right password
+/// is refused while logins are locked, and the lock is journaled.
+#[test]
+fn five_failed_logins_lock_the_login() {
+    let data = data_with_accounts("lockout");
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.data_dir = Some(data.clone());
+    let mut h = harness(o);
+    h.run_steps(1);
+    let login = |password: &str| Command::Login {
+        name: "marie".into(),
+        password: password.into(),
+    };
+    for k in 0..vigie_app::console::MAX_FAILED_LOGINS {
+        h.state_mut().apply(login(&format!("guess {k}")));
+        assert_eq!(
+            h.state().status,
+            "Login refused: unknown user or wrong password"
+        );
+    }
+    h.state_mut().apply(login("correct horse"));
+    assert!(
+        h.state().status.starts_with("Login locked for ")
+            && h.state().status.ends_with(" s after 5 failed attempts"),
+        "{}",
+        h.state().status
+    );
+    assert_eq!(h.state().role, vigie_core::access::Role::Operator);
+    journal_with(&data, &["\"login_locked\"", "logins locked for 60 s"]);
+    let _ = std::fs::remove_dir_all(&data);
+}

@@ -414,7 +414,15 @@ pub struct Console {
     pub(crate) login: Option<(String, String)>,
     /// The bypass form: constraint, reason, minutes.
     pub(crate) bypass_form: (String, String, u64),
+    /// Failed logins in a row, and since when logins are locked after too many.
+    failed_logins: (u32, Option<std::time::Instant>),
 }
+
+/// Failed logins in a row before logins are locked for [`LOGIN_LOCK`].
+pub const MAX_FAILED_LOGINS: u32 = 5;
+
+/// How long logins stay locked after [`MAX_FAILED_LOGINS`] failures.
+pub const LOGIN_LOCK: std::time::Duration = std::time::Duration::from_secs(60);
 
 /// Alarms on one page of the list.
 pub const ALARMS_PER_PAGE: usize = 8;
@@ -560,6 +568,7 @@ impl Console {
             role: Role::Operator,
             login: None,
             bypass_form: (String::new(), String::new(), 15),
+            failed_logins: (0, None),
         };
         c.attach_link(opts)?;
         c.drain_journal();
@@ -675,6 +684,53 @@ impl Console {
         )
     }
 
+    /// A login: the role of the account when the password is right. Guessing is
+    /// slowed: after [`MAX_FAILED_LOGINS`] failures in a row, logins wait
+    /// [`LOGIN_LOCK`] (wall-clock time: a person at the console).
+    fn log_in(&mut self, name: &str, password: &str, now: u64) {
+        if let Some(since) = self.failed_logins.1 {
+            if since.elapsed() < LOGIN_LOCK {
+                self.status = format!(
+                    "Login locked for {} s after {MAX_FAILED_LOGINS} failed attempts",
+                    LOGIN_LOCK.saturating_sub(since.elapsed()).as_secs().max(1)
+                );
+                return;
+            }
+            self.failed_logins = (0, None);
+        }
+        let name = name.trim();
+        match self.users.verify(name, password) {
+            Ok(role) => {
+                self.failed_logins = (0, None);
+                self.role = role;
+                self.user = Some(name.to_string());
+                self.login = None;
+                self.status = format!("{name} logged in ({})", role.name());
+                self.journal.push(now, "login", &self.status.clone());
+            }
+            Err(e) => {
+                self.status = format!("Login refused: {e}");
+                self.journal.push(
+                    now,
+                    "login_refused",
+                    &format!("login refused for `{name}`: {e}"),
+                );
+                self.failed_logins.0 += 1;
+                if self.failed_logins.0 >= MAX_FAILED_LOGINS {
+                    self.failed_logins.1 = Some(std::time::Instant::now());
+                    self.journal.push(
+                        now,
+                        "login_locked",
+                        &format!(
+                            "{MAX_FAILED_LOGINS} failed logins in a row: logins locked for {} s",
+                            LOGIN_LOCK.as_secs()
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
     /// Checks `p`; a refusal is shown and journaled.
     fn require(&mut self, p: Permission) -> bool {
         if self.may(p) {
@@ -725,23 +781,7 @@ impl Console {
             return;
         }
         match cmd {
-            Command::Login { name, password } => match self.users.verify(&name, &password) {
-                Ok(role) => {
-                    self.role = role;
-                    self.user = Some(name.trim().to_string());
-                    self.login = None;
-                    self.status = format!("{} logged in ({})", name.trim(), role.name());
-                    self.journal.push(now, "login", &self.status.clone());
-                }
-                Err(e) => {
-                    self.status = format!("Login refused: {e}");
-                    self.journal.push(
-                        now,
-                        "login_refused",
-                        &format!("login refused for `{}`: {e}", name.trim()),
-                    );
-                }
-            },
+            Command::Login { name, password } => self.log_in(&name, &password, now),
             Command::Logout => {
                 if let Some(u) = self.user.take() {
                     self.journal.push(now, "logout", &format!("{u} logged out"));
