@@ -769,16 +769,22 @@ fn data_with_accounts(name: &str) -> PathBuf {
     data
 }
 
+/// The console on the reference program (not started) with the accounts of
+/// [`data_with_accounts`] in its data folder.
+fn console_with_accounts(name: &str) -> (PathBuf, Harness<'static, Console>) {
+    let data = data_with_accounts(name);
+    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
+    o.data_dir = Some(data.clone());
+    (data, harness(o))
+}
+
 /// Roles: the operator cannot open Maintenance on the production program (button
 /// disabled, the command refused and journaled); a wrong password is refused without
 /// saying which part was wrong and without journaling it; maintenance logs in, opens
 /// Maintenance, logs out and is back to the operator role.
 #[test]
 fn login_roles_and_a_refused_maintenance_action_for_the_operator() {
-    let data = data_with_accounts("roles");
-    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
-    o.data_dir = Some(data.clone());
-    let mut h = harness(o);
+    let (data, mut h) = console_with_accounts("roles");
     h.run_steps(2);
     assert!(h.get_by_label("Maintenance").accesskit_node().is_disabled());
     h.state_mut().apply(Command::SetMode(Mode::Maintenance));
@@ -848,10 +854,7 @@ fn login_roles_and_a_refused_maintenance_action_for_the_operator() {
 /// each step.
 #[test]
 fn a_bypass_needs_maintenance_shows_a_banner_and_is_journaled() {
-    let data = data_with_accounts("bypass");
-    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
-    o.data_dir = Some(data.clone());
-    let mut h = harness(o);
+    let (data, mut h) = console_with_accounts("bypass");
     h.run_steps(2);
     let bypass = Command::Plant(vigie_core::sim::OperatorAction::Bypass {
         constraint: "CSs1".into(),
@@ -916,10 +919,7 @@ fn a_bypass_needs_maintenance_shows_a_banner_and_is_journaled() {
 /// is refused while logins are locked, and the lock is journaled.
 #[test]
 fn five_failed_logins_lock_the_login() {
-    let data = data_with_accounts("lockout");
-    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
-    o.data_dir = Some(data.clone());
-    let mut h = harness(o);
+    let (data, mut h) = console_with_accounts("lockout");
     h.run_steps(1);
     let login = |password: &str| Command::Login {
         name: "marie".into(),
