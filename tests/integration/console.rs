@@ -366,6 +366,19 @@ fn a_refused_reset_after_a_phantom_box_is_cleared_by_the_reinitialisation() {
     assert!(h.state().sim.emulator.hazards().is_empty());
 }
 
+/// Focuses the field of `role` labelled `label` and types `text` into it, as a person
+/// would (one frame between).
+fn type_into(
+    h: &mut Harness<'static, Console>,
+    role: egui::accesskit::Role,
+    label: &str,
+    text: &str,
+) {
+    h.get_by_role_and_label(role, label).focus();
+    h.run_steps(1);
+    h.get_by_role_and_label(role, label).type_text(text);
+}
+
 /// The y of the first label `text` on screen.
 fn label_y(h: &Harness<'static, Console>, text: &str) -> f32 {
     h.get_by_label(text).rect().min.y
@@ -465,11 +478,12 @@ fn alarms_by_priority_a_trip_never_shelved_and_shelving_needs_a_reason() {
             .get(task)
             .is_some_and(|a| a.shelving.is_none())
     );
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Reason")
-        .focus();
-    h.run_steps(1);
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Reason")
-        .type_text("sensor being cleaned");
+    type_into(
+        &mut h,
+        egui::accesskit::Role::TextInput,
+        "Reason",
+        "sensor being cleaned",
+    );
     h.run_steps(2);
     h.get_by_label(&format!("Shelve #{task} now")).click();
     h.run_steps(2);
@@ -722,11 +736,12 @@ fn the_alarm_history_searches_filters_exports_and_the_rate_shows_a_flood() {
     h.get_by_label("Alarm history (12)").click();
     h.run_steps(2);
     h.get_by_label("12 of 12");
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Search")
-        .focus();
-    h.run_steps(1);
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Search")
-        .type_text("rotation");
+    type_into(
+        &mut h,
+        egui::accesskit::Role::TextInput,
+        "Search",
+        "rotation",
+    );
     h.run_steps(2);
     h.get_by_label("1 of 12");
     h.get_by_label("Export alarms CSV").click();
@@ -798,17 +813,14 @@ fn login_roles_and_a_refused_maintenance_action_for_the_operator() {
     // A wrong password.
     h.get_by_label("Log in…").click();
     h.run_steps(2);
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "User")
-        .focus();
+    type_into(&mut h, egui::accesskit::Role::TextInput, "User", "marie");
     h.run_steps(1);
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "User")
-        .type_text("marie");
-    h.run_steps(1);
-    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
-        .focus();
-    h.run_steps(1);
-    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
-        .type_text("wrong one");
+    type_into(
+        &mut h,
+        egui::accesskit::Role::PasswordInput,
+        "Password",
+        "wrong one",
+    );
     h.run_steps(1);
     h.get_by_label("Log in").click();
     h.run_steps(2);
@@ -818,11 +830,12 @@ fn login_roles_and_a_refused_maintenance_action_for_the_operator() {
     );
     assert_eq!(h.state().role, vigie_core::access::Role::Operator);
     // The right one (the dialog is still open, the password field emptied).
-    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
-        .focus();
-    h.run_steps(1);
-    h.get_by_role_and_label(egui::accesskit::Role::PasswordInput, "Password")
-        .type_text("correct horse");
+    type_into(
+        &mut h,
+        egui::accesskit::Role::PasswordInput,
+        "Password",
+        "correct horse",
+    );
     h.run_steps(1);
     h.get_by_label("Log in").click();
     h.run_steps(2);
@@ -876,11 +889,12 @@ fn a_bypass_needs_maintenance_shows_a_banner_and_is_journaled() {
     h.get_by_label("Maintenance").click();
     h.run_steps(2);
     h.get_by_label("Bypass a constraint");
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Bypass reason")
-        .focus();
-    h.run_steps(1);
-    h.get_by_role_and_label(egui::accesskit::Role::TextInput, "Bypass reason")
-        .type_text("sensor C1 replaced");
+    type_into(
+        &mut h,
+        egui::accesskit::Role::TextInput,
+        "Bypass reason",
+        "sensor C1 replaced",
+    );
     h.run_steps(1);
     h.get_by_label("Bypass now").click();
     h.run_steps(2);
