@@ -92,6 +92,17 @@ pub enum AlarmKind {
 }
 
 impl AlarmKind {
+    /// Every kind, in declaration order.
+    pub const ALL: [AlarmKind; 7] = [
+        Self::FilterTrip,
+        Self::Diagnosis,
+        Self::Task,
+        Self::Link,
+        Self::Specification,
+        Self::Hazard,
+        Self::Plausibility,
+    ];
+
     /// Its name in texts.
     pub fn name(self) -> &'static str {
         match self {

@@ -619,8 +619,7 @@ impl Simulation {
         if self.engine.mode() == FilterMode::Enforce && flagged.iter().any(|f| f.1) {
             return PlantState::Stopped;
         }
-        if !self.degraded.is_empty() || !self.alarms.active_keys(AlarmKind::Plausibility).is_empty()
-        {
+        if !self.degraded.is_empty() || !self.suspect_sensors().is_empty() {
             return PlantState::Degraded;
         }
         if self.program.at_initial_situation() {
@@ -672,7 +671,7 @@ impl Simulation {
                     continue;
                 };
                 let signal = &self.bundle.plant.inputs[k];
-                let reading = self.emulator_or_link_input(k);
+                let reading = self.shown_input(k);
                 let place = if signal.element.is_empty() {
                     String::new()
                 } else {
@@ -695,8 +694,9 @@ impl Simulation {
         out
     }
 
-    /// The raw reading of input `k` (the last cycle's, before any estimate).
-    fn emulator_or_link_input(&self, k: usize) -> bool {
+    /// Input `k` as the last cycle recorded it (what the synoptic's lamp shows: after
+    /// the plausibility stage).
+    fn shown_input(&self, k: usize) -> bool {
         self.engine
             .history
             .last()
@@ -859,30 +859,7 @@ impl Simulation {
             (Some(off), false) => format!("{id} OFF ({off})"),
             _ => format!("{id} {}", if on { "ON" } else { "OFF" }),
         };
-        let why: Vec<String> = refused
-            .iter()
-            .map(|fc| {
-                let context: Vec<String> = fc
-                    .literals
-                    .iter()
-                    .filter(|l| {
-                        matches!(l.space, Space::Input | Space::Observer)
-                            || (l.space == Space::Output && l.previous)
-                    })
-                    .map(|l| format!("{} = {}", l.name, u8::from(l.value)))
-                    .collect();
-                let with = if context.is_empty() {
-                    String::new()
-                } else {
-                    format!(", with {}", context.join(", "))
-                };
-                match self.bundle.constraints.get(&fc.id).map(|c| &c.description) {
-                    Some(d) if !d.is_empty() => format!("{d} ({}{with})", fc.id),
-                    _ => format!("constraint {}{with}", fc.id),
-                }
-            })
-            .collect();
-        Err(format!("{what} refused: {}", why.join("; ")))
+        Err(texts::refused_request(&self.bundle, &what, &refused))
     }
 
     /// The constraints of the trip that holds the plant, if it is tripped.
@@ -1332,8 +1309,7 @@ impl Simulation {
         }
         self.degraded = diagnosis::estimated_inputs(d, &self.bundle.plant, &self.engine.symbols);
         for n in notices {
-            let sensor = n.estimated.as_deref().unwrap_or(&n.diagnosis.partition);
-            let text = texts::about_signal(&self.bundle.plant, sensor, &n.text);
+            let text = texts::diagnosis(&self.bundle.plant, &n);
             self.alarms.raise(now, &n.key, AlarmKind::Diagnosis, text);
             self.log("diagnosis", n.text);
         }

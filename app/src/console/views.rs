@@ -1005,20 +1005,11 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 let l = ui.label("Search");
                 ui.add(egui::TextEdit::singleline(&mut c.history_filter.text).desired_width(120.0))
                     .labelled_by(l.id);
-                let kinds = [
-                    AlarmKind::FilterTrip,
-                    AlarmKind::Hazard,
-                    AlarmKind::Diagnosis,
-                    AlarmKind::Link,
-                    AlarmKind::Specification,
-                    AlarmKind::Plausibility,
-                    AlarmKind::Task,
-                ];
                 egui::ComboBox::from_id_salt("history_kind")
                     .selected_text(c.history_filter.kind.map_or("every kind", AlarmKind::name))
                     .show_ui(ui, |ui| {
                         ui.selectable_value(&mut c.history_filter.kind, None, "every kind");
-                        for k in kinds {
+                        for k in AlarmKind::ALL {
                             ui.selectable_value(&mut c.history_filter.kind, Some(k), k.name());
                         }
                     });

@@ -408,8 +408,7 @@ impl LiveDiagnosers {
             line["estimated"] = json!(n.estimated);
             line["text"] = json!(n.text);
             emit(line);
-            let sensor = n.estimated.as_deref().unwrap_or(&n.diagnosis.partition);
-            let text = vigie_core::alarms::texts::about_signal(&bundle.plant, sensor, &n.text);
+            let text = vigie_core::alarms::texts::diagnosis(&bundle.plant, &n);
             board.raise(emit, now, &n.key, AlarmKind::Diagnosis, text);
         }
         step

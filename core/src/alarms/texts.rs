@@ -6,8 +6,10 @@
 use super::AlarmText;
 use crate::bundle::PlantBundle;
 use crate::emulator::{Hazard, HazardKind};
-use crate::engine::Trip;
+use crate::engine::{FiredConstraint, Trip};
 use crate::plant::Plant;
+use crate::sim::diagnosis::Notice;
+use crate::symbols::Space;
 use crate::tasks::{self, TaskSet};
 
 /// A trip of the safety filter: what each violated constraint protects, and what the
@@ -16,16 +18,7 @@ pub fn trip(bundle: &PlantBundle, trip: &Trip) -> AlarmText {
     let why: Vec<String> = trip
         .constraints
         .iter()
-        .map(|fc| {
-            match bundle
-                .constraints
-                .get(&fc.id)
-                .map(|c| c.description.as_str())
-            {
-                Some(d) if !d.is_empty() => format!("{d} ({})", fc.id),
-                _ => format!("constraint {} violated", fc.id),
-            }
-        })
+        .map(|fc| violated(bundle, fc, ""))
         .collect();
     let changed = |on: bool| -> Vec<String> {
         trip.actions
@@ -50,6 +43,53 @@ pub fn trip(bundle: &PlantBundle, trip: &Trip) -> AlarmText {
         message,
         detail: format!("{detail} (true at {} ms)", trip.time_ms),
     }
+}
+
+/// A violated constraint in the operator's words: what it protects and its id, then
+/// `with` (`, with C7 = 1`); `constraint X violated` when it has no description.
+fn violated(bundle: &PlantBundle, fc: &FiredConstraint, with: &str) -> String {
+    match bundle
+        .constraints
+        .get(&fc.id)
+        .map(|c| c.description.as_str())
+    {
+        Some(d) if !d.is_empty() => format!("{d} ({}{with})", fc.id),
+        _ => format!("constraint {} violated{with}", fc.id),
+    }
+}
+
+/// A manual request the constraints refuse (`what`: `A4 OFF (…)`): each violated
+/// constraint in the operator's words with the plant signals and observers that make it
+/// true.
+pub fn refused_request(bundle: &PlantBundle, what: &str, refused: &[FiredConstraint]) -> String {
+    let why: Vec<String> = refused
+        .iter()
+        .map(|fc| {
+            let context: Vec<String> = fc
+                .literals
+                .iter()
+                .filter(|l| {
+                    matches!(l.space, Space::Input | Space::Observer)
+                        || (l.space == Space::Output && l.previous)
+                })
+                .map(|l| format!("{} = {}", l.name, u8::from(l.value)))
+                .collect();
+            let with = if context.is_empty() {
+                String::new()
+            } else {
+                format!(", with {}", context.join(", "))
+            };
+            violated(bundle, fc, &with)
+        })
+        .collect();
+    format!("{what} refused: {}", why.join("; "))
+}
+
+/// A certain diagnosis's alarm: the sensor it is about (the estimated one, else its
+/// partition) named with its description.
+pub fn diagnosis(plant: &Plant, n: &Notice) -> AlarmText {
+    let sensor = n.estimated.as_deref().unwrap_or(&n.diagnosis.partition);
+    about_signal(plant, sensor, &n.text)
 }
 
 /// Where to look on the machine after `trip`: the elements of the plant signals its
