@@ -9,6 +9,7 @@
 //! - [`bench_frames`] measures the CPU time of a frame without a GPU.
 
 pub mod console;
+pub mod historian;
 pub mod live;
 pub mod theme;
 

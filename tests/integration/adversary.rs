@@ -852,7 +852,7 @@ fn a_trip_latched_before_a_kill_9_is_restored_and_enforced_after_restart() {
             ));
         }
         if !rig.journal().iter().any(|e| e["journal_kind"] == "trip") {
-            rig.fail("a trip entry in journal.jsonl");
+            rig.fail("a trip entry in the journal (vigie.sqlite)");
         }
     }
 }

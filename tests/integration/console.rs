@@ -51,7 +51,7 @@ fn temp_dir(name: &str) -> PathBuf {
 /// The journal the console wrote into `data`, checked to hold every one of `needles`.
 #[track_caller]
 fn journal_with(data: &std::path::Path, needles: &[&str]) -> String {
-    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal written");
+    let journal = crate::historian_journal(data);
     for needle in needles {
         assert!(
             journal.contains(needle),
@@ -497,7 +497,7 @@ fn alarms_by_priority_a_trip_never_shelved_and_shelving_needs_a_reason() {
         .expect("shelved");
     assert_eq!(shelving.reason, "sensor being cleaned");
     assert_eq!(shelving.until.0 - shelving.at.0, 15 * 60_000);
-    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
+    let journal = crate::historian_journal(&data);
     assert!(
         journal.contains(&format!(
             "alarm {task} shelved for 15 min: sensor being cleaned"
@@ -539,7 +539,7 @@ fn acknowledge_all_acknowledges_every_alarm_and_journals_them() {
             .accesskit_node()
             .is_disabled()
     );
-    let journal = std::fs::read_to_string(data.join("journal.jsonl")).expect("journal");
+    let journal = crate::historian_journal(&data);
     assert!(
         journal.contains("alarms #1, #2, #3 acknowledged together"),
         "{journal}"

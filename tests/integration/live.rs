@@ -207,6 +207,8 @@ impl Plc {
 struct Gateway {
     peer: Peer,
     events: Vec<serde_json::Value>,
+    /// Its state folder (the historian, the latch), unless the test named one.
+    state: PathBuf,
     _dir: TempDir,
 }
 
@@ -270,6 +272,7 @@ impl Gateway {
         Self {
             peer: Peer::spawn("vigie gateway", cmd),
             events: Vec::new(),
+            state: dir.0.join("state"),
             _dir: dir,
         }
     }
@@ -954,4 +957,194 @@ fn emulator_served_to_pymodbus_and_mbpoll() {
     let out = mbpoll_run(&args);
     assert!(out.to_lowercase().contains("illegal data address"), "{out}");
     gw.stop();
+}
+
+/// A kill -9 of the gateway in the middle of a burst of events loses no journal entry
+/// that reached stdout (a line is printed only once its transaction committed), and
+/// the historian opens sound afterwards, with the process history of the run.
+#[test]
+fn kill_9_of_the_gateway_during_a_burst_loses_no_committed_entry() {
+    let mut plant = Plant::start(None);
+    let body = format!(
+        "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
+         client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
+        plant.port
+    );
+    // A box at C7 with the table at C5: every release of A4 is a violation of CSs10.
+    plant.set_inputs(&[(C5, true), (C7, true)]);
+    let mut gw = Gateway::start(&body);
+    gw.event("monitoring", Gateway::kind("monitoring"));
+    let mut printed: Vec<String> = Vec::new();
+    let violations = |p: &[String]| p.iter().filter(|l| l.contains("\"violation\"")).count();
+    // The burst: A4 on and off as fast as the peer answers, until 40 violations were
+    // printed (bounded: at most 20,000 toggles).
+    for k in 0..20_000 {
+        assert_eq!(plant.peer.ask(&format!("co 4 {}", k % 2)), "ok");
+        printed.extend(gw.peer.lines.try_iter());
+        if violations(&printed) >= 40 {
+            break;
+        }
+    }
+    assert!(
+        violations(&printed) >= 40,
+        "a burst of violations: {printed:#?}"
+    );
+    // The process history reaches the disk during the run (a batch a second): A4's
+    // changes are there before the kill.
+    let a4_changes = |store: &vigie_app::historian::Store| -> u64 {
+        let now = vigie_app::historian::wall_ms();
+        let trend = store
+            .trend("A4.cmd", now - 600_000, now + 1000, 600)
+            .expect("trend");
+        trend.buckets.iter().map(|b| b.changes).sum()
+    };
+    let reader = vigie_app::historian::Store::open_in(&gw.state).expect("historian opens");
+    let mut k = 0;
+    wait_until("A4's changes in the process history", || {
+        k += 1;
+        assert_eq!(plant.peer.ask(&format!("co 4 {}", k % 2)), "ok");
+        a4_changes(&reader) >= 2
+    });
+    drop(reader);
+    // Killed in the middle of it (the toggles go on while it dies).
+    let _ = plant.peer.ask("co 4 1");
+    gw.peer.kill();
+    let _ = plant.peer.ask("co 4 0");
+    // Whatever reached stdout before the kill (the reader thread may still hold lines).
+    printed.extend(gw.peer.lines.try_iter());
+    let store =
+        vigie_app::historian::Store::open_in(&gw.state).expect("historian opens after kill -9");
+    assert_eq!(store.integrity().expect("integrity check"), "ok");
+    let journal: std::collections::BTreeSet<String> = store
+        .journal(0, "", usize::MAX >> 1)
+        .expect("journal")
+        .into_iter()
+        .map(|r| r.text)
+        .collect();
+    let missing: Vec<&String> = printed.iter().filter(|l| !journal.contains(*l)).collect();
+    assert!(
+        missing.is_empty(),
+        "{} of {} printed events are not in the journal: {missing:#?}",
+        missing.len(),
+        printed.len()
+    );
+    assert!(a4_changes(&store) >= 2);
+}
+
+/// A virtual X display for a real console window (`Xvfb -displayfd`: the server picks
+/// a free display number and prints it).
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Xvfb {
+    fn start() -> Self {
+        let mut child = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "1280x720x24",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start Xvfb (scripts/test.sh installs it): {e}"));
+        let stdout = child.stdout.take().unwrap();
+        let (tx, rx) = channel();
+        std::thread::Builder::new()
+            .name("xvfb-display".into())
+            .spawn(move || {
+                let mut line = String::new();
+                let _ = BufReader::new(stdout).read_line(&mut line);
+                let _ = tx.send(line);
+            })
+            .unwrap();
+        let n = rx.recv_timeout(WAIT).expect("Xvfb printed its display");
+        let n = n.trim();
+        assert!(
+            !n.is_empty() && n.chars().all(|c| c.is_ascii_digit()),
+            "Xvfb display {n:?}"
+        );
+        Self {
+            child,
+            display: format!(":{n}"),
+        }
+    }
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// A kill -9 of the console (a real window on Xvfb, following a monitor link) during a
+/// burst of journal entries: every entry committed before the kill is still there,
+/// and the historian opens sound.
+#[test]
+fn kill_9_of_the_console_during_a_burst_loses_no_committed_entry() {
+    let x = Xvfb::start();
+    let mut plant = Plant::start(None);
+    plant.set_inputs(&[(C5, true), (C7, true)]);
+    let dir = TempDir::new("console-kill");
+    let data = dir.0.join("data");
+    let station = repo()
+        .join("layouts/sorting-station")
+        .canonicalize()
+        .unwrap();
+    let config = dir.0.join("monitor.ron");
+    std::fs::write(
+        &config,
+        format!(
+            "Gateway(mode: Monitor, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
+             state_dir: {:?}, client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200))",
+            station.display().to_string(),
+            dir.0.join("link-state").display().to_string(),
+            plant.port
+        ),
+    )
+    .unwrap();
+    let mut console = Command::new(env!("CARGO_BIN_EXE_vigie"))
+        .arg("--link")
+        .arg(&config)
+        .env("DISPLAY", &x.display)
+        .env("VIGIE_DATA_DIR", &data)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the console starts");
+    // The burst: every release of A4 while the box is at C7 is a trip entry.
+    let mut seen = Vec::new();
+    let mut k = 0;
+    wait_until("60 trip entries committed by the console", || {
+        k += 1;
+        assert_eq!(plant.peer.ask(&format!("co 4 {}", k % 2)), "ok");
+        if k % 20 == 0
+            && data.join(vigie_app::historian::FILE).exists()
+            && let Ok(store) = vigie_app::historian::Store::open_in(&data)
+        {
+            seen = store.journal(0, "", usize::MAX >> 1).unwrap_or_default();
+        }
+        assert!(console.try_wait().unwrap().is_none(), "the console exited");
+        seen.iter().filter(|r| r.kind == "trip").count() >= 60
+    });
+    // Killed while the burst goes on.
+    let _ = plant.peer.ask("co 4 1");
+    console.kill().unwrap();
+    let _ = console.wait();
+    let store = vigie_app::historian::Store::open_in(&data).expect("historian opens after kill -9");
+    assert_eq!(store.integrity().expect("integrity check"), "ok");
+    let after = store.journal(0, "", usize::MAX >> 1).expect("journal");
+    assert!(after.len() >= seen.len());
+    assert_eq!(
+        &after[..seen.len()],
+        &seen[..],
+        "the committed entries are intact"
+    );
 }

@@ -10,3 +10,18 @@ mod filter_trace;
 mod fuzz_loaders;
 mod live;
 mod transients;
+
+/// The journal of the historian in `dir` (`vigie.sqlite`), one JSON object per line
+/// (`wall_ms`, `sim_ms`, `kind`, `text`), oldest first; empty when there is none.
+pub(crate) fn historian_journal(dir: &std::path::Path) -> String {
+    if !dir.join(vigie_app::historian::FILE).exists() {
+        return String::new();
+    }
+    let store = vigie_app::historian::Store::open_in(dir).expect("historian opens");
+    store
+        .journal(0, "", usize::MAX >> 1)
+        .expect("journal reads")
+        .iter()
+        .map(|r| serde_json::to_string(r).expect("row as JSON") + "\n")
+        .collect()
+}

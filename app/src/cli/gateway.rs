@@ -1,7 +1,8 @@
 //! `vigie gateway CONFIG`: the live link as a headless service (monitor, gateway or
 //! emulator mode, from the configuration file). Logs go to stderr through `tracing`
-//! (`RUST_LOG`-style level with `--log`); events go to the journal in the state folder
-//! (`journal.jsonl`) and to stdout as JSON lines. Neither stderr nor stdout can block
+//! (`RUST_LOG`-style level with `--log`); events go to the historian in the state folder
+//! (`vigie.sqlite`: journal, alarm history, process history) and, once committed, to
+//! stdout as JSON lines. Neither stderr nor stdout can block
 //! the service: both are written by threads of their own through bounded, lossy
 //! queues (a reader that stalls loses lines, counted; the journal loses none). SIGINT
 //! and SIGTERM stop it cleanly, with the outputs driven to the safe state first.
@@ -9,7 +10,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 use vigie_app::live::runtime::{self, CycleStats};
-use vigie_app::live::sink::EventSink;
+use vigie_app::live::sink::{EventSink, LiveHistory, SinkHistorian};
 
 /// Arguments of `vigie gateway`.
 #[derive(clap::Args, Debug)]
@@ -57,8 +58,16 @@ pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
         .enable_all()
         .build()?;
     let stop = stop_signal(&rt);
-    let setup = runtime::load(&args.config)?;
-    let (sink, thread) = EventSink::start(Some(&setup.state_dir))?;
+    let mut setup = runtime::load(&args.config)?;
+    let signals = vigie_app::historian::writer::signal_names(&setup.bundle.symbols);
+    let plant = setup.bundle.dir.display().to_string();
+    let (sink, thread) = EventSink::start(Some(SinkHistorian {
+        dir: &setup.state_dir,
+        plant: &plant,
+        signals: &signals,
+        retention: setup.config.retention,
+    }))?;
+    setup.history = Some(LiveHistory::new(signals.len(), sink.clone()));
     let result = {
         let mut emit = move |line: serde_json::Value| sink.emit(line);
         let mut stats = CycleStats::default();

@@ -277,6 +277,9 @@ impl Console {
         link.dropped = taken.dropped;
         for c in &taken.cycles {
             self.sim.observe(c);
+            if let Some(rec) = self.sim.engine.history.last() {
+                self.journal.record_cycle(rec);
+            }
         }
         for (time, kind, text) in &taken.events {
             self.journal.push(time.0, kind, text);
@@ -302,6 +305,8 @@ impl Console {
         }
         self.drain_journal();
         self.follow_trip();
+        self.journal.sync_alarms(&self.sim.alarms);
+        self.journal.commit();
     }
 
     /// In link mode, handles the commands that would drive the plant or the emulator;

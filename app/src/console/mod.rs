@@ -490,7 +490,11 @@ impl Console {
             }
         };
         let variants = sim_variants(&plant_dir, &sim);
-        let mut journal = Journal::open(opts.data_dir.as_deref());
+        let mut journal = Journal::open(
+            opts.data_dir.as_deref(),
+            &sim.bundle.dir.display().to_string(),
+            &sim.bundle.symbols,
+        );
         journal.push(
             0,
             "session",
@@ -629,9 +633,14 @@ impl Console {
     pub fn cycles(&mut self, n: u32) {
         for _ in 0..n {
             self.sim.cycle();
+            if let Some(rec) = self.sim.engine.history.last() {
+                self.journal.record_cycle(rec);
+            }
         }
         self.drain_journal();
         self.follow_trip();
+        self.journal.sync_alarms(&self.sim.alarms);
+        self.journal.commit();
     }
 
     /// Advances by `dt_s` seconds of real time (× speed), in whole cycles, at most
@@ -760,8 +769,15 @@ impl Console {
         }
     }
 
-    /// Applies one command: the only place where the UI changes the simulation.
+    /// Applies one command: the only place where the UI changes the simulation. What
+    /// it journals is committed before it returns.
     pub fn apply(&mut self, cmd: Command) {
+        self.apply_command(cmd);
+        self.journal.sync_alarms(&self.sim.alarms);
+        self.journal.commit();
+    }
+
+    fn apply_command(&mut self, cmd: Command) {
         if self.link_command(&cmd) {
             return;
         }
@@ -1050,6 +1066,7 @@ impl Console {
                     sim.replace_program(p);
                 }
                 self.sim = sim;
+                self.journal.restart_run();
                 self.level = None;
                 self.replay = None;
                 self.budget_ms = 0.0;
@@ -1180,6 +1197,8 @@ impl Console {
         self.report_step(ctx);
         verification::poll(self, ctx);
         link::close_on_signal(self, ctx);
+        self.journal.sync_alarms(&self.sim.alarms);
+        self.journal.commit();
         if self.running {
             ctx.request_repaint();
         }

@@ -209,6 +209,7 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         map,
         diagnosers,
         state_dir: state.clone(),
+        history: None,
     };
     let measuring = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let alarms = std::sync::Arc::new(std::sync::Mutex::new(Vec::<String>::new()));

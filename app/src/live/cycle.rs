@@ -16,6 +16,7 @@ use super::runtime::{
     AlarmBoard, Clock, CycleStats, Emit, Explainer, Setup, bits_text, emit_engine_events, names,
 };
 use super::server::{self, Shared, SharedImage};
+use super::sink::LiveHistory;
 use super::tap::Tap;
 use anyhow::Context as _;
 use serde_json::json;
@@ -494,6 +495,8 @@ struct MonitorCycle {
     diagnosers: Option<LiveDiagnosers>,
     emit: Box<dyn FnMut(serde_json::Value) + Send>,
     tap: Option<Tap>,
+    /// The process history (`vigie gateway`).
+    history: Option<LiveHistory>,
 }
 
 impl Cycle for MonitorCycle {
@@ -576,6 +579,11 @@ impl Cycle for MonitorCycle {
             }
             self.last_potential = verdict.potentially_violated;
         }
+        if let Some(h) = &mut self.history
+            && let Some(rec) = self.engine.history.last()
+        {
+            h.record(rec);
+        }
         if let Some(tap) = &self.tap {
             let stale_names = names(&self.bundle, Space::Input, &stale);
             let cycles = self.engine.cycles();
@@ -600,7 +608,10 @@ impl Cycle for MonitorCycle {
         }
     }
 
-    fn finish(self) -> Self::Done {
+    fn finish(mut self) -> Self::Done {
+        if let Some(h) = &mut self.history {
+            h.finish();
+        }
         LiveDiagnosers::diagnoses(self.diagnosers.as_ref())
     }
 }
@@ -618,6 +629,7 @@ pub(crate) async fn monitor(
         map,
         diagnosers,
         state_dir: _,
+        history,
     } = setup;
     let client = config
         .client
@@ -682,6 +694,7 @@ pub(crate) async fn monitor(
         ),
         emit: event_sender(tx),
         tap: tap.clone(),
+        history,
         bundle,
     };
     let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
@@ -735,6 +748,8 @@ struct GatewayCycle {
     auto_reset: bool,
     emit: Box<dyn FnMut(serde_json::Value) + Send>,
     tap: Option<Tap>,
+    /// The process history (`vigie gateway`).
+    history: Option<LiveHistory>,
 }
 
 impl GatewayCycle {
@@ -923,6 +938,11 @@ impl Cycle for GatewayCycle {
                 substitute(&d.estimated, self.engine.frame(), &mut shared.inputs);
             }
         }
+        if let Some(h) = &mut self.history
+            && let Some(rec) = self.engine.history.last()
+        {
+            h.record(rec);
+        }
         if let Some(tap) = &self.tap {
             let stale_names = names(&self.bundle, Space::Input, &stale);
             let cycles = self.engine.cycles();
@@ -954,6 +974,9 @@ impl Cycle for GatewayCycle {
     /// Shutdown: the fallback of the current context, whatever the PLC commands; and
     /// the certain diagnoses of the run.
     fn finish(mut self) -> Self::Done {
+        if let Some(h) = &mut self.history {
+            h.finish();
+        }
         let now = self.clock.now();
         (
             self.safe_now(now),
@@ -975,6 +998,7 @@ pub(crate) async fn gateway(
         map,
         diagnosers,
         state_dir,
+        history,
     } = setup;
     let client = config
         .client
@@ -1094,6 +1118,7 @@ pub(crate) async fn gateway(
         auto_reset: config.auto_reset,
         emit: event_sender(tx),
         tap: tap.clone(),
+        history,
         bundle,
     };
     let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;

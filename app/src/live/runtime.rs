@@ -106,6 +106,9 @@ pub struct Setup {
     /// Where the run keeps its journal and its latched trip
     /// ([`GatewayConfig::state_dir`], or its default).
     pub state_dir: std::path::PathBuf,
+    /// Where the monitor and gateway cycles record the process history (`vigie
+    /// gateway` sets it; the console following a link keeps its own).
+    pub history: Option<super::sink::LiveHistory>,
 }
 
 /// The state folder of the configuration at `path`: its `state_dir`, else the data
@@ -138,6 +141,7 @@ pub fn load(path: &std::path::Path) -> anyhow::Result<Setup> {
         bundle,
         map,
         diagnosers,
+        history: None,
     })
 }
 
@@ -348,6 +352,7 @@ async fn emulator(
         map,
         diagnosers: _,
         state_dir: _,
+        history: _,
     } = setup;
     let server_config = config
         .server

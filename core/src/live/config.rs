@@ -214,8 +214,8 @@ pub struct GatewayConfig {
     /// false runs every thread at normal priority.
     #[serde(default = "default_realtime")]
     pub realtime: bool,
-    /// Where the gateway keeps its journal (`journal.jsonl`, as the console's) and its
-    /// latched trip (`latch.json`, so that a trip survives a crash or a restart);
+    /// Where the gateway keeps its historian (`vigie.sqlite`: the journal, the alarm
+    /// history and the process history, as the console's) and its latched trip (`latch.json`, so that a trip survives a crash or a restart);
     /// relative to the configuration's folder. By default the data folder
     /// (`VIGIE_DATA_DIR`, else `$XDG_DATA_HOME/vigie`, else `~/.local/share/vigie`)
     /// under `gateway/<configuration file stem>`.
@@ -231,6 +231,40 @@ pub struct GatewayConfig {
     /// peer that moves the plant faster than its physics).
     #[serde(default = "default_diagnosers")]
     pub plausibility: bool,
+    /// How long the historian keeps its rows: `retention: (process_days: 31,
+    /// journal_days: 366)` by default.
+    #[serde(default)]
+    pub retention: Retention,
+}
+
+/// How long the historian keeps its rows (the console's and the gateway's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Retention {
+    /// Process history (every change of every signal), days.
+    #[serde(default = "Retention::default_process_days")]
+    pub process_days: u32,
+    /// Journal and alarm history, days.
+    #[serde(default = "Retention::default_journal_days")]
+    pub journal_days: u32,
+}
+
+impl Retention {
+    fn default_process_days() -> u32 {
+        31
+    }
+    fn default_journal_days() -> u32 {
+        366
+    }
+}
+
+impl Default for Retention {
+    fn default() -> Self {
+        Self {
+            process_days: Self::default_process_days(),
+            journal_days: Self::default_journal_days(),
+        }
+    }
 }
 
 fn default_diagnosers() -> bool {

@@ -369,8 +369,7 @@ impl Rig {
 
     /// The journal's entries, each the event it holds (`text` parsed), with `kind`.
     pub(crate) fn journal(&self) -> Vec<serde_json::Value> {
-        let text =
-            std::fs::read_to_string(self.state_dir().join("journal.jsonl")).unwrap_or_default();
+        let text = crate::historian_journal(&self.state_dir());
         text.lines()
             .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
             .map(|entry| {
