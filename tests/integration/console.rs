@@ -957,3 +957,66 @@ fn five_failed_logins_lock_the_login() {
     journal_with(&data, &["\"login_locked\"", "logins locked for 60 s"]);
     let _ = std::fs::remove_dir_all(&data);
 }
+
+/// Trends: the process history of the run, read back from the historian, drawn and
+/// exported; without a data folder the view says there is no history.
+#[test]
+fn trends_show_and_export_the_process_history() {
+    let data = temp_dir("trends");
+    let mut opts = options(Some(data.clone()));
+    opts.scenario = Some(root().join("layouts/sorting-station/scenarios/reference-hour.ron"));
+    let mut h = harness(opts);
+    h.run_steps(1);
+    h.get_by_label("Start").click();
+    h.run_steps(1);
+    // 40 s of production (the station's boxes cross C0 every few seconds).
+    h.state_mut().cycles(4000);
+    assert!(h.state_mut().journal.flush_history(), "history committed");
+    h.get_by_label("Trends").click();
+    h.run_steps(2);
+    h.get_by_label("C0 ✕");
+    h.get_by_label("1 min").click();
+    h.run_steps(2);
+    let store = h.state().journal.store().expect("historian");
+    let now = h.state().journal.wall_of(h.state().sim.now().0);
+    let c0 = store.changes("C0", now - 60_000, now + 1).expect("changes");
+    assert!(
+        c0.len() >= 4,
+        "C0 toggled in production: {c0:?}, now {now}, sim {}, state {:?}, status {}",
+        h.state().sim.now().0,
+        h.state().sim.plant_state(),
+        h.state().status
+    );
+    // Removing a signal, adding another through the list.
+    h.get_by_label("C0 ✕").click();
+    h.run_steps(2);
+    assert!(h.query_by_label("C0 ✕").is_none());
+    h.get_by_label("Add a signal…").click();
+    h.run_steps(2);
+    // The list is long: filter it down, as a user would.
+    type_into(&mut h, egui::accesskit::Role::TextInput, "Filter", "a4");
+    h.run_steps(2);
+    assert!(h.query_by_label("C0").is_none(), "filtered out");
+    h.get_by_label("A4.cmd");
+    h.get_by_label("A4").click();
+    h.run_steps(2);
+    h.get_by_label("A4 ✕");
+    // The export: A4's changes over the minute.
+    h.state_mut()
+        .apply(Command::ExportTrend("trend.csv".into()));
+    let csv = std::fs::read_to_string(data.join("trend.csv"))
+        .expect("trend written under the data folder");
+    assert!(csv.starts_with("signal,t_ms,value\n"), "{csv}");
+    assert!(
+        csv.lines().filter(|l| l.starts_with("A4,")).count() >= 2,
+        "{csv}"
+    );
+    drop(h);
+    let _ = std::fs::remove_dir_all(&data);
+
+    let mut h = harness(options(None));
+    h.run_steps(1);
+    h.get_by_label("Trends").click();
+    h.run_steps(2);
+    assert!(h.query_by_label_contains("No history").is_some());
+}

@@ -1,6 +1,7 @@
 //! Command-line interface: argument parsing and dispatch to the subcommands.
 
 mod bench;
+mod bench_historian;
 mod campaign;
 mod check;
 mod export_st;
@@ -213,6 +214,9 @@ pub(crate) enum Command {
         #[command(subcommand)]
         action: UserAction,
     },
+    /// Measure the historian: a durable journal insert, recording a week of process
+    /// history at the plant's cycle, and trend queries over it.
+    BenchHistorian(bench_historian::Args),
     /// Measure the engines and print the figures.
     Bench {
         /// Number of timed repetitions per figure.
@@ -309,6 +313,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         }
         Some(Command::BenchDiag) => learn::bench(&cli.plant),
         Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
+        Some(Command::BenchHistorian(args)) => bench_historian::run(&cli.plant, &args),
         Some(Command::ExportSt { dir, out }) => {
             export_st::run(&dir.unwrap_or(cli.plant), out.as_deref())
         }

@@ -89,7 +89,9 @@ impl Journal {
         if old.exists() {
             store.import_jsonl(&old, "console")?;
         }
-        let base_ms = wall_ms();
+        // Simulated time runs ahead of the clock at a high speed: the run starts after
+        // whatever an earlier session stamped.
+        let base_ms = wall_ms().max(store.latest_ms()? + 1);
         let session = store.begin_session("console", plant, base_ms)?;
         let names = signal_names(symbols);
         let writer = Writer::start(Store::open_in(dir)?, session, &names, Retention::default())?;
@@ -114,7 +116,8 @@ impl Journal {
         self.persist.as_ref().map(|p| &p.store)
     }
 
-    /// The wall-clock time of simulated time `sim_ms` in the current run, ms.
+    /// The time stamped on simulated time `sim_ms` of the current run, ms: the run's
+    /// start (the clock, or after an earlier session's last stamp) plus `sim_ms`.
     pub fn wall_of(&self, sim_ms: u64) -> u64 {
         self.persist
             .as_ref()

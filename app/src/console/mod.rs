@@ -8,8 +8,10 @@ mod diagnosers;
 pub mod journal;
 pub mod link;
 pub mod report;
+pub mod save;
 pub mod synoptic;
 mod training;
+pub mod trends;
 pub mod users;
 mod verification;
 mod views;
@@ -112,6 +114,11 @@ pub enum Command {
     /// Export the alarm history, as filtered, to CSV (a relative path is under the data
     /// folder).
     ExportAlarms(PathBuf),
+    /// Export the changes of the trends' signals over their range to CSV (a relative
+    /// path is under the data folder).
+    ExportTrend(PathBuf),
+    /// Open the desktop's save dialog for an export; the export follows the choice.
+    SaveAs(save::Export),
     /// Export the incident report (Markdown + one PNG per level) into a folder.
     ExportReport(PathBuf),
     /// Maintenance: recompile the edited program.
@@ -384,6 +391,10 @@ pub struct Console {
     pub(crate) alarm_page: usize,
     /// The alarm history's search and filters.
     pub history_filter: vigie_core::alarms::HistoryFilter,
+    /// The trends view (the historian's process history).
+    pub trends: trends::TrendView,
+    /// The save dialog open, if any.
+    pub save: save::SaveDialog,
     /// Where the journal and the exports go (`None`: the journal in memory only, the
     /// exports under the temporary folder).
     pub data_dir: Option<PathBuf>,
@@ -490,6 +501,7 @@ impl Console {
             }
         };
         let variants = sim_variants(&plant_dir, &sim);
+        let trends = trends::TrendView::new(&sim.bundle.symbols);
         let mut journal = Journal::open(
             opts.data_dir.as_deref(),
             &sim.bundle.dir.display().to_string(),
@@ -550,6 +562,8 @@ impl Console {
             alarm_filter_shelved: false,
             alarm_page: 0,
             history_filter: vigie_core::alarms::HistoryFilter::default(),
+            trends,
+            save: save::SaveDialog::default(),
             data_dir: opts.data_dir.clone(),
             shelve_form: None,
             reinit_confirm: false,
@@ -971,6 +985,36 @@ impl Console {
                 };
                 self.journal.push(now, "operator", &self.status.clone());
             }
+            Command::ExportTrend(path) => {
+                let path = self.export_path(&path);
+                let now = self.journal.wall_of(self.now().0);
+                let csv = self.journal.store().map_or_else(
+                    || Err("the console runs without a data folder: no history".to_string()),
+                    |s| {
+                        trends::changes_csv(s, &self.trends.signals, now, self.trends.range_ms)
+                            .map_err(|e| e.to_string())
+                    },
+                );
+                let written = csv.and_then(|(csv, n)| {
+                    path.parent()
+                        .map_or(Ok(()), std::fs::create_dir_all)
+                        .and_then(|()| std::fs::write(&path, csv))
+                        .map(|()| n)
+                        .map_err(|e| e.to_string())
+                });
+                self.status = match written {
+                    Ok(n) => format!("{n} changes exported to {}", path.display()),
+                    Err(e) => format!("trend export to {} failed: {e}", path.display()),
+                };
+                self.journal
+                    .push(self.now().0, "operator", &self.status.clone());
+            }
+            Command::SaveAs(what) => {
+                let dir = self.export_path(Path::new(""));
+                if !self.save.ask(what, &dir) {
+                    self.status = "a save dialog is already open".into();
+                }
+            }
             Command::ExportCsv(path) => {
                 let path = self.export_path(&path);
                 self.status = match self.journal.export_csv(&path) {
@@ -1197,6 +1241,13 @@ impl Console {
         self.report_step(ctx);
         verification::poll(self, ctx);
         link::close_on_signal(self, ctx);
+        match self.save.poll() {
+            Some(Ok(cmd)) => self.apply(cmd),
+            Some(Err(())) => {
+                self.status = "export cancelled (no save dialog on this desktop? type a file name beside the button: it is written under the data folder)".into();
+            }
+            None => {}
+        }
         self.journal.sync_alarms(&self.sim.alarms);
         self.journal.commit();
         if self.running {

@@ -73,6 +73,26 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         .show(ui, |ui| {
             if c.mode == Mode::Maintenance {
                 maintenance_ui(c, ui, out);
+                return;
+            }
+            ui.horizontal(|ui| {
+                ui.add_space(6.0);
+                if ui
+                    .add(egui::Button::selectable(!c.trends.shown, "Synoptic"))
+                    .clicked()
+                {
+                    c.trends.shown = false;
+                }
+                if ui
+                    .add(egui::Button::selectable(c.trends.shown, "Trends"))
+                    .on_hover_text("The history of any signal over minutes to days")
+                    .clicked()
+                {
+                    c.trends.shown = true;
+                }
+            });
+            if c.trends.shown {
+                super::trends::trends_ui(c, ui, out);
             } else {
                 synoptic_panel_ui(c, ui);
             }
@@ -1035,6 +1055,12 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 if ui.button("Export alarms CSV").clicked() {
                     out.push(Command::ExportAlarms("vigie-alarms.csv".into()));
                 }
+                if ui
+                    .add_enabled(!c.save.is_open(), egui::Button::new("Save alarms as…"))
+                    .clicked()
+                {
+                    out.push(Command::SaveAs(super::save::Export::Alarms));
+                }
             });
             const SHOWN: usize = 100;
             for a in list.iter().take(SHOWN) {
@@ -1251,8 +1277,18 @@ fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         let l = ui.label("CSV file");
         ui.add(egui::TextEdit::singleline(&mut c.csv_path).desired_width(200.0))
             .labelled_by(l.id);
-        if ui.button("Export CSV").clicked() {
+        if ui
+            .button("Export CSV")
+            .on_hover_text("Written under the data folder")
+            .clicked()
+        {
             out.push(Command::ExportCsv(c.csv_path.clone().into()));
+        }
+        if ui
+            .add_enabled(!c.save.is_open(), egui::Button::new("Save journal as…"))
+            .clicked()
+        {
+            out.push(Command::SaveAs(super::save::Export::Journal));
         }
     });
     ui.weak(format!(

@@ -521,6 +521,26 @@ impl Store {
         Ok(ids)
     }
 
+    /// The latest time stamped in the journal or the process history, ms (0 when
+    /// empty): a session that stamps simulated time starts after it, so that two
+    /// sessions never overlap.
+    pub fn latest_ms(&self) -> Result<u64, HistorianError> {
+        let journal: Option<i64> = self
+            .conn
+            .query_row("SELECT MAX(wall_ms) FROM journal", [], |r| r.get(0))
+            .map_err(|e| self.sql(e))?;
+        // Per signal: the last key of each range of the primary key.
+        let samples: Option<i64> = self
+            .conn
+            .query_row(
+                "SELECT MAX((SELECT MAX(t_ms) FROM samples WHERE signal = signals.id)) FROM signals",
+                [],
+                |r| r.get(0),
+            )
+            .map_err(|e| self.sql(e))?;
+        Ok(to_u64(journal.unwrap_or(0).max(samples.unwrap_or(0))))
+    }
+
     /// The signals with a history, by name.
     pub fn signals(&self) -> Result<Vec<String>, HistorianError> {
         let mut st = self
@@ -626,6 +646,34 @@ impl Store {
             };
         }
         Ok(Trend { before, buckets })
+    }
+
+    /// The changes of `signal` in `[from_ms, to_ms)`, with the value before the range
+    /// first (stamped `from_ms`), in time order.
+    pub fn changes(
+        &self,
+        signal: &str,
+        from_ms: u64,
+        to_ms: u64,
+    ) -> Result<Vec<(u64, i64)>, HistorianError> {
+        let t = self.trend(signal, from_ms, to_ms, 1)?;
+        let mut out: Vec<(u64, i64)> = t.before.map(|v| (from_ms, v)).into_iter().collect();
+        let mut st = self
+            .conn
+            .prepare_cached(
+                "SELECT t_ms, value FROM samples WHERE signal = (SELECT id FROM signals WHERE name = ?1) \
+                 AND t_ms >= ?2 AND t_ms < ?3 ORDER BY t_ms",
+            )
+            .map_err(|e| self.sql(e))?;
+        let rows = st
+            .query_map(params![signal, to_i64(from_ms), to_i64(to_ms)], |r| {
+                Ok((to_u64(r.get(0)?), r.get(1)?))
+            })
+            .map_err(|e| self.sql(e))?;
+        for r in rows {
+            out.push(r.map_err(|e| self.sql(e))?);
+        }
+        Ok(out)
     }
 
     /// Deletes what is older than the retention at `now_ms`.

@@ -152,6 +152,7 @@ fn trend_steps_and_buckets() {
     let steps = t.steps(100, 6100);
     assert_eq!(steps.first(), Some(&(100, 1)));
     assert_eq!(steps.last(), Some(&(6100, 1)));
+    assert_eq!(s.latest_ms().unwrap(), 5000);
     // An unknown signal has no history, not an error.
     assert_eq!(s.trend("nope", 0, 10, 10).unwrap(), Trend::default());
     // The range end is exclusive; nothing in an empty range.
