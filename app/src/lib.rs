@@ -10,6 +10,7 @@
 
 pub mod console;
 pub mod historian;
+pub mod i18n;
 pub mod live;
 pub mod theme;
 

@@ -123,6 +123,7 @@ fn check_warns_loudly_when_no_constraint_protects_the_plant() {
 
 fn console(plant: &Path) -> Harness<'static, Console> {
     let mut opts = ConsoleOptions::new(plant);
+    opts.lang = vigie_app::i18n::Lang::En;
     opts.data_dir = None;
     Harness::builder()
         .with_size(egui::vec2(1600.0, 1000.0))

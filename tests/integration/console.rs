@@ -18,7 +18,10 @@ fn options(data_dir: Option<PathBuf>) -> ConsoleOptions {
     o
 }
 
-fn harness(opts: ConsoleOptions) -> Harness<'static, Console> {
+/// The console in English whatever the machine's locale (the language switch has its
+/// own test).
+fn harness(mut opts: ConsoleOptions) -> Harness<'static, Console> {
+    opts.lang = vigie_app::i18n::Lang::En;
     Harness::builder()
         .with_size(egui::vec2(1600.0, 1000.0))
         .with_step_dt(1.0 / 60.0)
@@ -1019,4 +1022,36 @@ fn trends_show_and_export_the_process_history() {
     h.get_by_label("Trends").click();
     h.run_steps(2);
     assert!(h.query_by_label_contains("No history").is_some());
+}
+
+/// French and English, switched at run time: the state, the toolbar and the trends
+/// change language at once; the switch is journaled; English comes back.
+#[test]
+fn language_switch_french_and_english() {
+    let data = temp_dir("lang");
+    let mut opts = options(Some(data.clone()));
+    opts.scenario = None;
+    let mut h = harness(opts);
+    h.run_steps(1);
+    h.get_by_label("IDLE");
+    h.get_by_label("FR").click();
+    h.run_steps(2);
+    assert_eq!(h.state().i18n.lang(), vigie_app::i18n::Lang::Fr);
+    h.get_by_label("AU REPOS");
+    h.get_by_label("Départ cycle").click();
+    h.run_steps(2);
+    h.get_by_label("EN PRODUCTION");
+    h.get_by_label("Courbes").click();
+    h.run_steps(2);
+    h.get_by_label("Ajouter un signal…");
+    assert!(
+        h.query_by_label("Start").is_none(),
+        "no English left on the toolbar"
+    );
+    h.get_by_label("EN").click();
+    h.run_steps(2);
+    h.get_by_label("RUNNING");
+    h.get_by_label("Add a signal…");
+    journal_with(&data, &["language fr", "language en"]);
+    let _ = std::fs::remove_dir_all(&data);
 }

@@ -20,7 +20,8 @@ use vigie_app::{Console, ConsoleOptions};
 
 const WAIT: Duration = Duration::from_secs(15);
 
-fn harness(opts: ConsoleOptions) -> Harness<'static, Console> {
+fn harness(mut opts: ConsoleOptions) -> Harness<'static, Console> {
+    opts.lang = vigie_app::i18n::Lang::En;
     Harness::builder()
         .with_size(egui::vec2(1600.0, 1000.0))
         .with_step_dt(1.0 / 60.0)

@@ -16,6 +16,7 @@ pub mod users;
 mod verification;
 mod views;
 
+use crate::i18n::{I18n, Lang};
 use crate::theme::Palette;
 use journal::Journal;
 use std::collections::{BTreeMap, BTreeSet};
@@ -119,6 +120,8 @@ pub enum Command {
     ExportTrend(PathBuf),
     /// Open the desktop's save dialog for an export; the export follows the choice.
     SaveAs(save::Export),
+    /// Show the console in this language.
+    SetLanguage(Lang),
     /// Export the incident report (Markdown + one PNG per level) into a folder.
     ExportReport(PathBuf),
     /// Maintenance: recompile the edited program.
@@ -175,6 +178,8 @@ pub struct ConsoleOptions {
     pub variant: Option<String>,
     /// Follow the live link of this configuration instead of the emulator.
     pub link: Option<PathBuf>,
+    /// The language shown first (default: the system's, [`Lang::from_env`]).
+    pub lang: Lang,
 }
 
 impl ConsoleOptions {
@@ -193,6 +198,7 @@ impl ConsoleOptions {
             start: false,
             variant: None,
             link: None,
+            lang: Lang::from_env(),
         }
     }
 }
@@ -395,6 +401,8 @@ pub struct Console {
     pub trends: trends::TrendView,
     /// The save dialog open, if any.
     pub save: save::SaveDialog,
+    /// The texts, in the language shown.
+    pub i18n: I18n,
     /// Where the journal and the exports go (`None`: the journal in memory only, the
     /// exports under the temporary folder).
     pub data_dir: Option<PathBuf>,
@@ -502,6 +510,7 @@ impl Console {
         };
         let variants = sim_variants(&plant_dir, &sim);
         let trends = trends::TrendView::new(&sim.bundle.symbols);
+        let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
         let mut journal = Journal::open(
             opts.data_dir.as_deref(),
             &sim.bundle.dir.display().to_string(),
@@ -564,6 +573,7 @@ impl Console {
             history_filter: vigie_core::alarms::HistoryFilter::default(),
             trends,
             save: save::SaveDialog::default(),
+            i18n,
             data_dir: opts.data_dir.clone(),
             shelve_form: None,
             reinit_confirm: false,
@@ -1008,6 +1018,11 @@ impl Console {
                 };
                 self.journal
                     .push(self.now().0, "operator", &self.status.clone());
+            }
+            Command::SetLanguage(lang) => {
+                self.i18n.set_lang(lang);
+                self.journal
+                    .push(now, "operator", &format!("language {}", lang.code()));
             }
             Command::SaveAs(what) => {
                 let dir = self.export_path(Path::new(""));

@@ -129,11 +129,11 @@ pub(crate) fn changes_csv(
 }
 
 /// "-2 h 05 min", "-45 s": a time before now.
-fn fmt_before(s: f64) -> String {
+fn fmt_before(s: f64, now: &str) -> String {
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     let s = (-s).max(0.0).round() as u64;
     match s {
-        0 => "now".to_string(),
+        0 => now.to_string(),
         s if s < 120 => format!("-{s} s"),
         s if s < 7200 => format!("-{} min {:02} s", s / 60, s % 60),
         s if s < 2 * 86_400 => format!("-{} h {:02} min", s / 3600, s / 60 % 60),
@@ -145,7 +145,7 @@ fn fmt_before(s: f64) -> String {
 pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let names = signal_names(&c.sim.bundle.symbols);
     ui.horizontal_wrapped(|ui| {
-        ui.label("Range");
+        ui.label(c.i18n.t("trends-range"));
         for (ms, label) in RANGES {
             if ui
                 .add(egui::Button::selectable(c.trends.range_ms == ms, label))
@@ -157,13 +157,13 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
         ui.separator();
         let full = c.trends.signals.len() >= MAX_SIGNALS;
         let add = if full {
-            format!("{MAX_SIGNALS} signals at most")
+            c.i18n.ta("trends-full", &[("n", MAX_SIGNALS.into())])
         } else {
-            "Add a signal…".to_string()
+            c.i18n.t("trends-add")
         };
         ui.add_enabled_ui(!full, |ui| {
             ui.menu_button(add, |ui| {
-                let l = ui.label("Filter");
+                let l = ui.label(c.i18n.t("trends-filter"));
                 ui.add(egui::TextEdit::singleline(&mut c.trends.filter).desired_width(100.0))
                     .labelled_by(l.id);
                 let f = c.trends.filter.to_lowercase();
@@ -187,7 +187,7 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
         for (i, s) in c.trends.signals.iter().enumerate() {
             if ui
                 .small_button(format!("{s} ✕"))
-                .on_hover_text(format!("Remove {s} from the trends"))
+                .on_hover_text(c.i18n.ta("trends-remove-hover", &[("signal", s.into())]))
                 .clicked()
             {
                 remove = Some(i);
@@ -198,8 +198,11 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
         }
         ui.separator();
         if ui
-            .add_enabled(!c.save.is_open(), egui::Button::new("Export CSV…"))
-            .on_hover_text("The changes of these signals over the range, to a file you choose")
+            .add_enabled(
+                !c.save.is_open(),
+                egui::Button::new(c.i18n.t("trends-export")),
+            )
+            .on_hover_text(c.i18n.t("trends-export-hover"))
             .clicked()
         {
             out.push(Command::SaveAs(Export::Trend));
@@ -207,10 +210,7 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
     });
     let now = c.journal.wall_of(c.sim.now().0);
     let Some(store) = c.journal.store() else {
-        ui.label(
-            RichText::new("No history: the console runs without a data folder (the journal is in memory only).")
-                .color(c.palette.caution),
-        );
+        ui.label(RichText::new(c.i18n.t("trends-no-history")).color(c.palette.caution));
         return;
     };
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
@@ -220,17 +220,16 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
         ui.label(RichText::new(e).color(c.palette.alarm));
     }
     if rows.is_empty() {
-        ui.label("Add a signal to see its history.");
+        ui.label(c.i18n.t("trends-empty"));
         return;
     }
     ui.label(
-        RichText::new(
-            "Each row is a signal, high when 1; a solid bar is a signal that changed faster than the screen can show (zoom in). `.cmd` is the output the program commanded, without it the output applied.",
-        )
-        .small()
-        .color(c.palette.text_dim),
+        RichText::new(c.i18n.t("trends-legend"))
+            .small()
+            .color(c.palette.text_dim),
     );
     let n = rows.len();
+    let now_label = c.i18n.t("trends-now");
     let labels: Vec<String> = rows.iter().map(|(s, _)| s.clone()).collect();
     #[allow(clippy::cast_precision_loss)]
     let range_s = c.trends.range_ms as f64 / 1000.0;
@@ -240,7 +239,7 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
         .include_x(0.0)
         .include_y(-0.3)
         .include_y(n as f64 * 1.5)
-        .x_axis_formatter(|m, _| fmt_before(m.value))
+        .x_axis_formatter(move |m, _| fmt_before(m.value, &now_label))
         .y_axis_formatter(move |m, _| {
             let v = m.value;
             let row = (v / 1.5).floor();

@@ -78,14 +78,20 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
             ui.horizontal(|ui| {
                 ui.add_space(6.0);
                 if ui
-                    .add(egui::Button::selectable(!c.trends.shown, "Synoptic"))
+                    .add(egui::Button::selectable(
+                        !c.trends.shown,
+                        c.i18n.t("tab-synoptic"),
+                    ))
                     .clicked()
                 {
                     c.trends.shown = false;
                 }
                 if ui
-                    .add(egui::Button::selectable(c.trends.shown, "Trends"))
-                    .on_hover_text("The history of any signal over minutes to days")
+                    .add(egui::Button::selectable(
+                        c.trends.shown,
+                        c.i18n.t("tab-trends"),
+                    ))
+                    .on_hover_text(c.i18n.t("tab-trends-hover"))
                     .clicked()
                 {
                     c.trends.shown = true;
@@ -122,35 +128,51 @@ fn unprotected_ui(c: &Console, ui: &mut egui::Ui) {
         });
 }
 
+/// FR | EN: the language of the console, switched at once.
+pub(crate) fn lang_switch_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    for l in crate::i18n::Lang::ALL {
+        let r = ui
+            .add(egui::Button::selectable(c.i18n.lang() == l, l.label()).small())
+            .on_hover_text(c.i18n.t("lang-switch-hover"));
+        if r.clicked() && c.i18n.lang() != l {
+            out.push(Command::SetLanguage(l));
+        }
+    }
+}
+
 fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.horizontal_wrapped(|ui| {
         if super::link::toolbar_ui(c, ui, out) {
             return;
         }
         ui.label(RichText::new("VIGIE").strong().size(18.0));
+        lang_switch_ui(c, ui, out);
         ui.separator();
-        for (m, name) in [
-            (Mode::Production, "Production"),
-            (Mode::Maintenance, "Maintenance"),
-            (Mode::Training, "Training"),
+        for (m, id) in [
+            (Mode::Production, "mode-production"),
+            (Mode::Maintenance, "mode-maintenance"),
+            (Mode::Training, "mode-training"),
         ] {
             let allowed = m != Mode::Maintenance || c.may(Permission::EditProgram);
-            let r = ui.add_enabled(allowed, egui::Button::selectable(c.mode == m, name));
-            let r =
-                r.on_disabled_hover_text("Editing the program needs the maintenance role: log in");
+            let r = ui.add_enabled(allowed, egui::Button::selectable(c.mode == m, c.i18n.t(id)));
+            let r = r.on_disabled_hover_text(c.i18n.t("mode-maintenance-needs-role"));
             if r.clicked() && c.mode != m {
                 out.push(Command::SetMode(m));
             }
         }
         ui.separator();
         if c.running {
-            if ui.button("Pause").clicked() {
+            if ui.button(c.i18n.t("sim-pause")).clicked() {
                 out.push(Command::Pause);
             }
-        } else if ui.button("Run").clicked() {
+        } else if ui.button(c.i18n.t("sim-run")).clicked() {
             out.push(Command::Run);
         }
-        if ui.button("Step").on_hover_text("One PLC cycle").clicked() {
+        if ui
+            .button(c.i18n.t("sim-step"))
+            .on_hover_text(c.i18n.t("sim-step-hover"))
+            .clicked()
+        {
             out.push(Command::Step);
         }
         let mut speed = c.speed;
@@ -158,7 +180,7 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             egui::Slider::new(&mut speed, 0.1..=100.0)
                 .logarithmic(true)
                 .suffix("x")
-                .text("Speed"),
+                .text(c.i18n.t("sim-speed")),
         );
         if r.changed() {
             out.push(Command::SetSpeed(speed));
@@ -167,15 +189,15 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         ui.label(format!("t = {}", fmt_ms(c.sim.now().0)));
         ui.separator();
         if ui
-            .button("Start")
-            .on_hover_text("Plant START button")
+            .button(c.i18n.t("plant-start"))
+            .on_hover_text(c.i18n.t("plant-start-hover"))
             .clicked()
         {
             out.push(Command::Plant(OperatorAction::Start));
         }
         if ui
-            .button("Stop")
-            .on_hover_text("Plant STOP button")
+            .button(c.i18n.t("plant-stop"))
+            .on_hover_text(c.i18n.t("plant-stop-hover"))
             .clicked()
         {
             out.push(Command::Plant(OperatorAction::Stop));
@@ -433,14 +455,15 @@ fn bypass_form_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 /// The plant's state, unmistakable from across the room (large, coloured only when
 /// abnormal or running), the simulation's pause, and the unacknowledged alarms.
 fn state_ui(c: &Console, ui: &mut egui::Ui) {
-    let (txt, bg, fg) = match c.sim.plant_state() {
-        PlantState::Tripped => ("TRIPPED", c.palette.trip, Color32::WHITE),
-        PlantState::Stopped => ("STOPPED", c.palette.alarm, Color32::BLACK),
-        PlantState::Manual => ("MANUAL", c.palette.highlight, Color32::WHITE),
-        PlantState::Degraded => ("DEGRADED", c.palette.caution, Color32::BLACK),
-        PlantState::Idle => ("IDLE", c.palette.equipment, Color32::BLACK),
-        PlantState::Running => ("RUNNING", c.palette.normal, Color32::WHITE),
+    let (id, bg, fg) = match c.sim.plant_state() {
+        PlantState::Tripped => ("state-tripped", c.palette.trip, Color32::WHITE),
+        PlantState::Stopped => ("state-stopped", c.palette.alarm, Color32::BLACK),
+        PlantState::Manual => ("state-manual", c.palette.highlight, Color32::WHITE),
+        PlantState::Degraded => ("state-degraded", c.palette.caution, Color32::BLACK),
+        PlantState::Idle => ("state-idle", c.palette.equipment, Color32::BLACK),
+        PlantState::Running => ("state-running", c.palette.normal, Color32::WHITE),
     };
+    let txt = c.i18n.t(id);
     egui::Frame::new()
         .fill(bg)
         .inner_margin(egui::Margin::symmetric(10, 2))
@@ -449,17 +472,10 @@ fn state_ui(c: &Console, ui: &mut egui::Ui) {
             ui.label(RichText::new(txt).strong().size(22.0).color(fg))
         })
         .inner
-        .on_hover_text(match c.sim.plant_state() {
-            PlantState::Tripped => "The safety filter holds the outputs in their safe state",
-            PlantState::Stopped => "The diagnosers stopped the plant: check it, then reset them",
-            PlantState::Manual => "The operator drives the outputs; every command is checked",
-            PlantState::Degraded => "A sensor is read from its estimate or held as suspect",
-            PlantState::Idle => "The control program is at rest: press Start to produce",
-            PlantState::Running => "The control program runs",
-        });
+        .on_hover_text(c.i18n.t(&format!("{id}-hover")));
     if !c.running {
         ui.label(
-            RichText::new("SIMULATION PAUSED")
+            RichText::new(c.i18n.t("state-paused"))
                 .strong()
                 .color(Color32::WHITE)
                 .background_color(c.palette.highlight),
@@ -469,7 +485,7 @@ fn state_ui(c: &Console, ui: &mut egui::Ui) {
     if unack > 0 {
         ui.add(
             egui::Label::new(
-                RichText::new(format!("{unack} unacknowledged"))
+                RichText::new(c.i18n.ta("state-unacknowledged", &[("n", unack.into())]))
                     .strong()
                     .color(Color32::BLACK)
                     .background_color(c.palette.alarm),

@@ -1,0 +1,333 @@
+//! French and English (issue 19): the console's texts are Fluent messages
+//! (`assets/i18n/<lang>.ftl`, built in), switched at run time; a plant folder may add
+//! its own texts in `i18n/<lang>.ftl` (the descriptions of its signals, e.g.
+//! `signal-C4 = …`), read after the built-in ones.
+//!
+//! A message missing in the language shown falls back to English, and a message
+//! missing in English shows its id (a test checks that every id the console uses is in
+//! both files, and that both files hold the same ids).
+
+use fluent_bundle::concurrent::FluentBundle;
+use fluent_bundle::{FluentArgs, FluentResource, FluentValue};
+use std::path::{Path, PathBuf};
+
+/// A language of the console.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Lang {
+    /// English.
+    #[default]
+    En,
+    /// French.
+    Fr,
+}
+
+impl Lang {
+    /// Every language, in the order of the switch.
+    pub const ALL: [Lang; 2] = [Lang::Fr, Lang::En];
+
+    /// `en`, `fr`.
+    pub fn code(self) -> &'static str {
+        match self {
+            Self::En => "en",
+            Self::Fr => "fr",
+        }
+    }
+
+    /// `EN`, `FR` (the switch's labels).
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::En => "EN",
+            Self::Fr => "FR",
+        }
+    }
+
+    /// `fr`, `fr_FR.UTF-8`, `fr-CA`, `en_GB`…: the language of a locale name.
+    pub fn parse(s: &str) -> Option<Self> {
+        let lang = s
+            .split(['_', '-', '.', '@'])
+            .next()
+            .unwrap_or_default()
+            .to_ascii_lowercase();
+        match lang.as_str() {
+            "fr" => Some(Self::Fr),
+            "en" => Some(Self::En),
+            _ => None,
+        }
+    }
+
+    /// The system's language: `VIGIE_LANG`, else `LC_ALL`, `LC_MESSAGES`, `LANG`
+    /// (POSIX order); English when none names a language the console speaks.
+    pub fn from_env() -> Self {
+        ["VIGIE_LANG", "LC_ALL", "LC_MESSAGES", "LANG"]
+            .iter()
+            .filter_map(|v| std::env::var(v).ok())
+            .find(|v| !v.is_empty())
+            .and_then(|v| Self::parse(&v))
+            .unwrap_or_default()
+    }
+
+    fn source(self) -> &'static str {
+        match self {
+            Self::En => include_str!("../../assets/i18n/en.ftl"),
+            Self::Fr => include_str!("../../assets/i18n/fr.ftl"),
+        }
+    }
+
+    fn langid(self) -> unic_langid::LanguageIdentifier {
+        unic_langid::LanguageIdentifier::from_bytes(self.code().as_bytes()).unwrap_or_default()
+    }
+}
+
+/// A text file that does not parse.
+#[derive(Debug, thiserror::Error)]
+#[error("{}:{line}:{column}: {message}", file.display())]
+pub struct I18nError {
+    /// The file.
+    pub file: PathBuf,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+    /// What is wrong.
+    pub message: String,
+}
+
+fn parse(text: &str, file: &Path) -> Result<FluentResource, I18nError> {
+    FluentResource::try_new(text.to_string()).map_err(|(_, errors)| {
+        let e = &errors[0];
+        let before = &text[..e.pos.start.min(text.len())];
+        let line = before.matches('\n').count() + 1;
+        let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+        I18nError {
+            file: file.to_path_buf(),
+            line,
+            column,
+            message: e.kind.to_string(),
+        }
+    })
+}
+
+/// An argument of a message.
+pub enum Arg<'a> {
+    /// A text.
+    Str(&'a str),
+    /// A number (Fluent picks the plural form from it).
+    Num(f64),
+}
+
+impl<'a> From<&'a str> for Arg<'a> {
+    fn from(s: &'a str) -> Self {
+        Arg::Str(s)
+    }
+}
+
+impl<'a> From<&'a String> for Arg<'a> {
+    fn from(s: &'a String) -> Self {
+        Arg::Str(s)
+    }
+}
+
+macro_rules! num_arg {
+    ($($t:ty),*) => {$(
+        impl From<$t> for Arg<'_> {
+            #[allow(clippy::cast_precision_loss, clippy::cast_lossless)]
+            fn from(n: $t) -> Self {
+                Arg::Num(n as f64)
+            }
+        }
+    )*};
+}
+num_arg!(u8, u16, u32, u64, usize, i32, i64, f32, f64);
+
+/// The texts of both languages and the one shown.
+pub struct I18n {
+    lang: Lang,
+    bundles: Vec<(Lang, FluentBundle<FluentResource>)>,
+}
+
+impl std::fmt::Debug for I18n {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("I18n").field("lang", &self.lang).finish()
+    }
+}
+
+impl I18n {
+    /// The built-in texts, then the plant's (`plant_dir/i18n/<lang>.ftl` when it
+    /// exists; a message of the plant overrides a built-in one of the same id).
+    pub fn new(lang: Lang, plant_dir: Option<&Path>) -> Result<Self, I18nError> {
+        let mut bundles = Vec::new();
+        for l in Lang::ALL {
+            let mut bundle = FluentBundle::new_concurrent(vec![l.langid()]);
+            // egui draws no bidi isolation marks: no FSI/PDI around arguments.
+            bundle.set_use_isolating(false);
+            let builtin = PathBuf::from(format!("assets/i18n/{}.ftl", l.code()));
+            bundle.add_resource_overriding(parse(l.source(), &builtin)?);
+            if let Some(dir) = plant_dir {
+                let file = dir.join("i18n").join(format!("{}.ftl", l.code()));
+                if file.exists() {
+                    let text = std::fs::read_to_string(&file).map_err(|e| I18nError {
+                        file: file.clone(),
+                        line: 0,
+                        column: 0,
+                        message: e.to_string(),
+                    })?;
+                    bundle.add_resource_overriding(parse(&text, &file)?);
+                }
+            }
+            bundles.push((l, bundle));
+        }
+        Ok(Self { lang, bundles })
+    }
+
+    /// The language shown.
+    pub fn lang(&self) -> Lang {
+        self.lang
+    }
+
+    /// Shows `lang` from the next frame on.
+    pub fn set_lang(&mut self, lang: Lang) {
+        self.lang = lang;
+    }
+
+    fn bundle(&self, lang: Lang) -> Option<&FluentBundle<FluentResource>> {
+        self.bundles
+            .iter()
+            .find(|(l, _)| *l == lang)
+            .map(|(_, b)| b)
+    }
+
+    fn format(&self, lang: Lang, id: &str, args: Option<&FluentArgs<'_>>) -> Option<String> {
+        let bundle = self.bundle(lang)?;
+        let pattern = bundle.get_message(id)?.value()?;
+        let mut errors = Vec::new();
+        let text = bundle.format_pattern(pattern, args, &mut errors);
+        Some(text.into_owned())
+    }
+
+    /// True when `id` exists in the language shown or in English.
+    pub fn has(&self, id: &str) -> bool {
+        [self.lang, Lang::En]
+            .iter()
+            .any(|l| self.bundle(*l).is_some_and(|b| b.has_message(id)))
+    }
+
+    /// The text of `id`.
+    pub fn t(&self, id: &str) -> String {
+        self.format(self.lang, id, None)
+            .or_else(|| self.format(Lang::En, id, None))
+            .unwrap_or_else(|| id.to_string())
+    }
+
+    /// The text of `id` with its arguments.
+    pub fn ta(&self, id: &str, args: &[(&str, Arg<'_>)]) -> String {
+        let mut fa = FluentArgs::new();
+        for (k, v) in args {
+            match v {
+                Arg::Str(s) => fa.set(*k, FluentValue::from(*s)),
+                Arg::Num(n) => fa.set(*k, FluentValue::from(*n)),
+            }
+        }
+        self.format(self.lang, id, Some(&fa))
+            .or_else(|| self.format(Lang::En, id, Some(&fa)))
+            .unwrap_or_else(|| id.to_string())
+    }
+
+    /// A text of the plant's (`signal-C4`…) in the language shown, if it has one.
+    pub fn plant(&self, id: &str) -> Option<String> {
+        self.format(self.lang, id, None)
+    }
+}
+
+/// The message ids of a Fluent file.
+pub fn ids(text: &str) -> Vec<String> {
+    let res = match FluentResource::try_new(text.to_string()) {
+        Ok(r) | Err((r, _)) => r,
+    };
+    res.entries()
+        .filter_map(|e| match e {
+            fluent_syntax::ast::Entry::Message(m) => Some(m.id.name.to_string()),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The built-in file of `lang`.
+pub fn builtin(lang: Lang) -> &'static str {
+    lang.source()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn both_languages_hold_the_same_messages() {
+        let en: std::collections::BTreeSet<String> = ids(builtin(Lang::En)).into_iter().collect();
+        let fr: std::collections::BTreeSet<String> = ids(builtin(Lang::Fr)).into_iter().collect();
+        let only_en: Vec<_> = en.difference(&fr).collect();
+        let only_fr: Vec<_> = fr.difference(&en).collect();
+        assert!(
+            only_en.is_empty() && only_fr.is_empty(),
+            "only in en.ftl: {only_en:?}\nonly in fr.ftl: {only_fr:?}"
+        );
+        // Both parse without error.
+        I18n::new(Lang::Fr, None).unwrap();
+    }
+
+    /// Every `t("…")` / `ta("…"` id in the console's sources is a message.
+    #[test]
+    fn every_id_used_exists() {
+        let i = I18n::new(Lang::En, None).unwrap();
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/console");
+        let mut missing = Vec::new();
+        let mut used = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let text = std::fs::read_to_string(&path).unwrap();
+            for pat in [".t(\"", ".ta(\""] {
+                for (pos, _) in text.match_indices(pat) {
+                    let rest = &text[pos + pat.len()..];
+                    let id = &rest[..rest.find('"').unwrap()];
+                    used += 1;
+                    if !i.has(id) {
+                        missing.push(format!("{}: {id}", path.display()));
+                    }
+                }
+            }
+        }
+        assert!(used > 20, "the console uses its messages ({used})");
+        assert!(
+            missing.is_empty(),
+            "missing messages:\n{}",
+            missing.join("\n")
+        );
+    }
+
+    #[test]
+    fn locale_names_and_fallbacks() {
+        assert_eq!(Lang::parse("fr_FR.UTF-8"), Some(Lang::Fr));
+        assert_eq!(Lang::parse("fr-CA"), Some(Lang::Fr));
+        assert_eq!(Lang::parse("en_GB.UTF-8"), Some(Lang::En));
+        assert_eq!(Lang::parse("C.UTF-8"), None);
+        assert_eq!(Lang::parse("de_DE"), None);
+        let mut i = I18n::new(Lang::Fr, None).unwrap();
+        assert_eq!(i.t("no-such-message"), "no-such-message");
+        let fr = i.t("state-running");
+        i.set_lang(Lang::En);
+        assert_ne!(fr, i.t("state-running"));
+    }
+
+    #[test]
+    fn a_broken_plant_file_names_its_line_and_column() {
+        let dir = std::env::temp_dir().join(format!("vigie-i18n-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("i18n")).unwrap();
+        std::fs::write(dir.join("i18n/fr.ftl"), "signal-C4 = Table\n\n= oops\n").unwrap();
+        let e = I18n::new(Lang::Fr, Some(&dir)).unwrap_err().to_string();
+        assert!(e.contains("i18n/fr.ftl:3:1"), "{e}");
+        std::fs::write(dir.join("i18n/fr.ftl"), "signal-C4 = Table en chargement\n").unwrap();
+        let i = I18n::new(Lang::Fr, Some(&dir)).unwrap();
+        assert_eq!(i.plant("signal-C4").as_deref(), Some("Table en chargement"));
+        assert_eq!(i.plant("signal-C5"), None);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
