@@ -238,6 +238,22 @@ impl I18n {
     }
 }
 
+impl I18n {
+    /// The descriptions of `plant`'s signals the plant folder translates into the
+    /// language shown (`signal-<id>`), by signal id.
+    pub fn signal_descriptions(
+        &self,
+        plant: &vigie_core::plant::Plant,
+    ) -> std::collections::BTreeMap<String, String> {
+        plant
+            .inputs
+            .iter()
+            .chain(&plant.outputs)
+            .filter_map(|s| Some((s.id.clone(), self.plant(&format!("signal-{}", s.id))?)))
+            .collect()
+    }
+}
+
 /// The message ids of a Fluent file.
 pub fn ids(text: &str) -> Vec<String> {
     let res = match FluentResource::try_new(text.to_string()) {
@@ -329,5 +345,29 @@ mod tests {
         assert_eq!(i.plant("signal-C4").as_deref(), Some("Table en chargement"));
         assert_eq!(i.plant("signal-C5"), None);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+#[cfg(test)]
+mod plant_tests {
+    use super::*;
+
+    /// The sorting station's folder translates every signal it describes.
+    #[test]
+    fn the_station_describes_every_signal_in_french() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+        let (bundle, _) = vigie_core::bundle::PlantBundle::load(&dir).unwrap();
+        let i = I18n::new(Lang::Fr, Some(&dir)).unwrap();
+        let d = i.signal_descriptions(&bundle.plant);
+        assert_eq!(
+            d.len(),
+            bundle.plant.inputs.len() + bundle.plant.outputs.len()
+        );
+        assert!(d["C4"].contains("position de chargement"), "{}", d["C4"]);
+        let en = I18n::new(Lang::En, Some(&dir)).unwrap();
+        assert!(
+            en.signal_descriptions(&bundle.plant).is_empty(),
+            "English: plant.ron's own"
+        );
     }
 }

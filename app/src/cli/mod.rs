@@ -55,6 +55,10 @@ pub(crate) struct ConsoleArgs {
     /// layouts/sorting-station/gateway-monitor.ron) instead of the emulator.
     #[arg(long, global = true)]
     pub(crate) link: Option<PathBuf>,
+    /// Console: language shown first, `fr` or `en` (default: VIGIE_LANG, else the
+    /// system locale; switched at run time from the toolbar).
+    #[arg(long, global = true)]
+    pub(crate) lang: Option<String>,
 }
 
 fn open_console(
@@ -78,6 +82,10 @@ fn open_console(
     opts.start = args.start;
     opts.variant.clone_from(&args.variant);
     opts.link.clone_from(&args.link);
+    if let Some(l) = &args.lang {
+        opts.lang = vigie_app::i18n::Lang::parse(l)
+            .ok_or_else(|| anyhow::anyhow!("unknown language `{l}` (fr, en)"))?;
+    }
     let _log = opts.link.is_some().then(|| {
         vigie_app::console::link::watch_signals(true);
         gateway::init_tracing("warn")

@@ -511,6 +511,7 @@ impl Console {
         let variants = sim_variants(&plant_dir, &sim);
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
+        let descriptions = i18n.signal_descriptions(&sim.bundle.plant);
         let mut journal = Journal::open(
             opts.data_dir.as_deref(),
             &sim.bundle.dir.display().to_string(),
@@ -550,7 +551,10 @@ impl Console {
             level: None,
             wanted_level: opts.level,
             replay: None,
-            view: synoptic::View::default(),
+            view: synoptic::View {
+                descriptions,
+                ..synoptic::View::default()
+            },
             status: String::new(),
             notes: BTreeMap::new(),
             csv_path: "vigie-journal.csv".into(),
@@ -1021,6 +1025,7 @@ impl Console {
             }
             Command::SetLanguage(lang) => {
                 self.i18n.set_lang(lang);
+                self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
                 self.journal
                     .push(now, "operator", &format!("language {}", lang.code()));
             }

@@ -12,12 +12,15 @@ use vigie_core::explain::{Highlight, Mark};
 use vigie_core::plant::Plant;
 
 /// Zoom and pan of the synoptic (view state, kept across frames).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct View {
     /// Zoom factor over "fit to the panel".
     pub zoom: f32,
     /// Pan, in points.
     pub pan: Vec2,
+    /// The signals' descriptions in the language shown (from the plant folder's
+    /// `i18n/<lang>.ftl`, `signal-<id>`); a signal without one shows the plant's own.
+    pub descriptions: std::collections::BTreeMap<String, String>,
 }
 
 impl Default for View {
@@ -25,6 +28,7 @@ impl Default for View {
         Self {
             zoom: 1.0,
             pan: Vec2::ZERO,
+            descriptions: std::collections::BTreeMap::new(),
         }
     }
 }
@@ -323,7 +327,7 @@ fn badge(painter: &egui::Painter, at: Pos2, text: &str, fill: Color32, fg: Color
     rect
 }
 
-fn tooltip_text(plant: &Plant, id: &str, value: Option<bool>) -> String {
+fn tooltip_text(plant: &Plant, view: &View, id: &str, value: Option<bool>) -> String {
     let Some(s) = plant.signal(id) else {
         return id.to_string();
     };
@@ -335,7 +339,8 @@ fn tooltip_text(plant: &Plant, id: &str, value: Option<bool>) -> String {
         Some(false) => "0",
         None => "?",
     };
-    format!("{id} = {v}\n{}\n{addr}", s.description)
+    let description = view.descriptions.get(id).unwrap_or(&s.description);
+    format!("{id} = {v}\n{description}\n{addr}")
 }
 
 /// Paints the synoptic into the available space; returns the response (its rect is the
@@ -373,7 +378,8 @@ pub fn synoptic_ui(
         view.pan += response.drag_delta();
     }
     if response.double_clicked() {
-        *view = View::default();
+        view.zoom = 1.0;
+        view.pan = Vec2::ZERO;
     }
     painter.rect_filled(rect, 0.0, pal.floor);
     let (min, max) = geom.bounds;
@@ -711,7 +717,7 @@ pub fn synoptic_ui(
             .chain(geom.actuators.iter().map(|(id, p)| (id.as_str(), *p)))
             .find(|(_, w)| xf.p(*w).distance(ptr) <= lamp_r * 1.4);
         if let Some((id, _)) = hit {
-            let text = tooltip_text(plant, id, pic.values.get(id).copied());
+            let text = tooltip_text(plant, view, id, pic.values.get(id).copied());
             let galley = painter.layout(text, FontId::proportional(13.0), pal.text, 320.0);
             let r = Rect::from_min_size(ptr + vec2(14.0, 14.0), galley.size() + vec2(12.0, 10.0));
             let r = r.translate(vec2(
