@@ -1055,3 +1055,26 @@ fn language_switch_french_and_english() {
     journal_with(&data, &["language fr", "language en"]);
     let _ = std::fs::remove_dir_all(&data);
 }
+
+/// A data folder whose historian is not a database: the console opens all the same,
+/// journals in memory, says why, and leaves the file as it was.
+#[test]
+fn a_damaged_historian_leaves_the_console_running_and_the_file_alone() {
+    let data = temp_dir("damaged-historian");
+    std::fs::create_dir_all(&data).unwrap();
+    let garbage = b"this is not a database ".repeat(64);
+    std::fs::write(data.join("vigie.sqlite"), &garbage).unwrap();
+    let mut h = harness(options(Some(data.clone())));
+    h.run_steps(2);
+    let error = h.state().journal.error.clone().expect("the error is shown");
+    assert!(
+        error.contains("in memory only") && error.contains("vigie.sqlite"),
+        "{error}"
+    );
+    h.get_by_label("Start").click();
+    h.run_steps(2);
+    assert!(h.state().journal.entries().iter().any(|e| e.text == "Start"));
+    assert_eq!(std::fs::read(data.join("vigie.sqlite")).unwrap(), garbage);
+    drop(h);
+    let _ = std::fs::remove_dir_all(&data);
+}
