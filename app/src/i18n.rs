@@ -300,9 +300,13 @@ mod tests {
         for entry in std::fs::read_dir(&dir).unwrap() {
             let path = entry.unwrap().path();
             let text = std::fs::read_to_string(&path).unwrap();
-            for pat in [".t(\"", ".ta(\""] {
+            for pat in [".t(", ".ta("] {
                 for (pos, _) in text.match_indices(pat) {
-                    let rest = &text[pos + pat.len()..];
+                    // The id may be on the next line (a call rustfmt split).
+                    let rest = text[pos + pat.len()..].trim_start();
+                    let Some(rest) = rest.strip_prefix('"') else {
+                        continue;
+                    };
                     let id = &rest[..rest.find('"').unwrap()];
                     used += 1;
                     if !i.has(id) {

@@ -52,3 +52,236 @@ trends-no-history = No history: the console runs without a data folder (the jour
 trends-empty = Add a signal to see its history.
 trends-legend = Each row is a signal, high when 1; a solid bar is a signal that changed faster than the screen can show (zoom in). `.cmd` is the output the program commanded, without it the output applied.
 trends-now = now
+
+## Unprotected plant
+unprotected-banner = UNPROTECTED: no safety constraint, the filter lets every command through
+
+## Toolbar: manual mode, reset, re-initialisation, login
+manual-leave = Leave manual
+manual-leave-hover = Back to the program, restarted from its initial steps
+manual-enter = Manual…
+manual-enter-hover = Drive the actuators by hand, every command through the filter
+manual-enter-disabled-hover = Not while the filter holds the plant, nor on a live link
+reset = Reset
+reset-hover = Operator reset of the safety filter
+reinit = Re-initialise…
+reinit-hover = When the reset is refused because the program or an observer still believes what a transient made it believe: after a check of the plant (emptied, or every item where a sensor shows it), the program back to its initial steps, the sensors taken as read
+reinit-disabled-hover = Only after a trip, on the emulator (on a live link the PLC's program is re-initialised on the PLC)
+logout = Log out
+login = Log in…
+login-hover = Operator role until a maintenance, trainer or administrator login
+
+## Dialogs
+cancel = Cancel
+login-title = Log in to the console
+login-no-accounts = No account in the data folder yet: an administrator creates them with `vigie user add NAME --role maintenance` (the password on standard input).
+login-user = User
+login-password = Password
+login-submit = Log in
+manual-confirm-title = Drive the plant by hand?
+manual-confirm-text = The control program stops being scanned and the outputs stay as they are. You then switch each actuator on or off, or jog it while the button is held. Every command is checked against the safety constraints first: one that would break a constraint is refused with the reason and never reaches the plant. Leaving manual mode restarts the program from its initial steps.
+manual-confirm-enter = Enter manual mode
+reinit-title = Re-initialise after a check of the plant
+reinit-text = The control program goes back to its initial steps, as at the start of a shift, the sensors are taken as read and the trip ends. The filter checks the next commands as any other, and the diagnosers decide nothing with certainty until each model is back in its initial state.
+reinit-empty-first = Empty the plant first: take every item off by hand, fallen ones included (the initial steps expect no item half-way). Every observer then restarts empty.
+reinit-emulator = On the emulator, the emulated items are taken off for you.
+reinit-leave-in-place = Or leave the items in place, each where a sensor shows it, none between the sensors: an observer is then cleared only where the sensors leave no room for its item, and the program may stop again on an item it does not expect.
+reinit-emptied = Plant emptied: re-initialise
+reinit-items-left = Items left in place: re-initialise
+
+## Bypass
+bypass-banner = BYPASS: { $id }{ $what } is not enforced until { $until } ({ $min } min { $s } s left), by { $by }: { $reason }
+bypass-end = End bypass of { $id }
+bypass-title = Bypass a constraint
+bypass-needs-role = Bypassing a safety constraint needs the maintenance role: log in.
+bypass-reason = Bypass reason
+bypass-now = Bypass now
+bypass-now-hover = The filter stops enforcing this constraint until the time is up
+
+## Manual mode
+manual-title = Manual mode
+manual-note = Every command is checked against the safety constraints; a refused one never reaches the plant.
+manual-on = ON
+manual-off = OFF
+manual-set-on = { $id } ON
+manual-set-off = { $id } OFF
+manual-jog = Jog { $id }
+manual-jog-hover = ON while held
+
+## Status line
+status-removed = , { $n } taken off
+status-boxes = { $scenario } — boxes: { $created } created, { $left } left, { $right } right, { $damaged } damaged{ $removed }
+
+## Synoptic banners
+banner-level = Level { $level } — trip { $ids } at { $time }
+banner-replay = REPLAY at { $time } (live: { $now })
+banner-trip = TRIP { $ids } — the safety filter holds the plant
+
+## Next step after a trip
+next-title = What to do now (stopped at { $time })
+next-why = 1. Why: { $text }.
+next-check = 2. Check on the machine: { $where }.
+next-reset-possible = 3. Reset is possible now: press Reset, then Start if the program was stopped.
+next-reset-refused = 3. Reset is refused now ({ $reason }). Once the cause is gone (the item has moved on, the sensor reads right), press Reset; if it stays refused, check the plant and Re-initialise…
+
+## Explanation
+level-0 = 0 Current state
+level-1 = 1 Projection
+level-2 = 2 Before stop
+level-3 = 3 Advanced
+level-4 = 4 Hypothesis
+expl-title = Explanation
+expl-no-trip = No trip: the plant runs within its safety constraints.
+expl-trip-at = Trip at { $time }
+expl-as-written = as written: { $id } = { $notation }
+expl-level = Level { $level }
+expl-nothing = Nothing to report at this level.
+expl-choose-level = Choose a level to draw it on the synoptic.
+expl-report-folder = Report folder
+expl-export-report = Export incident report
+
+## Alarms
+prio-urgent = URGENT
+prio-high = HIGH
+prio-medium = MEDIUM
+alarms-title = Alarms
+alarms-show-shelved = show shelved
+alarms-ack-all = Acknowledge all ({ $n })
+alarms-none = No active alarm.
+alarms-previous = ◀ Previous
+alarms-page = Page { $page } of { $pages }
+alarms-next = Next ▶
+alarms-ack-page = Acknowledge page
+alarm-unack = UNACK
+alarm-ack = ACK
+alarm-cleared-unack = CLEARED-UNACK
+alarm-normal = NORMAL
+alarm-first-out = FIRST OUT
+alarm-shelved-until = (shelved until { $until }: { $reason })
+alarm-detail = Detail
+alarm-acknowledged-at = acknowledged at { $time }: { $note }
+alarm-note-hint = note
+alarm-acknowledge = Acknowledge #{ $id }
+alarm-unshelve = Unshelve #{ $id }
+alarm-shelve = Shelve #{ $id }…
+alarm-shelve-safety = A safety alarm (trip, hazard, specification error, live link) is never shelved
+shelve-reason = Reason
+shelve-reason-hint = why (required)
+shelve-now = Shelve #{ $id } now
+shelve-needs-reason = Shelving needs a reason
+
+## Alarm performance
+kpi-rate = Rate: { $last } in the last 10 min (average { $average }, peak { $peak })
+kpi-flood = ALARM FLOOD
+kpi-title = Alarm performance
+kpi-summary = { $total } alarms in { $intervals } intervals of 10 min; { $floods } in flood (more than { $limit } alarms)
+kpi-chattering = Chattering (3 or more within a minute): { $sources }
+
+## Alarm history
+history-title = Alarm history ({ $n })
+history-search = Search
+history-every-kind = every kind
+history-every-priority = every priority
+history-count = { $n } of { $total }
+history-export = Export alarms CSV
+history-save-as = Save alarms as…
+history-cleared = , cleared { $time }
+history-ack = , ack { $time }
+history-more = … { $n } more: narrow the search or export
+
+## Journal
+journal-title = Journal
+journal-written-to = written to { $path }
+journal-csv-file = CSV file
+journal-export-csv = Export CSV
+journal-export-csv-hover = Written under the data folder
+journal-save-as = Save journal as…
+journal-exports-under = Exports go under { $path }
+
+## Training
+training-title = Training
+training-verify-fix = Verify fix
+training-verify-fix-hover = Re-run the scenario with the edited program (Maintenance)
+training-edit-program = Edit program
+training-errors = Control-error library
+training-load = Load { $id }
+training-faults = Fault library
+training-no-faults = No faults.ron in the plant folder.
+training-inject = Inject
+
+## Maintenance
+maint-program = Control program: { $name }
+maint-recompile = Recompile
+maint-restart = Restart with edit
+maint-discard = Discard edits
+maint-verify-fix-hover = Re-run the scenario headless with the edit
+maint-chart = Chart { $name }
+maint-active = active
+maint-equations = Equations
+
+## Chronogram
+chrono-title = Chronogram
+chrono-replay = Replay
+chrono-live = Live
+chrono-signals = Signals
+
+## Diagnosers
+diag-doubt-monitor = { $comp } in doubt between { $faults } ({ $p }, a drive, may be at fault; monitor: reported, not stopped)
+diag-doubt-stop = Stopped on the safe side: { $comp } in doubt between { $faults } ({ $p }, a drive, may be at fault). Check the plant, then reset the diagnosers
+diag-no-estimate = { $s } at fault (certain): no estimate in its model, { $s } is still read
+diag-actuator-stop = Actuator partition { $p } at fault: the whole system is stopped
+diag-actuator-monitor = Actuator partition { $p } at fault (monitor: reported, not stopped)
+diag-estimated = { $s } estimated from time intervals ({ $hat }) — degraded mode
+diag-sensor-monitor = { $s } at fault: the filter reads { $hat } (monitor: the PLC still reads { $s })
+diag-partition = Partition { $p } at fault
+diag-question = Question: { $question }
+diag-item-there = Yes, an item is there ({ $sensor })
+diag-no-item = No item there ({ $sensor })
+diag-answer = Operator's answer: { $conclusion }
+diag-reset = Reset diagnosers (after repair)
+diag-reset-hover = The faulty sensor or actuator was repaired: clear the fault flags, read the sensors again and end the stop. A fault still present is diagnosed again.
+diag-table = Diagnosers ({ $n } certain diagnoses)
+diag-table-doubts = Diagnosers ({ $n } certain diagnoses, { $doubts } stops on the safe side)
+diag-component = component
+diag-estimate = state estimate
+diag-decisions = decisions
+
+## Training score
+score-summary = Levels consulted: { $levels }. Attempts: { $attempts }. { $result }
+score-none = none
+score-fixed-in = Fixed, located in { $s } s.
+score-fixed = Fixed.
+score-not-fixed = Not fixed yet.
+
+## Constraint set verification
+verif-title = Constraint set verification
+verif-run = Verify constraints
+verif-run-hover = Explore the abstract plant model with the most permissive control and the filter in the loop (at most 2 boxes): hazards, deliveries, invariants. Necessity of each constraint: `vigie verify --necessity`
+verif-exploring = exploring… { $s } s
+verif-not-yet = Not verified yet.
+verif-states = { $states } reachable states, { $transitions } transitions ({ $s } s)
+verif-safe = Safety: proved, no hazard reachable
+verif-violated = Safety: VIOLATED, { $kind } reachable in { $n } steps
+verif-hazard-kind = { $kind } ({ $n } steps)
+verif-hazards = Hazards reachable: { $kinds }
+verif-replay = Replay counterexample
+verif-replay-hover = Play the shortest hazard trace on the synoptic, filter enforcing
+verif-no-fallback = Some reachable context has no fallback vector
+verif-left = left
+verif-right = right
+verif-no-delivery = Permissiveness { $side }: NO delivery reachable
+verif-delivery-always = Permissiveness { $side }: delivery in { $n } steps, from every reachable state
+verif-delivery-some = Permissiveness { $side }: delivery in { $n } steps; some states can no longer deliver
+verif-invariants = Invariants
+verif-proved = proved
+verif-refuted = REFUTED
+verif-necessity-hint = Necessity of each constraint: `vigie verify --necessity` (one exploration per constraint).
+verif-necessity = Necessity of each constraint
+verif-necessary = necessary: without it { $hazard }
+verif-redundant = redundant on this model
+
+## Live link toolbar
+link-gateway = LIVE GATEWAY
+link-monitor = LIVE MONITOR
+link-reset-hover = Operator reset of the gateway's safety filter
+link-normal = Normal

@@ -56,3 +56,248 @@ trends-no-history = Pas d'historique : la console tourne sans dossier de donnée
 trends-empty = Ajoutez un signal pour voir son historique.
 trends-legend = Chaque ligne est un signal, haut à 1 ; une barre pleine est un signal qui a changé plus vite que l'écran ne peut le montrer (zoomez). « .cmd » est la sortie commandée par le programme, sans lui la sortie appliquée.
 trends-now = maintenant
+
+## Installation non protégée
+unprotected-banner = NON PROTÉGÉE : aucune contrainte de sécurité, le filtre laisse passer toutes les commandes
+
+## Barre d'outils : mode manuel, réarmement, réinitialisation, connexion
+manual-leave = Quitter le manuel
+manual-leave-hover = Retour au programme, relancé depuis ses étapes initiales
+manual-enter = Mode manuel…
+manual-enter-hover = Piloter les actionneurs à la main, chaque commande passant par le filtre
+manual-enter-disabled-hover = Impossible tant que le filtre maintient la machine, ou sur une liaison en direct
+reset = Réarmer
+reset-hover = Réarmement du filtre de sécurité par l'opérateur
+reinit = Réinitialiser…
+reinit-hover = Quand le réarmement est refusé parce que le programme ou un observateur croit encore ce qu'un transitoire lui a fait croire : après une vérification de la machine (vidée, ou chaque pièce là où un capteur la montre), le programme revient à ses étapes initiales, les capteurs sont pris tels qu'ils sont lus
+reinit-disabled-hover = Seulement après un arrêt sécurité, sur l'émulateur (sur une liaison en direct, le programme de l'automate se réinitialise sur l'automate)
+logout = Se déconnecter
+login = Se connecter…
+login-hover = Rôle opérateur jusqu'à une connexion maintenance, formateur ou administrateur
+
+## Dialogues
+cancel = Annuler
+login-title = Connexion à la console
+login-no-accounts = Aucun compte dans le dossier de données : un administrateur les crée avec `vigie user add NOM --role maintenance` (le mot de passe sur l'entrée standard).
+login-user = Utilisateur
+login-password = Mot de passe
+login-submit = Se connecter
+manual-confirm-title = Piloter la machine à la main ?
+manual-confirm-text = Le programme n'est plus exécuté et les sorties restent en l'état. Vous mettez alors chaque actionneur en marche ou à l'arrêt, ou le pilotez par à-coups tant que le bouton est maintenu. Chaque commande est d'abord vérifiée par rapport aux contraintes de sécurité : celle qui violerait une contrainte est refusée avec sa raison et n'atteint jamais la machine. Quitter le mode manuel relance le programme depuis ses étapes initiales.
+manual-confirm-enter = Passer en mode manuel
+reinit-title = Réinitialiser après une vérification de la machine
+reinit-text = Le programme revient à ses étapes initiales, comme en début de poste, les capteurs sont pris tels qu'ils sont lus et l'arrêt sécurité prend fin. Le filtre vérifie les commandes suivantes comme les autres, et les diagnostiqueurs ne décident rien avec certitude tant que chaque modèle n'est pas revenu à son état initial.
+reinit-empty-first = Videz d'abord la machine : retirez chaque pièce à la main, y compris celles tombées (les étapes initiales n'attendent aucune pièce à mi-chemin). Chaque observateur redémarre alors à vide.
+reinit-emulator = Sur l'émulateur, les pièces émulées sont retirées pour vous.
+reinit-leave-in-place = Ou laissez les pièces en place, chacune là où un capteur la montre, aucune entre les capteurs : un observateur n'est alors remis à zéro que là où les capteurs ne laissent pas de place à sa pièce, et le programme peut s'arrêter à nouveau sur une pièce qu'il n'attend pas.
+reinit-emptied = Machine vidée : réinitialiser
+reinit-items-left = Pièces laissées en place : réinitialiser
+
+## Dérivation
+bypass-banner = DÉRIVATION : { $id }{ $what } n'est pas appliquée jusqu'à { $until } (reste { $min } min { $s } s), par { $by } : { $reason }
+bypass-end = Fin de la dérivation de { $id }
+bypass-title = Mettre une contrainte en dérivation
+bypass-needs-role = Mettre une contrainte de sécurité en dérivation demande le rôle maintenance : connectez-vous.
+bypass-reason = Motif de la dérivation
+bypass-now = Mettre en dérivation
+bypass-now-hover = Le filtre cesse d'appliquer cette contrainte jusqu'à la fin du délai
+
+## Mode manuel
+manual-title = Mode manuel
+manual-note = Chaque commande est vérifiée par rapport aux contraintes de sécurité ; une commande refusée n'atteint jamais la machine.
+manual-on = MARCHE
+manual-off = ARRÊT
+manual-set-on = { $id } MARCHE
+manual-set-off = { $id } ARRÊT
+manual-jog = À-coups { $id }
+manual-jog-hover = MARCHE tant que le bouton est maintenu
+
+## Ligne d'état
+status-removed = , { $n ->
+    [one] { $n } retirée
+   *[other] { $n } retirées
+}
+status-boxes = { $scenario } — caisses : { $created } créées, { $left } à gauche, { $right } à droite, { $damaged } endommagées{ $removed }
+
+## Bandeaux du synoptique
+banner-level = Niveau { $level } — arrêt sécurité { $ids } à { $time }
+banner-replay = RELECTURE à { $time } (en direct : { $now })
+banner-trip = ARRÊT SÉCURITÉ { $ids } — le filtre de sécurité maintient la machine
+
+## Que faire après un arrêt sécurité
+next-title = Que faire maintenant (arrêt à { $time })
+next-why = 1. Pourquoi : { $text }.
+next-check = 2. À vérifier sur la machine : { $where }.
+next-reset-possible = 3. Le réarmement est possible : appuyez sur Réarmer, puis sur Départ cycle si le programme était arrêté.
+next-reset-refused = 3. Le réarmement est refusé pour l'instant ({ $reason }). Une fois la cause disparue (la pièce a avancé, le capteur lit juste), appuyez sur Réarmer ; s'il reste refusé, vérifiez la machine et Réinitialiser…
+
+## Explication
+level-0 = 0 État actuel
+level-1 = 1 Projection
+level-2 = 2 Avant l'arrêt
+level-3 = 3 Avancé
+level-4 = 4 Hypothèse
+expl-title = Explication
+expl-no-trip = Aucun arrêt sécurité : la machine fonctionne dans ses contraintes de sécurité.
+expl-trip-at = Arrêt sécurité à { $time }
+expl-as-written = tel qu'écrit : { $id } = { $notation }
+expl-level = Niveau { $level }
+expl-nothing = Rien à signaler à ce niveau.
+expl-choose-level = Choisissez un niveau pour l'afficher sur le synoptique.
+expl-report-folder = Dossier des rapports
+expl-export-report = Exporter le rapport d'incident
+
+## Alarmes
+prio-urgent = URGENTE
+prio-high = HAUTE
+prio-medium = MOYENNE
+alarms-title = Alarmes
+alarms-show-shelved = afficher les masquées
+alarms-ack-all = Tout acquitter ({ $n })
+alarms-none = Aucune alarme active.
+alarms-previous = ◀ Précédente
+alarms-page = Page { $page } sur { $pages }
+alarms-next = Suivante ▶
+alarms-ack-page = Acquitter la page
+alarm-unack = NON ACQ.
+alarm-ack = ACQ.
+alarm-cleared-unack = DISPARUE-NON ACQ.
+alarm-normal = NORMALE
+alarm-first-out = PREMIÈRE ALARME
+alarm-shelved-until = (masquée jusqu'à { $until } : { $reason })
+alarm-detail = Détail
+alarm-acknowledged-at = acquittée à { $time } : { $note }
+alarm-note-hint = commentaire
+alarm-acknowledge = Acquitter n° { $id }
+alarm-unshelve = Démasquer n° { $id }
+alarm-shelve = Masquer n° { $id }…
+alarm-shelve-safety = Une alarme de sécurité (arrêt sécurité, danger, erreur de spécification, liaison en direct) n'est jamais masquée
+shelve-reason = Motif
+shelve-reason-hint = pourquoi (obligatoire)
+shelve-now = Masquer n° { $id } maintenant
+shelve-needs-reason = Masquer une alarme demande un motif
+
+## Performance des alarmes
+kpi-rate = Fréquence : { $last } sur les 10 dernières min (moyenne { $average }, pic { $peak })
+kpi-flood = AVALANCHE D'ALARMES
+kpi-title = Performance des alarmes
+kpi-summary = { $total } alarmes en { $intervals } intervalles de 10 min ; { $floods } en avalanche (plus de { $limit } alarmes)
+kpi-chattering = Alarmes battantes (3 fois ou plus en une minute) : { $sources }
+
+## Historique des alarmes
+history-title = Historique des alarmes ({ $n })
+history-search = Rechercher
+history-every-kind = tous types
+history-every-priority = toutes priorités
+history-count = { $n } sur { $total }
+history-export = Exporter les alarmes en CSV
+history-save-as = Enregistrer les alarmes sous…
+history-cleared = , disparue à { $time }
+history-ack = , acquittée à { $time }
+history-more = … { $n } de plus : affinez la recherche ou exportez
+
+## Journal
+journal-title = Journal
+journal-written-to = écrit dans { $path }
+journal-csv-file = Fichier CSV
+journal-export-csv = Exporter en CSV
+journal-export-csv-hover = Écrit dans le dossier de données
+journal-save-as = Enregistrer le journal sous…
+journal-exports-under = Les exports vont dans { $path }
+
+## Formation
+training-title = Formation
+training-verify-fix = Vérifier la correction
+training-verify-fix-hover = Rejouer le scénario avec le programme modifié (Maintenance)
+training-edit-program = Modifier le programme
+training-errors = Bibliothèque d'erreurs de commande
+training-load = Charger { $id }
+training-faults = Bibliothèque de défauts
+training-no-faults = Pas de faults.ron dans le dossier de l'installation.
+training-inject = Injecter
+
+## Maintenance
+maint-program = Programme : { $name }
+maint-recompile = Recompiler
+maint-restart = Redémarrer avec la modification
+maint-discard = Abandonner les modifications
+maint-verify-fix-hover = Rejouer le scénario sans affichage avec la modification
+maint-chart = Grafcet { $name }
+maint-active = active
+maint-equations = Équations
+
+## Chronogramme
+chrono-title = Chronogramme
+chrono-replay = Relecture
+chrono-live = Direct
+chrono-signals = Signaux
+
+## Diagnostiqueurs
+diag-doubt-monitor = { $comp } en doute entre { $faults } ({ $p }, un entraînement, peut être en défaut ; surveillance : signalé, pas d'arrêt)
+diag-doubt-stop = Arrêt du côté sûr : { $comp } en doute entre { $faults } ({ $p }, un entraînement, peut être en défaut). Vérifiez la machine, puis réarmez les diagnostiqueurs
+diag-no-estimate = { $s } en défaut (certain) : pas d'estimation dans son modèle, { $s } est toujours lu
+diag-actuator-stop = Partition actionneur { $p } en défaut : tout le système est arrêté
+diag-actuator-monitor = Partition actionneur { $p } en défaut (surveillance : signalé, pas d'arrêt)
+diag-estimated = { $s } estimé à partir des intervalles de temps ({ $hat }) — mode dégradé
+diag-sensor-monitor = { $s } en défaut : le filtre lit { $hat } (surveillance : l'automate lit toujours { $s })
+diag-partition = Partition { $p } en défaut
+diag-question = Question : { $question }
+diag-item-there = Oui, une pièce est là ({ $sensor })
+diag-no-item = Pas de pièce ({ $sensor })
+diag-answer = Réponse de l'opérateur : { $conclusion }
+diag-reset = Réarmer les diagnostiqueurs (après réparation)
+diag-reset-hover = Le capteur ou l'actionneur défaillant a été réparé : effacer les indicateurs de défaut, relire les capteurs et mettre fin à l'arrêt. Un défaut toujours présent est diagnostiqué à nouveau.
+diag-table = Diagnostiqueurs ({ $n ->
+    [one] { $n } diagnostic certain
+   *[other] { $n } diagnostics certains
+})
+diag-table-doubts = Diagnostiqueurs ({ $n ->
+    [one] { $n } diagnostic certain
+   *[other] { $n } diagnostics certains
+}, { $doubts ->
+    [one] { $doubts } arrêt du côté sûr
+   *[other] { $doubts } arrêts du côté sûr
+})
+diag-component = composant
+diag-estimate = état estimé
+diag-decisions = décisions
+
+## Score de formation
+score-summary = Niveaux consultés : { $levels }. Tentatives : { $attempts }. { $result }
+score-none = aucun
+score-fixed-in = Corrigé, erreur localisée en { $s } s.
+score-fixed = Corrigé.
+score-not-fixed = Pas encore corrigé.
+
+## Vérification du jeu de contraintes
+verif-title = Vérification du jeu de contraintes
+verif-run = Vérifier les contraintes
+verif-run-hover = Explorer le modèle abstrait de la machine avec la commande la plus permissive et le filtre dans la boucle (2 caisses au plus) : dangers, livraisons, invariants. Nécessité de chaque contrainte : `vigie verify --necessity`
+verif-exploring = exploration… { $s } s
+verif-not-yet = Pas encore vérifié.
+verif-states = { $states } états atteignables, { $transitions } transitions ({ $s } s)
+verif-safe = Sécurité : prouvée, aucun danger atteignable
+verif-violated = Sécurité : VIOLÉE, { $kind } atteignable en { $n } pas
+verif-hazard-kind = { $kind } ({ $n } pas)
+verif-hazards = Dangers atteignables : { $kinds }
+verif-replay = Rejouer le contre-exemple
+verif-replay-hover = Jouer sur le synoptique la plus courte trace menant à un danger, filtre actif
+verif-no-fallback = Un contexte atteignable n'a pas de vecteur de repli
+verif-left = à gauche
+verif-right = à droite
+verif-no-delivery = Permissivité { $side } : AUCUNE livraison atteignable
+verif-delivery-always = Permissivité { $side } : livraison en { $n } pas, depuis tout état atteignable
+verif-delivery-some = Permissivité { $side } : livraison en { $n } pas ; certains états ne peuvent plus livrer
+verif-invariants = Invariants
+verif-proved = prouvé
+verif-refuted = RÉFUTÉ
+verif-necessity-hint = Nécessité de chaque contrainte : `vigie verify --necessity` (une exploration par contrainte).
+verif-necessity = Nécessité de chaque contrainte
+verif-necessary = nécessaire : sans elle { $hazard }
+verif-redundant = redondante sur ce modèle
+
+## Barre d'outils de la liaison en direct
+link-gateway = PASSERELLE EN DIRECT
+link-monitor = SURVEILLANCE EN DIRECT
+link-reset-hover = Réarmement du filtre de sécurité de la passerelle par l'opérateur
+link-normal = Normal

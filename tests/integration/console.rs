@@ -1073,7 +1073,13 @@ fn a_damaged_historian_leaves_the_console_running_and_the_file_alone() {
     );
     h.get_by_label("Start").click();
     h.run_steps(2);
-    assert!(h.state().journal.entries().iter().any(|e| e.text == "Start"));
+    assert!(
+        h.state()
+            .journal
+            .entries()
+            .iter()
+            .any(|e| e.text == "Start")
+    );
     assert_eq!(std::fs::read(data.join("vigie.sqlite")).unwrap(), garbage);
     drop(h);
     let _ = std::fs::remove_dir_all(&data);

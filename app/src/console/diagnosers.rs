@@ -19,6 +19,7 @@ pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
         return Vec::new();
     };
     let monitor = c.link.as_ref().is_some_and(|l| l.mode == Mode::Monitor);
+    let i18n = &c.i18n;
     // A stop on the safe side (the component in doubt between a dead drive and a
     // sensor it cannot estimate) says so, with its candidates: no fault is certain.
     let doubt = |p: &str| {
@@ -33,44 +34,43 @@ pub(crate) fn banner_lines(c: &Console) -> Vec<(String, bool)> {
         .into_iter()
         .map(|(p, stop, sensor)| match (stop, sensor, monitor) {
             (true, _, _) if let Some((comp, faults)) = doubt(&p) => (
-                if monitor {
-                    format!(
-                        "{comp} in doubt between {faults} ({p}, a drive, may be at fault; monitor: reported, not stopped)"
-                    )
-                } else {
-                    format!(
-                        "Stopped on the safe side: {comp} in doubt between {faults} ({p}, a drive, may be at fault). Check the plant, then reset the diagnosers"
-                    )
-                },
+                i18n.ta(
+                    if monitor {
+                        "diag-doubt-monitor"
+                    } else {
+                        "diag-doubt-stop"
+                    },
+                    &[
+                        ("comp", (&comp).into()),
+                        ("faults", (&faults).into()),
+                        ("p", (&p).into()),
+                    ],
+                ),
                 true,
             ),
-            (false, Some(s), _) if !vigie_core::sim::diagnosis::has_estimate(d, &s) => (
-                format!("{s} at fault (certain): no estimate in its model, {s} is still read"),
-                false,
-            ),
-            (true, _, false) => (
-                format!("Actuator partition {p} at fault: the whole system is stopped"),
-                true,
-            ),
+            (false, Some(s), _) if !vigie_core::sim::diagnosis::has_estimate(d, &s) => {
+                (i18n.ta("diag-no-estimate", &[("s", (&s).into())]), false)
+            }
+            (true, _, false) => (i18n.ta("diag-actuator-stop", &[("p", (&p).into())]), true),
             (true, _, true) => (
-                format!("Actuator partition {p} at fault (monitor: reported, not stopped)"),
+                i18n.ta("diag-actuator-monitor", &[("p", (&p).into())]),
                 true,
             ),
             (false, Some(s), false) => (
-                format!(
-                    "{s} estimated from time intervals ({}) — degraded mode",
-                    hat(&s)
+                i18n.ta(
+                    "diag-estimated",
+                    &[("s", (&s).into()), ("hat", (&hat(&s)).into())],
                 ),
                 false,
             ),
             (false, Some(s), true) => (
-                format!(
-                    "{s} at fault: the filter reads {} (monitor: the PLC still reads {s})",
-                    hat(&s)
+                i18n.ta(
+                    "diag-sensor-monitor",
+                    &[("s", (&s).into()), ("hat", (&hat(&s)).into())],
                 ),
                 false,
             ),
-            (false, None, _) => (format!("Partition {p} at fault"), false),
+            (false, None, _) => (i18n.ta("diag-partition", &[("p", (&p).into())]), false),
         })
         .collect()
 }
@@ -96,11 +96,18 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 .stroke(egui::Stroke::new(2.0, c.palette.highlight))
                 .show(ui, |ui| {
                     ui.horizontal_wrapped(|ui| {
-                        ui.label(RichText::new(format!("Question: {}", q.question)).strong());
-                        for (item, text) in
-                            [(true, "Yes, an item is there"), (false, "No item there")]
-                        {
-                            if ui.button(format!("{text} ({})", q.sensor)).clicked() {
+                        ui.label(
+                            RichText::new(
+                                c.i18n
+                                    .ta("diag-question", &[("question", (&q.question).into())]),
+                            )
+                            .strong(),
+                        );
+                        for (item, id) in [(true, "diag-item-there"), (false, "diag-no-item")] {
+                            if ui
+                                .button(c.i18n.ta(id, &[("sensor", (&q.sensor).into())]))
+                                .clicked()
+                            {
                                 out.push(Command::Plant(OperatorAction::AnswerDoubt {
                                     component: q.component.clone(),
                                     sensor: q.sensor.clone(),
@@ -112,16 +119,18 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 });
         }
         for conclusion in c.sim.doubt_answers().values() {
-            ui.label(RichText::new(format!("Operator's answer: {conclusion}")).strong());
+            ui.label(
+                RichText::new(
+                    c.i18n
+                        .ta("diag-answer", &[("conclusion", conclusion.into())]),
+                )
+                .strong(),
+            );
         }
         if !lines.is_empty()
             && ui
-                .button("Reset diagnosers (after repair)")
-                .on_hover_text(
-                    "The faulty sensor or actuator was repaired: clear the fault flags, \
-                     read the sensors again and end the stop. A fault still present is \
-                     diagnosed again.",
-                )
+                .button(c.i18n.t("diag-reset"))
+                .on_hover_text(c.i18n.t("diag-reset-hover"))
                 .clicked()
         {
             out.push(Command::Plant(OperatorAction::ResetDiagnosers));
@@ -132,11 +141,14 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             .filter(|x| x.certainty == Certainty::Ambiguous)
             .count();
         egui::CollapsingHeader::new(if doubts == 0 {
-            format!("Diagnosers ({} certain diagnoses)", d.diagnoses.len())
+            c.i18n.ta("diag-table", &[("n", d.diagnoses.len().into())])
         } else {
-            format!(
-                "Diagnosers ({} certain diagnoses, {doubts} stops on the safe side)",
-                d.diagnoses.len() - doubts
+            c.i18n.ta(
+                "diag-table-doubts",
+                &[
+                    ("n", (d.diagnoses.len() - doubts).into()),
+                    ("doubts", doubts.into()),
+                ],
             )
         })
         .id_salt("diagnosers-table")
@@ -144,9 +156,10 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             egui::Grid::new("diagnosers-grid")
                 .striped(true)
                 .show(ui, |ui| {
-                    ui.strong("component");
-                    ui.strong("state estimate");
-                    ui.strong("decisions");
+                    ui.strong(c.i18n.t("diag-component"));
+                    ui.strong(c.i18n.t("diag-estimate"));
+                    ui.strong(c.i18n.t("diag-decisions"));
+
                     ui.end_row();
                     let decisions = d.decisions();
                     for comp in &d.compiled.components {

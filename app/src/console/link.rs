@@ -453,11 +453,11 @@ pub(crate) fn toolbar_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>)
     ui.label(RichText::new("VIGIE").strong().size(18.0));
     ui.separator();
     let what = match link.mode {
-        Mode::Gateway => "LIVE GATEWAY",
-        _ => "LIVE MONITOR",
+        Mode::Gateway => "link-gateway",
+        _ => "link-monitor",
     };
     ui.label(
-        RichText::new(what)
+        RichText::new(c.i18n.t(what))
             .strong()
             .color(Color32::WHITE)
             .background_color(state_color(c, &link.state)),
@@ -467,7 +467,7 @@ pub(crate) fn toolbar_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>)
     ui.separator();
     let tripped = c.sim.engine.is_tripped();
     if link.mode == Mode::Gateway {
-        let reset = egui::Button::new(RichText::new("Reset").color(if tripped {
+        let reset = egui::Button::new(RichText::new(c.i18n.t("reset")).color(if tripped {
             Color32::WHITE
         } else {
             c.palette.text
@@ -479,7 +479,7 @@ pub(crate) fn toolbar_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>)
         });
         if ui
             .add(reset)
-            .on_hover_text("Operator reset of the gateway's safety filter")
+            .on_hover_text(c.i18n.t("link-reset-hover"))
             .clicked()
         {
             out.push(Command::Plant(OperatorAction::Reset));
@@ -488,11 +488,14 @@ pub(crate) fn toolbar_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>)
     }
     let unack = c.sim.alarms.unacknowledged();
     let (txt, col) = if tripped {
-        ("TRIPPED".to_string(), c.palette.trip)
+        (c.i18n.t("state-tripped"), c.palette.trip)
     } else if unack > 0 {
-        (format!("{unack} unacknowledged"), c.palette.alarm)
+        (
+            c.i18n.ta("state-unacknowledged", &[("n", unack.into())]),
+            c.palette.alarm,
+        )
     } else {
-        ("Normal".to_string(), c.palette.equipment_edge)
+        (c.i18n.t("link-normal"), c.palette.equipment_edge)
     };
     ui.label(
         RichText::new(txt)

@@ -1,7 +1,9 @@
 //! Training: the score of a session (time to locate the error, levels consulted, correct
 //! fix) and the check of a fix by a re-run of the scenario.
 
+use crate::i18n::{I18n, Lang};
 use std::collections::BTreeSet;
+
 use std::path::Path;
 use vigie_core::control::CompiledProgram;
 use vigie_core::sim::{Options, Scenario, Simulation};
@@ -34,22 +36,31 @@ impl Score {
         }
     }
 
-    /// One line summary.
+    /// One line summary, in English.
     pub fn summary(&self) -> String {
+        I18n::new(Lang::En, None).map_or_else(|e| e.to_string(), |i| self.summary_in(&i))
+    }
+
+    /// One line summary, in the language `i18n` shows.
+    pub fn summary_in(&self, i18n: &I18n) -> String {
         let levels: Vec<String> = self.levels.iter().map(ToString::to_string).collect();
-        format!(
-            "Levels consulted: {}. Attempts: {}. {}",
-            if levels.is_empty() {
-                "none".into()
-            } else {
-                levels.join(", ")
-            },
-            self.attempts,
-            match (self.fixed, self.located_after_s) {
-                (true, Some(s)) => format!("Fixed, located in {s:.0} s."),
-                (true, None) => "Fixed.".into(),
-                (false, _) => "Not fixed yet.".into(),
-            }
+        let levels = if levels.is_empty() {
+            i18n.t("score-none")
+        } else {
+            levels.join(", ")
+        };
+        let result = match (self.fixed, self.located_after_s) {
+            (true, Some(s)) => i18n.ta("score-fixed-in", &[("s", (&format!("{s:.0}")).into())]),
+            (true, None) => i18n.t("score-fixed"),
+            (false, _) => i18n.t("score-not-fixed"),
+        };
+        i18n.ta(
+            "score-summary",
+            &[
+                ("levels", (&levels).into()),
+                ("attempts", self.attempts.into()),
+                ("result", (&result).into()),
+            ],
         )
     }
 }

@@ -138,30 +138,24 @@ pub(crate) fn replay(c: &mut Console) {
 /// The verification section of the maintenance side panel.
 pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let pal = c.palette.clone();
-    ui.heading("Constraint set verification");
+    ui.heading(c.i18n.t("verif-title"));
     ui.horizontal(|ui| {
         let running = c.verification.running();
         if ui
-            .add_enabled(!running, egui::Button::new("Verify constraints"))
-            .on_hover_text(
-                "Explore the abstract plant model with the most permissive control and the \
-                 filter in the loop (at most 2 boxes): hazards, deliveries, invariants. \
-                 Necessity of each constraint: `vigie verify --necessity`",
-            )
+            .add_enabled(!running, egui::Button::new(c.i18n.t("verif-run")))
+            .on_hover_text(c.i18n.t("verif-run-hover"))
             .clicked()
         {
             out.push(Command::VerifyConstraints);
         }
         if running {
             ui.spinner();
-            ui.label(format!(
-                "exploring… {:.0} s",
-                c.wall_s - c.verification.started_s
-            ));
+            let s = format!("{:.0}", c.wall_s - c.verification.started_s);
+            ui.label(c.i18n.ta("verif-exploring", &[("s", (&s).into())]));
         }
     });
     let Some((result, secs)) = &c.verification.result else {
-        ui.label("Not verified yet.");
+        ui.label(c.i18n.t("verif-not-yet"));
         return;
     };
     let r = match result {
@@ -171,19 +165,27 @@ pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command
             return;
         }
     };
-    ui.label(format!(
-        "{} reachable states, {} transitions ({:.1} s)",
-        r.full.states, r.full.transitions, secs
+    let i18n = &c.i18n;
+    ui.label(i18n.ta(
+        "verif-states",
+        &[
+            ("states", r.full.states.into()),
+            ("transitions", r.full.transitions.into()),
+            ("s", (&format!("{secs:.1}")).into()),
+        ],
     ));
     match &r.full.hazard {
         None => {
-            ui.label(RichText::new("Safety: proved, no hazard reachable").strong());
+            ui.label(RichText::new(i18n.t("verif-safe")).strong());
         }
         Some((kind, trace)) => {
             ui.label(
-                RichText::new(format!(
-                    "Safety: VIOLATED, {kind} reachable in {} steps",
-                    trace.steps.len()
+                RichText::new(i18n.ta(
+                    "verif-violated",
+                    &[
+                        ("kind", (&kind.to_string()).into()),
+                        ("n", trace.steps.len().into()),
+                    ],
                 ))
                 .strong()
                 .color(pal.trip),
@@ -192,12 +194,17 @@ pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command
                 .full
                 .hazard_kinds
                 .iter()
-                .map(|(k, n)| format!("{k} ({n} steps)"))
+                .map(|(k, n)| {
+                    i18n.ta(
+                        "verif-hazard-kind",
+                        &[("kind", (&k.to_string()).into()), ("n", (*n).into())],
+                    )
+                })
                 .collect();
-            ui.label(format!("Hazards reachable: {}", kinds.join(", ")));
+            ui.label(i18n.ta("verif-hazards", &[("kinds", (&kinds.join(", ")).into())]));
             if ui
-                .button("Replay counterexample")
-                .on_hover_text("Play the shortest hazard trace on the synoptic, filter enforcing")
+                .button(i18n.t("verif-replay"))
+                .on_hover_text(i18n.t("verif-replay-hover"))
                 .clicked()
             {
                 out.push(Command::ReplayCounterexample);
@@ -205,23 +212,24 @@ pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command
         }
     }
     if r.full.no_fallback.is_some() {
-        ui.label(RichText::new("Some reachable context has no fallback vector").color(pal.trip));
+        ui.label(RichText::new(i18n.t("verif-no-fallback")).color(pal.trip));
     }
-    for (side, name) in ["left", "right"].iter().enumerate() {
+    for (side, id) in ["verif-left", "verif-right"].iter().enumerate() {
+        let name = i18n.t(id);
         let text = match (&r.full.delivered[side], r.full.always_deliverable[side]) {
-            (None, _) => format!("Permissiveness {name}: NO delivery reachable"),
-            (Some(t), true) => format!(
-                "Permissiveness {name}: delivery in {} steps, from every reachable state",
-                t.steps.len()
-            ),
-            (Some(t), false) => format!(
-                "Permissiveness {name}: delivery in {} steps; some states can no longer deliver",
-                t.steps.len()
+            (None, _) => i18n.ta("verif-no-delivery", &[("side", (&name).into())]),
+            (Some(t), always) => i18n.ta(
+                if always {
+                    "verif-delivery-always"
+                } else {
+                    "verif-delivery-some"
+                },
+                &[("side", (&name).into()), ("n", t.steps.len().into())],
             ),
         };
         ui.label(text);
     }
-    egui::CollapsingHeader::new("Invariants")
+    egui::CollapsingHeader::new(i18n.t("verif-invariants"))
         .default_open(false)
         .show(ui, |ui| {
             for i in &r.invariants {
@@ -229,27 +237,31 @@ pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command
                     "{} {}: {}",
                     i.id,
                     i.source,
-                    if i.proved { "proved" } else { "REFUTED" }
+                    i18n.t(if i.proved {
+                        "verif-proved"
+                    } else {
+                        "verif-refuted"
+                    })
                 ));
             }
         });
     if r.constraints.is_empty() {
-        ui.label("Necessity of each constraint: `vigie verify --necessity` (one exploration per constraint).");
+        ui.label(i18n.t("verif-necessity-hint"));
         return;
     }
-    egui::CollapsingHeader::new("Necessity of each constraint")
+    egui::CollapsingHeader::new(i18n.t("verif-necessity"))
         .default_open(true)
         .show(ui, |ui| {
             egui::Grid::new("necessity").striped(true).show(ui, |ui| {
                 for role in &r.constraints {
                     ui.label(RichText::new(&role.id).monospace());
                     if role.necessary {
-                        ui.label(format!(
-                            "necessary: without it {}",
-                            role.hazard.as_deref().unwrap_or("?")
+                        ui.label(i18n.ta(
+                            "verif-necessary",
+                            &[("hazard", role.hazard.as_deref().unwrap_or("?").into())],
                         ));
                     } else {
-                        ui.label("redundant on this model");
+                        ui.label(i18n.t("verif-redundant"));
                     }
                     ui.end_row();
                 }

@@ -2,13 +2,16 @@
 //! pushes [`Command`]s; none of them changes the simulation.
 
 use super::synoptic::{self, Geometry, Picture};
-use super::{ALARMS_PER_PAGE, Command, Console, LEVEL_NAMES, Mode, ShelveForm};
+use super::{ALARMS_PER_PAGE, Command, Console, Mode, ShelveForm};
 use egui::{Align2, Color32, FontId, RichText, Sense, Stroke, pos2, vec2};
 use std::collections::{BTreeMap, BTreeSet};
 use vigie_core::access::Permission;
 use vigie_core::alarms::{AlarmKind, AlarmPriority, AlarmState};
 use vigie_core::sim::{OperatorAction, PlantState};
 use vigie_core::time::Millis;
+
+/// The messages of the explanation's levels (`LEVEL_NAMES`, in the language shown).
+const LEVEL_IDS: [&str; 5] = ["level-0", "level-1", "level-2", "level-3", "level-4"];
 
 /// The whole console.
 pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
@@ -105,10 +108,6 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         });
 }
 
-/// The text of the red banner shown while no safety constraint protects the plant.
-pub(crate) const UNPROTECTED_BANNER: &str =
-    "UNPROTECTED: no safety constraint, the filter lets every command through";
-
 /// The red banner under the toolbar while no safety constraint protects the plant
 /// (`V0110`: `constraints.txt` absent, empty or rejected); its hover text is the warning.
 fn unprotected_ui(c: &Console, ui: &mut egui::Ui) {
@@ -119,7 +118,7 @@ fn unprotected_ui(c: &Console, ui: &mut egui::Ui) {
         .frame(egui::Frame::side_top_panel(ui.style()).fill(c.palette.trip))
         .show(ui, |ui| {
             ui.label(
-                RichText::new(UNPROTECTED_BANNER)
+                RichText::new(c.i18n.t("unprotected-banner"))
                     .strong()
                     .size(16.0)
                     .color(Color32::WHITE),
@@ -204,8 +203,8 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         }
         if c.sim.manual_outputs().is_some() {
             if ui
-                .button("Leave manual")
-                .on_hover_text("Back to the program, restarted from its initial steps")
+                .button(c.i18n.t("manual-leave"))
+                .on_hover_text(c.i18n.t("manual-leave-hover"))
                 .clicked()
             {
                 out.push(Command::Plant(OperatorAction::Manual(false)));
@@ -213,16 +212,16 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         } else if ui
             .add_enabled(
                 c.link.is_none() && !c.sim.engine.is_tripped(),
-                egui::Button::new("Manual…"),
+                egui::Button::new(c.i18n.t("manual-enter")),
             )
-            .on_hover_text("Drive the actuators by hand, every command through the filter")
-            .on_disabled_hover_text("Not while the filter holds the plant, nor on a live link")
+            .on_hover_text(c.i18n.t("manual-enter-hover"))
+            .on_disabled_hover_text(c.i18n.t("manual-enter-disabled-hover"))
             .clicked()
         {
             c.manual_confirm = true;
         }
         let tripped = c.sim.engine.is_tripped();
-        let reset = egui::Button::new(RichText::new("Reset").color(if tripped {
+        let reset = egui::Button::new(RichText::new(c.i18n.t("reset")).color(if tripped {
             Color32::WHITE
         } else {
             c.palette.text
@@ -234,7 +233,7 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         });
         if ui
             .add(reset)
-            .on_hover_text("Operator reset of the safety filter")
+            .on_hover_text(c.i18n.t("reset-hover"))
             .clicked()
         {
             out.push(Command::Plant(OperatorAction::Reset));
@@ -249,23 +248,15 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 .find(|e| matches!(e.kind.as_str(), "trip" | "reset" | "reset_refused"))
                 .is_some_and(|e| e.kind == "reset_refused");
         let reinit = if refused {
-            egui::Button::new(RichText::new("Re-initialise…").color(Color32::BLACK))
+            egui::Button::new(RichText::new(c.i18n.t("reinit")).color(Color32::BLACK))
                 .fill(c.palette.alarm)
         } else {
-            egui::Button::new("Re-initialise…")
+            egui::Button::new(c.i18n.t("reinit"))
         };
         if ui
             .add_enabled(tripped && c.link.is_none(), reinit)
-            .on_hover_text(
-                "When the reset is refused because the program or an observer still \
-                 believes what a transient made it believe: after a check of the plant \
-                 (emptied, or every item where a sensor shows it), the program back to \
-                 its initial steps, the sensors taken as read",
-            )
-            .on_disabled_hover_text(
-                "Only after a trip, on the emulator (on a live link the PLC's program is \
-                 re-initialised on the PLC)",
-            )
+            .on_hover_text(c.i18n.t("reinit-hover"))
+            .on_disabled_hover_text(c.i18n.t("reinit-disabled-hover"))
             .clicked()
         {
             c.reinit_confirm = true;
@@ -276,16 +267,14 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         match &c.user {
             Some(u) => {
                 ui.label(format!("{u} · {}", c.role.name()));
-                if ui.button("Log out").clicked() {
+                if ui.button(c.i18n.t("logout")).clicked() {
                     out.push(Command::Logout);
                 }
             }
             None => {
                 if ui
-                    .button("Log in…")
-                    .on_hover_text(
-                        "Operator role until a maintenance, trainer or administrator login",
-                    )
+                    .button(c.i18n.t("login"))
+                    .on_hover_text(c.i18n.t("login-hover"))
                     .clicked()
                 {
                     c.login = Some((String::new(), String::new()));
@@ -307,19 +296,16 @@ fn login_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let modal = egui::Modal::new(egui::Id::unique("login")).show(ui.ctx(), |ui| {
         ui.set_min_width(360.0);
         ui.set_max_width(380.0);
-        ui.heading("Log in to the console");
+        ui.heading(c.i18n.t("login-title"));
         if no_accounts {
-            ui.label(
-                "No account in the data folder yet: an administrator creates them with \
-                 `vigie user add NAME --role maintenance` (the password on standard input).",
-            );
+            ui.label(c.i18n.t("login-no-accounts"));
         }
         egui::Grid::new("login_grid").show(ui, |ui| {
-            let l = ui.label("User");
+            let l = ui.label(c.i18n.t("login-user"));
             ui.add(egui::TextEdit::singleline(name).min_size(vec2(180.0, 0.0)))
                 .labelled_by(l.id);
             ui.end_row();
-            let l = ui.label("Password");
+            let l = ui.label(c.i18n.t("login-password"));
             let r = ui
                 .add(
                     egui::TextEdit::singleline(password)
@@ -332,13 +318,13 @@ fn login_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             ui.end_row();
         });
         ui.horizontal(|ui| {
-            if ui.button("Log in").clicked() || enter {
+            if ui.button(c.i18n.t("login-submit")).clicked() || enter {
                 out.push(Command::Login {
                     name: name.clone(),
                     password: std::mem::take(password),
                 });
             }
-            if ui.button("Cancel").clicked() {
+            if ui.button(c.i18n.t("cancel")).clicked() {
                 close = true;
             }
         });
@@ -370,19 +356,27 @@ fn bypass_banner_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         .filter(|d| !d.is_empty())
                         .map_or(String::new(), |d| format!(" ({d})"));
                     let left_s = b.until.0.saturating_sub(now.0) / 1000;
+                    let until = fmt_ms(b.until.0);
                     ui.label(
-                        RichText::new(format!(
-                            "BYPASS: {id}{what} is not enforced until {} ({} min {} s left), by {}: {}",
-                            fmt_ms(b.until.0),
-                            left_s / 60,
-                            left_s % 60,
-                            b.by,
-                            b.reason
+                        RichText::new(c.i18n.ta(
+                            "bypass-banner",
+                            &[
+                                ("id", id.into()),
+                                ("what", (&what).into()),
+                                ("until", (&until).into()),
+                                ("min", (left_s / 60).into()),
+                                ("s", (left_s % 60).into()),
+                                ("by", (&b.by).into()),
+                                ("reason", (&b.reason).into()),
+                            ],
                         ))
                         .strong()
                         .color(Color32::BLACK),
                     );
-                    if ui.button(format!("End bypass of {id}")).clicked() {
+                    if ui
+                        .button(c.i18n.ta("bypass-end", &[("id", id.into())]))
+                        .clicked()
+                    {
                         out.push(Command::Plant(OperatorAction::EndBypass(id.clone())));
                     }
                 });
@@ -392,12 +386,9 @@ fn bypass_banner_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 
 /// Maintenance: bypass one constraint for a limited time, with a reason.
 fn bypass_form_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
-    ui.heading("Bypass a constraint");
+    ui.heading(c.i18n.t("bypass-title"));
     if !c.may(Permission::BypassConstraint) {
-        ui.label(
-            RichText::new("Bypassing a safety constraint needs the maintenance role: log in.")
-                .color(c.palette.text_dim),
-        );
+        ui.label(RichText::new(c.i18n.t("bypass-needs-role")).color(c.palette.text_dim));
         return;
     }
     let ids: Vec<String> = c
@@ -428,12 +419,15 @@ fn bypass_form_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                     ui.selectable_value(&mut form.2, m, format!("{m} min"));
                 }
             });
-        let l = ui.label("Bypass reason");
+        let l = ui.label(c.i18n.t("bypass-reason"));
         ui.add(egui::TextEdit::singleline(&mut form.1).desired_width(160.0))
             .labelled_by(l.id);
         if ui
-            .add_enabled(!form.0.is_empty(), egui::Button::new("Bypass now"))
-            .on_hover_text("The filter stops enforcing this constraint until the time is up")
+            .add_enabled(
+                !form.0.is_empty(),
+                egui::Button::new(c.i18n.t("bypass-now")),
+            )
+            .on_hover_text(c.i18n.t("bypass-now-hover"))
             .clicked()
         {
             out.push(Command::Plant(OperatorAction::Bypass {
@@ -502,20 +496,14 @@ fn manual_confirm_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>)
     }
     let modal = egui::Modal::new(egui::Id::unique("manual_confirm")).show(ui.ctx(), |ui| {
         ui.set_max_width(460.0);
-        ui.heading("Drive the plant by hand?");
-        ui.label(
-            "The control program stops being scanned and the outputs stay as they are. \
-             You then switch each actuator on or off, or jog it while the button is held. \
-             Every command is checked against the safety constraints first: one that \
-             would break a constraint is refused with the reason and never reaches the \
-             plant. Leaving manual mode restarts the program from its initial steps.",
-        );
+        ui.heading(c.i18n.t("manual-confirm-title"));
+        ui.label(c.i18n.t("manual-confirm-text"));
         ui.horizontal(|ui| {
-            if ui.button("Enter manual mode").clicked() {
+            if ui.button(c.i18n.t("manual-confirm-enter")).clicked() {
                 out.push(Command::Plant(OperatorAction::Manual(true)));
                 c.manual_confirm = false;
             }
-            if ui.button("Cancel").clicked() {
+            if ui.button(c.i18n.t("cancel")).clicked() {
                 c.manual_confirm = false;
             }
         });
@@ -532,14 +520,8 @@ fn manual_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         c.jogging.clear();
         return;
     };
-    ui.heading("Manual mode");
-    ui.label(
-        RichText::new(
-            "Every command is checked against the safety constraints; a refused one \
-             never reaches the plant.",
-        )
-        .color(c.palette.text_dim),
-    );
+    ui.heading(c.i18n.t("manual-title"));
+    ui.label(RichText::new(c.i18n.t("manual-note")).color(c.palette.text_dim));
     let outputs: Vec<(usize, String, String)> = c
         .sim
         .bundle
@@ -554,22 +536,31 @@ fn manual_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             let on = requested.get(k);
             ui.label(RichText::new(&id).strong());
             ui.label(RichText::new(element).color(c.palette.text_dim));
-            ui.label(if on { "ON" } else { "OFF" });
+            ui.label(c.i18n.t(if on { "manual-on" } else { "manual-off" }));
             if ui
-                .add_enabled(!on, egui::Button::new(format!("{id} ON")))
+                .add_enabled(
+                    !on,
+                    egui::Button::new(c.i18n.ta("manual-set-on", &[("id", (&id).into())])),
+                )
                 .clicked()
             {
                 out.push(Command::Plant(OperatorAction::ManualSet(id.clone(), true)));
             }
             if ui
-                .add_enabled(on, egui::Button::new(format!("{id} OFF")))
+                .add_enabled(
+                    on,
+                    egui::Button::new(c.i18n.ta("manual-set-off", &[("id", (&id).into())])),
+                )
                 .clicked()
             {
                 out.push(Command::Plant(OperatorAction::ManualSet(id.clone(), false)));
             }
             let jog = ui
-                .add(egui::Button::new(format!("Jog {id}")).sense(Sense::click_and_drag()))
-                .on_hover_text("ON while held");
+                .add(
+                    egui::Button::new(c.i18n.ta("manual-jog", &[("id", (&id).into())]))
+                        .sense(Sense::click_and_drag()),
+                )
+                .on_hover_text(c.i18n.t("manual-jog-hover"));
             let held = jog.is_pointer_button_down_on();
             if held && !c.jogging.contains(&id) && !on {
                 c.jogging.insert(id.clone());
@@ -602,39 +593,25 @@ fn reinit_confirm_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>)
     }
     let modal = egui::Modal::new(egui::Id::unique("reinit_confirm")).show(ui.ctx(), |ui| {
         ui.set_max_width(460.0);
-        ui.heading("Re-initialise after a check of the plant");
-        ui.label(
-            "The control program goes back to its initial steps, as at the start of a \
-             shift, the sensors are taken as read and the trip ends. The filter checks \
-             the next commands as any other, and the diagnosers decide nothing with \
-             certainty until each model is back in its initial state.",
-        );
-        ui.label(
-            "Empty the plant first: take every item off by hand, fallen ones included \
-             (the initial steps expect no item half-way). Every observer then restarts \
-             empty.",
-        );
-        ui.weak("On the emulator, the emulated items are taken off for you.");
-        ui.label(
-            "Or leave the items in place, each where a sensor shows it, none between \
-             the sensors: an observer is then cleared only where the sensors leave no \
-             room for its item, and the program may stop again on an item it does not \
-             expect.",
-        );
+        ui.heading(c.i18n.t("reinit-title"));
+        ui.label(c.i18n.t("reinit-text"));
+        ui.label(c.i18n.t("reinit-empty-first"));
+        ui.weak(c.i18n.t("reinit-emulator"));
+        ui.label(c.i18n.t("reinit-leave-in-place"));
         ui.horizontal(|ui| {
-            if ui.button("Plant emptied: re-initialise").clicked() {
+            if ui.button(c.i18n.t("reinit-emptied")).clicked() {
                 out.push(Command::Plant(OperatorAction::Reinitialise {
                     emptied: true,
                 }));
                 c.reinit_confirm = false;
             }
-            if ui.button("Items left in place: re-initialise").clicked() {
+            if ui.button(c.i18n.t("reinit-items-left")).clicked() {
                 out.push(Command::Plant(OperatorAction::Reinitialise {
                     emptied: false,
                 }));
                 c.reinit_confirm = false;
             }
-            if ui.button("Cancel").clicked() {
+            if ui.button(c.i18n.t("cancel")).clicked() {
                 c.reinit_confirm = false;
             }
         });
@@ -651,14 +628,22 @@ fn status_ui(c: &Console, ui: &mut egui::Ui) {
         }
         let s = c.sim.emulator.stats();
         let removed = if s.removed > 0 {
-            format!(", {} taken off", s.removed)
+            c.i18n.ta("status-removed", &[("n", s.removed.into())])
         } else {
             String::new()
         };
-        ui.label(format!(
-            "{} — boxes: {} created, {} left, {} right, {} damaged{removed}",
-            c.source.scenario.name, s.created, s.delivered_left, s.delivered_right, s.damaged
+        ui.label(c.i18n.ta(
+            "status-boxes",
+            &[
+                ("scenario", (&c.source.scenario.name).into()),
+                ("created", s.created.into()),
+                ("left", s.delivered_left.into()),
+                ("right", s.delivered_right.into()),
+                ("damaged", s.damaged.into()),
+                ("removed", (&removed).into()),
+            ],
         ));
+
         ui.separator();
         if !c.status.is_empty() {
             ui.label(RichText::new(&c.status).strong());
@@ -734,26 +719,32 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
         {
             ghost = Some((p.boxes.as_slice(), p.table_angle_mdeg, p.hazards.as_slice()));
         }
+        let ids = ex
+            .constraints
+            .iter()
+            .map(|k| k.split(" =").next().unwrap_or(k))
+            .collect::<Vec<_>>()
+            .join(", ");
         banner = Some((
-            format!(
-                "Level {} — trip {} at {}",
-                LEVEL_NAMES[*l],
-                ex.constraints
-                    .iter()
-                    .map(|k| k.split(" =").next().unwrap_or(k))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                fmt_ms(ex.time_ms)
+            c.i18n.ta(
+                "banner-level",
+                &[
+                    ("level", (&c.i18n.t(LEVEL_IDS[*l])).into()),
+                    ("ids", (&ids).into()),
+                    ("time", (&fmt_ms(ex.time_ms)).into()),
+                ],
             ),
             c.palette.highlight,
         ));
     }
     if let Some(r) = &replay_rec {
         banner = Some((
-            format!(
-                "REPLAY at {} (live: {})",
-                fmt_ms(r.time.0),
-                fmt_ms(sim.now().0)
+            c.i18n.ta(
+                "banner-replay",
+                &[
+                    ("time", (&fmt_ms(r.time.0)).into()),
+                    ("now", (&fmt_ms(sim.now().0)).into()),
+                ],
             ),
             c.palette.highlight,
         ));
@@ -765,10 +756,8 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
             .map(|t| t.constraints.iter().map(|c| c.id.clone()).collect())
             .unwrap_or_default();
         banner = Some((
-            format!(
-                "TRIP {} — the safety filter holds the plant",
-                ids.join(", ")
-            ),
+            c.i18n
+                .ta("banner-trip", &[("ids", (&ids.join(", ")).into())]),
             c.palette.trip,
         ));
     }
@@ -801,26 +790,25 @@ fn next_step_ui(c: &Console, ui: &mut egui::Ui) {
         .stroke(Stroke::new(2.0, c.palette.trip))
         .show(ui, |ui| {
             ui.label(
-                RichText::new(format!(
-                    "What to do now (stopped at {})",
-                    fmt_ms(trip.time_ms)
-                ))
+                RichText::new(
+                    c.i18n
+                        .ta("next-title", &[("time", (&fmt_ms(trip.time_ms)).into())]),
+                )
                 .strong()
                 .color(c.palette.trip),
             );
-            ui.label(format!("1. Why: {}.", text.message));
+            ui.label(c.i18n.ta("next-why", &[("text", (&text.message).into())]));
             if !look.is_empty() {
-                ui.label(format!("2. Check on the machine: {}.", look.join("; ")));
+                ui.label(
+                    c.i18n
+                        .ta("next-check", &[("where", (&look.join("; ")).into())]),
+                );
             }
             let reset = match c.sim.engine.reset_check() {
-                Ok(()) => "3. Reset is possible now: press Reset, then Start if the \
-                           program was stopped."
-                    .to_string(),
-                Err(e) => format!(
-                    "3. Reset is refused now ({e}). Once the cause is gone (the item \
-                     has moved on, the sensor reads right), press Reset; if it stays \
-                     refused, check the plant and Re-initialise…"
-                ),
+                Ok(()) => c.i18n.t("next-reset-possible"),
+                Err(e) => c
+                    .i18n
+                    .ta("next-reset-refused", &[("reason", (&e.to_string()).into())]),
             };
             ui.label(reset);
         });
@@ -828,21 +816,21 @@ fn next_step_ui(c: &Console, ui: &mut egui::Ui) {
 
 fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     next_step_ui(c, ui);
-    ui.heading("Explanation");
+    ui.heading(c.i18n.t("expl-title"));
     let Some(trip) = c.latest_trip() else {
-        ui.label(
-            RichText::new("No trip: the plant runs within its safety constraints.")
-                .color(c.palette.text_dim),
-        );
+        ui.label(RichText::new(c.i18n.t("expl-no-trip")).color(c.palette.text_dim));
         return;
     };
     let Some(ex) = c.sim.explanations.get(&trip) else {
         return;
     };
     ui.label(
-        RichText::new(format!("Trip at {}", fmt_ms(ex.time_ms)))
-            .strong()
-            .color(c.palette.trip),
+        RichText::new(
+            c.i18n
+                .ta("expl-trip-at", &[("time", (&fmt_ms(ex.time_ms)).into())]),
+        )
+        .strong()
+        .color(c.palette.trip),
     );
     for k in &ex.constraints {
         synoptic::overbar_formula(ui, k, 20.0, c.palette.text);
@@ -850,14 +838,20 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     if let Some(t) = c.sim.engine.trips.get(trip) {
         for fc in &t.constraints {
             ui.label(
-                RichText::new(format!("as written: {} = {}", fc.id, fc.notation))
-                    .color(c.palette.text_dim),
+                RichText::new(c.i18n.ta(
+                    "expl-as-written",
+                    &[("id", (&fc.id).into()), ("notation", (&fc.notation).into())],
+                ))
+                .color(c.palette.text_dim),
             );
         }
     }
     ui.horizontal_wrapped(|ui| {
-        for (i, name) in LEVEL_NAMES.iter().enumerate() {
-            if ui.selectable_label(c.level == Some(i), *name).clicked() {
+        for (i, id) in LEVEL_IDS.iter().enumerate() {
+            if ui
+                .selectable_label(c.level == Some(i), c.i18n.t(id))
+                .clicked()
+            {
                 out.push(Command::ShowLevel(if c.level == Some(i) {
                     None
                 } else {
@@ -868,7 +862,13 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     });
     if let Some(l) = c.level {
         let level = ex.levels()[l];
-        ui.label(RichText::new(format!("Level {}", LEVEL_NAMES[l])).strong());
+        ui.label(
+            RichText::new(
+                c.i18n
+                    .ta("expl-level", &[("level", (&c.i18n.t(LEVEL_IDS[l])).into())]),
+            )
+            .strong(),
+        );
         for item in &level.items {
             ui.horizontal_wrapped(|ui| {
                 ui.label(
@@ -884,19 +884,19 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             });
         }
         if level.items.is_empty() {
-            ui.label("Nothing to report at this level.");
+            ui.label(c.i18n.t("expl-nothing"));
         }
     } else {
-        ui.label(
-            RichText::new("Choose a level to draw it on the synoptic.").color(c.palette.text_dim),
-        );
+        ui.label(RichText::new(c.i18n.t("expl-choose-level")).color(c.palette.text_dim));
     }
     ui.add_space(4.0);
+    let folder = c.i18n.t("expl-report-folder");
+    let export = c.i18n.t("expl-export-report");
     ui.horizontal(|ui| {
-        let l = ui.label("Report folder");
+        let l = ui.label(folder);
         ui.add(egui::TextEdit::singleline(&mut c.report_dir).desired_width(170.0))
             .labelled_by(l.id);
-        if ui.button("Export incident report").clicked() {
+        if ui.button(export).clicked() {
             out.push(Command::ExportReport(c.report_dir.clone().into()));
         }
     });
@@ -904,12 +904,12 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 
 /// The badge of an alarm's priority: text and colours.
 pub(crate) fn priority_badge(c: &Console, p: AlarmPriority) -> (String, Color32, Color32) {
-    let (name, bg, fg) = match p {
-        AlarmPriority::Urgent => ("URGENT", c.palette.trip, Color32::WHITE),
-        AlarmPriority::High => ("HIGH", c.palette.alarm, Color32::BLACK),
-        AlarmPriority::Medium => ("MEDIUM", c.palette.caution, Color32::BLACK),
+    let (id, bg, fg) = match p {
+        AlarmPriority::Urgent => ("prio-urgent", c.palette.trip, Color32::WHITE),
+        AlarmPriority::High => ("prio-high", c.palette.alarm, Color32::BLACK),
+        AlarmPriority::Medium => ("prio-medium", c.palette.caution, Color32::BLACK),
     };
-    (format!("P{} {name}", p.rank()), bg, fg)
+    (format!("P{} {}", p.rank(), c.i18n.t(id)), bg, fg)
 }
 
 /// Shelving durations offered, minutes.
@@ -918,14 +918,14 @@ const SHELVE_MINUTES: [u64; 4] = [15, 60, 240, 480];
 fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let now = c.sim.now();
     let unack = c.sim.alarms.unacknowledged();
+    let title = c.i18n.t("alarms-title");
+    let show_shelved = c.i18n.t("alarms-show-shelved");
+    let ack_all = c.i18n.ta("alarms-ack-all", &[("n", unack.into())]);
     ui.horizontal_wrapped(|ui| {
-        ui.heading("Alarms");
-        ui.checkbox(&mut c.alarm_filter_shelved, "show shelved");
+        ui.heading(title);
+        ui.checkbox(&mut c.alarm_filter_shelved, show_shelved);
         if ui
-            .add_enabled(
-                unack > 0,
-                egui::Button::new(format!("Acknowledge all ({unack})")),
-            )
+            .add_enabled(unack > 0, egui::Button::new(ack_all))
             .clicked()
         {
             out.push(Command::AcknowledgeAll {
@@ -942,7 +942,7 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         list.extend(c.sim.alarms.shelved(now).into_iter().cloned());
     }
     if list.is_empty() {
-        ui.label(RichText::new("No active alarm.").color(c.palette.text_dim));
+        ui.label(RichText::new(c.i18n.t("alarms-none")).color(c.palette.text_dim));
         return;
     }
     let pages = list.len().div_ceil(ALARMS_PER_PAGE);
@@ -955,14 +955,17 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     if pages > 1 {
         ui.horizontal(|ui| {
             if ui
-                .add_enabled(page > 0, egui::Button::new("◀ Previous"))
+                .add_enabled(page > 0, egui::Button::new(c.i18n.t("alarms-previous")))
                 .clicked()
             {
                 c.alarm_page = page - 1;
             }
-            ui.label(format!("Page {} of {pages}", page + 1));
+            ui.label(c.i18n.ta(
+                "alarms-page",
+                &[("page", (page + 1).into()), ("pages", pages.into())],
+            ));
             if ui
-                .add_enabled(page + 1 < pages, egui::Button::new("Next ▶"))
+                .add_enabled(page + 1 < pages, egui::Button::new(c.i18n.t("alarms-next")))
                 .clicked()
             {
                 c.alarm_page = page + 1;
@@ -973,7 +976,10 @@ fn alarms_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 .map(|a| a.id)
                 .collect();
             if ui
-                .add_enabled(!ids.is_empty(), egui::Button::new("Acknowledge page"))
+                .add_enabled(
+                    !ids.is_empty(),
+                    egui::Button::new(c.i18n.t("alarms-ack-page")),
+                )
                 .clicked()
             {
                 out.push(Command::AcknowledgeAll {
@@ -994,35 +1000,41 @@ fn kpi_ui(c: &Console, ui: &mut egui::Ui, now: Millis) {
     let k = c.sim.alarms.kpis(now);
     ui.horizontal_wrapped(|ui| {
         ui.label(
-            RichText::new(format!(
-                "Rate: {} in the last 10 min (average {:.1}, peak {})",
-                k.last_10_min, k.average_per_10_min, k.peak_per_10_min
+            RichText::new(c.i18n.ta(
+                "kpi-rate",
+                &[
+                    ("last", k.last_10_min.into()),
+                    ("average", (&format!("{:.1}", k.average_per_10_min)).into()),
+                    ("peak", k.peak_per_10_min.into()),
+                ],
             ))
             .color(c.palette.text_dim),
         );
         if k.flooding {
             ui.label(
-                RichText::new("ALARM FLOOD")
+                RichText::new(c.i18n.t("kpi-flood"))
                     .strong()
                     .color(Color32::BLACK)
                     .background_color(c.palette.alarm),
             );
         }
     });
-    egui::CollapsingHeader::new("Alarm performance")
+    egui::CollapsingHeader::new(c.i18n.t("kpi-title"))
         .id_salt("alarm_kpis")
         .show(ui, |ui| {
-            ui.label(format!(
-                "{} alarms in {} intervals of 10 min; {} in flood (more than {} alarms)",
-                k.total,
-                k.intervals,
-                k.flood_intervals,
-                vigie_core::alarms::FLOOD_PER_10_MIN
+            ui.label(c.i18n.ta(
+                "kpi-summary",
+                &[
+                    ("total", k.total.into()),
+                    ("intervals", k.intervals.into()),
+                    ("floods", k.flood_intervals.into()),
+                    ("limit", vigie_core::alarms::FLOOD_PER_10_MIN.into()),
+                ],
             ));
             if !k.chattering.is_empty() {
-                ui.label(format!(
-                    "Chattering (3 or more within a minute): {}",
-                    k.chattering.join(", ")
+                ui.label(c.i18n.ta(
+                    "kpi-chattering",
+                    &[("sources", (&k.chattering.join(", ")).into())],
                 ));
             }
             for (source, n) in &k.most_frequent {
@@ -1034,23 +1046,33 @@ fn kpi_ui(c: &Console, ui: &mut egui::Ui, now: Millis) {
 /// The alarm history: every alarm raised, searched and filtered, exported to CSV.
 fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let total = c.sim.alarms.all().len();
-    egui::CollapsingHeader::new(format!("Alarm history ({total})"))
+    let title = c.i18n.ta("history-title", &[("n", total.into())]);
+    let search = c.i18n.t("history-search");
+    let every_kind = c.i18n.t("history-every-kind");
+    let every_priority = c.i18n.t("history-every-priority");
+    let export = c.i18n.t("history-export");
+    let save_as = c.i18n.t("history-save-as");
+    egui::CollapsingHeader::new(title)
         .id_salt("alarm_history")
         .show(ui, |ui| {
             ui.horizontal_wrapped(|ui| {
-                let l = ui.label("Search");
+                let l = ui.label(search);
                 ui.add(egui::TextEdit::singleline(&mut c.history_filter.text).desired_width(120.0))
                     .labelled_by(l.id);
                 egui::ComboBox::from_id_salt("history_kind")
-                    .selected_text(c.history_filter.kind.map_or("every kind", AlarmKind::name))
+                    .selected_text(
+                        c.history_filter
+                            .kind
+                            .map_or(every_kind.clone(), |k| k.name().to_string()),
+                    )
                     .show_ui(ui, |ui| {
-                        ui.selectable_value(&mut c.history_filter.kind, None, "every kind");
+                        ui.selectable_value(&mut c.history_filter.kind, None, &every_kind);
                         for k in AlarmKind::ALL {
                             ui.selectable_value(&mut c.history_filter.kind, Some(k), k.name());
                         }
                     });
                 let prio = |p: Option<AlarmPriority>| {
-                    p.map_or("every priority".to_string(), |p| format!("P{}", p.rank()))
+                    p.map_or(every_priority.clone(), |p| format!("P{}", p.rank()))
                 };
                 egui::ComboBox::from_id_salt("history_priority")
                     .selected_text(prio(c.history_filter.priority))
@@ -1067,12 +1089,15 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             });
             let list = c.sim.alarms.history(&c.history_filter);
             ui.horizontal(|ui| {
-                ui.label(format!("{} of {total}", list.len()));
-                if ui.button("Export alarms CSV").clicked() {
+                ui.label(c.i18n.ta(
+                    "history-count",
+                    &[("n", list.len().into()), ("total", total.into())],
+                ));
+                if ui.button(export).clicked() {
                     out.push(Command::ExportAlarms("vigie-alarms.csv".into()));
                 }
                 if ui
-                    .add_enabled(!c.save.is_open(), egui::Button::new("Save alarms as…"))
+                    .add_enabled(!c.save.is_open(), egui::Button::new(save_as))
                     .clicked()
                 {
                     out.push(Command::SaveAs(super::save::Export::Alarms));
@@ -1080,13 +1105,14 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             });
             const SHOWN: usize = 100;
             for a in list.iter().take(SHOWN) {
-                let cleared = a
-                    .cleared
-                    .map_or(String::new(), |t| format!(", cleared {}", fmt_ms(t.0)));
+                let cleared = a.cleared.map_or(String::new(), |t| {
+                    c.i18n
+                        .ta("history-cleared", &[("time", (&fmt_ms(t.0)).into())])
+                });
                 let ack = a.acknowledged.as_ref().map_or(String::new(), |(t, n)| {
                     format!(
-                        ", ack {}{}",
-                        fmt_ms(t.0),
+                        "{}{}",
+                        c.i18n.ta("history-ack", &[("time", (&fmt_ms(t.0)).into())]),
                         if n.is_empty() {
                             String::new()
                         } else {
@@ -1105,10 +1131,10 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 );
             }
             if list.len() > SHOWN {
-                ui.weak(format!(
-                    "… {} more: narrow the search or export",
-                    list.len() - SHOWN
-                ));
+                ui.weak(
+                    c.i18n
+                        .ta("history-more", &[("n", (list.len() - SHOWN).into())]),
+                );
             }
         });
 }
@@ -1122,12 +1148,14 @@ fn alarm_row_ui(
     now: Millis,
     out: &mut Vec<Command>,
 ) {
-    let (state_txt, col) = match a.state() {
-        AlarmState::Unacknowledged => ("UNACK", c.palette.equipment_edge),
-        AlarmState::Acknowledged => ("ACK", c.palette.equipment),
-        AlarmState::ClearedUnacknowledged => ("CLEARED-UNACK", c.palette.equipment),
-        AlarmState::Normal => ("NORMAL", c.palette.equipment),
+    let (state_id, col) = match a.state() {
+        AlarmState::Unacknowledged => ("alarm-unack", c.palette.equipment_edge),
+        AlarmState::Acknowledged => ("alarm-ack", c.palette.equipment),
+        AlarmState::ClearedUnacknowledged => ("alarm-cleared-unack", c.palette.equipment),
+        AlarmState::Normal => ("alarm-normal", c.palette.equipment),
     };
+    let state_txt = c.i18n.t(state_id);
+    let id = a.id.to_string();
     let (prio, prio_bg, prio_fg) = priority_badge(c, a.priority());
     egui::Frame::group(ui.style()).show(ui, |ui| {
         ui.horizontal_wrapped(|ui| {
@@ -1139,7 +1167,7 @@ fn alarm_row_ui(
             );
             if a.first_out {
                 ui.label(
-                    RichText::new("FIRST OUT")
+                    RichText::new(c.i18n.t("alarm-first-out"))
                         .strong()
                         .color(Color32::WHITE)
                         .background_color(c.palette.equipment_edge),
@@ -1153,16 +1181,18 @@ fn alarm_row_ui(
             );
             ui.label(fmt_ms(a.raised.0));
             if let Some(s) = a.shelving.as_ref().filter(|_| a.is_shelved(now)) {
-                ui.label(format!(
-                    "(shelved until {}: {})",
-                    fmt_ms(s.until.0),
-                    s.reason
+                ui.label(c.i18n.ta(
+                    "alarm-shelved-until",
+                    &[
+                        ("until", (&fmt_ms(s.until.0)).into()),
+                        ("reason", (&s.reason).into()),
+                    ],
                 ));
             }
         });
         ui.label(&a.message);
         if !a.detail.is_empty() {
-            egui::CollapsingHeader::new("Detail")
+            egui::CollapsingHeader::new(c.i18n.t("alarm-detail"))
                 .id_salt(("alarm_detail", a.id))
                 .show(ui, |ui| {
                     ui.label(
@@ -1174,19 +1204,24 @@ fn alarm_row_ui(
         }
         if let Some((t, note)) = &a.acknowledged {
             ui.label(
-                RichText::new(format!("acknowledged at {}: {note}", fmt_ms(t.0)))
-                    .color(c.palette.text_dim),
+                RichText::new(c.i18n.ta(
+                    "alarm-acknowledged-at",
+                    &[("time", (&fmt_ms(t.0)).into()), ("note", note.into())],
+                ))
+                .color(c.palette.text_dim),
             );
         }
         ui.horizontal_wrapped(|ui| {
             if a.acknowledged.is_none() {
+                let hint = c.i18n.t("alarm-note-hint");
+                let label = c.i18n.ta("alarm-acknowledge", &[("id", (&id).into())]);
                 let note = c.notes.entry(a.id).or_default();
                 ui.add(
                     egui::TextEdit::singleline(note)
-                        .hint_text("note")
+                        .hint_text(hint)
                         .desired_width(120.0),
                 );
-                if ui.button(format!("Acknowledge #{}", a.id)).clicked() {
+                if ui.button(label).clicked() {
                     out.push(Command::Acknowledge {
                         id: a.id,
                         note: note.clone(),
@@ -1194,18 +1229,18 @@ fn alarm_row_ui(
                 }
             }
             if a.is_shelved(now) {
-                if ui.button(format!("Unshelve #{}", a.id)).clicked() {
+                if ui
+                    .button(c.i18n.ta("alarm-unshelve", &[("id", (&id).into())]))
+                    .clicked()
+                {
                     out.push(Command::Unshelve(a.id));
                 }
             } else if ui
                 .add_enabled(
                     a.kind.shelvable(),
-                    egui::Button::new(format!("Shelve #{}…", a.id)),
+                    egui::Button::new(c.i18n.ta("alarm-shelve", &[("id", (&id).into())])),
                 )
-                .on_disabled_hover_text(
-                    "A safety alarm (trip, hazard, specification error, live link) is \
-                     never shelved",
-                )
+                .on_disabled_hover_text(c.i18n.t("alarm-shelve-safety"))
                 .clicked()
             {
                 c.shelve_form = Some(ShelveForm {
@@ -1216,7 +1251,7 @@ fn alarm_row_ui(
             }
         });
         if let Some(form) = c.shelve_form.as_mut().filter(|f| f.id == a.id) {
-            shelve_form_ui(form, ui, out, &mut c.status);
+            shelve_form_ui(form, ui, out, &mut c.status, &c.i18n);
         }
     });
 }
@@ -1227,12 +1262,13 @@ fn shelve_form_ui(
     ui: &mut egui::Ui,
     out: &mut Vec<Command>,
     status: &mut String,
+    i18n: &crate::i18n::I18n,
 ) {
     ui.horizontal_wrapped(|ui| {
-        let l = ui.label("Reason");
+        let l = ui.label(i18n.t("shelve-reason"));
         ui.add(
             egui::TextEdit::singleline(&mut form.reason)
-                .hint_text("why (required)")
+                .hint_text(i18n.t("shelve-reason-hint"))
                 .desired_width(150.0),
         )
         .labelled_by(l.id);
@@ -1243,9 +1279,12 @@ fn shelve_form_ui(
                     ui.selectable_value(&mut form.minutes, m, fmt_minutes(m));
                 }
             });
-        if ui.button(format!("Shelve #{} now", form.id)).clicked() {
+        if ui
+            .button(i18n.ta("shelve-now", &[("id", (&form.id.to_string()).into())]))
+            .clicked()
+        {
             if form.reason.trim().is_empty() {
-                *status = "Shelving needs a reason".to_string();
+                *status = i18n.t("shelve-needs-reason");
             } else {
                 out.push(Command::Shelve {
                     id: form.id,
@@ -1254,7 +1293,7 @@ fn shelve_form_ui(
                 });
             }
         }
-        if ui.button("Cancel").clicked() {
+        if ui.button(i18n.t("cancel")).clicked() {
             out.push(Command::CloseShelveForm);
         }
     });
@@ -1269,12 +1308,15 @@ fn fmt_minutes(m: u64) -> String {
 }
 
 fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
-    ui.heading("Journal");
+    ui.heading(c.i18n.t("journal-title"));
     if let Some(p) = c.journal.path() {
         ui.label(
-            RichText::new(format!("written to {}", p.display()))
-                .small()
-                .color(c.palette.text_dim),
+            RichText::new(c.i18n.ta(
+                "journal-written-to",
+                &[("path", (&p.display().to_string()).into())],
+            ))
+            .small()
+            .color(c.palette.text_dim),
         );
     }
     for e in c.journal.entries().iter().rev().take(12) {
@@ -1290,54 +1332,64 @@ fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         );
     }
     ui.horizontal(|ui| {
-        let l = ui.label("CSV file");
+        let l = ui.label(c.i18n.t("journal-csv-file"));
         ui.add(egui::TextEdit::singleline(&mut c.csv_path).desired_width(200.0))
             .labelled_by(l.id);
         if ui
-            .button("Export CSV")
-            .on_hover_text("Written under the data folder")
+            .button(c.i18n.t("journal-export-csv"))
+            .on_hover_text(c.i18n.t("journal-export-csv-hover"))
             .clicked()
         {
             out.push(Command::ExportCsv(c.csv_path.clone().into()));
         }
         if ui
-            .add_enabled(!c.save.is_open(), egui::Button::new("Save journal as…"))
+            .add_enabled(
+                !c.save.is_open(),
+                egui::Button::new(c.i18n.t("journal-save-as")),
+            )
             .clicked()
         {
             out.push(Command::SaveAs(super::save::Export::Journal));
         }
     });
-    ui.weak(format!(
-        "Exports go under {}",
-        c.export_path(std::path::Path::new("")).display()
-    ));
+    let under = c
+        .export_path(std::path::Path::new(""))
+        .display()
+        .to_string();
+    ui.weak(
+        c.i18n
+            .ta("journal-exports-under", &[("path", (&under).into())]),
+    );
 }
 
 fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
-    ui.heading("Training");
-    ui.label(RichText::new(c.score.summary()).strong());
+    ui.heading(c.i18n.t("training-title"));
+    ui.label(RichText::new(c.score.summary_in(&c.i18n)).strong());
     if c.score.variant.is_some() {
         ui.horizontal(|ui| {
             if ui
-                .button("Verify fix")
-                .on_hover_text("Re-run the scenario with the edited program (Maintenance)")
+                .button(c.i18n.t("training-verify-fix"))
+                .on_hover_text(c.i18n.t("training-verify-fix-hover"))
                 .clicked()
             {
                 out.push(Command::VerifyFix);
             }
-            if ui.button("Edit program").clicked() {
+            if ui.button(c.i18n.t("training-edit-program")).clicked() {
                 out.push(Command::SetMode(Mode::Maintenance));
             }
         });
     }
-    egui::CollapsingHeader::new("Control-error library")
+    egui::CollapsingHeader::new(c.i18n.t("training-errors"))
         .default_open(true)
         .show(ui, |ui| {
             for (id, desc, _) in &c.variants {
                 ui.horizontal_wrapped(|ui| {
                     let selected = c.score.variant.as_deref() == Some(id.as_str());
                     if ui
-                        .selectable_label(selected, format!("Load {id}"))
+                        .selectable_label(
+                            selected,
+                            c.i18n.ta("training-load", &[("id", id.into())]),
+                        )
                         .clicked()
                     {
                         out.push(Command::LoadVariant(id.clone()));
@@ -1346,15 +1398,15 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 });
             }
         });
-    egui::CollapsingHeader::new("Fault library")
+    egui::CollapsingHeader::new(c.i18n.t("training-faults"))
         .default_open(false)
         .show(ui, |ui| {
             if c.faults.is_empty() {
-                ui.label("No faults.ron in the plant folder.");
+                ui.label(c.i18n.t("training-no-faults"));
             }
             for (i, (name, _)) in c.faults.iter().enumerate() {
                 ui.horizontal(|ui| {
-                    if ui.button("Inject").clicked() {
+                    if ui.button(c.i18n.t("training-inject")).clicked() {
                         out.push(Command::InjectFault(i));
                     }
                     ui.label(name);
@@ -1373,24 +1425,30 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         .collect();
     let program = c.sim.program.program().program.clone();
     let pal = c.palette.clone();
+    let chart_label = |name: &str| c.i18n.ta("maint-chart", &[("name", name.into())]);
+    let active_label = c.i18n.t("maint-active");
+    let equations = c.i18n.t("maint-equations");
     egui::Frame::NONE
         .fill(pal.panel)
         .inner_margin(8.0)
         .show(ui, |ui| {
             ui.horizontal(|ui| {
-                ui.heading(format!("Control program: {}", program.name));
-                if ui.button("Recompile").clicked() {
+                ui.heading(
+                    c.i18n
+                        .ta("maint-program", &[("name", (&program.name).into())]),
+                );
+                if ui.button(c.i18n.t("maint-recompile")).clicked() {
                     out.push(Command::Recompile);
                 }
-                if ui.button("Restart with edit").clicked() {
+                if ui.button(c.i18n.t("maint-restart")).clicked() {
                     out.push(Command::RestartWithEdit);
                 }
-                if ui.button("Discard edits").clicked() {
+                if ui.button(c.i18n.t("maint-discard")).clicked() {
                     out.push(Command::DiscardEdits);
                 }
                 if ui
-                    .button("Verify fix")
-                    .on_hover_text("Re-run the scenario headless with the edit")
+                    .button(c.i18n.t("training-verify-fix"))
+                    .on_hover_text(c.i18n.t("maint-verify-fix-hover"))
                     .clicked()
                 {
                     out.push(Command::VerifyFix);
@@ -1412,11 +1470,7 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 .show(ui, |ui| {
                     for chart in &program.charts {
                         ui.add_space(6.0);
-                        ui.label(
-                            RichText::new(format!("Chart {}", chart.name))
-                                .strong()
-                                .size(16.0),
-                        );
+                        ui.label(RichText::new(chart_label(&chart.name)).strong().size(16.0));
                         egui::Grid::new(format!("steps-{}", chart.name))
                             .striped(true)
                             .num_columns(3)
@@ -1436,7 +1490,7 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                                     } else {
                                         txt
                                     });
-                                    ui.label(if on { "active" } else { "" });
+                                    ui.label(if on { active_label.as_str() } else { "" });
                                     if let Some(a) = draft.actions.get_mut(&s.id) {
                                         ui.add(
                                             egui::TextEdit::singleline(a)
@@ -1472,7 +1526,7 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                     }
                     if !draft.equations.is_empty() {
                         ui.add_space(6.0);
-                        ui.label(RichText::new("Equations").strong().size(16.0));
+                        ui.label(RichText::new(&equations).strong().size(16.0));
                         egui::Grid::new("equations").num_columns(2).show(ui, |ui| {
                             for (target, expr) in &mut draft.equations {
                                 let l = ui.label(RichText::new(format!("{target} =")).monospace());
@@ -1493,8 +1547,12 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let sim = &c.sim;
     let now = sim.now().0;
+    let title = c.i18n.t("chrono-title");
+    let replay = c.i18n.t("chrono-replay");
+    let live = c.i18n.t("chrono-live");
+    let signals = c.i18n.t("chrono-signals");
     ui.horizontal(|ui| {
-        ui.label(RichText::new("Chronogram").strong());
+        ui.label(RichText::new(&title).strong());
         for w in [10u64, 30, 60, 300] {
             if ui
                 .selectable_label(c.chrono_window_s == w, format!("{w} s"))
@@ -1508,16 +1566,16 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         let mut t = c.replay.unwrap_or(now);
         let r = ui.add(
             egui::Slider::new(&mut t, oldest..=now.max(oldest))
-                .text("Replay")
+                .text(replay)
                 .custom_formatter(|v, _| fmt_ms(v as u64)),
         );
         if r.changed() {
             out.push(Command::Scrub(Some(t)));
         }
-        if c.replay.is_some() && ui.button("Live").clicked() {
+        if c.replay.is_some() && ui.button(live).clicked() {
             out.push(Command::Scrub(None));
         }
-        ui.menu_button("Signals", |ui| {
+        ui.menu_button(signals, |ui| {
             for s in sim
                 .bundle
                 .plant
@@ -1541,7 +1599,8 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     });
     let size = ui.available_size().max(vec2(100.0, 60.0));
     let (resp, painter) = ui.allocate_painter(size, Sense::click_and_drag());
-    resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Chronogram"));
+    resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, &title));
+
     let rect = resp.rect;
     let pal = &c.palette;
     painter.rect_filled(rect, 0.0, pal.background);
