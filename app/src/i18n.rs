@@ -78,6 +78,29 @@ impl Lang {
     }
 }
 
+/// The explanation items in French, by code (`explain-X201`…); in English the console
+/// shows the text the core wrote.
+const FR_EXPLAIN: &str = include_str!("../../assets/i18n/fr-explain.ftl");
+
+/// Fields of explanation items that hold comma-separated lists.
+const LIST_FIELDS: [&str; 12] = [
+    "constraints",
+    "outputs",
+    "elements",
+    "values",
+    "actuators",
+    "observers",
+    "signals",
+    "steps",
+    "transitions",
+    "activated",
+    "driven",
+    "reasons",
+];
+
+/// Fields of explanation items that are numbers (Fluent selects on them).
+const NUMBER_FIELDS: [&str; 4] = ["time_ms", "after_ms", "ms_before", "horizon_ms"];
+
 /// A text file that does not parse.
 #[derive(Debug, thiserror::Error)]
 #[error("{}:{line}:{column}: {message}", file.display())]
@@ -162,6 +185,10 @@ impl I18n {
             bundle.set_use_isolating(false);
             let builtin = PathBuf::from(format!("assets/i18n/{}.ftl", l.code()));
             bundle.add_resource_overriding(parse(l.source(), &builtin)?);
+            if l == Lang::Fr {
+                let file = PathBuf::from("assets/i18n/fr-explain.ftl");
+                bundle.add_resource_overriding(parse(FR_EXPLAIN, &file)?);
+            }
             if let Some(dir) = plant_dir {
                 let file = dir.join("i18n").join(format!("{}.ftl", l.code()));
                 if file.exists() {
@@ -230,6 +257,65 @@ impl I18n {
         self.format(self.lang, id, Some(&fa))
             .or_else(|| self.format(Lang::En, id, Some(&fa)))
             .unwrap_or_else(|| id.to_string())
+    }
+
+    /// An explanation item in the language shown: in English the core's text; in
+    /// another language the message of its code (`explain-X201`) built from its fields
+    /// (lists spaced, an output's `meaning` from the plant's `off-<output>` when the
+    /// plant folder translates it), else the core's text.
+    pub fn explain(&self, item: &vigie_core::explain::Item) -> String {
+        let id = format!("explain-{}", item.code);
+        if self.lang == Lang::En || !self.bundle(self.lang).is_some_and(|b| b.has_message(&id)) {
+            return item.text.clone();
+        }
+        let mut owned: Vec<(String, String)> = Vec::new();
+        let mut numbers: Vec<(String, f64)> = Vec::new();
+        for (k, v) in &item.fields {
+            if NUMBER_FIELDS.contains(&k.as_str()) {
+                numbers.push((k.clone(), v.parse().unwrap_or(0.0)));
+                continue;
+            }
+            let mut v = if LIST_FIELDS.contains(&k.as_str()) {
+                v.split(',').map(str::trim).collect::<Vec<_>>().join(", ")
+            } else {
+                v.clone()
+            };
+            if k == "expected" {
+                v = v.replace(" or ", &format!(" {} ", self.t("word-or")));
+            }
+            if k == "notation" {
+                v = vigie_core::explain::overbar_notation(&v);
+            }
+            if k == "meaning"
+                && let Some(m) = item
+                    .fields
+                    .get("output")
+                    .and_then(|o| self.plant(&format!("off-{o}")))
+            {
+                v = m;
+            }
+            if v.is_empty() {
+                v = "none".into();
+            }
+            owned.push((k.clone(), v));
+        }
+        for key in ["reasons", "observer", "meaning"] {
+            if !item.fields.contains_key(key) {
+                owned.push((key.into(), "none".into()));
+            }
+        }
+        #[allow(clippy::cast_precision_loss)]
+        let n = item
+            .fields
+            .get("constraints")
+            .map_or(1, |c| c.split(',').count()) as f64;
+        numbers.push(("n_constraints".into(), n));
+        let mut args: Vec<(&str, Arg<'_>)> = owned
+            .iter()
+            .map(|(k, v)| (k.as_str(), Arg::Str(v.as_str())))
+            .collect();
+        args.extend(numbers.iter().map(|(k, v)| (k.as_str(), Arg::Num(*v))));
+        self.ta(&id, &args)
     }
 
     /// A text of the plant's (`signal-C4`…) in the language shown, if it has one.
@@ -323,6 +409,21 @@ mod tests {
         );
     }
 
+    /// The ids the console builds at run time: the synoptic's tags, the states' hover
+    /// texts.
+    #[test]
+    fn built_ids_exist() {
+        let i = I18n::new(Lang::Fr, None).unwrap();
+        for (k, _) in crate::console::synoptic::TAGS {
+            assert!(i.has(&format!("syn-{k}")), "syn-{k}");
+        }
+        for s in [
+            "tripped", "stopped", "manual", "degraded", "idle", "running",
+        ] {
+            assert!(i.has(&format!("state-{s}-hover")), "state-{s}-hover");
+        }
+    }
+
     #[test]
     fn locale_names_and_fallbacks() {
         assert_eq!(Lang::parse("fr_FR.UTF-8"), Some(Lang::Fr));
@@ -349,6 +450,88 @@ mod tests {
         assert_eq!(i.plant("signal-C4").as_deref(), Some("Table en chargement"));
         assert_eq!(i.plant("signal-C5"), None);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+#[cfg(test)]
+mod explain_tests {
+    use super::*;
+
+    /// Every code of `core/src/explain/codes.md` has its French message.
+    #[test]
+    fn every_explanation_code_has_a_french_message() {
+        let codes = include_str!("../../core/src/explain/codes.md");
+        let fr: std::collections::BTreeSet<String> = ids(FR_EXPLAIN).into_iter().collect();
+        let mut missing = Vec::new();
+        let mut n = 0;
+        for line in codes.lines() {
+            if let Some(code) = line.strip_prefix("| X").and_then(|r| r.split(' ').next()) {
+                n += 1;
+                if !fr.contains(&format!("explain-X{code}")) {
+                    missing.push(format!("X{code}"));
+                }
+            }
+        }
+        assert!(n > 20, "codes read: {n}");
+        assert!(missing.is_empty(), "no French message for {missing:?}");
+    }
+
+    #[test]
+    fn an_item_in_french_from_its_fields() {
+        let item =
+            |code: &'static str, text: &str, fields: &[(&str, &str)]| vigie_core::explain::Item {
+                code,
+                text: text.into(),
+                fields: fields
+                    .iter()
+                    .map(|(k, v)| ((*k).into(), (*v).into()))
+                    .collect(),
+            };
+        let mut i = I18n::new(Lang::Fr, None).unwrap();
+        let x301 = item(
+            "X301",
+            "C7 changed 0→1 at 11680 ms (in the stopping cycle), element of the constraint.",
+            &[
+                ("signal", "C7"),
+                ("from", "0"),
+                ("to", "1"),
+                ("time_ms", "11680"),
+                ("ms_before", "0"),
+                ("in_constraint", "true"),
+            ],
+        );
+        assert_eq!(
+            i.explain(&x301),
+            "C7 est passé de 0 à 1 à 11680 ms (dans le cycle de l'arrêt), élément de la contrainte."
+        );
+        let x001 = item(
+            "X001",
+            "…",
+            &[("time_ms", "11680"), ("constraints", "CSs10,CSs14")],
+        );
+        assert_eq!(
+            i.explain(&x001),
+            "Le filtre de sécurité a arrêté la machine à 11680 ms : CSs10, CSs14 auraient été violées."
+        );
+        let x403 = item("X403", "…", &[("expected", "A2=0 or A3=0")]);
+        assert_eq!(i.explain(&x403), "Attendu de la commande : A2=0 ou A3=0.");
+        let x201 = item(
+            "X201",
+            "…",
+            &[
+                ("constraint", "CSs10"),
+                ("notation", "C7 . /A4"),
+                ("values", "C7=1,A4=0"),
+            ],
+        );
+        assert!(i.explain(&x201).contains('\u{305}'), "{}", i.explain(&x201));
+        // In English, the core's text, untouched.
+        i.set_lang(Lang::En);
+        assert_eq!(i.explain(&x301), x301.text);
+        // A code without a French message keeps the core's text.
+        i.set_lang(Lang::Fr);
+        let unknown = item("X999", "as the core wrote it", &[]);
+        assert_eq!(i.explain(&unknown), "as the core wrote it");
     }
 }
 

@@ -285,3 +285,28 @@ link-gateway = LIVE GATEWAY
 link-monitor = LIVE MONITOR
 link-reset-hover = Operator reset of the gateway's safety filter
 link-normal = Normal
+
+## Words
+word-or = or
+
+## Synoptic tags
+syn-held-on = held ON
+syn-forced-off = forced OFF
+syn-stays-on = stays ON
+syn-stays-off = stays OFF
+syn-suspect = suspect
+syn-expected-on = expected ON
+syn-expected-off = expected OFF
+syn-inferred-box = inferred box
+syn-estimated = estimated
+syn-no-address = no fieldbus address
+
+## Texts built from the plant's data (French only: English is the core's record)
+words-constraint-violated = constraint { $id } violated
+words-safety-stop = Safety stop: { $why }
+words-held-on = . Held ON: { $list }
+words-stopped = . Stopped: { $list }
+words-not-tripped = the filter has not tripped
+words-still-violated = reset refused: { $constraints } still violated by the commanded outputs
+words-with-observers = {" "}(with { $observers } = 1)
+words-list-sep = {"; "}

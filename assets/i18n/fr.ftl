@@ -301,3 +301,28 @@ link-gateway = PASSERELLE EN DIRECT
 link-monitor = SURVEILLANCE EN DIRECT
 link-reset-hover = Réarmement du filtre de sécurité de la passerelle par l'opérateur
 link-normal = Normal
+
+## Words
+word-or = ou
+
+## Étiquettes du synoptique
+syn-held-on = maintenu EN MARCHE
+syn-forced-off = forcé À L'ARRÊT
+syn-stays-on = reste EN MARCHE
+syn-stays-off = reste À L'ARRÊT
+syn-suspect = suspect
+syn-expected-on = attendu EN MARCHE
+syn-expected-off = attendu À L'ARRÊT
+syn-inferred-box = caisse déduite
+syn-estimated = estimé
+syn-no-address = pas d'adresse sur le bus
+
+## Textes construits à partir des données de l'installation
+words-constraint-violated = contrainte { $id } violée
+words-safety-stop = Arrêt sécurité : { $why }
+words-held-on = . Maintenus EN MARCHE : { $list }
+words-stopped = . Arrêtés : { $list }
+words-not-tripped = le filtre n'est pas déclenché
+words-still-violated = réarmement refusé : { $constraints } encore violée(s) par les sorties commandées
+words-with-observers = {" "}(avec { $observers } = 1)
+words-list-sep = {" ; "}

@@ -1084,3 +1084,64 @@ fn a_damaged_historian_leaves_the_console_running_and_the_file_alone() {
     drop(h);
     let _ = std::fs::remove_dir_all(&data);
 }
+
+/// The paper's CSs10 trip in French: the next step, the alarm and the explanation
+/// levels from the plant's French texts and the items' codes; the records stay English.
+#[test]
+fn the_cs10_trip_explained_in_french() {
+    let mut opts = options(None);
+    opts.lang = vigie_app::i18n::Lang::Fr;
+    let mut h = harness(opts);
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.run_steps(1);
+    h.get_by_label("Départ cycle").click();
+    h.run_steps(2);
+    run_to_trip(&mut h);
+    h.run_steps(2);
+    let why = "Arrêt sécurité : caisse sortant à droite : maintenir la rotation (CSs10). Maintenus EN MARCHE : A4 (Table tournante). Arrêtés : A0 (Convoyeur d'entrée), A5 (Convoyeur de sortie gauche), A6 (Convoyeur de sortie droit)";
+    assert!(
+        h.query_by_label(&format!("1. Pourquoi : {why}.")).is_some(),
+        "next step in French"
+    );
+    // The alarm row, as the next step says it.
+    h.get_by_label(why);
+    h.get_by_label(
+        "2. À vérifier sur la machine : Convoyeur de sortie droit (C7) ; Table tournante (A4).",
+    );
+    assert!(
+        h.query_by_label_contains("réarmement refusé : CSs10 encore violée(s)")
+            .is_some()
+    );
+    for (button, item) in [
+        (
+            "2 Avant l'arrêt",
+            "Le filtre a maintenu EN MARCHE A4 (commandé À L'ARRÊT ; A4 À L'ARRÊT : la table tournante revient en position de chargement).",
+        ),
+        (
+            "3 Avancé",
+            "C7 est passé de 0 à 1 à 11680 ms (dans le cycle de l'arrêt), élément de la contrainte.",
+        ),
+        ("4 Hypothèse", "Attendu de la commande : A4=1."),
+    ] {
+        h.get_by_label(button).click();
+        h.run_steps(2);
+        assert!(h.query_by_label(item).is_some(), "level {button}: {item}");
+    }
+    // The records stay in English (the journal, the core's alarm text).
+    assert!(
+        h.state()
+            .journal
+            .entries()
+            .iter()
+            .any(|e| e.text.contains("filter tripped on CSs10"))
+    );
+    assert!(
+        h.state()
+            .sim
+            .alarms
+            .all()
+            .iter()
+            .any(|a| a.message.starts_with("Safety stop: "))
+    );
+}

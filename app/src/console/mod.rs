@@ -15,6 +15,7 @@ pub mod trends;
 pub mod users;
 mod verification;
 mod views;
+mod words;
 
 use crate::i18n::{I18n, Lang};
 use crate::theme::Palette;
@@ -553,6 +554,7 @@ impl Console {
             replay: None,
             view: synoptic::View {
                 descriptions,
+                words: synoptic_words(&i18n),
                 ..synoptic::View::default()
             },
             status: String::new(),
@@ -1026,6 +1028,7 @@ impl Console {
             Command::SetLanguage(lang) => {
                 self.i18n.set_lang(lang);
                 self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
+                self.view.words = synoptic_words(&self.i18n);
                 self.journal
                     .push(now, "operator", &format!("language {}", lang.code()));
             }
@@ -1285,6 +1288,14 @@ impl Console {
         }
         self.pending.extend(commands);
     }
+}
+
+/// The synoptic's tags in the language shown.
+fn synoptic_words(i18n: &I18n) -> BTreeMap<&'static str, String> {
+    synoptic::TAGS
+        .iter()
+        .map(|(k, _)| (*k, i18n.t(&format!("syn-{k}"))))
+        .collect()
 }
 
 fn sim_variants(plant_dir: &Path, sim: &Simulation) -> Vec<(String, String, String)> {

@@ -21,6 +21,36 @@ pub struct View {
     /// The signals' descriptions in the language shown (from the plant folder's
     /// `i18n/<lang>.ftl`, `signal-<id>`); a signal without one shows the plant's own.
     pub descriptions: std::collections::BTreeMap<String, String>,
+    /// The synoptic's tags in the language shown, by key ([`TAGS`]).
+    pub words: std::collections::BTreeMap<&'static str, String>,
+}
+
+/// The synoptic's tags: key (message `syn-<key>`) and English text.
+pub const TAGS: [(&str, &str); 10] = [
+    ("held-on", "held ON"),
+    ("forced-off", "forced OFF"),
+    ("stays-on", "stays ON"),
+    ("stays-off", "stays OFF"),
+    ("suspect", "suspect"),
+    ("expected-on", "expected ON"),
+    ("expected-off", "expected OFF"),
+    ("inferred-box", "inferred box"),
+    ("estimated", "estimated"),
+    ("no-address", "no fieldbus address"),
+];
+
+impl View {
+    /// The tag `key` in the language shown.
+    fn word(&self, key: &str) -> &str {
+        self.words.get(key).map_or_else(
+            || {
+                TAGS.iter()
+                    .find(|(k, _)| *k == key)
+                    .map_or("", |(_, en)| en)
+            },
+            String::as_str,
+        )
+    }
 }
 
 impl Default for View {
@@ -29,6 +59,7 @@ impl Default for View {
             zoom: 1.0,
             pan: Vec2::ZERO,
             descriptions: std::collections::BTreeMap::new(),
+            words: std::collections::BTreeMap::new(),
         }
     }
 }
@@ -333,7 +364,7 @@ fn tooltip_text(plant: &Plant, view: &View, id: &str, value: Option<bool>) -> St
     };
     let addr = s
         .address
-        .map_or_else(|| "no fieldbus address".to_string(), |a| a.to_string());
+        .map_or_else(|| view.word("no-address").to_string(), |a| a.to_string());
     let v = match value {
         Some(true) => "1",
         Some(false) => "0",
@@ -635,31 +666,35 @@ pub fn synoptic_ui(
             Mark::Circle => {
                 painter.circle_stroke(p, lamp_r * 2.0, Stroke::new(3.0, pal.trip));
             }
-            Mark::ForcedOn => put("held ON", pal.forced, pal.text),
-            Mark::ForcedOff => put("forced OFF", pal.forced, pal.text),
+            Mark::ForcedOn => put(view.word("held-on"), pal.forced, pal.text),
+            Mark::ForcedOff => put(view.word("forced-off"), pal.forced, pal.text),
             Mark::Change { from, to } => put(
                 &format!("{}→{}", u8::from(*from), u8::from(*to)),
                 pal.highlight,
                 Color32::WHITE,
             ),
             Mark::Steady { value } => put(
-                &format!("stays {}", if *value { "ON" } else { "OFF" }),
+                view.word(if *value { "stays-on" } else { "stays-off" }),
                 pal.equipment_edge,
                 Color32::WHITE,
             ),
             Mark::Suspect => {
                 painter.add(dashed_ring(p, lamp_r, pal.alarm));
-                put("suspect", pal.alarm, pal.text);
+                put(view.word("suspect"), pal.alarm, pal.text);
             }
             Mark::Expected { value } => put(
-                &format!("expected {}", if *value { "ON" } else { "OFF" }),
+                view.word(if *value {
+                    "expected-on"
+                } else {
+                    "expected-off"
+                }),
                 pal.highlight,
                 Color32::WHITE,
             ),
-            Mark::InferredBox => put("inferred box", pal.highlight, Color32::WHITE),
+            Mark::InferredBox => put(view.word("inferred-box"), pal.highlight, Color32::WHITE),
             Mark::Estimated => {
                 painter.add(dashed_ring(p, lamp_r, pal.caution));
-                put("estimated", pal.caution, pal.text);
+                put(view.word("estimated"), pal.caution, pal.text);
             }
         }
     }

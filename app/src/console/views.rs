@@ -784,8 +784,8 @@ fn next_step_ui(c: &Console, ui: &mut egui::Ui) {
     let Some(trip) = c.sim.engine.trips.last() else {
         return;
     };
-    let text = vigie_core::alarms::texts::trip(&c.sim.bundle, trip);
-    let look = vigie_core::alarms::texts::where_to_look(&c.sim.bundle, trip);
+    let message = super::words::trip_message(&c.i18n, &c.sim.bundle, trip);
+    let look = super::words::where_to_look(&c.i18n, &c.sim.bundle, trip);
     egui::Frame::group(ui.style())
         .stroke(Stroke::new(2.0, c.palette.trip))
         .show(ui, |ui| {
@@ -797,18 +797,19 @@ fn next_step_ui(c: &Console, ui: &mut egui::Ui) {
                 .strong()
                 .color(c.palette.trip),
             );
-            ui.label(c.i18n.ta("next-why", &[("text", (&text.message).into())]));
+            ui.label(c.i18n.ta("next-why", &[("text", (&message).into())]));
             if !look.is_empty() {
-                ui.label(
-                    c.i18n
-                        .ta("next-check", &[("where", (&look.join("; ")).into())]),
-                );
+                ui.label(c.i18n.ta(
+                    "next-check",
+                    &[("where", (&look.join(&c.i18n.t("words-list-sep"))).into())],
+                ));
             }
             let reset = match c.sim.engine.reset_check() {
                 Ok(()) => c.i18n.t("next-reset-possible"),
-                Err(e) => c
-                    .i18n
-                    .ta("next-reset-refused", &[("reason", (&e.to_string()).into())]),
+                Err(e) => c.i18n.ta(
+                    "next-reset-refused",
+                    &[("reason", (&super::words::reset_refused(&c.i18n, &e)).into())],
+                ),
             };
             ui.label(reset);
         });
@@ -876,10 +877,11 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         .monospace()
                         .color(c.palette.text_dim),
                 );
-                if item.text.contains('\u{305}') {
-                    synoptic::overbar_formula(ui, &item.text, 14.0, c.palette.text);
+                let text = c.i18n.explain(item);
+                if text.contains('\u{305}') {
+                    synoptic::overbar_formula(ui, &text, 14.0, c.palette.text);
                 } else {
-                    ui.label(&item.text);
+                    ui.label(text);
                 }
             });
         }
@@ -1190,7 +1192,12 @@ fn alarm_row_ui(
                 ));
             }
         });
-        ui.label(&a.message);
+        ui.label(super::words::alarm_message(
+            &c.i18n,
+            &c.sim.bundle,
+            &c.sim.engine.trips,
+            a,
+        ));
         if !a.detail.is_empty() {
             egui::CollapsingHeader::new(c.i18n.t("alarm-detail"))
                 .id_salt(("alarm_detail", a.id))

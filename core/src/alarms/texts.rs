@@ -96,6 +96,21 @@ pub fn diagnosis(plant: &Plant, n: &Notice) -> AlarmText {
 /// constraints read (`Right exit conveyor (C7)`, `Turntable (A4)`), in order of first
 /// mention; signals without an element by their id alone.
 pub fn where_to_look(bundle: &PlantBundle, trip: &Trip) -> Vec<String> {
+    where_to_look_by_element(bundle, trip)
+        .into_iter()
+        .map(|(e, ids)| {
+            if e.is_empty() {
+                ids.join(", ")
+            } else {
+                format!("{e} ({})", ids.join(", "))
+            }
+        })
+        .collect()
+}
+
+/// What [`where_to_look`] says, as data: each element (empty for signals without one)
+/// with the ids of its signals, in order of first mention.
+pub fn where_to_look_by_element(bundle: &PlantBundle, trip: &Trip) -> Vec<(String, Vec<String>)> {
     let mut by_element: Vec<(String, Vec<String>)> = Vec::new();
     for l in trip.constraints.iter().flat_map(|fc| &fc.literals) {
         let Some(signal) = bundle.plant.signal(&l.name) else {
@@ -109,15 +124,6 @@ pub fn where_to_look(bundle: &PlantBundle, trip: &Trip) -> Vec<String> {
         }
     }
     by_element
-        .into_iter()
-        .map(|(e, ids)| {
-            if e.is_empty() {
-                ids.join(", ")
-            } else {
-                format!("{e} ({})", ids.join(", "))
-            }
-        })
-        .collect()
 }
 
 /// `A4 (Turntable)`: an output with its element, when the plant names one.

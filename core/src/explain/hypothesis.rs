@@ -187,6 +187,7 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
                     ("sensor", name.clone()),
                     ("from", u8::from(*from).to_string()),
                     ("to", u8::from(*to).to_string()),
+                    ("expected", expected_field(&outputs)),
                 ],
             ),
             vec![Highlight {
@@ -294,19 +295,21 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
             &[
                 ("category", "c".into()),
                 ("constraint", c.id.clone()),
-                (
-                    "expected",
-                    outputs
-                        .iter()
-                        .map(|(n, v)| format!("{n}={}", u8::from(!v)))
-                        .collect::<Vec<_>>()
-                        .join(if outputs.len() == 1 { "" } else { " or " }),
-                ),
+                ("expected", expected_field(&outputs)),
             ],
         ),
         highlights,
     ));
     out
+}
+
+/// The `expected` field: `A4=1`, or the alternatives `A2=0 or A3=0`.
+fn expected_field(outputs: &[(&str, bool)]) -> String {
+    outputs
+        .iter()
+        .map(|(n, v)| format!("{n}={}", u8::from(!v)))
+        .collect::<Vec<_>>()
+        .join(" or ")
 }
 
 /// "A4 should have stayed ON", or for several outputs the alternatives.

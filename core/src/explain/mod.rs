@@ -533,6 +533,11 @@ fn advanced(
                 ("from", u8::from(ch.from).to_string()),
                 ("to", u8::from(ch.to).to_string()),
                 ("time_ms", ch.time_ms.to_string()),
+                (
+                    "ms_before",
+                    trip.time_ms.saturating_sub(ch.time_ms).to_string(),
+                ),
+                ("in_constraint", in_constraint.to_string()),
             ],
         ));
     }

@@ -1,0 +1,131 @@
+//! The texts the console builds from the plant's data and the engine's records (a
+//! trip's alarm, where to look, why a reset is refused) in the language shown. In
+//! English they are the core's own texts (`vigie_core::alarms::texts`), the records of
+//! the journal; in another language they are built from the same data with the
+//! console's messages and the plant folder's translations (`constraint-<id>`,
+//! `element-<name>` with the name in lower case and its spaces as dashes).
+
+use crate::i18n::{I18n, Lang};
+use vigie_core::alarms::texts;
+use vigie_core::alarms::{Alarm, AlarmKind};
+use vigie_core::bundle::PlantBundle;
+use vigie_core::engine::{ResetRefused, Trip};
+
+/// The plant's name of an element in the language shown.
+pub(crate) fn element(i18n: &I18n, element: &str) -> String {
+    let key = format!("element-{}", element.to_lowercase().replace(' ', "-"));
+    i18n.plant(&key).unwrap_or_else(|| element.to_string())
+}
+
+/// `A4 (Table tournante)`: a signal with its element.
+fn signal_phrase(i18n: &I18n, bundle: &PlantBundle, id: &str) -> String {
+    match bundle.plant.signal(id).map(|s| s.element.as_str()) {
+        Some(e) if !e.is_empty() => format!("{id} ({})", element(i18n, e)),
+        _ => id.to_string(),
+    }
+}
+
+/// What a constraint protects, and its id.
+fn constraint_phrase(i18n: &I18n, bundle: &PlantBundle, id: &str) -> String {
+    let description = i18n.plant(&format!("constraint-{id}")).or_else(|| {
+        bundle
+            .constraints
+            .get(id)
+            .map(|c| c.description.clone())
+            .filter(|d| !d.is_empty())
+    });
+    match description {
+        Some(d) => format!("{d} ({id})"),
+        None => i18n.ta("words-constraint-violated", &[("id", id.into())]),
+    }
+}
+
+/// The trip alarm's text.
+pub(crate) fn trip_message(i18n: &I18n, bundle: &PlantBundle, trip: &Trip) -> String {
+    if i18n.lang() == Lang::En {
+        return texts::trip(bundle, trip).message;
+    }
+    let why: Vec<String> = trip
+        .constraints
+        .iter()
+        .map(|fc| constraint_phrase(i18n, bundle, &fc.id))
+        .collect();
+    let list = |on: bool| -> String {
+        trip.actions
+            .iter()
+            .filter(|a| a.commanded != a.applied && a.applied == on)
+            .map(|a| signal_phrase(i18n, bundle, &a.output))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut text = i18n.ta("words-safety-stop", &[("why", (&why.join(" ; ")).into())]);
+    for (list, id) in [
+        (list(true), "words-held-on"),
+        (list(false), "words-stopped"),
+    ] {
+        if !list.is_empty() {
+            text.push_str(&i18n.ta(id, &[("list", (&list).into())]));
+        }
+    }
+    text
+}
+
+/// Where to look on the machine after `trip`.
+pub(crate) fn where_to_look(i18n: &I18n, bundle: &PlantBundle, trip: &Trip) -> Vec<String> {
+    if i18n.lang() == Lang::En {
+        return texts::where_to_look(bundle, trip);
+    }
+    texts::where_to_look_by_element(bundle, trip)
+        .into_iter()
+        .map(|(e, ids)| {
+            if e.is_empty() {
+                ids.join(", ")
+            } else {
+                format!("{} ({})", element(i18n, &e), ids.join(", "))
+            }
+        })
+        .collect()
+}
+
+/// Why a reset is refused.
+pub(crate) fn reset_refused(i18n: &I18n, e: &ResetRefused) -> String {
+    if i18n.lang() == Lang::En {
+        return e.to_string();
+    }
+    match e {
+        ResetRefused::NotTripped => i18n.t("words-not-tripped"),
+        ResetRefused::StillViolated {
+            constraints,
+            observers,
+        } => {
+            let mut t = i18n.ta(
+                "words-still-violated",
+                &[("constraints", (&constraints.join(", ")).into())],
+            );
+            if !observers.is_empty() {
+                t.push_str(&i18n.ta(
+                    "words-with-observers",
+                    &[("observers", (&observers.join(" = 1, ")).into())],
+                ));
+            }
+            t
+        }
+    }
+}
+
+/// An alarm's text in the language shown: a trip's from its record; the others as the
+/// core wrote them.
+pub(crate) fn alarm_message(
+    i18n: &I18n,
+    bundle: &PlantBundle,
+    trips: &[Trip],
+    a: &Alarm,
+) -> String {
+    if i18n.lang() == Lang::En || a.kind != AlarmKind::FilterTrip {
+        return a.message.clone();
+    }
+    trips
+        .iter()
+        .find(|t| t.time_ms == a.raised.0)
+        .map_or_else(|| a.message.clone(), |t| trip_message(i18n, bundle, t))
+}

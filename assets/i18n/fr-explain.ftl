@@ -1,0 +1,71 @@
+# Les éléments des explications en français, un message par code stable
+# (core/src/explain/codes.md), à partir des champs de l'élément. En anglais, la console
+# montre le texte que le cœur a écrit (l'enregistrement). Un test vérifie que chaque
+# code du tableau a ici son message.
+
+## Niveau 0 — état courant
+explain-X001 = Le filtre de sécurité a arrêté la machine à { $time_ms } ms : { $constraints } aurai{ $n_constraints ->
+    [one] t
+   *[other] ent
+} été violée{ $n_constraints ->
+    [one] {""}
+   *[other] s
+}.
+explain-X002 = { $reasons ->
+    [none] { $output } est maintenu EN MARCHE.
+   *[other] { $output } est maintenu EN MARCHE par le filtre : { $reasons }.
+}
+explain-X003 = Arrêtés : { $outputs }.
+explain-X004 = { $observer ->
+    [none] { $output } À L'ARRÊT : { $meaning }.
+   *[other] L'observateur { $observer } est à 1 : une caisse qu'aucun capteur ne voit est déduite.
+}
+
+## Niveau 1 — projection
+explain-X101 = Sans le filtre, { $after_ms } ms plus tard : la caisse { $box } { $kind ->
+    [Sheared] serait cisaillée au niveau
+    [Dropped] tomberait
+    [Collision] heurterait une autre caisse au niveau
+   *[other] serait poussée contre une surface arrêtée au niveau
+} de : { $place } ({ $elements }).
+explain-X102 = Sans le filtre, aucun dommage n'est prévu dans les { $horizon_ms } ms qui suivent : l'arrêt a empêché une situation interdite.
+
+## Niveau 2 — avant l'arrêt
+explain-X201 = { $constraint } = { $notation } est devenue vraie : { $values }.
+explain-X202 = { $meaning ->
+    [none] Le filtre a maintenu EN MARCHE { $output } (commandé À L'ARRÊT).
+   *[other] Le filtre a maintenu EN MARCHE { $output } (commandé À L'ARRÊT ; { $output } À L'ARRÊT : { $meaning }).
+}
+explain-X203 = Le filtre a forcé À L'ARRÊT { $output } (commandé EN MARCHE).
+
+## Niveau 3 — avancé
+explain-X301 = { $signal } est passé de { $from } à { $to } à { $time_ms } ms ({ $ms_before ->
+    [0] dans le cycle de l'arrêt
+   *[other] { $ms_before } ms avant l'arrêt
+}){ $in_constraint ->
+    [true] , élément de la contrainte
+   *[other] {""}
+}.
+explain-X302 = { $output } reste EN MARCHE.
+
+## Niveau 4 — hypothèse
+explain-X401 = { $sensor } est passé de { $from } à { $to } dans le cycle de l'arrêt et fait partie de { $constraint } ; la commande n'a pas fait l'évolution que ce changement demande : { $expected }.
+explain-X402 = { $sensor } a changé dans le même cycle que { $actuators } ; { $sensor } ne fait pas partie de { $constraint } : une réceptivité ou une équation de sortie qui lit { $sensor } a pu commander l'actionneur.
+explain-X403 = Attendu de la commande : { $expected }.
+explain-X404 = { $actuators } alors qu'aucune entrée n'a changé : une temporisation ou une mémoire interne du programme l'a probablement commandé.
+explain-X405 = L'observateur { $observers } a changé sans changement direct d'une entrée ; la contrainte est devenue vraie par lui.
+explain-X406 = Les cycles d'avant l'arrêt ne sont plus dans l'historique : pas d'hypothèse.
+explain-X407 = La transition { $transition } (réceptivité `{ $receptivity }`) a été franchie { $ms_before ->
+    [0] dans le cycle de l'arrêt
+   *[other] { $ms_before } ms avant l'arrêt
+} et a désactivé l'étape { $step } ({ $qualifier } { $output }) ; les étapes activées ({ $activated }) ne commandent pas { $output } : la réceptivité de { $transition } est suspecte (elle lit { $signals }).
+explain-X408 = La transition { $transition } (réceptivité `{ $receptivity }`) a été franchie { $ms_before ->
+    [0] dans le cycle de l'arrêt
+   *[other] { $ms_before } ms avant l'arrêt
+} et a activé l'étape { $step }, dont l'action { $qualifier } { $output } commande { $output } : la réceptivité de { $transition } est suspecte (elle lit { $signals }).
+explain-X409 = Le qualificatif { $qualifier } de l'action de l'étape { $step } sur { $output } fait la différence : il est suspect.
+explain-X410 = L'équation de { $output } (`{ $expression }`) commande la valeur interdite ({ $signals }) ; les transitions qui ont changé en dernier les étapes qu'elle lit : { $transitions }.
+explain-X411 = { $output } devrait être EN MARCHE mais rien dans le programme ne le commande : les étapes qui agissent sur lui ({ $steps }) sont inactives et son équation est fausse.
+explain-X412 = L'étape { $step } est active et son action { $qualifier } { $output } commande { $output } ; les transitions qui la quittent, { $transition } (`{ $receptivity }`), n'ont pas été franchies : leur réceptivité est suspecte (elles lisent { $signals }).
+explain-X413 = Contrainte combinée { $constraint } : l'étape { $step }, activée dans le cycle de l'arrêt, commande { $driven } alors que { $output }, que la contrainte exige avec lui, n'est commandé par rien : les actions de la nouvelle étape ou ce qui commande { $output } l'oublient.
+explain-X414 = { $sensor } est suspect : sa lecture a fait un front que la physique de la machine ne permet pas ; l'étage de plausibilité garde sa dernière valeur plausible et { $constraint } la lit comme pouvant valoir l'une ou l'autre. Vérifiez { $sensor } (cellule, réflecteur, câble) avant le programme.
