@@ -136,6 +136,13 @@ impl AlarmKind {
     pub fn can_stop(self) -> bool {
         !matches!(self, Self::Task)
     }
+
+    /// An alarm of this kind says the plant stopped (the filter's trip, a diagnoser's
+    /// stop through its `DSTOP_` constraint, a constraint set without fallback): its
+    /// event gets a first-out.
+    pub fn stops(self) -> bool {
+        matches!(self, Self::FilterTrip | Self::Specification)
+    }
 }
 
 /// A shelving: when, until when, and why.
@@ -335,8 +342,21 @@ impl AlarmList {
         {
             return a.id;
         }
-        let first_out =
-            kind.can_stop() && !self.alarms.iter().any(|a| a.kind.can_stop() && a.is_open());
+        // First-out, once the plant stops: the earliest open alarm that can start a
+        // stop (a suspect sensor before the trip), else this one. An event in which
+        // nothing stops has none.
+        let mut first_out = false;
+        if kind.stops() && !self.alarms.iter().any(|a| a.first_out && a.is_open()) {
+            match self
+                .alarms
+                .iter_mut()
+                .filter(|a| a.kind.can_stop() && a.is_open())
+                .min_by_key(|a| a.id)
+            {
+                Some(a) => a.first_out = true,
+                None => first_out = true,
+            }
+        }
         // Shelving is for the source (a chattering alarm clears and comes back): an
         // alarm raised again while its key's shelving lasts stays shelved.
         let shelving = self
@@ -634,8 +654,17 @@ mod tests {
         // a new first-out.
         l.clear(Millis(65), "trip:CSs10");
         let c = l.raise(Millis(70), "diag:C4", AlarmKind::Diagnosis, "C4");
-        assert!(l.get(c).is_some_and(|x| x.first_out));
-        assert_eq!(l.all().len(), 3, "nothing is ever removed");
+        assert!(
+            l.get(c).is_some_and(|x| !x.first_out),
+            "nothing stopped (degraded mode): no first-out"
+        );
+        let d = l.raise(Millis(80), "trip:CSs2", AlarmKind::FilterTrip, "CSs2");
+        assert!(
+            l.get(c).is_some_and(|x| x.first_out),
+            "the trip's first-out"
+        );
+        assert!(l.get(d).is_some_and(|x| !x.first_out));
+        assert_eq!(l.all().len(), 4, "nothing is ever removed");
     }
 
     #[test]
@@ -755,6 +784,11 @@ mod tests {
         // A suspect sensor before the trip is the trip's first-out.
         let mut m = AlarmList::new();
         let sus = m.raise(Millis(0), "pl", AlarmKind::Plausibility, "p");
+        assert_eq!(
+            first(&m),
+            Vec::<u64>::new(),
+            "a suspect sensor alone stops nothing"
+        );
         m.raise(Millis(5), "trip", AlarmKind::FilterTrip, "x");
         assert_eq!(first(&m), vec![sus]);
         // Once the event's alarms are cleared and acknowledged, a new event starts.

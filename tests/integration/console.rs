@@ -1145,3 +1145,25 @@ fn the_cs10_trip_explained_in_french() {
             .any(|a| a.message.starts_with("Safety stop: "))
     );
 }
+
+/// Degraded mode (C4 stuck at 0, estimated): the plant goes on, so no alarm is a
+/// first-out (the finding: FIRST OUT on a suspect-sensor alarm while nothing stopped).
+#[test]
+fn degraded_mode_has_no_first_out() {
+    let mut opts = options(None);
+    opts.scenario = Some(root().join("layouts/sorting-station/scenarios/c4-stuck-degraded.ron"));
+    let mut h = harness(opts);
+    h.run_steps(1);
+    h.state_mut().cycles(6000);
+    h.run_steps(2);
+    h.get_by_label("DEGRADED");
+    let alarms = h.state().sim.alarms.all();
+    assert!(
+        alarms
+            .iter()
+            .any(|a| a.kind == vigie_core::alarms::AlarmKind::Diagnosis),
+        "the diagnosis alarm"
+    );
+    assert!(alarms.iter().all(|a| !a.first_out), "no first-out");
+    assert!(h.query_by_label("FIRST OUT").is_none());
+}
