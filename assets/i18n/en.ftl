@@ -310,3 +310,18 @@ words-not-tripped = the filter has not tripped
 words-still-violated = reset refused: { $constraints } still violated by the commanded outputs
 words-with-observers = {" "}(with { $observers } = 1)
 words-list-sep = {"; "}
+
+## Status line
+status-reinit-emptied = Re-initialised: the plant emptied, the program at its initial steps; press Start
+status-reinit-in-place = Re-initialised with the items in place, the program at its initial steps; press Start
+status-manual-on = Manual mode: every command is checked by the safety filter
+status-manual-off = Automatic mode: the program restarted from its initial steps; press Start
+status-by-hand-on = { $id } ON by hand
+status-by-hand-off = { $id } OFF by hand
+status-bypassed = { $constraint } bypassed for { $minutes } min: the banner stays while it lasts
+status-enforced-again = { $id } enforced again
+status-start-pressed = Start pressed
+status-stop-pressed = Stop pressed
+status-reset-done = Reset: the filter releases the plant
+status-diagnosers-reset = Diagnosers reset: the sensors are read again
+status-reset-refused = Reset: { $reason }. Still refused? Check the plant, then Re-initialise…

@@ -326,3 +326,18 @@ words-not-tripped = le filtre n'est pas déclenché
 words-still-violated = réarmement refusé : { $constraints } encore violée(s) par les sorties commandées
 words-with-observers = {" "}(avec { $observers } = 1)
 words-list-sep = {" ; "}
+
+## Ligne d'état
+status-reinit-emptied = Réinitialisée : la machine vidée, le programme à ses étapes initiales ; appuyez sur Départ cycle
+status-reinit-in-place = Réinitialisée avec les pièces en place, le programme à ses étapes initiales ; appuyez sur Départ cycle
+status-manual-on = Mode manuel : chaque commande est vérifiée par le filtre de sécurité
+status-manual-off = Mode automatique : le programme repart de ses étapes initiales ; appuyez sur Départ cycle
+status-by-hand-on = { $id } EN MARCHE à la main
+status-by-hand-off = { $id } À L'ARRÊT à la main
+status-bypassed = { $constraint } en dérivation pour { $minutes } min : le bandeau reste affiché tant qu'elle dure
+status-enforced-again = { $id } de nouveau appliquée
+status-start-pressed = Départ cycle appuyé
+status-stop-pressed = Arrêt appuyé
+status-reset-done = Réarmement : le filtre libère la machine
+status-diagnosers-reset = Diagnostiqueurs réarmés : les capteurs sont de nouveau lus
+status-reset-refused = Réarmement : { $reason }. Toujours refusé ? Vérifiez la machine, puis Réinitialiser…

@@ -864,26 +864,21 @@ impl Console {
                 }
                 self.status = match (result, &action) {
                     (Ok(()), OperatorAction::Reinitialise { emptied: true }) => {
-                        "Re-initialised: the plant emptied, the program at its initial \
-                         steps; press Start"
-                            .to_string()
+                        self.i18n.t("status-reinit-emptied")
                     }
                     (Ok(()), OperatorAction::Reinitialise { emptied: false }) => {
-                        "Re-initialised with the items in place, the program at its \
-                         initial steps; press Start"
-                            .to_string()
+                        self.i18n.t("status-reinit-in-place")
                     }
-                    (Ok(()), OperatorAction::Manual(true)) => {
-                        "Manual mode: every command is checked by the safety filter".to_string()
-                    }
-                    (Ok(()), OperatorAction::Manual(false)) => {
-                        "Automatic mode: the program restarted from its initial steps; press \
-                         Start"
-                            .to_string()
-                    }
-                    (Ok(()), OperatorAction::ManualSet(id, on)) => {
-                        format!("{id} {} by hand", if *on { "ON" } else { "OFF" })
-                    }
+                    (Ok(()), OperatorAction::Manual(true)) => self.i18n.t("status-manual-on"),
+                    (Ok(()), OperatorAction::Manual(false)) => self.i18n.t("status-manual-off"),
+                    (Ok(()), OperatorAction::ManualSet(id, on)) => self.i18n.ta(
+                        if *on {
+                            "status-by-hand-on"
+                        } else {
+                            "status-by-hand-off"
+                        },
+                        &[("id", id.into())],
+                    ),
                     (
                         Ok(()),
                         OperatorAction::Bypass {
@@ -893,24 +888,33 @@ impl Console {
                         },
                     ) => {
                         self.bypass_form.1.clear();
-                        format!(
-                            "{constraint} bypassed for {minutes} min: the banner stays while it lasts"
+                        self.i18n.ta(
+                            "status-bypassed",
+                            &[
+                                ("constraint", constraint.into()),
+                                ("minutes", (*minutes).into()),
+                            ],
                         )
                     }
-                    (Ok(()), OperatorAction::EndBypass(id)) => format!("{id} enforced again"),
-                    (Ok(()), OperatorAction::Start) => "Start pressed".to_string(),
-                    (Ok(()), OperatorAction::Stop) => "Stop pressed".to_string(),
-                    (Ok(()), OperatorAction::Reset) => {
-                        "Reset: the filter releases the plant".to_string()
+                    (Ok(()), OperatorAction::EndBypass(id)) => {
+                        self.i18n.ta("status-enforced-again", &[("id", id.into())])
                     }
+                    (Ok(()), OperatorAction::Start) => self.i18n.t("status-start-pressed"),
+                    (Ok(()), OperatorAction::Stop) => self.i18n.t("status-stop-pressed"),
+                    (Ok(()), OperatorAction::Reset) => self.i18n.t("status-reset-done"),
                     (Ok(()), OperatorAction::ResetDiagnosers) => {
-                        "Diagnosers reset: the sensors are read again".to_string()
+                        self.i18n.t("status-diagnosers-reset")
                     }
                     (Ok(()), OperatorAction::Press(b)) => format!("{b} pressed"),
                     (Ok(()), _) => format!("{action:?}: done"),
                     (Err(e), OperatorAction::ManualSet(..)) => e.clone(),
                     (Err(e), OperatorAction::Reset) => {
-                        format!("Reset: {e}. Still refused? Check the plant, then Re-initialise…")
+                        let reason = match self.sim.engine.reset_check() {
+                            Err(r) => words::reset_refused(&self.i18n, &r),
+                            Ok(()) => e.clone(),
+                        };
+                        self.i18n
+                            .ta("status-reset-refused", &[("reason", (&reason).into())])
                     }
                     (Err(e), _) => format!("{action:?}: {e}"),
                 };

@@ -535,7 +535,9 @@ fn manual_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         for (k, id, element) in outputs {
             let on = requested.get(k);
             ui.label(RichText::new(&id).strong());
-            ui.label(RichText::new(element).color(c.palette.text_dim));
+            ui.label(
+                RichText::new(super::words::element(&c.i18n, &element)).color(c.palette.text_dim),
+            );
             ui.label(c.i18n.t(if on { "manual-on" } else { "manual-off" }));
             if ui
                 .add_enabled(
