@@ -1167,3 +1167,40 @@ fn degraded_mode_has_no_first_out() {
     assert!(alarms.iter().all(|a| !a.first_out), "no first-out");
     assert!(h.query_by_label("FIRST OUT").is_none());
 }
+
+/// A manual request refused in French: the refusal in the operator's language, from
+/// the plant's French texts, and no output changed.
+#[test]
+fn a_manual_refusal_in_french() {
+    let mut opts = options(None);
+    opts.scenario = None;
+    let mut h = harness(opts);
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.run_steps(1);
+    h.state_mut()
+        .apply(Command::Plant(vigie_core::sim::OperatorAction::Manual(
+            true,
+        )));
+    h.run_steps(1);
+    // The table at C4, empty: turning it is refused (CSs13).
+    h.state_mut()
+        .apply(Command::Plant(vigie_core::sim::OperatorAction::ManualSet(
+            "A4".into(),
+            true,
+        )));
+    h.run_steps(2);
+    let refusal = h.state().manual_refusal.clone().expect("refused");
+    assert_eq!(
+        refusal,
+        "A4 EN MARCHE refusé : pas de rotation d'une table vide (CSs13, avec C4 = 1, C6 = 0)"
+    );
+    assert!(h.get_all_by_label(&refusal).count() >= 1, "shown");
+    assert!(!h.state().sim.manual_outputs().expect("manual").get(4));
+    // The journal keeps the core's record.
+    assert!(h.state().journal.entries().iter().any(|e| {
+        e.kind == "manual_refused"
+            && e.text
+                .starts_with("A4 ON refused: no rotation of an empty table")
+    }));
+}

@@ -853,6 +853,38 @@ impl Console {
             }
             Command::Plant(action) => {
                 let result = self.sim.act(&action);
+                let result = match (result, &action) {
+                    (Err(e), OperatorAction::ManualSet(id, on)) => {
+                        // The request is not taken: checking it again gives the same
+                        // constraints, for the text in the language shown.
+                        let refused = self
+                            .sim
+                            .manual_outputs()
+                            .zip(
+                                self.sim
+                                    .bundle
+                                    .plant
+                                    .outputs
+                                    .iter()
+                                    .position(|s| s.id == *id),
+                            )
+                            .map(|(current, k)| {
+                                let mut candidate = current.clone();
+                                candidate.set(k, *on);
+                                self.sim.engine.check_request(&candidate)
+                            })
+                            .unwrap_or_default();
+                        Err(words::refused_request(
+                            &self.i18n,
+                            &self.sim.bundle,
+                            id,
+                            *on,
+                            &refused,
+                            &e,
+                        ))
+                    }
+                    (r, _) => r,
+                };
                 match (&result, &action) {
                     (Err(e), OperatorAction::ManualSet(..)) => {
                         self.manual_refusal = Some(e.clone());

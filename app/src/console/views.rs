@@ -463,7 +463,11 @@ fn state_ui(c: &Console, ui: &mut egui::Ui) {
         .inner_margin(egui::Margin::symmetric(10, 2))
         .corner_radius(3.0)
         .show(ui, |ui| {
-            ui.label(RichText::new(txt).strong().size(22.0).color(fg))
+            // Never wrapped: on a crowded toolbar the badge moves to the next row whole.
+            ui.add(
+                egui::Label::new(RichText::new(txt).strong().size(22.0).color(fg))
+                    .wrap_mode(egui::TextWrapMode::Extend),
+            )
         })
         .inner
         .on_hover_text(c.i18n.t(&format!("{id}-hover")));

@@ -27,6 +27,11 @@ fn signal_phrase(i18n: &I18n, bundle: &PlantBundle, id: &str) -> String {
 
 /// What a constraint protects, and its id.
 fn constraint_phrase(i18n: &I18n, bundle: &PlantBundle, id: &str) -> String {
+    constraint_phrase_with(i18n, bundle, id, "")
+}
+
+/// What a constraint protects, its id and `with` (`, avec C4 = 1`).
+fn constraint_phrase_with(i18n: &I18n, bundle: &PlantBundle, id: &str, with: &str) -> String {
     let description = i18n.plant(&format!("constraint-{id}")).or_else(|| {
         bundle
             .constraints
@@ -35,9 +40,62 @@ fn constraint_phrase(i18n: &I18n, bundle: &PlantBundle, id: &str) -> String {
             .filter(|d| !d.is_empty())
     });
     match description {
-        Some(d) => format!("{d} ({id})"),
-        None => i18n.ta("words-constraint-violated", &[("id", id.into())]),
+        Some(d) => format!("{d} ({id}{with})"),
+        None => i18n.ta("words-constraint-violated", &[("id", id.into())]) + with,
     }
+}
+
+/// A manual request the constraints refuse, in the language shown: `refused` is
+/// [`vigie_core::engine::Engine::check_request`]'s answer for it; `core_text` what the
+/// core said (the record, and the English text).
+pub(crate) fn refused_request(
+    i18n: &I18n,
+    bundle: &PlantBundle,
+    id: &str,
+    on: bool,
+    refused: &[vigie_core::engine::FiredConstraint],
+    core_text: &str,
+) -> String {
+    if i18n.lang() == Lang::En || refused.is_empty() {
+        return core_text.to_string();
+    }
+    let what = if on {
+        i18n.ta("words-request-on", &[("id", id.into())])
+    } else {
+        match i18n.plant(&format!("off-{id}")) {
+            Some(m) => i18n.ta(
+                "words-request-off-meaning",
+                &[("id", id.into()), ("meaning", (&m).into())],
+            ),
+            None => i18n.ta("words-request-off", &[("id", id.into())]),
+        }
+    };
+    let why: Vec<String> = refused
+        .iter()
+        .map(|fc| {
+            let context: Vec<String> = fc
+                .literals
+                .iter()
+                .filter(|l| {
+                    matches!(
+                        l.space,
+                        vigie_core::symbols::Space::Input | vigie_core::symbols::Space::Observer
+                    ) || (l.space == vigie_core::symbols::Space::Output && l.previous)
+                })
+                .map(|l| format!("{} = {}", l.name, u8::from(l.value)))
+                .collect();
+            let with = if context.is_empty() {
+                String::new()
+            } else {
+                i18n.ta("words-with", &[("values", (&context.join(", ")).into())])
+            };
+            constraint_phrase_with(i18n, bundle, &fc.id, &with)
+        })
+        .collect();
+    i18n.ta(
+        "words-request-refused",
+        &[("what", (&what).into()), ("why", (&why.join(" ; ")).into())],
+    )
 }
 
 /// The trip alarm's text.
