@@ -231,6 +231,11 @@ impl I18n {
         Some(text.into_owned())
     }
 
+    /// True when `id` exists in the language shown itself (no fallback).
+    pub fn has_own(&self, id: &str) -> bool {
+        self.bundle(self.lang).is_some_and(|b| b.has_message(id))
+    }
+
     /// True when `id` exists in the language shown or in English.
     pub fn has(&self, id: &str) -> bool {
         [self.lang, Lang::En]
@@ -473,6 +478,30 @@ mod explain_tests {
             }
         }
         assert!(n > 20, "codes read: {n}");
+        assert!(missing.is_empty(), "no French message for {missing:?}");
+    }
+
+    /// Every alarm code the core writes has its French message.
+    #[test]
+    fn every_alarm_code_has_a_french_message() {
+        let fr: std::collections::BTreeSet<String> = ids(FR_EXPLAIN).into_iter().collect();
+        let core = [include_str!("../../core/src/alarms/texts.rs")];
+        let mut codes = Vec::new();
+        for text in core {
+            for (pos, _) in text
+                .match_indices("\"diagnosis-")
+                .chain(text.match_indices("\"plausibility-"))
+            {
+                let rest = &text[pos + 1..];
+                codes.push(rest[..rest.find('"').unwrap()].to_string());
+            }
+        }
+        codes.extend(["hazard".to_string(), "task".to_string()]);
+        assert!(codes.len() >= 10, "{codes:?}");
+        let missing: Vec<_> = codes
+            .iter()
+            .filter(|c| !fr.contains(&format!("alarm-{c}")))
+            .collect();
         assert!(missing.is_empty(), "no French message for {missing:?}");
     }
 

@@ -69,3 +69,48 @@ explain-X411 = { $output } devrait être EN MARCHE mais rien dans le programme n
 explain-X412 = L'étape { $step } est active et son action { $qualifier } { $output } commande { $output } ; les transitions qui la quittent, { $transition } (`{ $receptivity }`), n'ont pas été franchies : leur réceptivité est suspecte (elles lisent { $signals }).
 explain-X413 = Contrainte combinée { $constraint } : l'étape { $step }, activée dans le cycle de l'arrêt, commande { $driven } alors que { $output }, que la contrainte exige avec lui, n'est commandé par rien : les actions de la nouvelle étape ou ce qui commande { $output } l'oublient.
 explain-X414 = { $sensor } est suspect : sa lecture a fait un front que la physique de la machine ne permet pas ; l'étage de plausibilité garde sa dernière valeur plausible et { $constraint } la lit comme pouvant valoir l'une ou l'autre. Vérifiez { $sensor } (cellule, réflecteur, câble) avant le programme.
+
+## Alarmes (le texte du cœur reste l'enregistrement ; en français, à partir du code et
+## des champs de l'alarme)
+alarm-plausibility-suspect = { $sensor } ({ $description }) suspect : { $edge ->
+    [rise] montée
+   *[fall] retombée
+} invraisemblable (la physique de la machine ne le permet pas maintenant) ; { $sensor } tenu à { $held }{ $latched ->
+    [true] {" "}jusqu'à ce qu'il relise { $held } (si tôt après le dernier front, le dernier était un parasite)
+   *[other] {""}
+}
+alarm-plausibility-filtered = { $sensor } ({ $description }) : { $edge ->
+    [rise] une montée
+   *[fall] une retombée
+} de { $ms } ms filtrée (plus courte que sa confirmation de { $confirm_ms } ms)
+alarm-plausibility-again = { $sensor } ({ $description }) de nouveau plausible après { $ms } ms
+alarm-diagnosis-sensor-estimated = { $estimate ->
+    [true] Diagnostic : défaut { $fault } du capteur { $sensor } ({ $description }) (certain) : { $sensor } est estimé à partir des intervalles de temps (la temporisation de { $component }) ; la production continue en mode dégradé
+   *[other] Diagnostic : défaut { $fault } du capteur { $sensor } ({ $description }) (certain) : les contraintes lisent { $sensor } estimé à partir des intervalles de temps (la temporisation de { $component }), le programme lit toujours { $sensor }
+}
+alarm-diagnosis-sensor-no-estimate = Diagnostic : défaut { $fault } du capteur { $sensor } ({ $description }) (certain) ; { $sensor } n'a pas d'estimation dans le modèle { $component } : les contraintes et le programme lisent toujours { $sensor }
+alarm-diagnosis-actuator = { $stop ->
+    [true] Diagnostic : défaut { $fault } sur { $partition } ({ $component }), certain : partition d'actionneur en défaut, tout le système est arrêté
+   *[other] Diagnostic : défaut { $fault } sur { $partition } ({ $component }), certain : partition d'actionneur en défaut ; le filtre ne fait que signaler, le système n'est pas arrêté
+}
+alarm-diagnosis-ambiguous = { $stop ->
+    [true] Diagnostic : { $component } est en défaut, sans pouvoir trancher entre { $fault } : { $partition } (un entraînement) peut être en cause, tout le système est arrêté du côté sûr ; vérifiez-le, puis réarmez les diagnostiqueurs
+   *[other] Diagnostic : { $component } est en défaut, sans pouvoir trancher entre { $fault } : { $partition } (un entraînement) peut être en cause ; le filtre ne fait que signaler, le système n'est pas arrêté
+}
+alarm-diagnosis-other = Diagnostic : { $fault } sur { $partition } ({ $component })
+alarm-hazard = Caisse { $item } endommagée : { $kind ->
+    [Sheared] cisaillée au niveau de : { $place }
+    [Dropped] tombée de : { $place }
+    [Collision] heurt au niveau de : { $place }
+   *[other] poussée contre une surface arrêtée
+}
+alarm-task = { $subject } : { $code ->
+    [T001] arrêtée trop longtemps, elle ne peut plus finir à temps
+    [T002] plus lente que la normale
+    [T003] pas finie dans son temps acceptable
+    [T004] finie plus tôt que possible (un capteur ou une étape manquée ?)
+    [T005] finie hors de son temps acceptable
+    [T006] la commande a manqué sa fenêtre de temps
+    [T007] un événement est venu alors qu'aucun n'était attendu
+   *[T008] deux tâches désynchronisées
+}

@@ -20,6 +20,7 @@ pub mod texts;
 
 use crate::time::Millis;
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// An alarm's operator text and the engineer's detail.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -28,6 +29,22 @@ pub struct AlarmText {
     pub message: String,
     /// Formula, codes, internal names; may be empty.
     pub detail: String,
+    /// What the message says, as data, for a console that shows it in another language:
+    /// a code (`plausibility-suspect`, `diagnosis-estimated`…; empty when none) and its
+    /// fields (`sensor`, `fault`…).
+    pub code: &'static str,
+    /// See `code`.
+    pub fields: BTreeMap<String, String>,
+}
+
+impl AlarmText {
+    /// The same text with its code and fields.
+    #[must_use]
+    pub fn with(mut self, code: &'static str, fields: BTreeMap<String, String>) -> Self {
+        self.code = code;
+        self.fields = fields;
+        self
+    }
 }
 
 impl From<&str> for AlarmText {
@@ -40,7 +57,7 @@ impl From<String> for AlarmText {
     fn from(message: String) -> Self {
         Self {
             message,
-            detail: String::new(),
+            ..Self::default()
         }
     }
 }
@@ -183,6 +200,10 @@ pub struct Alarm {
     pub message: String,
     /// The engineer's detail (formula, codes), shown on demand; may be empty.
     pub detail: String,
+    /// The message as data ([`AlarmText::code`]); empty when none.
+    pub code: &'static str,
+    /// Its fields ([`AlarmText::fields`]).
+    pub fields: BTreeMap<String, String>,
     /// When it was raised.
     pub raised: Millis,
     /// Acknowledgement time and note.
@@ -334,7 +355,12 @@ impl AlarmList {
         kind: AlarmKind,
         text: impl Into<AlarmText>,
     ) -> u64 {
-        let AlarmText { message, detail } = text.into();
+        let AlarmText {
+            message,
+            detail,
+            code,
+            fields,
+        } = text.into();
         if let Some(a) = self
             .alarms
             .iter()
@@ -373,6 +399,8 @@ impl AlarmList {
             kind,
             message,
             detail,
+            code,
+            fields,
             raised: now,
             acknowledged: None,
             cleared: None,
@@ -856,6 +884,7 @@ mod tests {
             AlarmText {
                 message: "Safety stop: box leaving".into(),
                 detail: "CSs10 = C7 . /A4".into(),
+                ..AlarmText::default()
             },
         );
         l.raise(Millis(20), "task:x:T002", AlarmKind::Task, "Box \"late\"");

@@ -128,6 +128,11 @@ pub struct Notice {
     pub suspect: bool,
     /// In words.
     pub text: String,
+    /// The text as data: `filtered` (`edge`, `ms`, `confirm_ms`), `suspect` (`edge`,
+    /// `held`, `latched`), `plausible-again` (`ms`).
+    pub code: &'static str,
+    /// See `code`.
+    pub fields: std::collections::BTreeMap<String, String>,
 }
 
 /// One compiled rule, for the ST export (see [`Plausibility::export_rules`]).
@@ -376,11 +381,22 @@ impl Plausibility {
                     let edge = if read { "fall" } else { "rise" };
                     let confirm = if read { r.fall_confirm } else { r.rise_confirm };
                     let name = &self.names[k];
+                    let ms = t.saturating_sub(from);
                     let text = format!(
-                        "{name}: a {edge} of {} ms filtered (shorter than its {confirm} ms confirmation)",
-                        t.saturating_sub(from)
+                        "{name}: a {edge} of {ms} ms filtered (shorter than its {confirm} ms confirmation)"
                     );
-                    notice(&mut self.notices, t, name, false, text);
+                    let fields = fields(&[
+                        ("edge", edge.into()),
+                        ("ms", ms.to_string()),
+                        ("confirm_ms", confirm.to_string()),
+                    ]);
+                    notice(
+                        &mut self.notices,
+                        t,
+                        name,
+                        false,
+                        (text, "filtered", fields),
+                    );
                 }
             }
             match (suspect, st.suspect_since) {
@@ -400,14 +416,26 @@ impl Plausibility {
                     let text = format!(
                         "{name} suspect: implausible {edge} (the plant's physics does not allow it now); {name} held at {held}{until}"
                     );
-                    notice(&mut self.notices, t, name, true, text);
+                    let fields = fields(&[
+                        ("edge", edge.into()),
+                        ("held", held.to_string()),
+                        ("latched", st.latched.to_string()),
+                    ]);
+                    notice(&mut self.notices, t, name, true, (text, "suspect", fields));
                 }
                 (false, Some(from)) => {
                     st.suspect_since = None;
                     let name = &self.names[k];
-                    let text =
-                        format!("{name} plausible again after {} ms", t.saturating_sub(from));
-                    notice(&mut self.notices, t, name, false, text);
+                    let ms = t.saturating_sub(from);
+                    let text = format!("{name} plausible again after {ms} ms");
+                    let fields = fields(&[("ms", ms.to_string())]);
+                    notice(
+                        &mut self.notices,
+                        t,
+                        name,
+                        false,
+                        (text, "plausible-again", fields),
+                    );
                 }
                 _ => {}
             }
@@ -459,15 +487,31 @@ impl Plausibility {
 /// keeps the first ones only.
 const MAX_NOTICES: usize = 1024;
 
-fn notice(notices: &mut Vec<Notice>, time_ms: u64, sensor: &str, suspect: bool, text: String) {
+type Said = (
+    String,
+    &'static str,
+    std::collections::BTreeMap<String, String>,
+);
+
+fn notice(notices: &mut Vec<Notice>, time_ms: u64, sensor: &str, suspect: bool, said: Said) {
+    let (text, code, fields) = said;
     if notices.len() < MAX_NOTICES {
         notices.push(Notice {
             time_ms,
             sensor: sensor.to_string(),
             suspect,
             text,
+            code,
+            fields,
         });
     }
+}
+
+fn fields(pairs: &[(&str, String)]) -> std::collections::BTreeMap<String, String> {
+    pairs
+        .iter()
+        .map(|(k, v)| ((*k).to_string(), v.clone()))
+        .collect()
 }
 
 fn leaf(name: &str, kind: LeafKind, span: crate::expr::Span) -> Expr {

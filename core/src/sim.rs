@@ -1309,7 +1309,7 @@ impl Simulation {
         }
         self.degraded = diagnosis::estimated_inputs(d, &self.bundle.plant, &self.engine.symbols);
         for n in notices {
-            let text = texts::diagnosis(&self.bundle.plant, &n);
+            let text = texts::diagnosis(&self.bundle.plant, &n, acts);
             self.alarms.raise(now, &n.key, AlarmKind::Diagnosis, text);
             self.log("diagnosis", n.text);
         }
@@ -1321,7 +1321,7 @@ impl Simulation {
         for n in self.engine.plausibility.take_notices() {
             let key = format!("plausibility:{}", n.sensor);
             if n.suspect {
-                let text = texts::about_signal(&self.bundle.plant, &n.sensor, &n.text);
+                let text = texts::plausibility(&self.bundle.plant, &n);
                 self.alarms.raise(now, &key, AlarmKind::Plausibility, text);
             } else {
                 self.alarms.clear(now, &key);

@@ -1204,3 +1204,27 @@ fn a_manual_refusal_in_french() {
                 .starts_with("A4 ON refused: no rotation of an empty table")
     }));
 }
+
+/// Degraded mode in French: the diagnosis and the suspect sensor's alarms from their
+/// codes and fields, with the plant's French descriptions.
+#[test]
+fn degraded_mode_alarms_in_french() {
+    let mut opts = options(None);
+    opts.scenario = Some(root().join("layouts/sorting-station/scenarios/c4-stuck-degraded.ron"));
+    let mut h = harness(opts);
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.run_steps(1);
+    h.state_mut().cycles(6000);
+    h.run_steps(2);
+    h.get_by_label("DÉGRADÉ");
+    h.get_by_label(
+        "Diagnostic : défaut F1 du capteur C4 (Table tournante en position de chargement) (certain) : C4 est estimé à partir des intervalles de temps (la temporisation de table) ; la production continue en mode dégradé",
+    );
+    assert!(
+        h.query_by_label_contains(
+            "C4 (Table tournante en position de chargement) suspect : retombée invraisemblable"
+        )
+        .is_some()
+    );
+}

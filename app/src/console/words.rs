@@ -179,11 +179,35 @@ pub(crate) fn alarm_message(
     trips: &[Trip],
     a: &Alarm,
 ) -> String {
-    if i18n.lang() == Lang::En || a.kind != AlarmKind::FilterTrip {
+    if i18n.lang() == Lang::En {
         return a.message.clone();
     }
-    trips
+    if a.kind == AlarmKind::FilterTrip {
+        return trips
+            .iter()
+            .find(|t| t.time_ms == a.raised.0)
+            .map_or_else(|| a.message.clone(), |t| trip_message(i18n, bundle, t));
+    }
+    let id = format!("alarm-{}", a.code);
+    if a.code.is_empty() || !i18n.has_own(&id) {
+        return a.message.clone();
+    }
+    let mut fields = a.fields.clone();
+    if let Some(sensor) = fields.get("sensor").cloned() {
+        let description = i18n
+            .plant(&format!("signal-{sensor}"))
+            .or_else(|| bundle.plant.signal(&sensor).map(|s| s.description.clone()))
+            .unwrap_or_default();
+        fields.insert("description".into(), description);
+    }
+    if let Some(task) = fields.get("task").cloned()
+        && let Some(subject) = i18n.plant(&format!("task-{task}"))
+    {
+        fields.insert("subject".into(), subject);
+    }
+    let args: Vec<(&str, crate::i18n::Arg<'_>)> = fields
         .iter()
-        .find(|t| t.time_ms == a.raised.0)
-        .map_or_else(|| a.message.clone(), |t| trip_message(i18n, bundle, t))
+        .map(|(k, v)| (k.as_str(), crate::i18n::Arg::Str(v.as_str())))
+        .collect();
+    i18n.ta(&id, &args)
 }

@@ -315,7 +315,7 @@ fn plausibility_events(
         let key = format!("plausibility:{}", n.sensor);
         let now = Millis(n.time_ms);
         if n.suspect {
-            let text = vigie_core::alarms::texts::about_signal(plant, &n.sensor, &n.text);
+            let text = vigie_core::alarms::texts::plausibility(plant, &n);
             board.raise(emit, now, &key, AlarmKind::Plausibility, text);
         } else {
             emit(
@@ -409,7 +409,7 @@ impl LiveDiagnosers {
             line["estimated"] = json!(n.estimated);
             line["text"] = json!(n.text);
             emit(line);
-            let text = vigie_core::alarms::texts::diagnosis(&bundle.plant, &n);
+            let text = vigie_core::alarms::texts::diagnosis(&bundle.plant, &n, self.acts);
             board.raise(emit, now, &n.key, AlarmKind::Diagnosis, text);
         }
         step

@@ -8,7 +8,7 @@ use crate::bundle::PlantBundle;
 use crate::emulator::{Hazard, HazardKind};
 use crate::engine::{FiredConstraint, Trip};
 use crate::plant::Plant;
-use crate::sim::diagnosis::Notice;
+use crate::sim::diagnosis::{Cooperation, Notice};
 use crate::symbols::Space;
 use crate::tasks::{self, TaskSet};
 
@@ -42,6 +42,7 @@ pub fn trip(bundle: &PlantBundle, trip: &Trip) -> AlarmText {
     AlarmText {
         message,
         detail: format!("{detail} (true at {} ms)", trip.time_ms),
+        ..AlarmText::default()
     }
 }
 
@@ -87,9 +88,40 @@ pub fn refused_request(bundle: &PlantBundle, what: &str, refused: &[FiredConstra
 
 /// A certain diagnosis's alarm: the sensor it is about (the estimated one, else its
 /// partition) named with its description.
-pub fn diagnosis(plant: &Plant, n: &Notice) -> AlarmText {
+pub fn diagnosis(plant: &Plant, n: &Notice, acts: Cooperation) -> AlarmText {
     let sensor = n.estimated.as_deref().unwrap_or(&n.diagnosis.partition);
-    about_signal(plant, sensor, &n.text)
+    let fields = [
+        ("fault", n.diagnosis.fault.replace('|', ", ")),
+        ("partition", n.diagnosis.partition.clone()),
+        ("component", n.diagnosis.component.clone()),
+        ("sensor", n.sensor.clone().unwrap_or_default()),
+        ("stop", acts.stop.to_string()),
+        ("estimate", acts.estimate.to_string()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    let code = match n.code {
+        "ambiguous" => "diagnosis-ambiguous",
+        "actuator" => "diagnosis-actuator",
+        "sensor-no-estimate" => "diagnosis-sensor-no-estimate",
+        "sensor-estimated" => "diagnosis-sensor-estimated",
+        _ => "diagnosis-other",
+    };
+    about_signal(plant, sensor, &n.text).with(code, fields)
+}
+
+/// A sensor the plausibility stage holds as suspect, with its code and fields
+/// (`plausibility-suspect`: `sensor`, `edge`, `held`, `latched`).
+pub fn plausibility(plant: &Plant, n: &crate::plausibility::Notice) -> AlarmText {
+    let mut fields = n.fields.clone();
+    fields.insert("sensor".into(), n.sensor.clone());
+    let code = match n.code {
+        "suspect" => "plausibility-suspect",
+        "filtered" => "plausibility-filtered",
+        _ => "plausibility-again",
+    };
+    about_signal(plant, &n.sensor, &n.text).with(code, fields)
 }
 
 /// Where to look on the machine after `trip`: the elements of the plant signals its
@@ -145,7 +177,19 @@ pub fn hazard(h: &Hazard) -> AlarmText {
     AlarmText {
         message: format!("Item {} damaged: {what} {}", h.box_id, h.place),
         detail: format!("{:?}; actuators {}", h.kind, h.elements.join(", ")),
+        ..AlarmText::default()
     }
+    .with(
+        "hazard",
+        [
+            ("item", h.box_id.to_string()),
+            ("kind", format!("{:?}", h.kind)),
+            ("place", h.place.clone()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect(),
+    )
 }
 
 /// A task monitor's alarm: the task's description (its first clause) and what is
@@ -176,7 +220,19 @@ pub fn task(set: Option<&TaskSet>, a: &tasks::Alarm) -> AlarmText {
     AlarmText {
         message: format!("{subject}: {}", a.code.meaning()),
         detail: format!("{} {}: {}", a.code.as_str(), a.subject, a.text),
+        ..AlarmText::default()
     }
+    .with(
+        "task",
+        [
+            ("subject", subject.clone()),
+            ("task", a.subject.clone()),
+            ("code", a.code.as_str().to_string()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect(),
+    )
 }
 
 /// The text up to the first `:`, `(` or `;`, trimmed.
@@ -208,6 +264,7 @@ pub fn about_signal(plant: &Plant, sensor: &str, text: &str) -> AlarmText {
     AlarmText {
         message: described.unwrap_or_else(|| text.to_string()),
         detail: text.to_string(),
+        ..AlarmText::default()
     }
 }
 

@@ -49,6 +49,11 @@ pub struct Notice {
     pub stop: bool,
     /// The sensor now read from its estimate (degraded mode).
     pub estimated: Option<String>,
+    /// The text as data: `ambiguous`, `actuator`, `sensor-no-estimate`,
+    /// `sensor-estimated`, `other`.
+    pub code: &'static str,
+    /// The sensor of a sensor partition at fault.
+    pub sensor: Option<String>,
 }
 
 /// What Vigie does with a flag, for the texts of the notices.
@@ -75,6 +80,13 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
         .map(|n| {
             let flag = flagged.iter().find(|(p, _, _)| *p == n.partition);
             let (f, p, c) = (&n.fault, &n.partition, &n.component);
+            let code = match flag {
+                Some((_, true, _)) if n.certainty == Certainty::Ambiguous => "ambiguous",
+                Some((_, true, _)) => "actuator",
+                Some((_, false, Some(s))) if !has_estimate(d, s) => "sensor-no-estimate",
+                Some((_, false, Some(_))) => "sensor-estimated",
+                _ => "other",
+            };
             let (text, stop, estimated) = match flag {
                 Some((_, true, _)) if n.certainty == Certainty::Ambiguous => (
                     format!(
@@ -132,6 +144,11 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
                 text,
                 stop,
                 estimated,
+                code,
+                sensor: match flag {
+                    Some((_, false, Some(s))) => Some(s.clone()),
+                    _ => None,
+                },
             }
         })
         .collect()
