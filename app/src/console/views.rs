@@ -147,6 +147,9 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         ui.label(RichText::new("VIGIE").strong().size(18.0));
         lang_switch_ui(c, ui, out);
         ui.separator();
+        // First, so that it is never pushed off a narrow screen.
+        state_ui(c, ui);
+        ui.separator();
         for (m, id) in [
             (Mode::Production, "mode-production"),
             (Mode::Maintenance, "mode-maintenance"),
@@ -261,8 +264,6 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         {
             c.reinit_confirm = true;
         }
-        ui.separator();
-        state_ui(c, ui);
         ui.separator();
         match &c.user {
             Some(u) => {
