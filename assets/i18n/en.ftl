@@ -41,6 +41,12 @@ tab-trends = Trends
 tab-trends-hover = The history of any signal over minutes to days
 
 ## Trends
+trends-1-min = 1 min
+trends-10-min = 10 min
+trends-1-h = 1 h
+trends-8-h = 8 h
+trends-1-day = 1 day
+trends-7-days = 7 days
 trends-range = Range
 trends-add = Add a signal…
 trends-full = { $n } signals at most

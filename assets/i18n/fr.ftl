@@ -45,6 +45,12 @@ tab-trends = Courbes
 tab-trends-hover = L'historique de n'importe quel signal, sur des minutes ou des jours
 
 ## Courbes
+trends-1-min = 1 min
+trends-10-min = 10 min
+trends-1-h = 1 h
+trends-8-h = 8 h
+trends-1-day = 1 jour
+trends-7-days = 7 jours
 trends-range = Durée
 trends-add = Ajouter un signal…
 trends-full = { $n } signaux au plus

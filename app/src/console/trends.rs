@@ -11,14 +11,14 @@ use crate::historian::writer::signal_names;
 use egui::RichText;
 use egui_plot::{Line, Plot, PlotPoints};
 
-/// The ranges offered, ms.
+/// The ranges offered: ms, and the message of the label.
 pub(crate) const RANGES: [(u64, &str); 6] = [
-    (60_000, "1 min"),
-    (600_000, "10 min"),
-    (3_600_000, "1 h"),
-    (8 * 3_600_000, "8 h"),
-    (24 * 3_600_000, "1 day"),
-    (7 * 24 * 3_600_000, "7 days"),
+    (60_000, "trends-1-min"),
+    (600_000, "trends-10-min"),
+    (3_600_000, "trends-1-h"),
+    (8 * 3_600_000, "trends-8-h"),
+    (24 * 3_600_000, "trends-1-day"),
+    (7 * 24 * 3_600_000, "trends-7-days"),
 ];
 
 /// Rows shown at most.
@@ -146,9 +146,12 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
     let names = signal_names(&c.sim.bundle.symbols);
     ui.horizontal_wrapped(|ui| {
         ui.label(c.i18n.t("trends-range"));
-        for (ms, label) in RANGES {
+        for (ms, id) in RANGES {
             if ui
-                .add(egui::Button::selectable(c.trends.range_ms == ms, label))
+                .add(egui::Button::selectable(
+                    c.trends.range_ms == ms,
+                    c.i18n.t(id),
+                ))
                 .clicked()
             {
                 c.trends.range_ms = ms;

@@ -188,7 +188,10 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             out.push(Command::SetSpeed(speed));
         }
         ui.separator();
-        ui.label(format!("t = {}", fmt_ms(c.sim.now().0)));
+        ui.add(
+            egui::Label::new(format!("t = {}", fmt_ms(c.sim.now().0)))
+                .wrap_mode(egui::TextWrapMode::Extend),
+        );
         ui.separator();
         if ui
             .button(c.i18n.t("plant-start"))
