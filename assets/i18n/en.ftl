@@ -336,3 +336,4 @@ words-request-off = { $id } OFF
 words-request-off-meaning = { $id } OFF ({ $meaning })
 words-request-refused = { $what } refused: { $why }
 words-with = , with { $values }
+status-export-cancelled = Export cancelled (no save dialog on this desktop? The Export button beside it writes under the data folder)

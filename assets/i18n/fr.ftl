@@ -187,7 +187,13 @@ shelve-needs-reason = Masquer une alarme demande un motif
 kpi-rate = Fréquence : { $last } sur les 10 dernières min (moyenne { $average }, pic { $peak })
 kpi-flood = AVALANCHE D'ALARMES
 kpi-title = Performance des alarmes
-kpi-summary = { $total } alarmes en { $intervals } intervalles de 10 min ; { $floods } en avalanche (plus de { $limit } alarmes)
+kpi-summary = { $total ->
+    [one] { $total } alarme
+   *[other] { $total } alarmes
+} en { $intervals ->
+    [one] { $intervals } intervalle
+   *[other] { $intervals } intervalles
+} de 10 min ; { $floods } en avalanche (plus de { $limit } alarmes)
 kpi-chattering = Alarmes battantes (3 fois ou plus en une minute) : { $sources }
 
 ## Historique des alarmes
@@ -352,3 +358,4 @@ words-request-off = { $id } À L'ARRÊT
 words-request-off-meaning = { $id } À L'ARRÊT ({ $meaning })
 words-request-refused = { $what } refusé : { $why }
 words-with = , avec { $values }
+status-export-cancelled = Export annulé (pas de boîte d'enregistrement sur ce bureau ? Le bouton Exporter à côté écrit dans le dossier de données)

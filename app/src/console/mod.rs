@@ -1303,7 +1303,7 @@ impl Console {
         match self.save.poll() {
             Some(Ok(cmd)) => self.apply(cmd),
             Some(Err(())) => {
-                self.status = "export cancelled (no save dialog on this desktop? type a file name beside the button: it is written under the data folder)".into();
+                self.status = self.i18n.t("status-export-cancelled");
             }
             None => {}
         }

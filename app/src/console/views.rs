@@ -1137,7 +1137,7 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         "{:>9} P{} {}{cleared}{ack}",
                         fmt_ms(a.raised.0),
                         a.priority().rank(),
-                        a.message
+                        super::words::alarm_message(&c.i18n, &c.sim.bundle, &c.sim.engine.trips, a)
                     ))
                     .size(11.0),
                 );
