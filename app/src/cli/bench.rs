@@ -30,17 +30,17 @@ pub(crate) fn median_ns(batches: u32, per_batch: u32, mut f: impl FnMut()) -> f6
 /// relative to the plant folder). Without the file those figures are skipped, said.
 #[derive(serde::Deserialize, Default)]
 #[serde(deny_unknown_fields)]
-struct BenchFile {
+pub(crate) struct BenchFile {
     /// Production without a trip, timed as a closed loop (simulated / wall time).
     #[serde(default)]
-    production: Option<std::path::PathBuf>,
+    pub(crate) production: Option<std::path::PathBuf>,
     /// A scenario that trips the filter: the filter cycle is timed on its last frame
     /// before the trip and on the tripping frame, and the explanation of the trip.
     #[serde(default)]
     trip: Option<std::path::PathBuf>,
 }
 
-fn bench_file(plant_dir: &Path) -> anyhow::Result<BenchFile> {
+pub(crate) fn bench_file(plant_dir: &Path) -> anyhow::Result<BenchFile> {
     let path = plant_dir.join("bench.ron");
     if !path.exists() {
         return Ok(BenchFile::default());

@@ -30,28 +30,9 @@ pub(crate) struct Args {
 
 fn production_hour(plant_dir: &Path) -> anyhow::Result<(Vec<String>, Vec<Change>, u64)> {
     use vigie_core::sim::{Options, Scenario, Simulation};
-    #[derive(serde::Deserialize)]
-    struct BenchFile {
-        production: Option<std::path::PathBuf>,
-    }
     let file = plant_dir.join("bench.ron");
-    let text = std::fs::read_to_string(&file).map_err(|e| {
-        anyhow::anyhow!(
-            "{}: {e} (the production scenario is named there)",
-            file.display()
-        )
-    })?;
-    let bench: BenchFile = ron::Options::default().from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{}:{}:{}: {}",
-            file.display(),
-            e.span.start.line,
-            e.span.start.col,
-            e.code
-        )
-    })?;
     let path = plant_dir.join(
-        bench
+        super::bench::bench_file(plant_dir)?
             .production
             .ok_or_else(|| anyhow::anyhow!("{}: no `production` scenario", file.display()))?,
     );

@@ -73,17 +73,7 @@ pub(crate) fn refused_request(
     let why: Vec<String> = refused
         .iter()
         .map(|fc| {
-            let context: Vec<String> = fc
-                .literals
-                .iter()
-                .filter(|l| {
-                    matches!(
-                        l.space,
-                        vigie_core::symbols::Space::Input | vigie_core::symbols::Space::Observer
-                    ) || (l.space == vigie_core::symbols::Space::Output && l.previous)
-                })
-                .map(|l| format!("{} = {}", l.name, u8::from(l.value)))
-                .collect();
+            let context = texts::request_context(fc);
             let with = if context.is_empty() {
                 String::new()
             } else {

@@ -322,6 +322,22 @@ impl Store {
         &self.path
     }
 
+    /// Runs `f` in one durable transaction, committed when it returns `Ok`.
+    fn write<T>(
+        &mut self,
+        f: impl FnOnce(&rusqlite::Transaction<'_>) -> rusqlite::Result<T>,
+    ) -> Result<T, HistorianError> {
+        let path = self.path.clone();
+        let sql = |source| HistorianError::Sql { path, source };
+        let run = || {
+            let tx = self.conn.transaction()?;
+            let value = f(&tx)?;
+            tx.commit()?;
+            Ok(value)
+        };
+        run().map_err(sql)
+    }
+
     /// Starts a session (a console or gateway run) and returns its id.
     pub fn begin_session(
         &mut self,
@@ -348,18 +364,11 @@ impl Store {
         if rows.is_empty() {
             return Ok(());
         }
-        let path = self.path.clone();
-        let sql = |source| HistorianError::Sql {
-            path: path.clone(),
-            source,
-        };
-        let tx = self.conn.transaction().map_err(sql)?;
-        {
+        self.write(|tx| {
             let mut st = tx
                 .prepare_cached(
                     "INSERT INTO journal(session, wall_ms, sim_ms, kind, text) VALUES (?1, ?2, ?3, ?4, ?5)",
-                )
-                .map_err(sql)?;
+                )?;
             for r in rows {
                 st.execute(params![
                     session,
@@ -367,11 +376,10 @@ impl Store {
                     to_i64(r.sim_ms),
                     r.kind,
                     r.text
-                ])
-                .map_err(sql)?;
+                ])?;
             }
-        }
-        tx.commit().map_err(sql)
+            Ok(())
+        })
     }
 
     /// The journal entries from `from_ms` on (wall clock), oldest first, at most
@@ -412,20 +420,13 @@ impl Store {
         if rows.is_empty() {
             return Ok(());
         }
-        let path = self.path.clone();
-        let sql = |source| HistorianError::Sql {
-            path: path.clone(),
-            source,
-        };
-        let tx = self.conn.transaction().map_err(sql)?;
-        {
+        self.write(|tx| {
             let mut st = tx
                 .prepare_cached(
                     "INSERT OR REPLACE INTO alarms(session, alarm, key, kind, priority, message, detail, \
                      raised_ms, acked_ms, ack_note, cleared_ms, shelved_until_ms, shelve_reason, first_out) \
                      VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
-                )
-                .map_err(sql)?;
+                )?;
             for a in rows {
                 st.execute(params![
                     session,
@@ -442,11 +443,10 @@ impl Store {
                     a.shelved.as_ref().map(|(t, _)| to_i64(*t)),
                     a.shelved.as_ref().map(|(_, r)| r.as_str()),
                     a.first_out
-                ])
-                .map_err(sql)?;
+                ])?;
             }
-        }
-        tx.commit().map_err(sql)
+            Ok(())
+        })
     }
 
     /// The alarms raised from `from_ms` on, every session, oldest first (at most
@@ -498,27 +498,17 @@ impl Store {
 
     /// The ids of these signal names, created as needed.
     pub fn signal_ids(&mut self, names: &[String]) -> Result<Vec<i64>, HistorianError> {
-        let path = self.path.clone();
-        let sql = |source| HistorianError::Sql {
-            path: path.clone(),
-            source,
-        };
-        let tx = self.conn.transaction().map_err(sql)?;
-        let mut ids = Vec::with_capacity(names.len());
-        {
-            let mut insert = tx
-                .prepare_cached("INSERT OR IGNORE INTO signals(name) VALUES (?1)")
-                .map_err(sql)?;
-            let mut get = tx
-                .prepare_cached("SELECT id FROM signals WHERE name = ?1")
-                .map_err(sql)?;
+        self.write(|tx| {
+            let mut insert =
+                tx.prepare_cached("INSERT OR IGNORE INTO signals(name) VALUES (?1)")?;
+            let mut get = tx.prepare_cached("SELECT id FROM signals WHERE name = ?1")?;
+            let mut ids = Vec::with_capacity(names.len());
             for n in names {
-                insert.execute([n]).map_err(sql)?;
-                ids.push(get.query_row([n], |r| r.get(0)).map_err(sql)?);
+                insert.execute([n])?;
+                ids.push(get.query_row([n], |r| r.get(0))?);
             }
-        }
-        tx.commit().map_err(sql)?;
-        Ok(ids)
+            Ok(ids)
+        })
     }
 
     /// The latest time stamped in the journal or the process history, ms (0 when
@@ -557,24 +547,15 @@ impl Store {
         if samples.is_empty() {
             return Ok(());
         }
-        let path = self.path.clone();
-        let sql = |source| HistorianError::Sql {
-            path: path.clone(),
-            source,
-        };
-        let tx = self.conn.transaction().map_err(sql)?;
-        {
-            let mut st = tx
-                .prepare_cached(
-                    "INSERT OR REPLACE INTO samples(signal, t_ms, value) VALUES (?1, ?2, ?3)",
-                )
-                .map_err(sql)?;
+        self.write(|tx| {
+            let mut st = tx.prepare_cached(
+                "INSERT OR REPLACE INTO samples(signal, t_ms, value) VALUES (?1, ?2, ?3)",
+            )?;
             for s in samples {
-                st.execute(params![s.signal, to_i64(s.t_ms), s.value])
-                    .map_err(sql)?;
+                st.execute(params![s.signal, to_i64(s.t_ms), s.value])?;
             }
-        }
-        tx.commit().map_err(sql)
+            Ok(())
+        })
     }
 
     /// The history of `signal` over `[from_ms, to_ms)` in at most `buckets` equal
@@ -680,34 +661,23 @@ impl Store {
     pub fn purge(&mut self, now_ms: u64, retention: &Retention) -> Result<Purged, HistorianError> {
         let process = to_i64(now_ms.saturating_sub(u64::from(retention.process_days) * DAY_MS));
         let journal = to_i64(now_ms.saturating_sub(u64::from(retention.journal_days) * DAY_MS));
-        let path = self.path.clone();
-        let sql = |source| HistorianError::Sql {
-            path: path.clone(),
-            source,
-        };
-        let tx = self.conn.transaction().map_err(sql)?;
-        let mut purged = Purged::default();
-        {
+        self.write(|tx| {
             // Per signal: a range of the primary key each, no full scan.
             let ids: Vec<i64> = tx
-                .prepare("SELECT id FROM signals")
-                .and_then(|mut st| st.query_map([], |r| r.get(0))?.collect())
-                .map_err(sql)?;
-            let mut del = tx
-                .prepare("DELETE FROM samples WHERE signal = ?1 AND t_ms < ?2")
-                .map_err(sql)?;
+                .prepare("SELECT id FROM signals")?
+                .query_map([], |r| r.get(0))?
+                .collect::<Result<_, _>>()?;
+            let mut del = tx.prepare("DELETE FROM samples WHERE signal = ?1 AND t_ms < ?2")?;
+            let mut purged = Purged::default();
             for id in ids {
-                purged.samples += del.execute(params![id, process]).map_err(sql)? as u64;
+                purged.samples += del.execute(params![id, process])? as u64;
             }
-            purged.journal = tx
-                .execute("DELETE FROM journal WHERE wall_ms < ?1", [journal])
-                .map_err(sql)? as u64;
-            purged.alarms = tx
-                .execute("DELETE FROM alarms WHERE raised_ms < ?1", [journal])
-                .map_err(sql)? as u64;
-        }
-        tx.commit().map_err(sql)?;
-        Ok(purged)
+            purged.journal =
+                tx.execute("DELETE FROM journal WHERE wall_ms < ?1", [journal])? as u64;
+            purged.alarms =
+                tx.execute("DELETE FROM alarms WHERE raised_ms < ?1", [journal])? as u64;
+            Ok(purged)
+        })
     }
 
     /// `PRAGMA integrity_check` (`ok` when sound).

@@ -66,15 +66,7 @@ pub fn refused_request(bundle: &PlantBundle, what: &str, refused: &[FiredConstra
     let why: Vec<String> = refused
         .iter()
         .map(|fc| {
-            let context: Vec<String> = fc
-                .literals
-                .iter()
-                .filter(|l| {
-                    matches!(l.space, Space::Input | Space::Observer)
-                        || (l.space == Space::Output && l.previous)
-                })
-                .map(|l| format!("{} = {}", l.name, u8::from(l.value)))
-                .collect();
+            let context = request_context(fc);
             let with = if context.is_empty() {
                 String::new()
             } else {
@@ -84,6 +76,19 @@ pub fn refused_request(bundle: &PlantBundle, what: &str, refused: &[FiredConstra
         })
         .collect();
     format!("{what} refused: {}", why.join("; "))
+}
+
+/// What makes a refused request's constraint true in the plant: its sensors, observers
+/// and outputs at t-1 with their values (`C4 = 1`), in the term's order.
+pub fn request_context(fc: &FiredConstraint) -> Vec<String> {
+    fc.literals
+        .iter()
+        .filter(|l| {
+            matches!(l.space, Space::Input | Space::Observer)
+                || (l.space == Space::Output && l.previous)
+        })
+        .map(|l| format!("{} = {}", l.name, u8::from(l.value)))
+        .collect()
 }
 
 /// A certain diagnosis's alarm: the sensor it is about (the estimated one, else its
