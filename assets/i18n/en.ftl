@@ -337,3 +337,7 @@ words-request-off-meaning = { $id } OFF ({ $meaning })
 words-request-refused = { $what } refused: { $why }
 words-with = , with { $values }
 status-export-cancelled = Export cancelled (no save dialog on this desktop? The Export button beside it writes under the data folder)
+
+## Alarms of earlier runs (the historian)
+past-title = Alarms of earlier runs (historian)
+past-count = { $n } alarms in the last { $days } days, every session of this data folder (console and gateway), newest first, as recorded

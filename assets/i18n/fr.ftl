@@ -359,3 +359,10 @@ words-request-off-meaning = { $id } À L'ARRÊT ({ $meaning })
 words-request-refused = { $what } refusé : { $why }
 words-with = , avec { $values }
 status-export-cancelled = Export annulé (pas de boîte d'enregistrement sur ce bureau ? Le bouton Exporter à côté écrit dans le dossier de données)
+
+## Alarmes des marches précédentes (l'historique)
+past-title = Alarmes des marches précédentes (historique)
+past-count = { $n ->
+    [one] { $n } alarme
+   *[other] { $n } alarmes
+} sur les { $days } derniers jours, toutes les sessions de ce dossier de données (console et passerelle), les plus récentes d'abord, telles qu'enregistrées

@@ -1228,3 +1228,60 @@ fn degraded_mode_alarms_in_french() {
         .is_some()
     );
 }
+
+/// The alarms of earlier runs come back from the historian: the console's own last run
+/// and a gateway's session in the same data folder, newest first.
+#[test]
+fn alarms_of_earlier_runs_from_the_historian() {
+    let data = temp_dir("past-alarms");
+    {
+        let mut h = harness(options(Some(data.clone())));
+        h.run_steps(1);
+        h.get_by_label("Start").click();
+        h.run_steps(1);
+        run_to_trip(&mut h);
+        h.run_steps(2);
+        assert!(h.state_mut().journal.flush_history());
+    }
+    // A gateway's session in the same folder (as `vigie gateway` writes it).
+    {
+        let mut store = vigie_app::historian::Store::open_in(&data).expect("historian");
+        let s = store
+            .begin_session("gateway", "station", vigie_app::historian::wall_ms())
+            .unwrap();
+        store
+            .upsert_alarms(
+                s,
+                &[vigie_app::historian::AlarmRow {
+                    alarm: 1,
+                    key: "link:peer".into(),
+                    kind: "link".into(),
+                    priority: "high".into(),
+                    message: "peer lost (never heard)".into(),
+                    detail: String::new(),
+                    raised_ms: vigie_app::historian::wall_ms(),
+                    acked: None,
+                    cleared_ms: None,
+                    shelved: None,
+                    first_out: false,
+                }],
+            )
+            .unwrap();
+    }
+    let mut h = harness(options(Some(data.clone())));
+    h.run_steps(1);
+    h.get_by_label("Alarm history (0)").click();
+    h.run_steps(2);
+    h.get_by_label("Alarms of earlier runs (historian)").click();
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains("URGENT · UNACK  Safety stop: box leaving to the right")
+            .is_some()
+    );
+    assert!(
+        h.query_by_label_contains("HIGH · UNACK  peer lost (never heard)")
+            .is_some()
+    );
+    drop(h);
+    let _ = std::fs::remove_dir_all(&data);
+}

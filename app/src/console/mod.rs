@@ -7,6 +7,7 @@
 mod diagnosers;
 pub mod journal;
 pub mod link;
+mod past;
 pub mod report;
 pub mod save;
 pub mod synoptic;

@@ -1148,6 +1148,8 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         .ta("history-more", &[("n", (list.len() - SHOWN).into())]),
                 );
             }
+            // Earlier runs, from the historian (every session of the data folder).
+            super::past::past_alarms_ui(c, ui);
         });
 }
 
