@@ -341,3 +341,14 @@ status-export-cancelled = Export cancelled (no save dialog on this desktop? The 
 ## Alarms of earlier runs (the historian)
 past-title = Alarms of earlier runs (historian)
 past-count = { $n } alarms in the last { $days } days, every session of this data folder (console and gateway), newest first, as recorded
+
+## Alarm kinds (history filter)
+kind-safety-filter-trip = safety filter trip
+kind-diagnosis = diagnosis
+kind-task-monitor = task monitor
+kind-live-link = live link
+kind-specification-error = specification error
+kind-hazard = hazard
+kind-implausible-sensor = implausible sensor
+syn-elevator-left = Left elevator
+syn-elevator-right = Right elevator

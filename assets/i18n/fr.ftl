@@ -366,3 +366,14 @@ past-count = { $n ->
     [one] { $n } alarme
    *[other] { $n } alarmes
 } sur les { $days } derniers jours, toutes les sessions de ce dossier de données (console et passerelle), les plus récentes d'abord, telles qu'enregistrées
+
+## Types d'alarme (filtre de l'historique)
+kind-safety-filter-trip = arrêt sécurité du filtre
+kind-diagnosis = diagnostic
+kind-task-monitor = surveillance des tâches
+kind-live-link = liaison
+kind-specification-error = erreur de spécification
+kind-hazard = danger
+kind-implausible-sensor = capteur invraisemblable
+syn-elevator-left = Élévateur gauche
+syn-elevator-right = Élévateur droit

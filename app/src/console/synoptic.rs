@@ -26,7 +26,9 @@ pub struct View {
 }
 
 /// The synoptic's tags: key (message `syn-<key>`) and English text.
-pub const TAGS: [(&str, &str); 10] = [
+pub const TAGS: [(&str, &str); 12] = [
+    ("elevator-left", "Left elevator"),
+    ("elevator-right", "Right elevator"),
     ("held-on", "held ON"),
     ("forced-off", "forced OFF"),
     ("stays-on", "stays ON"),
@@ -107,7 +109,7 @@ pub struct Geometry {
     pub sensors: Vec<SensorGeom>,
     /// Actuator symbols: id → world position.
     pub actuators: BTreeMap<String, [f32; 2]>,
-    /// Elevators: (label, world position).
+    /// Elevators: (tag of the label, `elevator-left`…; world position).
     pub elevators: Vec<(String, [f32; 2])>,
     /// World bounds (min, max).
     pub bounds: ([f32; 2], [f32; 2]),
@@ -220,7 +222,10 @@ impl Geometry {
         let elevators: Vec<(String, [f32; 2])> = layout
             .elevators
             .iter()
-            .map(|e| (format!("{:?} elevator", e.side), p(e.at.x, e.at.y)))
+            .map(|e| {
+                let side = format!("{:?}", e.side).to_lowercase();
+                (format!("elevator-{side}"), p(e.at.x, e.at.y))
+            })
             .collect();
         let mut min = [f32::MAX; 2];
         let mut max = [f32::MIN; 2];
@@ -455,7 +460,8 @@ pub fn synoptic_ui(
         }
     }
     // Elevators.
-    for (name, at) in &geom.elevators {
+    for (key, at) in &geom.elevators {
+        let name = view.word(key);
         let p = xf.p(*at);
         let r = Rect::from_center_size(p, Vec2::splat(300.0 * xf.scale));
         painter.rect_stroke(

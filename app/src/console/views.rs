@@ -1072,15 +1072,14 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 ui.add(egui::TextEdit::singleline(&mut c.history_filter.text).desired_width(120.0))
                     .labelled_by(l.id);
                 egui::ComboBox::from_id_salt("history_kind")
-                    .selected_text(
-                        c.history_filter
-                            .kind
-                            .map_or(every_kind.clone(), |k| k.name().to_string()),
-                    )
+                    .selected_text(c.history_filter.kind.map_or(every_kind.clone(), |k| {
+                        c.i18n.t(&format!("kind-{}", k.name().replace(' ', "-")))
+                    }))
                     .show_ui(ui, |ui| {
                         ui.selectable_value(&mut c.history_filter.kind, None, &every_kind);
                         for k in AlarmKind::ALL {
-                            ui.selectable_value(&mut c.history_filter.kind, Some(k), k.name());
+                            let name = c.i18n.t(&format!("kind-{}", k.name().replace(' ', "-")));
+                            ui.selectable_value(&mut c.history_filter.kind, Some(k), name);
                         }
                     });
                 let prio = |p: Option<AlarmPriority>| {
