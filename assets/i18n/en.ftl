@@ -352,3 +352,26 @@ kind-hazard = hazard
 kind-implausible-sensor = implausible sensor
 syn-elevator-left = Left elevator
 syn-elevator-right = Right elevator
+
+## Live-link panel
+linkp-title = Live link
+linkp-mode-gateway = Mode: gateway (filter enforced between PLC and plant)
+linkp-mode-monitor = Mode: monitor (read-only, filter reports)
+linkp-stopped-error = Link: stopped ({ $error })
+linkp-stopped = Link: stopped
+linkp-connected = Link: connected to { $peer }
+linkp-connecting = Link: connecting to { $peer }
+linkp-reconnecting = Link: reconnecting to { $peer } (attempt { $attempt }, next in { $ms } ms)
+linkp-last-poll = Last poll: { $ms } ms ago
+linkp-never-polled = Last poll: never
+linkp-no-stale = Stale inputs: none
+linkp-stale = Stale inputs: { $inputs }
+linkp-cycles = Cycles: { $n }
+linkp-exceptions = Exceptions: { $n } (transport errors { $errors }, connections { $connections })
+linkp-plc-server = PLC server: { $address }
+linkp-plc-heard = PLC: heard
+linkp-plc-silent = PLC: silent
+linkp-plc-refused = PLC requests refused: { $n }
+linkp-safe-outputs = Safe outputs: { $reason }
+linkp-dropped = { $n } cycles not shown (the console fell behind)
+linkp-status = { $poll } · { $stale } · { $cycles } cycles · { $exceptions } exceptions

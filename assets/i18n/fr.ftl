@@ -377,3 +377,26 @@ kind-hazard = danger
 kind-implausible-sensor = capteur invraisemblable
 syn-elevator-left = Élévateur gauche
 syn-elevator-right = Élévateur droit
+
+## Panneau de la liaison
+linkp-title = Liaison
+linkp-mode-gateway = Mode : passerelle (filtre appliqué entre l'automate et la machine)
+linkp-mode-monitor = Mode : surveillance (lecture seule, le filtre signale)
+linkp-stopped-error = Liaison : arrêtée ({ $error })
+linkp-stopped = Liaison : arrêtée
+linkp-connected = Liaison : connectée à { $peer }
+linkp-connecting = Liaison : connexion à { $peer }
+linkp-reconnecting = Liaison : reconnexion à { $peer } (tentative { $attempt }, prochaine dans { $ms } ms)
+linkp-last-poll = Dernière lecture : il y a { $ms } ms
+linkp-never-polled = Dernière lecture : jamais
+linkp-no-stale = Entrées périmées : aucune
+linkp-stale = Entrées périmées : { $inputs }
+linkp-cycles = Cycles : { $n }
+linkp-exceptions = Exceptions : { $n } (erreurs de transport { $errors }, connexions { $connections })
+linkp-plc-server = Serveur pour l'automate : { $address }
+linkp-plc-heard = Automate : entendu
+linkp-plc-silent = Automate : muet
+linkp-plc-refused = Requêtes de l'automate refusées : { $n }
+linkp-safe-outputs = Sorties sûres : { $reason }
+linkp-dropped = { $n } cycles non montrés (la console a pris du retard)
+linkp-status = { $poll } · { $stale } · { $cycles } cycles · { $exceptions } exceptions

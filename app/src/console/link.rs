@@ -15,6 +15,7 @@
 //! simulation controls are refused; the operator's reset goes to the run (gateway).
 
 use super::{Command, Console, ConsoleOptions};
+use crate::i18n::I18n;
 use crate::live::runtime::{self, CycleStats};
 use crate::live::tap::{LinkAlarm, LinkState, Tap};
 use egui::{Color32, RichText};
@@ -343,40 +344,49 @@ impl Console {
     }
 }
 
-/// One line of text for the connection.
-pub fn connection_text(s: &LinkState) -> String {
+/// One line of text for the connection, in the language shown.
+pub fn connection_text(i18n: &I18n, s: &LinkState) -> String {
     let peer = s.peer.map(|p| p.to_string()).unwrap_or_default();
     if let Some(e) = &s.error {
-        return format!("Link: stopped ({e})");
+        return i18n.ta("linkp-stopped-error", &[("error", e.into())]);
     }
     if !s.running {
-        return "Link: stopped".to_string();
+        return i18n.t("linkp-stopped");
     }
     if s.client.connected {
-        format!("Link: connected to {peer}")
+        i18n.ta("linkp-connected", &[("peer", (&peer).into())])
     } else if s.client.failed_attempts == 0 && s.client.connections == 0 {
-        format!("Link: connecting to {peer}")
+        i18n.ta("linkp-connecting", &[("peer", (&peer).into())])
     } else {
-        format!(
-            "Link: reconnecting to {peer} (attempt {}, next in {} ms)",
-            s.client.failed_attempts + 1,
-            s.client.next_attempt.saturating_sub(s.now).0
+        i18n.ta(
+            "linkp-reconnecting",
+            &[
+                ("peer", (&peer).into()),
+                ("attempt", (s.client.failed_attempts + 1).into()),
+                ("ms", s.client.next_attempt.saturating_sub(s.now).0.into()),
+            ],
         )
     }
 }
 
-fn poll_text(s: &LinkState) -> String {
+fn poll_text(i18n: &I18n, s: &LinkState) -> String {
     match s.client.last_read {
-        Some(t) => format!("Last poll: {} ms ago", s.now.saturating_sub(t).0),
-        None => "Last poll: never".to_string(),
+        Some(t) => i18n.ta(
+            "linkp-last-poll",
+            &[("ms", s.now.saturating_sub(t).0.into())],
+        ),
+        None => i18n.t("linkp-never-polled"),
     }
 }
 
-fn stale_text(s: &LinkState) -> String {
+fn stale_text(i18n: &I18n, s: &LinkState) -> String {
     if s.stale_inputs.is_empty() {
-        "Stale inputs: none".to_string()
+        i18n.t("linkp-no-stale")
     } else {
-        format!("Stale inputs: {}", s.stale_inputs.join(" "))
+        i18n.ta(
+            "linkp-stale",
+            &[("inputs", (&s.stale_inputs.join(" ")).into())],
+        )
     }
 }
 
@@ -396,48 +406,55 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
         return;
     };
     let s = &link.state;
-    ui.heading("Live link");
-    let mode = match link.mode {
-        Mode::Gateway => "Mode: gateway (filter enforced between PLC and plant)",
-        _ => "Mode: monitor (read-only, filter reports)",
-    };
-    ui.label(mode);
+    let i = &c.i18n;
+    ui.heading(i.t("linkp-title"));
+    ui.label(i.t(match link.mode {
+        Mode::Gateway => "linkp-mode-gateway",
+        _ => "linkp-mode-monitor",
+    }));
     ui.label(
-        RichText::new(connection_text(s))
+        RichText::new(connection_text(i, s))
             .strong()
             .color(Color32::WHITE)
             .background_color(state_color(c, s)),
     );
-    ui.label(poll_text(s));
-    let stale = RichText::new(stale_text(s));
+    ui.label(poll_text(i, s));
+    let stale = RichText::new(stale_text(i, s));
     ui.label(if s.stale_inputs.is_empty() {
         stale
     } else {
         stale.color(c.palette.alarm)
     });
-    ui.label(format!("Cycles: {}", s.cycles));
-    ui.label(format!(
-        "Exceptions: {} (transport errors {}, connections {})",
-        s.client.exceptions, s.client.errors, s.client.connections
+    ui.label(i.ta("linkp-cycles", &[("n", s.cycles.into())]));
+    ui.label(i.ta(
+        "linkp-exceptions",
+        &[
+            ("n", s.client.exceptions.into()),
+            ("errors", s.client.errors.into()),
+            ("connections", s.client.connections.into()),
+        ],
     ));
     if let Some(addr) = s.listening {
-        ui.label(format!("PLC server: {addr}"));
-        ui.label(match s.plc_connected {
-            Some(true) => "PLC: heard".to_string(),
-            _ => "PLC: silent".to_string(),
-        });
-        ui.label(format!("PLC requests refused: {}", s.server_exceptions));
+        ui.label(i.ta(
+            "linkp-plc-server",
+            &[("address", (&addr.to_string()).into())],
+        ));
+        ui.label(i.t(match s.plc_connected {
+            Some(true) => "linkp-plc-heard",
+            _ => "linkp-plc-silent",
+        }));
+        ui.label(i.ta("linkp-plc-refused", &[("n", s.server_exceptions.into())]));
     }
     if let Some(r) = &s.safe_outputs {
-        ui.label(RichText::new(format!("Safe outputs: {r}")).color(c.palette.trip));
+        ui.label(
+            RichText::new(i.ta("linkp-safe-outputs", &[("reason", r.into())]))
+                .color(c.palette.trip),
+        );
     }
     if link.dropped > 0 {
         ui.label(
-            RichText::new(format!(
-                "{} cycles not shown (the console fell behind)",
-                link.dropped
-            ))
-            .color(c.palette.text_dim),
+            RichText::new(i.ta("linkp-dropped", &[("n", link.dropped.into())]))
+                .color(c.palette.text_dim),
         );
     }
     ui.label(RichText::new(link.config.display().to_string()).color(c.palette.text_dim));
@@ -513,17 +530,22 @@ pub(crate) fn status_ui(c: &Console, ui: &mut egui::Ui) -> bool {
     };
     let s = &link.state;
     ui.label(
-        RichText::new(connection_text(s))
+        RichText::new(connection_text(&c.i18n, s))
             .strong()
             .color(Color32::WHITE)
             .background_color(state_color(c, s)),
     );
-    ui.label(format!(
-        "{} · {} · {} cycles · {} exceptions",
-        poll_text(s),
-        stale_text(s),
-        s.cycles,
-        s.client.exceptions + s.server_exceptions
+    ui.label(c.i18n.ta(
+        "linkp-status",
+        &[
+            ("poll", (&poll_text(&c.i18n, s)).into()),
+            ("stale", (&stale_text(&c.i18n, s)).into()),
+            ("cycles", s.cycles.into()),
+            (
+                "exceptions",
+                (s.client.exceptions + s.server_exceptions).into(),
+            ),
+        ],
     ));
     if !c.status.is_empty() {
         ui.separator();
