@@ -375,3 +375,12 @@ linkp-plc-refused = PLC requests refused: { $n }
 linkp-safe-outputs = Safe outputs: { $reason }
 linkp-dropped = { $n } cycles not shown (the console fell behind)
 linkp-status = { $poll } · { $stale } · { $cycles } cycles · { $exceptions } exceptions
+
+## Incident report
+report-title = Incident report
+report-trip = Trip at **{ $time_ms } ms** (cycle { $cycle })
+report-constraint = Constraint **{ $id }**: `{ $source }` — { $notation }
+report-fallback = Fallback: { $outputs }
+report-trace = Trace before the trip (changes)
+report-time-ms = time ms
+report-changes = changes

@@ -400,3 +400,12 @@ linkp-plc-refused = Requêtes de l'automate refusées : { $n }
 linkp-safe-outputs = Sorties sûres : { $reason }
 linkp-dropped = { $n } cycles non montrés (la console a pris du retard)
 linkp-status = { $poll } · { $stale } · { $cycles } cycles · { $exceptions } exceptions
+
+## Rapport d'incident
+report-title = Rapport d'incident
+report-trip = Arrêt sécurité à **{ $time_ms } ms** (cycle { $cycle })
+report-constraint = Contrainte **{ $id }** : `{ $source }` — { $notation }
+report-fallback = Repli : { $outputs }
+report-trace = Trace avant l'arrêt (changements)
+report-time-ms = temps ms
+report-changes = changements

@@ -1128,6 +1128,17 @@ fn the_cs10_trip_explained_in_french() {
         h.run_steps(2);
         assert!(h.query_by_label(item).is_some(), "level {button}: {item}");
     }
+    // The incident report, in the language shown.
+    let out = temp_dir("report-fr");
+    h.state_mut()
+        .apply(Command::ExportReport(out.join("report")));
+    let md = std::fs::read_to_string(out.join("report/report.md")).expect("report");
+    assert!(md.starts_with("# Rapport d'incident"), "{md}");
+    assert!(
+        md.contains("## Niveau 4 Hypothèse") && md.contains("Attendu de la commande : A4=1."),
+        "{md}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
     // The records stay in English (the journal, the core's alarm text).
     assert!(
         h.state()

@@ -1210,7 +1210,7 @@ impl Console {
             self.status = "no trip to report".into();
             return;
         };
-        match report::write_markdown(&self.sim, trip, &dir) {
+        match report::write_markdown(&self.sim, &self.i18n, trip, &dir) {
             Ok(path) => {
                 self.status = format!(
                     "report written to {}; capturing the levels…",

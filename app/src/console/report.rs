@@ -1,25 +1,45 @@
 //! The incident report: a Markdown file (trip, constraint, the five levels' items, the
 //! trace window) and one PNG of the synoptic per level.
 
+use crate::i18n::I18n;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use vigie_core::explain::overbar_notation;
 use vigie_core::sim::Simulation;
 
 /// Writes `dir/report.md` for trip `trip`; returns its path.
-pub fn write_markdown(sim: &Simulation, trip: usize, dir: &Path) -> std::io::Result<PathBuf> {
+/// The report is in the language `i18n` shows (the items of the levels as the console
+/// shows them).
+pub fn write_markdown(
+    sim: &Simulation,
+    i18n: &I18n,
+    trip: usize,
+    dir: &Path,
+) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
     let mut md = String::new();
-    let _ = writeln!(md, "# Incident report\n");
+    let _ = writeln!(md, "# {}\n", i18n.t("report-title"));
     if let Some(t) = sim.engine.trips.get(trip) {
-        let _ = writeln!(md, "- Trip at **{} ms** (cycle {})", t.time_ms, t.cycle);
+        let _ = writeln!(
+            md,
+            "- {}",
+            i18n.ta(
+                "report-trip",
+                &[("time_ms", t.time_ms.into()), ("cycle", t.cycle.into())]
+            )
+        );
         for c in &t.constraints {
             let _ = writeln!(
                 md,
-                "- Constraint **{}**: `{}` — {}",
-                c.id,
-                c.notation,
-                overbar_notation(&c.notation)
+                "- {}",
+                i18n.ta(
+                    "report-constraint",
+                    &[
+                        ("id", (&c.id).into()),
+                        ("source", (&c.notation).into()),
+                        ("notation", (&overbar_notation(&c.notation)).into()),
+                    ]
+                )
             );
         }
         let fb: Vec<String> = t
@@ -27,20 +47,29 @@ pub fn write_markdown(sim: &Simulation, trip: usize, dir: &Path) -> std::io::Res
             .iter()
             .map(|(o, v)| format!("{o}={}", u8::from(*v)))
             .collect();
-        let _ = writeln!(md, "- Fallback: {}\n", fb.join(" "));
+        let _ = writeln!(
+            md,
+            "- {}\n",
+            i18n.ta("report-fallback", &[("outputs", (&fb.join(" ")).into())])
+        );
     }
     if let Some(ex) = sim.explanations.get(&trip) {
-        for (i, (name, level)) in super::LEVEL_NAMES.iter().zip(ex.levels()).enumerate() {
-            let _ = writeln!(md, "## Level {name}\n\n![level {i}](level-{i}.png)\n");
+        for (i, level) in ex.levels().into_iter().enumerate() {
+            let name = i18n.t(&format!("level-{i}"));
+            let title = i18n.ta("expl-level", &[("level", (&name).into())]);
+            let _ = writeln!(md, "## {title}\n\n![level {i}](level-{i}.png)\n");
             for item in &level.items {
-                let _ = writeln!(md, "- `{}` {}", item.code, item.text);
+                let _ = writeln!(md, "- `{}` {}", item.code, i18n.explain(item));
             }
             md.push('\n');
         }
         // Trace window: the last 30 cycles before the trip, changes only.
         let _ = writeln!(
             md,
-            "## Trace before the trip (changes)\n\n| time ms | changes |\n|---|---|"
+            "## {}\n\n| {} | {} |\n|---|---|",
+            i18n.t("report-trace"),
+            i18n.t("report-time-ms"),
+            i18n.t("report-changes")
         );
         let names: Vec<&String> = sim
             .bundle
