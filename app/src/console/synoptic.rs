@@ -25,8 +25,14 @@ pub struct View {
     pub words: std::collections::BTreeMap<&'static str, String>,
 }
 
-/// The synoptic's tags: key (message `syn-<key>`) and English text.
-pub const TAGS: [(&str, &str); 12] = [
+/// The synoptic's tags: key (message `syn-<key>`) and English text (`%kind%` and
+/// `%box%` are filled in by the synoptic).
+pub const TAGS: [(&str, &str); 17] = [
+    ("predicted", "predicted: %kind% box %box%"),
+    ("hazard-sheared", "Sheared"),
+    ("hazard-dropped", "Dropped"),
+    ("hazard-collision", "Collision"),
+    ("hazard-pushedagainststopped", "PushedAgainstStopped"),
     ("elevator-left", "Left elevator"),
     ("elevator-right", "Right elevator"),
     ("held-on", "held ON"),
@@ -581,7 +587,12 @@ pub fn synoptic_ui(
                 let s = Stroke::new(3.0, pal.trip);
                 painter.line_segment([p - vec2(r, r), p + vec2(r, r)], s);
                 painter.line_segment([p - vec2(r, -r), p + vec2(r, -r)], s);
-                predicted_labels.push((p, format!("predicted: {:?} box {}", h.kind, h.box_id)));
+                let kind = view.word(&format!("hazard-{:?}", h.kind).to_lowercase());
+                let label = view
+                    .word("predicted")
+                    .replace("%kind%", kind)
+                    .replace("%box%", &h.box_id.to_string());
+                predicted_labels.push((p, label));
             }
         }
     }
