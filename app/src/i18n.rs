@@ -485,7 +485,10 @@ mod explain_tests {
     #[test]
     fn every_alarm_code_has_a_french_message() {
         let fr: std::collections::BTreeSet<String> = ids(FR_EXPLAIN).into_iter().collect();
-        let core = [include_str!("../../core/src/alarms/texts.rs")];
+        let core = [
+            include_str!("../../core/src/sim/diagnosis.rs"),
+            include_str!("../../core/src/plausibility.rs"),
+        ];
         let mut codes = Vec::new();
         for text in core {
             for (pos, _) in text

@@ -128,8 +128,9 @@ pub struct Notice {
     pub suspect: bool,
     /// In words.
     pub text: String,
-    /// The text as data: `filtered` (`edge`, `ms`, `confirm_ms`), `suspect` (`edge`,
-    /// `held`, `latched`), `plausible-again` (`ms`).
+    /// The alarm code of the text, with its fields: `plausibility-filtered` (`edge`,
+    /// `ms`, `confirm_ms`), `plausibility-suspect` (`edge`, `held`, `latched`),
+    /// `plausibility-again` (`ms`).
     pub code: &'static str,
     /// See `code`.
     pub fields: std::collections::BTreeMap<String, String>,
@@ -395,7 +396,7 @@ impl Plausibility {
                         t,
                         name,
                         false,
-                        (text, "filtered", fields),
+                        (text, "plausibility-filtered", fields),
                     );
                 }
             }
@@ -421,7 +422,13 @@ impl Plausibility {
                         ("held", held.to_string()),
                         ("latched", st.latched.to_string()),
                     ]);
-                    notice(&mut self.notices, t, name, true, (text, "suspect", fields));
+                    notice(
+                        &mut self.notices,
+                        t,
+                        name,
+                        true,
+                        (text, "plausibility-suspect", fields),
+                    );
                 }
                 (false, Some(from)) => {
                     st.suspect_since = None;
@@ -434,7 +441,7 @@ impl Plausibility {
                         t,
                         name,
                         false,
-                        (text, "plausible-again", fields),
+                        (text, "plausibility-again", fields),
                     );
                 }
                 _ => {}

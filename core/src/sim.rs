@@ -839,8 +839,14 @@ impl Simulation {
         Ok(())
     }
 
-    /// A manual request, checked against the constraints before it is taken.
-    fn manual_set(&mut self, id: &str, on: bool) -> Result<(), String> {
+    /// The outputs a manual request asks for and the constraints they would violate
+    /// (none: the request is taken); an error outside manual mode or for an unknown
+    /// output. Changes nothing.
+    pub fn check_manual(
+        &self,
+        id: &str,
+        on: bool,
+    ) -> Result<(Bits, Vec<crate::engine::FiredConstraint>), String> {
         let Some(current) = self.manual.as_ref() else {
             return Err("not in manual mode: enter manual mode first".into());
         };
@@ -850,11 +856,19 @@ impl Simulation {
         let mut candidate = current.clone();
         candidate.set(k, on);
         let refused = self.engine.check_request(&candidate);
+        Ok((candidate, refused))
+    }
+
+    /// A manual request, checked against the constraints before it is taken.
+    fn manual_set(&mut self, id: &str, on: bool) -> Result<(), String> {
+        let (candidate, refused) = self.check_manual(id, on)?;
         if refused.is_empty() {
             self.manual = Some(candidate);
             return Ok(());
         }
-        let signal = &self.bundle.plant.outputs[k];
+        let Some(signal) = self.bundle.plant.outputs.iter().find(|s| s.id == id) else {
+            return Err(format!("no output `{id}` in the plant"));
+        };
         let what = match (&signal.off, on) {
             (Some(off), false) => format!("{id} OFF ({off})"),
             _ => format!("{id} {}", if on { "ON" } else { "OFF" }),

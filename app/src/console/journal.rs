@@ -235,11 +235,16 @@ impl Journal {
 
     /// Writes the CSV export to `path`.
     pub fn export_csv(&self, path: &Path) -> std::io::Result<()> {
-        if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(parent)?;
-        }
-        std::fs::write(path, self.to_csv())
+        write_export(path, &self.to_csv())
     }
+}
+
+/// Writes an export to `path`, creating its folder.
+pub fn write_export(path: &Path, text: &str) -> std::io::Result<()> {
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)?;
+    }
+    std::fs::write(path, text)
 }
 
 impl Drop for Journal {

@@ -403,6 +403,9 @@ pub struct Console {
     pub trends: trends::TrendView,
     /// The save dialog open, if any.
     pub save: save::SaveDialog,
+    /// The alarms of earlier runs last read from the historian: the second read, the
+    /// rows or the error.
+    past_alarms: Option<(u64, Result<Vec<crate::historian::AlarmRow>, String>)>,
     /// The texts, in the language shown.
     pub i18n: I18n,
     /// Where the journal and the exports go (`None`: the journal in memory only, the
@@ -580,6 +583,7 @@ impl Console {
             history_filter: vigie_core::alarms::HistoryFilter::default(),
             trends,
             save: save::SaveDialog::default(),
+            past_alarms: None,
             i18n,
             data_dir: opts.data_dir.clone(),
             shelve_form: None,
@@ -860,20 +864,8 @@ impl Console {
                         // constraints, for the text in the language shown.
                         let refused = self
                             .sim
-                            .manual_outputs()
-                            .zip(
-                                self.sim
-                                    .bundle
-                                    .plant
-                                    .outputs
-                                    .iter()
-                                    .position(|s| s.id == *id),
-                            )
-                            .map(|(current, k)| {
-                                let mut candidate = current.clone();
-                                candidate.set(k, *on);
-                                self.sim.engine.check_request(&candidate)
-                            })
+                            .check_manual(id, *on)
+                            .map(|(_, refused)| refused)
                             .unwrap_or_default();
                         Err(words::refused_request(
                             &self.i18n,
@@ -1028,10 +1020,7 @@ impl Console {
                 let list = self.sim.alarms.history(&self.history_filter);
                 let csv = vigie_core::alarms::AlarmList::history_csv(&list);
                 let n = list.len();
-                let written = path
-                    .parent()
-                    .map_or(Ok(()), std::fs::create_dir_all)
-                    .and_then(|()| std::fs::write(&path, csv));
+                let written = journal::write_export(&path, &csv);
                 self.status = match written {
                     Ok(()) => format!("{n} alarms exported to {}", path.display()),
                     Err(e) => format!("alarm export to {} failed: {e}", path.display()),
@@ -1049,9 +1038,7 @@ impl Console {
                     },
                 );
                 let written = csv.and_then(|(csv, n)| {
-                    path.parent()
-                        .map_or(Ok(()), std::fs::create_dir_all)
-                        .and_then(|()| std::fs::write(&path, csv))
+                    journal::write_export(&path, &csv)
                         .map(|()| n)
                         .map_err(|e| e.to_string())
                 });

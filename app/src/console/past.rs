@@ -36,7 +36,7 @@ pub(crate) fn fmt_wall(ms: u64) -> String {
 }
 
 /// The collapsible list of the earlier runs' alarms.
-pub(crate) fn past_alarms_ui(c: &Console, ui: &mut egui::Ui) {
+pub(crate) fn past_alarms_ui(c: &mut Console, ui: &mut egui::Ui) {
     egui::CollapsingHeader::new(c.i18n.t("past-title"))
         .id_salt("past_alarms")
         .show(ui, |ui| {
@@ -44,13 +44,24 @@ pub(crate) fn past_alarms_ui(c: &Console, ui: &mut egui::Ui) {
                 ui.label(c.i18n.t("trends-no-history"));
                 return;
             };
+            // Read again at most once a second, not every frame.
             let now = c.journal.wall_of(c.sim.now().0);
-            let rows = match store.alarms(now.saturating_sub(BACK_MS), ROWS) {
-                Ok(r) => r,
-                Err(e) => {
-                    ui.label(RichText::new(e.to_string()).color(c.palette.alarm));
+            if c.past_alarms
+                .as_ref()
+                .is_none_or(|(at, _)| *at != now / 1000)
+            {
+                let rows = store
+                    .alarms(now.saturating_sub(BACK_MS), ROWS)
+                    .map_err(|e| e.to_string());
+                c.past_alarms = Some((now / 1000, rows));
+            }
+            let rows = match c.past_alarms.as_ref().map(|(_, r)| r) {
+                Some(Ok(r)) => r,
+                Some(Err(e)) => {
+                    ui.label(RichText::new(e).color(c.palette.alarm));
                     return;
                 }
+                None => return,
             };
             let search = c.history_filter.text.to_lowercase();
             let shown: Vec<_> = rows

@@ -68,13 +68,9 @@ impl TrendView {
         }
     }
 
-    /// The points to draw, queried again when stale.
-    fn points(
-        &mut self,
-        store: &crate::historian::Store,
-        now_ms: u64,
-        buckets: u32,
-    ) -> &[(String, Vec<[f64; 2]>)] {
+    /// Queries the points to draw again when they are stale (other signals, range or
+    /// width, or a second later).
+    fn refresh(&mut self, store: &crate::historian::Store, now_ms: u64, buckets: u32) {
         let key = CacheKey {
             signals: self.signals.clone(),
             range_ms: self.range_ms,
@@ -104,6 +100,10 @@ impl TrendView {
             }
             self.cache = Some((key, rows));
         }
+    }
+
+    /// The points to draw, per signal (x in s before now).
+    fn rows(&self) -> &[(String, Vec<[f64; 2]>)] {
         self.cache.as_ref().map_or(&[], |(_, r)| r.as_slice())
     }
 }
@@ -218,7 +218,8 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
     };
     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
     let buckets = ui.available_width().clamp(100.0, 4000.0) as u32;
-    let rows = c.trends.points(store, now, buckets).to_vec();
+    c.trends.refresh(store, now, buckets);
+    let rows = c.trends.rows();
     if let Some(e) = &c.trends.error {
         ui.label(RichText::new(e).color(c.palette.alarm));
     }
@@ -266,12 +267,12 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
                 .collect()
         })
         .show(ui, |p| {
-            for (i, (name, pts)) in rows.into_iter().enumerate() {
+            for (i, (name, pts)) in rows.iter().enumerate() {
                 #[allow(clippy::cast_precision_loss)]
                 let y0 = (n - 1 - i) as f64 * 1.5;
-                let pts: Vec<[f64; 2]> = pts.into_iter().map(|[x, y]| [x, y0 + y]).collect();
+                let pts: Vec<[f64; 2]> = pts.iter().map(|[x, y]| [*x, y0 + y]).collect();
                 p.line(
-                    Line::new(name, PlotPoints::from(pts))
+                    Line::new(name.as_str(), PlotPoints::from(pts))
                         .width(1.5)
                         .allow_band(false),
                 );

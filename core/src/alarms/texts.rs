@@ -106,14 +106,7 @@ pub fn diagnosis(plant: &Plant, n: &Notice, acts: Cooperation) -> AlarmText {
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect();
-    let code = match n.code {
-        "ambiguous" => "diagnosis-ambiguous",
-        "actuator" => "diagnosis-actuator",
-        "sensor-no-estimate" => "diagnosis-sensor-no-estimate",
-        "sensor-estimated" => "diagnosis-sensor-estimated",
-        _ => "diagnosis-other",
-    };
-    about_signal(plant, sensor, &n.text).with(code, fields)
+    about_signal(plant, sensor, &n.text).with(n.code, fields)
 }
 
 /// A sensor the plausibility stage holds as suspect, with its code and fields
@@ -121,12 +114,7 @@ pub fn diagnosis(plant: &Plant, n: &Notice, acts: Cooperation) -> AlarmText {
 pub fn plausibility(plant: &Plant, n: &crate::plausibility::Notice) -> AlarmText {
     let mut fields = n.fields.clone();
     fields.insert("sensor".into(), n.sensor.clone());
-    let code = match n.code {
-        "suspect" => "plausibility-suspect",
-        "filtered" => "plausibility-filtered",
-        _ => "plausibility-again",
-    };
-    about_signal(plant, &n.sensor, &n.text).with(code, fields)
+    about_signal(plant, &n.sensor, &n.text).with(n.code, fields)
 }
 
 /// Where to look on the machine after `trip`: the elements of the plant signals its

@@ -49,8 +49,8 @@ pub struct Notice {
     pub stop: bool,
     /// The sensor now read from its estimate (degraded mode).
     pub estimated: Option<String>,
-    /// The text as data: `ambiguous`, `actuator`, `sensor-no-estimate`,
-    /// `sensor-estimated`, `other`.
+    /// The alarm code of the text: `diagnosis-ambiguous`, `diagnosis-actuator`,
+    /// `diagnosis-sensor-no-estimate`, `diagnosis-sensor-estimated`, `diagnosis-other`.
     pub code: &'static str,
     /// The sensor of a sensor partition at fault.
     pub sensor: Option<String>,
@@ -80,14 +80,7 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
         .map(|n| {
             let flag = flagged.iter().find(|(p, _, _)| *p == n.partition);
             let (f, p, c) = (&n.fault, &n.partition, &n.component);
-            let code = match flag {
-                Some((_, true, _)) if n.certainty == Certainty::Ambiguous => "ambiguous",
-                Some((_, true, _)) => "actuator",
-                Some((_, false, Some(s))) if !has_estimate(d, s) => "sensor-no-estimate",
-                Some((_, false, Some(_))) => "sensor-estimated",
-                _ => "other",
-            };
-            let (text, stop, estimated) = match flag {
+            let (text, stop, estimated, code) = match flag {
                 Some((_, true, _)) if n.certainty == Certainty::Ambiguous => (
                     format!(
                         "Diagnosis: {c} is faulty, ambiguous between {}: {p} (a drive) may be at fault, {}",
@@ -100,6 +93,7 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
                     ),
                     true,
                     None,
+                    "diagnosis-ambiguous",
                 ),
                 Some((_, true, _)) => (
                     if acts.stop {
@@ -113,6 +107,7 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
                     },
                     true,
                     None,
+                    "diagnosis-actuator",
                 ),
                 Some((_, false, Some(s))) if !has_estimate(d, s) => (
                     format!(
@@ -120,6 +115,7 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
                     ),
                     false,
                     None,
+                    "diagnosis-sensor-no-estimate",
                 ),
                 Some((_, false, Some(s))) => (
                     if acts.estimate {
@@ -135,8 +131,14 @@ pub fn take_notices(d: &Diagnosers, seen: &mut usize, acts: Cooperation) -> Vec<
                     },
                     false,
                     Some(s.clone()),
+                    "diagnosis-sensor-estimated",
                 ),
-                _ => (format!("Diagnosis: {f} on {p} ({c})"), false, None),
+                _ => (
+                    format!("Diagnosis: {f} on {p} ({c})"),
+                    false,
+                    None,
+                    "diagnosis-other",
+                ),
             };
             Notice {
                 diagnosis: n.clone(),
