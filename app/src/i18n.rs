@@ -250,6 +250,20 @@ impl I18n {
             .unwrap_or_else(|| id.to_string())
     }
 
+    /// The text of `id` with its arguments in English (a record's text, whatever the
+    /// language shown).
+    pub fn ta_en(&self, id: &str, args: &[(&str, Arg<'_>)]) -> String {
+        let mut fa = FluentArgs::new();
+        for (k, v) in args {
+            match v {
+                Arg::Str(s) => fa.set(*k, FluentValue::from(*s)),
+                Arg::Num(n) => fa.set(*k, FluentValue::from(*n)),
+            }
+        }
+        self.format(Lang::En, id, Some(&fa))
+            .unwrap_or_else(|| id.to_string())
+    }
+
     /// The text of `id` with its arguments.
     pub fn ta(&self, id: &str, args: &[(&str, Arg<'_>)]) -> String {
         let mut fa = FluentArgs::new();
@@ -299,6 +313,11 @@ impl I18n {
             {
                 v = m;
             }
+            if k == "place"
+                && let Some(p) = self.place(&item.fields)
+            {
+                v = p;
+            }
             if v.is_empty() {
                 v = "none".into();
             }
@@ -321,6 +340,31 @@ impl I18n {
             .collect();
         args.extend(numbers.iter().map(|(k, v)| (k.as_str(), Arg::Num(*v))));
         self.ta(&id, &args)
+    }
+
+    /// Where an item was damaged, in the language shown, from the place fields of a
+    /// hazard (`place_kind`, `part`, `other`, `other_item`) and the plant's names of its
+    /// parts (`part-<id>`); `None` when the fields have no place or the plant folder
+    /// does not name a part in this language.
+    pub fn place(&self, fields: &std::collections::BTreeMap<String, String>) -> Option<String> {
+        let kind = fields.get("place_kind")?;
+        let name = |key: &str| self.plant(&format!("part-{}", fields.get(key)?));
+        let mut args: Vec<(&str, Arg<'_>)> = Vec::new();
+        let part = name("part")?;
+        args.push(("part", Arg::Str(&part)));
+        let other = if fields.contains_key("other") {
+            Some(name("other")?)
+        } else {
+            None
+        };
+        if let Some(o) = &other {
+            args.push(("other", Arg::Str(o)));
+        }
+        if let Some(i) = fields.get("other_item") {
+            args.push(("other_item", Arg::Str(i)));
+        }
+        let id = format!("place-{kind}");
+        self.has(&id).then(|| self.ta(&id, &args))
     }
 
     /// A text of the plant's (`signal-C4`…) in the language shown, if it has one.
@@ -570,6 +614,99 @@ mod explain_tests {
 #[cfg(test)]
 mod plant_tests {
     use super::*;
+
+    /// Every scenario file and every variant of the control-error library of the station
+    /// has its French text, and the plant folder holds no text for a file or a variant
+    /// that does not exist (a renamed scenario would lose its title silently).
+    #[test]
+    fn the_station_titles_its_scenarios_and_variants_in_french() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+        let fr = I18n::new(Lang::Fr, Some(&dir)).unwrap();
+        let mut expected = std::collections::BTreeSet::new();
+        for e in std::fs::read_dir(dir.join("scenarios")).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "ron") {
+                expected.insert(format!(
+                    "scenario-{}",
+                    p.file_stem().unwrap().to_string_lossy()
+                ));
+            }
+        }
+        let (bundle, _) = vigie_core::bundle::PlantBundle::load(&dir).unwrap();
+        let lib = vigie_core::control::ErrorLibrary::load(
+            &dir.join("programs/errors.ron"),
+            &bundle.plant,
+        )
+        .unwrap();
+        for v in &lib.variants {
+            expected.insert(format!("variant-{}", v.def.id));
+        }
+        for id in &expected {
+            assert!(fr.plant(id).is_some(), "{id} has no French text");
+        }
+        let text = std::fs::read_to_string(dir.join("i18n/fr.ftl")).unwrap();
+        for id in ids(&text) {
+            if id.starts_with("scenario-") || id.starts_with("variant-") {
+                assert!(expected.contains(&id), "{id} names nothing");
+            }
+        }
+    }
+
+    /// Every part of the station's layout has a French name, and a damaged item's place
+    /// is told with it (not with layout.ron's English name).
+    #[test]
+    fn a_damaged_items_place_in_french() {
+        use vigie_core::emulator::{Layout, Place};
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+        let layout = Layout::load(&dir.join("layout.ron")).unwrap();
+        let fr = I18n::new(Lang::Fr, Some(&dir)).unwrap();
+        for id in layout
+            .conveyors
+            .iter()
+            .map(|c| &c.id)
+            .chain([&layout.table.id])
+        {
+            assert!(fr.plant(&format!("part-{id}")).is_some(), "part-{id}");
+        }
+        let sheared = vigie_core::explain::Item {
+            code: "X101",
+            text: "Without the filter, 76 ms later: box 1 would be sheared at the edge of the Roller turntable (A4, A2, A3).".into(),
+            fields: [
+                ("kind", "Sheared"),
+                ("place", "edge of the Roller turntable"),
+                ("box", "1"),
+                ("after_ms", "76"),
+                ("elements", "A4,A2,A3"),
+            ]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .chain(Place::Edge { part: layout.table.id.clone() }.fields())
+            .collect(),
+        };
+        let t = fr.explain(&sheared);
+        assert!(t.contains("Table tournante (bord)"), "{t}");
+        assert!(!t.contains("Roller"), "{t}");
+        let between: std::collections::BTreeMap<String, String> = Place::Between {
+            part: "intermediate".into(),
+            other: "table".into(),
+        }
+        .fields()
+        .into_iter()
+        .collect();
+        assert_eq!(
+            fr.place(&between).as_deref(),
+            Some("jonction Convoyeur intermédiaire / Table tournante")
+        );
+        // A part the plant folder does not name: no place of our own (the core's text
+        // stays).
+        let unknown: std::collections::BTreeMap<String, String> = Place::Edge {
+            part: "nowhere".into(),
+        }
+        .fields()
+        .into_iter()
+        .collect();
+        assert_eq!(fr.place(&unknown), None);
+    }
 
     /// The sorting station's folder translates every signal it describes.
     #[test]

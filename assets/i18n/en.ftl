@@ -204,6 +204,74 @@ journal-export-csv-hover = Written under the data folder
 journal-save-as = Save journal as…
 journal-exports-under = Exports go under { $path }
 
+## What the console says and journals (the journal keeps the English text and the
+## message id, and shows an entry in the language shown)
+say-session = console opened on { $scenario }
+say-login = { $user } logged in ({ $role })
+say-login-refused = Login refused: { $error }
+say-logout = { $user } logged out
+say-logged-out = Logged out: operator role
+say-mode = mode { $mode }
+say-ack = alarm { $id } acknowledged: { $note }
+say-ack-refused = acknowledge refused: { $error }
+say-ack-all = { $n } alarm(s) acknowledged
+say-ack-together = alarms { $list } acknowledged together: { $note }
+say-shelve = alarm { $id } shelved for { $minutes } min: { $reason }
+say-shelve-refused = Shelving refused: { $error }
+say-unshelve = alarm { $id } unshelved
+say-unshelve-refused = unshelve refused: { $error }
+say-language = language { $lang }
+say-restart = restart: { $scenario }
+say-restarted = restarted
+say-restart-failed = restart failed: { $error }
+say-compiled = program compiled
+say-compile-failed = compilation failed
+say-nothing-to-verify = nothing to verify: the edit does not compile
+say-no-trip = no trip to report
+say-report-written = report written to { $path }; capturing the levels…
+say-report = incident report { $path }
+say-report-failed = report failed: { $error }
+say-png-failed = PNG failed: { $error }
+say-report-complete = incident report complete in { $path }
+say-report-no-png = report Markdown in { $path }; PNG capture unavailable here
+say-alarms-exported = { $n } alarms exported to { $path }
+say-alarms-export-failed = alarm export to { $path } failed: { $error }
+say-trend-exported = { $n } changes exported to { $path }
+say-trend-export-failed = trend export to { $path } failed: { $error }
+
+say-verifying = verifying the constraint set…
+say-verify-cannot-start = cannot start the verification: { $error }
+say-verified = verification: { $safe ->
+    [true] SAFE
+   *[other] NOT SAFE
+} ({ $states } states), { $permissive ->
+    [true] permissive
+   *[other] NOT permissive
+}
+say-verify-failed = verification failed: { $error }
+say-no-verification = no verification result to replay
+say-no-counterexample = no counterexample: the set is safe on the model
+say-counterexample-unwritable = cannot write the counterexample: { $error }
+say-replaying = replaying the counterexample ({ $kind }) with the filter enforcing
+say-counterexample-unreadable = counterexample: { $error }
+fix-cannot-run = cannot re-run: { $error }
+fix-nothing-delivered = not fixed: no trip but no box was delivered in the re-run
+fix-correct = correct fix: no trip and no hazard in { $s } s, { $delivered } boxes delivered
+fix-not-fixed = not fixed: the re-run has trips [{ $trips }] and hazards [{ $hazards }]
+
+say-fault-injected = fault injected: { $what }
+say-fault-refused = fault refused ({ $what }): { $error }
+
+say-refused = Refused: { $what } needs the { $roles } role ({ $role } now): log in
+perm-EditProgram = editing the program
+perm-ChangeFilterMode = changing the filter's mode
+perm-BypassConstraint = bypassing a safety constraint
+perm-Train = loading exercises and injecting faults
+role-operator = operator
+role-maintenance = maintenance
+role-trainer = trainer
+role-administrator = administrator
+
 ## Training
 training-title = Training
 training-verify-fix = Verify fix
@@ -214,6 +282,22 @@ training-load = Load { $id }
 training-faults = Fault library
 training-no-faults = No faults.ron in the plant folder.
 training-inject = Inject
+# The run's title (status line); a scenario file has its own in the plant folder
+# (`scenario-<file stem>`), else its `name`.
+scenario-reference = Reference program
+scenario-training = Training: { $id }
+# A fault of the library, built from its kind (in English the console shows the name
+# faults.ron gives it).
+fault-stuck-at-0 = { $signal } stuck at 0{ $description }
+fault-stuck-at-1 = { $signal } stuck at 1{ $description }
+fault-spurious-rise = { $signal }: spurious pulse of { $ms } ms{ $description }
+fault-spurious-fall = { $signal }: dropout of { $ms } ms{ $description }
+fault-actuator-off = { $signal } stuck OFF{ $description }
+fault-actuator-on = { $signal } stuck ON (welded contactor){ $description }
+fault-table-at-loading = Table blocked at the loading position
+fault-table-at-unloading = Table blocked at the unloading position
+fault-table-between = Table blocked between the positions
+fault-slowed = { $signal } slowed to { $percent } %{ $description }
 
 ## Maintenance
 maint-program = Control program: { $name }
@@ -316,6 +400,12 @@ words-not-tripped = the filter has not tripped
 words-still-violated = reset refused: { $constraints } still violated by the commanded outputs
 words-with-observers = {" "}(with { $observers } = 1)
 words-list-sep = {"; "}
+# Where an item was damaged, from the plant's parts (`part-<id>` in the plant folder).
+place-edge = edge of the { $part }
+place-against = { $part } (against item { $other_item })
+place-end = end of the { $part }
+place-start = start of the { $part }
+place-between = between the { $part } and the { $other }
 
 ## Status line
 status-reinit-emptied = Re-initialised: the plant emptied, the program at its initial steps; press Start

@@ -102,7 +102,7 @@ alarm-hazard = Caisse { $item } endommagée : { $kind ->
     [Sheared] cisaillée au niveau de : { $place }
     [Dropped] tombée de : { $place }
     [Collision] heurt au niveau de : { $place }
-   *[other] poussée contre une surface arrêtée
+   *[other] poussée contre une surface arrêtée : { $place }
 }
 alarm-task = { $subject } : { $code ->
     [T001] arrêtée trop longtemps, elle ne peut plus finir à temps
@@ -114,3 +114,56 @@ alarm-task = { $subject } : { $code ->
     [T007] un événement est venu alors qu'aucun n'était attendu
    *[T008] deux tâches désynchronisées
 }
+
+## Journal : les entrées du cœur (en anglais, le texte enregistré)
+journal-trip = arrêt sécurité sur { $constraints }
+journal-reset = réarmement du filtre par l'opérateur
+journal-reinitialise = réinitialisation par l'opérateur après vérification de la machine : { $emptied ->
+    [true] machine vidée, chaque observateur repart vide
+   *[other] pièces laissées en place, observateurs effacés là où les capteurs ne laissent pas de place à leur pièce
+}, programme à ses étapes initiales, arrêt terminé
+journal-plant-emptied = l'opérateur a retiré { $n } pièce(s) de la machine
+journal-manual-on = mode manuel : le programme n'est plus exécuté, les sorties restent en l'état ; chaque commande est vérifiée par les contraintes de sécurité
+journal-manual-off = mode automatique : le programme repart de ses étapes initiales ; appuyez sur Départ cycle
+journal-by-hand = { $output } { $on ->
+    [true] EN MARCHE
+   *[other] À L'ARRÊT
+} à la main
+journal-bypass = { $constraint } dérivée pendant { $minutes } min par { $by } : { $reason }
+journal-bypass-end = { $constraint } de nouveau appliquée (dérivation terminée)
+journal-bypass-expired = { $constraint } de nouveau appliquée (durée de la dérivation écoulée)
+journal-operator = { $action ->
+    [Start] Départ cycle
+    [Stop] Arrêt
+    [Pause] Pause
+   *[other] Reprise
+}
+journal-fault = défaut injecté : { $what }
+journal-plausible-again = { $sensor } de nouveau plausible
+
+## Journal : la nature d'une entrée
+journal-kind-trip = arrêt
+journal-kind-reset = réarmement
+journal-kind-reset_refused = réarm. refusé
+journal-kind-operator = opérateur
+journal-kind-session = session
+journal-kind-hazard = dommage
+journal-kind-fault = défaut
+journal-kind-manual = manuel
+journal-kind-manual_refused = man. refusé
+journal-kind-bypass = dérivation
+journal-kind-bypass_end = fin dériv.
+journal-kind-ack = acquit
+journal-kind-shelve = masquage
+journal-kind-unshelve = démasquage
+journal-kind-login = connexion
+journal-kind-logout = déconnexion
+journal-kind-diagnosis = diagnostic
+journal-kind-plausibility = plausibilité
+journal-kind-task_alarm = tâche
+journal-kind-task_warning = tâche (avert.)
+journal-kind-reinitialise = réinit.
+journal-kind-plant_emptied = vidage
+journal-kind-maintenance = maintenance
+journal-kind-training = formation
+journal-kind-report = rapport

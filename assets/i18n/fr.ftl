@@ -217,6 +217,79 @@ journal-export-csv-hover = Écrit dans le dossier de données
 journal-save-as = Enregistrer le journal sous…
 journal-exports-under = Les exports vont dans { $path }
 
+## Ce que la console dit et journalise (le journal garde le texte anglais et l'id du
+## message, et montre une entrée dans la langue affichée)
+say-session = console ouverte sur { $scenario }
+say-login = { $user } connecté ({ $role })
+say-login-refused = Connexion refusée : { $error }
+say-logout = { $user } déconnecté
+say-logged-out = Déconnecté : rôle opérateur
+say-mode = mode { $mode ->
+    [Production] Production
+    [Maintenance] Maintenance
+    [Training] Formation
+   *[other] { $mode }
+}
+say-ack = alarme { $id } acquittée : { $note }
+say-ack-refused = acquittement refusé : { $error }
+say-ack-all = { $n } alarme(s) acquittée(s)
+say-ack-together = alarmes { $list } acquittées ensemble : { $note }
+say-shelve = alarme { $id } masquée pendant { $minutes } min : { $reason }
+say-shelve-refused = Masquage refusé : { $error }
+say-unshelve = alarme { $id } démasquée
+say-unshelve-refused = démasquage refusé : { $error }
+say-language = langue { $lang }
+say-restart = redémarrage : { $scenario }
+say-restarted = redémarré
+say-restart-failed = redémarrage impossible : { $error }
+say-compiled = programme compilé
+say-compile-failed = la compilation a échoué
+say-nothing-to-verify = rien à vérifier : la modification ne compile pas
+say-no-trip = aucun arrêt à rapporter
+say-report-written = rapport écrit dans { $path } ; capture des niveaux…
+say-report = rapport d'incident { $path }
+say-report-failed = rapport impossible : { $error }
+say-png-failed = PNG impossible : { $error }
+say-report-complete = rapport d'incident complet dans { $path }
+say-report-no-png = rapport Markdown dans { $path } ; capture PNG indisponible ici
+say-alarms-exported = { $n } alarmes exportées dans { $path }
+say-alarms-export-failed = l'export des alarmes dans { $path } a échoué : { $error }
+say-trend-exported = { $n } changements exportés dans { $path }
+say-trend-export-failed = l'export des courbes dans { $path } a échoué : { $error }
+
+say-verifying = vérification du jeu de contraintes…
+say-verify-cannot-start = impossible de lancer la vérification : { $error }
+say-verified = vérification : { $safe ->
+    [true] SÛR
+   *[other] PAS SÛR
+} ({ $states } états), { $permissive ->
+    [true] permissif
+   *[other] PAS permissif
+}
+say-verify-failed = la vérification a échoué : { $error }
+say-no-verification = aucun résultat de vérification à rejouer
+say-no-counterexample = pas de contre-exemple : le jeu est sûr sur le modèle
+say-counterexample-unwritable = impossible d'écrire le contre-exemple : { $error }
+say-replaying = rejeu du contre-exemple ({ $kind }) avec le filtre actif
+say-counterexample-unreadable = contre-exemple : { $error }
+fix-cannot-run = impossible de rejouer : { $error }
+fix-nothing-delivered = pas corrigé : aucun arrêt, mais aucune caisse livrée pendant le rejeu
+fix-correct = correction juste : aucun arrêt ni dommage en { $s } s, { $delivered } caisses livrées
+fix-not-fixed = pas corrigé : le rejeu a des arrêts [{ $trips }] et des dommages [{ $hazards }]
+
+say-fault-injected = défaut injecté : { $what }
+say-fault-refused = défaut refusé ({ $what }) : { $error }
+
+say-refused = Refusé : { $what } demande le rôle { $roles } (rôle actuel : { $role }) ; connectez-vous
+perm-EditProgram = modifier le programme
+perm-ChangeFilterMode = changer le mode du filtre
+perm-BypassConstraint = dériver une contrainte de sécurité
+perm-Train = charger des exercices et injecter des défauts
+role-operator = opérateur
+role-maintenance = maintenance
+role-trainer = formateur
+role-administrator = administrateur
+
 ## Formation
 training-title = Formation
 training-verify-fix = Vérifier la correction
@@ -227,6 +300,22 @@ training-load = Charger { $id }
 training-faults = Bibliothèque de défauts
 training-no-faults = Pas de faults.ron dans le dossier de l'installation.
 training-inject = Injecter
+# Le titre de la marche (ligne d'état) ; un fichier de scénario a le sien dans le dossier
+# de l'installation (`scenario-<nom du fichier>`).
+scenario-reference = Programme de référence
+scenario-training = Formation : { $id }
+# Un défaut de la bibliothèque, construit à partir de sa nature (le nom de faults.ron est
+# celui de l'auteur, en anglais).
+fault-stuck-at-0 = { $signal } bloqué à 0{ $description }
+fault-stuck-at-1 = { $signal } bloqué à 1{ $description }
+fault-spurious-rise = { $signal } : impulsion parasite de { $ms } ms{ $description }
+fault-spurious-fall = { $signal } : coupure de { $ms } ms{ $description }
+fault-actuator-off = { $signal } bloqué À L'ARRÊT{ $description }
+fault-actuator-on = { $signal } bloqué EN MARCHE (contacteur soudé){ $description }
+fault-table-at-loading = Table bloquée en position de chargement
+fault-table-at-unloading = Table bloquée en position de déchargement
+fault-table-between = Table bloquée entre les positions
+fault-slowed = { $signal } ralenti à { $percent } %{ $description }
 
 ## Maintenance
 maint-program = Programme : { $name }
@@ -338,6 +427,13 @@ words-not-tripped = le filtre n'est pas déclenché
 words-still-violated = réarmement refusé : { $constraints } encore violée(s) par les sorties commandées
 words-with-observers = {" "}(avec { $observers } = 1)
 words-list-sep = {" ; "}
+# Le lieu d'un dommage, à partir des parties de l'installation (`part-<id>` dans le
+# dossier de l'installation).
+place-edge = { $part } (bord)
+place-against = { $part }, contre la caisse { $other_item }
+place-end = { $part } (extrémité aval)
+place-start = { $part } (extrémité amont)
+place-between = jonction { $part } / { $other }
 
 ## Ligne d'état
 status-reinit-emptied = Réinitialisée : la machine vidée, le programme à ses étapes initiales ; appuyez sur Départ cycle

@@ -266,8 +266,30 @@ pub struct JournalEntry {
     pub time_ms: u64,
     /// `trip`, `reset`, `reset_refused`, `hazard`, `operator`, `spec_error`, `fault`…
     pub kind: String,
-    /// Text.
+    /// Text (English, the record).
     pub text: String,
+    /// What the text says, as data, for a console that shows it in another language:
+    /// the id of a message (`journal-trip`, `alarm-hazard`…; empty when none) and its
+    /// fields.
+    #[serde(skip_serializing_if = "str::is_empty")]
+    pub code: String,
+    /// See `code`.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub fields: BTreeMap<String, String>,
+}
+
+/// The message id of an alarm's text (`alarm-<code>`), empty when it has no code.
+fn alarm_code(t: &crate::alarms::AlarmText) -> String {
+    if t.code.is_empty() {
+        String::new()
+    } else {
+        format!("alarm-{}", t.code)
+    }
+}
+
+/// Fields of a journal entry from pairs.
+fn fields<const N: usize>(pairs: [(&str, String); N]) -> BTreeMap<String, String> {
+    pairs.into_iter().map(|(k, v)| (k.to_string(), v)).collect()
 }
 
 /// The plant as drawn at one cycle, for the synoptic's replay.
@@ -791,9 +813,11 @@ impl Simulation {
         }
         for id in &ended {
             self.bypasses.remove(id);
-            self.log(
+            self.log_coded(
                 "bypass_end",
                 format!("{id} enforced again (the bypass's time is up)"),
+                "journal-bypass-expired",
+                fields([("constraint", id.clone())]),
             );
         }
         self.apply_bypasses();
@@ -946,9 +970,11 @@ impl Simulation {
                 if self.engine.reinitialise(emptied) {
                     if emptied {
                         let n = self.emulator.remove_items();
-                        self.log(
+                        self.log_coded(
                             "plant_emptied",
                             format!("the operator took {n} items off the plant"),
+                            "journal-plant-emptied",
+                            fields([("n", n.to_string())]),
                         );
                     }
                     self.restart_program(self.program.program().clone());
@@ -974,7 +1000,12 @@ impl Simulation {
                 for key in self.alarms.active_keys(AlarmKind::FilterTrip) {
                     self.alarms.clear(now, &key);
                 }
-                self.log("reset", "operator reset of the filter".into());
+                self.log_coded(
+                    "reset",
+                    "operator reset of the filter".into(),
+                    "journal-reset",
+                    BTreeMap::new(),
+                );
             }
             (Err(e), OperatorAction::Reset) => self.log("reset_refused", e.clone()),
             (Ok(()), &OperatorAction::Reinitialise { emptied }) => {
@@ -995,28 +1026,36 @@ impl Simulation {
                     "the items left in place, the observers cleared where the sensors \
                      leave no room for their item (the others kept)"
                 };
-                self.log(
+                self.log_coded(
                     "reinitialise",
                     format!(
                         "operator re-initialisation after a check of the plant: the \
                          control program back to its initial steps, the sensors taken as \
                          read, {observers}, the trip ended"
                     ),
+                    "journal-reinitialise",
+                    fields([("emptied", emptied.to_string())]),
                 );
             }
-            (Ok(()), OperatorAction::Manual(true)) => self.log(
+            (Ok(()), OperatorAction::Manual(true)) => self.log_coded(
                 "manual",
                 "manual mode: the program is no longer scanned, the outputs stay as they \
                  are; every command is checked against the safety constraints"
                     .into(),
+                "journal-manual-on",
+                BTreeMap::new(),
             ),
-            (Ok(()), OperatorAction::Manual(false)) => self.log(
+            (Ok(()), OperatorAction::Manual(false)) => self.log_coded(
                 "manual",
                 "automatic mode: the program restarted from its initial steps; press Start".into(),
+                "journal-manual-off",
+                BTreeMap::new(),
             ),
-            (Ok(()), OperatorAction::ManualSet(id, on)) => self.log(
+            (Ok(()), OperatorAction::ManualSet(id, on)) => self.log_coded(
                 "manual",
                 format!("{id} {} by hand", if *on { "ON" } else { "OFF" }),
+                "journal-by-hand",
+                fields([("output", id.clone()), ("on", on.to_string())]),
             ),
             (Err(e), OperatorAction::ManualSet(..)) => self.log("manual_refused", e.clone()),
             (
@@ -1027,13 +1066,21 @@ impl Simulation {
                     reason,
                     by,
                 },
-            ) => self.log(
+            ) => self.log_coded(
                 "bypass",
                 format!(
                     "{constraint} bypassed for {minutes} min by {by}: {reason} (the filter \
                      does not enforce it until {} ms)",
                     now.0 + minutes * 60_000
                 ),
+                "journal-bypass",
+                fields([
+                    ("constraint", constraint.clone()),
+                    ("minutes", minutes.to_string()),
+                    ("by", by.clone()),
+                    ("reason", reason.clone()),
+                    ("until_ms", (now.0 + minutes * 60_000).to_string()),
+                ]),
             ),
             (Err(e), OperatorAction::Bypass { .. }) => self.log("bypass_refused", e.clone()),
             (Ok(()), OperatorAction::AnswerDoubt { component, .. }) => {
@@ -1041,7 +1088,12 @@ impl Simulation {
                 self.log("operator_answer", conclusion);
             }
             (Ok(()), OperatorAction::EndBypass(id)) => {
-                self.log("bypass_end", format!("{id} enforced again (bypass ended)"));
+                self.log_coded(
+                    "bypass_end",
+                    format!("{id} enforced again (bypass ended)"),
+                    "journal-bypass-end",
+                    fields([("constraint", id.clone())]),
+                );
             }
             (Ok(()), OperatorAction::ResetDiagnosers) => self.diagnosers_cleared(
                 now,
@@ -1049,7 +1101,18 @@ impl Simulation {
                  sensors read again, no certain decision until each model is back in \
                  its initial state",
             ),
-            (Ok(()), a) => self.log("operator", format!("{a:?}")),
+            (Ok(()), a) => {
+                let (code, f) = match a {
+                    OperatorAction::Start
+                    | OperatorAction::Stop
+                    | OperatorAction::Pause
+                    | OperatorAction::Resume => {
+                        ("journal-operator", fields([("action", format!("{a:?}"))]))
+                    }
+                    _ => ("", BTreeMap::new()),
+                };
+                self.log_coded("operator", format!("{a:?}"), code, f);
+            }
             (Err(e), a) => self.log("operator_refused", format!("{a:?}: {e}")),
         }
         result
@@ -1069,16 +1132,35 @@ impl Simulation {
     /// Injects a fault now (training).
     pub fn inject(&mut self, fault: FaultSpec) -> Result<(), Problem> {
         let text = format!("{:?}", fault.fault);
+        let f = fault.fault.fields();
         self.emulator.try_schedule_fault(fault)?;
-        self.log("fault", format!("fault injected: {text}"));
+        self.log_coded(
+            "fault",
+            format!("fault injected: {text}"),
+            "journal-fault",
+            f,
+        );
         Ok(())
     }
 
     fn log(&mut self, kind: &str, text: String) {
+        self.log_coded(kind, text, "", BTreeMap::new());
+    }
+
+    /// A journal entry with its message id and fields (see [`JournalEntry::code`]).
+    fn log_coded(
+        &mut self,
+        kind: &str,
+        text: String,
+        code: &str,
+        fields: BTreeMap<String, String>,
+    ) {
         self.journal.push(JournalEntry {
             time_ms: self.now().0,
             kind: kind.to_string(),
             text,
+            code: code.to_string(),
+            fields,
         });
     }
 
@@ -1201,13 +1283,15 @@ impl Simulation {
             self.hazards_seen = hazards.len();
             for h in new {
                 let text = format!("{:?} of box {} at {}", h.kind, h.box_id, h.place);
+                let alarm = texts::hazard(&h);
+                let f = alarm.fields.clone();
                 self.alarms.raise(
                     Millis(h.time_ms),
                     &format!("hazard:{}:{:?}", h.box_id, h.kind),
                     AlarmKind::Hazard,
-                    texts::hazard(&h),
+                    alarm,
                 );
-                self.log("hazard", text);
+                self.log_coded("hazard", text, "alarm-hazard", f);
             }
         }
         self.push_snapshot(now);
@@ -1248,7 +1332,12 @@ impl Simulation {
                     let key = format!("trip:{}", ids.join("+"));
                     let text = texts::trip(&self.bundle, &self.engine.trips[*index]);
                     self.alarms.raise(now, &key, AlarmKind::FilterTrip, text);
-                    self.log("trip", format!("filter tripped on {}", ids.join(", ")));
+                    self.log_coded(
+                        "trip",
+                        format!("filter tripped on {}", ids.join(", ")),
+                        "journal-trip",
+                        fields([("constraints", ids.join(", "))]),
+                    );
                     tripped = Some(*index);
                 }
                 Event::SpecificationError { message } => {
@@ -1285,21 +1374,25 @@ impl Simulation {
         t.seen = t.monitor.alarms.len();
         for a in new {
             let warning = a.severity == crate::tasks::Severity::Warning;
+            let text = texts::task(self.bundle.tasks.as_ref(), &a);
+            let (code, f) = (alarm_code(&text), text.fields.clone());
             if !warning {
                 self.alarms.raise(
                     a.time,
                     &format!("task:{}:{:?}", a.subject, a.code),
                     AlarmKind::Task,
-                    texts::task(self.bundle.tasks.as_ref(), &a),
+                    text,
                 );
             }
-            self.log(
+            self.log_coded(
                 if warning {
                     "task_warning"
                 } else {
                     "task_alarm"
                 },
                 a.text,
+                &code,
+                f,
             );
         }
     }
@@ -1324,8 +1417,9 @@ impl Simulation {
         self.degraded = diagnosis::estimated_inputs(d, &self.bundle.plant, &self.engine.symbols);
         for n in notices {
             let text = texts::diagnosis(&self.bundle.plant, &n, acts);
+            let (code, f) = (alarm_code(&text), text.fields.clone());
             self.alarms.raise(now, &n.key, AlarmKind::Diagnosis, text);
-            self.log("diagnosis", n.text);
+            self.log_coded("diagnosis", n.text, &code, f);
         }
     }
 
@@ -1334,13 +1428,19 @@ impl Simulation {
     pub(crate) fn plausibility_events(&mut self, now: Millis) {
         for n in self.engine.plausibility.take_notices() {
             let key = format!("plausibility:{}", n.sensor);
-            if n.suspect {
+            let (code, f) = if n.suspect {
                 let text = texts::plausibility(&self.bundle.plant, &n);
+                let coded = (alarm_code(&text), text.fields.clone());
                 self.alarms.raise(now, &key, AlarmKind::Plausibility, text);
+                coded
             } else {
                 self.alarms.clear(now, &key);
-            }
-            self.log("plausibility", n.text);
+                (
+                    "journal-plausible-again".to_string(),
+                    fields([("sensor", n.sensor.clone())]),
+                )
+            };
+            self.log_coded("plausibility", n.text, &code, f);
         }
     }
 
@@ -1567,6 +1667,7 @@ fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundl
                 ("elements".to_string(), h.elements.join(",")),
             ]
             .into_iter()
+            .chain(h.at.fields())
             .collect(),
             text: format!(
                 "Without the filter, {after} ms later: box {} {} at the {} ({}).",

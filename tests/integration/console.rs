@@ -169,6 +169,66 @@ fn maintenance_fix_of_e01_passes_verification() {
     assert!(h.state().score().summary().contains("Fixed"));
 }
 
+/// Training in French: the control-error library and the fault library from the
+/// plant's French texts and the faults' kinds, an injected fault journaled in French,
+/// and a fix's verdict in French (recorded in English).
+#[test]
+fn training_in_french() {
+    let mut h = harness(options(None));
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains("Rotation relâchée sur le front montant de C7")
+            .is_some(),
+        "variant E01 in French"
+    );
+    assert!(h.query_by_label_contains("Rotation released").is_none());
+    // The operator may not inject a fault: refused in French.
+    h.state_mut().apply(Command::InjectFault(0));
+    assert!(
+        h.state().status.starts_with(
+            "Refusé : charger des exercices et injecter des défauts demande le rôle formateur ou administrateur (rôle actuel : opérateur)"
+        ),
+        "{}",
+        h.state().status
+    );
+    h.state_mut().role = vigie_core::access::Role::Trainer;
+    h.get_by_label("Bibliothèque de défauts").click();
+    h.run_steps(2);
+    h.get_by_label("C7 bloqué à 0 (Caisse à l'entrée du convoyeur de sortie droit)");
+    h.get_by_label("A1 bloqué EN MARCHE (contacteur soudé) (Moteur du convoyeur intermédiaire)");
+    h.state_mut().apply(Command::InjectFault(0));
+    h.state_mut().apply(Command::SetMode(Mode::Production));
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains("défaut injecté : C7 bloqué à 0")
+            .is_some(),
+        "the journal tells the fault in French"
+    );
+    // The fix of E01 (the scenario's variant), checked: the verdict in French.
+    h.state_mut().apply(Command::SetMode(Mode::Maintenance));
+    h.state_mut()
+        .draft_mut()
+        .expect("draft")
+        .conditions
+        .insert("t24".into(), "FE(C7)".into());
+    h.state_mut().apply(Command::VerifyFix);
+    h.run_steps(2);
+    assert!(
+        h.state()
+            .status
+            .starts_with("correction juste : aucun arrêt"),
+        "{}",
+        h.state().status
+    );
+    let e = h.state().journal.entries().last().cloned().expect("entry");
+    assert_eq!(e.kind, "training");
+    assert!(e.text.starts_with("correct fix: no trip"), "{}", e.text);
+    assert_eq!(e.code, "fix-correct");
+}
+
 #[test]
 fn journal_exports_to_csv_and_report_to_markdown() {
     let out = temp_dir("export");
@@ -1128,6 +1188,33 @@ fn the_cs10_trip_explained_in_french() {
         h.run_steps(2);
         assert!(h.query_by_label(item).is_some(), "level {button}: {item}");
     }
+    // Where the box would be sheared, with the plant's French name of the part.
+    h.get_by_label("1 Projection").click();
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains("serait cisaillée au niveau de : Table tournante (bord)")
+            .is_some(),
+        "level 1 names the place in French"
+    );
+    // The journal panel in French, from the entries' message ids; the status line
+    // titles the run in French.
+    for shown in [
+        "console ouverte sur CSs10 : A4 relâchée pendant que la caisse sort à droite",
+        "opérateur  Départ cycle",
+        "opérateur  langue fr",
+        "arrêt      arrêt sécurité sur CSs10",
+    ] {
+        assert!(
+            h.query_all_by_label_contains(shown).next().is_some(),
+            "journal shows {shown:?}"
+        );
+    }
+    assert!(
+        h.query_by_label_contains(
+            "CSs10 : A4 relâchée pendant que la caisse sort à droite — caisses"
+        )
+        .is_some()
+    );
     // The incident report, in the language shown.
     let out = temp_dir("report-fr");
     h.state_mut()
@@ -1139,13 +1226,30 @@ fn the_cs10_trip_explained_in_french() {
         "{md}"
     );
     let _ = std::fs::remove_dir_all(&out);
-    // The records stay in English (the journal, the core's alarm text).
+    // The records stay in English (the journal, the core's alarm text), with the
+    // message id that shows them in any language.
     assert!(
         h.state()
             .journal
             .entries()
             .iter()
-            .any(|e| e.text.contains("filter tripped on CSs10"))
+            .any(|e| e.text == "filter tripped on CSs10"
+                && e.code == "journal-trip"
+                && e.fields.get("constraints").map(String::as_str) == Some("CSs10"))
+    );
+    // Back in English, the journal shows the records.
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::En));
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains("trip       filter tripped on CSs10")
+            .is_some()
+    );
+    assert!(
+        h.query_by_label_contains(
+            "console opened on CSs10: A4 released while the box leaves to the right"
+        )
+        .is_some()
     );
     assert!(
         h.state()
@@ -1232,11 +1336,20 @@ fn degraded_mode_alarms_in_french() {
     h.get_by_label(
         "Diagnostic : défaut F1 du capteur C4 (Table tournante en position de chargement) (certain) : C4 est estimé à partir des intervalles de temps (la temporisation de table) ; la production continue en mode dégradé",
     );
-    assert!(
-        h.query_by_label_contains(
+    // The alarm row and its journal entry, both in French.
+    assert_eq!(
+        h.query_all_by_label_contains(
             "C4 (Table tournante en position de chargement) suspect : retombée invraisemblable"
         )
-        .is_some()
+        .count(),
+        2
+    );
+    assert!(
+        h.query_by_label_contains(
+            "plausibilité C4 (Table tournante en position de chargement) suspect"
+        )
+        .is_some(),
+        "the journal entry in French"
     );
 }
 

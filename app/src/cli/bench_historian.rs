@@ -92,6 +92,7 @@ fn measure(
         text: format!(
             "Safety stop {k}: a journal entry of a typical length, with the constraint's description"
         ),
+        ..JournalRow::default()
     };
     let mut k = 0;
     let one = median_ns(51, 4, || {

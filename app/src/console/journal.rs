@@ -126,12 +126,27 @@ impl Journal {
 
     /// Adds one entry; it is committed by the next [`Journal::commit`].
     pub fn push(&mut self, sim_ms: u64, kind: &str, text: &str) {
+        self.push_coded(sim_ms, kind, text, "", BTreeMap::new());
+    }
+
+    /// Adds one entry with the message that tells it in another language (`code`, a
+    /// message id) and its fields.
+    pub fn push_coded(
+        &mut self,
+        sim_ms: u64,
+        kind: &str,
+        text: &str,
+        code: &str,
+        fields: BTreeMap<String, String>,
+    ) {
         let wall_ms = self.wall_of(sim_ms);
         self.entries.push(Entry {
             wall_ms,
             sim_ms,
             kind: kind.to_string(),
             text: text.to_string(),
+            code: code.to_string(),
+            fields,
         });
     }
 

@@ -29,7 +29,7 @@ use vigie_core::emulator::FaultSpec;
 use vigie_core::sim::{OperatorAction, Options, ProgramChoice, Scenario, Simulation};
 use vigie_core::time::Millis;
 
-pub use training::{Score, verify_fix};
+pub use training::{FixOutcome, Score, verify_fix};
 
 /// The console's modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -205,6 +205,9 @@ impl ConsoleOptions {
     }
 }
 
+/// The file name a free run (no scenario file) stands at, in the plant folder.
+const FREE_RUN: &str = "console.ron";
+
 /// The scenario the console runs.
 #[derive(Clone, Debug)]
 pub(crate) struct Source {
@@ -213,6 +216,34 @@ pub(crate) struct Source {
 }
 
 impl Source {
+    /// The run's title in the language shown: the reference program or a training
+    /// variant by their console names, a scenario file by the plant folder's
+    /// `scenario-<file stem>` when it has one, else the file's own name.
+    pub(crate) fn title(&self, i18n: &I18n) -> String {
+        words::title(i18n, &self.title_fields(), false)
+    }
+
+    /// What [`Source::title`] is built from, as a record's fields: `scenario` (the
+    /// file's own name), `scenario_key` (the message or plant text that titles it) and
+    /// `id` (a training variant).
+    pub(crate) fn title_fields(&self) -> BTreeMap<String, String> {
+        let free = self.path.file_name() == Some(std::ffi::OsStr::new(FREE_RUN));
+        let mut f = BTreeMap::new();
+        f.insert("scenario".to_string(), self.scenario.name.clone());
+        let key = match (&self.scenario.program, free) {
+            (ProgramChoice::Reference, true) => "scenario-reference".to_string(),
+            (ProgramChoice::Error(id), true) => {
+                f.insert("id".to_string(), id.clone());
+                "scenario-training".to_string()
+            }
+            _ => self.path.file_stem().map_or(String::new(), |s| {
+                format!("scenario-{}", s.to_string_lossy())
+            }),
+        };
+        f.insert("scenario_key".to_string(), key);
+        f
+    }
+
     fn free_run(plant_dir: &Path, program: ProgramChoice, name: &str) -> Self {
         let actions = match program {
             ProgramChoice::Error(_) => vec![vigie_core::sim::TimedAction {
@@ -238,7 +269,7 @@ impl Source {
                 diagnosers: plant_dir.join("diagnosers.ron").exists(),
                 plausibility: true,
             },
-            path: plant_dir.join("console.ron"),
+            path: plant_dir.join(FREE_RUN),
         }
     }
 
@@ -522,11 +553,13 @@ impl Console {
             &sim.bundle.dir.display().to_string(),
             &sim.bundle.symbols,
         );
-        journal.push(
-            0,
-            "session",
-            &format!("console opened on {}", source.scenario.name),
-        );
+        {
+            let mut fields = source.title_fields();
+            let title = words::title(&i18n, &fields, true);
+            let text = i18n.ta_en("say-session", &[("scenario", (&title).into())]);
+            fields.insert("scenario".into(), title);
+            journal.push_coded(0, "session", &text, "say-session", fields);
+        }
         if opts.start {
             let _ = sim.act(&OperatorAction::Start);
         }
@@ -617,7 +650,7 @@ impl Console {
                 c.enter_maintenance();
             } else {
                 c.mode = Mode::Production;
-                c.status = c.refusal(Permission::EditProgram);
+                c.refuse(Permission::EditProgram);
             }
         }
         Ok(c)
@@ -648,8 +681,10 @@ impl Console {
     fn drain_journal(&mut self) {
         let entries: Vec<_> = self.sim.take_journal().to_vec();
         for e in entries {
-            self.journal.push(e.time_ms, &e.kind, &e.text);
-            if e.kind == "trip" && self.score.trip_wall_s.is_none() {
+            let trip = e.kind == "trip";
+            self.journal
+                .push_coded(e.time_ms, &e.kind, &e.text, &e.code, e.fields);
+            if trip && self.score.trip_wall_s.is_none() {
                 self.score.trip_wall_s = Some(self.wall_s);
             }
         }
@@ -703,6 +738,23 @@ impl Console {
         self.cycles(whole);
     }
 
+    /// Tells the operator `id` (with `args`) on the status line in the language shown;
+    /// with a `kind`, also journals it at `sim_ms`: the English text as the record, the
+    /// message id and its fields to show it in any language.
+    fn say(&mut self, kind: Option<(&str, u64)>, id: &str, args: &[(&str, String)]) {
+        let a: Vec<(&str, crate::i18n::Arg<'_>)> =
+            args.iter().map(|(k, v)| (*k, v.into())).collect();
+        self.status = self.i18n.ta(id, &a);
+        if let Some((kind, sim_ms)) = kind {
+            let text = self.i18n.ta_en(id, &a);
+            let fields = args
+                .iter()
+                .map(|(k, v)| ((*k).to_string(), v.clone()))
+                .collect();
+            self.journal.push_coded(sim_ms, kind, &text, id, fields);
+        }
+    }
+
     fn now(&self) -> Millis {
         self.sim.now()
     }
@@ -719,13 +771,18 @@ impl Console {
     }
 
     /// The refusal of `p` for the role in force.
-    fn refusal(&self, p: Permission) -> String {
-        format!(
-            "Refused: {} needs the {} role ({} now): log in",
-            p.what(),
-            p.roles().join(" or "),
-            self.role.name()
-        )
+    /// Refuses `p` to the current role: said and journaled.
+    fn refuse(&mut self, p: Permission) {
+        let or = format!(" {} ", self.i18n.t("word-or"));
+        let role = |r: &str| self.i18n.t(&format!("role-{r}"));
+        let roles: Vec<String> = p.roles().into_iter().map(role).collect();
+        let args = [
+            ("what", self.i18n.t(&format!("perm-{p:?}"))),
+            ("roles", roles.join(&or)),
+            ("role", role(self.role.name())),
+        ];
+        let now = self.now().0;
+        self.say(Some(("refused", now)), "say-refused", &args);
     }
 
     /// A login: the role of the account when the password is right. Guessing is
@@ -749,11 +806,17 @@ impl Console {
                 self.role = role;
                 self.user = Some(name.to_string());
                 self.login = None;
-                self.status = format!("{name} logged in ({})", role.name());
-                self.journal.push(now, "login", &self.status.clone());
+                self.say(
+                    Some(("login", now)),
+                    "say-login",
+                    &[
+                        ("user", name.to_string()),
+                        ("role", role.name().to_string()),
+                    ],
+                );
             }
             Err(e) => {
-                self.status = format!("Login refused: {e}");
+                self.say(None, "say-login-refused", &[("error", e.to_string())]);
                 self.journal.push(
                     now,
                     "login_refused",
@@ -780,9 +843,7 @@ impl Console {
         if self.may(p) {
             return true;
         }
-        self.status = self.refusal(p);
-        let now = self.now().0;
-        self.journal.push(now, "refused", &self.status.clone());
+        self.refuse(p);
         false
     }
 
@@ -835,13 +896,13 @@ impl Console {
             Command::Login { name, password } => self.log_in(&name, &password, now),
             Command::Logout => {
                 if let Some(u) = self.user.take() {
-                    self.journal.push(now, "logout", &format!("{u} logged out"));
+                    self.say(Some(("logout", now)), "say-logout", &[("user", u)]);
                 }
                 self.role = Role::Operator;
                 if self.mode == Mode::Maintenance && !self.may(Permission::EditProgram) {
                     self.mode = Mode::Production;
                 }
-                self.status = "Logged out: operator role".into();
+                self.say(None, "say-logged-out", &[]);
             }
             Command::Run => self.running = true,
             Command::Pause => self.running = false,
@@ -950,7 +1011,11 @@ impl Console {
                 if m == Mode::Maintenance {
                     self.enter_maintenance();
                 }
-                self.journal.push(now, "operator", &format!("mode {m:?}"));
+                self.say(
+                    Some(("operator", now)),
+                    "say-mode",
+                    &[("mode", format!("{m:?}"))],
+                );
             }
             Command::ShowLevel(l) => {
                 self.level = l.filter(|l| *l < 5);
@@ -961,11 +1026,14 @@ impl Console {
             Command::Acknowledge { id, note } => {
                 match self.sim.alarms.acknowledge(Millis(now), id, &note) {
                     Ok(()) => {
-                        self.journal
-                            .push(now, "ack", &format!("alarm {id} acknowledged: {note}"));
+                        self.say(
+                            Some(("ack", now)),
+                            "say-ack",
+                            &[("id", id.to_string()), ("note", note.clone())],
+                        );
                         self.notes.remove(&id);
                     }
-                    Err(e) => self.status = format!("acknowledge refused: {e}"),
+                    Err(e) => self.say(None, "say-ack-refused", &[("error", e.to_string())]),
                 }
             }
             Command::AcknowledgeAll { ids, note } => {
@@ -977,42 +1045,44 @@ impl Console {
                     self.notes.remove(id);
                 }
                 let list: Vec<String> = done.iter().map(|id| format!("#{id}")).collect();
-                self.status = format!("{} alarm(s) acknowledged", done.len());
                 if !done.is_empty() {
-                    self.journal.push(
-                        now,
-                        "ack",
-                        &format!("alarms {} acknowledged together: {note}", list.join(", ")),
+                    self.say(
+                        Some(("ack", now)),
+                        "say-ack-together",
+                        &[("list", list.join(", ")), ("note", note.clone())],
                     );
                 }
+                self.say(None, "say-ack-all", &[("n", done.len().to_string())]);
             }
             Command::Shelve { id, ms, reason } => {
                 match self.sim.alarms.shelve(Millis(now), id, Millis(ms), &reason) {
                     Ok(()) => {
                         self.shelve_form = None;
-                        self.journal.push(
-                            now,
-                            "shelve",
-                            &format!(
-                                "alarm {id} shelved for {} min: {}",
-                                ms / 60_000,
-                                reason.trim()
-                            ),
+                        self.say(
+                            Some(("shelve", now)),
+                            "say-shelve",
+                            &[
+                                ("id", id.to_string()),
+                                ("minutes", (ms / 60_000).to_string()),
+                                ("reason", reason.trim().to_string()),
+                            ],
                         );
                     }
-                    Err(e) => {
-                        self.status = format!("Shelving refused: {e}");
-                        self.journal
-                            .push(now, "shelve_refused", &self.status.clone());
-                    }
+                    Err(e) => self.say(
+                        Some(("shelve_refused", now)),
+                        "say-shelve-refused",
+                        &[("error", e.to_string())],
+                    ),
                 }
             }
             Command::CloseShelveForm => self.shelve_form = None,
             Command::Unshelve(id) => match self.sim.alarms.unshelve(Millis(now), id) {
-                Ok(()) => self
-                    .journal
-                    .push(now, "unshelve", &format!("alarm {id} unshelved")),
-                Err(e) => self.status = format!("unshelve refused: {e}"),
+                Ok(()) => self.say(
+                    Some(("unshelve", now)),
+                    "say-unshelve",
+                    &[("id", id.to_string())],
+                ),
+                Err(e) => self.say(None, "say-unshelve-refused", &[("error", e.to_string())]),
             },
             Command::Scrub(t) => self.replay = t,
             Command::ExportAlarms(path) => {
@@ -1021,11 +1091,19 @@ impl Console {
                 let csv = vigie_core::alarms::AlarmList::history_csv(&list);
                 let n = list.len();
                 let written = journal::write_export(&path, &csv);
-                self.status = match written {
-                    Ok(()) => format!("{n} alarms exported to {}", path.display()),
-                    Err(e) => format!("alarm export to {} failed: {e}", path.display()),
-                };
-                self.journal.push(now, "operator", &self.status.clone());
+                let shown = path.display().to_string();
+                match written {
+                    Ok(()) => self.say(
+                        Some(("operator", now)),
+                        "say-alarms-exported",
+                        &[("n", n.to_string()), ("path", shown)],
+                    ),
+                    Err(e) => self.say(
+                        Some(("operator", now)),
+                        "say-alarms-export-failed",
+                        &[("path", shown), ("error", e.to_string())],
+                    ),
+                }
             }
             Command::ExportTrend(path) => {
                 let path = self.export_path(&path);
@@ -1042,19 +1120,32 @@ impl Console {
                         .map(|()| n)
                         .map_err(|e| e.to_string())
                 });
-                self.status = match written {
-                    Ok(n) => format!("{n} changes exported to {}", path.display()),
-                    Err(e) => format!("trend export to {} failed: {e}", path.display()),
-                };
-                self.journal
-                    .push(self.now().0, "operator", &self.status.clone());
+                let shown = path.display().to_string();
+                let at = self.now().0;
+                match written {
+                    Ok(n) => self.say(
+                        Some(("operator", at)),
+                        "say-trend-exported",
+                        &[("n", n.to_string()), ("path", shown)],
+                    ),
+                    Err(e) => self.say(
+                        Some(("operator", at)),
+                        "say-trend-export-failed",
+                        &[("path", shown), ("error", e)],
+                    ),
+                }
             }
             Command::SetLanguage(lang) => {
                 self.i18n.set_lang(lang);
                 self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
                 self.view.words = synoptic_words(&self.i18n);
-                self.journal
-                    .push(now, "operator", &format!("language {}", lang.code()));
+                let status = std::mem::take(&mut self.status);
+                self.say(
+                    Some(("operator", now)),
+                    "say-language",
+                    &[("lang", lang.code().to_string())],
+                );
+                self.status = status;
             }
             Command::SaveAs(what) => {
                 let dir = self.export_path(Path::new(""));
@@ -1107,10 +1198,15 @@ impl Console {
                     if let vigie_core::emulator::Trigger::At(t) = &mut spec.trigger {
                         *t += now;
                     }
-                    self.status = match self.sim.inject(spec) {
-                        Ok(()) => format!("fault injected: {name}"),
-                        Err(e) => format!("fault refused: {}", e.message),
-                    };
+                    let what = words::fault(&self.i18n, &self.view.descriptions, &name, &spec);
+                    match self.sim.inject(spec) {
+                        Ok(()) => self.say(None, "say-fault-injected", &[("what", what)]),
+                        Err(e) => self.say(
+                            None,
+                            "say-fault-refused",
+                            &[("what", what), ("error", e.message)],
+                        ),
+                    }
                     self.drain_journal();
                 }
             }
@@ -1138,12 +1234,12 @@ impl Console {
                     format!("compiled: {}", diff.join("; "))
                 };
                 self.compiled_edit = Some(c);
-                self.status = "program compiled".into();
+                self.say(None, "say-compiled", &[]);
             }
             Err(e) => {
                 self.problems = e;
                 self.compiled_edit = None;
-                self.status = "compilation failed".into();
+                self.say(None, "say-compile-failed", &[]);
             }
         }
         let text = self.status.clone();
@@ -1163,15 +1259,19 @@ impl Console {
                 self.budget_ms = 0.0;
                 self.running = true;
                 self.score.trip_wall_s = None;
-                self.journal.push(
-                    0,
-                    "operator",
-                    &format!("restart: {}", self.source.scenario.name),
-                );
+                let mut fields = self.source.title_fields();
+                let title = words::title(&self.i18n, &fields, true);
+                let text = self
+                    .i18n
+                    .ta_en("say-restart", &[("scenario", (&title).into())]);
+                fields.insert("scenario".into(), title);
+                self.journal
+                    .push_coded(0, "operator", &text, "say-restart", fields);
+                self.status = self.source.title(&self.i18n);
                 self.drain_journal();
-                self.status = "restarted".into();
+                self.say(None, "say-restarted", &[]);
             }
-            Err(e) => self.status = format!("restart failed: {e}"),
+            Err(e) => self.say(None, "say-restart-failed", &[("error", e)]),
         }
     }
 
@@ -1180,33 +1280,34 @@ impl Console {
             self.recompile();
         }
         let Some(program) = self.compiled_edit.clone() else {
-            self.status = "nothing to verify: the edit does not compile".into();
+            self.say(None, "say-nothing-to-verify", &[]);
             return;
         };
         let outcome = verify_fix(&self.source.scenario, &self.source.path, program);
         if self.score.variant.is_none() {
             self.score.variant = Some(self.source.scenario.name.clone());
         }
-        self.score.record(outcome.clone(), self.wall_s);
-        self.status = outcome.clone();
-        self.journal.push(self.now().0, "training", &outcome);
+        self.score.record(&outcome, self.wall_s);
+        let (id, args) = outcome.message();
+        self.say(Some(("training", self.now().0)), id, &args);
     }
 
     fn start_report(&mut self, dir: PathBuf) {
         let Some(trip) = self.latest_trip() else {
-            self.status = "no trip to report".into();
+            self.say(None, "say-no-trip", &[]);
             return;
         };
         match report::write_markdown(&self.sim, &self.i18n, trip, &dir) {
             Ok(path) => {
-                self.status = format!(
-                    "report written to {}; capturing the levels…",
-                    path.display()
+                self.say(
+                    Some(("report", self.now().0)),
+                    "say-report",
+                    &[("path", dir.display().to_string())],
                 );
-                self.journal.push(
-                    self.now().0,
-                    "report",
-                    &format!("incident report {}", dir.display()),
+                self.say(
+                    None,
+                    "say-report-written",
+                    &[("path", path.display().to_string())],
                 );
                 self.report_job = Some(ReportJob {
                     dir,
@@ -1217,7 +1318,7 @@ impl Console {
                 });
                 self.running = false;
             }
-            Err(e) => self.status = format!("report failed: {e}"),
+            Err(e) => self.say(None, "say-report-failed", &[("error", e.to_string())]),
         }
     }
 
@@ -1231,14 +1332,19 @@ impl Console {
             let ppp = ctx.pixels_per_point();
             let path = job.dir.join(format!("level-{}.png", job.level));
             if let Err(e) = report::save_png(&image, self.synoptic_rect, ppp, &path) {
-                self.status = format!("PNG failed: {e}");
+                self.status = self
+                    .i18n
+                    .ta("say-png-failed", &[("error", (&e.to_string()).into())]);
             }
             job.level += 1;
             job.waiting = false;
             job.frames = 0;
         }
         if job.level >= 5 {
-            self.status = format!("incident report complete in {}", job.dir.display());
+            self.status = self.i18n.ta(
+                "say-report-complete",
+                &[("path", (&job.dir.display().to_string()).into())],
+            );
             self.report_job = None;
             self.level = Some(0);
             return;
@@ -1259,9 +1365,9 @@ impl Console {
             job.waiting = true;
             job.frames = 0;
         } else if job.waiting && job.frames > 120 {
-            self.status = format!(
-                "report Markdown in {}; PNG capture unavailable here",
-                job.dir.display()
+            self.status = self.i18n.ta(
+                "say-report-no-png",
+                &[("path", (&job.dir.display().to_string()).into())],
             );
             self.report_job = None;
             return;

@@ -28,9 +28,9 @@ pub struct Score {
 
 impl Score {
     /// Records a verification outcome.
-    pub fn record(&mut self, outcome: String, wall_s: f64) {
+    pub fn record(&mut self, outcome: &FixOutcome, wall_s: f64) {
         self.attempts += 1;
-        self.fixed = outcome.starts_with("correct fix");
+        self.fixed = outcome.is_fixed();
         if self.fixed && self.located_after_s.is_none() {
             self.located_after_s = Some(wall_s - self.trip_wall_s.unwrap_or(0.0));
         }
@@ -65,16 +65,62 @@ impl Score {
     }
 }
 
+/// What the re-run of a fix found.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FixOutcome {
+    /// The scenario could not be re-run (the rendered problems).
+    CannotRun(String),
+    /// No trip, no hazard, and no box delivered either.
+    NothingDelivered,
+    /// No trip and no hazard over `s` seconds, `delivered` boxes delivered.
+    Fixed {
+        /// Length of the re-run, s.
+        s: u64,
+        /// Boxes delivered.
+        delivered: u64,
+    },
+    /// The re-run still trips or damages.
+    NotFixed {
+        /// The constraints that tripped.
+        trips: Vec<String>,
+        /// The hazards (`Sheared of box 1 at 11756 ms`).
+        hazards: Vec<String>,
+    },
+}
+
+impl FixOutcome {
+    /// True for a correct fix.
+    pub fn is_fixed(&self) -> bool {
+        matches!(self, Self::Fixed { .. })
+    }
+
+    /// The message that tells it (`fix-…`) and its arguments.
+    pub fn message(&self) -> (&'static str, Vec<(&'static str, String)>) {
+        match self {
+            Self::CannotRun(e) => ("fix-cannot-run", vec![("error", e.clone())]),
+            Self::NothingDelivered => ("fix-nothing-delivered", Vec::new()),
+            Self::Fixed { s, delivered } => (
+                "fix-correct",
+                vec![("s", s.to_string()), ("delivered", delivered.to_string())],
+            ),
+            Self::NotFixed { trips, hazards } => (
+                "fix-not-fixed",
+                vec![("trips", trips.join(", ")), ("hazards", hazards.join("; "))],
+            ),
+        }
+    }
+}
+
 /// Re-runs `scenario` headless with `program` for its duration (at least 60 s) and tells
 /// whether the filter still trips or a hazard occurs.
-pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) -> String {
+pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) -> FixOutcome {
     let options = Options {
         history_cycles: 2_000,
         explain: false,
     };
     let mut sim = match Simulation::from_scenario(scenario, path, options) {
         Ok(s) => s,
-        Err(p) => return format!("cannot re-run: {}", vigie_core::diag::render(&p)),
+        Err(p) => return FixOutcome::CannotRun(vigie_core::diag::render(&p)),
     };
     sim.replace_program(program);
     sim.run_until(Millis(scenario.duration_ms.max(60_000)));
@@ -88,12 +134,12 @@ pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) ->
     let delivered = stats.delivered_left + stats.delivered_right;
     if trips.is_empty() && sim.emulator.hazards().is_empty() {
         if delivered == 0 {
-            return "not fixed: no trip but no box was delivered in the re-run".into();
+            return FixOutcome::NothingDelivered;
         }
-        format!(
-            "correct fix: no trip and no hazard in {} s, {delivered} boxes delivered",
-            sim.now().0 / 1000
-        )
+        FixOutcome::Fixed {
+            s: sim.now().0 / 1000,
+            delivered: u64::from(delivered),
+        }
     } else {
         let hazards: Vec<String> = sim
             .emulator
@@ -101,10 +147,6 @@ pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) ->
             .iter()
             .map(|h| format!("{:?} of box {} at {} ms", h.kind, h.box_id, h.time_ms))
             .collect();
-        format!(
-            "not fixed: the re-run has trips [{}] and hazards [{}]",
-            trips.join(", "),
-            hazards.join("; ")
-        )
+        FixOutcome::NotFixed { trips, hazards }
     }
 }

@@ -50,9 +50,9 @@ pub(crate) fn start(c: &mut Console) {
     match spawned {
         Ok(job) => {
             c.verification.job = Some(job);
-            c.status = "verifying the constraint set…".into();
+            c.say(None, "say-verifying", &[]);
         }
-        Err(e) => c.status = format!("cannot start the verification: {e}"),
+        Err(e) => c.say(None, "say-verify-cannot-start", &[("error", e.to_string())]),
     }
 }
 
@@ -76,32 +76,30 @@ pub(crate) fn poll(c: &mut Console, ctx: &egui::Context) {
         .join()
         .unwrap_or_else(|_| Err("the verification worker panicked".into()));
     let secs = c.wall_s - c.verification.started_s;
-    let summary = match &result {
-        Ok(r) => format!(
-            "verification: {} ({} states), {}",
-            if r.safe { "SAFE" } else { "NOT SAFE" },
-            r.full.states,
-            if r.permissive {
-                "permissive"
-            } else {
-                "NOT permissive"
-            }
+    let at = Some(("maintenance", c.now().0));
+    match &result {
+        Ok(r) => c.say(
+            at,
+            "say-verified",
+            &[
+                ("safe", r.safe.to_string()),
+                ("states", r.full.states.to_string()),
+                ("permissive", r.permissive.to_string()),
+            ],
         ),
-        Err(e) => format!("verification failed: {e}"),
-    };
-    c.journal.push(c.now().0, "maintenance", &summary);
-    c.status = summary;
+        Err(e) => c.say(at, "say-verify-failed", &[("error", e.clone())]),
+    }
     c.verification.result = Some((result, secs));
 }
 
 /// Replays the shortest hazard trace on the synoptic.
 pub(crate) fn replay(c: &mut Console) {
     let Some((Ok(report), _)) = &c.verification.result else {
-        c.status = "no verification result to replay".into();
+        c.say(None, "say-no-verification", &[]);
         return;
     };
     let Some((kind, trace)) = &report.full.hazard else {
-        c.status = "no counterexample: the set is safe on the model".into();
+        c.say(None, "say-no-counterexample", &[]);
         return;
     };
     let dir = std::env::temp_dir().join(format!("vigie-counterexample-{}", std::process::id()));
@@ -117,7 +115,11 @@ pub(crate) fn replay(c: &mut Console) {
     let path = match written {
         Ok(p) => p,
         Err(e) => {
-            c.status = format!("cannot write the counterexample: {e}");
+            c.say(
+                None,
+                "say-counterexample-unwritable",
+                &[("error", e.to_string())],
+            );
             return;
         }
     };
@@ -129,9 +131,13 @@ pub(crate) fn replay(c: &mut Console) {
             c.compiled_edit = None;
             c.restart(None);
             c.speed = c.speed.min(0.5);
-            c.status = format!("replaying the counterexample ({kind}) with the filter enforcing");
+            c.say(None, "say-replaying", &[("kind", kind.to_string())]);
         }
-        Err(p) => c.status = format!("counterexample: {}", vigie_core::diag::render(&p)),
+        Err(p) => c.say(
+            None,
+            "say-counterexample-unreadable",
+            &[("error", vigie_core::diag::render(&p))],
+        ),
     }
 }
 

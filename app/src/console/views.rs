@@ -356,7 +356,11 @@ fn bypass_banner_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         .bundle
                         .constraints
                         .get(id)
-                        .map(|k| k.description.clone())
+                        .map(|k| {
+                            c.i18n
+                                .plant(&format!("constraint-{}", k.id))
+                                .unwrap_or_else(|| k.description.clone())
+                        })
                         .filter(|d| !d.is_empty())
                         .map_or(String::new(), |d| format!(" ({d})"));
                     let left_s = b.until.0.saturating_sub(now.0) / 1000;
@@ -444,8 +448,15 @@ fn bypass_form_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     });
     if let Some(k) = c.sim.bundle.constraints.get(&c.bypass_form.0) {
         ui.label(
-            RichText::new(format!("{} = {}: {}", k.id, k.source, k.description))
-                .color(c.palette.text_dim),
+            RichText::new(format!(
+                "{} = {}: {}",
+                k.id,
+                k.source,
+                c.i18n
+                    .plant(&format!("constraint-{}", k.id))
+                    .unwrap_or_else(|| k.description.clone())
+            ))
+            .color(c.palette.text_dim),
         );
     }
 }
@@ -645,7 +656,7 @@ fn status_ui(c: &Console, ui: &mut egui::Ui) {
         ui.label(c.i18n.ta(
             "status-boxes",
             &[
-                ("scenario", (&c.source.scenario.name).into()),
+                ("scenario", (&c.source.title(&c.i18n)).into()),
                 ("created", s.created.into()),
                 ("left", s.delivered_left.into()),
                 ("right", s.delivered_right.into()),
@@ -1342,8 +1353,8 @@ fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             RichText::new(format!(
                 "{:>9}  {:<10} {}",
                 fmt_ms(e.sim_ms),
-                e.kind,
-                e.text
+                super::words::journal_kind(&c.i18n, &e.kind),
+                super::words::journal_text(&c.i18n, &c.sim.bundle, e)
             ))
             .monospace()
             .size(11.0),
@@ -1412,6 +1423,10 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                     {
                         out.push(Command::LoadVariant(id.clone()));
                     }
+                    let desc = c
+                        .i18n
+                        .plant(&format!("variant-{id}"))
+                        .unwrap_or_else(|| desc.clone());
                     ui.label(RichText::new(desc).small());
                 });
             }
@@ -1422,12 +1437,17 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             if c.faults.is_empty() {
                 ui.label(c.i18n.t("training-no-faults"));
             }
-            for (i, (name, _)) in c.faults.iter().enumerate() {
+            for (i, (name, spec)) in c.faults.iter().enumerate() {
                 ui.horizontal(|ui| {
                     if ui.button(c.i18n.t("training-inject")).clicked() {
                         out.push(Command::InjectFault(i));
                     }
-                    ui.label(name);
+                    ui.label(super::words::fault(
+                        &c.i18n,
+                        &c.view.descriptions,
+                        name,
+                        spec,
+                    ));
                 });
             }
         });
@@ -1603,7 +1623,14 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             {
                 let mut on = c.chrono_signals.contains(&s.id);
                 if ui
-                    .checkbox(&mut on, format!("{} {}", s.id, s.description))
+                    .checkbox(
+                        &mut on,
+                        format!(
+                            "{} {}",
+                            s.id,
+                            c.view.descriptions.get(&s.id).unwrap_or(&s.description)
+                        ),
+                    )
                     .changed()
                 {
                     if on {

@@ -9,6 +9,7 @@ use crate::i18n::{I18n, Lang};
 use vigie_core::alarms::texts;
 use vigie_core::alarms::{Alarm, AlarmKind};
 use vigie_core::bundle::PlantBundle;
+use vigie_core::emulator::FaultSpec;
 use vigie_core::engine::{ResetRefused, Trip};
 
 /// The plant's name of an element in the language shown.
@@ -179,16 +180,43 @@ pub(crate) fn alarm_message(
             .map_or_else(|| a.message.clone(), |t| trip_message(i18n, bundle, t));
     }
     let id = format!("alarm-{}", a.code);
-    if a.code.is_empty() || !i18n.has_own(&id) {
+    if a.code.is_empty() {
         return a.message.clone();
     }
-    let mut fields = a.fields.clone();
+    coded(i18n, bundle, &id, &a.fields).unwrap_or_else(|| a.message.clone())
+}
+
+/// The message `id` of the language shown built from a record's `fields` (an alarm's,
+/// a journal entry's), with what the plant folder translates added (a sensor's
+/// description, a task's subject, a place, a fault); `None` when the language shown
+/// has no such message of its own.
+pub(crate) fn coded(
+    i18n: &I18n,
+    bundle: &PlantBundle,
+    id: &str,
+    fields: &std::collections::BTreeMap<String, String>,
+) -> Option<String> {
+    if id.is_empty() || !i18n.has_own(id) {
+        return None;
+    }
+    let mut fields = fields.clone();
     if let Some(sensor) = fields.get("sensor").cloned() {
         let description = i18n
             .plant(&format!("signal-{sensor}"))
             .or_else(|| bundle.plant.signal(&sensor).map(|s| s.description.clone()))
             .unwrap_or_default();
         fields.insert("description".into(), description);
+    }
+    if let Some(place) = i18n.place(&fields) {
+        fields.insert("place".into(), place);
+    }
+    if fields.contains_key("fault") {
+        let what = fault_of(i18n, &i18n.signal_descriptions(&bundle.plant), &fields);
+        fields.insert("what".into(), what);
+    }
+    if fields.contains_key("scenario_key") {
+        let t = title(i18n, &fields, false);
+        fields.insert("scenario".into(), t);
     }
     if let Some(task) = fields.get("task").cloned()
         && let Some(subject) = i18n.plant(&format!("task-{task}"))
@@ -199,5 +227,94 @@ pub(crate) fn alarm_message(
         .iter()
         .map(|(k, v)| (k.as_str(), crate::i18n::Arg::Str(v.as_str())))
         .collect();
-    i18n.ta(&id, &args)
+    Some(i18n.ta(id, &args))
+}
+
+/// A journal entry's text in the language shown: its message when it has one in
+/// this language, else the text recorded.
+pub(crate) fn journal_text(
+    i18n: &I18n,
+    bundle: &PlantBundle,
+    e: &crate::historian::JournalRow,
+) -> String {
+    if i18n.lang() == Lang::En {
+        return e.text.clone();
+    }
+    coded(i18n, bundle, &e.code, &e.fields).unwrap_or_else(|| e.text.clone())
+}
+
+/// A journal entry's kind in the language shown.
+pub(crate) fn journal_kind(i18n: &I18n, kind: &str) -> String {
+    let id = format!("journal-kind-{kind}");
+    if i18n.lang() != Lang::En && i18n.has_own(&id) {
+        i18n.t(&id)
+    } else {
+        kind.to_string()
+    }
+}
+
+/// A fault of the training library in the language shown: in English the name
+/// `faults.ron` gives it; in another language built from its kind and the signal's
+/// translated description.
+pub(crate) fn fault(
+    i18n: &I18n,
+    descriptions: &std::collections::BTreeMap<String, String>,
+    name: &str,
+    spec: &FaultSpec,
+) -> String {
+    if i18n.lang() == Lang::En {
+        return name.to_string();
+    }
+    fault_of(i18n, descriptions, &spec.fault.fields())
+}
+
+/// A fault told from its fields ([`FaultKind::fields`]) in the language shown.
+fn fault_of(
+    i18n: &I18n,
+    descriptions: &std::collections::BTreeMap<String, String>,
+    fields: &std::collections::BTreeMap<String, String>,
+) -> String {
+    let get = |k: &str| fields.get(k).map_or("", String::as_str);
+    let signal = get("signal");
+    let description = descriptions
+        .get(signal)
+        .map_or(String::new(), |d| format!(" ({d})"));
+    i18n.ta(
+        &format!("fault-{}", get("fault")),
+        &[
+            ("signal", signal.into()),
+            ("description", (&description).into()),
+            ("ms", get("ms").into()),
+            ("percent", get("percent").into()),
+        ],
+    )
+}
+
+/// A run's title from its fields (see `Source::title_fields`), in the language shown
+/// or in English (`english`, a record's text): the console's message or the plant
+/// folder's text named by `scenario_key`, else the scenario file's own name
+/// (`scenario`, English as the file gives it).
+pub(crate) fn title(
+    i18n: &I18n,
+    fields: &std::collections::BTreeMap<String, String>,
+    english: bool,
+) -> String {
+    let get = |k: &str| fields.get(k).map_or("", String::as_str);
+    let key = get("scenario_key");
+    if key.is_empty() {
+        return get("scenario").to_string();
+    }
+    let args = [("id", get("id").into())];
+    if i18n.has(key) {
+        return if english {
+            i18n.ta_en(key, &args)
+        } else {
+            i18n.ta(key, &args)
+        };
+    }
+    if english || i18n.lang() == Lang::En {
+        return get("scenario").to_string();
+    }
+    i18n.plant(key)
+        .unwrap_or_else(|| get("scenario").to_string())
 }

@@ -17,13 +17,14 @@
 pub mod writer;
 
 use rusqlite::{Connection, OptionalExtension as _, params};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The database file in a data folder.
 pub const FILE: &str = "vigie.sqlite";
 
 /// The schema version this build writes (`PRAGMA user_version`).
-const SCHEMA_VERSION: i64 = 1;
+const SCHEMA_VERSION: i64 = 2;
 
 const SCHEMA: &str = "
 CREATE TABLE IF NOT EXISTS sessions(
@@ -38,7 +39,9 @@ CREATE TABLE IF NOT EXISTS journal(
     wall_ms INTEGER NOT NULL,
     sim_ms INTEGER NOT NULL,
     kind TEXT NOT NULL,
-    text TEXT NOT NULL
+    text TEXT NOT NULL,
+    code TEXT NOT NULL DEFAULT '',
+    fields TEXT NOT NULL DEFAULT ''
 );
 CREATE INDEX IF NOT EXISTS journal_time ON journal(wall_ms);
 CREATE TABLE IF NOT EXISTS alarms(
@@ -105,8 +108,23 @@ pub enum HistorianError {
 
 pub use vigie_core::live::config::Retention;
 
+/// A journal entry's fields as stored: JSON, empty for none.
+fn encode_fields(fields: &BTreeMap<String, String>) -> String {
+    if fields.is_empty() {
+        String::new()
+    } else {
+        serde_json::to_string(fields).unwrap_or_default()
+    }
+}
+
+/// A journal entry's fields as stored; what is not a JSON object of strings reads as
+/// none (the entry keeps its text).
+fn decode_fields(text: &str) -> BTreeMap<String, String> {
+    serde_json::from_str(text).unwrap_or_default()
+}
+
 /// One journal entry.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct JournalRow {
     /// Wall-clock time, ms since the Unix epoch.
     pub wall_ms: u64,
@@ -114,8 +132,15 @@ pub struct JournalRow {
     pub sim_ms: u64,
     /// `trip`, `reset`, `hazard`, `operator`, `ack`, `shelve`, `fault`…
     pub kind: String,
-    /// Text.
+    /// Text (English, the record).
     pub text: String,
+    /// The id of the message that tells the text in another language (`journal-trip`,
+    /// `alarm-hazard`…; empty when none), with its fields.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub code: String,
+    /// See `code`.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub fields: BTreeMap<String, String>,
 }
 
 /// One alarm as the history keeps it (its latest state).
@@ -311,9 +336,23 @@ impl Store {
                 found: version,
             });
         }
-        self.conn.execute_batch(SCHEMA).map_err(|e| self.sql(e))?;
+        // Version 1 had no message code nor fields on journal entries: its rows keep
+        // their text and gain empty ones.
+        let migrate = if version == 1 {
+            "ALTER TABLE journal ADD COLUMN code TEXT NOT NULL DEFAULT ''; \
+             ALTER TABLE journal ADD COLUMN fields TEXT NOT NULL DEFAULT '';"
+        } else {
+            ""
+        };
+        if version == SCHEMA_VERSION {
+            return Ok(());
+        }
+        // IMMEDIATE: the write lock is taken first, so a writer holding the file makes
+        // this wait (busy timeout) rather than fail on a lock upgrade.
         self.conn
-            .execute_batch(&format!("PRAGMA user_version = {SCHEMA_VERSION}"))
+            .execute_batch(&format!(
+                "BEGIN IMMEDIATE; {migrate} {SCHEMA} PRAGMA user_version = {SCHEMA_VERSION}; COMMIT;"
+            ))
             .map_err(|e| self.sql(e))
     }
 
@@ -365,17 +404,19 @@ impl Store {
             return Ok(());
         }
         self.write(|tx| {
-            let mut st = tx
-                .prepare_cached(
-                    "INSERT INTO journal(session, wall_ms, sim_ms, kind, text) VALUES (?1, ?2, ?3, ?4, ?5)",
-                )?;
+            let mut st = tx.prepare_cached(
+                "INSERT INTO journal(session, wall_ms, sim_ms, kind, text, code, fields) \
+                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)",
+            )?;
             for r in rows {
                 st.execute(params![
                     session,
                     to_i64(r.wall_ms),
                     to_i64(r.sim_ms),
                     r.kind,
-                    r.text
+                    r.text,
+                    r.code,
+                    encode_fields(&r.fields)
                 ])?;
             }
             Ok(())
@@ -393,7 +434,7 @@ impl Store {
         let mut st = self
             .conn
             .prepare_cached(
-                "SELECT wall_ms, sim_ms, kind, text FROM journal WHERE wall_ms >= ?1 \
+                "SELECT wall_ms, sim_ms, kind, text, code, fields FROM journal WHERE wall_ms >= ?1 \
                  AND (?2 = '' OR instr(lower(kind || ' ' || text), lower(?2)) > 0) \
                  ORDER BY id LIMIT ?3",
             )
@@ -407,6 +448,8 @@ impl Store {
                         sim_ms: to_u64(r.get(1)?),
                         kind: r.get(2)?,
                         text: r.get(3)?,
+                        code: r.get(4)?,
+                        fields: decode_fields(&r.get::<_, String>(5)?),
                     })
                 },
             )
@@ -715,6 +758,7 @@ impl Store {
                 sim_ms: e.sim_ms,
                 kind: e.kind,
                 text: e.text,
+                ..JournalRow::default()
             });
         }
         let started = rows.first().map_or(0, |r| r.wall_ms);

@@ -26,6 +26,7 @@ fn row(wall_ms: u64, kind: &str, text: &str) -> JournalRow {
         sim_ms: wall_ms,
         kind: kind.into(),
         text: text.into(),
+        ..JournalRow::default()
     }
 }
 
@@ -61,6 +62,49 @@ fn journal_is_durable_and_shared_by_two_connections() {
         .query_row("PRAGMA synchronous", [], |r| r.get(0))
         .unwrap();
     assert_eq!(sync, 2, "synchronous = FULL");
+}
+
+/// A file of schema version 1 (journal rows without message code nor fields) opens:
+/// its rows keep their text, and new rows keep their code and fields.
+#[test]
+fn a_version_1_file_is_migrated_and_keeps_its_rows() {
+    let d = Dir::new("v1");
+    std::fs::create_dir_all(&d.0).unwrap();
+    {
+        let c = rusqlite::Connection::open(d.0.join("vigie.sqlite")).unwrap();
+        c.execute_batch(
+            "CREATE TABLE sessions(id INTEGER PRIMARY KEY, source TEXT NOT NULL, \
+             plant TEXT NOT NULL, started_ms INTEGER NOT NULL); \
+             CREATE TABLE journal(id INTEGER PRIMARY KEY, session INTEGER NOT NULL, \
+             wall_ms INTEGER NOT NULL, sim_ms INTEGER NOT NULL, kind TEXT NOT NULL, \
+             text TEXT NOT NULL); \
+             INSERT INTO sessions VALUES (1, 'console', 'station', 5); \
+             INSERT INTO journal VALUES (1, 1, 5, 0, 'trip', 'filter tripped on CSs10'); \
+             PRAGMA user_version = 1;",
+        )
+        .unwrap();
+    }
+    let mut s = Store::open_in(&d.0).unwrap();
+    let version: i64 = s
+        .conn
+        .query_row("PRAGMA user_version", [], |r| r.get(0))
+        .unwrap();
+    assert_eq!(version, SCHEMA_VERSION);
+    let old = s.journal(0, "", 10).unwrap();
+    assert_eq!(old.len(), 1);
+    assert_eq!(old[0].text, "filter tripped on CSs10");
+    assert!(old[0].code.is_empty() && old[0].fields.is_empty());
+    let mut coded = row(6, "trip", "filter tripped on CSs4");
+    coded.code = "journal-trip".into();
+    coded.fields = [("constraints".to_string(), "CSs4".to_string())].into();
+    s.append_journal(1, &[coded.clone()]).unwrap();
+    drop(s);
+    // Opened again (now at the current version): nothing migrates twice.
+    let s = Store::open_in(&d.0).unwrap();
+    let all = s.journal(0, "", 10).unwrap();
+    assert_eq!(all.len(), 2);
+    assert_eq!(all[1], coded);
+    assert_eq!(s.integrity().unwrap(), "ok");
 }
 
 #[test]

@@ -190,6 +190,7 @@ impl History {
                 sim_ms: e["time_ms"].as_u64().unwrap_or(0),
                 kind: e["event"].as_str().unwrap_or("event").to_string(),
                 text: e.to_string(),
+                ..JournalRow::default()
             })
             .collect();
         let mut alarms = Vec::new();

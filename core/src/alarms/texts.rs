@@ -181,6 +181,7 @@ pub fn hazard(h: &Hazard) -> AlarmText {
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
+        .chain(h.at.fields())
         .collect(),
     )
 }

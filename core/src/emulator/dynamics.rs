@@ -2,7 +2,7 @@
 //! arrivals and sensors. No allocation in the steady state.
 
 use super::model::{Body, END, Link, START, TablePos};
-use super::{BoxState, Emulator, Hazard, HazardKind, Side};
+use super::{BoxState, Emulator, Hazard, HazardKind, Place, Side};
 use crate::symbols::Space;
 
 /// Velocity factor from the axis of a part, across its end `e`, into the axis of the
@@ -315,7 +315,11 @@ impl Emulator {
                     if pj != pi {
                         el.extend(self.parts[pj].actuators.iter().cloned());
                     }
-                    self.report(i, HazardKind::Collision, place, el);
+                    let at = Place::Against {
+                        part: self.parts[pi].id.clone(),
+                        item: bj.id,
+                    };
+                    self.report(i, HazardKind::Collision, (place, at), el);
                 }
             }
         }
@@ -365,7 +369,11 @@ impl Emulator {
                     if b.part as usize == self.table {
                         el.push(self.layout.table.rotate_actuator.clone());
                     }
-                    self.report(i, HazardKind::Dropped, place, el);
+                    let at = Place::Off {
+                        part: p.id.clone(),
+                        end: e == END,
+                    };
+                    self.report(i, HazardKind::Dropped, (place, at), el);
                 }
                 let v = self.view(&self.bodies[i], BoxState::Fallen);
                 self.done.push((v, self.now));
@@ -396,7 +404,10 @@ impl Emulator {
                     let place = format!("edge of the {}", self.layout.table.name);
                     let mut el = vec![self.layout.table.rotate_actuator.clone()];
                     el.extend(self.parts[p].actuators.iter().cloned());
-                    self.report(i, HazardKind::Sheared, place, el);
+                    let at = Place::Edge {
+                        part: self.layout.table.id.clone(),
+                    };
+                    self.report(i, HazardKind::Sheared, (place, at), el);
                 }
                 let Some(q) = self.links[p][e as usize] else {
                     continue;
@@ -422,7 +433,11 @@ impl Emulator {
         let place = format!("between the {} and the {}", a.name, b.name);
         let mut el = a.actuators.clone();
         el.extend(b.actuators.iter().cloned());
-        self.report(i, HazardKind::PushedAgainstStopped, place, el);
+        let at = Place::Between {
+            part: a.id.clone(),
+            other: b.id.clone(),
+        };
+        self.report(i, HazardKind::PushedAgainstStopped, (place, at), el);
     }
 
     /// True when box `i` has not yet reported `kind`.
@@ -431,7 +446,13 @@ impl Emulator {
         self.bodies[i].reported & (1 << kind as u8) == 0
     }
 
-    fn report(&mut self, i: usize, kind: HazardKind, place: String, elements: Vec<String>) {
+    fn report(
+        &mut self,
+        i: usize,
+        kind: HazardKind,
+        (place, at): (String, Place),
+        elements: Vec<String>,
+    ) {
         let b = &mut self.bodies[i];
         b.reported |= 1 << kind as u8;
         if !b.damaged {
@@ -442,6 +463,7 @@ impl Emulator {
             time_ms: self.now,
             kind,
             place,
+            at,
             elements,
             box_id: b.id,
         });

@@ -60,6 +60,44 @@ pub enum FaultKind {
 }
 
 /// A fault and its schedule.
+impl FaultKind {
+    /// The fault as data, for a console that tells it in its own words: `fault`
+    /// (`stuck-at-0`, `stuck-at-1`, `spurious-rise`, `spurious-fall`, `actuator-off`,
+    /// `actuator-on`, `table-at-loading`, `table-at-unloading`, `table-between`,
+    /// `slowed`), `signal` where one is named, `ms` or `percent` where they apply.
+    pub fn fields(&self) -> std::collections::BTreeMap<String, String> {
+        let (tag, signal, n) = match self {
+            Self::SensorStuckAt0(s) => ("stuck-at-0", s.as_str(), None),
+            Self::SensorStuckAt1(s) => ("stuck-at-1", s.as_str(), None),
+            Self::SpuriousRise { sensor, pulse_ms } => {
+                ("spurious-rise", sensor.as_str(), Some(("ms", *pulse_ms)))
+            }
+            Self::SpuriousFall { sensor, pulse_ms } => {
+                ("spurious-fall", sensor.as_str(), Some(("ms", *pulse_ms)))
+            }
+            Self::ActuatorStuckOff(a) => ("actuator-off", a.as_str(), None),
+            Self::ActuatorStuckOn(a) => ("actuator-on", a.as_str(), None),
+            Self::TableBlockedAtC4 => ("table-at-loading", "", None),
+            Self::TableBlockedAtC5 => ("table-at-unloading", "", None),
+            Self::TableBlockedBetween => ("table-between", "", None),
+            Self::ConveyorSlowed { actuator, percent } => (
+                "slowed",
+                actuator.as_str(),
+                Some(("percent", u64::from(*percent))),
+            ),
+        };
+        let mut f = std::collections::BTreeMap::new();
+        f.insert("fault".to_string(), tag.to_string());
+        if !signal.is_empty() {
+            f.insert("signal".to_string(), signal.to_string());
+        }
+        if let Some((k, v)) = n {
+            f.insert(k.to_string(), v.to_string());
+        }
+        f
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FaultSpec {

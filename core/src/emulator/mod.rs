@@ -50,7 +50,7 @@ pub use layout::{
     ArrivalPlan, Beam, BoxDims, BoxSize, Conveyor, Elevator, Layout, Point, SensorDef, SensorKind,
     Side, SizeMix, Source, Turntable,
 };
-pub use model::{BoxState, BoxStats, BoxView, Hazard, HazardKind};
+pub use model::{BoxState, BoxStats, BoxView, Hazard, HazardKind, Place};
 
 use crate::bits::Bits;
 use crate::diag::Problem;

@@ -34,6 +34,8 @@ pub(crate) struct EndKind {
 /// A conveyor or the table, as an axis `0..len` in µm.
 #[derive(Clone, Debug)]
 pub(crate) struct Part {
+    /// Layout id (`entry`, `table`…), for the place of a hazard in data.
+    pub(crate) id: String,
     pub(crate) name: String,
     pub(crate) len: i64,
     /// Drive speed, µm per ms (= mm/s).
@@ -134,6 +136,69 @@ pub enum HazardKind {
     PushedAgainstStopped,
 }
 
+/// Where a hazard happened, by the layout ids of the parts involved.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Place {
+    /// At the edge of the rotating part.
+    Edge {
+        /// The rotating part.
+        part: String,
+    },
+    /// On a part, against another item.
+    Against {
+        /// The part.
+        part: String,
+        /// The other item.
+        item: u32,
+    },
+    /// Off the start or the end of a part.
+    Off {
+        /// The part.
+        part: String,
+        /// True at its end, false at its start.
+        end: bool,
+    },
+    /// Across two parts.
+    Between {
+        /// The part driving the item.
+        part: String,
+        /// The part it is pushed against.
+        other: String,
+    },
+}
+
+impl Place {
+    /// The place as fields of an explanation or an alarm: `place_kind` (`edge`,
+    /// `against`, `end`, `start`, `between`), `part`, and `other` / `other_item` where
+    /// they apply.
+    pub fn fields(&self) -> Vec<(String, String)> {
+        let mut f = Vec::new();
+        let mut put = |k: &str, v: String| f.push((k.to_string(), v));
+        match self {
+            Self::Edge { part } => {
+                put("place_kind", "edge".into());
+                put("part", part.clone());
+            }
+            Self::Against { part, item } => {
+                put("place_kind", "against".into());
+                put("part", part.clone());
+                put("other_item", item.to_string());
+            }
+            Self::Off { part, end } => {
+                put("place_kind", if *end { "end" } else { "start" }.into());
+                put("part", part.clone());
+            }
+            Self::Between { part, other } => {
+                put("place_kind", "between".into());
+                put("part", part.clone());
+                put("other", other.clone());
+            }
+        }
+        f
+    }
+}
+
 /// One dangerous state, reported once per box and kind.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Hazard {
@@ -141,8 +206,10 @@ pub struct Hazard {
     pub time_ms: u64,
     /// What.
     pub kind: HazardKind,
-    /// Where, in words.
+    /// Where, in words (English, from the layout's names).
     pub place: String,
+    /// Where, as data, for a translation to build its own words.
+    pub at: Place,
     /// Actuators involved.
     pub elements: Vec<String>,
     /// The damaged box.
@@ -160,6 +227,7 @@ pub(crate) fn build_parts(layout: &Layout) -> Vec<Part> {
             let (dx, dy) = ((c.end.x - c.start.x) as f64, (c.end.y - c.start.y) as f64);
             let len = dx.hypot(dy);
             Part {
+                id: c.id.clone(),
                 name: c.name.clone(),
                 len: (len * 1000.0).round() as i64,
                 speed: c.speed_mm_s,
@@ -174,6 +242,7 @@ pub(crate) fn build_parts(layout: &Layout) -> Vec<Part> {
     let t = &layout.table;
     let n = parts.len();
     parts.push(Part {
+        id: t.id.clone(),
         name: t.name.clone(),
         len: 2 * t.half_length_mm * 1000,
         speed: t.roller_speed_mm_s,

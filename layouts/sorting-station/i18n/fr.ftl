@@ -29,6 +29,13 @@ element-left-exit-conveyor = Convoyeur de sortie gauche
 element-right-exit-conveyor = Convoyeur de sortie droit
 element-turntable = Table tournante
 
+# Les parties de layout.ron (`id`), pour dire où une caisse est endommagée.
+part-entry = Convoyeur d'entrée
+part-intermediate = Convoyeur intermédiaire
+part-left_exit = Convoyeur de sortie gauche
+part-right_exit = Convoyeur de sortie droit
+part-table = Table tournante
+
 # Ce que protège chaque contrainte (le commentaire de constraints.txt).
 constraint-CSs1 = deux caisses entre C0 et C1 : arrêter le convoyeur d'entrée
 constraint-CSs2 = caisse en bout de A1, table pas en position de chargement
@@ -50,3 +57,29 @@ constraint-CSc2 = caisse poussée de A1 sur des rouleaux arrêtés
 
 # A4 à l'arrêt (`off` dans plant.ron : une sortie à 0 qui fait bouger quelque chose).
 off-A4 = la table tournante revient en position de chargement
+
+# Les scénarios (`scenario-<nom du fichier>` : son titre dans la ligne d'état).
+scenario-a1-dead-belt = A1 en panne sous une caisse poussée
+scenario-c4-stuck-degraded = C4 bloqué à 0, mode dégradé
+scenario-c6-phantom = C6 fantôme en position de chargement
+scenario-cs10-paper = CSs10 : A4 relâchée pendant que la caisse sort à droite
+scenario-learn-mixed = Tailles mélangées, alimentation chargée (trace d'apprentissage)
+scenario-reference-hour = Programme de référence, une heure de production
+scenario-table-blocked = Table tournante bloquée entre les positions
+scenario-tasks-hour = Une heure avec des pauses de l'opérateur
+
+# La bibliothèque d'erreurs de commande (programs/errors.ron).
+variant-E01 = Rotation relâchée sur le front montant de C7 au lieu de son front descendant : la caisse sort encore à droite (l'exemple de l'article)
+variant-E02 = Évacuation à droite jugée finie quand la caisse quitte le centre de la table (FE(C6)) au lieu de FE(C7) : A4 relâchée avec la caisse entre C6 et C7
+variant-E03 = Évacuation à gauche jugée finie sur FE(C6) au lieu de FE(C8) : A4 relâchée alors que la caisse est encore en C8
+variant-E04 = A4 non maintenue dans l'étape d'évacuation à droite (actionneur monostable traité comme bistable) : la table chargée quitte la position de déchargement
+variant-E05 = Évacuation à droite lancée dès que la table quitte la position de chargement (/C4 au lieu de C5) : A3 tourne pendant la rotation
+variant-E06 = Évacuation à gauche lancée dès que la table quitte la position de chargement (/C4 au lieu de C5) : A2 tourne pendant la rotation
+variant-E07 = Rouleaux mémorisés (S) au lieu de non mémorisés (N) dans l'étape de centrage : A2 tourne encore quand la table chargée est en C4
+variant-E08 = Capteur de présence inversé dans la réceptivité de rotation (/C6 au lieu de C6) : la table vide se met à tourner
+variant-E09 = Ordre de rotation impulsionnel (P) au lieu de maintenu (N) dans l'étape de rotation à droite : A4 retombe entre les positions
+variant-E10 = Ordre de rotation limité à 1 s (L) dans l'étape de rotation à gauche, plus court que la rotation de 2,9 s : A4 retombe entre les positions
+variant-E11 = Convoyeur intermédiaire non démarré pendant la poussée de la caisse depuis C0 (X11 absent de l'équation de A1)
+variant-E12 = Rouleaux non démarrés pendant que la caisse est tirée de A1 (action A2 absente de X21) : la caisse est poussée sur des rouleaux arrêtés
+variant-E13 = Convoyeur intermédiaire jamais arrêté en C3 (le facteur d'arrêt manque dans l'équation de A1)
+variant-E14 = La poussée finit quand la caisse a passé C1 (FE(C1)) au lieu de C0 : A0 continue d'alimenter et la caisse suivante atteint C0 pendant que la première couvre encore C1
