@@ -272,6 +272,26 @@ role-maintenance = maintenance
 role-trainer = trainer
 role-administrator = administrator
 
+say-alarms-printed = { $n } alarms laid out for printing in { $path }
+say-print-open-failed = { $path } is written; it could not be opened to print ({ $error }): open it in a browser
+print-title = Vigie: alarm history
+print-plant = Plant: { $name }
+print-run = Run: { $title }
+print-printed = Printed { $time }
+print-filter = Filter: { $filter }
+print-search = text “{ $text }”
+print-no-search = any text
+print-col-raised = Raised
+print-col-priority = Priority
+print-col-kind = Kind
+print-col-state = State
+print-col-message = Alarm
+print-col-cleared = Cleared
+print-col-ack = Acknowledged
+print-col-shelved = Shelved until
+history-print-hover = The history as filtered, laid out for paper (HTML), then opened in the browser to print
+history-print = Print…
+
 ## Training
 training-title = Training
 training-verify-fix = Verify fix

@@ -290,6 +290,26 @@ role-maintenance = maintenance
 role-trainer = formateur
 role-administrator = administrateur
 
+say-alarms-printed = { $n } alarmes mises en page pour l'impression dans { $path }
+say-print-open-failed = { $path } est écrit ; impossible de l'ouvrir pour l'imprimer ({ $error }) : ouvrez-le dans un navigateur
+print-title = Vigie : historique des alarmes
+print-plant = Installation : { $name }
+print-run = Marche : { $title }
+print-printed = Imprimé le { $time }
+print-filter = Filtre : { $filter }
+print-search = texte « { $text } »
+print-no-search = tout texte
+print-col-raised = Apparue
+print-col-priority = Priorité
+print-col-kind = Nature
+print-col-state = État
+print-col-message = Alarme
+print-col-cleared = Disparue
+print-col-ack = Acquittée
+print-col-shelved = Masquée jusqu'à
+history-print-hover = L'historique filtré, mis en page pour le papier (HTML), puis ouvert dans le navigateur pour l'imprimer
+history-print = Imprimer…
+
 ## Formation
 training-title = Formation
 training-verify-fix = Vérifier la correction

@@ -817,6 +817,28 @@ fn the_alarm_history_searches_filters_exports_and_the_rate_shows_a_flood() {
     let csv = std::fs::read_to_string(&path).expect("alarm csv");
     assert_eq!(csv.lines().count(), 2, "{csv}");
     assert!(csv.contains("\"P1\",\"safety filter trip\""), "{csv}");
+    // Print: the same filtered history laid out for paper, in the language shown,
+    // written (the test console opens no browser) with the filter on top.
+    h.get_by_label("Print…");
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.state_mut()
+        .apply(Command::PrintAlarms("vigie-alarms.html".into()));
+    let printed = std::fs::read_to_string(data.join("vigie-alarms.html")).expect("print");
+    assert!(
+        printed.contains("<h1>Vigie : historique des alarmes</h1>"),
+        "{printed}"
+    );
+    assert!(printed.contains("Filtre : texte « rotation »"), "{printed}");
+    assert_eq!(printed.matches("<tr class=").count(), 1, "{printed}");
+    assert!(
+        printed.contains("<td>P1</td><td>arrêt sécurité du filtre</td><td>NON ACQ.</td>")
+            && printed.contains("Arrêt sécurité : caisse sortant à droite"),
+        "{printed}"
+    );
+    assert!(printed.contains("window.print()"));
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::En));
     // By kind: the task alarms only.
     h.state_mut().history_filter.text.clear();
     h.state_mut().history_filter.kind = Some(vigie_core::alarms::AlarmKind::Task);

@@ -82,6 +82,7 @@ fn open_console(
     opts.start = args.start;
     opts.variant.clone_from(&args.variant);
     opts.link.clone_from(&args.link);
+    opts.open_files = true;
     if let Some(l) = &args.lang {
         opts.lang = vigie_app::i18n::Lang::parse(l)
             .ok_or_else(|| anyhow::anyhow!("unknown language `{l}` (fr, en)"))?;

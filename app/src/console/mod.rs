@@ -120,6 +120,11 @@ pub enum Command {
     /// Export the changes of the trends' signals over their range to CSV (a relative
     /// path is under the data folder).
     ExportTrend(PathBuf),
+    /// Write the alarm history, as filtered, as a document laid out for paper (HTML;
+    /// a relative path is under the data folder), then open it in the desktop's
+    /// browser to print it (when the console opens files, see
+    /// [`ConsoleOptions::open_files`]).
+    PrintAlarms(PathBuf),
     /// Open the desktop's save dialog for an export; the export follows the choice.
     SaveAs(save::Export),
     /// Show the console in this language.
@@ -182,6 +187,9 @@ pub struct ConsoleOptions {
     pub link: Option<PathBuf>,
     /// The language shown first (default: the system's, [`Lang::from_env`]).
     pub lang: Lang,
+    /// Open a printed document in the desktop's browser (off by default: tests and
+    /// headless runs write it only).
+    pub open_files: bool,
 }
 
 impl ConsoleOptions {
@@ -201,6 +209,7 @@ impl ConsoleOptions {
             variant: None,
             link: None,
             lang: Lang::from_env(),
+            open_files: false,
         }
     }
 }
@@ -390,6 +399,8 @@ pub struct Console {
     pub sim: Simulation,
     pub(crate) source: Source,
     pub(crate) plant_dir: PathBuf,
+    /// Open a printed document in the desktop's browser.
+    pub(crate) open_files: bool,
     /// Palette.
     pub palette: Palette,
     /// The journal.
@@ -641,6 +652,7 @@ impl Console {
             login: None,
             bypass_form: (String::new(), String::new(), 15),
             failed_logins: (0, None),
+            open_files: opts.open_files,
         };
         c.attach_link(opts)?;
         c.drain_journal();
@@ -1098,6 +1110,36 @@ impl Console {
                         "say-alarms-exported",
                         &[("n", n.to_string()), ("path", shown)],
                     ),
+                    Err(e) => self.say(
+                        Some(("operator", now)),
+                        "say-alarms-export-failed",
+                        &[("path", shown), ("error", e.to_string())],
+                    ),
+                }
+            }
+            Command::PrintAlarms(path) => {
+                let path = self.export_path(&path);
+                let list = self.sim.alarms.history(&self.history_filter);
+                let html = report::alarms_html(self, &list);
+                let n = list.len();
+                let shown = path.display().to_string();
+                match journal::write_export(&path, &html) {
+                    Ok(()) => {
+                        self.say(
+                            Some(("operator", now)),
+                            "say-alarms-printed",
+                            &[("n", n.to_string()), ("path", shown.clone())],
+                        );
+                        if self.open_files
+                            && let Err(e) = open::that_detached(&path)
+                        {
+                            self.say(
+                                None,
+                                "say-print-open-failed",
+                                &[("path", shown), ("error", e.to_string())],
+                            );
+                        }
+                    }
                     Err(e) => self.say(
                         Some(("operator", now)),
                         "say-alarms-export-failed",

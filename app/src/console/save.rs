@@ -17,6 +17,8 @@ pub enum Export {
     Alarms,
     /// The changes of the trends' signals over their range (CSV).
     Trend,
+    /// The alarm history as filtered, laid out for paper (HTML), then opened to print.
+    AlarmsPrint,
 }
 
 impl Export {
@@ -26,6 +28,15 @@ impl Export {
             Self::Journal => "vigie-journal.csv",
             Self::Alarms => "vigie-alarms.csv",
             Self::Trend => "vigie-trend.csv",
+            Self::AlarmsPrint => "vigie-alarms.html",
+        }
+    }
+
+    /// The file type offered: its name and extension.
+    fn filter(self) -> (&'static str, &'static str) {
+        match self {
+            Self::AlarmsPrint => ("HTML", "html"),
+            _ => ("CSV", "csv"),
         }
     }
 
@@ -35,6 +46,7 @@ impl Export {
             Self::Journal => Command::ExportCsv(path),
             Self::Alarms => Command::ExportAlarms(path),
             Self::Trend => Command::ExportTrend(path),
+            Self::AlarmsPrint => Command::PrintAlarms(path),
         }
     }
 }
@@ -75,7 +87,7 @@ impl SaveDialog {
                     .set_title("Vigie: export")
                     .set_directory(&dir)
                     .set_file_name(what.default_name())
-                    .add_filter("CSV", &["csv"])
+                    .add_filter(what.filter().0, &[what.filter().1])
                     .save_file();
                 let _ = tx.send(path);
             });

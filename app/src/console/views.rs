@@ -1075,6 +1075,7 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let every_priority = c.i18n.t("history-every-priority");
     let export = c.i18n.t("history-export");
     let save_as = c.i18n.t("history-save-as");
+    let print = c.i18n.t("history-print");
     egui::CollapsingHeader::new(title)
         .id_salt("alarm_history")
         .show(ui, |ui| {
@@ -1123,6 +1124,13 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                     .clicked()
                 {
                     out.push(Command::SaveAs(super::save::Export::Alarms));
+                }
+                if ui
+                    .add_enabled(!c.save.is_open(), egui::Button::new(&print))
+                    .on_hover_text(c.i18n.t("history-print-hover"))
+                    .clicked()
+                {
+                    out.push(Command::SaveAs(super::save::Export::AlarmsPrint));
                 }
             });
             const SHOWN: usize = 100;
