@@ -1410,6 +1410,7 @@ fn alarms_of_earlier_runs_from_the_historian() {
                     cleared_ms: None,
                     shelved: None,
                     first_out: false,
+                    ..Default::default()
                 }],
             )
             .unwrap();
@@ -1426,6 +1427,21 @@ fn alarms_of_earlier_runs_from_the_historian() {
     );
     assert!(
         h.query_by_label_contains("HIGH · UNACK  peer lost (never heard)")
+            .is_some()
+    );
+    // In French: the earlier trip told from its code and fields with the plant's
+    // French texts; the gateway's alarm, which has none, as recorded.
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains(
+            "URGENTE · NON ACQ.  Arrêt sécurité : caisse sortant à droite : maintenir la rotation (CSs10)"
+        )
+        .is_some()
+    );
+    assert!(
+        h.query_by_label_contains("HAUTE · NON ACQ.  peer lost (never heard)")
             .is_some()
     );
     drop(h);

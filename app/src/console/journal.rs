@@ -287,6 +287,8 @@ fn alarm_row(a: &Alarm, base_ms: u64) -> AlarmRow {
             .as_ref()
             .map(|s| (base_ms + s.until.0, s.reason.clone())),
         first_out: a.first_out,
+        code: a.code.to_string(),
+        fields: a.fields.clone(),
     }
 }
 

@@ -86,17 +86,27 @@ pub(crate) fn past_alarms_ui(c: &mut Console, ui: &mut egui::Ui) {
             );
             for a in shown.iter().take(SHOWN) {
                 let state = match (a.acked.is_some(), a.cleared_ms.is_some()) {
-                    (true, true) => "",
-                    (true, false) => " · ACK",
-                    (false, true) => " · CLEARED-UNACK",
-                    (false, false) => " · UNACK",
+                    (true, true) => String::new(),
+                    (true, false) => format!(" · {}", c.i18n.t("alarm-ack")),
+                    (false, true) => format!(" · {}", c.i18n.t("alarm-cleared-unack")),
+                    (false, false) => format!(" · {}", c.i18n.t("alarm-unack")),
                 };
+                let message = if a.code.is_empty() || c.i18n.lang() == crate::i18n::Lang::En {
+                    a.message.clone()
+                } else {
+                    super::words::coded(
+                        &c.i18n,
+                        &c.sim.bundle,
+                        &format!("alarm-{}", a.code),
+                        &a.fields,
+                    )
+                    .unwrap_or_else(|| a.message.clone())
+                };
+                let priority = c.i18n.t(&format!("prio-{}", a.priority));
                 ui.label(
                     RichText::new(format!(
-                        "{}  {}{state}  {}",
+                        "{}  {priority}{state}  {message}",
                         fmt_wall(a.raised_ms),
-                        a.priority.to_uppercase(),
-                        a.message
                     ))
                     .size(11.0),
                 );

@@ -255,12 +255,7 @@ pub(crate) fn alarms_html(c: &super::Console, list: &[&vigie_core::alarms::Alarm
             raised = e(&at(a.raised.0)),
             kind = e(&kind_name(a.kind)),
             state = e(&i.t(state)),
-            message = e(&super::words::alarm_message(
-                i,
-                &c.sim.bundle,
-                &c.sim.engine.trips,
-                a
-            )),
+            message = e(&super::words::alarm_message(i, &c.sim.bundle, a)),
             cleared = e(&a.cleared.map_or(String::new(), |t| at(t.0))),
             ack = e(&ack),
             shelved = e(&shelved),

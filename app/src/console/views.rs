@@ -1155,7 +1155,7 @@ fn history_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         "{:>9} P{} {}{cleared}{ack}",
                         fmt_ms(a.raised.0),
                         a.priority().rank(),
-                        super::words::alarm_message(&c.i18n, &c.sim.bundle, &c.sim.engine.trips, a)
+                        super::words::alarm_message(&c.i18n, &c.sim.bundle, a)
                     ))
                     .size(11.0),
                 );
@@ -1222,12 +1222,7 @@ fn alarm_row_ui(
                 ));
             }
         });
-        ui.label(super::words::alarm_message(
-            &c.i18n,
-            &c.sim.bundle,
-            &c.sim.engine.trips,
-            a,
-        ));
+        ui.label(super::words::alarm_message(&c.i18n, &c.sim.bundle, a));
         if !a.detail.is_empty() {
             egui::CollapsingHeader::new(c.i18n.t("alarm-detail"))
                 .id_salt(("alarm_detail", a.id))

@@ -6,8 +6,8 @@
 //! `element-<name>` with the name in lower case and its spaces as dashes).
 
 use crate::i18n::{I18n, Lang};
+use vigie_core::alarms::Alarm;
 use vigie_core::alarms::texts;
-use vigie_core::alarms::{Alarm, AlarmKind};
 use vigie_core::bundle::PlantBundle;
 use vigie_core::emulator::FaultSpec;
 use vigie_core::engine::{ResetRefused, Trip};
@@ -94,23 +94,36 @@ pub(crate) fn trip_message(i18n: &I18n, bundle: &PlantBundle, trip: &Trip) -> St
     if i18n.lang() == Lang::En {
         return texts::trip(bundle, trip).message;
     }
-    let why: Vec<String> = trip
-        .constraints
+    trip_from_fields(i18n, bundle, &texts::trip(bundle, trip).fields)
+}
+
+/// A trip alarm's text in the language shown from its fields (`constraints`, `held`,
+/// `stopped`: ids, comma-separated), as an earlier run's alarm keeps them.
+fn trip_from_fields(
+    i18n: &I18n,
+    bundle: &PlantBundle,
+    fields: &std::collections::BTreeMap<String, String>,
+) -> String {
+    let ids = |k: &str| -> Vec<&str> {
+        fields.get(k).map_or(Vec::new(), |v| {
+            v.split(',').filter(|s| !s.is_empty()).collect()
+        })
+    };
+    let why: Vec<String> = ids("constraints")
         .iter()
-        .map(|fc| constraint_phrase(i18n, bundle, &fc.id))
+        .map(|id| constraint_phrase(i18n, bundle, id))
         .collect();
-    let list = |on: bool| -> String {
-        trip.actions
+    let list = |k: &str| -> String {
+        ids(k)
             .iter()
-            .filter(|a| a.commanded != a.applied && a.applied == on)
-            .map(|a| signal_phrase(i18n, bundle, &a.output))
+            .map(|o| signal_phrase(i18n, bundle, o))
             .collect::<Vec<_>>()
             .join(", ")
     };
     let mut text = i18n.ta("words-safety-stop", &[("why", (&why.join(" ; ")).into())]);
     for (list, id) in [
-        (list(true), "words-held-on"),
-        (list(false), "words-stopped"),
+        (list("held"), "words-held-on"),
+        (list("stopped"), "words-stopped"),
     ] {
         if !list.is_empty() {
             text.push_str(&i18n.ta(id, &[("list", (&list).into())]));
@@ -164,25 +177,14 @@ pub(crate) fn reset_refused(i18n: &I18n, e: &ResetRefused) -> String {
 
 /// An alarm's text in the language shown: a trip's from its record; the others as the
 /// core wrote them.
-pub(crate) fn alarm_message(
-    i18n: &I18n,
-    bundle: &PlantBundle,
-    trips: &[Trip],
-    a: &Alarm,
-) -> String {
+pub(crate) fn alarm_message(i18n: &I18n, bundle: &PlantBundle, a: &Alarm) -> String {
     if i18n.lang() == Lang::En {
         return a.message.clone();
     }
-    if a.kind == AlarmKind::FilterTrip {
-        return trips
-            .iter()
-            .find(|t| t.time_ms == a.raised.0)
-            .map_or_else(|| a.message.clone(), |t| trip_message(i18n, bundle, t));
-    }
-    let id = format!("alarm-{}", a.code);
     if a.code.is_empty() {
         return a.message.clone();
     }
+    let id = format!("alarm-{}", a.code);
     coded(i18n, bundle, &id, &a.fields).unwrap_or_else(|| a.message.clone())
 }
 
@@ -196,6 +198,9 @@ pub(crate) fn coded(
     id: &str,
     fields: &std::collections::BTreeMap<String, String>,
 ) -> Option<String> {
+    if id == "alarm-trip" && i18n.lang() != Lang::En {
+        return Some(trip_from_fields(i18n, bundle, fields));
+    }
     if id.is_empty() || !i18n.has_own(id) {
         return None;
     }

@@ -59,6 +59,8 @@ CREATE TABLE IF NOT EXISTS alarms(
     shelved_until_ms INTEGER,
     shelve_reason TEXT,
     first_out INTEGER NOT NULL,
+    code TEXT NOT NULL DEFAULT '',
+    fields TEXT NOT NULL DEFAULT '',
     PRIMARY KEY(session, alarm)
 );
 CREATE INDEX IF NOT EXISTS alarms_time ON alarms(raised_ms);
@@ -144,7 +146,7 @@ pub struct JournalRow {
 }
 
 /// One alarm as the history keeps it (its latest state).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct AlarmRow {
     /// The alarm's number in its session.
     pub alarm: u64,
@@ -168,6 +170,11 @@ pub struct AlarmRow {
     pub shelved: Option<(u64, String)>,
     /// First alarm of the event that stopped the plant.
     pub first_out: bool,
+    /// What the message says as data (the alarm's code, `trip`, `hazard`…; empty when
+    /// none), to show it in another language.
+    pub code: String,
+    /// See `code`.
+    pub fields: BTreeMap<String, String>,
 }
 
 /// One change of a signal.
@@ -340,7 +347,9 @@ impl Store {
         // their text and gain empty ones.
         let migrate = if version == 1 {
             "ALTER TABLE journal ADD COLUMN code TEXT NOT NULL DEFAULT ''; \
-             ALTER TABLE journal ADD COLUMN fields TEXT NOT NULL DEFAULT '';"
+             ALTER TABLE journal ADD COLUMN fields TEXT NOT NULL DEFAULT ''; \
+             ALTER TABLE alarms ADD COLUMN code TEXT NOT NULL DEFAULT ''; \
+             ALTER TABLE alarms ADD COLUMN fields TEXT NOT NULL DEFAULT '';"
         } else {
             ""
         };
@@ -467,8 +476,9 @@ impl Store {
             let mut st = tx
                 .prepare_cached(
                     "INSERT OR REPLACE INTO alarms(session, alarm, key, kind, priority, message, detail, \
-                     raised_ms, acked_ms, ack_note, cleared_ms, shelved_until_ms, shelve_reason, first_out) \
-                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
+                     raised_ms, acked_ms, ack_note, cleared_ms, shelved_until_ms, shelve_reason, first_out, \
+                     code, fields) \
+                     VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
                 )?;
             for a in rows {
                 st.execute(params![
@@ -485,7 +495,9 @@ impl Store {
                     a.cleared_ms.map(to_i64),
                     a.shelved.as_ref().map(|(t, _)| to_i64(*t)),
                     a.shelved.as_ref().map(|(_, r)| r.as_str()),
-                    a.first_out
+                    a.first_out,
+                    a.code,
+                    encode_fields(&a.fields)
                 ])?;
             }
             Ok(())
@@ -499,7 +511,7 @@ impl Store {
             .conn
             .prepare_cached(
                 "SELECT alarm, key, kind, priority, message, detail, raised_ms, acked_ms, ack_note, \
-                 cleared_ms, shelved_until_ms, shelve_reason, first_out FROM alarms \
+                 cleared_ms, shelved_until_ms, shelve_reason, first_out, code, fields FROM alarms \
                  WHERE raised_ms >= ?1 ORDER BY raised_ms, session, alarm LIMIT ?2",
             )
             .map_err(|e| self.sql(e))?;
@@ -533,6 +545,8 @@ impl Store {
                         })
                         .transpose()?,
                     first_out: r.get(12)?,
+                    code: r.get(13)?,
+                    fields: decode_fields(&r.get::<_, String>(14)?),
                 })
             })
             .map_err(|e| self.sql(e))?;

@@ -78,7 +78,17 @@ fn a_version_1_file_is_migrated_and_keeps_its_rows() {
              CREATE TABLE journal(id INTEGER PRIMARY KEY, session INTEGER NOT NULL, \
              wall_ms INTEGER NOT NULL, sim_ms INTEGER NOT NULL, kind TEXT NOT NULL, \
              text TEXT NOT NULL); \
+             CREATE TABLE alarms(session INTEGER NOT NULL, alarm INTEGER NOT NULL, \
+             key TEXT NOT NULL, kind TEXT NOT NULL, priority TEXT NOT NULL, \
+             message TEXT NOT NULL, detail TEXT NOT NULL, raised_ms INTEGER NOT NULL, \
+             acked_ms INTEGER, ack_note TEXT, cleared_ms INTEGER, shelved_until_ms INTEGER, \
+             shelve_reason TEXT, first_out INTEGER NOT NULL, PRIMARY KEY(session, alarm)); \
+             CREATE TABLE signals(id INTEGER PRIMARY KEY, name TEXT NOT NULL UNIQUE); \
+             CREATE TABLE samples(signal INTEGER NOT NULL, t_ms INTEGER NOT NULL, \
+             value INTEGER NOT NULL, PRIMARY KEY(signal, t_ms)) WITHOUT ROWID; \
              INSERT INTO sessions VALUES (1, 'console', 'station', 5); \
+             INSERT INTO alarms VALUES (1, 1, 'trip:CSs10', 'trip', 'urgent', 'Safety stop', \
+             '', 5, NULL, NULL, NULL, NULL, NULL, 1); \
              INSERT INTO journal VALUES (1, 1, 5, 0, 'trip', 'filter tripped on CSs10'); \
              PRAGMA user_version = 1;",
         )
@@ -94,6 +104,10 @@ fn a_version_1_file_is_migrated_and_keeps_its_rows() {
     assert_eq!(old.len(), 1);
     assert_eq!(old[0].text, "filter tripped on CSs10");
     assert!(old[0].code.is_empty() && old[0].fields.is_empty());
+    let alarms = s.alarms(0, 10).unwrap();
+    assert_eq!(alarms.len(), 1);
+    assert_eq!(alarms[0].message, "Safety stop");
+    assert!(alarms[0].code.is_empty() && alarms[0].first_out);
     let mut coded = row(6, "trip", "filter tripped on CSs4");
     coded.code = "journal-trip".into();
     coded.fields = [("constraints".to_string(), "CSs4".to_string())].into();
@@ -150,6 +164,8 @@ fn alarms_keep_their_latest_state() {
         cleared_ms: None,
         shelved: None,
         first_out: true,
+        code: "trip".into(),
+        fields: [("constraints".to_string(), "CSs10".to_string())].into(),
     };
     s.upsert_alarms(session, std::slice::from_ref(&a)).unwrap();
     a.acked = Some((150, "checked the box".into()));

@@ -212,6 +212,8 @@ impl History {
                         cleared_ms: None,
                         shelved: None,
                         first_out: false,
+                        code: String::new(),
+                        fields: BTreeMap::new(),
                     };
                     self.next_alarm += 1;
                     alarms.push(row.clone());

@@ -39,11 +39,33 @@ pub fn trip(bundle: &PlantBundle, trip: &Trip) -> AlarmText {
         .map(|fc| format!("{} = {}", fc.id, fc.notation))
         .collect::<Vec<_>>()
         .join("; ");
+    let ids = |v: Vec<&str>| v.join(",");
+    let outputs = |on: bool| {
+        ids(trip
+            .actions
+            .iter()
+            .filter(|a| a.commanded != a.applied && a.applied == on)
+            .map(|a| a.output.as_str())
+            .collect())
+    };
     AlarmText {
         message,
         detail: format!("{detail} (true at {} ms)", trip.time_ms),
         ..AlarmText::default()
     }
+    .with(
+        "trip",
+        [
+            (
+                "constraints".to_string(),
+                ids(trip.constraints.iter().map(|c| c.id.as_str()).collect()),
+            ),
+            ("held".to_string(), outputs(true)),
+            ("stopped".to_string(), outputs(false)),
+        ]
+        .into_iter()
+        .collect(),
+    )
 }
 
 /// A violated constraint in the operator's words: what it protects and its id, then
