@@ -16,6 +16,8 @@ need mesa-vulkan-drivers
 need libgl1-mesa-dri
 need xvfb
 need imagemagick
+# a real console window found by name (tests/integration/cli.rs)
+need x11-utils
 need spin
 if [ ${#apt_packages[@]} -gt 0 ]; then
   echo "scripts/test.sh: installing Debian packages: ${apt_packages[*]}"

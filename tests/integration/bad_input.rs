@@ -301,7 +301,14 @@ fn a_50_mib_file_is_refused_quickly_by_check_and_learn() {
         assert_eq!(text(&out.stderr).trim_end(), want, "{name}");
         if name == "diagnosers.ron" || name == "plant.ron" {
             let trace = fixture("trace-time-repeats.csv");
-            let out = vigie(&["--plant", &d, "learn", path_str(&trace), "--dry-run"]);
+            let out = vigie(&[
+                "diagnose",
+                "learn",
+                "--plant",
+                &d,
+                path_str(&trace),
+                "--dry-run",
+            ]);
             assert!(!out.status.success(), "{name}");
             assert!(
                 text(&out.stderr).contains(&want),
@@ -350,7 +357,13 @@ fn learn_rewrites_only_the_interval_bounds_of_diagnosers_ron() {
         "--no-timing",
     ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
-    let out = vigie(&["--plant", path_str(&dir), "learn", path_str(&trace)]);
+    let out = vigie(&[
+        "diagnose",
+        "learn",
+        "--plant",
+        path_str(&dir),
+        path_str(&trace),
+    ]);
     assert!(out.status.success(), "{}", text(&out.stderr));
     let after = std::fs::read_to_string(dir.join("diagnosers.ron")).unwrap();
     assert_ne!(after, before, "nothing learned");
@@ -389,7 +402,7 @@ fn bench_reads_its_scenarios_from_the_plant_folder() {
         ),
     ] {
         std::fs::write(dir.join("bench.ron"), bench).unwrap();
-        let out = vigie(&["--plant", d, "bench", "--iterations", "101"]);
+        let out = vigie(&["bench", "--plant", d, "--iterations", "101"]);
         let err = text(&out.stderr);
         assert!(!out.status.success());
         assert!(err.contains(says), "{err}");

@@ -1033,13 +1033,13 @@ fn kill_9_of_the_gateway_during_a_burst_loses_no_committed_entry() {
 
 /// A virtual X display for a real console window (`Xvfb -displayfd`: the server picks
 /// a free display number and prints it).
-struct Xvfb {
+pub(crate) struct Xvfb {
     child: Child,
-    display: String,
+    pub(crate) display: String,
 }
 
 impl Xvfb {
-    fn start() -> Self {
+    pub(crate) fn start() -> Self {
         let mut child = Command::new("Xvfb")
             .args([
                 "-displayfd",

@@ -2,6 +2,7 @@
 
 mod adversary;
 mod bad_input;
+mod cli;
 mod console;
 mod console_link;
 mod diagnoser;

@@ -6,27 +6,96 @@ use std::io::Write as _;
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Which campaign.
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub(crate) enum Kind {
-    /// Library variants and single mutations of the reference program.
-    Mutations,
-    /// Fault campaign of the diagnosers: every injectable fault over many seeds, and
-    /// fault-free hours (`vigie campaign diagnoser`).
-    Diagnoser,
-    /// Transient sensor faults (dropouts, pulses, flicker, pairs) and welded and dead
-    /// actuators, with the filter and the diagnosers on: hazards, wrong diagnoses and
-    /// recovery after the reset (`vigie campaign transients`).
-    Transients,
+/// Options every campaign takes.
+#[derive(clap::Args, Debug)]
+pub(crate) struct Common {
+    #[command(flatten)]
+    pub(crate) plant: super::PlantOpt,
+    /// Worker threads (default: the available parallelism).
+    #[arg(long)]
+    pub(crate) threads: Option<usize>,
+    /// Print the full JSON report.
+    #[arg(long)]
+    pub(crate) json: bool,
 }
 
-pub(crate) fn run(
-    plant_dir: &Path,
-    kind: Kind,
-    threads: Option<usize>,
-    json: bool,
-) -> anyhow::Result<ExitCode> {
-    anyhow::ensure!(matches!(kind, Kind::Mutations), "dispatched elsewhere");
+/// Options of the fault campaigns (`diagnoser`, `transients`).
+#[derive(clap::Args, Debug)]
+pub(crate) struct Faults {
+    /// Seeds per fault.
+    #[arg(long, default_value_t = 100)]
+    pub(crate) seeds: u64,
+    /// The first seed (`--from-seed 66 --seeds 1` replays seed 66; `transients --seeds
+    /// 1 --json` adds every change of a signal of the failed run).
+    #[arg(long, default_value_t = 0)]
+    pub(crate) from_seed: u64,
+    /// Simulated hours of fault-free runs.
+    #[arg(long, default_value_t = 10)]
+    pub(crate) hours: u64,
+    /// Only faults (cases) whose name contains this.
+    #[arg(long)]
+    pub(crate) only: Option<String>,
+}
+
+/// Which campaign.
+#[derive(clap::Subcommand, Debug)]
+pub(crate) enum CampaignCmd {
+    /// Library variants and single mutations of the reference program: does the
+    /// hypothesis level localise every control error that trips the filter?
+    Mutations {
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Fault campaign of the diagnosers: every injectable fault over many seeds, and
+    /// fault-free hours.
+    Diagnoser {
+        #[command(flatten)]
+        common: Common,
+        #[command(flatten)]
+        faults: Faults,
+    },
+    /// Transient sensor faults (dropouts, pulses, flicker, pairs) and welded and dead
+    /// actuators, with the filter and the diagnosers on: hazards, wrong diagnoses and
+    /// recovery after the reset.
+    Transients {
+        #[command(flatten)]
+        common: Common,
+        #[command(flatten)]
+        faults: Faults,
+        /// Without the plausibility stage (every edge as read), to compare.
+        #[arg(long)]
+        no_plausibility: bool,
+    },
+}
+
+/// Runs the campaign asked for.
+pub(crate) fn dispatch(cmd: CampaignCmd) -> anyhow::Result<ExitCode> {
+    match cmd {
+        CampaignCmd::Mutations { common } => run(&common.plant.plant, common.threads, common.json),
+        CampaignCmd::Diagnoser { common, faults } => super::learn::campaign(
+            &common.plant.plant,
+            (faults.from_seed, faults.seeds),
+            faults.hours,
+            faults.only.as_deref(),
+            common.threads,
+            common.json,
+        ),
+        CampaignCmd::Transients {
+            common,
+            faults,
+            no_plausibility,
+        } => super::learn::transients(
+            &common.plant.plant,
+            (faults.from_seed, faults.seeds),
+            faults.hours,
+            faults.only.as_deref(),
+            common.threads,
+            (common.json, !no_plausibility),
+        ),
+    }
+}
+
+fn run(plant_dir: &Path, threads: Option<usize>, json: bool) -> anyhow::Result<ExitCode> {
     let config = vigie_core::campaign::Config {
         threads: threads
             .or_else(|| std::thread::available_parallelism().ok().map(usize::from))

@@ -17,16 +17,37 @@ use vigie_app::live::sink::{EventSink, LiveHistory, SinkHistorian};
 pub(crate) struct GatewayArgs {
     /// The gateway configuration (RON), e.g. layouts/sorting-station/gateway-monitor.ron.
     pub(crate) config: PathBuf,
-    /// Log level: error, warn, info, debug or trace.
-    #[arg(long, default_value = "info")]
-    pub(crate) log: String,
+    /// Log level.
+    #[arg(long, value_enum, default_value_t = LogLevel::Info)]
+    pub(crate) log: LogLevel,
+}
+
+/// How much the gateway logs on stderr.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum LogLevel {
+    /// Errors only.
+    Error,
+    /// And warnings.
+    Warn,
+    /// And what the link does (default).
+    Info,
+    /// And details.
+    Debug,
+    /// Everything.
+    Trace,
 }
 
 /// Logs to stderr through a thread of their own (lossy when nobody reads stderr); keep
 /// the guard for the whole run, it flushes what is left when dropped.
 #[must_use]
-pub(crate) fn init_tracing(level: &str) -> tracing_appender::non_blocking::WorkerGuard {
-    let level = level.parse().unwrap_or(tracing::Level::INFO);
+pub(crate) fn init_tracing(level: LogLevel) -> tracing_appender::non_blocking::WorkerGuard {
+    let level = match level {
+        LogLevel::Error => tracing::Level::ERROR,
+        LogLevel::Warn => tracing::Level::WARN,
+        LogLevel::Info => tracing::Level::INFO,
+        LogLevel::Debug => tracing::Level::DEBUG,
+        LogLevel::Trace => tracing::Level::TRACE,
+    };
     let (writer, guard) = tracing_appender::non_blocking::NonBlockingBuilder::default()
         .lossy(true)
         .thread_name("vigie-log")
@@ -53,7 +74,7 @@ fn stop_signal(rt: &tokio::runtime::Runtime) -> impl std::future::Future<Output 
 }
 
 pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
-    let _log = init_tracing(&args.log);
+    let _log = init_tracing(args.log);
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;
@@ -106,7 +127,7 @@ pub(crate) struct BenchArgs {
 
 /// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
 pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result<ExitCode> {
-    let _log = init_tracing("warn");
+    let _log = init_tracing(LogLevel::Warn);
     let f = vigie_app::live::bench::run(
         plant,
         vigie_app::live::bench::Options {

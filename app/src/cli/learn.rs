@@ -1,5 +1,5 @@
-//! `vigie learn` (interval learning from traces), `vigie diagnose --report`,
-//! `vigie campaign diagnoser` and `vigie bench-diag`: the diagnosers' commands.
+//! `vigie diagnose learn` (interval learning from traces), `vigie diagnose report`,
+//! `vigie campaign diagnoser` and `vigie diagnose bench`: the diagnosers' commands.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -286,10 +286,10 @@ pub(crate) fn transients(
     })
 }
 
-/// Wall-clock limit of one libFAUDES construction in `vigie bench-diag`, s.
+/// Wall-clock limit of one libFAUDES construction in `vigie diagnose bench`, s.
 const LIBFAUDES_LIMIT_S: u64 = 60;
 
-/// `vigie bench-diag`: diagnoser cost per cycle (station, 1000 synthetic turntables),
+/// `vigie diagnose bench`: diagnoser cost per cycle (station, 1000 synthetic turntables),
 /// build times, and libFAUDES' centralized diagnoser for 1, 3, 4, 5 identical turntables
 /// and box beams (`c6`).
 pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {

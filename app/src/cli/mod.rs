@@ -14,51 +14,101 @@ mod verify;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// The plant folder the sorting station's examples use when none is named.
+const DEFAULT_PLANT: &str = "layouts/sorting-station";
+
 /// Vigie: safety filter, diagnosis and explanations beside a PLC-controlled machine.
+///
+/// Without a subcommand, `vigie` opens the operator console (the options below); every
+/// other command has its own options (`vigie help COMMAND`).
 #[derive(clap::Parser, Debug)]
-#[command(name = "vigie", version, about)]
+#[command(name = "vigie", version, about, args_conflicts_with_subcommands = true)]
 pub(crate) struct Cli {
-    /// Plant folder to open.
-    #[arg(long, global = true, default_value = "layouts/sorting-station")]
-    pub(crate) plant: PathBuf,
     #[command(flatten)]
-    pub(crate) console: ConsoleArgs,
+    pub(crate) console: ConsoleCmd,
     #[command(subcommand)]
     pub(crate) command: Option<Command>,
 }
 
-/// Options of the console (no subcommand, or `vigie run SCENARIO` without `--headless`).
+/// `--plant`: the plant folder of a command that does not name it otherwise.
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct PlantOpt {
+    /// Plant folder.
+    #[arg(long, value_name = "DIR", default_value = DEFAULT_PLANT)]
+    pub(crate) plant: PathBuf,
+}
+
+/// The plant folder as the command's argument.
+#[derive(clap::Args, Debug, Clone)]
+pub(crate) struct PlantArg {
+    /// Plant folder.
+    #[arg(value_name = "PLANT", default_value = DEFAULT_PLANT)]
+    pub(crate) plant: PathBuf,
+}
+
+/// The console on a plant folder (`vigie`, `vigie console`).
+#[derive(clap::Args, Debug)]
+pub(crate) struct ConsoleCmd {
+    #[command(flatten)]
+    pub(crate) plant: PlantOpt,
+    #[command(flatten)]
+    pub(crate) console: ConsoleArgs,
+}
+
+/// The console's mode.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default)]
+pub(crate) enum ModeArg {
+    /// The operator's console.
+    #[default]
+    Production,
+    /// Control charts, edits, verification (maintenance role).
+    Maintenance,
+    /// Control-error and fault libraries, score.
+    Training,
+}
+
+/// A language of the console.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub(crate) enum LangArg {
+    /// Français.
+    Fr,
+    /// English.
+    En,
+}
+
+/// Options of the console (`vigie`, `vigie console`, `vigie run SCENARIO`).
 #[derive(clap::Args, Debug)]
 pub(crate) struct ConsoleArgs {
-    /// Console: initial simulation speed (0.1 to 100).
-    #[arg(long, global = true, default_value_t = 1.0)]
+    /// Initial simulation speed (0.1 to 100).
+    #[arg(long, default_value_t = 1.0)]
     pub(crate) speed: f64,
-    /// Console: initial mode (production, maintenance, training).
-    #[arg(long, global = true, default_value = "production")]
-    pub(crate) mode: String,
-    /// Console: explanation level (0-4) to show once a trip is explained.
-    #[arg(long, global = true)]
-    pub(crate) level: Option<usize>,
-    /// Console: run the simulation to this time (ms) before the first frame.
-    #[arg(long, global = true)]
+    /// Initial mode.
+    #[arg(long, value_enum, default_value_t = ModeArg::Production)]
+    pub(crate) mode: ModeArg,
+    /// Explanation level to show once a trip is explained (0 current state, 1
+    /// projection, 2 before stop, 3 advanced, 4 hypothesis).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(0..=4))]
+    pub(crate) level: Option<u8>,
+    /// Run the simulation to this time (ms) before the first frame.
+    #[arg(long, value_name = "MS")]
     pub(crate) run_until: Option<u64>,
-    /// Console: start paused.
-    #[arg(long, global = true)]
+    /// Start paused.
+    #[arg(long)]
     pub(crate) paused: bool,
-    /// Console: press START at once.
-    #[arg(long, global = true)]
+    /// Press the plant's Start button at once.
+    #[arg(long)]
     pub(crate) start: bool,
-    /// Console: load this variant of the control-error library (training).
-    #[arg(long, global = true)]
+    /// Load this variant of the control-error library (training), e.g. E01.
+    #[arg(long)]
     pub(crate) variant: Option<String>,
-    /// Console: follow the live link of this monitor or gateway configuration (e.g.
+    /// Follow the live link of this monitor or gateway configuration (e.g.
     /// layouts/sorting-station/gateway-monitor.ron) instead of the emulator.
-    #[arg(long, global = true)]
+    #[arg(long, value_name = "CONFIG")]
     pub(crate) link: Option<PathBuf>,
-    /// Console: language shown first, `fr` or `en` (default: VIGIE_LANG, else the
-    /// system locale; switched at run time from the toolbar).
-    #[arg(long, global = true)]
-    pub(crate) lang: Option<String>,
+    /// Language shown first (default: VIGIE_LANG, else the system locale; switched at
+    /// run time from the toolbar).
+    #[arg(long, value_enum)]
+    pub(crate) lang: Option<LangArg>,
 }
 
 fn open_console(
@@ -66,30 +116,30 @@ fn open_console(
     scenario: Option<PathBuf>,
     args: &ConsoleArgs,
 ) -> anyhow::Result<ExitCode> {
-    let mode = vigie_app::Mode::parse(&args.mode).ok_or_else(|| {
-        anyhow::anyhow!(
-            "unknown mode `{}` (production, maintenance, training)",
-            args.mode
-        )
-    })?;
     let mut opts = vigie_app::ConsoleOptions::new(plant);
     opts.scenario = scenario;
     opts.speed = args.speed;
-    opts.mode = mode;
-    opts.level = args.level;
+    opts.mode = match args.mode {
+        ModeArg::Production => vigie_app::Mode::Production,
+        ModeArg::Maintenance => vigie_app::Mode::Maintenance,
+        ModeArg::Training => vigie_app::Mode::Training,
+    };
+    opts.level = args.level.map(usize::from);
     opts.paused = args.paused;
     opts.run_until_ms = args.run_until;
     opts.start = args.start;
     opts.variant.clone_from(&args.variant);
     opts.link.clone_from(&args.link);
     opts.open_files = true;
-    if let Some(l) = &args.lang {
-        opts.lang = vigie_app::i18n::Lang::parse(l)
-            .ok_or_else(|| anyhow::anyhow!("unknown language `{l}` (fr, en)"))?;
+    if let Some(l) = args.lang {
+        opts.lang = match l {
+            LangArg::Fr => vigie_app::i18n::Lang::Fr,
+            LangArg::En => vigie_app::i18n::Lang::En,
+        };
     }
     let _log = opts.link.is_some().then(|| {
         vigie_app::console::link::watch_signals(true);
-        gateway::init_tracing("warn")
+        gateway::init_tracing(gateway::LogLevel::Warn)
     });
     vigie_app::run_console(&opts)?;
     Ok(ExitCode::SUCCESS)
@@ -97,10 +147,12 @@ fn open_console(
 
 #[derive(clap::Subcommand, Debug)]
 pub(crate) enum Command {
+    /// Open the operator console (what `vigie` alone does).
+    Console(ConsoleCmd),
     /// Validate a plant folder and print its constraint table and static-check results.
     Check {
-        /// The plant folder (defaults to --plant).
-        dir: Option<PathBuf>,
+        #[command(flatten)]
+        plant: PlantArg,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -108,8 +160,8 @@ pub(crate) enum Command {
     /// Run observers and the filter over a recorded cycle trace (CSV) and print one JSON
     /// line per trip.
     Filter {
-        /// The plant folder (defaults to --plant).
-        dir: Option<PathBuf>,
+        #[command(flatten)]
+        plant: PlantArg,
         /// The trace: `time_ms` and one 0/1 column per signal (outputs as commanded).
         #[arg(long)]
         trace: PathBuf,
@@ -128,30 +180,40 @@ pub(crate) enum Command {
         #[arg(long)]
         cold_start: bool,
     },
-    /// Run a scenario (emulator + control program + filter).
+    /// Run a scenario (emulator + control program + filter) in the console, or headless
+    /// with `--headless`. The scenario names its plant folder.
     Run {
         /// The scenario file (RON).
         scenario: PathBuf,
         /// Run without the console, as fast as possible, and print the JSON report.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "ConsoleArgs")]
         headless: bool,
-        /// Write the per-cycle trace (the CSV format `vigie filter` reads).
-        #[arg(long)]
+        /// Write the per-cycle trace (the CSV format `vigie filter` reads); headless.
+        #[arg(long, requires = "headless")]
         trace: Option<PathBuf>,
-        /// Leave `wall_ms` out of the report, so that it is byte-identical across runs.
-        #[arg(long)]
+        /// Leave `wall_ms` out of the report, so that it is byte-identical across runs;
+        /// headless.
+        #[arg(long, requires = "headless")]
         no_timing: bool,
+        #[command(flatten)]
+        console: ConsoleArgs,
     },
-    /// Run the live link headless (monitor, gateway or emulator mode, from CONFIG).
+    /// Run the live link headless (monitor, gateway or emulator mode, from CONFIG; the
+    /// configuration names its plant folder).
     Gateway(gateway::GatewayArgs),
     /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
     /// sensor-to-output latency).
-    GatewayBench(gateway::BenchArgs),
+    GatewayBench {
+        #[command(flatten)]
+        plant: PlantOpt,
+        #[command(flatten)]
+        args: gateway::BenchArgs,
+    },
     /// Write the observers, the filter and the task monitors as IEC 61131-3 Structured
     /// Text (function blocks and a program to call at the end of the PLC cycle).
     ExportSt {
-        /// The plant folder (defaults to --plant).
-        dir: Option<PathBuf>,
+        #[command(flatten)]
+        plant: PlantArg,
         /// Write to this file instead of the standard output.
         #[arg(long, short)]
         out: Option<PathBuf>,
@@ -159,6 +221,8 @@ pub(crate) enum Command {
     /// Measure the console: CPU time per frame at 1x (headless egui, no GPU) and memory
     /// over a simulated hour at 100x.
     BenchConsole {
+        #[command(flatten)]
+        plant: PlantOpt,
         /// Frames timed.
         #[arg(long, default_value_t = 600)]
         frames: usize,
@@ -166,57 +230,19 @@ pub(crate) enum Command {
         #[arg(long)]
         no_memory: bool,
     },
-    /// Run a campaign and print its figures (`mutations`: does the hypothesis level
-    /// localise every control error that trips the filter?).
+    /// Run a campaign and print its figures.
     Campaign {
-        /// Which campaign.
-        #[arg(value_enum)]
-        kind: campaign::Kind,
-        /// Worker threads (default: the available parallelism).
-        #[arg(long)]
-        threads: Option<usize>,
-        /// Print the full JSON report.
-        #[arg(long)]
-        json: bool,
-        /// `diagnoser`, `transients`: seeds per fault.
-        #[arg(long, default_value_t = 100)]
-        seeds: u64,
-        /// `diagnoser`, `transients`: the first seed (`--from-seed 66 --seeds 1` replays seed 66;
-        /// `transients --seeds 1 --json` adds every change of a signal of the failed run).
-        #[arg(long, default_value_t = 0)]
-        from_seed: u64,
-        /// `diagnoser`, `transients`: simulated hours of fault-free runs.
-        #[arg(long, default_value_t = 10)]
-        hours: u64,
-        /// `diagnoser`, `transients`: only faults (cases) whose name contains this.
-        #[arg(long)]
-        only: Option<String>,
-        /// `transients`: without the plausibility stage (every edge as read), to compare.
-        #[arg(long)]
-        no_plausibility: bool,
+        #[command(subcommand)]
+        kind: campaign::CampaignCmd,
     },
     /// Verify the constraint set on the abstract plant model (safety, permissiveness,
     /// invariants, necessity), optionally against SPIN, with benchmarks.
     Verify(verify::VerifyArgs),
-    /// Learn the diagnosers' intervals from normal-run traces into `diagnosers.ron`.
-    Learn {
-        /// Trace files (CSV, `vigie run --trace`).
-        traces: Vec<PathBuf>,
-        /// Confidence coefficient α of ΔT = α·σ (default: the file's).
-        #[arg(long)]
-        alpha: Option<f64>,
-        /// Print the figures without writing the file.
-        #[arg(long)]
-        dry_run: bool,
-    },
-    /// Diagnosers: `--report` prints the diagnosability report.
+    /// The diagnosers: learn their intervals, report diagnosability, measure them.
     Diagnose {
-        /// Print the diagnosability report (JSON).
-        #[arg(long)]
-        report: bool,
+        #[command(subcommand)]
+        action: DiagnoseCmd,
     },
-    /// Measure the diagnosers (per cycle, build) and libFAUDES' centralized diagnoser.
-    BenchDiag,
     /// The console's user accounts (roles, argon2id password hashes in
     /// `users.ron` of the data folder).
     User {
@@ -225,16 +251,77 @@ pub(crate) enum Command {
     },
     /// Measure the historian: a durable journal insert, recording a week of process
     /// history at the plant's cycle, and trend queries over it.
-    BenchHistorian(bench_historian::Args),
+    BenchHistorian {
+        #[command(flatten)]
+        plant: PlantOpt,
+        #[command(flatten)]
+        args: bench_historian::Args,
+    },
     /// Measure the engines and print the figures.
     Bench {
+        #[command(flatten)]
+        plant: PlantOpt,
         /// Number of timed repetitions per figure.
         #[arg(long, default_value_t = 200_000)]
         iterations: u32,
     },
+    /// Print the shell completion script of `vigie` (bash, zsh, fish, elvish,
+    /// powershell) to the standard output.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Write the manual pages of `vigie` and of each command (roff) into a folder.
+    Man {
+        /// The folder (created if needed).
+        #[arg(long, default_value = "man")]
+        out: PathBuf,
+    },
 }
 
-/// Runs the parsed command line.
+/// What `vigie diagnose` does.
+#[derive(clap::Subcommand, Debug)]
+pub(crate) enum DiagnoseCmd {
+    /// Learn the diagnosers' intervals from normal-run traces into `diagnosers.ron`.
+    Learn {
+        #[command(flatten)]
+        plant: PlantOpt,
+        /// Trace files (CSV, `vigie run --headless --trace`).
+        #[arg(required = true)]
+        traces: Vec<PathBuf>,
+        /// Confidence coefficient α of ΔT = α·σ (default: the file's).
+        #[arg(long)]
+        alpha: Option<f64>,
+        /// Print the figures without writing the file.
+        #[arg(long)]
+        dry_run: bool,
+    },
+    /// Print the diagnosability report (JSON).
+    Report {
+        #[command(flatten)]
+        plant: PlantOpt,
+    },
+    /// Measure the diagnosers (per cycle, build) and libFAUDES' centralized diagnoser.
+    Bench {
+        #[command(flatten)]
+        plant: PlantOpt,
+    },
+}
+
+/// A role of the console, for `vigie user add`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub(crate) enum RoleArg {
+    /// Production operator.
+    Operator,
+    /// Maintenance technician: program edits, filter mode, bypasses.
+    Maintenance,
+    /// Trainer: exercises and faults.
+    Trainer,
+    /// Everything, and the accounts.
+    Administrator,
+}
+
 /// What `vigie user` does.
 #[derive(clap::Subcommand, Debug)]
 pub(crate) enum UserAction {
@@ -243,9 +330,9 @@ pub(crate) enum UserAction {
     Add {
         /// Login name (one word).
         name: String,
-        /// operator, maintenance, trainer or administrator.
-        #[arg(long)]
-        role: String,
+        /// The account's role.
+        #[arg(long, value_enum)]
+        role: RoleArg,
         /// The data folder (default: `VIGIE_DATA_DIR`, else `$XDG_DATA_HOME/vigie`,
         /// else `~/.local/share/vigie`).
         #[arg(long)]
@@ -269,11 +356,12 @@ fn user(action: UserAction) -> anyhow::Result<ExitCode> {
             data_dir,
         } => {
             let dir = dir(data_dir);
-            let role = vigie_core::access::Role::parse(&role).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "unknown role `{role}` (operator, maintenance, trainer, administrator)"
-                )
-            })?;
+            let role = match role {
+                RoleArg::Operator => vigie_core::access::Role::Operator,
+                RoleArg::Maintenance => vigie_core::access::Role::Maintenance,
+                RoleArg::Trainer => vigie_core::access::Role::Trainer,
+                RoleArg::Administrator => vigie_core::access::Role::Administrator,
+            };
             let mut password = String::new();
             std::io::stdin().read_line(&mut password)?;
             let password = password.trim_end_matches(['\n', '\r']);
@@ -292,113 +380,116 @@ fn user(action: UserAction) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// Runs the parsed command line.
 pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
-    match cli.command {
-        Some(Command::User { action }) => user(action),
-        Some(Command::Check { dir, json }) => check::run(&dir.unwrap_or(cli.plant), json),
-        Some(Command::Filter {
-            dir,
+    let Some(command) = cli.command else {
+        return open_console(&cli.console.plant.plant, None, &cli.console.console);
+    };
+    match command {
+        Command::Console(c) => open_console(&c.plant.plant, None, &c.console),
+        Command::User { action } => user(action),
+        Command::Check { plant, json } => check::run(&plant.plant, json),
+        Command::Filter {
+            plant,
             trace,
             reset_after_trip,
             explain,
             cold_start,
-        }) => filter::run(
-            &dir.unwrap_or(cli.plant),
-            &trace,
-            reset_after_trip,
-            explain,
-            cold_start,
-        ),
-        Some(Command::Gateway(args)) => gateway::run(&args),
-        Some(Command::GatewayBench(args)) => gateway::bench(&cli.plant, &args),
-        Some(Command::Learn {
-            traces,
-            alpha,
-            dry_run,
-        }) => learn::learn(&cli.plant, &traces, alpha, dry_run),
-        Some(Command::Diagnose { report }) => {
-            anyhow::ensure!(report, "use `vigie diagnose --report`");
-            learn::report(&cli.plant)
-        }
-        Some(Command::BenchDiag) => learn::bench(&cli.plant),
-        Some(Command::Bench { iterations }) => bench::run(&cli.plant, iterations),
-        Some(Command::BenchHistorian(args)) => bench_historian::run(&cli.plant, &args),
-        Some(Command::ExportSt { dir, out }) => {
-            export_st::run(&dir.unwrap_or(cli.plant), out.as_deref())
-        }
-        Some(Command::BenchConsole { frames, no_memory }) => {
-            let opts = vigie_app::ConsoleOptions::new(&cli.plant);
-            let b = vigie_app::bench_frames(&opts, frames, !no_memory)?;
-            println!(
-                "console frame (logic + ui + tessellation, 1600x1000, 1x): median {:.2} ms, p95 {:.2} ms over {} frames   goal <= 4 ms",
-                b.median_ms, b.p95_ms, b.frames
-            );
-            if !no_memory {
-                println!(
-                    "memory over {} s simulated at 100x: RSS {} KiB after 10 min, {} KiB at the end (growth {} KiB)",
-                    b.memory_sim_s,
-                    b.rss_warm_kib,
-                    b.rss_end_kib,
-                    b.rss_end_kib.saturating_sub(b.rss_warm_kib)
-                );
-            }
-            Ok(ExitCode::SUCCESS)
-        }
-        Some(Command::Campaign {
-            kind: campaign::Kind::Diagnoser,
-            seeds,
-            from_seed,
-            hours,
-            only,
-            threads,
-            json,
-            ..
-        }) => learn::campaign(
-            &cli.plant,
-            (from_seed, seeds),
-            hours,
-            only.as_deref(),
-            threads,
-            json,
-        ),
-        Some(Command::Campaign {
-            kind: campaign::Kind::Transients,
-            seeds,
-            from_seed,
-            hours,
-            only,
-            threads,
-            json,
-            no_plausibility,
-        }) => learn::transients(
-            &cli.plant,
-            (from_seed, seeds),
-            hours,
-            only.as_deref(),
-            threads,
-            (json, !no_plausibility),
-        ),
-        Some(Command::Campaign {
-            kind,
-            threads,
-            json,
-            ..
-        }) => campaign::run(&cli.plant, kind, threads, json),
-        Some(Command::Verify(args)) => verify::run(&cli.plant, &args),
-        Some(Command::Run {
+        } => filter::run(&plant.plant, &trace, reset_after_trip, explain, cold_start),
+        Command::Gateway(args) => gateway::run(&args),
+        Command::GatewayBench { plant, args } => gateway::bench(&plant.plant, &args),
+        Command::Diagnose { action } => match action {
+            DiagnoseCmd::Learn {
+                plant,
+                traces,
+                alpha,
+                dry_run,
+            } => learn::learn(&plant.plant, &traces, alpha, dry_run),
+            DiagnoseCmd::Report { plant } => learn::report(&plant.plant),
+            DiagnoseCmd::Bench { plant } => learn::bench(&plant.plant),
+        },
+        Command::Bench { plant, iterations } => bench::run(&plant.plant, iterations),
+        Command::BenchHistorian { plant, args } => bench_historian::run(&plant.plant, &args),
+        Command::ExportSt { plant, out } => export_st::run(&plant.plant, out.as_deref()),
+        Command::BenchConsole {
+            plant,
+            frames,
+            no_memory,
+        } => bench_console(&plant.plant, frames, no_memory),
+        Command::Campaign { kind } => campaign::dispatch(kind),
+        Command::Verify(args) => verify::run(&args),
+        Command::Run {
             scenario,
             headless,
             trace,
             no_timing,
-        }) => {
+            console,
+        } => {
             if headless {
                 run::run(&scenario, trace.as_deref(), !no_timing)
             } else {
-                open_console(&cli.plant, Some(scenario), &cli.console)
+                // The console finds the plant folder from the scenario.
+                open_console(
+                    std::path::Path::new(DEFAULT_PLANT),
+                    Some(scenario),
+                    &console,
+                )
             }
         }
-        None => open_console(&cli.plant, None, &cli.console),
+        Command::Completions { shell } => {
+            let mut cmd = <Cli as clap::CommandFactory>::command();
+            clap_complete::generate(shell, &mut cmd, "vigie", &mut std::io::stdout());
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Man { out } => man(&out),
     }
+}
+
+/// `vigie bench-console`.
+fn bench_console(
+    plant: &std::path::Path,
+    frames: usize,
+    no_memory: bool,
+) -> anyhow::Result<ExitCode> {
+    let opts = vigie_app::ConsoleOptions::new(plant);
+    let b = vigie_app::bench_frames(&opts, frames, !no_memory)?;
+    println!(
+        "console frame (logic + ui + tessellation, 1600x1000, 1x): median {:.2} ms, p95 {:.2} ms over {} frames   goal <= 4 ms",
+        b.median_ms, b.p95_ms, b.frames
+    );
+    if !no_memory {
+        println!(
+            "memory over {} s simulated at 100x: RSS {} KiB after 10 min, {} KiB at the end (growth {} KiB)",
+            b.memory_sim_s,
+            b.rss_warm_kib,
+            b.rss_end_kib,
+            b.rss_end_kib.saturating_sub(b.rss_warm_kib)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `vigie man`: `vigie.1` and one page per command (`vigie-check.1`…) into `out`.
+fn man(out: &std::path::Path) -> anyhow::Result<ExitCode> {
+    fn write(cmd: &clap::Command, name: &str, out: &std::path::Path) -> anyhow::Result<()> {
+        let cmd = cmd.clone().name(name.to_string());
+        let mut page = Vec::new();
+        clap_mangen::Man::new(cmd.clone()).render(&mut page)?;
+        let path = out.join(format!("{name}.1"));
+        std::fs::write(&path, page)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+        for sub in cmd.get_subcommands().filter(|s| s.get_name() != "help") {
+            write(sub, &format!("{name}-{}", sub.get_name()), out)?;
+        }
+        Ok(())
+    }
+    std::fs::create_dir_all(out)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", out.display()))?;
+    let mut cmd = <Cli as clap::CommandFactory>::command();
+    cmd.build();
+    write(&cmd, "vigie", out)?;
+    println!("manual pages written to {}", out.display());
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Loads a plant folder and refuses it when any problem is an error.

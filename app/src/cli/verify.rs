@@ -1,7 +1,6 @@
 //! `vigie verify`: exhaustive verification of the constraint set on the abstract plant
 //! model, the SPIN cross-check, and the compiled-filter benchmarks.
 
-use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 use vigie_core::dtree::{CompiledFilter, Tests};
@@ -12,8 +11,8 @@ use vigie_core::verify::{self, Model, Options, promela};
 /// Arguments of `vigie verify`.
 #[derive(clap::Args, Debug)]
 pub(crate) struct VerifyArgs {
-    /// The plant folder (defaults to --plant).
-    pub(crate) dir: Option<std::path::PathBuf>,
+    #[command(flatten)]
+    pub(crate) plant: super::PlantArg,
     /// Largest number of boxes in the plant at once.
     #[arg(long, default_value_t = 2)]
     pub(crate) max_boxes: usize,
@@ -46,8 +45,8 @@ fn ns_per(iters: u32, mut f: impl FnMut(u32) -> bool) -> f64 {
     ns
 }
 
-pub(crate) fn run(plant_dir: &Path, args: &VerifyArgs) -> anyhow::Result<ExitCode> {
-    let dir = args.dir.as_deref().unwrap_or(plant_dir);
+pub(crate) fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
+    let dir = args.plant.plant.as_path();
     let (bundle, _) = super::load_bundle(dir)?;
     let layout = Layout::load(&dir.join("layout.ron"))
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;

@@ -182,7 +182,7 @@ pub fn apply(file: &mut DiagnoserFile, measures: &BTreeMap<String, Estimator>) -
 /// The text of the diagnoser file `text` (read from `path`) with the interval bounds of
 /// `learned` (the file after [`apply`]): only the value of each `lo` or `hi` that
 /// changed is replaced, so comments, layout, order and every other value stay byte for
-/// byte (the learned statistics and α are printed by `vigie learn`, not written). The
+/// byte (the learned statistics and α are printed by `vigie diagnose learn`, not written). The
 /// result is parsed again and must give the bounds asked for; anything unexpected is a
 /// `V0514` problem and nothing is written.
 pub fn rewrite(text: &str, path: &Path, learned: &DiagnoserFile) -> Result<String, Problem> {

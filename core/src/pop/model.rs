@@ -184,7 +184,7 @@ pub enum Bound {
     Never,
 }
 
-/// Learned statistics of an interval (written by `vigie learn`).
+/// Learned statistics of an interval (written by `vigie diagnose learn`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Learned {
@@ -302,7 +302,7 @@ impl DiagnoserFile {
         Self::from_ron(&text, path)
     }
 
-    /// The file text (pretty RON), as `vigie learn` writes it.
+    /// The file text (pretty RON), as `vigie diagnose learn` writes it.
     pub fn to_ron(&self) -> String {
         let cfg = ron::ser::PrettyConfig::new().struct_names(true);
         ron::ser::to_string_pretty(self, cfg).unwrap_or_default()

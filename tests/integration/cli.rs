@@ -1,0 +1,209 @@
+//! The command line: each command takes only its own options, enumerated options list
+//! their values, an inapplicable option is an error, and `vigie` alone still opens the
+//! console.
+
+use crate::live::{TempDir, Xvfb, repo, wait_until};
+use std::process::{Command, Output, Stdio};
+
+fn vigie(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vigie"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .expect("vigie runs")
+}
+
+fn text(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr)
+}
+
+/// The console's own options.
+const CONSOLE: [&str; 9] = [
+    "--speed",
+    "--mode",
+    "--level",
+    "--run-until",
+    "--paused",
+    "--start",
+    "--variant",
+    "--link",
+    "--lang",
+];
+
+/// Every command, as `vigie help` lists them, with what its help must show.
+#[test]
+fn every_commands_help_lists_only_its_own_options() {
+    let top = vigie(&["--help"]);
+    assert!(top.status.success());
+    let top = text(&top);
+    let commands: Vec<String> = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+        .filter(|c| c != "help")
+        .collect();
+    assert!(commands.len() >= 15, "{commands:?}");
+    for c in &commands {
+        let out = vigie(&[c, "--help"]);
+        assert!(out.status.success(), "{c} --help: {}", text(&out));
+        let help = text(&out);
+        let console = matches!(c.as_str(), "console" | "run");
+        for o in CONSOLE {
+            assert_eq!(
+                help.contains(&format!("{o} ")) || help.contains(&format!("{o}\n")),
+                console,
+                "`vigie {c} --help` and {o}:\n{help}"
+            );
+        }
+        // One way to name the plant folder: the argument or `--plant`, never both.
+        let positional = help.contains("[PLANT]");
+        let option = help.contains("--plant");
+        assert!(!(positional && option), "{c}: {help}");
+    }
+    // The top level is the console: its options, and the plant as `--plant`.
+    for o in CONSOLE {
+        assert!(top.contains(o), "vigie --help lacks {o}");
+    }
+    // Nested commands have their own help.
+    for (c, sub) in [
+        ("campaign", "transients"),
+        ("diagnose", "learn"),
+        ("user", "add"),
+    ] {
+        let out = vigie(&[c, sub, "--help"]);
+        assert!(out.status.success(), "{c} {sub}: {}", text(&out));
+    }
+    let transients = text(&vigie(&["campaign", "transients", "--help"]));
+    assert!(transients.contains("--no-plausibility") && transients.contains("--seeds"));
+    let mutations = text(&vigie(&["campaign", "mutations", "--help"]));
+    assert!(
+        !mutations.contains("--seeds") && !mutations.contains("--no-plausibility"),
+        "{mutations}"
+    );
+}
+
+/// An option of another command, or one that does not apply here, is refused with a
+/// message naming it; nothing runs.
+#[test]
+fn inapplicable_options_are_refused() {
+    for (args, says) in [
+        (
+            vec![
+                "check",
+                "--speed",
+                "5",
+                "--link",
+                "/nonexistent",
+                "layouts/sorting-station",
+            ],
+            "unexpected argument '--speed'",
+        ),
+        (
+            vec!["gateway", "--mode", "training", "x.ron"],
+            "unexpected argument '--mode'",
+        ),
+        (
+            vec![
+                "run",
+                "layouts/sorting-station/scenarios/cs10-paper.ron",
+                "--headless",
+                "--speed",
+                "3",
+            ],
+            "'--headless' cannot be used with",
+        ),
+        (
+            vec![
+                "run",
+                "layouts/sorting-station/scenarios/cs10-paper.ron",
+                "--trace",
+                "t.csv",
+            ],
+            "--headless",
+        ),
+        (vec!["--speed", "2", "check"], "cannot be used with"),
+        (
+            vec!["check", "--plant", "layouts/sorting-station"],
+            "unexpected argument '--plant'",
+        ),
+        (
+            vec!["--mode", "supervisor"],
+            "[possible values: production, maintenance, training]",
+        ),
+        (vec!["--lang", "de"], "[possible values: fr, en]"),
+        (vec!["--level", "7"], "7 is not in 0..=4"),
+        (
+            vec!["gateway", "--log", "loud", "x.ron"],
+            "possible values: error, warn, info, debug, trace",
+        ),
+        (
+            vec!["user", "add", "ann", "--role", "boss"],
+            "possible values: operator, maintenance, trainer, administrator",
+        ),
+        (vec!["diagnose", "learn"], "<TRACES>"),
+    ] {
+        let out = vigie(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", text(&out));
+        assert!(text(&out).contains(says), "{args:?}: {}", text(&out));
+    }
+}
+
+/// Completions and manual pages come from the same definitions.
+#[test]
+fn completions_and_manual_pages() {
+    let out = vigie(&["completions", "bash"]);
+    assert!(out.status.success());
+    let script = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        script.contains("_vigie") && script.contains("gateway-bench"),
+        "{script}"
+    );
+    let dir = TempDir::new("man");
+    let out = vigie(&["man", "--out", dir.0.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out));
+    let check = std::fs::read_to_string(dir.0.join("vigie-check.1")).expect("vigie-check.1");
+    assert!(check.contains(".TH vigie-check"), "{check}");
+    assert!(dir.0.join("vigie-campaign-transients.1").is_file());
+    let top = std::fs::read_to_string(dir.0.join("vigie.1")).unwrap();
+    assert!(top.contains("\\-\\-speed"), "{top}");
+}
+
+/// `vigie` with no argument opens the console: a real window on Xvfb, whose first
+/// journal entry (the session) reaches the historian of its data folder.
+#[test]
+fn vigie_alone_opens_the_console() {
+    let x = Xvfb::start();
+    let dir = TempDir::new("console-alone");
+    let data = dir.0.join("data");
+    let mut console = Command::new(env!("CARGO_BIN_EXE_vigie"))
+        .current_dir(repo())
+        .env("DISPLAY", &x.display)
+        .env("VIGIE_DATA_DIR", &data)
+        .env("VIGIE_LANG", "en")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the console starts");
+    wait_until("the console's session entry", || {
+        crate::historian_journal(&data).contains("console opened on Reference program")
+    });
+    // Its window is on the display (xwininfo, x11-utils).
+    wait_until("the console's window", || {
+        Command::new("xwininfo")
+            .args(["-root", "-tree"])
+            .env("DISPLAY", &x.display)
+            .output()
+            .map(|o| String::from_utf8_lossy(&o.stdout).contains("\"Vigie"))
+            .unwrap_or_else(|e| {
+                panic!("cannot run xwininfo (scripts/test.sh installs x11-utils): {e}")
+            })
+    });
+    assert!(
+        console.try_wait().unwrap().is_none(),
+        "the console is running"
+    );
+    console.kill().unwrap();
+    console.wait().unwrap();
+}
