@@ -39,5 +39,14 @@ if [ -s requirements-test.txt ]; then
 fi
 export VIGIE_VENV="$venv"
 
-# 3. The tests.
-cargo test --workspace --locked --no-fail-fast "$@"
+# 3. The style, then the tests, then the lints and the documentation; each check
+#    runs even when an earlier one failed, and the script fails if any did.
+status=0
+echo "scripts/test.sh: cargo fmt --check"
+cargo fmt --all -- --check || status=1
+cargo test --workspace --locked --no-fail-fast "$@" || status=1
+echo "scripts/test.sh: cargo clippy (warnings denied)"
+cargo clippy --workspace --all-targets --locked -- -D warnings || status=1
+echo "scripts/test.sh: cargo doc (warnings denied)"
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked || status=1
+exit $status

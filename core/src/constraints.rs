@@ -178,8 +178,9 @@ impl ConstraintSet {
         let mut problems = Vec::new();
         let mut discharged = Vec::new();
         // For each output k, the terms that force it to 0 (s_k . h0) and to 1 (/s_k . h1).
-        let mut forcing: BTreeMap<u32, (Vec<(usize, Vec<Literal>)>, Vec<(usize, Vec<Literal>)>)> =
-            BTreeMap::new();
+        // Per output: (constraint index, the term's other literals), to 0 and to 1.
+        type Forcing = Vec<(usize, Vec<Literal>)>;
+        let mut forcing: BTreeMap<u32, (Forcing, Forcing)> = BTreeMap::new();
         for (ci, c) in self.constraints.iter().enumerate() {
             if c.class != Class::Simple {
                 continue;

@@ -719,10 +719,7 @@ impl Simulation {
     /// Input `k` as the last cycle recorded it (what the synoptic's lamp shows: after
     /// the plausibility stage).
     fn shown_input(&self, k: usize) -> bool {
-        self.engine
-            .history
-            .last()
-            .map_or(false, |r| r.inputs.get(k))
+        self.engine.history.last().is_some_and(|r| r.inputs.get(k))
     }
 
     /// The operator's answers so far, by component (cleared by the diagnosers' reset).

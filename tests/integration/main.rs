@@ -1,5 +1,9 @@
 //! Integration tests: one binary.
 
+// Test code: a failed unwrap is the test's failure (helpers included, which
+// `allow-unwrap-in-tests` does not cover).
+#![allow(clippy::unwrap_used)]
+
 mod adversary;
 mod bad_input;
 mod cli;

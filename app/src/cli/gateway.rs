@@ -39,7 +39,6 @@ pub(crate) enum LogLevel {
 
 /// Logs to stderr through a thread of their own (lossy when nobody reads stderr); keep
 /// the guard for the whole run, it flushes what is left when dropped.
-#[must_use]
 pub(crate) fn init_tracing(level: LogLevel) -> tracing_appender::non_blocking::WorkerGuard {
     let level = match level {
         LogLevel::Error => tracing::Level::ERROR,

@@ -36,10 +36,13 @@ pub struct TrendView {
     /// The signal list's filter.
     pub filter: String,
     /// The last query: its key and its points per signal (x in s before now).
-    cache: Option<(CacheKey, Vec<(String, Vec<[f64; 2]>)>)>,
+    cache: Option<(CacheKey, Vec<SignalPoints>)>,
     /// The last error of a query.
     pub error: Option<String>,
 }
+
+/// A signal and its points (x in s before now).
+type SignalPoints = (String, Vec<[f64; 2]>);
 
 #[derive(Clone, Debug, PartialEq, Eq)]
 struct CacheKey {

@@ -12,7 +12,7 @@
 //! - `latch`: the latched trip on disk, saved before it is reported.
 //! - [`sink`]: the headless run's events to the journal and to stdout, off the cycle.
 //! - [`tap`]: what a run publishes for the console (cycles, link state, link alarms).
-//! - [`bench`]: cycle rate, jitter and sensor-to-output latency against pymodbus.
+//! - [`bench`](mod@bench): cycle rate, jitter and sensor-to-output latency against pymodbus.
 //!
 //! The only wall clock of Vigie is read here (`std::time::Instant`), turned into
 //! [`vigie_core::Millis`] since the start of the run.

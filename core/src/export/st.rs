@@ -842,8 +842,8 @@ fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(
         );
         for (c, &d) in order.iter().enumerate() {
             let mut ok = Vec::new();
-            for j in 0..m {
-                let n = name(comp[j]);
+            for (j, &k) in comp.iter().enumerate().take(m) {
+                let n = name(k);
                 // x = 1 against F0, x = 0 against F1.
                 if d >> j & 1 == 1 {
                     ok.push(format!(
@@ -873,8 +873,8 @@ fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(
             }
             let kw = if c == 0 { "IF" } else { "ELSIF" };
             let _ = writeln!(b, "    {kw} {} THEN", ok.join(" AND "));
-            for j in 0..m {
-                let _ = writeln!(b, "        {} := {};", q(comp[j]), value(j, d));
+            for (j, &k) in comp.iter().enumerate().take(m) {
+                let _ = writeln!(b, "        {} := {};", q(k), value(j, d));
             }
         }
         let _ = writeln!(b, "    ELSE\n        CONFLICT := TRUE;\n    END_IF;");

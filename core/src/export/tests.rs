@@ -115,7 +115,7 @@ fn fallback_is_exact_in_every_context() {
         .constraints
         .iter()
         .flat_map(|c| c.dnf.iter().flatten())
-        .filter(|l| !(l.var.space == Space::Output && !l.var.prev))
+        .filter(|l| l.var.space != Space::Output || l.var.prev)
         .map(|l| l.var)
         .collect();
     support.sort();

@@ -26,8 +26,11 @@ pub struct FrameTasks {
     aux: Vec<Option<u32>>,
     /// Per task: the event names (start, end, optional interrupt and resume), copied
     /// once so that a cycle allocates nothing.
-    names: Vec<(String, String, Option<(String, String)>)>,
+    names: Vec<EventNames>,
 }
+
+/// A task's event names: start, end, and the interrupt and resume pair if any.
+type EventNames = (String, String, Option<(String, String)>);
 
 /// The compiled expressions of one task.
 #[derive(Clone, Debug)]

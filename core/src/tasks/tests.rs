@@ -1,3 +1,6 @@
+// The fixtures mirror fixtures.ron's tuples field for field.
+#![allow(clippy::type_complexity)]
+
 use super::monitor::crossing;
 use super::spec::TaskFile;
 use super::*;

@@ -89,6 +89,10 @@ impl Hasher for Fx {
 
 type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<Fx>>;
 
+/// The key of a memoised filter context: the state's bits, its observers and items, and
+/// its four clocks.
+type CtxKey = (u64, (u64, u64, u64), [u16; 4]);
+
 /// Options of a verification.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -473,7 +477,7 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
     let mut delivered: [Option<(u32, Edge)>; 2] = [None, None];
     let mut inv: Vec<Option<u32>> = vec![None; model.invariants.len()];
     let mut transitions = 0u64;
-    let mut cache: FxMap<(u64, (u64, u64, u64), [u16; 4]), Ctx> = FxMap::default();
+    let mut cache: FxMap<CtxKey, Ctx> = FxMap::default();
     // Graph for the "always deliverable" check: successors of each state, and the states
     // with a delivering transition.
     let mut succ: Vec<u32> = Vec::new();
