@@ -1054,7 +1054,40 @@ impl Simulation {
                 "journal-by-hand",
                 fields([("output", id.clone()), ("on", on.to_string())]),
             ),
-            (Err(e), OperatorAction::ManualSet(..)) => self.log("manual_refused", e.clone()),
+            (Err(e), OperatorAction::ManualSet(id, on)) => {
+                // What the refusal says, as data: the output, the request and each
+                // refusing constraint with the values that make it refuse.
+                let refused = self
+                    .check_manual(id, *on)
+                    .map(|(_, r)| r)
+                    .unwrap_or_default();
+                let (code, mut f) = if refused.is_empty() {
+                    ("", BTreeMap::new())
+                } else {
+                    (
+                        "journal-manual-refused",
+                        fields([
+                            ("output", id.clone()),
+                            ("on", on.to_string()),
+                            (
+                                "constraints",
+                                refused
+                                    .iter()
+                                    .map(|c| c.id.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(","),
+                            ),
+                        ]),
+                    )
+                };
+                for c in &refused {
+                    f.insert(
+                        format!("with-{}", c.id),
+                        texts::request_context(c).join(", "),
+                    );
+                }
+                self.log_coded("manual_refused", e.clone(), code, f);
+            }
             (
                 Ok(()),
                 OperatorAction::Bypass {

@@ -1334,12 +1334,18 @@ fn a_manual_refusal_in_french() {
     );
     assert!(h.get_all_by_label(&refusal).count() >= 1, "shown");
     assert!(!h.state().sim.manual_outputs().expect("manual").get(4));
-    // The journal keeps the core's record.
+    // The journal keeps the core's record, and shows the refusal in French.
     assert!(h.state().journal.entries().iter().any(|e| {
         e.kind == "manual_refused"
             && e.text
                 .starts_with("A4 ON refused: no rotation of an empty table")
+            && e.code == "journal-manual-refused"
     }));
+    assert!(
+        h.query_by_label_contains(&format!("man. refusé {refusal}"))
+            .is_some(),
+        "the journal panel in French"
+    );
 }
 
 /// Degraded mode in French: the diagnosis and the suspect sensor's alarms from their

@@ -60,6 +60,46 @@ pub(crate) fn refused_request(
     if i18n.lang() == Lang::En || refused.is_empty() {
         return core_text.to_string();
     }
+    let why: Vec<(String, String)> = refused
+        .iter()
+        .map(|fc| (fc.id.clone(), texts::request_context(fc).join(", ")))
+        .collect();
+    refusal(i18n, bundle, id, on, &why)
+}
+
+/// A refused manual request from its journal fields (`output`, `on`, `constraints` and
+/// `with-<constraint>`), in the language shown.
+fn refusal_from_fields(
+    i18n: &I18n,
+    bundle: &PlantBundle,
+    fields: &std::collections::BTreeMap<String, String>,
+) -> Option<String> {
+    let output = fields.get("output")?;
+    let on = fields.get("on")? == "true";
+    let why: Vec<(String, String)> = fields
+        .get("constraints")?
+        .split(',')
+        .filter(|c| !c.is_empty())
+        .map(|c| {
+            let with = fields
+                .get(&format!("with-{c}"))
+                .cloned()
+                .unwrap_or_default();
+            (c.to_string(), with)
+        })
+        .collect();
+    Some(refusal(i18n, bundle, output, on, &why))
+}
+
+/// `id` ON (or OFF, with what that does) refused, and why: each constraint with the
+/// values that make it refuse (`C4 = 1, C6 = 0`).
+fn refusal(
+    i18n: &I18n,
+    bundle: &PlantBundle,
+    id: &str,
+    on: bool,
+    why: &[(String, String)],
+) -> String {
     let what = if on {
         i18n.ta("words-request-on", &[("id", id.into())])
     } else {
@@ -71,16 +111,15 @@ pub(crate) fn refused_request(
             None => i18n.ta("words-request-off", &[("id", id.into())]),
         }
     };
-    let why: Vec<String> = refused
+    let why: Vec<String> = why
         .iter()
-        .map(|fc| {
-            let context = texts::request_context(fc);
+        .map(|(c, context)| {
             let with = if context.is_empty() {
                 String::new()
             } else {
-                i18n.ta("words-with", &[("values", (&context.join(", ")).into())])
+                i18n.ta("words-with", &[("values", context.into())])
             };
-            constraint_phrase_with(i18n, bundle, &fc.id, &with)
+            constraint_phrase_with(i18n, bundle, c, &with)
         })
         .collect();
     i18n.ta(
@@ -200,6 +239,9 @@ pub(crate) fn coded(
 ) -> Option<String> {
     if id == "alarm-trip" && i18n.lang() != Lang::En {
         return Some(trip_from_fields(i18n, bundle, fields));
+    }
+    if id == "journal-manual-refused" && i18n.lang() != Lang::En {
+        return refusal_from_fields(i18n, bundle, fields);
     }
     if id.is_empty() || !i18n.has_own(id) {
         return None;
