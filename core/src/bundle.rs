@@ -3,6 +3,7 @@
 
 use crate::constraints::ConstraintSet;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::observers::Observers;
 use crate::plant::Plant;
 use crate::symbols::Symbols;
@@ -199,7 +200,7 @@ fn unprotected_warning(path: &Path, exists: bool) -> Problem {
         "does not exist"
     };
     Problem::warning(
-        "V0110",
+        codes::PLANT_UNPROTECTED.id,
         format!(
             "the plant is unprotected: {} {why}, so the filter lets every command through",
             path.display()
@@ -232,7 +233,7 @@ fn conflict_problem(
         |c| c.location.clone(),
     );
     Problem::error(
-        "V0107",
+        codes::NO_FALLBACK.id,
         format!("{err} when {witness} ({lines})"),
         Some(location),
     )

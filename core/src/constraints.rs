@@ -4,6 +4,7 @@
 //! (seed 004, equations (1)-(4)). The file holds one per line, `ID = expression`, in the
 //! notation of [`crate::expr`]; `#` starts a comment.
 
+use crate::diag::codes;
 use crate::diag::{Location, Problem};
 use crate::expr::{self, Dnf, Expr, Span};
 use crate::symbols::{Literal, Space, Symbols};
@@ -84,7 +85,7 @@ impl ConstraintSet {
             let Some(eq) = content.find('=') else {
                 let col = first_non_space_col(content);
                 problems.push(Problem::error(
-                    "V0108",
+                    codes::CONSTRAINT_LINE_INVALID.id,
                     format!("expected `ID = expression`, found `{}`", content.trim()),
                     at(col),
                 ));
@@ -94,7 +95,7 @@ impl ConstraintSet {
             let id_col = first_non_space_col(&content[..eq]);
             if !crate::plant::is_valid_name(id) {
                 problems.push(Problem::error(
-                    "V0108",
+                    codes::CONSTRAINT_LINE_INVALID.id,
                     format!("`{id}` is not a valid constraint id"),
                     at(id_col),
                 ));
@@ -102,7 +103,7 @@ impl ConstraintSet {
             }
             if let Some(first) = seen.get(id) {
                 problems.push(Problem::error(
-                    "V0102",
+                    codes::CONSTRAINT_DUPLICATE.id,
                     format!("constraint `{id}` is already defined on line {first}"),
                     at(id_col),
                 ));
@@ -122,7 +123,11 @@ impl ConstraintSet {
             let (expr, raw_dnf) = match parsed {
                 Ok(v) => v,
                 Err(err) => {
-                    problems.push(Problem::error("V0101", err.message, at(err.span.column)));
+                    problems.push(Problem::error(
+                        codes::CONSTRAINT_SYNTAX.id,
+                        err.message,
+                        at(err.span.column),
+                    ));
                     continue;
                 }
             };
@@ -247,7 +252,7 @@ impl ConstraintSet {
                         continue;
                     }
                     problems.push(Problem::error(
-                        "V0106",
+                        codes::PROPERTY_6_VIOLATED.id,
                         format!(
                             "property (6) violated for output {}: {} forces it to 0 and {} forces it to 1 when {}",
                             symbols.name(Space::Output, *k),
@@ -339,7 +344,7 @@ impl Constraint {
                 .any(|l| l.var.space == Space::Output && !l.var.prev)
             {
                 return Err(Problem::error(
-                    "V0109",
+                    codes::INVARIANT_READS_OUTPUT.id,
                     format!(
                         "invariant `{id}` reads an output at t; invariants describe situations of the plant (inputs, observers, previous outputs)"
                     ),
@@ -362,14 +367,14 @@ impl Constraint {
         }
         if dnf.is_empty() {
             warnings.push(Problem::warning(
-                "V0104",
+                codes::CONSTRAINT_NEVER_TRUE.id,
                 format!("constraint `{id}` can never be true: it never acts"),
                 Some(location.clone()),
             ));
         }
         if dnf.iter().any(Vec::is_empty) || is_tautology(&dnf) {
             return Err(Problem::error(
-                "V0105",
+                codes::CONSTRAINT_ALWAYS_TRUE.id,
                 format!(
                     "constraint `{id}` is always true: the filter would stop the plant at once"
                 ),
@@ -385,7 +390,7 @@ impl Constraint {
                 .collect();
             if outs.is_empty() {
                 return Err(Problem::error(
-                    "V0103",
+                    codes::CONSTRAINT_NOT_ENFORCEABLE.id,
                     format!(
                         "constraint `{id}` has a term with no output at t ({}): the filter cannot enforce it",
                         expr::render_dnf(std::slice::from_ref(term), symbols)

@@ -1,5 +1,7 @@
 //! Problems found while loading user data: each one says where (file, line, column) and what.
 
+pub mod codes;
+
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -46,7 +48,7 @@ pub enum Severity {
 pub struct Problem {
     /// Error or warning.
     pub severity: Severity,
-    /// A stable code, e.g. `V0103`, documented in `ARCHITECTURE.md`.
+    /// A stable code of the registry [`codes`], e.g. `V0103` (page `docs/codes/V0103.md`).
     pub code: &'static str,
     /// Human-readable message, lowercase, no trailing period.
     pub message: String,
@@ -122,12 +124,12 @@ fn too_large(path: &Path, size: Option<u64>) -> Problem {
         ),
         None => format!("{} holds more than {limit}: not read", path.display()),
     };
-    Problem::error("V0003", message, None)
+    Problem::error(codes::FILE_TOO_LARGE.id, message, None)
 }
 
 fn cannot_read(path: &Path, e: &dyn std::fmt::Display) -> Problem {
     Problem::error(
-        "V0002",
+        codes::FILE_UNREADABLE.id,
         format!("cannot read {}: {e}", path.display()),
         None,
     )
@@ -177,7 +179,7 @@ pub fn read_text_optional(path: &Path) -> Result<Option<String>, Problem> {
 /// Converts a `ron` parse error into a problem at its file position.
 pub fn ron_problem(file: &Path, err: &ron::error::SpannedError) -> Problem {
     Problem::error(
-        "V0001",
+        codes::RON_INVALID.id,
         format!("invalid RON: {}", err.code),
         Some(Location::new(file, err.span.start.line, err.span.start.col)),
     )

@@ -15,6 +15,7 @@
 //! always covers C0 or C1, so `/C0 . /C1` means the zone is empty and clears the count.
 //! `2P` is `count >= 2`: two boxes, not one box straddling both sensors.
 
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::expr::{self, Dnf};
 use crate::frame::Frame;
@@ -154,7 +155,7 @@ impl Observers {
                             || l.var.space == Space::Observer
                     }) {
                         problems.push(Problem::error(
-                            "V0201",
+                            codes::OBSERVER_READS_FORBIDDEN.id,
                             format!("observer `{id}`: `{what}` may read inputs, previous outputs and auxiliaries only"),
                             Some(Location::new(file, 1, 1)),
                         ));
@@ -165,7 +166,7 @@ impl Observers {
                 }
                 Err(e) => {
                     problems.push(Problem::error(
-                        "V0202",
+                        codes::OBSERVER_EXPRESSION_INVALID.id,
                         format!(
                             "observer `{id}`: `{what}`: {} (column {})",
                             e.message, e.span.column
@@ -222,7 +223,7 @@ impl Observers {
             };
             if !crate::plant::is_valid_name(&def.id) {
                 problems.push(Problem::error(
-                    "V0203",
+                    codes::OBSERVER_ID_INVALID.id,
                     format!("observer id `{}` must be letters, digits and `_`", def.id),
                     Some(Location::new(file, 1, 1)),
                 ));
@@ -238,7 +239,7 @@ impl Observers {
         for ((def, c), e) in kept.into_iter().zip(compiled).zip(empties) {
             if symbols.declare(&def.id, Space::Observer).is_err() {
                 problems.push(Problem::error(
-                    "V0204",
+                    codes::OBSERVER_NAME_TAKEN.id,
                     format!("observer `{}` has the name of another signal", def.id),
                     Some(Location::new(file, 1, 1)),
                 ));

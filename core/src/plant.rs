@@ -3,6 +3,7 @@
 //! Loaded from `plant.ron` in a plant folder (for the sorting station,
 //! `layouts/sorting-station/plant.ron`).
 
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::symbols::{Space, Symbols};
 use serde::{Deserialize, Serialize};
@@ -252,14 +253,14 @@ impl Plant {
         for (i, s) in file.signals.iter().enumerate() {
             if !is_valid_name(&s.id) {
                 problems.push(Problem::error(
-                    "V0010",
+                    codes::SIGNAL_ID_INVALID.id,
                     format!("signal id `{}` must be letters, digits and `_`", s.id),
                     id_at(i),
                 ));
             }
             if s.plausible.is_some() && s.kind != SignalKind::Sensor {
                 problems.push(Problem::error(
-                    "V0012",
+                    codes::PLAUSIBLE_ON_ACTUATOR.id,
                     format!("`plausible` is for sensors; `{}` is an actuator", s.id),
                     id_at(i),
                 ));
@@ -268,7 +269,7 @@ impl Plant {
                 let at = crate::diag::ron_field(&fields, &["signals"], "id", first)
                     .map_or(String::new(), |f| format!(" (first on line {})", f.line));
                 problems.push(Problem::error(
-                    "V0011",
+                    codes::SIGNAL_DUPLICATE.id,
                     format!("signal `{}` is declared twice{at}", s.id),
                     id_at(i),
                 ));

@@ -46,6 +46,7 @@
 
 use crate::bits::Bits;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::expr::{Dnf, Expr, LeafKind, eval_dnf, parse_str, simplify};
 use crate::frame::Frame;
 use crate::plant::Plant;
@@ -201,7 +202,7 @@ impl Plausibility {
                     Ok(d) => Some(simplify(&d)),
                     Err(e) => {
                         problems.push(Problem::error(
-                            "V0013",
+                            codes::PLAUSIBILITY_INVALID.id,
                             format!(
                                 "plausibility of `{}`: `{what}: \"{text}\"`, column {}: {}",
                                 s.id, e.span.column, e.message
@@ -220,7 +221,7 @@ impl Plausibility {
                 .and_then(|a| cond("rise_not_after", &Some(a.event.clone())).map(|d| (d, a.ms)));
             let Some((Space::Aux, aux)) = symbols.lookup(&suspect_name(&s.id)) else {
                 problems.push(Problem::error(
-                    "V0013",
+                    codes::PLAUSIBILITY_INVALID.id,
                     format!(
                         "plausibility of `{}`: `{}` is not declared",
                         s.id,
@@ -610,7 +611,7 @@ pub fn suspect_constraints(
                 c.dnf = simplify(&d);
             }
             Err(err) => problems.push(Problem::error(
-                "V0013",
+                codes::PLAUSIBILITY_INVALID.id,
                 format!("{}: with the suspect sensors, {}", c.id, err.message),
                 Some(c.location.clone()),
             )),

@@ -23,6 +23,7 @@ pub mod transients;
 
 use crate::bundle::PlantBundle;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::plant::Plant;
 use build::{Compiled, Component};
 use model::DiagnoserFile;
@@ -84,7 +85,7 @@ pub fn from_text(
     )?;
     let safe: Vec<_> = bundle.plant.outputs.iter().map(|s| s.safe).collect();
     let rewritten = coop::rewrite(&bundle.constraints, &bundle.symbols, &compiled, &safe)
-        .map_err(|m| vec![Problem::error("V0513", m, None)])?;
+        .map_err(|m| vec![Problem::error(codes::DIAGNOSER_REWRITE.id, m, None)])?;
     let file_name = dir.join("constraints.txt (rewritten by the diagnosers)");
     let (set, mut p2) =
         crate::constraints::ConstraintSet::parse(&rewritten, &file_name, &bundle.symbols);

@@ -12,6 +12,7 @@ use crate::alarms::{AlarmKind, AlarmList, texts};
 use crate::bits::Bits;
 use crate::bundle::PlantBundle;
 use crate::control::{CompiledProgram, ErrorLibrary, ProgramRuntime};
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::emulator::{ArrivalPlan, BoxView, Emulator, FaultSpec, Hazard, Layout};
 use crate::engine::{Commanded, Control as _, Engine, Event, FilterMode};
@@ -473,7 +474,7 @@ impl Simulation {
                     ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &bundle.plant)?;
                 let Some(v) = lib.variants.into_iter().find(|v| &v.def.id == id) else {
                     return Err(vec![Problem::error(
-                        "V0402",
+                        codes::SCENARIO_UNKNOWN_VARIANT.id,
                         format!("no variant `{id}` in the control-error library"),
                         Some(Location::new(scenario_path, 1, 1)),
                     )]);

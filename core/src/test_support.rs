@@ -1,6 +1,7 @@
 //! Fixtures shared by the unit tests: the sorting station of seed 004.
 
 use crate::bundle::PlantBundle;
+use crate::diag::codes;
 use crate::frame::Frame;
 use crate::symbols::{Symbols, Var};
 use std::path::PathBuf;
@@ -22,7 +23,7 @@ pub(crate) fn station() -> PlantBundle {
     };
     let unexpected: Vec<_> = problems
         .iter()
-        .filter(|p| p.code != "V0106")
+        .filter(|p| p.code != codes::PROPERTY_6_VIOLATED.id)
         .cloned()
         .collect();
     assert!(

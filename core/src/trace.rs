@@ -7,6 +7,7 @@
 //! ```
 
 use crate::bits::Bits;
+use crate::diag::codes;
 use crate::diag::{Location, Problem};
 use crate::plant::Plant;
 use crate::time::Millis;
@@ -34,7 +35,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
         .filter(|(_, l)| !l.trim().is_empty());
     let Some((header_index, header)) = lines.next() else {
         return Err(Problem::error(
-            "V0301",
+            codes::TRACE_EMPTY.id,
             "empty trace: expected a header `time_ms,<signals>`",
             Some(Location::new(file, 1, 1)),
         ));
@@ -50,7 +51,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
         let name = cell.trim();
         if let Some(first) = names.insert(name, col) {
             return Err(Problem::error(
-                "V0330",
+                codes::TRACE_DUPLICATE_COLUMN.id,
                 format!(
                     "column `{name}` appears twice in the trace header (first at column {first})"
                 ),
@@ -66,7 +67,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
             columns.push(Some((true, k)));
         } else {
             return Err(Problem::error(
-                "V0302",
+                codes::TRACE_UNKNOWN_SIGNAL.id,
                 format!("unknown signal `{name}` in trace header"),
                 Some(Location::new(file, header_line, col)),
             ));
@@ -75,7 +76,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
     }
     if !has_time {
         return Err(Problem::error(
-            "V0303",
+            codes::TRACE_NO_TIME_COLUMN.id,
             "trace header has no `time_ms` column",
             Some(Location::new(file, header_line, 1)),
         ));
@@ -90,7 +91,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
         });
         if !present {
             return Err(Problem::error(
-                "V0304",
+                codes::TRACE_MISSING_SIGNAL.id,
                 format!("trace has no column for signal `{}`", s.id),
                 Some(Location::new(file, header_line, 1)),
             ));
@@ -110,7 +111,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
         let cells: Vec<&str> = line.split(',').collect();
         if cells.len() != columns.len() {
             return Err(Problem::error(
-                "V0305",
+                codes::TRACE_ROW_WIDTH.id,
                 format!("expected {} values, found {}", columns.len(), cells.len()),
                 Some(Location::new(file, line_no, 1)),
             ));
@@ -121,7 +122,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
                 None => {
                     row.time = Millis(v.parse().map_err(|_| {
                         Problem::error(
-                            "V0306",
+                            codes::TRACE_TIME_INVALID.id,
                             format!("`{v}` is not a time in milliseconds"),
                             Some(Location::new(file, line_no, col)),
                         )
@@ -135,7 +136,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
                             "goes backwards from"
                         };
                         return Err(Problem::error(
-                            "V0331",
+                            codes::TRACE_TIME_BACKWARDS.id,
                             format!(
                                 "time {} ms {how} {} ms on line {previous_line}: the time of a trace must increase",
                                 row.time.0, prev.time.0
@@ -150,7 +151,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
                         "1" => true,
                         _ => {
                             return Err(Problem::error(
-                                "V0307",
+                                codes::TRACE_VALUE_INVALID.id,
                                 format!("`{v}` is not 0 or 1"),
                                 Some(Location::new(file, line_no, col)),
                             ));

@@ -2,6 +2,7 @@
 //! of a reference program (`programs/errors.ron`).
 
 use super::program::{Action, CompiledProgram, Origin, Program, Step};
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::plant::Plant;
 use serde::{Deserialize, Serialize};
@@ -245,7 +246,7 @@ impl ErrorLibrary {
                 .unwrap_or_else(|| Location::new(path, 1, 1));
             if !ids.insert(def.id.clone()) {
                 problems.push(Problem::error(
-                    "V0320",
+                    codes::LIBRARY_VARIANT_DUPLICATE.id,
                     format!("variant `{}` is declared twice", def.id),
                     Some(loc),
                 ));
@@ -255,7 +256,7 @@ impl ErrorLibrary {
                 Ok(p) => p,
                 Err(m) => {
                     problems.push(Problem::error(
-                        "V0321",
+                        codes::LIBRARY_VARIANT_INVALID.id,
                         format!("variant `{}`: {m}", def.id),
                         Some(loc),
                     ));

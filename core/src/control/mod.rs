@@ -11,7 +11,7 @@
 //!   of a reference program ([`ErrorLibrary`]).
 //! - [`mutation`]: enumeration of single mutations for localisation campaigns.
 //!
-//! Problem codes: V0301–V0315 program compilation, V0320–V0321 error library.
+//! Problem codes: V0901–V0915 program compilation, V0920–V0921 error library (`diag::codes`).
 
 pub mod library;
 pub mod mutation;

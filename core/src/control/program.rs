@@ -1,6 +1,7 @@
 //! The program format (`programs/*.ron`) and its compilation against a plant.
 
 use super::packed::{Cond, Conds, Layout};
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::expr::{self, Dnf, Span};
 use crate::plant::{Plant, is_valid_name};
@@ -325,7 +326,7 @@ impl CompiledProgram {
          -> Option<u32> {
             if !is_valid_name(name) {
                 problems.push(Problem::error(
-                    "V0301",
+                    codes::PROGRAM_NAME_INVALID.id,
                     format!("{what} `{name}`: names are letters, digits and `_`"),
                     loc,
                 ));
@@ -340,7 +341,7 @@ impl CompiledProgram {
                         "a plant signal"
                     };
                     problems.push(Problem::error(
-                        "V0302",
+                        codes::PROGRAM_NAME_TAKEN.id,
                         format!("{what} `{name}` has the name of {other}"),
                         loc,
                     ));
@@ -352,14 +353,14 @@ impl CompiledProgram {
         for (ci, chart) in program.charts.iter().enumerate() {
             if chart_names.insert(chart.name.clone(), ci).is_some() {
                 problems.push(Problem::error(
-                    "V0303",
+                    codes::PROGRAM_CHART_DUPLICATE.id,
                     format!("chart `{}` is declared twice", chart.name),
                     Some(origin.location(origin.find_quoted(&chart.name, 0))),
                 ));
             }
             if !chart.steps.iter().any(|s| s.initial) {
                 problems.push(Problem::error(
-                    "V0304",
+                    codes::PROGRAM_NO_INITIAL_STEP.id,
                     format!("chart `{}` has no initial step", chart.name),
                     Some(origin.location(origin.find_quoted(&chart.name, 0))),
                 ));
@@ -413,7 +414,7 @@ impl CompiledProgram {
                     aux,
                 }),
                 None => problems.push(Problem::error(
-                    "V0305",
+                    codes::PROGRAM_TIMER_UNKNOWN_STEP.id,
                     format!("timer `{id}`: unknown step `{step}`"),
                     loc,
                 )),
@@ -429,7 +430,7 @@ impl CompiledProgram {
         for (what, button) in [("start", &program.start), ("stop", &program.stop)] {
             if let Some(b) = button.as_ref().filter(|b| !program.panel.contains(b)) {
                 problems.push(Problem::error(
-                    "V0315",
+                    codes::PROGRAM_BUTTON_NOT_ON_PANEL.id,
                     format!("`{what}`: `{b}` is not one of the panel's buttons"),
                     Some(origin.location(origin.find_quoted(b, 0))),
                 ));
@@ -457,7 +458,7 @@ impl CompiledProgram {
                         slot,
                     }),
                     None => problems.push(Problem::error(
-                        "V0306",
+                        codes::PROGRAM_ACTION_TARGET.id,
                         format!(
                             "chart `{chart}`, step `{}`: action target `{}` is neither an actuator nor a memory",
                             step.id, a.target
@@ -480,7 +481,7 @@ impl CompiledProgram {
                 Ok(d) => {
                     if let Some(l) = d.iter().flatten().find(|l| l.var.space == Space::Observer) {
                         problems.push(Problem::error(
-                            "V0308",
+                            codes::PROGRAM_READS_OBSERVER.id,
                             format!(
                                 "{what}: a program cannot read the observer `{}`",
                                 symbols.name(l.var.space, l.var.index)
@@ -493,7 +494,7 @@ impl CompiledProgram {
                 }
                 Err(e) => {
                     problems.push(Problem::error(
-                        "V0307",
+                        codes::PROGRAM_EXPRESSION_INVALID.id,
                         format!("{what}: {}", e.message),
                         Some(Location::new(&origin.file, e.span.line, e.span.column)),
                     ));
@@ -510,7 +511,7 @@ impl CompiledProgram {
                     || step_index.contains_key(&t.id)
                 {
                     problems.push(Problem::error(
-                        "V0309",
+                        codes::PROGRAM_TRANSITION_ID_TAKEN.id,
                         format!("{what}: the id is used twice"),
                         at_id(&t.id),
                     ));
@@ -519,7 +520,7 @@ impl CompiledProgram {
                     let mut out = Vec::new();
                     if list.is_empty() {
                         problems.push(Problem::error(
-                            "V0310",
+                            codes::PROGRAM_TRANSITION_NO_STEP.id,
                             format!("{what}: no {dir} step"),
                             at_id(&t.id),
                         ));
@@ -534,12 +535,12 @@ impl CompiledProgram {
                                 out.push(i)
                             }
                             Some(_) => problems.push(Problem::error(
-                                "V0311",
+                                codes::PROGRAM_TRANSITION_OTHER_CHART.id,
                                 format!("{what}: {dir} step `{s}` belongs to another chart"),
                                 at_id(&t.id),
                             )),
                             None => problems.push(Problem::error(
-                                "V0312",
+                                codes::PROGRAM_TRANSITION_UNKNOWN_STEP.id,
                                 format!("{what}: unknown {dir} step `{s}`"),
                                 at_id(&t.id),
                             )),
@@ -576,7 +577,7 @@ impl CompiledProgram {
             let start = origin.equation_start(target);
             let Some(slot) = target_slot(target) else {
                 problems.push(Problem::error(
-                    "V0313",
+                    codes::PROGRAM_EQUATION_TARGET.id,
                     format!("{what}: `{target}` is neither an actuator nor a memory"),
                     Some(origin.location(start)),
                 ));
@@ -584,7 +585,7 @@ impl CompiledProgram {
             };
             if eq_targets.insert(slot, ()).is_some() {
                 problems.push(Problem::error(
-                    "V0314",
+                    codes::PROGRAM_EQUATION_TWICE.id,
                     format!("{what}: `{target}` has two equations"),
                     Some(origin.location(start)),
                 ));

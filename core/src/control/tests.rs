@@ -158,7 +158,7 @@ fn start_and_stop_name_panel_buttons() {
     assert_eq!(msgs.len(), 1, "{msgs:#?}");
     assert!(
         msgs[0].contains(":3:")
-            && msgs[0].contains("V0315")
+            && msgs[0].contains("V0915")
             && msgs[0].contains("`stop`: `HALT` is not one of the panel's buttons"),
         "{msgs:#?}"
     );

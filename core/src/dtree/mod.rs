@@ -11,6 +11,7 @@
 
 use crate::constraints::ConstraintSet;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::expr;
 use crate::frame::Frame;
 use crate::symbols::{Space, Var};
@@ -303,7 +304,7 @@ impl CompiledFilter {
         vars.dedup();
         if vars.len() > 64 {
             return Err(Problem::error(
-                "V0601",
+                codes::DTREE_SUPPORT_TOO_LARGE.id,
                 format!(
                     "support of {} variables: the compiled forms take at most 64",
                     vars.len()

@@ -5,6 +5,7 @@
 //! signals (`When("C3 . /C4")`), and lasts `duration_ms` (forever when `None`).
 
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::expr::{Dnf, eval_dnf, parse_str, simplify};
 use crate::frame::Frame;
 use crate::symbols::Symbols;
@@ -161,7 +162,11 @@ impl Scheduled {
         symbols: &Symbols,
     ) -> Result<Self, Problem> {
         let unknown = |what: &str, id: &str| {
-            Problem::error("V0303", format!("fault names unknown {what} `{id}`"), None)
+            Problem::error(
+                codes::FAULT_UNKNOWN_SIGNAL.id,
+                format!("fault names unknown {what} `{id}`"),
+                None,
+            )
         };
         let sensor = |id: &str| sensor_index(id).ok_or_else(|| unknown("sensor", id));
         let actuator = |id: &str| actuator_role(id).ok_or_else(|| unknown("actuator", id));
@@ -195,7 +200,7 @@ impl Scheduled {
             Trigger::When(text) => {
                 let bad = |e: crate::expr::ExprError| {
                     Problem::error(
-                        "V0304",
+                        codes::FAULT_CONDITION_INVALID.id,
                         format!(
                             "fault condition `{text}`, column {}: {}",
                             e.span.column, e.message

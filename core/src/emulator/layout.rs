@@ -1,6 +1,7 @@
 //! The plant layout: world geometry (mm, top view, x right, y up) shared by the emulator
 //! and the synoptic, loaded from `layout.ron`.
 
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::plant::Plant;
 use serde::{Deserialize, Serialize};
@@ -288,7 +289,7 @@ impl Layout {
         let mut out = Vec::new();
         if !(1..=MAX_STEP_MS).contains(&self.step_ms) {
             out.push(Problem::error(
-                "V0301",
+                codes::LAYOUT_INVALID.id,
                 format!(
                     "step_ms is {} ms: the simulation step is from 1 to {MAX_STEP_MS} ms",
                     self.step_ms
@@ -305,7 +306,7 @@ impl Layout {
             let max = crate::sim::scenario::MAX_RUN_MS;
             if !(1..=max).contains(period_ms) {
                 out.push(Problem::error(
-                    "V0301",
+                    codes::LAYOUT_INVALID.id,
                     format!(
                         "period_ms is {period_ms} ms: an arrival period is from 1 ms to {max} ms"
                     ),
@@ -314,14 +315,18 @@ impl Layout {
             }
             if *jitter_ms > max {
                 out.push(Problem::error(
-                    "V0301",
+                    codes::LAYOUT_INVALID.id,
                     format!("jitter_ms is {jitter_ms} ms: at most {max} ms"),
                     self.field_location("source.arrivals.jitter_ms"),
                 ));
             }
         }
         let mut err = |id: &str, msg: String| {
-            out.push(Problem::error("V0301", msg, self.location_of(id)));
+            out.push(Problem::error(
+                codes::LAYOUT_INVALID.id,
+                msg,
+                self.location_of(id),
+            ));
         };
         for c in &self.conveyors {
             if c.start == c.end || c.speed_mm_s < 0 {
@@ -393,7 +398,7 @@ impl Layout {
         for a in actuators {
             if plant.output(a).is_none() {
                 out.push(Problem::error(
-                    "V0302",
+                    codes::LAYOUT_UNKNOWN_SIGNAL.id,
                     format!("layout names actuator `{a}`, which the plant does not declare"),
                     self.location_of(a),
                 ));
@@ -402,7 +407,7 @@ impl Layout {
         for s in &self.sensors {
             if plant.input(&s.id).is_none() {
                 out.push(Problem::error(
-                    "V0302",
+                    codes::LAYOUT_UNKNOWN_SIGNAL.id,
                     format!(
                         "layout names sensor `{}`, which the plant does not declare",
                         s.id

@@ -54,6 +54,7 @@ pub use model::{BoxState, BoxStats, BoxView, Hazard, HazardKind, Place};
 
 use crate::bits::Bits;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::frame::Frame;
 use crate::plant::Plant;
 use crate::symbols::Symbols;
@@ -398,7 +399,7 @@ impl Emulator {
         };
         let Some(p) = p else {
             return Err(Problem::error(
-                "V0305",
+                codes::EMULATOR_UNKNOWN_PART.id,
                 format!("no part `{part}` in the layout"),
                 None,
             ));

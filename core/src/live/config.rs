@@ -3,6 +3,7 @@
 //! file's folder.
 
 use super::ron_options;
+use crate::diag::codes;
 use crate::diag::{Problem, ron_problem};
 use crate::time::Millis;
 use serde::{Deserialize, Serialize};
@@ -303,7 +304,7 @@ impl GatewayConfig {
         let at = |n: &str| Some(super::iomap::locate(text, file, n));
         if config.cycle_ms == 0 {
             problems.push(Problem::error(
-                "V0620",
+                codes::GATEWAY_CYCLE.id,
                 "cycle_ms must be at least 1",
                 at("cycle_ms"),
             ));
@@ -313,14 +314,14 @@ impl GatewayConfig {
             .is_some_and(|p| !(1..=99).contains(&p))
         {
             problems.push(Problem::error(
-                "V0625",
+                codes::GATEWAY_PRIORITY.id,
                 "cycle_priority must be between 1 and 99",
                 at("cycle_priority"),
             ));
         }
         if config.link_timeout_cycles == 0 {
             problems.push(Problem::error(
-                "V0621",
+                codes::GATEWAY_LINK_TIMEOUT.id,
                 "link_timeout_cycles must be at least 1",
                 at("link_timeout_cycles"),
             ));
@@ -328,14 +329,14 @@ impl GatewayConfig {
         match config.mode {
             Mode::Monitor | Mode::Gateway if config.client.is_none() => {
                 problems.push(Problem::error(
-                    "V0622",
+                    codes::GATEWAY_NO_CLIENT.id,
                     format!("{:?} mode needs `client: (address: …)`", config.mode),
                     at("mode"),
                 ))
             }
             Mode::Gateway | Mode::Emulator if config.server.is_none() => {
                 problems.push(Problem::error(
-                    "V0623",
+                    codes::GATEWAY_NO_SERVER.id,
                     format!("{:?} mode needs `server: (…)`", config.mode),
                     at("mode"),
                 ))
@@ -347,7 +348,7 @@ impl GatewayConfig {
         {
             {
                 problems.push(Problem::error(
-                    "V0624",
+                    codes::GATEWAY_PLC_NOT_ALLOWED.id,
                     format!("the PLC address {} is not in the allow-list", plc.ip),
                     at("plc"),
                 ));
@@ -356,7 +357,7 @@ impl GatewayConfig {
         if let Some(s) = &config.server {
             if !(1..=247).contains(&s.unit) {
                 problems.push(Problem::error(
-                    "V0626",
+                    codes::GATEWAY_UNIT_ID.id,
                     format!(
                         "unit {} cannot be served: a Modbus unit id is 1 to 247 (0 is broadcast, 248 to 255 are reserved)",
                         s.unit
@@ -366,14 +367,14 @@ impl GatewayConfig {
             }
             if s.max_connections == 0 {
                 problems.push(Problem::error(
-                    "V0627",
+                    codes::GATEWAY_MAX_CONNECTIONS.id,
                     "max_connections must be at least 1 (the PLC's connection)",
                     at("max_connections"),
                 ));
             }
             if s.idle_timeout_ms <= config.link_timeout().0 {
                 problems.push(Problem::error(
-                    "V0628",
+                    codes::GATEWAY_IDLE_TIMEOUT.id,
                     format!(
                         "idle_timeout_ms ({}) must be longer than the link timeout ({} ms): a PLC would be disconnected before it is declared lost",
                         s.idle_timeout_ms,
@@ -392,8 +393,13 @@ impl GatewayConfig {
 
     /// Loads a configuration file.
     pub fn load(path: &Path) -> Result<Self, Vec<Problem>> {
-        let text = crate::diag::read_text(path)
-            .map_err(|p| vec![Problem::error("V0619", p.message, None)])?;
+        let text = crate::diag::read_text(path).map_err(|p| {
+            vec![Problem::error(
+                codes::GATEWAY_CONFIG_UNREADABLE.id,
+                p.message,
+                None,
+            )]
+        })?;
         Self::from_ron(&text, path)
     }
 

@@ -16,6 +16,7 @@
 //! ```
 
 use super::ron_options;
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::plant::{Address, Plant};
 use crate::time::Millis;
@@ -173,7 +174,7 @@ impl IoMap {
     /// errors alone when the map cannot be used.
     pub fn load(path: &Path, plant: &Plant) -> Result<(Self, Vec<Problem>), Vec<Problem>> {
         let text = crate::diag::read_text(path)
-            .map_err(|p| vec![Problem::error("V0601", p.message, None)])?;
+            .map_err(|p| vec![Problem::error(codes::IO_MAP_UNREADABLE.id, p.message, None)])?;
         Self::from_ron(&text, path, plant)
     }
 
@@ -203,7 +204,7 @@ impl IoMap {
                     max_age_ms: None,
                 }),
                 None => problems.push(Problem::error(
-                    "V0602",
+                    codes::IO_MAP_NO_ADDRESS.id,
                     format!("signal `{}` has no address in the plant file", s.id),
                     None,
                 )),
@@ -237,7 +238,7 @@ impl IoMap {
         let mut taken: BTreeMap<Point, String> = BTreeMap::new();
         if file.poll_ms == 0 {
             errors.push(Problem::error(
-                "V0603",
+                codes::IO_MAP_POLL.id,
                 "poll_ms must be at least 1",
                 at("poll_ms"),
             ));
@@ -252,21 +253,21 @@ impl IoMap {
                 .unwrap_or_else(|| poll.saturating_mul(3));
             if point.bit > 15 {
                 errors.push(Problem::error(
-                    "V0604",
+                    codes::IO_MAP_BIT.id,
                     format!("`{}`: register bit {} is past 15", e.signal, point.bit),
                     loc.clone(),
                 ));
             }
             if poll == 0 {
                 errors.push(Problem::error(
-                    "V0603",
+                    codes::IO_MAP_POLL.id,
                     format!("`{}`: poll_ms must be at least 1", e.signal),
                     loc.clone(),
                 ));
             }
             if max_age < poll {
                 warnings.push(Problem::warning(
-                    "V0605",
+                    codes::IO_MAP_MAX_AGE.id,
                     format!(
                         "`{}`: max_age_ms {max_age} is below the poll period {poll}: the value will be stale between polls",
                         e.signal
@@ -276,7 +277,7 @@ impl IoMap {
             }
             if let Some(other) = taken.insert(point, e.signal.clone()) {
                 errors.push(Problem::error(
-                    "V0606",
+                    codes::IO_MAP_SHARED_POINT.id,
                     format!("`{}` and `{other}` are both on {point}", e.signal),
                     loc.clone(),
                 ));
@@ -291,7 +292,7 @@ impl IoMap {
             } else if let Some(k) = plant.output(&e.signal) {
                 if !point.area.is_writable() {
                     errors.push(Problem::error(
-                        "V0607",
+                        codes::IO_MAP_ACTUATOR_READ_ONLY.id,
                         format!(
                             "actuator `{}` is on a read-only {}: actuators go on coils or holding registers",
                             e.signal, point.area
@@ -302,7 +303,7 @@ impl IoMap {
                 outputs.get_mut(k)
             } else {
                 errors.push(Problem::error(
-                    "V0608",
+                    codes::IO_MAP_UNKNOWN_SIGNAL.id,
                     format!("`{}` is not a signal of plant `{}`", e.signal, plant.name),
                     loc.clone(),
                 ));
@@ -311,7 +312,7 @@ impl IoMap {
             if let Some(slot) = slot {
                 if slot.is_some() {
                     errors.push(Problem::error(
-                        "V0609",
+                        codes::IO_MAP_DUPLICATE.id,
                         format!("`{}` is mapped twice", e.signal),
                         loc.clone(),
                     ));
@@ -329,7 +330,7 @@ impl IoMap {
             .collect();
         if !missing.is_empty() {
             errors.push(Problem::error(
-                "V0610",
+                codes::IO_MAP_UNMAPPED.id,
                 format!("signals not mapped: {}", missing.join(", ")),
                 Some(Location::new(path, 1, 1)),
             ));

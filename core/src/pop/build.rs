@@ -4,6 +4,7 @@
 
 use super::model::{Behaviour, Bound, ComponentDef, DiagnoserFile, locate};
 use crate::constraints::{ConstraintSet, implies};
+use crate::diag::codes;
 use crate::diag::{Location, Problem};
 use crate::expr::{Dnf, parse_str};
 use crate::symbols::{Literal, Space, Symbols, Var};
@@ -248,7 +249,11 @@ pub fn compile(
     let mut components = Vec::new();
     for c in &file_def.components {
         if ids.insert(c.id.clone(), ()).is_some() {
-            ctx.err("V0502", &c.id, format!("duplicate component `{}`", c.id));
+            ctx.err(
+                codes::DIAGNOSER_DUPLICATE_COMPONENT.id,
+                &c.id,
+                format!("duplicate component `{}`", c.id),
+            );
             continue;
         }
         if let Some(comp) = compile_one(c, symbols, filter, file_def.margin_ms, &mut ctx) {
@@ -288,7 +293,7 @@ fn compile_one(
                 },
             }),
             _ => ctx.err(
-                "V0503",
+                codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
                 s,
                 format!("`{s}` is not a sensor or actuator of the plant"),
             ),
@@ -296,7 +301,7 @@ fn compile_one(
     }
     if signals.len() > 64 {
         ctx.err(
-            "V0503",
+            codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
             &c.id,
             "a component observes at most 64 signals".into(),
         );
@@ -310,7 +315,7 @@ fn compile_one(
     let state_of = |n: &str| states.iter().position(|s| s == n);
     let Some(initial) = state_of(&c.initial) else {
         ctx.err(
-            "V0504",
+            codes::DIAGNOSER_UNKNOWN_STATE.id,
             &c.initial,
             format!("unknown initial state `{}`", c.initial),
         );
@@ -381,14 +386,14 @@ fn compile_one(
                         }
                     }
                     _ => ctx.err(
-                        "V0505",
+                        codes::DIAGNOSER_INITIAL_VALUES.id,
                         &c.initial_values,
                         format!("`{}`: only component signals at t", c.initial_values),
                     ),
                 }
             }
         }
-        Err(m) => ctx.err("V0505", &c.initial_values, m),
+        Err(m) => ctx.err(codes::DIAGNOSER_INITIAL_VALUES.id, &c.initial_values, m),
     }
     // Symbols: bare edges, then guarded.
     let mut syms: Vec<Symbol> = Vec::new();
@@ -415,11 +420,11 @@ fn compile_one(
                 raw.push((iv.id.clone(), k, iv.lo.clone(), iv.hi.clone()));
             }
             Ok(_) => ctx.err(
-                "V0506",
+                codes::DIAGNOSER_CLOCK_EVENT.id,
                 &iv.after,
                 format!("clock event `{}` must be a bare edge", iv.after),
             ),
-            Err(m) => ctx.err("V0506", &iv.after, m),
+            Err(m) => ctx.err(codes::DIAGNOSER_CLOCK_EVENT.id, &iv.after, m),
         }
     }
     let resolve = |b: &Bound, depth: usize| -> Result<Option<u64>, String> {
@@ -454,8 +459,16 @@ fn compile_one(
                 lo,
                 hi,
             }),
-            (Ok(None), _) => ctx.err("V0507", id, format!("interval `{id}` has no lower bound")),
-            (Err(m), _) | (_, Err(m)) => ctx.err("V0507", id, format!("interval `{id}`: {m}")),
+            (Ok(None), _) => ctx.err(
+                codes::DIAGNOSER_INTERVAL.id,
+                id,
+                format!("interval `{id}` has no lower bound"),
+            ),
+            (Err(m), _) | (_, Err(m)) => ctx.err(
+                codes::DIAGNOSER_INTERVAL.id,
+                id,
+                format!("interval `{id}`: {m}"),
+            ),
         }
     }
     let interval_of = |n: &str| intervals.iter().position(|i| i.id == n);
@@ -464,7 +477,7 @@ fn compile_one(
         Some(t) => match edge_of(t) {
             Ok((i, r, _)) => clocks.iter().position(|&e| e == (i, r)),
             Err(m) => {
-                ctx.err("V0506", t, m);
+                ctx.err(codes::DIAGNOSER_CLOCK_EVENT.id, t, m);
                 None
             }
         },
@@ -483,7 +496,7 @@ fn compile_one(
     for e in &c.expected {
         let (Some(from), Some(to)) = (state_of(&e.from), state_of(&e.to)) else {
             ctx.err(
-                "V0504",
+                codes::DIAGNOSER_UNKNOWN_STATE.id,
                 if state_of(&e.from).is_none() {
                     &e.from
                 } else {
@@ -498,7 +511,11 @@ fn compile_one(
             Some(w) => match interval_of(w) {
                 Some(k) => Some(k),
                 None => {
-                    ctx.err("V0507", w, format!("unknown interval `{w}`"));
+                    ctx.err(
+                        codes::DIAGNOSER_INTERVAL.id,
+                        w,
+                        format!("unknown interval `{w}`"),
+                    );
                     continue;
                 }
             },
@@ -530,7 +547,7 @@ fn compile_one(
                     rise,
                 });
             }
-            Err(m) => ctx.err("V0508", &e.event, m),
+            Err(m) => ctx.err(codes::DIAGNOSER_EDGE.id, &e.event, m),
         }
     }
     // Unguarded evolutions match every symbol of their edge.
@@ -580,7 +597,7 @@ fn compile_one(
             let before = (v >> ev.sig) & 1 == 1;
             if before == ev.rise {
                 ctx.err(
-                    "V0509",
+                    codes::DIAGNOSER_INCONSISTENT_VALUES.id,
                     &c.states[x].id,
                     format!(
                         "in state `{}`, `{}` is already {}",
@@ -598,7 +615,7 @@ fn compile_one(
                     work.push(ev.to);
                 }
                 Some(o) if o != nv => ctx.err(
-                    "V0509",
+                    codes::DIAGNOSER_INCONSISTENT_VALUES.id,
                     &c.states[ev.to].id,
                     format!(
                         "state `{}` is reached with different signal values",
@@ -628,7 +645,7 @@ fn compile_one(
             match faults.iter().position(|x| x == f) {
                 Some(k) => fs.push(k),
                 None => ctx.err(
-                    "V0510",
+                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
                     f,
                     format!("partition `{}` names unknown fault `{f}`", p.id),
                 ),
@@ -637,7 +654,7 @@ fn compile_one(
         for a in &p.actuators {
             if !matches!(symbols.lookup(a), Some((Space::Output, _))) {
                 ctx.err(
-                    "V0510",
+                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
                     a,
                     format!(
                         "partition `{}` names `{a}`, not an actuator of the plant",
@@ -657,7 +674,7 @@ fn compile_one(
         for e in &i.expected {
             if !c.partitions.iter().any(|p| &p.id == e) {
                 ctx.err(
-                    "V0510",
+                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
                     &i.name,
                     format!(
                         "injection `{}` expects `{e}`, not a partition of `{}`",
@@ -670,7 +687,7 @@ fn compile_one(
             && let Err(e) = parse_str(when).and_then(|x| x.to_dnf(symbols))
         {
             ctx.err(
-                "V0510",
+                codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
                 when,
                 format!("injection `{}`: `when`: {}", i.name, e.message),
             );
@@ -782,7 +799,7 @@ fn compile_one(
                 Behaviour::StuckAt(s, v) | Behaviour::Spurious(s, v) => {
                     let Some(si) = signals.iter().position(|x| &x.name == s) else {
                         ctx.err(
-                            "V0511",
+                            codes::DIAGNOSER_FAULT.id,
                             s,
                             format!("fault `{}`: `{s}` is not a signal of `{}`", fd.id, c.id),
                         );
@@ -863,7 +880,7 @@ fn compile_one(
                                 g[x].spawn.push((f, t));
                             }
                             None => ctx.err(
-                                "V0504",
+                                codes::DIAGNOSER_UNKNOWN_STATE.id,
                                 n,
                                 format!("fault `{}`: unknown state `{n}`", fd.id),
                             ),
@@ -886,7 +903,7 @@ fn compile_one(
                         g[x].spawn.push((f, t));
                     }
                     _ => ctx.err(
-                        "V0504",
+                        codes::DIAGNOSER_UNKNOWN_STATE.id,
                         n,
                         format!("fault `{}`: `Jumps({n}, {m})` needs two states", fd.id),
                     ),
@@ -910,7 +927,7 @@ fn compile_one(
                 Behaviour::Moves(n, act) => {
                     let (Some(x), Ok((i, r, _))) = (state_of(n), edge_of(act)) else {
                         ctx.err(
-                            "V0511",
+                            codes::DIAGNOSER_FAULT.id,
                             n,
                             format!(
                                 "fault `{}`: `Moves({n}, {act})` needs a state and an edge",
@@ -938,7 +955,7 @@ fn compile_one(
                             g[x].spawn.push((f, t));
                         }
                         None => ctx.err(
-                            "V0511",
+                            codes::DIAGNOSER_FAULT.id,
                             n,
                             format!("fault `{}`: `{act}` is not expected in `{n}`", fd.id),
                         ),
@@ -1323,7 +1340,7 @@ fn compile_one(
         match parse_str(&e.expr).and_then(|x| x.to_dnf(symbols)) {
             Ok(d) => estimates.push((crate::symbols::estimate_name(&e.sensor), d)),
             Err(m) => ctx.err(
-                "V0512",
+                codes::DIAGNOSER_ESTIMATE.id,
                 &e.expr,
                 format!("estimate of `{}`: {}", e.sensor, m.message),
             ),
@@ -1385,7 +1402,7 @@ fn compile_one(
         for a in list {
             if !matches!(symbols.lookup(a), Some((Space::Input, _))) {
                 ctx.err(
-                    "V0503",
+                    codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
                     a,
                     format!("`{field}`: `{a}` is not a sensor of the plant"),
                 );
@@ -1398,7 +1415,7 @@ fn compile_one(
             .any(|s| &s.name == a && s.var.space == Space::Input)
         {
             ctx.err(
-                "V0503",
+                codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
                 a,
                 format!("`independent`: `{a}` is not a sensor of the component"),
             );

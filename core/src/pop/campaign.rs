@@ -12,6 +12,7 @@ use super::runtime::Certainty;
 use crate::bundle::PlantBundle;
 use crate::control::CompiledProgram;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::emulator::{ArrivalPlan, FaultKind, FaultSpec, SizeMix, Trigger};
 use crate::expr::{Dnf, eval_dnf, parse_str};
 use crate::sim::{OperatorAction, Options, Simulation};
@@ -293,7 +294,7 @@ fn run_one(
             .and_then(|e| e.to_dnf(&sim.engine.symbols))
             .map_err(|e| {
                 vec![Problem::error(
-                    "V0304",
+                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
                     format!("`{when}`: {}", e.message),
                     None,
                 )]

@@ -9,6 +9,7 @@
 
 use super::build::Compiled;
 use super::model::{Bound, DiagnoserFile, Learned};
+use crate::diag::codes;
 use crate::diag::{Location, Problem, RonField};
 use crate::frame::Frame;
 use crate::symbols::Space;
@@ -188,7 +189,7 @@ pub fn apply(file: &mut DiagnoserFile, measures: &BTreeMap<String, Estimator>) -
 pub fn rewrite(text: &str, path: &Path, learned: &DiagnoserFile) -> Result<String, Problem> {
     let fail = |message: String, at: Option<&RonField>| {
         Problem::error(
-            "V0514",
+            codes::LEARN_WRITE_IN_PLACE.id,
             format!("cannot write the learned bounds in place: {message}"),
             Some(at.map_or_else(|| Location::new(path, 1, 1), |f| f.location(path))),
         )

@@ -11,6 +11,7 @@
 
 use crate::bits::Bits;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::frame::Frame;
 use crate::plant::Plant;
 use crate::pop::{Certainty, DiagBundle, Diagnosers, Diagnosis};
@@ -27,7 +28,7 @@ pub fn load(dir: &Path) -> Result<DiagBundle, Vec<Problem>> {
     let (db, problems) = crate::pop::load(dir)?;
     let errors: Vec<Problem> = problems
         .into_iter()
-        .filter(|p| p.is_error() && p.code != "V0106")
+        .filter(|p| p.is_error() && p.code != codes::PROPERTY_6_VIOLATED.id)
         .collect();
     if errors.is_empty() {
         Ok(db)

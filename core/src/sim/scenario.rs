@@ -8,6 +8,7 @@
 //! period or jitter, `V0406` length of a fault or of a spurious pulse.
 
 use super::Scenario;
+use crate::diag::codes;
 use crate::diag::{Location, Problem, RonField, ron_field, ron_fields};
 use crate::emulator::{ArrivalPlan, FaultKind, Trigger};
 use std::path::Path;
@@ -29,7 +30,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
     let mut out = Vec::new();
     if !(1..=MAX_CYCLE_MS).contains(&s.cycle_ms) {
         out.push(Problem::error(
-            "V0401",
+            codes::SCENARIO_CYCLE.id,
             format!(
                 "cycle_ms is {} ms: a PLC cycle must be from 1 to {MAX_CYCLE_MS} ms",
                 s.cycle_ms
@@ -39,7 +40,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
     }
     if !(1..=MAX_RUN_MS).contains(&s.duration_ms) {
         out.push(Problem::error(
-            "V0403",
+            codes::SCENARIO_DURATION.id,
             format!(
                 "duration_ms is {} ms: a run lasts from 1 ms to {MAX_RUN_MS} ms (7 days)",
                 s.duration_ms
@@ -49,7 +50,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
     }
     if s.projection_ms > MAX_PROJECTION_MS {
         out.push(Problem::error(
-            "V0403",
+            codes::SCENARIO_DURATION.id,
             format!(
                 "projection_ms is {} ms: the projection horizon is at most {MAX_PROJECTION_MS} ms (1 h)",
                 s.projection_ms
@@ -60,7 +61,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
     let end = s.duration_ms;
     let after_end = |what: String, t: u64, location: Option<Location>| {
         Problem::error(
-            "V0404",
+            codes::SCENARIO_AFTER_END.id,
             format!(
                 "{what} at {t} ms is not before the end of the run (duration_ms {end}): it would never happen"
             ),
@@ -84,7 +85,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
         }) => {
             if !(1..=MAX_RUN_MS).contains(period_ms) {
                 out.push(Problem::error(
-                    "V0405",
+                    codes::SCENARIO_ARRIVALS.id,
                     format!(
                         "period_ms is {period_ms} ms: an arrival period is from 1 ms to {MAX_RUN_MS} ms"
                     ),
@@ -93,7 +94,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
             }
             if *jitter_ms > MAX_RUN_MS {
                 out.push(Problem::error(
-                    "V0405",
+                    codes::SCENARIO_ARRIVALS.id,
                     format!("jitter_ms is {jitter_ms} ms: at most {MAX_RUN_MS} ms"),
                     at(ron_field(&fields, &["arrivals"], "jitter_ms", 0)),
                 ));
@@ -132,7 +133,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
             && !(1..=MAX_RUN_MS).contains(&d)
         {
             out.push(Problem::error(
-                "V0406",
+                codes::SCENARIO_FAULT_DURATION.id,
                 format!(
                     "fault {:?} lasts {d} ms: a fault lasts from 1 ms to {MAX_RUN_MS} ms (leave duration_ms out for ever)",
                     f.fault
@@ -145,7 +146,7 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
             && !(1..=MAX_RUN_MS).contains(pulse_ms)
         {
             out.push(Problem::error(
-                "V0406",
+                codes::SCENARIO_FAULT_DURATION.id,
                 format!(
                     "pulse_ms is {pulse_ms} ms: a spurious pulse lasts from 1 ms to {MAX_RUN_MS} ms"
                 ),

@@ -12,6 +12,7 @@
 
 use super::monitor::{Monitor, Role, TaskState};
 use super::spec::TaskSet;
+use crate::diag::codes;
 use crate::diag::{Location, Problem};
 use crate::expr::{self, Dnf};
 use crate::frame::Frame;
@@ -54,7 +55,7 @@ impl FrameTasks {
                 Ok(d) => expr::simplify(&d),
                 Err(e) => {
                     problems.push(Problem::error(
-                        "V0310",
+                        codes::TASK_EVENT_INVALID.id,
                         format!(
                             "task `{task}`: `{what}` event `{text}`: {} (column {})",
                             e.message, e.span.column

@@ -14,6 +14,7 @@
 
 use super::monitor::{Role, TaskMonitor, TaskState};
 use super::spec::{Cmp, CrossDef, TaskSpec, WindowDef};
+use crate::diag::codes;
 use crate::time::Millis;
 use serde::Serialize;
 
@@ -41,17 +42,17 @@ pub enum AlarmCode {
 }
 
 impl AlarmCode {
-    /// The code as text (`"T001"`).
+    /// The code as text (`"T001"`), from the registry [`codes`].
     pub fn as_str(self) -> &'static str {
         match self {
-            AlarmCode::T001 => "T001",
-            AlarmCode::T002 => "T002",
-            AlarmCode::T003 => "T003",
-            AlarmCode::T004 => "T004",
-            AlarmCode::T005 => "T005",
-            AlarmCode::T006 => "T006",
-            AlarmCode::T007 => "T007",
-            AlarmCode::T008 => "T008",
+            AlarmCode::T001 => codes::T_TOLERANCE_USED_UP.id,
+            AlarmCode::T002 => codes::T_SLOWDOWN.id,
+            AlarmCode::T003 => codes::T_WATCHDOG.id,
+            AlarmCode::T004 => codes::T_ENDED_TOO_EARLY.id,
+            AlarmCode::T005 => codes::T_ENDED_OUTSIDE_WINDOW.id,
+            AlarmCode::T006 => codes::T_CONTROLLER_WINDOW.id,
+            AlarmCode::T007 => codes::T_UNEXPECTED_EVENT.id,
+            AlarmCode::T008 => codes::T_CROSS_TASK.id,
         }
     }
 

@@ -4,6 +4,7 @@
 //! time units (u.t.) with halves such as 6.5; the fixtures map **1 u.t. = 1000 ms**, so
 //! every value of the thesis is exact.
 
+use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
@@ -258,21 +259,21 @@ impl TaskSet {
             let before = problems.len();
             if !crate::plant::is_valid_name(&t.id) {
                 problems.push(Problem::error(
-                    "V0301",
+                    codes::TASK_ID_INVALID.id,
                     format!("task id `{}` must be letters, digits and `_`", t.id),
                     at(&t.id),
                 ));
             }
             if !seen.insert(t.id.clone()) {
                 problems.push(Problem::error(
-                    "V0302",
+                    codes::TASK_DUPLICATE.id,
                     format!("task `{}` is declared twice", t.id),
                     at(&t.id),
                 ));
             }
             if t.alpha_ms > t.beta_ms {
                 problems.push(Problem::error(
-                    "V0303",
+                    codes::TASK_ALPHA_BEYOND_BETA.id,
                     format!(
                         "task `{}`: α = {} ms is greater than β = {} ms; the normal duration [α, β] is empty",
                         t.id, t.alpha_ms, t.beta_ms
@@ -282,7 +283,7 @@ impl TaskSet {
             }
             if t.beta_ms >= t.gamma_ms {
                 problems.push(Problem::error(
-                    "V0304",
+                    codes::TASK_BETA_NOT_BELOW_GAMMA.id,
                     format!(
                         "task `{}`: β = {} ms must be less than γ = {} ms (the acceptable duration [α, γ) must extend the normal one)",
                         t.id, t.beta_ms, t.gamma_ms
@@ -295,7 +296,7 @@ impl TaskSet {
                 (None, None) => None,
                 _ => {
                     problems.push(Problem::error(
-                        "V0305",
+                        codes::TASK_INTERRUPT_RESUME.id,
                         format!(
                             "task `{}`: give both `interrupt` and `resume`, or neither",
                             t.id
@@ -322,7 +323,7 @@ impl TaskSet {
         for w in &f.windows {
             if w.min_ms > w.max_ms {
                 problems.push(Problem::error(
-                    "V0306",
+                    codes::TASK_WINDOW_EMPTY.id,
                     format!(
                         "window `{}`: min = {} ms is greater than max = {} ms",
                         w.id, w.min_ms, w.max_ms
@@ -335,7 +336,7 @@ impl TaskSet {
             for (task, _, _) in &c.terms {
                 if !seen.contains(task) {
                     problems.push(Problem::error(
-                        "V0307",
+                        codes::TASK_CROSS_INVALID.id,
                         format!(
                             "cross constraint `{}` names the unknown task `{task}`",
                             c.id
@@ -346,7 +347,7 @@ impl TaskSet {
             }
             if c.terms.is_empty() {
                 problems.push(Problem::error(
-                    "V0307",
+                    codes::TASK_CROSS_INVALID.id,
                     format!("cross constraint `{}` has no term", c.id),
                     at(&c.id),
                 ));

@@ -166,19 +166,19 @@ fn invalid_specs_are_rejected_with_a_location() {
     assert_eq!(msgs.len(), 3, "{msgs:#?}");
     assert!(
         msgs[0].starts_with(
-            "tasks.ron:2:8: error[V0303]: task `a`: α = 5 ms is greater than β = 4 ms"
+            "tasks.ron:2:8: error[V0803]: task `a`: α = 5 ms is greater than β = 4 ms"
         ),
         "{}",
         msgs[0]
     );
     assert!(
         msgs[1].starts_with(
-            "tasks.ron:3:8: error[V0304]: task `b`: β = 4 ms must be less than γ = 4 ms"
+            "tasks.ron:3:8: error[V0804]: task `b`: β = 4 ms must be less than γ = 4 ms"
         ),
         "{}",
         msgs[1]
     );
-    assert!(msgs[2].contains("V0305"), "{}", msgs[2]);
+    assert!(msgs[2].contains("V0805"), "{}", msgs[2]);
     let bad =
         TaskSet::from_ron("(tasks: [(id: \"a\", bogus: 1)])", Path::new("t.ron")).unwrap_err();
     assert!(bad[0].to_string().starts_with("t.ron:1:"), "{}", bad[0]);

@@ -42,6 +42,7 @@ use crate::bits::Bits;
 use crate::bundle::PlantBundle;
 use crate::constraints::ConstraintSet;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::emulator::{ArrivalPlan, BoxSize, Emulator, Hazard, HazardKind, Layout};
 use crate::expr;
 use crate::filter::Filter;
@@ -262,7 +263,7 @@ impl Model {
         let geo = Geometry::new(layout, &bundle.plant)?;
         if bundle.observers.len() > 4 {
             return Err(Problem::error(
-                "V0501",
+                codes::VERIFY_UNSUPPORTED.id,
                 "the verifier handles at most 4 observers",
                 None,
             ));
@@ -270,7 +271,7 @@ impl Model {
         let n_out = bundle.plant.outputs.len();
         if n_out + bundle.plant.inputs.len() + bundle.observers.len() > 128 - 99 {
             return Err(Problem::error(
-                "V0501",
+                codes::VERIFY_UNSUPPORTED.id,
                 "too many signals for the verifier",
                 None,
             ));

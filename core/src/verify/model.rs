@@ -10,6 +10,7 @@
 //! (delivery or drop), shear and push hazards, arrivals.
 
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::emulator::{BoxSize, HazardKind, Layout, SensorKind};
 use crate::plant::Plant;
 use serde::Serialize;
@@ -118,7 +119,7 @@ fn gcd(a: i64, b: i64) -> i64 {
 }
 
 fn unsupported(msg: impl Into<String>) -> Problem {
-    Problem::error("V0501", msg.into(), None)
+    Problem::error(codes::VERIFY_UNSUPPORTED.id, msg.into(), None)
 }
 
 impl Geometry {

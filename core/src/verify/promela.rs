@@ -14,6 +14,7 @@
 use super::Model;
 use crate::constraints::ConstraintSet;
 use crate::diag::Problem;
+use crate::diag::codes;
 use crate::expr::Dnf;
 use crate::symbols::{Literal, Space, Symbols};
 use std::fmt::Write as _;
@@ -462,7 +463,7 @@ pub fn run_spin(
     use std::process::Command;
     use std::sync::atomic::{AtomicUsize, Ordering};
     static RUNS: AtomicUsize = AtomicUsize::new(0);
-    let fail = |msg: String| Problem::error("V0520", msg, None);
+    let fail = |msg: String| Problem::error(codes::SPIN_FAILED.id, msg, None);
     let dir = std::env::temp_dir().join(format!(
         "vigie-spin-{}-{}",
         std::process::id(),

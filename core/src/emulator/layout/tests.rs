@@ -37,15 +37,15 @@ fn a_zero_or_absurd_period_or_step_is_reported_at_its_value() {
         problems(&text),
         [
             format!(
-                "{}: error[V0301]: step_ms is 0 ms: the simulation step is from 1 to 1000 ms",
+                "{}: error[V0701]: step_ms is 0 ms: the simulation step is from 1 to 1000 ms",
                 after(&text, "step_ms: ")
             ),
             format!(
-                "{}: error[V0301]: period_ms is 0 ms: an arrival period is from 1 ms to 604800000 ms",
+                "{}: error[V0701]: period_ms is 0 ms: an arrival period is from 1 ms to 604800000 ms",
                 after(&text, "period_ms: ")
             ),
             format!(
-                "{}: error[V0301]: jitter_ms is 99999999999 ms: at most 604800000 ms",
+                "{}: error[V0701]: jitter_ms is 99999999999 ms: at most 604800000 ms",
                 after(&text, "jitter_ms: ")
             ),
         ]
@@ -54,7 +54,7 @@ fn a_zero_or_absurd_period_or_step_is_reported_at_its_value() {
     assert_eq!(
         problems(&text),
         [format!(
-            "{}: error[V0301]: step_ms is 60000 ms: the simulation step is from 1 to 1000 ms",
+            "{}: error[V0701]: step_ms is 60000 ms: the simulation step is from 1 to 1000 ms",
             after(&text, "step_ms: ")
         )]
     );
@@ -69,7 +69,7 @@ fn bad_box_dimensions_are_reported_at_the_box() {
     assert_eq!(
         problems(&text),
         [format!(
-            "{}: error[V0301]: large box dimensions must be positive",
+            "{}: error[V0701]: large box dimensions must be positive",
             after(&text, "large: ")
         )]
     );
