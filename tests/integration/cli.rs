@@ -207,3 +207,27 @@ fn vigie_alone_opens_the_console() {
     console.kill().unwrap();
     console.wait().unwrap();
 }
+
+/// `vigie explain` prints a code's page of the catalogue, one of each family; an
+/// unknown code is an error that says where the codes are.
+#[test]
+fn explain_prints_a_codes_page() {
+    for (code, title) in [
+        ("V0301", "# V0301: "),
+        ("v0701", "# V0701: "),
+        ("X101", "# X101: "),
+        ("T003", "# T003: "),
+    ] {
+        let out = vigie(&["explain", code]);
+        assert!(out.status.success(), "{code}: {}", text(&out));
+        let page = String::from_utf8_lossy(&out.stdout);
+        assert!(page.starts_with(title), "{code}: {page}");
+    }
+    let out = vigie(&["explain", "V9999"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out).contains("no code `V9999` in the catalogue"),
+        "{}",
+        text(&out)
+    );
+}

@@ -265,6 +265,12 @@ pub(crate) enum Command {
         #[arg(long, default_value_t = 200_000)]
         iterations: u32,
     },
+    /// Explain a problem code (V…), an explanation item's code (X…) or a task alarm's
+    /// code (T…): its page of the catalogue (`docs/codes/`).
+    Explain {
+        /// The code, e.g. V0301, X101 or T003.
+        code: String,
+    },
     /// Print the shell completion script of `vigie` (bash, zsh, fish, elvish,
     /// powershell) to the standard output.
     Completions {
@@ -436,6 +442,16 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 )
             }
         }
+        Command::Explain { code } => match vigie_core::diag::codes::explain(&code) {
+            Some(page) => {
+                print!("{page}");
+                Ok(ExitCode::SUCCESS)
+            }
+            None => anyhow::bail!(
+                "no code `{}` in the catalogue (V…: problems, X…: explanation items, T…: task alarms; docs/codes/)",
+                code.trim()
+            ),
+        },
         Command::Completions { shell } => {
             let mut cmd = <Cli as clap::CommandFactory>::command();
             clap_complete::generate(shell, &mut cmd, "vigie", &mut std::io::stdout());
