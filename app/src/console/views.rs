@@ -1628,65 +1628,10 @@ fn chart_steps_ui(
 }
 
 fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let title = c.i18n.t("chrono-title");
+    chronogram_controls_ui(c, ui, &title, out);
     let sim = &c.sim;
     let now = sim.now().0;
-    let title = c.i18n.t("chrono-title");
-    let replay = c.i18n.t("chrono-replay");
-    let live = c.i18n.t("chrono-live");
-    let signals = c.i18n.t("chrono-signals");
-    ui.horizontal(|ui| {
-        ui.label(RichText::new(&title).strong());
-        for w in [10u64, 30, 60, 300] {
-            if ui
-                .selectable_label(c.chrono_window_s == w, format!("{w} s"))
-                .clicked()
-            {
-                c.chrono_window_s = w;
-            }
-        }
-        ui.separator();
-        let oldest = sim.engine.history.iter().next().map_or(0, |r| r.time.0);
-        let mut t = c.replay.unwrap_or(now);
-        let r = ui.add(
-            egui::Slider::new(&mut t, oldest..=now.max(oldest))
-                .text(replay)
-                .custom_formatter(|v, _| fmt_ms(v as u64)),
-        );
-        if r.changed() {
-            out.push(Command::Scrub(Some(t)));
-        }
-        if c.replay.is_some() && ui.button(live).clicked() {
-            out.push(Command::Scrub(None));
-        }
-        ui.menu_button(signals, |ui| {
-            for s in sim
-                .bundle
-                .plant
-                .inputs
-                .iter()
-                .chain(&sim.bundle.plant.outputs)
-            {
-                let mut on = c.chrono_signals.contains(&s.id);
-                if ui
-                    .checkbox(
-                        &mut on,
-                        format!(
-                            "{} {}",
-                            s.id,
-                            c.view.descriptions.get(&s.id).unwrap_or(&s.description)
-                        ),
-                    )
-                    .changed()
-                {
-                    if on {
-                        c.chrono_signals.insert(s.id.clone());
-                    } else {
-                        c.chrono_signals.remove(&s.id);
-                    }
-                }
-            }
-        });
-    });
     let size = ui.available_size().max(vec2(100.0, 60.0));
     let (resp, painter) = ui.allocate_painter(size, Sense::click_and_drag());
     resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, &title));
@@ -1758,34 +1703,133 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 r.applied.get(*i)
             }
         };
-        let mut start: Option<u64> = None;
         let col = if *input {
             pal.running
         } else {
             pal.equipment_edge
         };
-        let flush = |s: u64, e: u64| {
-            let r = egui::Rect::from_min_max(
-                pos2(x_of(s), y + 3.0),
-                pos2(x_of(e).max(x_of(s) + 1.0), y + row_h - 3.0),
-            );
-            painter.rect_filled(r, 0.0, col);
-        };
-        for r in &recs {
-            let v = get(r);
-            match (v, start) {
-                (true, None) => start = Some(r.time.0),
-                (false, Some(s)) => {
-                    flush(s, r.time.0);
-                    start = None;
-                }
-                _ => {}
+        paint_spans(&painter, &recs, get, (y, row_h), col, &x_of, now);
+    }
+    paint_chronogram_marks(c, &painter, rect, t0, &x_of);
+    if let Some(p) = resp.interact_pointer_pos()
+        && p.x > rect.left() + label_w
+    {
+        #[allow(
+            clippy::cast_possible_truncation,
+            clippy::cast_sign_loss,
+            clippy::cast_precision_loss
+        )]
+        let t =
+            t0 + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
+        out.push(Command::Scrub(Some(t.min(now))));
+    }
+}
+
+/// The chronogram's controls: window length, replay slider, back to live, signals shown.
+fn chronogram_controls_ui(c: &mut Console, ui: &mut egui::Ui, title: &str, out: &mut Vec<Command>) {
+    let sim = &c.sim;
+    let now = sim.now().0;
+    let replay = c.i18n.t("chrono-replay");
+    let live = c.i18n.t("chrono-live");
+    let signals = c.i18n.t("chrono-signals");
+    ui.horizontal(|ui| {
+        ui.label(RichText::new(title).strong());
+        for w in [10u64, 30, 60, 300] {
+            if ui
+                .selectable_label(c.chrono_window_s == w, format!("{w} s"))
+                .clicked()
+            {
+                c.chrono_window_s = w;
             }
         }
-        if let Some(s) = start {
-            flush(s, now);
+        ui.separator();
+        let oldest = sim.engine.history.iter().next().map_or(0, |r| r.time.0);
+        let mut t = c.replay.unwrap_or(now);
+        let r = ui.add(
+            egui::Slider::new(&mut t, oldest..=now.max(oldest))
+                .text(replay)
+                .custom_formatter(|v, _| fmt_ms(v as u64)),
+        );
+        if r.changed() {
+            out.push(Command::Scrub(Some(t)));
+        }
+        if c.replay.is_some() && ui.button(live).clicked() {
+            out.push(Command::Scrub(None));
+        }
+        ui.menu_button(signals, |ui| {
+            for s in sim
+                .bundle
+                .plant
+                .inputs
+                .iter()
+                .chain(&sim.bundle.plant.outputs)
+            {
+                let mut on = c.chrono_signals.contains(&s.id);
+                if ui
+                    .checkbox(
+                        &mut on,
+                        format!(
+                            "{} {}",
+                            s.id,
+                            c.view.descriptions.get(&s.id).unwrap_or(&s.description)
+                        ),
+                    )
+                    .changed()
+                {
+                    if on {
+                        c.chrono_signals.insert(s.id.clone());
+                    } else {
+                        c.chrono_signals.remove(&s.id);
+                    }
+                }
+            }
+        });
+    });
+}
+
+/// Paints one chronogram row's spans where the signal (`get`) is on, in `col`.
+fn paint_spans(
+    painter: &egui::Painter,
+    recs: &[&vigie_core::history::CycleRecord],
+    get: impl Fn(&vigie_core::history::CycleRecord) -> bool,
+    (y, row_h): (f32, f32),
+    col: Color32,
+    x_of: &impl Fn(u64) -> f32,
+    now: u64,
+) {
+    let mut start: Option<u64> = None;
+    let flush = |s: u64, e: u64| {
+        let r = egui::Rect::from_min_max(
+            pos2(x_of(s), y + 3.0),
+            pos2(x_of(e).max(x_of(s) + 1.0), y + row_h - 3.0),
+        );
+        painter.rect_filled(r, 0.0, col);
+    };
+    for r in recs {
+        let v = get(r);
+        match (v, start) {
+            (true, None) => start = Some(r.time.0),
+            (false, Some(s)) => {
+                flush(s, r.time.0);
+                start = None;
+            }
+            _ => {}
         }
     }
+    if let Some(s) = start {
+        flush(s, now);
+    }
+}
+
+/// Marks the chronogram's trips (with their constraints), hazards and replay time.
+fn paint_chronogram_marks(
+    c: &Console,
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    t0: u64,
+    x_of: &impl Fn(u64) -> f32,
+) {
+    let (sim, pal) = (&c.sim, &c.palette);
     for t in &sim.engine.trips {
         if t.time_ms >= t0 {
             let x = x_of(t.time_ms);
@@ -1818,18 +1862,6 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             [pos2(x, rect.top()), pos2(x, rect.bottom())],
             Stroke::new(2.0, pal.highlight),
         );
-    }
-    if let Some(p) = resp.interact_pointer_pos()
-        && p.x > rect.left() + label_w
-    {
-        #[allow(
-            clippy::cast_possible_truncation,
-            clippy::cast_sign_loss,
-            clippy::cast_precision_loss
-        )]
-        let t =
-            t0 + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
-        out.push(Command::Scrub(Some(t.min(now))));
     }
 }
 
