@@ -1047,53 +1047,17 @@ pub(crate) async fn gateway(
         raise_priority(p.below(), "I/O runtime thread");
     }
     // A trip latched by an earlier run (a crash, a kill) holds from the first cycle.
-    let mut engine = with_estimates(
-        Engine::new(&bundle, FilterMode::Enforce, 6000),
-        diagnosers.as_ref(),
-        &bundle,
-        config.plausibility,
-    );
-    let restored = super::latch::load(&state_dir)?;
-    if let Some(trip) = restored.clone() {
-        engine.restore_trip(trip);
-    }
-    let shared: SharedImage = Arc::new(Mutex::new(Shared {
-        inputs: Bits::zeros(n_in),
-        outputs: Bits::zeros(n_out),
-        ..Shared::default()
-    }));
-    let server = server::start(
-        &server_config,
-        ServerImage::new(&map, server_config.unit),
-        Arc::clone(&shared),
-        Duration::from_millis(config.link_timeout().0),
-    )
-    .await
-    .with_context(|| format!("cannot listen on {}", server_config.bind))?;
-    tracing::info!(
-        "serving the PLC on {}, plant at {}",
+    let (engine, restored) = restored_engine(&bundle, diagnosers.as_ref(), &config, &state_dir)?;
+    let (shared, server) = serve_plc(&server_config, &map, &config, (n_in, n_out)).await?;
+    announce(
+        emit,
+        tap.as_ref(),
         server.local,
-        client.address
+        client.address,
+        diagnosers.is_some(),
+        &state_dir,
+        restored.as_ref(),
     );
-    if let Some(t) = &tap {
-        t.update(|s| {
-            s.peer = Some(client.address);
-            s.listening = Some(server.local);
-        });
-    }
-    emit(json!({
-        "event": "listening", "address": server.local.to_string(),
-        "plant": client.address.to_string(), "diagnosers": diagnosers.is_some(),
-        "state_dir": state_dir.display().to_string(),
-    }));
-    if let Some(trip) = &restored {
-        let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
-        tracing::warn!(
-            "a trip latched before the restart holds ({}): the outputs stay at the fallback until the reset",
-            ids.join(", ")
-        );
-        emit(json!({"event": "trip_restored", "record": trip}));
-    }
     let plant_peer = client.address;
     let liveness = Liveness::of(&config, client.timeout_ms);
     let (out_tx, out_rx) = watch::channel(None);
@@ -1157,8 +1121,99 @@ pub(crate) async fn gateway(
     let mut client = io.stop().await?;
     let ((safe, diagnoses), cycle_stats) = result?;
     *stats = cycle_stats;
-    let written = match &mut client {
-        PeerClient::Plant(w) => w.write(clock.now(), &safe).await.is_ok(),
+    stop_report(&mut client, clock, &safe, &diagnoses, tap.as_ref(), emit).await;
+    drop(server);
+    Ok(())
+}
+
+/// The gateway's engine, holding a trip latched by an earlier run (returned too).
+fn restored_engine(
+    bundle: &PlantBundle,
+    diagnosers: Option<&vigie_core::pop::build::Compiled>,
+    config: &vigie_core::live::config::GatewayConfig,
+    state_dir: &std::path::Path,
+) -> anyhow::Result<(Engine, Option<vigie_core::engine::Trip>)> {
+    let mut engine = with_estimates(
+        Engine::new(bundle, FilterMode::Enforce, 6000),
+        diagnosers,
+        bundle,
+        config.plausibility,
+    );
+    let restored = super::latch::load(state_dir)?;
+    if let Some(trip) = restored.clone() {
+        engine.restore_trip(trip);
+    }
+    Ok((engine, restored))
+}
+
+/// Starts the Modbus server the PLC talks to, over a fresh shared image.
+async fn serve_plc(
+    server_config: &vigie_core::live::config::ServerConfig,
+    map: &vigie_core::live::iomap::IoMap,
+    config: &vigie_core::live::config::GatewayConfig,
+    (n_in, n_out): (usize, usize),
+) -> anyhow::Result<(SharedImage, server::ServerHandle)> {
+    let shared: SharedImage = Arc::new(Mutex::new(Shared {
+        inputs: Bits::zeros(n_in),
+        outputs: Bits::zeros(n_out),
+        ..Shared::default()
+    }));
+    let server = server::start(
+        server_config,
+        ServerImage::new(map, server_config.unit),
+        Arc::clone(&shared),
+        Duration::from_millis(config.link_timeout().0),
+    )
+    .await
+    .with_context(|| format!("cannot listen on {}", server_config.bind))?;
+    Ok((shared, server))
+}
+
+/// Announces the gateway: where it serves the PLC and reaches the plant (log, tap,
+/// `listening` event), and a trip restored from an earlier run.
+fn announce(
+    emit: Emit<'_>,
+    tap: Option<&Tap>,
+    local: std::net::SocketAddr,
+    plant: std::net::SocketAddr,
+    diagnosers: bool,
+    state_dir: &std::path::Path,
+    restored: Option<&vigie_core::engine::Trip>,
+) {
+    tracing::info!("serving the PLC on {}, plant at {}", local, plant);
+    if let Some(t) = tap {
+        t.update(|s| {
+            s.peer = Some(plant);
+            s.listening = Some(local);
+        });
+    }
+    emit(json!({
+        "event": "listening", "address": local.to_string(),
+        "plant": plant.to_string(), "diagnosers": diagnosers,
+        "state_dir": state_dir.display().to_string(),
+    }));
+    if let Some(trip) = restored {
+        let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
+        tracing::warn!(
+            "a trip latched before the restart holds ({}): the outputs stay at the fallback until the reset",
+            ids.join(", ")
+        );
+        emit(json!({"event": "trip_restored", "record": trip}));
+    }
+}
+
+/// Writes the safe outputs to the plant on stopping and reports the stop (log, tap,
+/// `stopped` event with the diagnoses).
+async fn stop_report(
+    client: &mut PeerClient,
+    clock: Clock,
+    safe: &Bits,
+    diagnoses: &[vigie_core::pop::Diagnosis],
+    tap: Option<&Tap>,
+    emit: Emit<'_>,
+) {
+    let written = match client {
+        PeerClient::Plant(w) => w.write(clock.now(), safe).await.is_ok(),
         PeerClient::Monitor(_) => false,
     };
     tracing::info!(
@@ -1169,13 +1224,11 @@ pub(crate) async fn gateway(
             "not written (plant unreachable)"
         }
     );
-    if let Some(t) = &tap {
+    if let Some(t) = tap {
         t.update(|s| s.running = false);
     }
     emit(json!({
-        "event": "stopped", "outputs": bits_text(&safe), "written": written,
+        "event": "stopped", "outputs": bits_text(safe), "written": written,
         "diagnoses": diagnoses,
     }));
-    drop(server);
-    Ok(())
 }
