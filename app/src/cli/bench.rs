@@ -121,52 +121,102 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
             "  filter cycle: no `trip` scenario in {}/bench.ron, not measured",
             plant_dir.display()
         )?,
-        Some(trip_path) => {
-            let frames = trip_frames(&plant_dir.join(trip_path))?;
-            let mut frame = frames.before;
-            let mut observers = bundle.observers.clone();
-            let mut violations = Vec::new();
-            let mut state = filter.new_state();
-            let no_trip = median_ns(batches, per_batch, || {
-                observers.update(black_box(&mut frame));
-                filter.sync(&mut state, black_box(&frame));
-                filter.violations_synced(&state, black_box(&frame), &mut violations);
-                black_box(&violations);
-            });
-            anyhow::ensure!(
-                violations.is_empty(),
-                "the frame before the trip unexpectedly violates {violations:?}"
-            );
-            let mut trip = frames.trip;
-            let mut state = filter.new_state();
-            let with_trip = median_ns(batches, per_batch, || {
-                filter.sync(&mut state, black_box(&trip));
-                filter.violations_synced(&state, black_box(&trip), &mut violations);
-                let fb = filter.fallback_synced(&state, &trip);
-                black_box(&fb);
-            });
-            anyhow::ensure!(
-                !violations.is_empty(),
-                "the tripping frame violates nothing"
-            );
-            observers.update(&mut trip);
-            let fb = filter.fallback(&trip).map_err(|e| anyhow::anyhow!("{e}"))?;
-            anyhow::ensure!(
-                fb == frames.applied,
-                "the fallback differs from what the engine applied at the trip"
-            );
-            writeln!(
-                out,
-                "  filter cycle, no trip (observers + constraints): {no_trip:>10.1} ns   goal <= 1000 ns"
-            )?;
-            writeln!(
-                out,
-                "  filter cycle with the {} trip (+ fallback): {with_trip:>10.1} ns   goal <= 1000 ns",
-                frames.violated.join(", ")
-            )?;
-        }
+        Some(trip_path) => bench_trip(
+            &mut out,
+            &bundle,
+            &filter,
+            &plant_dir.join(trip_path),
+            (batches, per_batch),
+        )?,
     }
 
+    bench_synthetic(&mut out, iterations)?;
+    match &files.production {
+        Some(p) => closed_loop(&mut out, &plant_dir.join(p))?,
+        None => writeln!(
+            out,
+            "closed loop: no `production` scenario in {}/bench.ron, not measured",
+            plant_dir.display()
+        )?,
+    }
+    task_monitors(&mut out)?;
+    if let Some(trip) = &files.trip
+        && let Some((ms, worst)) = explanations_ms(&plant_dir.join(trip), 21)?
+    {
+        writeln!(
+            out,
+            "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms (the trip of {})",
+            trip.display()
+        )?;
+        writeln!(
+            out,
+            "  (projection running the whole 10 s, no hazard:  {worst:>10.2} ms)"
+        )?;
+    }
+    writeln!(
+        out,
+        "live link (10 ms cycle, jitter, sensor -> filtered output): `vigie gateway-bench` (needs the pymodbus venv)"
+    )?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Measures the plant's filter cycle on the frames of its `trip` scenario: the frame
+/// before the trip, then the tripping frame with its fallback.
+fn bench_trip(
+    out: &mut impl std::io::Write,
+    bundle: &vigie_core::bundle::PlantBundle,
+    filter: &Filter,
+    trip_path: &Path,
+    (batches, per_batch): (u32, u32),
+) -> anyhow::Result<()> {
+    let frames = trip_frames(trip_path)?;
+    let mut frame = frames.before;
+    let mut observers = bundle.observers.clone();
+    let mut violations = Vec::new();
+    let mut state = filter.new_state();
+    let no_trip = median_ns(batches, per_batch, || {
+        observers.update(black_box(&mut frame));
+        filter.sync(&mut state, black_box(&frame));
+        filter.violations_synced(&state, black_box(&frame), &mut violations);
+        black_box(&violations);
+    });
+    anyhow::ensure!(
+        violations.is_empty(),
+        "the frame before the trip unexpectedly violates {violations:?}"
+    );
+    let mut trip = frames.trip;
+    let mut state = filter.new_state();
+    let with_trip = median_ns(batches, per_batch, || {
+        filter.sync(&mut state, black_box(&trip));
+        filter.violations_synced(&state, black_box(&trip), &mut violations);
+        let fb = filter.fallback_synced(&state, &trip);
+        black_box(&fb);
+    });
+    anyhow::ensure!(
+        !violations.is_empty(),
+        "the tripping frame violates nothing"
+    );
+    observers.update(&mut trip);
+    let fb = filter.fallback(&trip).map_err(|e| anyhow::anyhow!("{e}"))?;
+    anyhow::ensure!(
+        fb == frames.applied,
+        "the fallback differs from what the engine applied at the trip"
+    );
+    writeln!(
+        out,
+        "  filter cycle, no trip (observers + constraints): {no_trip:>10.1} ns   goal <= 1000 ns"
+    )?;
+    writeln!(
+        out,
+        "  filter cycle with the {} trip (+ fallback): {with_trip:>10.1} ns   goal <= 1000 ns",
+        frames.violated.join(", ")
+    )?;
+    Ok(())
+}
+
+/// Measures the filter on the synthetic plant (10,000 signals, 10,000 constraints):
+/// cycles with a few inputs changed, a trip and its fallback.
+fn bench_synthetic(out: &mut impl std::io::Write, iterations: u32) -> anyhow::Result<()> {
     // Synthetic plant: 10,000 signals, 10,000 constraints.
     let mut violations = Vec::new();
     let synth = vigie_core::synthetic::generate(10_000, 10_000, 42);
@@ -182,10 +232,7 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
             sframe.prev[space as usize].set(i, rng.chance(1, 2));
         }
     }
-    let compliant = sfilter
-        .fallback(&sframe)
-        .map_err(|e| anyhow::anyhow!("synthetic plant has no fallback: {e}"))?;
-    sframe.now[Space::Output as usize].copy_from(&compliant);
+    make_compliant(&sfilter, &mut sframe)?;
     let heavy = (iterations / 1000).max(10);
     // Each measured cycle changes 10 random sensors (a PLC cycle changes few inputs) and
     // runs the incremental evaluation, as the engine does.
@@ -207,23 +254,15 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         black_box(&violations);
     });
     // Back to the compliant state for the trip measurements.
-    let compliant = sfilter
-        .fallback(&sframe)
-        .map_err(|e| anyhow::anyhow!("synthetic plant has no fallback: {e}"))?;
-    sframe.now[Space::Output as usize].copy_from(&compliant);
+    make_compliant(&sfilter, &mut sframe)?;
     let n_viol_after_changes = violations.len();
     // A trip: one forced-OFF output commanded ON.
-    let mut tripping = sframe.clone();
-    sfilter.violations_into(&tripping, &mut violations);
-    for k in 0..synth.plant.outputs.len() {
-        let before = tripping.now[Space::Output as usize].get(k);
-        tripping.now[Space::Output as usize].set(k, !before);
-        sfilter.violations_into(&tripping, &mut violations);
-        if !violations.is_empty() {
-            break;
-        }
-        tripping.now[Space::Output as usize].set(k, before);
-    }
+    let tripping = first_trip(
+        &sfilter,
+        &sframe,
+        synth.plant.outputs.len(),
+        &mut violations,
+    );
     let n_trip = violations.len();
     sfilter.sync(&mut sstate, &tripping);
     let s_trip_cycle = median_ns(21, heavy.min(200), || {
@@ -272,33 +311,39 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         "  (fallback re-evaluating every term:              {:>10.1} µs)",
         s_fallback_full / 1000.0
     )?;
-    match &files.production {
-        Some(p) => closed_loop(&mut out, &plant_dir.join(p))?,
-        None => writeln!(
-            out,
-            "closed loop: no `production` scenario in {}/bench.ron, not measured",
-            plant_dir.display()
-        )?,
+    Ok(())
+}
+
+/// Sets the frame's outputs to the fallback of its context (the commands of a plant in
+/// normal production).
+fn make_compliant(sfilter: &Filter, sframe: &mut Frame) -> anyhow::Result<()> {
+    let compliant = sfilter
+        .fallback(sframe)
+        .map_err(|e| anyhow::anyhow!("synthetic plant has no fallback: {e}"))?;
+    sframe.now[Space::Output as usize].copy_from(&compliant);
+    Ok(())
+}
+
+/// The frame with the first output (of `n_out`) whose flip violates a constraint
+/// flipped; `violations` are then that trip's.
+fn first_trip(
+    sfilter: &Filter,
+    sframe: &Frame,
+    n_out: usize,
+    violations: &mut Vec<usize>,
+) -> Frame {
+    let mut tripping = sframe.clone();
+    sfilter.violations_into(&tripping, violations);
+    for k in 0..n_out {
+        let before = tripping.now[Space::Output as usize].get(k);
+        tripping.now[Space::Output as usize].set(k, !before);
+        sfilter.violations_into(&tripping, violations);
+        if !violations.is_empty() {
+            break;
+        }
+        tripping.now[Space::Output as usize].set(k, before);
     }
-    task_monitors(&mut out)?;
-    if let Some(trip) = &files.trip
-        && let Some((ms, worst)) = explanations_ms(&plant_dir.join(trip), 21)?
-    {
-        writeln!(
-            out,
-            "explanations: five levels with 10 s projection:   {ms:>10.2} ms   goal <= 20 ms (the trip of {})",
-            trip.display()
-        )?;
-        writeln!(
-            out,
-            "  (projection running the whole 10 s, no hazard:  {worst:>10.2} ms)"
-        )?;
-    }
-    writeln!(
-        out,
-        "live link (10 ms cycle, jitter, sensor -> filtered output): `vigie gateway-bench` (needs the pymodbus venv)"
-    )?;
-    Ok(ExitCode::SUCCESS)
+    tripping
 }
 
 /// Task monitor cost per event and per cycle against the number of tasks.

@@ -84,36 +84,7 @@ fn measure(
 
     // 1. The journal: one entry per durable transaction (an operator's action), and a
     //    batch of 100 (a burst of events in one frame or one gateway batch).
-    let session = store.begin_session("bench", "bench", wall_ms())?;
-    let entry = |k: u64| JournalRow {
-        wall_ms: wall_ms(),
-        sim_ms: k,
-        kind: "trip".into(),
-        text: format!(
-            "Safety stop {k}: a journal entry of a typical length, with the constraint's description"
-        ),
-        ..JournalRow::default()
-    };
-    let mut k = 0;
-    let one = median_ns(51, 4, || {
-        k += 1;
-        store.append_journal(session, &[entry(k)]).expect("insert");
-    });
-    let batch: Vec<JournalRow> = (0..100).map(entry).collect();
-    let hundred = median_ns(21, 2, || {
-        store.append_journal(session, &batch).expect("insert");
-    });
-    writeln!(
-        out,
-        "  journal insert, one entry per commit: {:.2} ms (median of 51 × 4)",
-        one / 1e6
-    )?;
-    writeln!(
-        out,
-        "  journal insert, 100 entries per commit: {:.2} ms per batch, {:.1} µs per entry",
-        hundred / 1e6,
-        hundred / 100.0 / 1e3
-    )?;
+    bench_journal(&mut store, out)?;
 
     // 2. The process history: an hour of production, written `hours` times.
     let t = Instant::now();
@@ -177,8 +148,70 @@ fn measure(
 
     // 3. Trend queries over the whole history, a day and an hour, for the signal that
     //    changes most, in 1,000 buckets (a plot's width).
+    bench_trends(&store, out, &names, &hour, (start, args.hours))?;
+    // 4. Retention: with a one-day process retention, the older half of the history
+    //    is purged.
+    let t = Instant::now();
+    let keep_a_day = vigie_app::historian::Retention {
+        process_days: 1,
+        journal_days: 366,
+    };
+    let p = store.purge(start + args.hours * HOUR_MS / 2 + 24 * HOUR_MS, &keep_a_day)?;
+    writeln!(
+        out,
+        "  retention: the older half ({} changes) purged in {:.2} s",
+        p.samples,
+        t.elapsed().as_secs_f64()
+    )?;
+    Ok(())
+}
+
+/// Times journal inserts: one entry per commit, and batches of 100.
+fn bench_journal(store: &mut Store, out: &mut impl std::io::Write) -> anyhow::Result<()> {
+    let session = store.begin_session("bench", "bench", wall_ms())?;
+    let entry = |k: u64| JournalRow {
+        wall_ms: wall_ms(),
+        sim_ms: k,
+        kind: "trip".into(),
+        text: format!(
+            "Safety stop {k}: a journal entry of a typical length, with the constraint's description"
+        ),
+        ..JournalRow::default()
+    };
+    let mut k = 0;
+    let one = median_ns(51, 4, || {
+        k += 1;
+        store.append_journal(session, &[entry(k)]).expect("insert");
+    });
+    let batch: Vec<JournalRow> = (0..100).map(entry).collect();
+    let hundred = median_ns(21, 2, || {
+        store.append_journal(session, &batch).expect("insert");
+    });
+    writeln!(
+        out,
+        "  journal insert, one entry per commit: {:.2} ms (median of 51 × 4)",
+        one / 1e6
+    )?;
+    writeln!(
+        out,
+        "  journal insert, 100 entries per commit: {:.2} ms per batch, {:.1} µs per entry",
+        hundred / 1e6,
+        hundred / 100.0 / 1e3
+    )?;
+    Ok(())
+}
+
+/// Times trend queries (1,000 buckets) of the busiest signal over the whole history,
+/// a day and an hour.
+fn bench_trends(
+    store: &Store,
+    out: &mut impl std::io::Write,
+    names: &[String],
+    hour: &[Change],
+    (start, hours): (u64, u64),
+) -> anyhow::Result<()> {
     let mut counts = vec![0u64; names.len()];
-    for &(i, _, _) in &hour {
+    for &(i, _, _) in hour {
         counts[i as usize] += 1;
     }
     let busiest = counts
@@ -186,9 +219,9 @@ fn measure(
         .enumerate()
         .max_by_key(|(_, c)| **c)
         .map_or(0, |(i, _)| i);
-    let end = start + args.hours * HOUR_MS;
+    let end = start + hours * HOUR_MS;
     for (label, span) in [
-        ("the whole history", args.hours * HOUR_MS),
+        ("the whole history", hours * HOUR_MS),
         ("a day", 24 * HOUR_MS),
         ("an hour", HOUR_MS),
     ] {
@@ -208,19 +241,5 @@ fn measure(
             counts[busiest]
         )?;
     }
-    // 4. Retention: with a one-day process retention, the older half of the history
-    //    is purged.
-    let t = Instant::now();
-    let keep_a_day = vigie_app::historian::Retention {
-        process_days: 1,
-        journal_days: 366,
-    };
-    let p = store.purge(start + args.hours * HOUR_MS / 2 + 24 * HOUR_MS, &keep_a_day)?;
-    writeln!(
-        out,
-        "  retention: the older half ({} changes) purged in {:.2} s",
-        p.samples,
-        t.elapsed().as_secs_f64()
-    )?;
     Ok(())
 }

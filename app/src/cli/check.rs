@@ -88,97 +88,109 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
     if json {
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
     } else {
-        // First, before anything else: nothing stops a dangerous command.
-        if let Some(w) = bundle.unprotected() {
-            let detail = w
-                .message
-                .strip_prefix("the plant is unprotected: ")
-                .unwrap_or(&w.message);
-            writeln!(
-                out,
-                "WARNING[{}]: THE PLANT IS UNPROTECTED: {detail}",
-                w.code
-            )?;
-            writeln!(out)?;
-        }
-        writeln!(
-            out,
-            "{}: {} sensors, {} actuators, observers {}",
-            report.plant,
-            report.inputs,
-            report.outputs,
-            report.observers.join(", ")
-        )?;
-        writeln!(out)?;
-        writeln!(out, "{:<8} {:<9} {:<10} notation", "id", "class", "outputs")?;
-        for r in &report.constraints {
-            let class = match r.class {
-                Class::Simple => "simple",
-                Class::Combined => "combined",
-            };
-            writeln!(
-                out,
-                "{:<8} {:<9} {:<10} {}",
-                r.id,
-                class,
-                r.outputs.join(","),
-                r.notation
-            )?;
-        }
-        writeln!(out)?;
-        let simple = report
-            .constraints
-            .iter()
-            .filter(|r| r.class == Class::Simple)
-            .count();
-        writeln!(
-            out,
-            "{} constraints: {} simple, {} combined",
-            report.constraints.len(),
-            simple,
-            report.constraints.len() - simple
-        )?;
-        if !bundle.discharged.is_empty() {
-            writeln!(
-                out,
-                "property (6): {} logical conflicts, each in a situation an invariant excludes:",
-                bundle.discharged.len()
-            )?;
-            for d in &bundle.discharged {
-                writeln!(
-                    out,
-                    "  {}: {} forces 0, {} forces 1 when {}; unreachable by {}",
-                    d.output, d.forces_zero, d.forces_one, d.witness, d.invariant
-                )?;
-            }
-        }
-        if let Some(f) = &report.fallback {
-            write_fallback(&mut out, f)?;
-        }
-        let fallback_proved = report.fallback.as_ref().is_some_and(|f| f.proved());
-        if problems.is_empty() && fallback_proved {
-            writeln!(
-                out,
-                "static checks passed: property (6) holds for every output in every reachable situation \
-                 ({} invariants), a fallback exists in every reachable context, every name is known",
-                report.invariants.len()
-            )?;
-        } else if problems.is_empty() {
-            writeln!(
-                out,
-                "static checks passed except the fallback's existence, NOT PROVED for the components above: \
-                 property (6) holds for every output in every reachable situation ({} invariants), every name is known",
-                report.invariants.len()
-            )?;
-        } else {
-            writeln!(out, "{}", vigie_core::diag::render(&problems))?;
-        }
+        write_text(&mut out, &bundle, &report, &problems)?;
     }
     Ok(if problems.iter().any(Problem::is_error) {
         ExitCode::FAILURE
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// The check's text report: the unprotected warning first, the constraints, property
+/// (6), the fallback and the verdict (or the problems).
+fn write_text(
+    out: &mut std::io::StdoutLock<'_>,
+    bundle: &vigie_core::bundle::PlantBundle,
+    report: &Report<'_>,
+    problems: &[Problem],
+) -> anyhow::Result<()> {
+    // First, before anything else: nothing stops a dangerous command.
+    if let Some(w) = bundle.unprotected() {
+        let detail = w
+            .message
+            .strip_prefix("the plant is unprotected: ")
+            .unwrap_or(&w.message);
+        writeln!(
+            out,
+            "WARNING[{}]: THE PLANT IS UNPROTECTED: {detail}",
+            w.code
+        )?;
+        writeln!(out)?;
+    }
+    writeln!(
+        out,
+        "{}: {} sensors, {} actuators, observers {}",
+        report.plant,
+        report.inputs,
+        report.outputs,
+        report.observers.join(", ")
+    )?;
+    writeln!(out)?;
+    writeln!(out, "{:<8} {:<9} {:<10} notation", "id", "class", "outputs")?;
+    for r in &report.constraints {
+        let class = match r.class {
+            Class::Simple => "simple",
+            Class::Combined => "combined",
+        };
+        writeln!(
+            out,
+            "{:<8} {:<9} {:<10} {}",
+            r.id,
+            class,
+            r.outputs.join(","),
+            r.notation
+        )?;
+    }
+    writeln!(out)?;
+    let simple = report
+        .constraints
+        .iter()
+        .filter(|r| r.class == Class::Simple)
+        .count();
+    writeln!(
+        out,
+        "{} constraints: {} simple, {} combined",
+        report.constraints.len(),
+        simple,
+        report.constraints.len() - simple
+    )?;
+    if !bundle.discharged.is_empty() {
+        writeln!(
+            out,
+            "property (6): {} logical conflicts, each in a situation an invariant excludes:",
+            bundle.discharged.len()
+        )?;
+        for d in &bundle.discharged {
+            writeln!(
+                out,
+                "  {}: {} forces 0, {} forces 1 when {}; unreachable by {}",
+                d.output, d.forces_zero, d.forces_one, d.witness, d.invariant
+            )?;
+        }
+    }
+    if let Some(f) = &report.fallback {
+        write_fallback(out, f)?;
+    }
+    let fallback_proved = report.fallback.as_ref().is_some_and(|f| f.proved());
+    if problems.is_empty() && fallback_proved {
+        writeln!(
+            out,
+            "static checks passed: property (6) holds for every output in every reachable situation \
+             ({} invariants), a fallback exists in every reachable context, every name is known",
+            report.invariants.len()
+        )?;
+    } else if problems.is_empty() {
+        writeln!(
+            out,
+            "static checks passed except the fallback's existence, NOT PROVED for the components above: \
+             property (6) holds for every output in every reachable situation ({} invariants), every name is known",
+            report.invariants.len()
+        )?;
+    } else {
+        writeln!(out, "{}", vigie_core::diag::render(problems))?;
+    }
+    Ok(())
 }
 
 /// What the fallback's existence check proved, in words: the whole support enumerated,

@@ -296,34 +296,7 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
     let mut out = std::io::stdout().lock();
     let err =
         |p: Vec<vigie_core::diag::Problem>| anyhow::anyhow!("{}", vigie_core::diag::render(&p));
-    // Station: ten minutes of production recorded (frames after the filter), then
-    // replayed through a fresh copy of the diagnosers alone.
-    let (_, mut sim) = pop::closed_loop(dir, 2, 10, None).map_err(err)?;
-    let diag = sim
-        .diagnosers
-        .clone()
-        .ok_or_else(|| anyhow::anyhow!("no diagnosers"))?;
-    let mut frames = Vec::new();
-    for _ in 0..60_000 {
-        sim.cycle();
-        frames.push((sim.now(), sim.engine.frame().clone()));
-    }
-    let mut best = f64::MAX;
-    for _ in 0..5 {
-        let mut d = diag.clone();
-        let mut fr = frames.clone();
-        let start = Instant::now();
-        for (t, f) in &mut fr {
-            d.update(*t, f);
-        }
-        best = best.min(start.elapsed().as_secs_f64() * 1e6 / frames.len() as f64);
-    }
-    writeln!(
-        out,
-        "station: {} components, {best:.3} us per cycle (best of 5 replays of {} cycles = 10 min of production; goal <= 50 us)",
-        diag.compiled.components.len(),
-        frames.len()
-    )?;
+    bench_station(dir, &mut out)?;
     // Synthetic 1000 turntables.
     let text = std::fs::read_to_string(dir.join("diagnosers.ron"))?;
     let file = pop::model::DiagnoserFile::from_ron(&text, &dir.join("diagnosers.ron"))
@@ -413,6 +386,41 @@ pub(crate) fn bench(dir: &Path) -> anyhow::Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Times the station's diagnosers replaying ten minutes of recorded production.
+fn bench_station(dir: &Path, out: &mut impl std::io::Write) -> anyhow::Result<()> {
+    let err =
+        |p: Vec<vigie_core::diag::Problem>| anyhow::anyhow!("{}", vigie_core::diag::render(&p));
+    // Station: ten minutes of production recorded (frames after the filter), then
+    // replayed through a fresh copy of the diagnosers alone.
+    let (_, mut sim) = pop::closed_loop(dir, 2, 10, None).map_err(err)?;
+    let diag = sim
+        .diagnosers
+        .clone()
+        .ok_or_else(|| anyhow::anyhow!("no diagnosers"))?;
+    let mut frames = Vec::new();
+    for _ in 0..60_000 {
+        sim.cycle();
+        frames.push((sim.now(), sim.engine.frame().clone()));
+    }
+    let mut best = f64::MAX;
+    for _ in 0..5 {
+        let mut d = diag.clone();
+        let mut fr = frames.clone();
+        let start = Instant::now();
+        for (t, f) in &mut fr {
+            d.update(*t, f);
+        }
+        best = best.min(start.elapsed().as_secs_f64() * 1e6 / frames.len() as f64);
+    }
+    writeln!(
+        out,
+        "station: {} components, {best:.3} us per cycle (best of 5 replays of {} cycles = 10 min of production; goal <= 50 us)",
+        diag.compiled.components.len(),
+        frames.len()
+    )?;
+    Ok(())
 }
 
 /// `n` synthetic copies of `def` and the symbols of their plant (auxiliaries declared).

@@ -98,153 +98,17 @@ pub(crate) fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
         match &report.full.hazard {
             None => println!("SAFETY: proved (no hazard reachable)"),
             Some((kind, trace)) => {
-                println!(
-                    "SAFETY: VIOLATED: {kind} reachable in {} steps; last steps:",
-                    trace.steps.len()
-                );
-                for s in trace.steps.iter().rev().take(4).rev() {
-                    println!(
-                        "  t={:>6} ms  in[{}] obs[{}] applied[{}]  {}",
-                        s.time_ms, s.inputs, s.observers, s.applied, s.plant
-                    );
-                }
-                let rp = verify::replay(&layout, &bundle, trace, g.step_us, 10)
-                    .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
-                match rp.hazards.first() {
-                    Some(h) => println!(
-                        "  replayed in the emulator: {:?} at {} ms ({}) — a real flaw of the constraint set on this plant",
-                        h.kind, h.time_ms, h.place
-                    ),
-                    None => {
-                        println!("  replayed in the emulator: no hazard (abstraction artefact)")
-                    }
-                }
-                if let Some(out) = &args.out {
-                    std::fs::create_dir_all(out)?;
-                    std::fs::write(out.join("counterexample.csv"), &rp.csv)?;
-                    std::fs::write(
-                        out.join("counterexample.json"),
-                        serde_json::to_string_pretty(trace)?,
-                    )?;
-                    let plant_abs =
-                        std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
-                    let sc = verify::scenario::write(
-                        out,
-                        trace,
-                        &bundle.plant,
-                        &plant_abs.to_string_lossy(),
-                        g.step_us,
-                    )?;
-                    println!(
-                        "  trace written to {}",
-                        out.join("counterexample.csv").display()
-                    );
-                    println!(
-                        "  open it in the console: vigie run {}   (or --headless for the report)",
-                        sc.display()
-                    );
-                }
+                print_counterexample(args, &bundle, &layout, kind, trace, g.step_us)?
             }
         }
         if report.full.no_fallback.is_some() {
             println!("FALLBACK: some reachable context has no fallback vector");
         }
         println!("hazard kinds reachable: {:?}", report.full.hazard_kinds);
-        for (side, name) in ["left (+u)", "right (-u)"].iter().enumerate() {
-            println!(
-                "PERMISSIVENESS {name}: delivery {} ; from every reachable state: {}",
-                report.full.delivered[side].as_ref().map_or(
-                    "UNREACHABLE".to_string(),
-                    |t| format!("reachable in {} steps", t.steps.len())
-                ),
-                if report.full.always_deliverable[side] {
-                    "yes".to_string()
-                } else {
-                    format!(
-                        "NO (stuck after {} steps: {})",
-                        report.full.stuck[side]
-                            .as_ref()
-                            .map_or(0, |t| t.steps.len()),
-                        report.full.stuck[side]
-                            .as_ref()
-                            .and_then(|t| t.steps.last())
-                            .map_or(String::new(), |s| format!(
-                                "in[{}] obs[{}] {}",
-                                s.inputs, s.observers, s.plant
-                            ))
-                    )
-                }
-            );
-        }
-        for i in &report.invariants {
-            println!(
-                "{:<5} {:<24} {}",
-                i.id,
-                i.source,
-                if i.proved {
-                    "proved".to_string()
-                } else {
-                    format!(
-                        "REFUTED in {} steps",
-                        i.counterexample.as_ref().map_or(0, |t| t.steps.len())
-                    )
-                }
-            );
-        }
-        for c in &report.constraints {
-            println!(
-                "{:<6} {}",
-                c.id,
-                if c.necessary {
-                    format!(
-                        "necessary: without it {} in {} steps ({} states)",
-                        c.hazard.as_deref().unwrap_or("?"),
-                        c.steps.unwrap_or(0),
-                        c.states
-                    )
-                } else {
-                    format!("redundant for this model ({} states)", c.states)
-                }
-            );
-        }
-        if !report.constraints.is_empty() {
-            println!(
-                "necessity analysis ({} box(es), one exploration per constraint): {:.2} s",
-                opts.necessity_boxes.unwrap_or(1),
-                t_all
-            );
-        }
+        print_roles(&report, opts.necessity_boxes, t_all);
     }
     if args.spin || args.bench {
-        let text = promela::generate(&model, &bundle.constraints, &bundle.symbols);
-        if let Some(out) = &args.out {
-            std::fs::create_dir_all(out)?;
-            std::fs::write(out.join("model.pml"), &text)?;
-        }
-        let t0 = Instant::now();
-        let v = promela::run_spin(&text, 0, false)
-            .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
-        let secs = t0.elapsed().as_secs_f64();
-        let mut mine: Vec<String> = full.hazard_kinds.iter().map(|(k, _)| k.clone()).collect();
-        mine.sort();
-        let agree = v.hazards == mine
-            && v.delivered == [full.delivered[0].is_some(), full.delivered[1].is_some()]
-            && v.no_fallback == full.no_fallback.is_some();
-        println!(
-            "SPIN: {} states stored in {:.2} s (spin+gcc+pan), hazards {:?}, deliveries {:?}, no fallback {}, complete {} — {}",
-            v.states,
-            secs,
-            v.hazards,
-            v.delivered,
-            v.no_fallback,
-            v.complete,
-            if agree {
-                "AGREES with vigie"
-            } else {
-                "DISAGREES with vigie"
-            }
-        );
-        println!("vigie: {} states in {:.2} s", full.states, t_full);
+        compare_with_spin(args, &model, &bundle, full, t_full)?;
     }
     if args.bench {
         bench_compiled(&bundle)?;
@@ -254,6 +118,177 @@ pub(crate) fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::from(1)
     })
+}
+
+/// Prints the last steps of the counterexample and its replay in the emulator; with
+/// `--out`, writes it (CSV, JSON, scenario to open in the console).
+fn print_counterexample(
+    args: &VerifyArgs,
+    bundle: &vigie_core::bundle::PlantBundle,
+    layout: &Layout,
+    kind: &str,
+    trace: &verify::Trace,
+    step_us: i64,
+) -> anyhow::Result<()> {
+    let dir = args.plant.plant.as_path();
+    println!(
+        "SAFETY: VIOLATED: {kind} reachable in {} steps; last steps:",
+        trace.steps.len()
+    );
+    for s in trace.steps.iter().rev().take(4).rev() {
+        println!(
+            "  t={:>6} ms  in[{}] obs[{}] applied[{}]  {}",
+            s.time_ms, s.inputs, s.observers, s.applied, s.plant
+        );
+    }
+    let rp = verify::replay(layout, bundle, trace, step_us, 10)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
+    match rp.hazards.first() {
+        Some(h) => println!(
+            "  replayed in the emulator: {:?} at {} ms ({}) — a real flaw of the constraint set on this plant",
+            h.kind, h.time_ms, h.place
+        ),
+        None => {
+            println!("  replayed in the emulator: no hazard (abstraction artefact)")
+        }
+    }
+    if let Some(out) = &args.out {
+        std::fs::create_dir_all(out)?;
+        std::fs::write(out.join("counterexample.csv"), &rp.csv)?;
+        std::fs::write(
+            out.join("counterexample.json"),
+            serde_json::to_string_pretty(trace)?,
+        )?;
+        let plant_abs = std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf());
+        let sc = verify::scenario::write(
+            out,
+            trace,
+            &bundle.plant,
+            &plant_abs.to_string_lossy(),
+            step_us,
+        )?;
+        println!(
+            "  trace written to {}",
+            out.join("counterexample.csv").display()
+        );
+        println!(
+            "  open it in the console: vigie run {}   (or --headless for the report)",
+            sc.display()
+        );
+    }
+    Ok(())
+}
+
+/// Prints permissiveness per side, the invariants proved or refuted and each
+/// constraint's necessity (with the time of that analysis).
+fn print_roles(report: &verify::VerifyReport, necessity_boxes: Option<usize>, t_all: f64) {
+    for (side, name) in ["left (+u)", "right (-u)"].iter().enumerate() {
+        println!(
+            "PERMISSIVENESS {name}: delivery {} ; from every reachable state: {}",
+            report.full.delivered[side]
+                .as_ref()
+                .map_or("UNREACHABLE".to_string(), |t| format!(
+                    "reachable in {} steps",
+                    t.steps.len()
+                )),
+            if report.full.always_deliverable[side] {
+                "yes".to_string()
+            } else {
+                format!(
+                    "NO (stuck after {} steps: {})",
+                    report.full.stuck[side]
+                        .as_ref()
+                        .map_or(0, |t| t.steps.len()),
+                    report.full.stuck[side]
+                        .as_ref()
+                        .and_then(|t| t.steps.last())
+                        .map_or(String::new(), |s| format!(
+                            "in[{}] obs[{}] {}",
+                            s.inputs, s.observers, s.plant
+                        ))
+                )
+            }
+        );
+    }
+    for i in &report.invariants {
+        println!(
+            "{:<5} {:<24} {}",
+            i.id,
+            i.source,
+            if i.proved {
+                "proved".to_string()
+            } else {
+                format!(
+                    "REFUTED in {} steps",
+                    i.counterexample.as_ref().map_or(0, |t| t.steps.len())
+                )
+            }
+        );
+    }
+    for c in &report.constraints {
+        println!(
+            "{:<6} {}",
+            c.id,
+            if c.necessary {
+                format!(
+                    "necessary: without it {} in {} steps ({} states)",
+                    c.hazard.as_deref().unwrap_or("?"),
+                    c.steps.unwrap_or(0),
+                    c.states
+                )
+            } else {
+                format!("redundant for this model ({} states)", c.states)
+            }
+        );
+    }
+    if !report.constraints.is_empty() {
+        println!(
+            "necessity analysis ({} box(es), one exploration per constraint): {:.2} s",
+            necessity_boxes.unwrap_or(1),
+            t_all
+        );
+    }
+}
+
+/// Runs SPIN on the Promela model (written with `--out`) and says whether it agrees
+/// with vigie's exploration.
+fn compare_with_spin(
+    args: &VerifyArgs,
+    model: &Model,
+    bundle: &vigie_core::bundle::PlantBundle,
+    full: &verify::Exploration,
+    t_full: f64,
+) -> anyhow::Result<()> {
+    let text = promela::generate(model, &bundle.constraints, &bundle.symbols);
+    if let Some(out) = &args.out {
+        std::fs::create_dir_all(out)?;
+        std::fs::write(out.join("model.pml"), &text)?;
+    }
+    let t0 = Instant::now();
+    let v = promela::run_spin(&text, 0, false)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
+    let secs = t0.elapsed().as_secs_f64();
+    let mut mine: Vec<String> = full.hazard_kinds.iter().map(|(k, _)| k.clone()).collect();
+    mine.sort();
+    let agree = v.hazards == mine
+        && v.delivered == [full.delivered[0].is_some(), full.delivered[1].is_some()]
+        && v.no_fallback == full.no_fallback.is_some();
+    println!(
+        "SPIN: {} states stored in {:.2} s (spin+gcc+pan), hazards {:?}, deliveries {:?}, no fallback {}, complete {} — {}",
+        v.states,
+        secs,
+        v.hazards,
+        v.delivered,
+        v.no_fallback,
+        v.complete,
+        if agree {
+            "AGREES with vigie"
+        } else {
+            "DISAGREES with vigie"
+        }
+    );
+    println!("vigie: {} states in {:.2} s", full.states, t_full);
+    Ok(())
 }
 
 fn bench_compiled(bundle: &vigie_core::bundle::PlantBundle) -> anyhow::Result<()> {

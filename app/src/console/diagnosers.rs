@@ -91,33 +91,7 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             ui.label(RichText::new(line).strong().color(color));
         }
         // Seed 004, section 7: the operator's eyes lift the doubt.
-        for q in c.sim.doubt_questions() {
-            egui::Frame::group(ui.style())
-                .stroke(egui::Stroke::new(2.0, c.palette.highlight))
-                .show(ui, |ui| {
-                    ui.horizontal_wrapped(|ui| {
-                        ui.label(
-                            RichText::new(
-                                c.i18n
-                                    .ta("diag-question", &[("question", (&q.question).into())]),
-                            )
-                            .strong(),
-                        );
-                        for (item, id) in [(true, "diag-item-there"), (false, "diag-no-item")] {
-                            if ui
-                                .button(c.i18n.ta(id, &[("sensor", (&q.sensor).into())]))
-                                .clicked()
-                            {
-                                out.push(Command::Plant(OperatorAction::AnswerDoubt {
-                                    component: q.component.clone(),
-                                    sensor: q.sensor.clone(),
-                                    item,
-                                }));
-                            }
-                        }
-                    });
-                });
-        }
+        doubt_questions_ui(c, ui, out);
         for conclusion in c.sim.doubt_answers().values() {
             ui.label(
                 RichText::new(
@@ -153,50 +127,84 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         })
         .id_salt("diagnosers-table")
         .show(ui, |ui| {
-            egui::Grid::new("diagnosers-grid")
-                .striped(true)
-                .show(ui, |ui| {
-                    ui.strong(c.i18n.t("diag-component"));
-                    ui.strong(c.i18n.t("diag-estimate"));
-                    ui.strong(c.i18n.t("diag-decisions"));
-
-                    ui.end_row();
-                    let decisions = d.decisions();
-                    for comp in &d.compiled.components {
-                        ui.label(&comp.id);
-                        let est = d.estimate(&comp.id);
-                        let shown: Vec<&str> = est.iter().take(4).map(String::as_str).collect();
-                        let more = est.len().saturating_sub(shown.len());
-                        ui.label(if more > 0 {
-                            format!("{} (+{more})", shown.join(", "))
-                        } else {
-                            shown.join(", ")
-                        });
-                        ui.horizontal(|ui| {
-                            for (_, p, dec) in
-                                decisions.iter().filter(|(cid, _, _)| *cid == comp.id)
-                            {
-                                let (text, color) = match dec.certainty {
-                                    Certainty::Normal => (format!("{p}: N"), None),
-                                    Certainty::Ambiguous => (
-                                        format!("{p}: {{N, {}}}", dec.faults.join(", ")),
-                                        Some(c.palette.alarm),
-                                    ),
-                                    Certainty::Certain => (
-                                        format!("{p}: {} def_{p}", dec.faults.join("|")),
-                                        Some(c.palette.trip),
-                                    ),
-                                };
-                                let mut t = RichText::new(text);
-                                if let Some(col) = color {
-                                    t = t.color(col).strong();
-                                }
-                                ui.label(t);
-                            }
-                        });
-                        ui.end_row();
-                    }
-                });
+            diagnosers_grid_ui(c, ui, d);
         });
     });
+}
+
+/// The doubts the operator's eyes can lift: each question with its two answers.
+fn doubt_questions_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    for q in c.sim.doubt_questions() {
+        egui::Frame::group(ui.style())
+            .stroke(egui::Stroke::new(2.0, c.palette.highlight))
+            .show(ui, |ui| {
+                ui.horizontal_wrapped(|ui| {
+                    ui.label(
+                        RichText::new(
+                            c.i18n
+                                .ta("diag-question", &[("question", (&q.question).into())]),
+                        )
+                        .strong(),
+                    );
+                    for (item, id) in [(true, "diag-item-there"), (false, "diag-no-item")] {
+                        if ui
+                            .button(c.i18n.ta(id, &[("sensor", (&q.sensor).into())]))
+                            .clicked()
+                        {
+                            out.push(Command::Plant(OperatorAction::AnswerDoubt {
+                                component: q.component.clone(),
+                                sensor: q.sensor.clone(),
+                                item,
+                            }));
+                        }
+                    }
+                });
+            });
+    }
+}
+
+/// The diagnosers' table: each component with its estimate and its decisions.
+fn diagnosers_grid_ui(c: &Console, ui: &mut egui::Ui, d: &vigie_core::pop::Diagnosers) {
+    egui::Grid::new("diagnosers-grid")
+        .striped(true)
+        .show(ui, |ui| {
+            ui.strong(c.i18n.t("diag-component"));
+            ui.strong(c.i18n.t("diag-estimate"));
+            ui.strong(c.i18n.t("diag-decisions"));
+
+            ui.end_row();
+            let decisions = d.decisions();
+            for comp in &d.compiled.components {
+                ui.label(&comp.id);
+                let est = d.estimate(&comp.id);
+                let shown: Vec<&str> = est.iter().take(4).map(String::as_str).collect();
+                let more = est.len().saturating_sub(shown.len());
+                ui.label(if more > 0 {
+                    format!("{} (+{more})", shown.join(", "))
+                } else {
+                    shown.join(", ")
+                });
+                ui.horizontal(|ui| {
+                    for (_, p, dec) in decisions.iter().filter(|(cid, _, _)| *cid == comp.id) {
+                        let (text, color) = match dec.certainty {
+                            Certainty::Normal => (format!("{p}: N"), None),
+                            Certainty::Ambiguous => (
+                                format!("{p}: {{N, {}}}", dec.faults.join(", ")),
+                                Some(c.palette.alarm),
+                            ),
+                            Certainty::Certain => (
+                                format!("{p}: {} def_{p}", dec.faults.join("|")),
+                                Some(c.palette.trip),
+                            ),
+                        };
+                        let mut t = RichText::new(text);
+                        if let Some(col) = color {
+                            t = t.color(col).strong();
+                        }
+                        ui.label(t);
+                    }
+                });
+                ui.end_row();
+            }
+        });
 }

@@ -512,65 +512,31 @@ fn load_faults(plant_dir: &Path) -> Vec<(String, FaultSpec)> {
     })
 }
 
+/// The users file of the data folder (none without one; a broken one is logged and
+/// read as none).
+fn load_users(opts: &ConsoleOptions) -> users::Users {
+    match opts.data_dir.as_deref().map(users::Users::load) {
+        None => users::Users::default(),
+        Some(Ok(u)) => u,
+        Some(Err(e)) => {
+            tracing::warn!("{e}");
+            users::Users::default()
+        }
+    }
+}
+
 impl Console {
     /// Opens the console; fails with the rendered problems when the plant or scenario
     /// cannot be loaded.
     pub fn new(opts: &ConsoleOptions) -> Result<Self, String> {
         let linked = link::options(opts)?;
         let opts = linked.as_ref().unwrap_or(opts);
-        let mut source = match &opts.scenario {
-            Some(path) => Source {
-                scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
-                path: path.clone(),
-            },
-            None => Source::free_run(
-                &opts.plant_dir,
-                ProgramChoice::Reference,
-                "Reference program",
-            ),
-        };
-        if let Some(config) = &opts.link {
-            // The mirror of a live run replays the run's own engine cycle by cycle: with
-            // the diagnosers and their constraint rewrite exactly when the run has them.
-            source.scenario.diagnosers = link::runs_diagnosers(config)?;
-            source.scenario.plausibility = link::runs_plausibility(config)?;
-        }
-        let plant_dir = source
-            .path
-            .parent()
-            .unwrap_or(Path::new("."))
-            .join(&source.scenario.plant);
-        let (source, mut sim) = match &opts.variant {
-            Some(id) => {
-                let s = Source::free_run(
-                    &plant_dir,
-                    ProgramChoice::Error(id.clone()),
-                    &format!("Training: {id}"),
-                );
-                let sim = s.build()?;
-                (s, sim)
-            }
-            None => {
-                let sim = source.build()?;
-                (source, sim)
-            }
-        };
+        let (source, mut sim, plant_dir) = Self::open_simulation(opts)?;
         let variants = sim_variants(&plant_dir, &sim);
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
         let descriptions = i18n.signal_descriptions(&sim.bundle.plant);
-        let mut journal = Journal::open(
-            opts.data_dir.as_deref(),
-            &sim.bundle.dir.display().to_string(),
-            &sim.bundle.symbols,
-        );
-        {
-            let mut fields = source.title_fields();
-            let title = words::title(&i18n, &fields, true);
-            let text = i18n.ta_en("say-session", &[("scenario", (&title).into())]);
-            fields.insert("scenario".into(), title);
-            journal.push_coded(0, "session", &text, "say-session", fields);
-        }
+        let journal = Self::open_journal(opts, &sim, &source, &i18n);
         if opts.start {
             let _ = sim.act(&OperatorAction::Start);
         }
@@ -639,14 +605,7 @@ impl Console {
             visuals_set: false,
             pending: Vec::new(),
             link: None,
-            users: match opts.data_dir.as_deref().map(users::Users::load) {
-                None => users::Users::default(),
-                Some(Ok(u)) => u,
-                Some(Err(e)) => {
-                    tracing::warn!("{e}");
-                    users::Users::default()
-                }
-            },
+            users: load_users(opts),
             user: None,
             role: Role::Operator,
             login: None,
@@ -666,6 +625,71 @@ impl Console {
             }
         }
         Ok(c)
+    }
+
+    /// Loads the scenario (or the free run, or the training variant) and builds its
+    /// simulation; returns the source, the simulation and the plant folder.
+    fn open_simulation(opts: &ConsoleOptions) -> Result<(Source, Simulation, PathBuf), String> {
+        let mut source = match &opts.scenario {
+            Some(path) => Source {
+                scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
+                path: path.clone(),
+            },
+            None => Source::free_run(
+                &opts.plant_dir,
+                ProgramChoice::Reference,
+                "Reference program",
+            ),
+        };
+        if let Some(config) = &opts.link {
+            // The mirror of a live run replays the run's own engine cycle by cycle: with
+            // the diagnosers and their constraint rewrite exactly when the run has them.
+            source.scenario.diagnosers = link::runs_diagnosers(config)?;
+            source.scenario.plausibility = link::runs_plausibility(config)?;
+        }
+        let plant_dir = source
+            .path
+            .parent()
+            .unwrap_or(Path::new("."))
+            .join(&source.scenario.plant);
+        let (source, sim) = match &opts.variant {
+            Some(id) => {
+                let s = Source::free_run(
+                    &plant_dir,
+                    ProgramChoice::Error(id.clone()),
+                    &format!("Training: {id}"),
+                );
+                let sim = s.build()?;
+                (s, sim)
+            }
+            None => {
+                let sim = source.build()?;
+                (source, sim)
+            }
+        };
+        Ok((source, sim, plant_dir))
+    }
+
+    /// Opens the journal and writes the session's first entry.
+    fn open_journal(
+        opts: &ConsoleOptions,
+        sim: &Simulation,
+        source: &Source,
+        i18n: &I18n,
+    ) -> Journal {
+        let mut journal = Journal::open(
+            opts.data_dir.as_deref(),
+            &sim.bundle.dir.display().to_string(),
+            &sim.bundle.symbols,
+        );
+        {
+            let mut fields = source.title_fields();
+            let title = words::title(i18n, &fields, true);
+            let text = i18n.ta_en("say-session", &[("scenario", (&title).into())]);
+            fields.insert("scenario".into(), title);
+            journal.push_coded(0, "session", &text, "say-session", fields);
+        }
+        journal
     }
 
     /// The maintenance draft (text of receptivities, actions, equations), if any.
@@ -890,32 +914,12 @@ impl Console {
             return;
         }
         let now = self.now().0;
-        let needs = match &cmd {
-            Command::SetMode(Mode::Maintenance) | Command::Recompile | Command::RestartWithEdit => {
-                Some(Permission::EditProgram)
-            }
-            Command::Plant(OperatorAction::Filter(_)) => Some(Permission::ChangeFilterMode),
-            Command::Plant(OperatorAction::Bypass { .. }) => Some(Permission::BypassConstraint),
-            Command::InjectFault(_) => Some(Permission::Train),
-            _ => None,
-        };
-        if let Some(p) = needs
-            && !self.require(p)
-        {
+        if !self.permitted(&cmd) {
             return;
         }
         match cmd {
             Command::Login { name, password } => self.log_in(&name, &password, now),
-            Command::Logout => {
-                if let Some(u) = self.user.take() {
-                    self.say(Some(("logout", now)), "say-logout", &[("user", u)]);
-                }
-                self.role = Role::Operator;
-                if self.mode == Mode::Maintenance && !self.may(Permission::EditProgram) {
-                    self.mode = Mode::Production;
-                }
-                self.say(None, "say-logged-out", &[]);
-            }
+            Command::Logout => self.log_out(now),
             Command::Run => self.running = true,
             Command::Pause => self.running = false,
             Command::Step => {
@@ -929,95 +933,7 @@ impl Console {
                     1.0
                 }
             }
-            Command::Plant(action) => {
-                let result = self.sim.act(&action);
-                let result = match (result, &action) {
-                    (Err(e), OperatorAction::ManualSet(id, on)) => {
-                        // The request is not taken: checking it again gives the same
-                        // constraints, for the text in the language shown.
-                        let refused = self
-                            .sim
-                            .check_manual(id, *on)
-                            .map(|(_, refused)| refused)
-                            .unwrap_or_default();
-                        Err(words::refused_request(
-                            &self.i18n,
-                            &self.sim.bundle,
-                            id,
-                            *on,
-                            &refused,
-                            &e,
-                        ))
-                    }
-                    (r, _) => r,
-                };
-                match (&result, &action) {
-                    (Err(e), OperatorAction::ManualSet(..)) => {
-                        self.manual_refusal = Some(e.clone());
-                    }
-                    (Ok(()), OperatorAction::ManualSet(..) | OperatorAction::Manual(_)) => {
-                        self.manual_refusal = None;
-                    }
-                    _ => {}
-                }
-                self.status = match (result, &action) {
-                    (Ok(()), OperatorAction::Reinitialise { emptied: true }) => {
-                        self.i18n.t("status-reinit-emptied")
-                    }
-                    (Ok(()), OperatorAction::Reinitialise { emptied: false }) => {
-                        self.i18n.t("status-reinit-in-place")
-                    }
-                    (Ok(()), OperatorAction::Manual(true)) => self.i18n.t("status-manual-on"),
-                    (Ok(()), OperatorAction::Manual(false)) => self.i18n.t("status-manual-off"),
-                    (Ok(()), OperatorAction::ManualSet(id, on)) => self.i18n.ta(
-                        if *on {
-                            "status-by-hand-on"
-                        } else {
-                            "status-by-hand-off"
-                        },
-                        &[("id", id.into())],
-                    ),
-                    (
-                        Ok(()),
-                        OperatorAction::Bypass {
-                            constraint,
-                            minutes,
-                            ..
-                        },
-                    ) => {
-                        self.bypass_form.1.clear();
-                        self.i18n.ta(
-                            "status-bypassed",
-                            &[
-                                ("constraint", constraint.into()),
-                                ("minutes", (*minutes).into()),
-                            ],
-                        )
-                    }
-                    (Ok(()), OperatorAction::EndBypass(id)) => {
-                        self.i18n.ta("status-enforced-again", &[("id", id.into())])
-                    }
-                    (Ok(()), OperatorAction::Start) => self.i18n.t("status-start-pressed"),
-                    (Ok(()), OperatorAction::Stop) => self.i18n.t("status-stop-pressed"),
-                    (Ok(()), OperatorAction::Reset) => self.i18n.t("status-reset-done"),
-                    (Ok(()), OperatorAction::ResetDiagnosers) => {
-                        self.i18n.t("status-diagnosers-reset")
-                    }
-                    (Ok(()), OperatorAction::Press(b)) => format!("{b} pressed"),
-                    (Ok(()), _) => format!("{action:?}: done"),
-                    (Err(e), OperatorAction::ManualSet(..)) => e.clone(),
-                    (Err(e), OperatorAction::Reset) => {
-                        let reason = match self.sim.engine.reset_check() {
-                            Err(r) => words::reset_refused(&self.i18n, &r),
-                            Ok(()) => e.clone(),
-                        };
-                        self.i18n
-                            .ta("status-reset-refused", &[("reason", (&reason).into())])
-                    }
-                    (Err(e), _) => format!("{action:?}: {e}"),
-                };
-                self.drain_journal();
-            }
+            Command::Plant(action) => self.plant_command(action),
             Command::SetMode(m) => {
                 self.mode = m;
                 if m == Mode::Maintenance {
@@ -1035,58 +951,9 @@ impl Console {
                     self.score.levels.insert(l);
                 }
             }
-            Command::Acknowledge { id, note } => {
-                match self.sim.alarms.acknowledge(Millis(now), id, &note) {
-                    Ok(()) => {
-                        self.say(
-                            Some(("ack", now)),
-                            "say-ack",
-                            &[("id", id.to_string()), ("note", note.clone())],
-                        );
-                        self.notes.remove(&id);
-                    }
-                    Err(e) => self.say(None, "say-ack-refused", &[("error", e.to_string())]),
-                }
-            }
-            Command::AcknowledgeAll { ids, note } => {
-                let done = self
-                    .sim
-                    .alarms
-                    .acknowledge_all(Millis(now), ids.as_deref(), &note);
-                for id in &done {
-                    self.notes.remove(id);
-                }
-                let list: Vec<String> = done.iter().map(|id| format!("#{id}")).collect();
-                if !done.is_empty() {
-                    self.say(
-                        Some(("ack", now)),
-                        "say-ack-together",
-                        &[("list", list.join(", ")), ("note", note.clone())],
-                    );
-                }
-                self.say(None, "say-ack-all", &[("n", done.len().to_string())]);
-            }
-            Command::Shelve { id, ms, reason } => {
-                match self.sim.alarms.shelve(Millis(now), id, Millis(ms), &reason) {
-                    Ok(()) => {
-                        self.shelve_form = None;
-                        self.say(
-                            Some(("shelve", now)),
-                            "say-shelve",
-                            &[
-                                ("id", id.to_string()),
-                                ("minutes", (ms / 60_000).to_string()),
-                                ("reason", reason.trim().to_string()),
-                            ],
-                        );
-                    }
-                    Err(e) => self.say(
-                        Some(("shelve_refused", now)),
-                        "say-shelve-refused",
-                        &[("error", e.to_string())],
-                    ),
-                }
-            }
+            Command::Acknowledge { id, note } => self.acknowledge(id, note, now),
+            Command::AcknowledgeAll { ids, note } => self.acknowledge_all(ids, note, now),
+            Command::Shelve { id, ms, reason } => self.shelve(id, ms, &reason, now),
             Command::CloseShelveForm => self.shelve_form = None,
             Command::Unshelve(id) => match self.sim.alarms.unshelve(Millis(now), id) {
                 Ok(()) => self.say(
@@ -1097,98 +964,10 @@ impl Console {
                 Err(e) => self.say(None, "say-unshelve-refused", &[("error", e.to_string())]),
             },
             Command::Scrub(t) => self.replay = t,
-            Command::ExportAlarms(path) => {
-                let path = self.export_path(&path);
-                let list = self.sim.alarms.history(&self.history_filter);
-                let csv = vigie_core::alarms::AlarmList::history_csv(&list);
-                let n = list.len();
-                let written = journal::write_export(&path, &csv);
-                let shown = path.display().to_string();
-                match written {
-                    Ok(()) => self.say(
-                        Some(("operator", now)),
-                        "say-alarms-exported",
-                        &[("n", n.to_string()), ("path", shown)],
-                    ),
-                    Err(e) => self.say(
-                        Some(("operator", now)),
-                        "say-alarms-export-failed",
-                        &[("path", shown), ("error", e.to_string())],
-                    ),
-                }
-            }
-            Command::PrintAlarms(path) => {
-                let path = self.export_path(&path);
-                let list = self.sim.alarms.history(&self.history_filter);
-                let html = report::alarms_html(self, &list);
-                let n = list.len();
-                let shown = path.display().to_string();
-                match journal::write_export(&path, &html) {
-                    Ok(()) => {
-                        self.say(
-                            Some(("operator", now)),
-                            "say-alarms-printed",
-                            &[("n", n.to_string()), ("path", shown.clone())],
-                        );
-                        if self.open_files
-                            && let Err(e) = open::that_detached(&path)
-                        {
-                            self.say(
-                                None,
-                                "say-print-open-failed",
-                                &[("path", shown), ("error", e.to_string())],
-                            );
-                        }
-                    }
-                    Err(e) => self.say(
-                        Some(("operator", now)),
-                        "say-alarms-export-failed",
-                        &[("path", shown), ("error", e.to_string())],
-                    ),
-                }
-            }
-            Command::ExportTrend(path) => {
-                let path = self.export_path(&path);
-                let now = self.journal.wall_of(self.now().0);
-                let csv = self.journal.store().map_or_else(
-                    || Err("the console runs without a data folder: no history".to_string()),
-                    |s| {
-                        trends::changes_csv(s, &self.trends.signals, now, self.trends.range_ms)
-                            .map_err(|e| e.to_string())
-                    },
-                );
-                let written = csv.and_then(|(csv, n)| {
-                    journal::write_export(&path, &csv)
-                        .map(|()| n)
-                        .map_err(|e| e.to_string())
-                });
-                let shown = path.display().to_string();
-                let at = self.now().0;
-                match written {
-                    Ok(n) => self.say(
-                        Some(("operator", at)),
-                        "say-trend-exported",
-                        &[("n", n.to_string()), ("path", shown)],
-                    ),
-                    Err(e) => self.say(
-                        Some(("operator", at)),
-                        "say-trend-export-failed",
-                        &[("path", shown), ("error", e)],
-                    ),
-                }
-            }
-            Command::SetLanguage(lang) => {
-                self.i18n.set_lang(lang);
-                self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
-                self.view.words = synoptic_words(&self.i18n);
-                let status = std::mem::take(&mut self.status);
-                self.say(
-                    Some(("operator", now)),
-                    "say-language",
-                    &[("lang", lang.code().to_string())],
-                );
-                self.status = status;
-            }
+            Command::ExportAlarms(path) => self.export_alarms(&path, now),
+            Command::PrintAlarms(path) => self.print_alarms(&path, now),
+            Command::ExportTrend(path) => self.export_trend(&path),
+            Command::SetLanguage(lang) => self.set_language(lang, now),
             Command::SaveAs(what) => {
                 let dir = self.export_path(Path::new(""));
                 if !self.save.ask(what, &dir) {
@@ -1219,42 +998,324 @@ impl Console {
                 self.problems.clear();
             }
             Command::Restart => self.restart(None),
-            Command::LoadVariant(id) => {
-                self.source = Source::free_run(
-                    &self.plant_dir,
-                    ProgramChoice::Error(id.clone()),
-                    &format!("Training: {id}"),
-                );
-                self.score = Score::default();
-                self.score.variant = Some(id);
-                self.draft = None;
-                self.compiled_edit = None;
-                self.restart(None);
-                if self.mode == Mode::Maintenance {
-                    self.enter_maintenance();
-                }
-            }
-            Command::InjectFault(i) => {
-                if let Some((name, spec)) = self.faults.get(i).cloned() {
-                    let mut spec = spec;
-                    if let vigie_core::emulator::Trigger::At(t) = &mut spec.trigger {
-                        *t += now;
-                    }
-                    let what = words::fault(&self.i18n, &self.view.descriptions, &name, &spec);
-                    match self.sim.inject(spec) {
-                        Ok(()) => self.say(None, "say-fault-injected", &[("what", what)]),
-                        Err(e) => self.say(
-                            None,
-                            "say-fault-refused",
-                            &[("what", what), ("error", e.message)],
-                        ),
-                    }
-                    self.drain_journal();
-                }
-            }
+            Command::LoadVariant(id) => self.load_variant(id),
+            Command::InjectFault(i) => self.inject_fault(i, now),
             Command::VerifyFix => self.verify(),
             Command::VerifyConstraints => verification::start(self),
             Command::ReplayCounterexample => verification::replay(self),
+        }
+    }
+
+    /// Whether the role may give `cmd`: the permission it needs, if any, checked.
+    fn permitted(&mut self, cmd: &Command) -> bool {
+        let needs = match cmd {
+            Command::SetMode(Mode::Maintenance) | Command::Recompile | Command::RestartWithEdit => {
+                Some(Permission::EditProgram)
+            }
+            Command::Plant(OperatorAction::Filter(_)) => Some(Permission::ChangeFilterMode),
+            Command::Plant(OperatorAction::Bypass { .. }) => Some(Permission::BypassConstraint),
+            Command::InjectFault(_) => Some(Permission::Train),
+            _ => None,
+        };
+        match needs {
+            Some(p) => self.require(p),
+            None => true,
+        }
+    }
+
+    /// Logs the user out, back to the operator role (leaving maintenance if it needs a role).
+    fn log_out(&mut self, now: u64) {
+        if let Some(u) = self.user.take() {
+            self.say(Some(("logout", now)), "say-logout", &[("user", u)]);
+        }
+        self.role = Role::Operator;
+        if self.mode == Mode::Maintenance && !self.may(Permission::EditProgram) {
+            self.mode = Mode::Production;
+        }
+        self.say(None, "say-logged-out", &[]);
+    }
+
+    /// Applies an operator action to the plant: status line, manual refusal, journal.
+    fn plant_command(&mut self, action: OperatorAction) {
+        let result = self.sim.act(&action);
+        let result = match (result, &action) {
+            (Err(e), OperatorAction::ManualSet(id, on)) => {
+                // The request is not taken: checking it again gives the same
+                // constraints, for the text in the language shown.
+                let refused = self
+                    .sim
+                    .check_manual(id, *on)
+                    .map(|(_, refused)| refused)
+                    .unwrap_or_default();
+                Err(words::refused_request(
+                    &self.i18n,
+                    &self.sim.bundle,
+                    id,
+                    *on,
+                    &refused,
+                    &e,
+                ))
+            }
+            (r, _) => r,
+        };
+        match (&result, &action) {
+            (Err(e), OperatorAction::ManualSet(..)) => {
+                self.manual_refusal = Some(e.clone());
+            }
+            (Ok(()), OperatorAction::ManualSet(..) | OperatorAction::Manual(_)) => {
+                self.manual_refusal = None;
+            }
+            _ => {}
+        }
+        self.status = match (result, &action) {
+            (Ok(()), OperatorAction::Reinitialise { emptied: true }) => {
+                self.i18n.t("status-reinit-emptied")
+            }
+            (Ok(()), OperatorAction::Reinitialise { emptied: false }) => {
+                self.i18n.t("status-reinit-in-place")
+            }
+            (Ok(()), OperatorAction::Manual(true)) => self.i18n.t("status-manual-on"),
+            (Ok(()), OperatorAction::Manual(false)) => self.i18n.t("status-manual-off"),
+            (Ok(()), OperatorAction::ManualSet(id, on)) => self.i18n.ta(
+                if *on {
+                    "status-by-hand-on"
+                } else {
+                    "status-by-hand-off"
+                },
+                &[("id", id.into())],
+            ),
+            (
+                Ok(()),
+                OperatorAction::Bypass {
+                    constraint,
+                    minutes,
+                    ..
+                },
+            ) => {
+                self.bypass_form.1.clear();
+                self.i18n.ta(
+                    "status-bypassed",
+                    &[
+                        ("constraint", constraint.into()),
+                        ("minutes", (*minutes).into()),
+                    ],
+                )
+            }
+            (Ok(()), OperatorAction::EndBypass(id)) => {
+                self.i18n.ta("status-enforced-again", &[("id", id.into())])
+            }
+            (Ok(()), OperatorAction::Start) => self.i18n.t("status-start-pressed"),
+            (Ok(()), OperatorAction::Stop) => self.i18n.t("status-stop-pressed"),
+            (Ok(()), OperatorAction::Reset) => self.i18n.t("status-reset-done"),
+            (Ok(()), OperatorAction::ResetDiagnosers) => self.i18n.t("status-diagnosers-reset"),
+            (Ok(()), OperatorAction::Press(b)) => format!("{b} pressed"),
+            (Ok(()), _) => format!("{action:?}: done"),
+            (Err(e), OperatorAction::ManualSet(..)) => e.clone(),
+            (Err(e), OperatorAction::Reset) => {
+                let reason = match self.sim.engine.reset_check() {
+                    Err(r) => words::reset_refused(&self.i18n, &r),
+                    Ok(()) => e.clone(),
+                };
+                self.i18n
+                    .ta("status-reset-refused", &[("reason", (&reason).into())])
+            }
+            (Err(e), _) => format!("{action:?}: {e}"),
+        };
+        self.drain_journal();
+    }
+
+    /// Acknowledges alarm `id` with a note.
+    fn acknowledge(&mut self, id: u64, note: String, now: u64) {
+        match self.sim.alarms.acknowledge(Millis(now), id, &note) {
+            Ok(()) => {
+                self.say(
+                    Some(("ack", now)),
+                    "say-ack",
+                    &[("id", id.to_string()), ("note", note.clone())],
+                );
+                self.notes.remove(&id);
+            }
+            Err(e) => self.say(None, "say-ack-refused", &[("error", e.to_string())]),
+        }
+    }
+
+    /// Acknowledges several alarms (all unacknowledged ones for `None`) with one note.
+    fn acknowledge_all(&mut self, ids: Option<Vec<u64>>, note: String, now: u64) {
+        let done = self
+            .sim
+            .alarms
+            .acknowledge_all(Millis(now), ids.as_deref(), &note);
+        for id in &done {
+            self.notes.remove(id);
+        }
+        let list: Vec<String> = done.iter().map(|id| format!("#{id}")).collect();
+        if !done.is_empty() {
+            self.say(
+                Some(("ack", now)),
+                "say-ack-together",
+                &[("list", list.join(", ")), ("note", note.clone())],
+            );
+        }
+        self.say(None, "say-ack-all", &[("n", done.len().to_string())]);
+    }
+
+    /// Shelves alarm `id` for `ms` with a reason.
+    fn shelve(&mut self, id: u64, ms: u64, reason: &str, now: u64) {
+        match self.sim.alarms.shelve(Millis(now), id, Millis(ms), reason) {
+            Ok(()) => {
+                self.shelve_form = None;
+                self.say(
+                    Some(("shelve", now)),
+                    "say-shelve",
+                    &[
+                        ("id", id.to_string()),
+                        ("minutes", (ms / 60_000).to_string()),
+                        ("reason", reason.trim().to_string()),
+                    ],
+                );
+            }
+            Err(e) => self.say(
+                Some(("shelve_refused", now)),
+                "say-shelve-refused",
+                &[("error", e.to_string())],
+            ),
+        }
+    }
+
+    /// Exports the filtered alarm history to CSV.
+    fn export_alarms(&mut self, path: &Path, now: u64) {
+        let path = self.export_path(path);
+        let list = self.sim.alarms.history(&self.history_filter);
+        let csv = vigie_core::alarms::AlarmList::history_csv(&list);
+        let n = list.len();
+        let written = journal::write_export(&path, &csv);
+        let shown = path.display().to_string();
+        match written {
+            Ok(()) => self.say(
+                Some(("operator", now)),
+                "say-alarms-exported",
+                &[("n", n.to_string()), ("path", shown)],
+            ),
+            Err(e) => self.say(
+                Some(("operator", now)),
+                "say-alarms-export-failed",
+                &[("path", shown), ("error", e.to_string())],
+            ),
+        }
+    }
+
+    /// Writes the filtered alarm history as HTML for print and opens it.
+    fn print_alarms(&mut self, path: &Path, now: u64) {
+        let path = self.export_path(path);
+        let list = self.sim.alarms.history(&self.history_filter);
+        let html = report::alarms_html(self, &list);
+        let n = list.len();
+        let shown = path.display().to_string();
+        match journal::write_export(&path, &html) {
+            Ok(()) => {
+                self.say(
+                    Some(("operator", now)),
+                    "say-alarms-printed",
+                    &[("n", n.to_string()), ("path", shown.clone())],
+                );
+                if self.open_files
+                    && let Err(e) = open::that_detached(&path)
+                {
+                    self.say(
+                        None,
+                        "say-print-open-failed",
+                        &[("path", shown), ("error", e.to_string())],
+                    );
+                }
+            }
+            Err(e) => self.say(
+                Some(("operator", now)),
+                "say-alarms-export-failed",
+                &[("path", shown), ("error", e.to_string())],
+            ),
+        }
+    }
+
+    /// Exports the changes of the trends' signals over their range to CSV.
+    fn export_trend(&mut self, path: &Path) {
+        let path = self.export_path(path);
+        let now = self.journal.wall_of(self.now().0);
+        let csv = self.journal.store().map_or_else(
+            || Err("the console runs without a data folder: no history".to_string()),
+            |s| {
+                trends::changes_csv(s, &self.trends.signals, now, self.trends.range_ms)
+                    .map_err(|e| e.to_string())
+            },
+        );
+        let written = csv.and_then(|(csv, n)| {
+            journal::write_export(&path, &csv)
+                .map(|()| n)
+                .map_err(|e| e.to_string())
+        });
+        let shown = path.display().to_string();
+        let at = self.now().0;
+        match written {
+            Ok(n) => self.say(
+                Some(("operator", at)),
+                "say-trend-exported",
+                &[("n", n.to_string()), ("path", shown)],
+            ),
+            Err(e) => self.say(
+                Some(("operator", at)),
+                "say-trend-export-failed",
+                &[("path", shown), ("error", e)],
+            ),
+        }
+    }
+
+    /// Switches the console's language (descriptions and synoptic words too), keeping the status.
+    fn set_language(&mut self, lang: Lang, now: u64) {
+        self.i18n.set_lang(lang);
+        self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
+        self.view.words = synoptic_words(&self.i18n);
+        let status = std::mem::take(&mut self.status);
+        self.say(
+            Some(("operator", now)),
+            "say-language",
+            &[("lang", lang.code().to_string())],
+        );
+        self.status = status;
+    }
+
+    /// Restarts on the training variant `id` with a new score.
+    fn load_variant(&mut self, id: String) {
+        self.source = Source::free_run(
+            &self.plant_dir,
+            ProgramChoice::Error(id.clone()),
+            &format!("Training: {id}"),
+        );
+        self.score = Score::default();
+        self.score.variant = Some(id);
+        self.draft = None;
+        self.compiled_edit = None;
+        self.restart(None);
+        if self.mode == Mode::Maintenance {
+            self.enter_maintenance();
+        }
+    }
+
+    /// Injects the training fault `i`, its time taken from now.
+    fn inject_fault(&mut self, i: usize, now: u64) {
+        if let Some((name, spec)) = self.faults.get(i).cloned() {
+            let mut spec = spec;
+            if let vigie_core::emulator::Trigger::At(t) = &mut spec.trigger {
+                *t += now;
+            }
+            let what = words::fault(&self.i18n, &self.view.descriptions, &name, &spec);
+            match self.sim.inject(spec) {
+                Ok(()) => self.say(None, "say-fault-injected", &[("what", what)]),
+                Err(e) => self.say(
+                    None,
+                    "say-fault-refused",
+                    &[("what", what), ("error", e.message)],
+                ),
+            }
+            self.drain_journal();
         }
     }
 

@@ -158,8 +158,6 @@ impl Geometry {
         let (half, tw) = (t.half_length_mm as f32, t.width_mm as f32);
         let angle = (angle_mdeg as f32 / 1000.0).to_radians();
         let u = [angle.cos(), angle.sin()];
-        let n = [-u[1], u[0]];
-        let mut sensors = Vec::new();
         let mut actuators = BTreeMap::new();
         for c in &conveyors {
             let d = unit(c.start, c.end);
@@ -172,59 +170,7 @@ impl Geometry {
         actuators.insert(t.plus_actuator.clone(), [tc[0] + side, tc[1] + 170.0]);
         actuators.insert(t.rotate_actuator.clone(), [tc[0] + side, tc[1]]);
         actuators.insert(t.minus_actuator.clone(), [tc[0] + side, tc[1] - 170.0]);
-        for s in &layout.sensors {
-            match &s.kind {
-                SensorKind::Presence { part, at_mm, beam } => {
-                    #[allow(clippy::cast_precision_loss)]
-                    let at = *at_mm as f32;
-                    let high = *beam == Beam::High;
-                    if let Some(c) = conveyors.iter().find(|c| {
-                        layout
-                            .conveyors
-                            .iter()
-                            .any(|lc| &lc.id == part && lc.name == c.name)
-                    }) {
-                        let d = unit(c.start, c.end);
-                        let left = [-d[1], d[0]];
-                        let at_pt = add(c.start, d, at);
-                        // Lamps away from the turntable's corner: low beams below the
-                        // horizontal belts, beside the vertical ones.
-                        let horizontal = d[0].abs() > d[1].abs();
-                        let k = match (high, horizontal) {
-                            (false, true) | (true, false) => -1.0,
-                            _ => 1.0,
-                        };
-                        let a = add(at_pt, left, c.width / 2.0 * k);
-                        let b = add(at_pt, left, -c.width / 2.0 * k);
-                        sensors.push(SensorGeom {
-                            id: s.id.clone(),
-                            lamp: add(at_pt, left, (c.width / 2.0 + 70.0) * k),
-                            beam: Some((a, b)),
-                            high,
-                        });
-                    } else if part == &t.id {
-                        let at_pt = add(tc, u, at);
-                        sensors.push(SensorGeom {
-                            id: s.id.clone(),
-                            lamp: add(at_pt, n, tw / 2.0 + 60.0),
-                            beam: Some((add(at_pt, n, tw / 2.0), add(at_pt, n, -tw / 2.0))),
-                            high,
-                        });
-                    }
-                }
-                SensorKind::Angle { min_mdeg, max_mdeg } => {
-                    // Right of the table, upper for angles towards +y.
-                    let mid = (*min_mdeg + *max_mdeg) as f32 / 2000.0;
-                    let y = if mid > 45.0 { 110.0 } else { -110.0 };
-                    sensors.push(SensorGeom {
-                        id: s.id.clone(),
-                        lamp: [tc[0] + tw / 2.0 + 190.0, tc[1] + y],
-                        beam: None,
-                        high: false,
-                    });
-                }
-            }
-        }
+        let sensors = place_sensors(layout, &conveyors, tc, u, tw);
         let elevators: Vec<(String, [f32; 2])> = layout
             .elevators
             .iter()
@@ -273,6 +219,74 @@ impl Geometry {
             .map(|s| s.lamp)
             .or_else(|| self.actuators.get(id).copied())
     }
+}
+
+/// Places the sensors' lamps and beams: presence sensors across their conveyor or the
+/// turntable (at `tc`, axis `u`, width `tw`), angle sensors right of the table.
+fn place_sensors(
+    layout: &Layout,
+    conveyors: &[ConveyorGeom],
+    tc: [f32; 2],
+    u: [f32; 2],
+    tw: f32,
+) -> Vec<SensorGeom> {
+    let t = &layout.table;
+    let n = [-u[1], u[0]];
+    let mut sensors = Vec::new();
+    for s in &layout.sensors {
+        match &s.kind {
+            SensorKind::Presence { part, at_mm, beam } => {
+                #[allow(clippy::cast_precision_loss)]
+                let at = *at_mm as f32;
+                let high = *beam == Beam::High;
+                if let Some(c) = conveyors.iter().find(|c| {
+                    layout
+                        .conveyors
+                        .iter()
+                        .any(|lc| &lc.id == part && lc.name == c.name)
+                }) {
+                    let d = unit(c.start, c.end);
+                    let left = [-d[1], d[0]];
+                    let at_pt = add(c.start, d, at);
+                    // Lamps away from the turntable's corner: low beams below the
+                    // horizontal belts, beside the vertical ones.
+                    let horizontal = d[0].abs() > d[1].abs();
+                    let k = match (high, horizontal) {
+                        (false, true) | (true, false) => -1.0,
+                        _ => 1.0,
+                    };
+                    let a = add(at_pt, left, c.width / 2.0 * k);
+                    let b = add(at_pt, left, -c.width / 2.0 * k);
+                    sensors.push(SensorGeom {
+                        id: s.id.clone(),
+                        lamp: add(at_pt, left, (c.width / 2.0 + 70.0) * k),
+                        beam: Some((a, b)),
+                        high,
+                    });
+                } else if part == &t.id {
+                    let at_pt = add(tc, u, at);
+                    sensors.push(SensorGeom {
+                        id: s.id.clone(),
+                        lamp: add(at_pt, n, tw / 2.0 + 60.0),
+                        beam: Some((add(at_pt, n, tw / 2.0), add(at_pt, n, -tw / 2.0))),
+                        high,
+                    });
+                }
+            }
+            SensorKind::Angle { min_mdeg, max_mdeg } => {
+                // Right of the table, upper for angles towards +y.
+                let mid = (*min_mdeg + *max_mdeg) as f32 / 2000.0;
+                let y = if mid > 45.0 { 110.0 } else { -110.0 };
+                sensors.push(SensorGeom {
+                    id: s.id.clone(),
+                    lamp: [tc[0] + tw / 2.0 + 190.0, tc[1] + y],
+                    beam: None,
+                    high: false,
+                });
+            }
+        }
+    }
+    sensors
 }
 
 /// What to draw: the plant at one time, with the marks of an explanation level.
@@ -396,13 +410,82 @@ pub fn synoptic_ui(
     pal: &Palette,
     plant: &Plant,
 ) -> egui::Response {
-    // Predicted-hazard labels, drawn last so that no equipment hides them.
-    let mut predicted_labels: Vec<(Pos2, String)> = Vec::new();
     let size = ui.available_size().max(vec2(100.0, 100.0));
     let (response, painter) = ui.allocate_painter(size, Sense::click_and_drag());
     response.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, "Synoptic"));
     let rect = response.rect;
-    // Zoom with the wheel around the pointer, pan with a drag.
+    zoom_and_pan(ui, view, &response);
+    painter.rect_filled(rect, 0.0, pal.floor);
+    let (min, max) = geom.bounds;
+    let fit = (rect.width() / (max[0] - min[0])).min(rect.height() / (max[1] - min[1])) * 0.95;
+    let xf = Xf {
+        origin: rect.center() + view.pan,
+        center: [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0],
+        scale: fit * view.zoom,
+    };
+    let painter = painter.with_clip_rect(rect);
+    let cv = Canvas {
+        painter: &painter,
+        xf,
+        pal,
+        values: pic.values,
+        rect,
+        lamp_r: (55.0 * xf.scale).clamp(5.0, 14.0),
+    };
+    let edge = Stroke::new(1.0, pal.equipment_edge);
+    #[allow(clippy::cast_precision_loss)]
+    let t_s = pic.time_ms as f32 / 1000.0;
+
+    paint_conveyors(&cv, geom, t_s);
+    paint_elevators(&cv, geom, view);
+    paint_table(&cv, geom, table_angle_mdeg, (pal.equipment, edge), true);
+    paint_table_motion(&cv, geom, table_angle_mdeg, t_s);
+    paint_boxes(&cv, pic.boxes);
+    // Predicted-hazard labels, drawn last so that no equipment hides them.
+    let predicted_labels = match pic.ghost {
+        Some(ghost) => paint_ghosts(&cv, geom, view, ghost),
+        None => Vec::new(),
+    };
+    paint_sensors(&cv, geom);
+    paint_actuators(&cv, geom, pic.forced);
+    paint_marks(&cv, geom, view, pic.highlights);
+    if let Some((text, col)) = &pic.banner {
+        badge(
+            &painter,
+            rect.min + vec2(10.0, 10.0),
+            text,
+            *col,
+            Color32::WHITE,
+        );
+    }
+    paint_predicted_labels(&cv, geom, &predicted_labels);
+    if let Some(ptr) = response.hover_pos() {
+        paint_tooltip(&cv, geom, plant, view, ptr);
+    }
+    response
+}
+
+/// What the synoptic's painters share: the clipped painter, the transform, the palette,
+/// the signal values, the synoptic's area and the lamps' radius.
+struct Canvas<'a> {
+    painter: &'a egui::Painter,
+    xf: Xf,
+    pal: &'a Palette,
+    values: &'a BTreeMap<String, bool>,
+    rect: Rect,
+    lamp_r: f32,
+}
+
+impl Canvas<'_> {
+    /// Value of a signal (false when not drawn).
+    fn val(&self, id: &str) -> bool {
+        self.values.get(id).copied().unwrap_or(false)
+    }
+}
+
+/// Zooms with the wheel around the pointer, pans with a drag, resets on a double click.
+fn zoom_and_pan(ui: &egui::Ui, view: &mut View, response: &egui::Response) {
+    let rect = response.rect;
     if response.hovered() {
         let scroll = ui.input(|i| i.smooth_scroll_delta.y + (i.zoom_delta() - 1.0) * 200.0);
         if scroll.abs() > 0.0 {
@@ -423,40 +506,31 @@ pub fn synoptic_ui(
         view.zoom = 1.0;
         view.pan = Vec2::ZERO;
     }
-    painter.rect_filled(rect, 0.0, pal.floor);
-    let (min, max) = geom.bounds;
-    let fit = (rect.width() / (max[0] - min[0])).min(rect.height() / (max[1] - min[1])) * 0.95;
-    let xf = Xf {
-        origin: rect.center() + view.pan,
-        center: [(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0],
-        scale: fit * view.zoom,
-    };
-    let painter = painter.with_clip_rect(rect);
-    let val = |id: &str| pic.values.get(id).copied().unwrap_or(false);
-    let edge = Stroke::new(1.0, pal.equipment_edge);
-    #[allow(clippy::cast_precision_loss)]
-    let t_s = pic.time_ms as f32 / 1000.0;
+}
 
-    // Conveyors.
+/// Paints the conveyors, with moving chevrons on those running.
+fn paint_conveyors(cv: &Canvas<'_>, geom: &Geometry, t_s: f32) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    let edge = Stroke::new(1.0, pal.equipment_edge);
     for c in &geom.conveyors {
         let d = unit(c.start, c.end);
         let len = (c.end[0] - c.start[0]).hypot(c.end[1] - c.start[1]);
         let mid = add(c.start, d, len / 2.0);
-        let on = val(&c.actuator);
+        let on = cv.val(&c.actuator);
         let fill = if on {
             pal.equipment
         } else {
             pal.equipment.gamma_multiply(0.9)
         };
         painter.add(Shape::convex_polygon(
-            quad(&xf, mid, d, len / 2.0, c.width / 2.0),
+            quad(xf, mid, d, len / 2.0, c.width / 2.0),
             fill,
             edge,
         ));
         if on {
             chevrons(
-                &painter,
-                &xf,
+                painter,
+                xf,
                 c.start,
                 c.end,
                 c.width,
@@ -465,7 +539,11 @@ pub fn synoptic_ui(
             );
         }
     }
-    // Elevators.
+}
+
+/// Paints the elevators with their names.
+fn paint_elevators(cv: &Canvas<'_>, geom: &Geometry, view: &View) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
     for (key, at) in &geom.elevators {
         let name = view.word(key);
         let p = xf.p(*at);
@@ -484,59 +562,72 @@ pub fn synoptic_ui(
             pal.text_dim,
         );
     }
-    // Turntable.
-    let draw_table = |angle_mdeg: i32, fill: Color32, stroke: Stroke, rollers: bool| {
-        let a = (angle_mdeg as f32 / 1000.0).to_radians();
-        let u = [a.cos(), a.sin()];
-        let tc = geom.table_center;
-        let [half, w] = geom.table_size;
-        painter.add(Shape::convex_polygon(
-            quad(&xf, tc, u, half, w / 2.0),
-            fill,
-            stroke,
-        ));
-        let n = [-u[1], u[0]];
-        if rollers {
-            let mut s = -half + 40.0;
-            while s < half {
-                let c = add(tc, u, s);
-                painter.line_segment(
-                    [
-                        xf.p(add(c, n, w / 2.0 - 15.0)),
-                        xf.p(add(c, n, -w / 2.0 + 15.0)),
-                    ],
-                    Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.5)),
-                );
-                s += 50.0;
-            }
-        }
-        painter.circle_stroke(
-            xf.p(tc),
-            (half + 25.0) * xf.scale,
-            Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.4)),
-        );
-    };
-    draw_table(table_angle_mdeg, pal.equipment, edge, true);
-    {
-        let a = (table_angle_mdeg as f32 / 1000.0).to_radians();
-        let u = [a.cos(), a.sin()];
-        let [half, w] = geom.table_size;
-        let [plus, minus, _] = &geom.table_actuators;
-        let dir = if val(plus) {
-            Some(1.0)
-        } else if val(minus) {
-            Some(-1.0)
-        } else {
-            None
-        };
-        if let Some(k) = dir {
-            let s = add(geom.table_center, u, -half * k);
-            let e = add(geom.table_center, u, half * k);
-            chevrons(&painter, &xf, s, e, w, t_s * 300.0, pal.running);
+}
+
+/// Paints the turntable at `angle_mdeg` with a fill and stroke, its rollers if asked.
+fn paint_table(
+    cv: &Canvas<'_>,
+    geom: &Geometry,
+    angle_mdeg: i32,
+    (fill, stroke): (Color32, Stroke),
+    rollers: bool,
+) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    let a = (angle_mdeg as f32 / 1000.0).to_radians();
+    let u = [a.cos(), a.sin()];
+    let tc = geom.table_center;
+    let [half, w] = geom.table_size;
+    painter.add(Shape::convex_polygon(
+        quad(xf, tc, u, half, w / 2.0),
+        fill,
+        stroke,
+    ));
+    let n = [-u[1], u[0]];
+    if rollers {
+        let mut s = -half + 40.0;
+        while s < half {
+            let c = add(tc, u, s);
+            painter.line_segment(
+                [
+                    xf.p(add(c, n, w / 2.0 - 15.0)),
+                    xf.p(add(c, n, -w / 2.0 + 15.0)),
+                ],
+                Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.5)),
+            );
+            s += 50.0;
         }
     }
-    // Boxes.
-    for b in pic.boxes {
+    painter.circle_stroke(
+        xf.p(tc),
+        (half + 25.0) * xf.scale,
+        Stroke::new(1.0, pal.equipment_edge.gamma_multiply(0.4)),
+    );
+}
+
+/// Paints the chevrons of the turntable's rollers when they run (+u or -u).
+fn paint_table_motion(cv: &Canvas<'_>, geom: &Geometry, table_angle_mdeg: i32, t_s: f32) {
+    let a = (table_angle_mdeg as f32 / 1000.0).to_radians();
+    let u = [a.cos(), a.sin()];
+    let [half, w] = geom.table_size;
+    let [plus, minus, _] = &geom.table_actuators;
+    let dir = if cv.val(plus) {
+        Some(1.0)
+    } else if cv.val(minus) {
+        Some(-1.0)
+    } else {
+        None
+    };
+    if let Some(k) = dir {
+        let s = add(geom.table_center, u, -half * k);
+        let e = add(geom.table_center, u, half * k);
+        chevrons(cv.painter, &cv.xf, s, e, w, t_s * 300.0, cv.pal.running);
+    }
+}
+
+/// Paints the boxes not yet delivered, with their id and size.
+fn paint_boxes(cv: &Canvas<'_>, boxes: &[BoxView]) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    for b in boxes {
         if matches!(b.state, BoxState::Delivered(_)) {
             continue;
         }
@@ -548,7 +639,7 @@ pub fn synoptic_ui(
             pal.box_small
         };
         let stroke = Stroke::new(if b.damaged { 2.0 } else { 1.0 }, pal.box_edge);
-        painter.add(Shape::convex_polygon(box_shape(&xf, b), fill, stroke));
+        painter.add(Shape::convex_polygon(box_shape(xf, b), fill, stroke));
         let label = match b.size {
             BoxSize::Small => format!("{} S", b.id),
             BoxSize::Large => format!("{} L", b.id),
@@ -561,45 +652,59 @@ pub fn synoptic_ui(
             pal.text,
         );
     }
-    // Ghosts (projection).
-    if let Some((boxes, angle, hazards)) = pic.ghost {
-        draw_table(
-            angle,
-            pal.ghost.gamma_multiply(0.12),
-            Stroke::new(1.5, pal.ghost),
-            false,
-        );
-        for b in boxes {
-            if matches!(b.state, BoxState::Delivered(_)) {
-                continue;
-            }
-            let col = if b.damaged { pal.trip } else { pal.ghost };
-            painter.add(Shape::convex_polygon(
-                box_shape(&xf, b),
-                col.gamma_multiply(0.2),
-                Stroke::new(2.0, col),
-            ));
+}
+
+/// Paints the projection (ghost table, boxes and hazard crosses); returns the
+/// predicted-hazard labels to draw last.
+fn paint_ghosts(
+    cv: &Canvas<'_>,
+    geom: &Geometry,
+    view: &View,
+    (boxes, angle, hazards): (&[BoxView], i32, &[Hazard]),
+) -> Vec<(Pos2, String)> {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    let mut predicted_labels = Vec::new();
+    paint_table(
+        cv,
+        geom,
+        angle,
+        (pal.ghost.gamma_multiply(0.12), Stroke::new(1.5, pal.ghost)),
+        false,
+    );
+    for b in boxes {
+        if matches!(b.state, BoxState::Delivered(_)) {
+            continue;
         }
-        for h in hazards {
-            if let Some(b) = boxes.iter().find(|b| b.id == h.box_id) {
-                let p = xf.p([b.x_mm, b.y_mm]);
-                let r = 16.0;
-                let s = Stroke::new(3.0, pal.trip);
-                painter.line_segment([p - vec2(r, r), p + vec2(r, r)], s);
-                painter.line_segment([p - vec2(r, -r), p + vec2(r, -r)], s);
-                let kind = view.word(&format!("hazard-{:?}", h.kind).to_lowercase());
-                let label = view
-                    .word("predicted")
-                    .replace("%kind%", kind)
-                    .replace("%box%", &h.box_id.to_string());
-                predicted_labels.push((p, label));
-            }
+        let col = if b.damaged { pal.trip } else { pal.ghost };
+        painter.add(Shape::convex_polygon(
+            box_shape(xf, b),
+            col.gamma_multiply(0.2),
+            Stroke::new(2.0, col),
+        ));
+    }
+    for h in hazards {
+        if let Some(b) = boxes.iter().find(|b| b.id == h.box_id) {
+            let p = xf.p([b.x_mm, b.y_mm]);
+            let r = 16.0;
+            let s = Stroke::new(3.0, pal.trip);
+            painter.line_segment([p - vec2(r, r), p + vec2(r, r)], s);
+            painter.line_segment([p - vec2(r, -r), p + vec2(r, -r)], s);
+            let kind = view.word(&format!("hazard-{:?}", h.kind).to_lowercase());
+            let label = view
+                .word("predicted")
+                .replace("%kind%", kind)
+                .replace("%box%", &h.box_id.to_string());
+            predicted_labels.push((p, label));
         }
     }
-    // Sensors.
-    let lamp_r = (55.0 * xf.scale).clamp(5.0, 14.0);
+    predicted_labels
+}
+
+/// Paints the sensors: beams (dashed for high ones), lamps and ids.
+fn paint_sensors(cv: &Canvas<'_>, geom: &Geometry) {
+    let (painter, xf, pal, lamp_r) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r);
     for s in &geom.sensors {
-        let on = val(&s.id);
+        let on = cv.val(&s.id);
         if let Some((a, b)) = s.beam {
             let col = if on {
                 pal.sensor_on
@@ -628,11 +733,15 @@ pub fn synoptic_ui(
             pal.text,
         );
     }
-    // Actuators.
+}
+
+/// Paints the actuators' symbols (amber when forced, lit when on).
+fn paint_actuators(cv: &Canvas<'_>, geom: &Geometry, forced: &BTreeSet<String>) {
+    let (painter, xf, pal, lamp_r) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r);
     for (id, at) in &geom.actuators {
         let p = xf.p(*at);
-        let on = val(id);
-        let forced = pic.forced.contains(id);
+        let on = cv.val(id);
+        let forced = forced.contains(id);
         let r = Rect::from_center_size(p, Vec2::splat(lamp_r * 2.4));
         let fill = if forced {
             pal.forced
@@ -661,9 +770,13 @@ pub fn synoptic_ui(
             fg,
         );
     }
-    // Explanation marks.
+}
+
+/// Paints the explanation marks (rings and stacked badges) on their elements.
+fn paint_marks(cv: &Canvas<'_>, geom: &Geometry, view: &View, highlights: &[Highlight]) {
+    let (painter, xf, pal, lamp_r) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r);
     let mut stacked: BTreeMap<&str, f32> = BTreeMap::new();
-    for h in pic.highlights {
+    for h in highlights {
         let Some(w) = geom.element(&h.element) else {
             continue;
         };
@@ -671,7 +784,7 @@ pub fn synoptic_ui(
         let mut put = |text: &str, fill: Color32, fg: Color32| {
             let dy = stacked.entry(h.element.as_str()).or_insert(0.0);
             badge(
-                &painter,
+                painter,
                 p + vec2(lamp_r + 4.0, -lamp_r - 20.0 - *dy),
                 text,
                 fill,
@@ -715,16 +828,11 @@ pub fn synoptic_ui(
             }
         }
     }
-    if let Some((text, col)) = &pic.banner {
-        badge(
-            &painter,
-            rect.min + vec2(10.0, 10.0),
-            text,
-            *col,
-            Color32::WHITE,
-        );
-    }
-    // Tooltip of the element under the pointer.
+}
+
+/// Paints the predicted-hazard labels, each with a leader line to its box.
+fn paint_predicted_labels(cv: &Canvas<'_>, geom: &Geometry, predicted_labels: &[(Pos2, String)]) {
+    let (painter, xf, pal, lamp_r, rect) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r, cv.rect);
     // Below and to the left of the box, away from the actuator lamps on the right,
     // with a leader line to the box.
     // The first of a few places around the box that covers no sensor or actuator lamp.
@@ -734,7 +842,7 @@ pub fn synoptic_ui(
         .map(|s| xf.p(s.lamp))
         .chain(geom.actuators.values().map(|p| xf.p(*p)))
         .collect();
-    for (p, text) in &predicted_labels {
+    for (p, text) in predicted_labels {
         let galley =
             painter.layout_no_wrap(text.clone(), FontId::proportional(12.0), Color32::WHITE);
         let size = galley.size() + vec2(8.0, 4.0);
@@ -759,34 +867,36 @@ pub fn synoptic_ui(
             if at.y > p.y { at.y } else { at.y + size.y },
         );
         painter.line_segment([anchor, *p], Stroke::new(1.5, pal.trip));
-        badge(&painter, at, text, pal.trip, Color32::WHITE);
+        badge(painter, at, text, pal.trip, Color32::WHITE);
     }
-    if let Some(ptr) = response.hover_pos() {
-        let hit = geom
-            .sensors
-            .iter()
-            .map(|s| (s.id.as_str(), s.lamp))
-            .chain(geom.actuators.iter().map(|(id, p)| (id.as_str(), *p)))
-            .find(|(_, w)| xf.p(*w).distance(ptr) <= lamp_r * 1.4);
-        if let Some((id, _)) = hit {
-            let text = tooltip_text(plant, view, id, pic.values.get(id).copied());
-            let galley = painter.layout(text, FontId::proportional(13.0), pal.text, 320.0);
-            let r = Rect::from_min_size(ptr + vec2(14.0, 14.0), galley.size() + vec2(12.0, 10.0));
-            let r = r.translate(vec2(
-                (rect.right() - r.right()).min(0.0),
-                (rect.bottom() - r.bottom()).min(0.0),
-            ));
-            painter.rect_filled(r, 4.0, pal.panel);
-            painter.rect_stroke(
-                r,
-                4.0,
-                Stroke::new(1.0, pal.equipment_edge),
-                egui::StrokeKind::Middle,
-            );
-            painter.galley(r.min + vec2(6.0, 5.0), galley, pal.text);
-        }
+}
+
+/// Paints the tooltip of the sensor or actuator under the pointer, if any.
+fn paint_tooltip(cv: &Canvas<'_>, geom: &Geometry, plant: &Plant, view: &View, ptr: Pos2) {
+    let (painter, xf, pal, lamp_r, rect) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r, cv.rect);
+    let hit = geom
+        .sensors
+        .iter()
+        .map(|s| (s.id.as_str(), s.lamp))
+        .chain(geom.actuators.iter().map(|(id, p)| (id.as_str(), *p)))
+        .find(|(_, w)| xf.p(*w).distance(ptr) <= lamp_r * 1.4);
+    if let Some((id, _)) = hit {
+        let text = tooltip_text(plant, view, id, cv.values.get(id).copied());
+        let galley = painter.layout(text, FontId::proportional(13.0), pal.text, 320.0);
+        let r = Rect::from_min_size(ptr + vec2(14.0, 14.0), galley.size() + vec2(12.0, 10.0));
+        let r = r.translate(vec2(
+            (rect.right() - r.right()).min(0.0),
+            (rect.bottom() - r.bottom()).min(0.0),
+        ));
+        painter.rect_filled(r, 4.0, pal.panel);
+        painter.rect_stroke(
+            r,
+            4.0,
+            Stroke::new(1.0, pal.equipment_edge),
+            egui::StrokeKind::Middle,
+        );
+        painter.galley(r.min + vec2(6.0, 5.0), galley, pal.text);
     }
-    response
 }
 
 /// The dashed ring around a sensor's lamp that marks its reading as not taken as is

@@ -146,6 +146,78 @@ fn fmt_before(s: f64, now: &str) -> String {
 
 /// The trends view (central panel).
 pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    trends_toolbar_ui(c, ui, out);
+    let now = c.journal.wall_of(c.sim.now().0);
+    let Some(store) = c.journal.store() else {
+        ui.label(RichText::new(c.i18n.t("trends-no-history")).color(c.palette.caution));
+        return;
+    };
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let buckets = ui.available_width().clamp(100.0, 4000.0) as u32;
+    c.trends.refresh(store, now, buckets);
+    let rows = c.trends.rows();
+    if let Some(e) = &c.trends.error {
+        ui.label(RichText::new(e).color(c.palette.alarm));
+    }
+    if rows.is_empty() {
+        ui.label(c.i18n.t("trends-empty"));
+        return;
+    }
+    ui.label(
+        RichText::new(c.i18n.t("trends-legend"))
+            .small()
+            .color(c.palette.text_dim),
+    );
+    let n = rows.len();
+    let now_label = c.i18n.t("trends-now");
+    let labels: Vec<String> = rows.iter().map(|(s, _)| s.clone()).collect();
+    #[allow(clippy::cast_precision_loss)]
+    let range_s = c.trends.range_ms as f64 / 1000.0;
+    Plot::new("trends")
+        .allow_scroll(false)
+        .include_x(-range_s)
+        .include_x(0.0)
+        .include_y(-0.3)
+        .include_y(n as f64 * 1.5)
+        .x_axis_formatter(move |m, _| fmt_before(m.value, &now_label))
+        .y_axis_formatter(move |m, _| {
+            let v = m.value;
+            let row = (v / 1.5).floor();
+            if (v - row * 1.5).abs() < 1e-6 && row >= 0.0 {
+                #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+                let i = row as usize;
+                labels
+                    .get(n.saturating_sub(1 + i))
+                    .cloned()
+                    .unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .y_grid_spacer(|_| {
+            (0..n)
+                .map(|i| egui_plot::GridMark {
+                    value: i as f64 * 1.5,
+                    step_size: 1.5,
+                })
+                .collect()
+        })
+        .show(ui, |p| {
+            for (i, (name, pts)) in rows.iter().enumerate() {
+                #[allow(clippy::cast_precision_loss)]
+                let y0 = (n - 1 - i) as f64 * 1.5;
+                let pts: Vec<[f64; 2]> = pts.iter().map(|[x, y]| [*x, y0 + y]).collect();
+                p.line(
+                    Line::new(name.as_str(), PlotPoints::from(pts))
+                        .width(1.5)
+                        .allow_band(false),
+                );
+            }
+        });
+}
+
+/// The trends' toolbar: range, signals added (with a filter) and removed, export.
+fn trends_toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let names = signal_names(&c.sim.bundle.symbols);
     ui.horizontal_wrapped(|ui| {
         ui.label(c.i18n.t("trends-range"));
@@ -214,71 +286,4 @@ pub(crate) fn trends_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Comman
             out.push(Command::SaveAs(Export::Trend));
         }
     });
-    let now = c.journal.wall_of(c.sim.now().0);
-    let Some(store) = c.journal.store() else {
-        ui.label(RichText::new(c.i18n.t("trends-no-history")).color(c.palette.caution));
-        return;
-    };
-    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-    let buckets = ui.available_width().clamp(100.0, 4000.0) as u32;
-    c.trends.refresh(store, now, buckets);
-    let rows = c.trends.rows();
-    if let Some(e) = &c.trends.error {
-        ui.label(RichText::new(e).color(c.palette.alarm));
-    }
-    if rows.is_empty() {
-        ui.label(c.i18n.t("trends-empty"));
-        return;
-    }
-    ui.label(
-        RichText::new(c.i18n.t("trends-legend"))
-            .small()
-            .color(c.palette.text_dim),
-    );
-    let n = rows.len();
-    let now_label = c.i18n.t("trends-now");
-    let labels: Vec<String> = rows.iter().map(|(s, _)| s.clone()).collect();
-    #[allow(clippy::cast_precision_loss)]
-    let range_s = c.trends.range_ms as f64 / 1000.0;
-    Plot::new("trends")
-        .allow_scroll(false)
-        .include_x(-range_s)
-        .include_x(0.0)
-        .include_y(-0.3)
-        .include_y(n as f64 * 1.5)
-        .x_axis_formatter(move |m, _| fmt_before(m.value, &now_label))
-        .y_axis_formatter(move |m, _| {
-            let v = m.value;
-            let row = (v / 1.5).floor();
-            if (v - row * 1.5).abs() < 1e-6 && row >= 0.0 {
-                #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-                let i = row as usize;
-                labels
-                    .get(n.saturating_sub(1 + i))
-                    .cloned()
-                    .unwrap_or_default()
-            } else {
-                String::new()
-            }
-        })
-        .y_grid_spacer(|_| {
-            (0..n)
-                .map(|i| egui_plot::GridMark {
-                    value: i as f64 * 1.5,
-                    step_size: 1.5,
-                })
-                .collect()
-        })
-        .show(ui, |p| {
-            for (i, (name, pts)) in rows.iter().enumerate() {
-                #[allow(clippy::cast_precision_loss)]
-                let y0 = (n - 1 - i) as f64 * 1.5;
-                let pts: Vec<[f64; 2]> = pts.iter().map(|[x, y]| [*x, y0 + y]).collect();
-                p.line(
-                    Line::new(name.as_str(), PlotPoints::from(pts))
-                        .width(1.5)
-                        .allow_band(false),
-                );
-            }
-        });
 }

@@ -180,61 +180,11 @@ pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command
             ("s", (&format!("{secs:.1}")).into()),
         ],
     ));
-    match &r.full.hazard {
-        None => {
-            ui.label(RichText::new(i18n.t("verif-safe")).strong());
-        }
-        Some((kind, trace)) => {
-            ui.label(
-                RichText::new(i18n.ta(
-                    "verif-violated",
-                    &[
-                        ("kind", (&kind.to_string()).into()),
-                        ("n", trace.steps.len().into()),
-                    ],
-                ))
-                .strong()
-                .color(pal.trip),
-            );
-            let kinds: Vec<String> = r
-                .full
-                .hazard_kinds
-                .iter()
-                .map(|(k, n)| {
-                    i18n.ta(
-                        "verif-hazard-kind",
-                        &[("kind", (&k.to_string()).into()), ("n", (*n).into())],
-                    )
-                })
-                .collect();
-            ui.label(i18n.ta("verif-hazards", &[("kinds", (&kinds.join(", ")).into())]));
-            if ui
-                .button(i18n.t("verif-replay"))
-                .on_hover_text(i18n.t("verif-replay-hover"))
-                .clicked()
-            {
-                out.push(Command::ReplayCounterexample);
-            }
-        }
-    }
+    hazard_ui(i18n, ui, r, &pal, out);
     if r.full.no_fallback.is_some() {
         ui.label(RichText::new(i18n.t("verif-no-fallback")).color(pal.trip));
     }
-    for (side, id) in ["verif-left", "verif-right"].iter().enumerate() {
-        let name = i18n.t(id);
-        let text = match (&r.full.delivered[side], r.full.always_deliverable[side]) {
-            (None, _) => i18n.ta("verif-no-delivery", &[("side", (&name).into())]),
-            (Some(t), always) => i18n.ta(
-                if always {
-                    "verif-delivery-always"
-                } else {
-                    "verif-delivery-some"
-                },
-                &[("side", (&name).into()), ("n", t.steps.len().into())],
-            ),
-        };
-        ui.label(text);
-    }
+    deliveries_ui(i18n, ui, r);
     egui::CollapsingHeader::new(i18n.t("verif-invariants"))
         .default_open(false)
         .show(ui, |ui| {
@@ -273,4 +223,70 @@ pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command
                 }
             });
         });
+}
+
+/// The hazard found (with the kinds and the replay of its counterexample), or safe.
+fn hazard_ui(
+    i18n: &crate::i18n::I18n,
+    ui: &mut egui::Ui,
+    r: &VerifyReport,
+    pal: &crate::theme::Palette,
+    out: &mut Vec<Command>,
+) {
+    match &r.full.hazard {
+        None => {
+            ui.label(RichText::new(i18n.t("verif-safe")).strong());
+        }
+        Some((kind, trace)) => {
+            ui.label(
+                RichText::new(i18n.ta(
+                    "verif-violated",
+                    &[
+                        ("kind", (&kind.to_string()).into()),
+                        ("n", trace.steps.len().into()),
+                    ],
+                ))
+                .strong()
+                .color(pal.trip),
+            );
+            let kinds: Vec<String> = r
+                .full
+                .hazard_kinds
+                .iter()
+                .map(|(k, n)| {
+                    i18n.ta(
+                        "verif-hazard-kind",
+                        &[("kind", (&k.to_string()).into()), ("n", (*n).into())],
+                    )
+                })
+                .collect();
+            ui.label(i18n.ta("verif-hazards", &[("kinds", (&kinds.join(", ")).into())]));
+            if ui
+                .button(i18n.t("verif-replay"))
+                .on_hover_text(i18n.t("verif-replay-hover"))
+                .clicked()
+            {
+                out.push(Command::ReplayCounterexample);
+            }
+        }
+    }
+}
+
+/// Whether each side can be delivered to (always or in some runs), with the steps.
+fn deliveries_ui(i18n: &crate::i18n::I18n, ui: &mut egui::Ui, r: &VerifyReport) {
+    for (side, id) in ["verif-left", "verif-right"].iter().enumerate() {
+        let name = i18n.t(id);
+        let text = match (&r.full.delivered[side], r.full.always_deliverable[side]) {
+            (None, _) => i18n.ta("verif-no-delivery", &[("side", (&name).into())]),
+            (Some(t), always) => i18n.ta(
+                if always {
+                    "verif-delivery-always"
+                } else {
+                    "verif-delivery-some"
+                },
+                &[("side", (&name).into()), ("n", t.steps.len().into())],
+            ),
+        };
+        ui.label(text);
+    }
 }

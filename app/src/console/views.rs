@@ -163,110 +163,9 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             }
         }
         ui.separator();
-        if c.running {
-            if ui.button(c.i18n.t("sim-pause")).clicked() {
-                out.push(Command::Pause);
-            }
-        } else if ui.button(c.i18n.t("sim-run")).clicked() {
-            out.push(Command::Run);
-        }
-        if ui
-            .button(c.i18n.t("sim-step"))
-            .on_hover_text(c.i18n.t("sim-step-hover"))
-            .clicked()
-        {
-            out.push(Command::Step);
-        }
-        let mut speed = c.speed;
-        let r = ui.add(
-            egui::Slider::new(&mut speed, 0.1..=100.0)
-                .logarithmic(true)
-                .suffix("x")
-                .text(c.i18n.t("sim-speed")),
-        );
-        if r.changed() {
-            out.push(Command::SetSpeed(speed));
-        }
+        sim_controls_ui(c, ui, out);
         ui.separator();
-        ui.add(
-            egui::Label::new(format!("t = {}", fmt_ms(c.sim.now().0)))
-                .wrap_mode(egui::TextWrapMode::Extend),
-        );
-        ui.separator();
-        if ui
-            .button(c.i18n.t("plant-start"))
-            .on_hover_text(c.i18n.t("plant-start-hover"))
-            .clicked()
-        {
-            out.push(Command::Plant(OperatorAction::Start));
-        }
-        if ui
-            .button(c.i18n.t("plant-stop"))
-            .on_hover_text(c.i18n.t("plant-stop-hover"))
-            .clicked()
-        {
-            out.push(Command::Plant(OperatorAction::Stop));
-        }
-        if c.sim.manual_outputs().is_some() {
-            if ui
-                .button(c.i18n.t("manual-leave"))
-                .on_hover_text(c.i18n.t("manual-leave-hover"))
-                .clicked()
-            {
-                out.push(Command::Plant(OperatorAction::Manual(false)));
-            }
-        } else if ui
-            .add_enabled(
-                c.link.is_none() && !c.sim.engine.is_tripped(),
-                egui::Button::new(c.i18n.t("manual-enter")),
-            )
-            .on_hover_text(c.i18n.t("manual-enter-hover"))
-            .on_disabled_hover_text(c.i18n.t("manual-enter-disabled-hover"))
-            .clicked()
-        {
-            c.manual_confirm = true;
-        }
-        let tripped = c.sim.engine.is_tripped();
-        let reset = egui::Button::new(RichText::new(c.i18n.t("reset")).color(if tripped {
-            Color32::WHITE
-        } else {
-            c.palette.text
-        }))
-        .fill(if tripped {
-            c.palette.trip
-        } else {
-            c.palette.equipment.gamma_multiply(0.5)
-        });
-        if ui
-            .add(reset)
-            .on_hover_text(c.i18n.t("reset-hover"))
-            .clicked()
-        {
-            out.push(Command::Plant(OperatorAction::Reset));
-        }
-        // The reset was refused since the trip: the re-initialisation is the next step,
-        // shown in the alarm colour.
-        let refused = tripped
-            && c.sim
-                .journal()
-                .iter()
-                .rev()
-                .find(|e| matches!(e.kind.as_str(), "trip" | "reset" | "reset_refused"))
-                .is_some_and(|e| e.kind == "reset_refused");
-        let reinit = if refused {
-            egui::Button::new(RichText::new(c.i18n.t("reinit")).color(Color32::BLACK))
-                .fill(c.palette.alarm)
-        } else {
-            egui::Button::new(c.i18n.t("reinit"))
-        };
-        if ui
-            .add_enabled(tripped && c.link.is_none(), reinit)
-            .on_hover_text(c.i18n.t("reinit-hover"))
-            .on_disabled_hover_text(c.i18n.t("reinit-disabled-hover"))
-            .clicked()
-        {
-            c.reinit_confirm = true;
-        }
+        plant_buttons_ui(c, ui, out);
         ui.separator();
         match &c.user {
             Some(u) => {
@@ -286,6 +185,117 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             }
         }
     });
+}
+
+/// The toolbar's simulation controls: run or pause, step, speed and the time.
+fn sim_controls_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    if c.running {
+        if ui.button(c.i18n.t("sim-pause")).clicked() {
+            out.push(Command::Pause);
+        }
+    } else if ui.button(c.i18n.t("sim-run")).clicked() {
+        out.push(Command::Run);
+    }
+    if ui
+        .button(c.i18n.t("sim-step"))
+        .on_hover_text(c.i18n.t("sim-step-hover"))
+        .clicked()
+    {
+        out.push(Command::Step);
+    }
+    let mut speed = c.speed;
+    let r = ui.add(
+        egui::Slider::new(&mut speed, 0.1..=100.0)
+            .logarithmic(true)
+            .suffix("x")
+            .text(c.i18n.t("sim-speed")),
+    );
+    if r.changed() {
+        out.push(Command::SetSpeed(speed));
+    }
+    ui.separator();
+    ui.add(
+        egui::Label::new(format!("t = {}", fmt_ms(c.sim.now().0)))
+            .wrap_mode(egui::TextWrapMode::Extend),
+    );
+}
+
+/// The toolbar's plant buttons: start, stop, manual mode, reset and re-initialisation.
+fn plant_buttons_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    if ui
+        .button(c.i18n.t("plant-start"))
+        .on_hover_text(c.i18n.t("plant-start-hover"))
+        .clicked()
+    {
+        out.push(Command::Plant(OperatorAction::Start));
+    }
+    if ui
+        .button(c.i18n.t("plant-stop"))
+        .on_hover_text(c.i18n.t("plant-stop-hover"))
+        .clicked()
+    {
+        out.push(Command::Plant(OperatorAction::Stop));
+    }
+    if c.sim.manual_outputs().is_some() {
+        if ui
+            .button(c.i18n.t("manual-leave"))
+            .on_hover_text(c.i18n.t("manual-leave-hover"))
+            .clicked()
+        {
+            out.push(Command::Plant(OperatorAction::Manual(false)));
+        }
+    } else if ui
+        .add_enabled(
+            c.link.is_none() && !c.sim.engine.is_tripped(),
+            egui::Button::new(c.i18n.t("manual-enter")),
+        )
+        .on_hover_text(c.i18n.t("manual-enter-hover"))
+        .on_disabled_hover_text(c.i18n.t("manual-enter-disabled-hover"))
+        .clicked()
+    {
+        c.manual_confirm = true;
+    }
+    let tripped = c.sim.engine.is_tripped();
+    let reset = egui::Button::new(RichText::new(c.i18n.t("reset")).color(if tripped {
+        Color32::WHITE
+    } else {
+        c.palette.text
+    }))
+    .fill(if tripped {
+        c.palette.trip
+    } else {
+        c.palette.equipment.gamma_multiply(0.5)
+    });
+    if ui
+        .add(reset)
+        .on_hover_text(c.i18n.t("reset-hover"))
+        .clicked()
+    {
+        out.push(Command::Plant(OperatorAction::Reset));
+    }
+    // The reset was refused since the trip: the re-initialisation is the next step,
+    // shown in the alarm colour.
+    let refused = tripped
+        && c.sim
+            .journal()
+            .iter()
+            .rev()
+            .find(|e| matches!(e.kind.as_str(), "trip" | "reset" | "reset_refused"))
+            .is_some_and(|e| e.kind == "reset_refused");
+    let reinit = if refused {
+        egui::Button::new(RichText::new(c.i18n.t("reinit")).color(Color32::BLACK))
+            .fill(c.palette.alarm)
+    } else {
+        egui::Button::new(c.i18n.t("reinit"))
+    };
+    if ui
+        .add_enabled(tripped && c.link.is_none(), reinit)
+        .on_hover_text(c.i18n.t("reinit-hover"))
+        .on_disabled_hover_text(c.i18n.t("reinit-disabled-hover"))
+        .clicked()
+    {
+        c.reinit_confirm = true;
+    }
 }
 
 /// The login dialog: name and password (hidden), checked against the accounts of the
@@ -740,23 +750,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
         {
             ghost = Some((p.boxes.as_slice(), p.table_angle_mdeg, p.hazards.as_slice()));
         }
-        let ids = ex
-            .constraints
-            .iter()
-            .map(|k| k.split(" =").next().unwrap_or(k))
-            .collect::<Vec<_>>()
-            .join(", ");
-        banner = Some((
-            c.i18n.ta(
-                "banner-level",
-                &[
-                    ("level", (&c.i18n.t(LEVEL_IDS[*l])).into()),
-                    ("ids", (&ids).into()),
-                    ("time", (&fmt_ms(ex.time_ms)).into()),
-                ],
-            ),
-            c.palette.highlight,
-        ));
+        banner = Some(level_banner(c, *l, ex));
     }
     if let Some(r) = &replay_rec {
         banner = Some((
@@ -770,17 +764,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
             c.palette.highlight,
         ));
     } else if banner.is_none() && sim.engine.is_tripped() {
-        let ids: Vec<String> = sim
-            .engine
-            .trips
-            .last()
-            .map(|t| t.constraints.iter().map(|c| c.id.clone()).collect())
-            .unwrap_or_default();
-        banner = Some((
-            c.i18n
-                .ta("banner-trip", &[("ids", (&ids.join(", ")).into())]),
-            c.palette.trip,
-        ));
+        banner = Some(trip_banner(c));
     }
     let geom = Geometry::new(&sim.layout, angle);
     let pic = Picture {
@@ -794,6 +778,43 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     };
     let resp = synoptic::synoptic_ui(ui, &mut c.view, &geom, angle, &pic, &c.palette, plant);
     c.synoptic_rect = Some(resp.rect);
+}
+
+/// The banner of an explanation level: the level, the constraints and the time.
+fn level_banner(c: &Console, l: usize, ex: &vigie_core::explain::Explanation) -> (String, Color32) {
+    let ids = ex
+        .constraints
+        .iter()
+        .map(|k| k.split(" =").next().unwrap_or(k))
+        .collect::<Vec<_>>()
+        .join(", ");
+    (
+        c.i18n.ta(
+            "banner-level",
+            &[
+                ("level", (&c.i18n.t(LEVEL_IDS[l])).into()),
+                ("ids", (&ids).into()),
+                ("time", (&fmt_ms(ex.time_ms)).into()),
+            ],
+        ),
+        c.palette.highlight,
+    )
+}
+
+/// The banner of a trip: the constraints that tripped.
+fn trip_banner(c: &Console) -> (String, Color32) {
+    let sim = &c.sim;
+    let ids: Vec<String> = sim
+        .engine
+        .trips
+        .last()
+        .map(|t| t.constraints.iter().map(|c| c.id.clone()).collect())
+        .unwrap_or_default();
+    (
+        c.i18n
+            .ta("banner-trip", &[("ids", (&ids.join(", ")).into())]),
+        c.palette.trip,
+    )
 }
 
 /// After a trip, while the plant is held: what was stopped and why, what to check on
@@ -1180,48 +1201,9 @@ fn alarm_row_ui(
     now: Millis,
     out: &mut Vec<Command>,
 ) {
-    let (state_id, col) = match a.state() {
-        AlarmState::Unacknowledged => ("alarm-unack", c.palette.equipment_edge),
-        AlarmState::Acknowledged => ("alarm-ack", c.palette.equipment),
-        AlarmState::ClearedUnacknowledged => ("alarm-cleared-unack", c.palette.equipment),
-        AlarmState::Normal => ("alarm-normal", c.palette.equipment),
-    };
-    let state_txt = c.i18n.t(state_id);
     let id = a.id.to_string();
-    let (prio, prio_bg, prio_fg) = priority_badge(c, a.priority());
     egui::Frame::group(ui.style()).show(ui, |ui| {
-        ui.horizontal_wrapped(|ui| {
-            ui.label(
-                RichText::new(prio)
-                    .strong()
-                    .color(prio_fg)
-                    .background_color(prio_bg),
-            );
-            if a.first_out {
-                ui.label(
-                    RichText::new(c.i18n.t("alarm-first-out"))
-                        .strong()
-                        .color(Color32::WHITE)
-                        .background_color(c.palette.equipment_edge),
-                );
-            }
-            ui.label(
-                RichText::new(state_txt)
-                    .strong()
-                    .color(Color32::WHITE)
-                    .background_color(col),
-            );
-            ui.label(fmt_ms(a.raised.0));
-            if let Some(s) = a.shelving.as_ref().filter(|_| a.is_shelved(now)) {
-                ui.label(c.i18n.ta(
-                    "alarm-shelved-until",
-                    &[
-                        ("until", (&fmt_ms(s.until.0)).into()),
-                        ("reason", (&s.reason).into()),
-                    ],
-                ));
-            }
-        });
+        alarm_header_ui(c, ui, a, now);
         ui.label(super::words::alarm_message(&c.i18n, &c.sim.bundle, a));
         if !a.detail.is_empty() {
             egui::CollapsingHeader::new(c.i18n.t("alarm-detail"))
@@ -1284,6 +1266,50 @@ fn alarm_row_ui(
         });
         if let Some(form) = c.shelve_form.as_mut().filter(|f| f.id == a.id) {
             shelve_form_ui(form, ui, out, &mut c.status, &c.i18n);
+        }
+    });
+}
+
+/// One alarm's header line: priority, first-out, state, time raised and shelving.
+fn alarm_header_ui(c: &Console, ui: &mut egui::Ui, a: &vigie_core::alarms::Alarm, now: Millis) {
+    let (state_id, col) = match a.state() {
+        AlarmState::Unacknowledged => ("alarm-unack", c.palette.equipment_edge),
+        AlarmState::Acknowledged => ("alarm-ack", c.palette.equipment),
+        AlarmState::ClearedUnacknowledged => ("alarm-cleared-unack", c.palette.equipment),
+        AlarmState::Normal => ("alarm-normal", c.palette.equipment),
+    };
+    let state_txt = c.i18n.t(state_id);
+    let (prio, prio_bg, prio_fg) = priority_badge(c, a.priority());
+    ui.horizontal_wrapped(|ui| {
+        ui.label(
+            RichText::new(prio)
+                .strong()
+                .color(prio_fg)
+                .background_color(prio_bg),
+        );
+        if a.first_out {
+            ui.label(
+                RichText::new(c.i18n.t("alarm-first-out"))
+                    .strong()
+                    .color(Color32::WHITE)
+                    .background_color(c.palette.equipment_edge),
+            );
+        }
+        ui.label(
+            RichText::new(state_txt)
+                .strong()
+                .color(Color32::WHITE)
+                .background_color(col),
+        );
+        ui.label(fmt_ms(a.raised.0));
+        if let Some(s) = a.shelving.as_ref().filter(|_| a.is_shelved(now)) {
+            ui.label(c.i18n.ta(
+                "alarm-shelved-until",
+                &[
+                    ("until", (&fmt_ms(s.until.0)).into()),
+                    ("reason", (&s.reason).into()),
+                ],
+            ));
         }
     });
 }
@@ -1473,28 +1499,7 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         .fill(pal.panel)
         .inner_margin(8.0)
         .show(ui, |ui| {
-            ui.horizontal(|ui| {
-                ui.heading(
-                    c.i18n
-                        .ta("maint-program", &[("name", (&program.name).into())]),
-                );
-                if ui.button(c.i18n.t("maint-recompile")).clicked() {
-                    out.push(Command::Recompile);
-                }
-                if ui.button(c.i18n.t("maint-restart")).clicked() {
-                    out.push(Command::RestartWithEdit);
-                }
-                if ui.button(c.i18n.t("maint-discard")).clicked() {
-                    out.push(Command::DiscardEdits);
-                }
-                if ui
-                    .button(c.i18n.t("training-verify-fix"))
-                    .on_hover_text(c.i18n.t("maint-verify-fix-hover"))
-                    .clicked()
-                {
-                    out.push(Command::VerifyFix);
-                }
-            });
+            maintenance_header_ui(&c.i18n, ui, &program.name, out);
             if !c.problems.is_empty() {
                 let col = if c.compiled_edit.is_some() {
                     pal.text
@@ -1516,53 +1521,7 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                             .striped(true)
                             .num_columns(3)
                             .show(ui, |ui| {
-                                for s in &chart.steps {
-                                    let on = active.contains(&s.id);
-                                    let txt = RichText::new(format!(
-                                        "{}{}",
-                                        if s.initial { "[init] " } else { "" },
-                                        s.id
-                                    ))
-                                    .monospace();
-                                    let l = ui.label(if on {
-                                        txt.strong()
-                                            .color(Color32::WHITE)
-                                            .background_color(pal.running)
-                                    } else {
-                                        txt
-                                    });
-                                    ui.label(if on { active_label.as_str() } else { "" });
-                                    if let Some(a) = draft.actions.get_mut(&s.id) {
-                                        ui.add(
-                                            egui::TextEdit::singleline(a)
-                                                .desired_width(260.0)
-                                                .font(egui::TextStyle::Monospace),
-                                        )
-                                        .labelled_by(l.id);
-                                    }
-                                    ui.end_row();
-                                    for t in
-                                        chart.transitions.iter().filter(|t| t.from.contains(&s.id))
-                                    {
-                                        let l = ui.label(
-                                            RichText::new(format!("   + {}", t.id)).monospace(),
-                                        );
-                                        ui.label(
-                                            RichText::new(format!("→ {}", t.to.join(", ")))
-                                                .monospace()
-                                                .color(pal.text_dim),
-                                        );
-                                        if let Some(cond) = draft.conditions.get_mut(&t.id) {
-                                            ui.add(
-                                                egui::TextEdit::singleline(cond)
-                                                    .desired_width(260.0)
-                                                    .font(egui::TextStyle::Monospace),
-                                            )
-                                            .labelled_by(l.id);
-                                        }
-                                        ui.end_row();
-                                    }
-                                }
+                                chart_steps_ui(ui, chart, draft, &active, &active_label, &pal);
                             });
                     }
                     if !draft.equations.is_empty() {
@@ -1585,66 +1544,94 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         });
 }
 
+/// The maintenance panel's heading with its buttons: recompile, restart, discard, verify.
+fn maintenance_header_ui(
+    i18n: &crate::i18n::I18n,
+    ui: &mut egui::Ui,
+    name: &str,
+    out: &mut Vec<Command>,
+) {
+    ui.horizontal(|ui| {
+        ui.heading(i18n.ta("maint-program", &[("name", name.into())]));
+        if ui.button(i18n.t("maint-recompile")).clicked() {
+            out.push(Command::Recompile);
+        }
+        if ui.button(i18n.t("maint-restart")).clicked() {
+            out.push(Command::RestartWithEdit);
+        }
+        if ui.button(i18n.t("maint-discard")).clicked() {
+            out.push(Command::DiscardEdits);
+        }
+        if ui
+            .button(i18n.t("training-verify-fix"))
+            .on_hover_text(i18n.t("maint-verify-fix-hover"))
+            .clicked()
+        {
+            out.push(Command::VerifyFix);
+        }
+    });
+}
+
+/// One chart's grid: each step (lit when active) with its editable action, then the
+/// transitions leaving it with their editable conditions.
+fn chart_steps_ui(
+    ui: &mut egui::Ui,
+    chart: &vigie_core::control::program::Chart,
+    draft: &mut super::Draft,
+    active: &BTreeSet<String>,
+    active_label: &str,
+    pal: &crate::theme::Palette,
+) {
+    for s in &chart.steps {
+        let on = active.contains(&s.id);
+        let txt = RichText::new(format!(
+            "{}{}",
+            if s.initial { "[init] " } else { "" },
+            s.id
+        ))
+        .monospace();
+        let l = ui.label(if on {
+            txt.strong()
+                .color(Color32::WHITE)
+                .background_color(pal.running)
+        } else {
+            txt
+        });
+        ui.label(if on { active_label } else { "" });
+        if let Some(a) = draft.actions.get_mut(&s.id) {
+            ui.add(
+                egui::TextEdit::singleline(a)
+                    .desired_width(260.0)
+                    .font(egui::TextStyle::Monospace),
+            )
+            .labelled_by(l.id);
+        }
+        ui.end_row();
+        for t in chart.transitions.iter().filter(|t| t.from.contains(&s.id)) {
+            let l = ui.label(RichText::new(format!("   + {}", t.id)).monospace());
+            ui.label(
+                RichText::new(format!("→ {}", t.to.join(", ")))
+                    .monospace()
+                    .color(pal.text_dim),
+            );
+            if let Some(cond) = draft.conditions.get_mut(&t.id) {
+                ui.add(
+                    egui::TextEdit::singleline(cond)
+                        .desired_width(260.0)
+                        .font(egui::TextStyle::Monospace),
+                )
+                .labelled_by(l.id);
+            }
+            ui.end_row();
+        }
+    }
+}
+
 fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let title = c.i18n.t("chrono-title");
+    chronogram_controls_ui(c, ui, &title, out);
     let sim = &c.sim;
     let now = sim.now().0;
-    let title = c.i18n.t("chrono-title");
-    let replay = c.i18n.t("chrono-replay");
-    let live = c.i18n.t("chrono-live");
-    let signals = c.i18n.t("chrono-signals");
-    ui.horizontal(|ui| {
-        ui.label(RichText::new(&title).strong());
-        for w in [10u64, 30, 60, 300] {
-            if ui
-                .selectable_label(c.chrono_window_s == w, format!("{w} s"))
-                .clicked()
-            {
-                c.chrono_window_s = w;
-            }
-        }
-        ui.separator();
-        let oldest = sim.engine.history.iter().next().map_or(0, |r| r.time.0);
-        let mut t = c.replay.unwrap_or(now);
-        let r = ui.add(
-            egui::Slider::new(&mut t, oldest..=now.max(oldest))
-                .text(replay)
-                .custom_formatter(|v, _| fmt_ms(v as u64)),
-        );
-        if r.changed() {
-            out.push(Command::Scrub(Some(t)));
-        }
-        if c.replay.is_some() && ui.button(live).clicked() {
-            out.push(Command::Scrub(None));
-        }
-        ui.menu_button(signals, |ui| {
-            for s in sim
-                .bundle
-                .plant
-                .inputs
-                .iter()
-                .chain(&sim.bundle.plant.outputs)
-            {
-                let mut on = c.chrono_signals.contains(&s.id);
-                if ui
-                    .checkbox(
-                        &mut on,
-                        format!(
-                            "{} {}",
-                            s.id,
-                            c.view.descriptions.get(&s.id).unwrap_or(&s.description)
-                        ),
-                    )
-                    .changed()
-                {
-                    if on {
-                        c.chrono_signals.insert(s.id.clone());
-                    } else {
-                        c.chrono_signals.remove(&s.id);
-                    }
-                }
-            }
-        });
-    });
     let size = ui.available_size().max(vec2(100.0, 60.0));
     let (resp, painter) = ui.allocate_painter(size, Sense::click_and_drag());
     resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, &title));
@@ -1716,34 +1703,133 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 r.applied.get(*i)
             }
         };
-        let mut start: Option<u64> = None;
         let col = if *input {
             pal.running
         } else {
             pal.equipment_edge
         };
-        let flush = |s: u64, e: u64| {
-            let r = egui::Rect::from_min_max(
-                pos2(x_of(s), y + 3.0),
-                pos2(x_of(e).max(x_of(s) + 1.0), y + row_h - 3.0),
-            );
-            painter.rect_filled(r, 0.0, col);
-        };
-        for r in &recs {
-            let v = get(r);
-            match (v, start) {
-                (true, None) => start = Some(r.time.0),
-                (false, Some(s)) => {
-                    flush(s, r.time.0);
-                    start = None;
-                }
-                _ => {}
+        paint_spans(&painter, &recs, get, (y, row_h), col, &x_of, now);
+    }
+    paint_chronogram_marks(c, &painter, rect, t0, &x_of);
+    if let Some(p) = resp.interact_pointer_pos()
+        && p.x > rect.left() + label_w
+    {
+        #[allow(
+            clippy::cast_possible_truncation,
+            clippy::cast_sign_loss,
+            clippy::cast_precision_loss
+        )]
+        let t =
+            t0 + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
+        out.push(Command::Scrub(Some(t.min(now))));
+    }
+}
+
+/// The chronogram's controls: window length, replay slider, back to live, signals shown.
+fn chronogram_controls_ui(c: &mut Console, ui: &mut egui::Ui, title: &str, out: &mut Vec<Command>) {
+    let sim = &c.sim;
+    let now = sim.now().0;
+    let replay = c.i18n.t("chrono-replay");
+    let live = c.i18n.t("chrono-live");
+    let signals = c.i18n.t("chrono-signals");
+    ui.horizontal(|ui| {
+        ui.label(RichText::new(title).strong());
+        for w in [10u64, 30, 60, 300] {
+            if ui
+                .selectable_label(c.chrono_window_s == w, format!("{w} s"))
+                .clicked()
+            {
+                c.chrono_window_s = w;
             }
         }
-        if let Some(s) = start {
-            flush(s, now);
+        ui.separator();
+        let oldest = sim.engine.history.iter().next().map_or(0, |r| r.time.0);
+        let mut t = c.replay.unwrap_or(now);
+        let r = ui.add(
+            egui::Slider::new(&mut t, oldest..=now.max(oldest))
+                .text(replay)
+                .custom_formatter(|v, _| fmt_ms(v as u64)),
+        );
+        if r.changed() {
+            out.push(Command::Scrub(Some(t)));
+        }
+        if c.replay.is_some() && ui.button(live).clicked() {
+            out.push(Command::Scrub(None));
+        }
+        ui.menu_button(signals, |ui| {
+            for s in sim
+                .bundle
+                .plant
+                .inputs
+                .iter()
+                .chain(&sim.bundle.plant.outputs)
+            {
+                let mut on = c.chrono_signals.contains(&s.id);
+                if ui
+                    .checkbox(
+                        &mut on,
+                        format!(
+                            "{} {}",
+                            s.id,
+                            c.view.descriptions.get(&s.id).unwrap_or(&s.description)
+                        ),
+                    )
+                    .changed()
+                {
+                    if on {
+                        c.chrono_signals.insert(s.id.clone());
+                    } else {
+                        c.chrono_signals.remove(&s.id);
+                    }
+                }
+            }
+        });
+    });
+}
+
+/// Paints one chronogram row's spans where the signal (`get`) is on, in `col`.
+fn paint_spans(
+    painter: &egui::Painter,
+    recs: &[&vigie_core::history::CycleRecord],
+    get: impl Fn(&vigie_core::history::CycleRecord) -> bool,
+    (y, row_h): (f32, f32),
+    col: Color32,
+    x_of: &impl Fn(u64) -> f32,
+    now: u64,
+) {
+    let mut start: Option<u64> = None;
+    let flush = |s: u64, e: u64| {
+        let r = egui::Rect::from_min_max(
+            pos2(x_of(s), y + 3.0),
+            pos2(x_of(e).max(x_of(s) + 1.0), y + row_h - 3.0),
+        );
+        painter.rect_filled(r, 0.0, col);
+    };
+    for r in recs {
+        let v = get(r);
+        match (v, start) {
+            (true, None) => start = Some(r.time.0),
+            (false, Some(s)) => {
+                flush(s, r.time.0);
+                start = None;
+            }
+            _ => {}
         }
     }
+    if let Some(s) = start {
+        flush(s, now);
+    }
+}
+
+/// Marks the chronogram's trips (with their constraints), hazards and replay time.
+fn paint_chronogram_marks(
+    c: &Console,
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    t0: u64,
+    x_of: &impl Fn(u64) -> f32,
+) {
+    let (sim, pal) = (&c.sim, &c.palette);
     for t in &sim.engine.trips {
         if t.time_ms >= t0 {
             let x = x_of(t.time_ms);
@@ -1776,18 +1862,6 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             [pos2(x, rect.top()), pos2(x, rect.bottom())],
             Stroke::new(2.0, pal.highlight),
         );
-    }
-    if let Some(p) = resp.interact_pointer_pos()
-        && p.x > rect.left() + label_w
-    {
-        #[allow(
-            clippy::cast_possible_truncation,
-            clippy::cast_sign_loss,
-            clippy::cast_precision_loss
-        )]
-        let t =
-            t0 + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
-        out.push(Command::Scrub(Some(t.min(now))));
     }
 }
 

@@ -143,74 +143,9 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         rt_peers,
     } = opts;
     let _load = Load::start(load)?;
-    let root = repo_root();
-    let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| root.join(".venv"), PathBuf::from);
-    let python = venv.join("bin/python");
-    anyhow::ensure!(
-        python.is_file(),
-        "{} not found: create the venv with `scripts/test.sh` (or python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt)",
-        python.display()
-    );
-    let mut plant = Command::new(&python)
-        .arg(root.join("tests/peers/plant.py"))
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .context("cannot start the pymodbus plant")?;
-    let peers = if rt_peers {
-        raise_peer_priority(plant.id()).map_or_else(
-            || "real-time 40".to_string(),
-            |why| format!("normal (real-time refused: {why})"),
-        )
-    } else {
-        "normal".to_string()
-    };
-    let mut plant_in = plant.stdin.take().context("plant stdin")?;
-    let mut plant_out = BufReader::new(plant.stdout.take().context("plant stdout")?);
-    let mut line = String::new();
-    plant_out.read_line(&mut line)?;
-    let port: u16 = line
-        .trim()
-        .strip_prefix("listening ")
-        .and_then(|p| p.parse().ok())
-        .with_context(|| format!("unexpected plant output {line:?}"))?;
-    let plant_addr: SocketAddr = ([127, 0, 0, 1], port).into();
-    // The plant answers every command with a line: drain them, or its stdout fills
-    // after some 20,000 edges and the plant stops answering Modbus too.
-    std::thread::Builder::new()
-        .name("bench-plant-stdout".into())
-        .spawn(move || {
-            let mut sink = String::new();
-            while plant_out.read_line(&mut sink).is_ok_and(|n| n > 0) {
-                sink.clear();
-            }
-        })?;
+    let (mut plant, mut plant_in, plant_addr, peers) = start_plant(rt_peers)?;
 
-    let state = std::env::temp_dir().join(format!("vigie-gateway-bench-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&state);
-    let text = format!(
-        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
-         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
-         cycle_priority: {}, realtime: {}, state_dir: {:?})",
-        plant_dir.display().to_string(),
-        cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})")),
-        cycle_priority.is_some(),
-        state.display().to_string(),
-    );
-    let config = GatewayConfig::from_ron(&text, std::path::Path::new("bench.ron"))
-        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
-    // The gateway as configured by default: with the plant's diagnosers.
-    let (bundle, diagnosers) = runtime::load_plant(&config)?;
-    let (map, _) = IoMap::load(&config.io_map_path(), &bundle.plant)
-        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
-    let setup = Setup {
-        config,
-        bundle,
-        map,
-        diagnosers,
-        state_dir: state.clone(),
-        history: None,
-    };
+    let (setup, state) = gateway_setup(plant_dir, plant_addr, cycle_priority)?;
     let measuring = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let alarms = std::sync::Arc::new(std::sync::Mutex::new(Vec::<String>::new()));
     let stale = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
@@ -223,46 +158,7 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
     // The gateway on its own thread and runtime.
     let (addr_tx, addr_rx) = std::sync::mpsc::channel::<SocketAddr>();
     let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
-    let gateway = std::thread::Builder::new()
-        .name("gateway".into())
-        .spawn(move || {
-            let mut stats = CycleStats::default();
-            let mut emit = move |e: serde_json::Value| {
-                if e["event"] == "listening"
-                    && let Some(addr) = e["address"].as_str().and_then(|a| a.parse().ok())
-                {
-                    let _ = addr_tx.send(addr);
-                }
-                let key = e["key"].as_str().unwrap_or_default();
-                if e["event"] == "alarm" && m.load(std::sync::atomic::Ordering::Acquire) {
-                    let text = format!("{key} at {} ms: {}", e["time_ms"], e["message"]);
-                    if key.starts_with("link:") {
-                        a.lock()
-                            .unwrap_or_else(std::sync::PoisonError::into_inner)
-                            .push(text);
-                    } else if key == "safe:outputs"
-                        && e["message"]
-                            .as_str()
-                            .is_some_and(|t| t.starts_with("stale inputs"))
-                    {
-                        s.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    }
-                }
-            };
-            let rt = tokio::runtime::Builder::new_current_thread()
-                .enable_all()
-                .build()?;
-            rt.block_on(runtime::run(
-                setup,
-                async {
-                    let _ = stop_rx.await;
-                },
-                &mut emit,
-                &mut stats,
-                None,
-            ))?;
-            anyhow::Ok(stats)
-        })?;
+    let gateway = spawn_gateway(setup, (m, a, s), addr_tx, stop_rx)?;
     let server = addr_rx
         .recv_timeout(Duration::from_secs(10))
         .context("the gateway did not start")?;
@@ -283,73 +179,14 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()?;
-    let result = rt.block_on(async {
-        let mut plc =
-            tokio_modbus::client::tcp::connect_slave(server, tokio_modbus::Slave(1)).await?;
-        let plc_task = tokio::spawn(async move {
-            loop {
-                let _ = plc.read_discrete_inputs(0, 11).await;
-                let _ = plc
-                    .write_multiple_coils(0, &[false, true, false, false, false, false, false])
-                    .await;
-                tokio::time::sleep(Duration::from_millis(5)).await;
-            }
-        });
-        let mut probe =
-            tokio_modbus::client::tcp::connect_slave(plant_addr, tokio_modbus::Slave(1)).await?;
-        // Every probe read is bounded: a plant that stops answering ends the bench
-        // with an error instead of hanging it.
-        let mut read_a1 = async move || -> anyhow::Result<bool> {
-            Ok(
-                tokio::time::timeout(Duration::from_secs(5), probe.read_coils(1, 1))
-                    .await
-                    .map_err(|_| {
-                        anyhow::anyhow!("the plant did not answer the probe within 5 s")
-                    })???
-                    .first()
-                    .copied()
-                    .unwrap_or(false),
-            )
-        };
-        // Wait for A1 at the plant.
-        let deadline = Instant::now() + Duration::from_secs(10);
-        while !read_a1().await? {
-            anyhow::ensure!(Instant::now() < deadline, "A1 never reached the plant");
-            if !probe_pause.is_zero() {
-                tokio::time::sleep(probe_pause).await;
-            }
-        }
-        measuring.store(true, std::sync::atomic::Ordering::Release);
-        let started = Instant::now();
-        let mut latencies = Vec::with_capacity(edges);
-        let mut k = 0;
-        while k < edges || started.elapsed() < Duration::from_secs(seconds) {
-            // Spread the phase of the change over the cycle.
-            tokio::time::sleep(Duration::from_micros(3000 + (k as u64 * 7919) % 10_000)).await;
-            let rising = k % 2 == 0;
-            let t0 = Instant::now();
-            writeln!(plant_in, "di 3 {}", u8::from(rising))?;
-            plant_in.flush()?;
-            let deadline = t0 + Duration::from_secs(5);
-            loop {
-                if read_a1().await? != rising {
-                    break;
-                }
-                if !probe_pause.is_zero() {
-                    tokio::time::sleep(probe_pause).await;
-                }
-                anyhow::ensure!(
-                    Instant::now() < deadline,
-                    "edge {k}: no filtered output within 5 s"
-                );
-            }
-            latencies.push(t0.elapsed().as_secs_f64() * 1e3);
-            k += 1;
-        }
-        measuring.store(false, std::sync::atomic::Ordering::Release);
-        plc_task.abort();
-        anyhow::Ok((latencies, started.elapsed().as_secs_f64()))
-    });
+    let result = rt.block_on(measure(
+        server,
+        plant_addr,
+        &mut plant_in,
+        &measuring,
+        (edges, seconds),
+        probe_pause,
+    ));
     let _ = stop_tx.send(());
     let stats = gateway
         .join()
@@ -393,4 +230,223 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         rt_priority: cycle_priority,
         peers,
     })
+}
+
+/// Starts the pymodbus plant of the venv (its peers at real-time priority if asked)
+/// and drains its answers; returns it, its stdin, its address and the peers' priority.
+fn start_plant(
+    rt_peers: bool,
+) -> anyhow::Result<(
+    std::process::Child,
+    std::process::ChildStdin,
+    SocketAddr,
+    String,
+)> {
+    let root = repo_root();
+    let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| root.join(".venv"), PathBuf::from);
+    let python = venv.join("bin/python");
+    anyhow::ensure!(
+        python.is_file(),
+        "{} not found: create the venv with `scripts/test.sh` (or python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt)",
+        python.display()
+    );
+    let mut plant = Command::new(&python)
+        .arg(root.join("tests/peers/plant.py"))
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .context("cannot start the pymodbus plant")?;
+    let peers = if rt_peers {
+        raise_peer_priority(plant.id()).map_or_else(
+            || "real-time 40".to_string(),
+            |why| format!("normal (real-time refused: {why})"),
+        )
+    } else {
+        "normal".to_string()
+    };
+    let plant_in = plant.stdin.take().context("plant stdin")?;
+    let mut plant_out = BufReader::new(plant.stdout.take().context("plant stdout")?);
+    let mut line = String::new();
+    plant_out.read_line(&mut line)?;
+    let port: u16 = line
+        .trim()
+        .strip_prefix("listening ")
+        .and_then(|p| p.parse().ok())
+        .with_context(|| format!("unexpected plant output {line:?}"))?;
+    let plant_addr: SocketAddr = ([127, 0, 0, 1], port).into();
+    // The plant answers every command with a line: drain them, or its stdout fills
+    // after some 20,000 edges and the plant stops answering Modbus too.
+    std::thread::Builder::new()
+        .name("bench-plant-stdout".into())
+        .spawn(move || {
+            let mut sink = String::new();
+            while plant_out.read_line(&mut sink).is_ok_and(|n| n > 0) {
+                sink.clear();
+            }
+        })?;
+    Ok((plant, plant_in, plant_addr, peers))
+}
+
+/// The gateway's setup for the bench (plant, its diagnosers, 10 ms cycle, a fresh
+/// state folder, returned too).
+fn gateway_setup(
+    plant_dir: &std::path::Path,
+    plant_addr: SocketAddr,
+    cycle_priority: Option<u8>,
+) -> anyhow::Result<(Setup, PathBuf)> {
+    let state = std::env::temp_dir().join(format!("vigie-gateway-bench-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&state);
+    let text = format!(
+        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
+         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
+         cycle_priority: {}, realtime: {}, state_dir: {:?})",
+        plant_dir.display().to_string(),
+        cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})")),
+        cycle_priority.is_some(),
+        state.display().to_string(),
+    );
+    let config = GatewayConfig::from_ron(&text, std::path::Path::new("bench.ron"))
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    // The gateway as configured by default: with the plant's diagnosers.
+    let (bundle, diagnosers) = runtime::load_plant(&config)?;
+    let (map, _) = IoMap::load(&config.io_map_path(), &bundle.plant)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let setup = Setup {
+        config,
+        bundle,
+        map,
+        diagnosers,
+        state_dir: state.clone(),
+        history: None,
+    };
+    Ok((setup, state))
+}
+
+/// Runs the gateway on its own thread and runtime: its address is sent on `addr_tx`,
+/// link alarms while measuring go to `alarms`, stale-input holds are counted.
+fn spawn_gateway(
+    setup: Setup,
+    (m, a, s): (
+        std::sync::Arc<std::sync::atomic::AtomicBool>,
+        std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+        std::sync::Arc<std::sync::atomic::AtomicUsize>,
+    ),
+    addr_tx: std::sync::mpsc::Sender<SocketAddr>,
+    stop_rx: tokio::sync::oneshot::Receiver<()>,
+) -> std::io::Result<std::thread::JoinHandle<anyhow::Result<CycleStats>>> {
+    std::thread::Builder::new()
+        .name("gateway".into())
+        .spawn(move || {
+            let mut stats = CycleStats::default();
+            let mut emit = move |e: serde_json::Value| {
+                if e["event"] == "listening"
+                    && let Some(addr) = e["address"].as_str().and_then(|a| a.parse().ok())
+                {
+                    let _ = addr_tx.send(addr);
+                }
+                let key = e["key"].as_str().unwrap_or_default();
+                if e["event"] == "alarm" && m.load(std::sync::atomic::Ordering::Acquire) {
+                    let text = format!("{key} at {} ms: {}", e["time_ms"], e["message"]);
+                    if key.starts_with("link:") {
+                        a.lock()
+                            .unwrap_or_else(std::sync::PoisonError::into_inner)
+                            .push(text);
+                    } else if key == "safe:outputs"
+                        && e["message"]
+                            .as_str()
+                            .is_some_and(|t| t.starts_with("stale inputs"))
+                    {
+                        s.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    }
+                }
+            };
+            let rt = tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()?;
+            rt.block_on(runtime::run(
+                setup,
+                async {
+                    let _ = stop_rx.await;
+                },
+                &mut emit,
+                &mut stats,
+                None,
+            ))?;
+            anyhow::Ok(stats)
+        })
+}
+
+/// Drives A1 on through the PLC, then times `edges` sensor edges (and at least
+/// `seconds`) from the plant to the filtered output; returns the latencies (ms) and
+/// the time measured (s).
+async fn measure(
+    server: SocketAddr,
+    plant_addr: SocketAddr,
+    plant_in: &mut std::process::ChildStdin,
+    measuring: &std::sync::atomic::AtomicBool,
+    (edges, seconds): (usize, u64),
+    probe_pause: Duration,
+) -> anyhow::Result<(Vec<f64>, f64)> {
+    let mut plc = tokio_modbus::client::tcp::connect_slave(server, tokio_modbus::Slave(1)).await?;
+    let plc_task = tokio::spawn(async move {
+        loop {
+            let _ = plc.read_discrete_inputs(0, 11).await;
+            let _ = plc
+                .write_multiple_coils(0, &[false, true, false, false, false, false, false])
+                .await;
+            tokio::time::sleep(Duration::from_millis(5)).await;
+        }
+    });
+    let mut probe =
+        tokio_modbus::client::tcp::connect_slave(plant_addr, tokio_modbus::Slave(1)).await?;
+    // Every probe read is bounded: a plant that stops answering ends the bench
+    // with an error instead of hanging it.
+    let mut read_a1 = async move || -> anyhow::Result<bool> {
+        Ok(
+            tokio::time::timeout(Duration::from_secs(5), probe.read_coils(1, 1))
+                .await
+                .map_err(|_| anyhow::anyhow!("the plant did not answer the probe within 5 s"))???
+                .first()
+                .copied()
+                .unwrap_or(false),
+        )
+    };
+    // Wait for A1 at the plant.
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while !read_a1().await? {
+        anyhow::ensure!(Instant::now() < deadline, "A1 never reached the plant");
+        if !probe_pause.is_zero() {
+            tokio::time::sleep(probe_pause).await;
+        }
+    }
+    measuring.store(true, std::sync::atomic::Ordering::Release);
+    let started = Instant::now();
+    let mut latencies = Vec::with_capacity(edges);
+    let mut k = 0;
+    while k < edges || started.elapsed() < Duration::from_secs(seconds) {
+        // Spread the phase of the change over the cycle.
+        tokio::time::sleep(Duration::from_micros(3000 + (k as u64 * 7919) % 10_000)).await;
+        let rising = k % 2 == 0;
+        let t0 = Instant::now();
+        writeln!(plant_in, "di 3 {}", u8::from(rising))?;
+        plant_in.flush()?;
+        let deadline = t0 + Duration::from_secs(5);
+        loop {
+            if read_a1().await? != rising {
+                break;
+            }
+            if !probe_pause.is_zero() {
+                tokio::time::sleep(probe_pause).await;
+            }
+            anyhow::ensure!(
+                Instant::now() < deadline,
+                "edge {k}: no filtered output within 5 s"
+            );
+        }
+        latencies.push(t0.elapsed().as_secs_f64() * 1e3);
+        k += 1;
+    }
+    measuring.store(false, std::sync::atomic::Ordering::Release);
+    plc_task.abort();
+    anyhow::Ok((latencies, started.elapsed().as_secs_f64()))
 }

@@ -504,28 +504,7 @@ impl Cycle for MonitorCycle {
 
     fn step(&mut self, start: Instant) {
         let now = self.clock.at(start);
-        let (heard, failed, status) = {
-            let s = lock(&self.side);
-            self.inputs.clone_from(&s.inputs);
-            self.outputs.clone_from(&s.outputs);
-            (s.heard, s.failed, s.status.clone())
-        };
-        let what = format!("monitored peer {}", self.peer);
-        if heard != self.heard {
-            if self.heard.is_none() && self.attach {
-                self.engine.attach_next_cycle();
-                self.attached_now = true;
-            }
-            self.heard = heard;
-            if let Some(h) = heard {
-                let t = self.dog.heard(h);
-                self.board
-                    .watch(&mut *self.emit, now, "link:peer", &what, t);
-            }
-        }
-        let t = self.liveness.check(&mut self.dog, now, &self.beat, failed);
-        self.board
-            .watch(&mut *self.emit, now, "link:peer", &what, t);
+        let status = self.listen(now);
         self.control.0.copy_from(self.outputs.values());
         self.engine
             .cycle(now, self.inputs.values(), &mut self.control);
@@ -613,6 +592,36 @@ impl Cycle for MonitorCycle {
             h.finish();
         }
         LiveDiagnosers::diagnoses(self.diagnosers.as_ref())
+    }
+}
+
+impl MonitorCycle {
+    /// Takes the peer's latest values and watches its liveness (attaching the engine
+    /// when it is first heard); returns the client's status.
+    fn listen(&mut self, now: Millis) -> super::client::ClientStatus {
+        let (heard, failed, status) = {
+            let s = lock(&self.side);
+            self.inputs.clone_from(&s.inputs);
+            self.outputs.clone_from(&s.outputs);
+            (s.heard, s.failed, s.status.clone())
+        };
+        let what = format!("monitored peer {}", self.peer);
+        if heard != self.heard {
+            if self.heard.is_none() && self.attach {
+                self.engine.attach_next_cycle();
+                self.attached_now = true;
+            }
+            self.heard = heard;
+            if let Some(h) = heard {
+                let t = self.dog.heard(h);
+                self.board
+                    .watch(&mut *self.emit, now, "link:peer", &what, t);
+            }
+        }
+        let t = self.liveness.check(&mut self.dog, now, &self.beat, failed);
+        self.board
+            .watch(&mut *self.emit, now, "link:peer", &what, t);
+        status
     }
 }
 
@@ -781,15 +790,10 @@ impl GatewayCycle {
             }
         }
     }
-}
 
-impl Cycle for GatewayCycle {
-    type Done = (Bits, Vec<vigie_core::pop::Diagnosis>);
-
-    fn step(&mut self, start: Instant) {
-        let now = self.clock.at(start);
-        let n_out = self.control.0.len();
-        // 1. The plant, as last polled.
+    /// Step 1: the plant's inputs as last polled, its liveness watched (attaching the
+    /// engine when it is first heard); returns the client's status.
+    fn listen_plant(&mut self, now: Millis) -> super::client::ClientStatus {
         let (heard, failed, status) = {
             let s = lock(&self.side);
             self.inputs.clone_from(&s.inputs);
@@ -813,7 +817,12 @@ impl Cycle for GatewayCycle {
             .check(&mut self.plant_dog, now, &self.beat, failed);
         self.board
             .watch(&mut *self.emit, now, "link:plant", &what, t);
-        // 2. The PLC: heard when it writes its outputs.
+        status
+    }
+
+    /// Step 2: the PLC's outputs, its liveness watched (heard when it writes); returns
+    /// the server's exception count.
+    fn listen_plc(&mut self, now: Millis) -> u64 {
         let (heard, server_exceptions, plc_connected) = {
             let s = lock(&self.shared);
             self.control.0.copy_from(&s.outputs);
@@ -828,25 +837,14 @@ impl Cycle for GatewayCycle {
             .liveness
             .check_plc(&mut self.plc_dog, now, &self.beat, plc_connected);
         self.board.watch(&mut *self.emit, now, "link:plc", "PLC", t);
-        // 3. The engine; a change of the latch is on disk before it is reported.
-        let reset = self.reset_if_asked(now);
-        self.engine
-            .cycle(now, self.inputs.values(), &mut self.control);
-        let mut events = Vec::new();
-        emit_engine_events(
-            &mut self.engine,
-            &mut |e| events.push(e),
-            None,
-            &mut self.last_spec,
-        );
-        if self.engine.is_tripped() == self.latched {
-            events.into_iter().for_each(&mut *self.emit);
-        } else {
-            self.latched = self.engine.is_tripped();
-            let trip = self.engine.trips.last().filter(|_| self.latched).cloned();
-            self.latch.save(trip, events);
-        }
-        // 4. Safe outputs.
+        server_exceptions
+    }
+
+    /// Step 4: the outputs sent to the plant, the safe fallback when the PLC or the plant
+    /// is lost or stale inputs may violate a constraint (announced and alarmed on a
+    /// change); returns the stale inputs, the outputs applied and the reason, if any.
+    fn safe_outputs(&mut self, now: Millis) -> (Bits, Bits, Option<String>) {
+        let n_out = self.control.0.len();
         let stale = self.inputs.stale(now, &self.bounds);
         let mut applied = self.engine.applied().clone();
         let reason = if self.plc_dog.is_lost() {
@@ -904,6 +902,39 @@ impl Cycle for GatewayCycle {
             self.safe_reason.clone_from(&reason);
         }
         self.engine.set_applied(&applied);
+        (stale, applied, reason)
+    }
+}
+
+impl Cycle for GatewayCycle {
+    type Done = (Bits, Vec<vigie_core::pop::Diagnosis>);
+
+    fn step(&mut self, start: Instant) {
+        let now = self.clock.at(start);
+        // 1. The plant, as last polled.
+        let status = self.listen_plant(now);
+        // 2. The PLC: heard when it writes its outputs.
+        let server_exceptions = self.listen_plc(now);
+        // 3. The engine; a change of the latch is on disk before it is reported.
+        let reset = self.reset_if_asked(now);
+        self.engine
+            .cycle(now, self.inputs.values(), &mut self.control);
+        let mut events = Vec::new();
+        emit_engine_events(
+            &mut self.engine,
+            &mut |e| events.push(e),
+            None,
+            &mut self.last_spec,
+        );
+        if self.engine.is_tripped() == self.latched {
+            events.into_iter().for_each(&mut *self.emit);
+        } else {
+            self.latched = self.engine.is_tripped();
+            let trip = self.engine.trips.last().filter(|_| self.latched).cloned();
+            self.latch.save(trip, events);
+        }
+        // 4. Safe outputs.
+        let (stale, applied, reason) = self.safe_outputs(now);
         // 5. The diagnosers follow what the plant receives.
         let usable = self.plant_heard.is_some() && !self.plant_dog.is_lost();
         let reset_asked = self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset);
@@ -1016,53 +1047,17 @@ pub(crate) async fn gateway(
         raise_priority(p.below(), "I/O runtime thread");
     }
     // A trip latched by an earlier run (a crash, a kill) holds from the first cycle.
-    let mut engine = with_estimates(
-        Engine::new(&bundle, FilterMode::Enforce, 6000),
-        diagnosers.as_ref(),
-        &bundle,
-        config.plausibility,
-    );
-    let restored = super::latch::load(&state_dir)?;
-    if let Some(trip) = restored.clone() {
-        engine.restore_trip(trip);
-    }
-    let shared: SharedImage = Arc::new(Mutex::new(Shared {
-        inputs: Bits::zeros(n_in),
-        outputs: Bits::zeros(n_out),
-        ..Shared::default()
-    }));
-    let server = server::start(
-        &server_config,
-        ServerImage::new(&map, server_config.unit),
-        Arc::clone(&shared),
-        Duration::from_millis(config.link_timeout().0),
-    )
-    .await
-    .with_context(|| format!("cannot listen on {}", server_config.bind))?;
-    tracing::info!(
-        "serving the PLC on {}, plant at {}",
+    let (engine, restored) = restored_engine(&bundle, diagnosers.as_ref(), &config, &state_dir)?;
+    let (shared, server) = serve_plc(&server_config, &map, &config, (n_in, n_out)).await?;
+    announce(
+        emit,
+        tap.as_ref(),
         server.local,
-        client.address
+        client.address,
+        diagnosers.is_some(),
+        &state_dir,
+        restored.as_ref(),
     );
-    if let Some(t) = &tap {
-        t.update(|s| {
-            s.peer = Some(client.address);
-            s.listening = Some(server.local);
-        });
-    }
-    emit(json!({
-        "event": "listening", "address": server.local.to_string(),
-        "plant": client.address.to_string(), "diagnosers": diagnosers.is_some(),
-        "state_dir": state_dir.display().to_string(),
-    }));
-    if let Some(trip) = &restored {
-        let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
-        tracing::warn!(
-            "a trip latched before the restart holds ({}): the outputs stay at the fallback until the reset",
-            ids.join(", ")
-        );
-        emit(json!({"event": "trip_restored", "record": trip}));
-    }
     let plant_peer = client.address;
     let liveness = Liveness::of(&config, client.timeout_ms);
     let (out_tx, out_rx) = watch::channel(None);
@@ -1126,8 +1121,99 @@ pub(crate) async fn gateway(
     let mut client = io.stop().await?;
     let ((safe, diagnoses), cycle_stats) = result?;
     *stats = cycle_stats;
-    let written = match &mut client {
-        PeerClient::Plant(w) => w.write(clock.now(), &safe).await.is_ok(),
+    stop_report(&mut client, clock, &safe, &diagnoses, tap.as_ref(), emit).await;
+    drop(server);
+    Ok(())
+}
+
+/// The gateway's engine, holding a trip latched by an earlier run (returned too).
+fn restored_engine(
+    bundle: &PlantBundle,
+    diagnosers: Option<&vigie_core::pop::build::Compiled>,
+    config: &vigie_core::live::config::GatewayConfig,
+    state_dir: &std::path::Path,
+) -> anyhow::Result<(Engine, Option<vigie_core::engine::Trip>)> {
+    let mut engine = with_estimates(
+        Engine::new(bundle, FilterMode::Enforce, 6000),
+        diagnosers,
+        bundle,
+        config.plausibility,
+    );
+    let restored = super::latch::load(state_dir)?;
+    if let Some(trip) = restored.clone() {
+        engine.restore_trip(trip);
+    }
+    Ok((engine, restored))
+}
+
+/// Starts the Modbus server the PLC talks to, over a fresh shared image.
+async fn serve_plc(
+    server_config: &vigie_core::live::config::ServerConfig,
+    map: &vigie_core::live::iomap::IoMap,
+    config: &vigie_core::live::config::GatewayConfig,
+    (n_in, n_out): (usize, usize),
+) -> anyhow::Result<(SharedImage, server::ServerHandle)> {
+    let shared: SharedImage = Arc::new(Mutex::new(Shared {
+        inputs: Bits::zeros(n_in),
+        outputs: Bits::zeros(n_out),
+        ..Shared::default()
+    }));
+    let server = server::start(
+        server_config,
+        ServerImage::new(map, server_config.unit),
+        Arc::clone(&shared),
+        Duration::from_millis(config.link_timeout().0),
+    )
+    .await
+    .with_context(|| format!("cannot listen on {}", server_config.bind))?;
+    Ok((shared, server))
+}
+
+/// Announces the gateway: where it serves the PLC and reaches the plant (log, tap,
+/// `listening` event), and a trip restored from an earlier run.
+fn announce(
+    emit: Emit<'_>,
+    tap: Option<&Tap>,
+    local: std::net::SocketAddr,
+    plant: std::net::SocketAddr,
+    diagnosers: bool,
+    state_dir: &std::path::Path,
+    restored: Option<&vigie_core::engine::Trip>,
+) {
+    tracing::info!("serving the PLC on {}, plant at {}", local, plant);
+    if let Some(t) = tap {
+        t.update(|s| {
+            s.peer = Some(plant);
+            s.listening = Some(local);
+        });
+    }
+    emit(json!({
+        "event": "listening", "address": local.to_string(),
+        "plant": plant.to_string(), "diagnosers": diagnosers,
+        "state_dir": state_dir.display().to_string(),
+    }));
+    if let Some(trip) = restored {
+        let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
+        tracing::warn!(
+            "a trip latched before the restart holds ({}): the outputs stay at the fallback until the reset",
+            ids.join(", ")
+        );
+        emit(json!({"event": "trip_restored", "record": trip}));
+    }
+}
+
+/// Writes the safe outputs to the plant on stopping and reports the stop (log, tap,
+/// `stopped` event with the diagnoses).
+async fn stop_report(
+    client: &mut PeerClient,
+    clock: Clock,
+    safe: &Bits,
+    diagnoses: &[vigie_core::pop::Diagnosis],
+    tap: Option<&Tap>,
+    emit: Emit<'_>,
+) {
+    let written = match client {
+        PeerClient::Plant(w) => w.write(clock.now(), safe).await.is_ok(),
         PeerClient::Monitor(_) => false,
     };
     tracing::info!(
@@ -1138,13 +1224,11 @@ pub(crate) async fn gateway(
             "not written (plant unreachable)"
         }
     );
-    if let Some(t) = &tap {
+    if let Some(t) = tap {
         t.update(|s| s.running = false);
     }
     emit(json!({
-        "event": "stopped", "outputs": bits_text(&safe), "written": written,
+        "event": "stopped", "outputs": bits_text(safe), "written": written,
         "diagnoses": diagnoses,
     }));
-    drop(server);
-    Ok(())
 }
