@@ -243,10 +243,6 @@ pub fn ron_field<'a>(
 /// strings, characters and nested comments; it does not validate (the parser does),
 /// and on a text the parser would reject it returns what it could see, never panics.
 pub fn ron_fields(text: &str) -> Vec<RonField> {
-    struct Open {
-        at: usize,
-        field: Option<usize>,
-    }
     let b = text.as_bytes();
     let mut out: Vec<RonField> = Vec::new();
     let mut stack = vec![Open { at: 0, field: None }];
@@ -254,13 +250,6 @@ pub fn ron_fields(text: &str) -> Vec<RonField> {
     let mut awaiting: Option<usize> = None;
     let mut last_end = 0;
     let mut i = 0;
-    let finish = |out: &mut Vec<RonField>, open: &mut Open, last_end: usize| {
-        if let Some(k) = open.field.take()
-            && let Some(f) = out.get_mut(k)
-        {
-            f.value.end = last_end.max(f.value.start);
-        }
-    };
     while i < b.len() {
         let c = b[i];
         // Whitespace and comments are not tokens.
@@ -310,18 +299,8 @@ pub fn ron_fields(text: &str) -> Vec<RonField> {
             }
             c if c.is_ascii_digit() => i = skip_number(b, i),
             c if c.is_ascii_alphabetic() || c == b'_' => {
-                let mut name_start = i;
-                if c == b'r'
-                    && b.get(i + 1) == Some(&b'#')
-                    && b.get(i + 2)
-                        .is_some_and(|&d| d.is_ascii_alphabetic() || d == b'_')
-                {
-                    name_start = i + 2;
-                }
-                i = name_start;
-                while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
-                    i += 1;
-                }
+                let name_start;
+                (name_start, i) = scan_name(b, i);
                 let colon = skip_trivia(b, i);
                 if b.get(colon) == Some(&b':') && b.get(colon + 1) != Some(&b':') {
                     let path = stack
@@ -361,11 +340,49 @@ pub fn ron_fields(text: &str) -> Vec<RonField> {
     while let Some(mut open) = stack.pop() {
         finish(&mut out, &mut open, last_end);
     }
-    // Lines and columns of the values.
+    set_lines_and_columns(text, &mut out);
+    out
+}
+
+/// An open bracket of the RON scan and the field whose value it holds, if any.
+struct Open {
+    at: usize,
+    field: Option<usize>,
+}
+
+/// Ends the value of the open field, if any, at the end of the last token.
+fn finish(out: &mut [RonField], open: &mut Open, last_end: usize) {
+    if let Some(k) = open.field.take()
+        && let Some(f) = out.get_mut(k)
+    {
+        f.value.end = last_end.max(f.value.start);
+    }
+}
+
+/// Scans an identifier at `i` (a raw `r#name` included): its name's start and its end.
+fn scan_name(b: &[u8], i: usize) -> (usize, usize) {
+    let c = b[i];
+    let mut name_start = i;
+    if c == b'r'
+        && b.get(i + 1) == Some(&b'#')
+        && b.get(i + 2)
+            .is_some_and(|&d| d.is_ascii_alphabetic() || d == b'_')
+    {
+        name_start = i + 2;
+    }
+    let mut i = name_start;
+    while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+        i += 1;
+    }
+    (name_start, i)
+}
+
+/// Lines and columns of the values.
+fn set_lines_and_columns(text: &str, out: &mut [RonField]) {
     let line_starts: Vec<usize> = std::iter::once(0)
         .chain(text.match_indices('\n').map(|(k, _)| k + 1))
         .collect();
-    for f in &mut out {
+    for f in out {
         let line = line_starts.partition_point(|&s| s <= f.value.start);
         let from = line_starts.get(line.wrapping_sub(1)).copied().unwrap_or(0);
         f.line = line.max(1);
@@ -374,7 +391,6 @@ pub fn ron_fields(text: &str) -> Vec<RonField> {
             .map_or(0, |s| s.chars().count())
             + 1;
     }
-    out
 }
 
 fn skip_line_comment(b: &[u8], i: usize) -> usize {

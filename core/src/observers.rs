@@ -147,35 +147,7 @@ impl Observers {
         // Expressions are resolved before any observer is declared: observers read
         // inputs, not each other.
         let resolve = |what: &str, id: &str, text: &str, problems: &mut Vec<Problem>| {
-            let dnf = expr::parse_str(text).and_then(|e| e.to_dnf(symbols));
-            match dnf {
-                Ok(d) => {
-                    if d.iter().flatten().any(|l| {
-                        (l.var.space == Space::Output && !l.var.prev)
-                            || l.var.space == Space::Observer
-                    }) {
-                        problems.push(Problem::error(
-                            codes::OBSERVER_READS_FORBIDDEN.id,
-                            format!("observer `{id}`: `{what}` may read inputs, previous outputs and auxiliaries only"),
-                            Some(Location::new(file, 1, 1)),
-                        ));
-                        None
-                    } else {
-                        Some(expr::simplify(&d))
-                    }
-                }
-                Err(e) => {
-                    problems.push(Problem::error(
-                        codes::OBSERVER_EXPRESSION_INVALID.id,
-                        format!(
-                            "observer `{id}`: `{what}`: {} (column {})",
-                            e.message, e.span.column
-                        ),
-                        Some(Location::new(file, 1, 1)),
-                    ));
-                    None
-                }
-            }
+            resolve_expr(symbols, file, what, id, text, problems)
         };
         for def in defs {
             let c = match &def.rule {
@@ -337,6 +309,45 @@ impl Observers {
     pub fn set_counts(&mut self, counts: &[u32]) {
         for (c, v) in self.counts.iter_mut().zip(counts) {
             *c = *v;
+        }
+    }
+}
+
+/// Parses one observer expression to a simplified DNF, rejecting forbidden reads.
+fn resolve_expr(
+    symbols: &Symbols,
+    file: &Path,
+    what: &str,
+    id: &str,
+    text: &str,
+    problems: &mut Vec<Problem>,
+) -> Option<Dnf> {
+    let dnf = expr::parse_str(text).and_then(|e| e.to_dnf(symbols));
+    match dnf {
+        Ok(d) => {
+            if d.iter().flatten().any(|l| {
+                (l.var.space == Space::Output && !l.var.prev) || l.var.space == Space::Observer
+            }) {
+                problems.push(Problem::error(
+                        codes::OBSERVER_READS_FORBIDDEN.id,
+                        format!("observer `{id}`: `{what}` may read inputs, previous outputs and auxiliaries only"),
+                        Some(Location::new(file, 1, 1)),
+                    ));
+                None
+            } else {
+                Some(expr::simplify(&d))
+            }
+        }
+        Err(e) => {
+            problems.push(Problem::error(
+                codes::OBSERVER_EXPRESSION_INVALID.id,
+                format!(
+                    "observer `{id}`: `{what}`: {} (column {})",
+                    e.message, e.span.column
+                ),
+                Some(Location::new(file, 1, 1)),
+            ));
+            None
         }
     }
 }

@@ -144,41 +144,7 @@ impl Emulator {
         }
         let parts = model::build_parts(layout);
         let table = parts.len() - 1;
-        let part_index = |id: &str| {
-            if id == layout.table.id {
-                Some(table)
-            } else {
-                layout.conveyors.iter().position(|c| c.id == id)
-            }
-        };
-        let mut probes = vec![Vec::new(); parts.len()];
-        let mut angles = Vec::new();
-        let mut sensor_plant = Vec::new();
-        for (k, s) in layout.sensors.iter().enumerate() {
-            sensor_plant.push(plant.input(&s.id).unwrap_or(usize::MAX));
-            match &s.kind {
-                SensorKind::Presence { part, at_mm, beam } => {
-                    let Some(p) = part_index(part) else { continue };
-                    let at = if p == table {
-                        (at_mm + layout.table.half_length_mm) * 1000
-                    } else {
-                        at_mm * 1000
-                    };
-                    let min_height = match beam {
-                        Beam::Low => 0,
-                        Beam::High => layout.high_beam_mm,
-                    };
-                    probes[p].push(Probe {
-                        sensor: k as u8,
-                        at,
-                        min_height,
-                    });
-                }
-                SensorKind::Angle { min_mdeg, max_mdeg } => {
-                    angles.push((k as u8, *min_mdeg as i64 * 1000, *max_mdeg as i64 * 1000));
-                }
-            }
-        }
+        let (probes, angles, sensor_plant) = sensor_probes(layout, plant, table, parts.len());
         let t = &layout.table;
         let role_plant = layout
             .conveyors
@@ -535,6 +501,49 @@ impl Emulator {
             }
         };
     }
+}
+
+/// Presence probes per part, angle windows `(sensor, min, max)`, and each sensor's plant input.
+type SensorPlacement = (Vec<Vec<Probe>>, Vec<(u8, i64, i64)>, Vec<usize>);
+
+/// Places each sensor: presence probes per part, angle windows, and its plant input.
+fn sensor_probes(layout: &Layout, plant: &Plant, table: usize, n_parts: usize) -> SensorPlacement {
+    let part_index = |id: &str| {
+        if id == layout.table.id {
+            Some(table)
+        } else {
+            layout.conveyors.iter().position(|c| c.id == id)
+        }
+    };
+    let mut probes = vec![Vec::new(); n_parts];
+    let mut angles = Vec::new();
+    let mut sensor_plant = Vec::new();
+    for (k, s) in layout.sensors.iter().enumerate() {
+        sensor_plant.push(plant.input(&s.id).unwrap_or(usize::MAX));
+        match &s.kind {
+            SensorKind::Presence { part, at_mm, beam } => {
+                let Some(p) = part_index(part) else { continue };
+                let at = if p == table {
+                    (at_mm + layout.table.half_length_mm) * 1000
+                } else {
+                    at_mm * 1000
+                };
+                let min_height = match beam {
+                    Beam::Low => 0,
+                    Beam::High => layout.high_beam_mm,
+                };
+                probes[p].push(Probe {
+                    sensor: k as u8,
+                    at,
+                    min_height,
+                });
+            }
+            SensorKind::Angle { min_mdeg, max_mdeg } => {
+                angles.push((k as u8, *min_mdeg as i64 * 1000, *max_mdeg as i64 * 1000));
+            }
+        }
+    }
+    (probes, angles, sensor_plant)
 }
 
 #[cfg(test)]

@@ -354,40 +354,47 @@ impl GatewayConfig {
                 ));
             }
         }
-        if let Some(s) = &config.server {
-            if !(1..=247).contains(&s.unit) {
-                problems.push(Problem::error(
-                    codes::GATEWAY_UNIT_ID.id,
-                    format!(
-                        "unit {} cannot be served: a Modbus unit id is 1 to 247 (0 is broadcast, 248 to 255 are reserved)",
-                        s.unit
-                    ),
-                    at("unit"),
-                ));
-            }
-            if s.max_connections == 0 {
-                problems.push(Problem::error(
-                    codes::GATEWAY_MAX_CONNECTIONS.id,
-                    "max_connections must be at least 1 (the PLC's connection)",
-                    at("max_connections"),
-                ));
-            }
-            if s.idle_timeout_ms <= config.link_timeout().0 {
-                problems.push(Problem::error(
-                    codes::GATEWAY_IDLE_TIMEOUT.id,
-                    format!(
-                        "idle_timeout_ms ({}) must be longer than the link timeout ({} ms): a PLC would be disconnected before it is declared lost",
-                        s.idle_timeout_ms,
-                        config.link_timeout().0
-                    ),
-                    at("idle_timeout_ms"),
-                ));
-            }
-        }
+        config.check_server(&mut problems, text, file);
         if problems.is_empty() {
             Ok(config)
         } else {
             Err(problems)
+        }
+    }
+
+    /// Checks the server section's unit id, connection limit and idle timeout.
+    fn check_server(&self, problems: &mut Vec<Problem>, text: &str, file: &Path) {
+        let at = |n: &str| Some(super::iomap::locate(text, file, n));
+        let Some(s) = &self.server else {
+            return;
+        };
+        if !(1..=247).contains(&s.unit) {
+            problems.push(Problem::error(
+                codes::GATEWAY_UNIT_ID.id,
+                format!(
+                    "unit {} cannot be served: a Modbus unit id is 1 to 247 (0 is broadcast, 248 to 255 are reserved)",
+                    s.unit
+                ),
+                at("unit"),
+            ));
+        }
+        if s.max_connections == 0 {
+            problems.push(Problem::error(
+                codes::GATEWAY_MAX_CONNECTIONS.id,
+                "max_connections must be at least 1 (the PLC's connection)",
+                at("max_connections"),
+            ));
+        }
+        if s.idle_timeout_ms <= self.link_timeout().0 {
+            problems.push(Problem::error(
+                codes::GATEWAY_IDLE_TIMEOUT.id,
+                format!(
+                    "idle_timeout_ms ({}) must be longer than the link timeout ({} ms): a PLC would be disconnected before it is declared lost",
+                    s.idle_timeout_ms,
+                    self.link_timeout().0
+                ),
+                at("idle_timeout_ms"),
+            ));
         }
     }
 

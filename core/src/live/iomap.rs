@@ -251,30 +251,15 @@ impl IoMap {
                 .max_age_ms
                 .or(file.max_age_ms)
                 .unwrap_or_else(|| poll.saturating_mul(3));
-            if point.bit > 15 {
-                errors.push(Problem::error(
-                    codes::IO_MAP_BIT.id,
-                    format!("`{}`: register bit {} is past 15", e.signal, point.bit),
-                    loc.clone(),
-                ));
-            }
-            if poll == 0 {
-                errors.push(Problem::error(
-                    codes::IO_MAP_POLL.id,
-                    format!("`{}`: poll_ms must be at least 1", e.signal),
-                    loc.clone(),
-                ));
-            }
-            if max_age < poll {
-                warnings.push(Problem::warning(
-                    codes::IO_MAP_MAX_AGE.id,
-                    format!(
-                        "`{}`: max_age_ms {max_age} is below the poll period {poll}: the value will be stale between polls",
-                        e.signal
-                    ),
-                    loc.clone(),
-                ));
-            }
+            check_entry(
+                &e.signal,
+                point,
+                poll,
+                max_age,
+                &loc,
+                &mut errors,
+                &mut warnings,
+            );
             if let Some(other) = taken.insert(point, e.signal.clone()) {
                 errors.push(Problem::error(
                     codes::IO_MAP_SHARED_POINT.id,
@@ -320,21 +305,7 @@ impl IoMap {
                 *slot = Some(mapped);
             }
         }
-        let missing: Vec<&str> = plant
-            .inputs
-            .iter()
-            .zip(&inputs)
-            .chain(plant.outputs.iter().zip(&outputs))
-            .filter(|(_, m)| m.is_none())
-            .map(|(s, _)| s.id.as_str())
-            .collect();
-        if !missing.is_empty() {
-            errors.push(Problem::error(
-                codes::IO_MAP_UNMAPPED.id,
-                format!("signals not mapped: {}", missing.join(", ")),
-                Some(Location::new(path, 1, 1)),
-            ));
-        }
+        check_unmapped(plant, &inputs, &outputs, path, &mut errors);
         if !errors.is_empty() {
             errors.extend(warnings);
             return Err(errors);
@@ -361,6 +332,67 @@ impl IoMap {
     /// Staleness bounds of the inputs, in input order.
     pub fn input_bounds(&self) -> Vec<Millis> {
         self.inputs.iter().map(|m| m.max_age).collect()
+    }
+}
+
+/// Checks one entry's register bit, poll period and maximum age.
+fn check_entry(
+    signal: &str,
+    point: Point,
+    poll: u64,
+    max_age: u64,
+    loc: &Option<Location>,
+    errors: &mut Vec<Problem>,
+    warnings: &mut Vec<Problem>,
+) {
+    if point.bit > 15 {
+        errors.push(Problem::error(
+            codes::IO_MAP_BIT.id,
+            format!("`{}`: register bit {} is past 15", signal, point.bit),
+            loc.clone(),
+        ));
+    }
+    if poll == 0 {
+        errors.push(Problem::error(
+            codes::IO_MAP_POLL.id,
+            format!("`{}`: poll_ms must be at least 1", signal),
+            loc.clone(),
+        ));
+    }
+    if max_age < poll {
+        warnings.push(Problem::warning(
+            codes::IO_MAP_MAX_AGE.id,
+            format!(
+                "`{}`: max_age_ms {max_age} is below the poll period {poll}: the value will be stale between polls",
+                signal
+            ),
+            loc.clone(),
+        ));
+    }
+}
+
+/// Reports the plant's signals that the map leaves unmapped.
+fn check_unmapped(
+    plant: &Plant,
+    inputs: &[Option<Mapped>],
+    outputs: &[Option<Mapped>],
+    path: &Path,
+    errors: &mut Vec<Problem>,
+) {
+    let missing: Vec<&str> = plant
+        .inputs
+        .iter()
+        .zip(inputs)
+        .chain(plant.outputs.iter().zip(outputs))
+        .filter(|(_, m)| m.is_none())
+        .map(|(s, _)| s.id.as_str())
+        .collect();
+    if !missing.is_empty() {
+        errors.push(Problem::error(
+            codes::IO_MAP_UNMAPPED.id,
+            format!("signals not mapped: {}", missing.join(", ")),
+            Some(Location::new(path, 1, 1)),
+        ));
     }
 }
 
