@@ -316,126 +316,13 @@ impl CompiledProgram {
         let at_id = |id: &str| Some(origin.location(origin.find_id(id)));
 
         // Declarations: steps, memories, timers, panel.
-        let mut step_index: BTreeMap<String, u16> = BTreeMap::new();
-        let mut steps = Vec::new();
-        let declare = |name: &str,
-                       what: &str,
-                       loc: Option<Location>,
-                       problems: &mut Vec<Problem>,
-                       symbols: &mut Symbols|
-         -> Option<u32> {
-            if !is_valid_name(name) {
-                problems.push(Problem::error(
-                    codes::PROGRAM_NAME_INVALID.id,
-                    format!("{what} `{name}`: names are letters, digits and `_`"),
-                    loc,
-                ));
-                return None;
-            }
-            match symbols.declare(name, Space::Aux) {
-                Ok(i) => Some(i),
-                Err((space, _)) => {
-                    let other = if space == Space::Aux {
-                        "another step, memory, timer or panel input"
-                    } else {
-                        "a plant signal"
-                    };
-                    problems.push(Problem::error(
-                        codes::PROGRAM_NAME_TAKEN.id,
-                        format!("{what} `{name}` has the name of {other}"),
-                        loc,
-                    ));
-                    None
-                }
-            }
-        };
-        let mut chart_names = BTreeMap::new();
-        for (ci, chart) in program.charts.iter().enumerate() {
-            if chart_names.insert(chart.name.clone(), ci).is_some() {
-                problems.push(Problem::error(
-                    codes::PROGRAM_CHART_DUPLICATE.id,
-                    format!("chart `{}` is declared twice", chart.name),
-                    Some(origin.location(origin.find_quoted(&chart.name, 0))),
-                ));
-            }
-            if !chart.steps.iter().any(|s| s.initial) {
-                problems.push(Problem::error(
-                    codes::PROGRAM_NO_INITIAL_STEP.id,
-                    format!("chart `{}` has no initial step", chart.name),
-                    Some(origin.location(origin.find_quoted(&chart.name, 0))),
-                ));
-            }
-            for step in &chart.steps {
-                if let Some(aux) = declare(
-                    &step.id,
-                    &format!("chart `{}`: step", chart.name),
-                    at_id(&step.id),
-                    &mut problems,
-                    &mut symbols,
-                ) {
-                    if steps.len() >= MAX_ELEMENTS {
-                        continue;
-                    }
-                    step_index.insert(
-                        step.id.clone(),
-                        u16::try_from(steps.len()).unwrap_or(u16::MAX),
-                    );
-                    steps.push(StepInfo {
-                        id: step.id.clone(),
-                        chart: ci,
-                        initial: step.initial,
-                        aux,
-                    });
-                }
-            }
-        }
-        let mut memory_aux = Vec::new();
-        let mut memory_index = BTreeMap::new();
-        for m in &program.memories {
-            let loc = Some(origin.location(origin.find_quoted(m, 0)));
-            if let Some(aux) = declare(m, "memory", loc, &mut problems, &mut symbols) {
-                memory_index.insert(
-                    m.clone(),
-                    u32::try_from(memory_aux.len()).unwrap_or(u32::MAX),
-                );
-                memory_aux.push(aux);
-            }
-        }
-        let mut timers = Vec::new();
-        for (id, step, ms) in &program.timers {
-            let loc = Some(origin.location(origin.find_quoted(id, 0)));
-            let Some(aux) = declare(id, "timer", loc.clone(), &mut problems, &mut symbols) else {
-                continue;
-            };
-            match step_index.get(step) {
-                Some(&s) => timers.push(TimerInfo {
-                    step: s,
-                    ms: *ms,
-                    aux,
-                }),
-                None => problems.push(Problem::error(
-                    codes::PROGRAM_TIMER_UNKNOWN_STEP.id,
-                    format!("timer `{id}`: unknown step `{step}`"),
-                    loc,
-                )),
-            }
-        }
-        let mut panel_aux = Vec::new();
-        for p in &program.panel {
-            let loc = Some(origin.location(origin.find_quoted(p, 0)));
-            if let Some(aux) = declare(p, "panel input", loc, &mut problems, &mut symbols) {
-                panel_aux.push(aux);
-            }
-        }
-        for (what, button) in [("start", &program.start), ("stop", &program.stop)] {
-            if let Some(b) = button.as_ref().filter(|b| !program.panel.contains(b)) {
-                problems.push(Problem::error(
-                    codes::PROGRAM_BUTTON_NOT_ON_PANEL.id,
-                    format!("`{what}`: `{b}` is not one of the panel's buttons"),
-                    Some(origin.location(origin.find_quoted(b, 0))),
-                ));
-            }
-        }
+        let (step_index, steps) = declare_steps(program, origin, &mut problems, &mut symbols);
+        let Others {
+            memory_aux,
+            memory_index,
+            timers,
+            panel_aux,
+        } = declare_others(program, origin, &step_index, &mut problems, &mut symbols);
 
         let target_slot = |name: &str| -> Option<usize> {
             if let Some(o) = plant.output(name) {
@@ -470,106 +357,18 @@ impl CompiledProgram {
         }
 
         // Expressions.
-        let compile_expr = |text: &str,
-                            start: Option<usize>,
-                            what: &str,
-                            problems: &mut Vec<Problem>|
-         -> Option<Dnf> {
-            let (line, column) = start.map_or((1, 1), |s| line_col(&origin.text, s));
-            let span = Span { line, column };
-            match expr::parse(text, span).and_then(|e| e.to_dnf(&symbols)) {
-                Ok(d) => {
-                    if let Some(l) = d.iter().flatten().find(|l| l.var.space == Space::Observer) {
-                        problems.push(Problem::error(
-                            codes::PROGRAM_READS_OBSERVER.id,
-                            format!(
-                                "{what}: a program cannot read the observer `{}`",
-                                symbols.name(l.var.space, l.var.index)
-                            ),
-                            Some(Location::new(&origin.file, line, column)),
-                        ));
-                        return None;
-                    }
-                    Some(d)
-                }
-                Err(e) => {
-                    problems.push(Problem::error(
-                        codes::PROGRAM_EXPRESSION_INVALID.id,
-                        format!("{what}: {}", e.message),
-                        Some(Location::new(&origin.file, e.span.line, e.span.column)),
-                    ));
-                    None
-                }
-            }
-        };
-        let mut transitions = Vec::new();
-        let mut transition_ids = BTreeMap::new();
-        for (ci, chart) in program.charts.iter().enumerate() {
-            for t in &chart.transitions {
-                let what = format!("chart `{}`, transition `{}`", chart.name, t.id);
-                if transition_ids.insert(t.id.clone(), ()).is_some()
-                    || step_index.contains_key(&t.id)
-                {
-                    problems.push(Problem::error(
-                        codes::PROGRAM_TRANSITION_ID_TAKEN.id,
-                        format!("{what}: the id is used twice"),
-                        at_id(&t.id),
-                    ));
-                }
-                let ends = |list: &[String], dir: &str, problems: &mut Vec<Problem>| -> Vec<u16> {
-                    let mut out = Vec::new();
-                    if list.is_empty() {
-                        problems.push(Problem::error(
-                            codes::PROGRAM_TRANSITION_NO_STEP.id,
-                            format!("{what}: no {dir} step"),
-                            at_id(&t.id),
-                        ));
-                    }
-                    for s in list {
-                        match step_index.get(s) {
-                            Some(&i)
-                                if steps
-                                    .get(i as usize)
-                                    .is_some_and(|st: &StepInfo| st.chart == ci) =>
-                            {
-                                out.push(i)
-                            }
-                            Some(_) => problems.push(Problem::error(
-                                codes::PROGRAM_TRANSITION_OTHER_CHART.id,
-                                format!("{what}: {dir} step `{s}` belongs to another chart"),
-                                at_id(&t.id),
-                            )),
-                            None => problems.push(Problem::error(
-                                codes::PROGRAM_TRANSITION_UNKNOWN_STEP.id,
-                                format!("{what}: unknown {dir} step `{s}`"),
-                                at_id(&t.id),
-                            )),
-                        }
-                    }
-                    out.sort_unstable();
-                    out.dedup();
-                    out
-                };
-                let from = ends(&t.from, "upstream", &mut problems);
-                let to = ends(&t.to, "downstream", &mut problems);
-                let condition = compile_expr(
-                    &t.condition,
-                    origin.condition_start(&t.id),
-                    &what,
-                    &mut problems,
-                );
-                if let Some(condition) = condition.filter(|_| transitions.len() < MAX_ELEMENTS) {
-                    transitions.push(TransitionInfo {
-                        id: t.id.clone(),
-                        from,
-                        to,
-                        condition,
-                        cond: Cond::default(),
-                        enable: Cond::default(),
-                    });
-                }
-            }
-        }
+        let compile_expr =
+            |text: &str, start: Option<usize>, what: &str, problems: &mut Vec<Problem>| {
+                compile_expr(origin, &symbols, text, start, what, problems)
+            };
+        let mut transitions = compile_transitions(
+            program,
+            origin,
+            &symbols,
+            &step_index,
+            &steps,
+            &mut problems,
+        );
         let mut equations = Vec::new();
         let mut eq_targets = BTreeMap::new();
         for (target, text) in &program.equations {
@@ -602,20 +401,7 @@ impl CompiledProgram {
             return Err(problems);
         }
         let layout = Layout::new(symbols.sizes());
-        let mut conds = Conds::default();
-        for t in &mut transitions {
-            t.cond = conds.add(&t.condition, &layout);
-            let vars: Vec<(usize, u64)> = t
-                .from
-                .iter()
-                .filter_map(|&s| steps.get(s as usize))
-                .map(|st| layout.locate(Space::Aux, st.aux as usize, false))
-                .collect();
-            t.enable = conds.add_all(&vars);
-        }
-        for e in &mut equations {
-            e.cond = conds.add(&e.dnf, &layout);
-        }
+        let conds = link_conds(&mut transitions, &mut equations, &steps, &layout);
         Ok(Self {
             layout,
             conds,
@@ -661,4 +447,336 @@ impl CompiledProgram {
                 .map_or("?", |&aux| self.symbols.name(Space::Aux, aux))
         }
     }
+}
+
+/// Declares an auxiliary variable for a step, memory, timer or panel input; reports a
+/// bad or taken name.
+fn declare(
+    name: &str,
+    what: &str,
+    loc: Option<Location>,
+    problems: &mut Vec<Problem>,
+    symbols: &mut Symbols,
+) -> Option<u32> {
+    if !is_valid_name(name) {
+        problems.push(Problem::error(
+            codes::PROGRAM_NAME_INVALID.id,
+            format!("{what} `{name}`: names are letters, digits and `_`"),
+            loc,
+        ));
+        return None;
+    }
+    match symbols.declare(name, Space::Aux) {
+        Ok(i) => Some(i),
+        Err((space, _)) => {
+            let other = if space == Space::Aux {
+                "another step, memory, timer or panel input"
+            } else {
+                "a plant signal"
+            };
+            problems.push(Problem::error(
+                codes::PROGRAM_NAME_TAKEN.id,
+                format!("{what} `{name}` has the name of {other}"),
+                loc,
+            ));
+            None
+        }
+    }
+}
+
+/// Declares the charts' steps, checking chart names and initial steps.
+fn declare_steps(
+    program: &Program,
+    origin: &Origin,
+    problems: &mut Vec<Problem>,
+    symbols: &mut Symbols,
+) -> (BTreeMap<String, u16>, Vec<StepInfo>) {
+    let at_id = |id: &str| Some(origin.location(origin.find_id(id)));
+    let mut step_index: BTreeMap<String, u16> = BTreeMap::new();
+    let mut steps = Vec::new();
+    let mut chart_names = BTreeMap::new();
+    for (ci, chart) in program.charts.iter().enumerate() {
+        if chart_names.insert(chart.name.clone(), ci).is_some() {
+            problems.push(Problem::error(
+                codes::PROGRAM_CHART_DUPLICATE.id,
+                format!("chart `{}` is declared twice", chart.name),
+                Some(origin.location(origin.find_quoted(&chart.name, 0))),
+            ));
+        }
+        if !chart.steps.iter().any(|s| s.initial) {
+            problems.push(Problem::error(
+                codes::PROGRAM_NO_INITIAL_STEP.id,
+                format!("chart `{}` has no initial step", chart.name),
+                Some(origin.location(origin.find_quoted(&chart.name, 0))),
+            ));
+        }
+        for step in &chart.steps {
+            if let Some(aux) = declare(
+                &step.id,
+                &format!("chart `{}`: step", chart.name),
+                at_id(&step.id),
+                problems,
+                symbols,
+            ) {
+                if steps.len() >= MAX_ELEMENTS {
+                    continue;
+                }
+                step_index.insert(
+                    step.id.clone(),
+                    u16::try_from(steps.len()).unwrap_or(u16::MAX),
+                );
+                steps.push(StepInfo {
+                    id: step.id.clone(),
+                    chart: ci,
+                    initial: step.initial,
+                    aux,
+                });
+            }
+        }
+    }
+    (step_index, steps)
+}
+
+/// The memories, timers and panel inputs of a program, declared.
+struct Others {
+    memory_aux: Vec<u32>,
+    memory_index: BTreeMap<String, u32>,
+    timers: Vec<TimerInfo>,
+    panel_aux: Vec<u32>,
+}
+
+/// Declares memories, timers and panel inputs, and checks the start and stop buttons.
+fn declare_others(
+    program: &Program,
+    origin: &Origin,
+    step_index: &BTreeMap<String, u16>,
+    problems: &mut Vec<Problem>,
+    symbols: &mut Symbols,
+) -> Others {
+    let mut memory_aux = Vec::new();
+    let mut memory_index = BTreeMap::new();
+    for m in &program.memories {
+        let loc = Some(origin.location(origin.find_quoted(m, 0)));
+        if let Some(aux) = declare(m, "memory", loc, problems, symbols) {
+            memory_index.insert(
+                m.clone(),
+                u32::try_from(memory_aux.len()).unwrap_or(u32::MAX),
+            );
+            memory_aux.push(aux);
+        }
+    }
+    let mut timers = Vec::new();
+    for (id, step, ms) in &program.timers {
+        let loc = Some(origin.location(origin.find_quoted(id, 0)));
+        let Some(aux) = declare(id, "timer", loc.clone(), problems, symbols) else {
+            continue;
+        };
+        match step_index.get(step) {
+            Some(&s) => timers.push(TimerInfo {
+                step: s,
+                ms: *ms,
+                aux,
+            }),
+            None => problems.push(Problem::error(
+                codes::PROGRAM_TIMER_UNKNOWN_STEP.id,
+                format!("timer `{id}`: unknown step `{step}`"),
+                loc,
+            )),
+        }
+    }
+    let mut panel_aux = Vec::new();
+    for p in &program.panel {
+        let loc = Some(origin.location(origin.find_quoted(p, 0)));
+        if let Some(aux) = declare(p, "panel input", loc, problems, symbols) {
+            panel_aux.push(aux);
+        }
+    }
+    for (what, button) in [("start", &program.start), ("stop", &program.stop)] {
+        if let Some(b) = button.as_ref().filter(|b| !program.panel.contains(b)) {
+            problems.push(Problem::error(
+                codes::PROGRAM_BUTTON_NOT_ON_PANEL.id,
+                format!("`{what}`: `{b}` is not one of the panel's buttons"),
+                Some(origin.location(origin.find_quoted(b, 0))),
+            ));
+        }
+    }
+    Others {
+        memory_aux,
+        memory_index,
+        timers,
+        panel_aux,
+    }
+}
+
+/// Parses and resolves an expression of the program, which may not read observers.
+fn compile_expr(
+    origin: &Origin,
+    symbols: &Symbols,
+    text: &str,
+    start: Option<usize>,
+    what: &str,
+    problems: &mut Vec<Problem>,
+) -> Option<Dnf> {
+    let (line, column) = start.map_or((1, 1), |s| line_col(&origin.text, s));
+    let span = Span { line, column };
+    match expr::parse(text, span).and_then(|e| e.to_dnf(symbols)) {
+        Ok(d) => {
+            if let Some(l) = d.iter().flatten().find(|l| l.var.space == Space::Observer) {
+                problems.push(Problem::error(
+                    codes::PROGRAM_READS_OBSERVER.id,
+                    format!(
+                        "{what}: a program cannot read the observer `{}`",
+                        symbols.name(l.var.space, l.var.index)
+                    ),
+                    Some(Location::new(&origin.file, line, column)),
+                ));
+                return None;
+            }
+            Some(d)
+        }
+        Err(e) => {
+            problems.push(Problem::error(
+                codes::PROGRAM_EXPRESSION_INVALID.id,
+                format!("{what}: {}", e.message),
+                Some(Location::new(&origin.file, e.span.line, e.span.column)),
+            ));
+            None
+        }
+    }
+}
+
+/// Where a transition's ends are checked: its description, place, chart and the steps.
+struct EndsContext<'a> {
+    what: &'a str,
+    at: Option<Location>,
+    chart: usize,
+    step_index: &'a BTreeMap<String, u16>,
+    steps: &'a [StepInfo],
+}
+
+/// Resolves a transition's upstream or downstream steps, sorted and deduplicated.
+fn transition_ends(
+    list: &[String],
+    dir: &str,
+    cx: &EndsContext<'_>,
+    problems: &mut Vec<Problem>,
+) -> Vec<u16> {
+    let EndsContext {
+        what,
+        chart: ci,
+        step_index,
+        steps,
+        ..
+    } = *cx;
+    let mut out = Vec::new();
+    if list.is_empty() {
+        problems.push(Problem::error(
+            codes::PROGRAM_TRANSITION_NO_STEP.id,
+            format!("{what}: no {dir} step"),
+            cx.at.clone(),
+        ));
+    }
+    for s in list {
+        match step_index.get(s) {
+            Some(&i)
+                if steps
+                    .get(i as usize)
+                    .is_some_and(|st: &StepInfo| st.chart == ci) =>
+            {
+                out.push(i)
+            }
+            Some(_) => problems.push(Problem::error(
+                codes::PROGRAM_TRANSITION_OTHER_CHART.id,
+                format!("{what}: {dir} step `{s}` belongs to another chart"),
+                cx.at.clone(),
+            )),
+            None => problems.push(Problem::error(
+                codes::PROGRAM_TRANSITION_UNKNOWN_STEP.id,
+                format!("{what}: unknown {dir} step `{s}`"),
+                cx.at.clone(),
+            )),
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Compiles the charts' transitions: ids, ends and conditions.
+fn compile_transitions(
+    program: &Program,
+    origin: &Origin,
+    symbols: &Symbols,
+    step_index: &BTreeMap<String, u16>,
+    steps: &[StepInfo],
+    problems: &mut Vec<Problem>,
+) -> Vec<TransitionInfo> {
+    let at_id = |id: &str| Some(origin.location(origin.find_id(id)));
+    let compile_expr =
+        |text: &str, start: Option<usize>, what: &str, problems: &mut Vec<Problem>| {
+            compile_expr(origin, symbols, text, start, what, problems)
+        };
+    let mut transitions = Vec::new();
+    let mut transition_ids = BTreeMap::new();
+    for (ci, chart) in program.charts.iter().enumerate() {
+        for t in &chart.transitions {
+            let what = format!("chart `{}`, transition `{}`", chart.name, t.id);
+            if transition_ids.insert(t.id.clone(), ()).is_some() || step_index.contains_key(&t.id) {
+                problems.push(Problem::error(
+                    codes::PROGRAM_TRANSITION_ID_TAKEN.id,
+                    format!("{what}: the id is used twice"),
+                    at_id(&t.id),
+                ));
+            }
+            let cx = EndsContext {
+                what: &what,
+                at: at_id(&t.id),
+                chart: ci,
+                step_index,
+                steps,
+            };
+            let ends = |list: &[String], dir: &str, problems: &mut Vec<Problem>| {
+                transition_ends(list, dir, &cx, problems)
+            };
+            let from = ends(&t.from, "upstream", problems);
+            let to = ends(&t.to, "downstream", problems);
+            let condition =
+                compile_expr(&t.condition, origin.condition_start(&t.id), &what, problems);
+            if let Some(condition) = condition.filter(|_| transitions.len() < MAX_ELEMENTS) {
+                transitions.push(TransitionInfo {
+                    id: t.id.clone(),
+                    from,
+                    to,
+                    condition,
+                    cond: Cond::default(),
+                    enable: Cond::default(),
+                });
+            }
+        }
+    }
+    transitions
+}
+
+/// Packs the transitions' conditions and enables and the equations' conditions.
+fn link_conds(
+    transitions: &mut [TransitionInfo],
+    equations: &mut [EquationInfo],
+    steps: &[StepInfo],
+    layout: &Layout,
+) -> Conds {
+    let mut conds = Conds::default();
+    for t in transitions.iter_mut() {
+        t.cond = conds.add(&t.condition, layout);
+        let vars: Vec<(usize, u64)> = t
+            .from
+            .iter()
+            .filter_map(|&s| steps.get(s as usize))
+            .map(|st| layout.locate(Space::Aux, st.aux as usize, false))
+            .collect();
+        t.enable = conds.add_all(&vars);
+    }
+    for e in equations.iter_mut() {
+        e.cond = conds.add(&e.dnf, layout);
+    }
+    conds
 }

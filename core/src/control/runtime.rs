@@ -420,6 +420,49 @@ impl ProgramRuntime {
         }
     }
 
+    /// Fires the transitions in `fired` simultaneously: deactivates their sources,
+    /// activates their targets, logs them in the ring and refreshes the timers.
+    fn fire(&mut self, p: &CompiledProgram, now: Millis) {
+        let half = p.layout.half;
+        for &ti in &self.fired {
+            for &s in &p.transitions[ti as usize].from {
+                let a = p.steps[s as usize].aux as usize;
+                let (w, m) = p.layout.locate(Space::Aux, a, false);
+                if let Some(x) = self.state.get_mut(w) {
+                    *x &= !m;
+                }
+            }
+        }
+        for &ti in &self.fired {
+            for &s in &p.transitions[ti as usize].to {
+                let a = p.steps[s as usize].aux as usize;
+                let (w, m) = p.layout.locate(Space::Aux, a, false);
+                let was = self.state.get(w + half).is_some_and(|x| x & m != 0);
+                let is = self.state.get(w).is_some_and(|x| x & m != 0);
+                if !is && !was {
+                    self.activated_at[s as usize] = now;
+                    self.just_activated.set(s as usize, true);
+                }
+                if let Some(x) = self.state.get_mut(w) {
+                    *x |= m;
+                }
+            }
+        }
+        let n = self.ring.len();
+        if n > 0 {
+            let slot = &mut self.ring[self.ring_head];
+            slot.time = now;
+            slot.scan = self.scans;
+            slot.fired.clear();
+            slot.fired.extend_from_slice(&self.fired);
+            self.ring_head = (self.ring_head + 1) % n;
+            self.ring_len = (self.ring_len + 1).min(n);
+        }
+        if !p.timers.is_empty() {
+            self.update_timers();
+        }
+    }
+
     fn run_scan(&mut self, now: Millis, engine: &Frame) {
         self.now = now;
         self.scans += 1;
@@ -478,43 +521,7 @@ impl ProgramRuntime {
         }
         // Fire them simultaneously.
         if !self.fired.is_empty() {
-            for &ti in &self.fired {
-                for &s in &p.transitions[ti as usize].from {
-                    let a = p.steps[s as usize].aux as usize;
-                    let (w, m) = p.layout.locate(Space::Aux, a, false);
-                    if let Some(x) = self.state.get_mut(w) {
-                        *x &= !m;
-                    }
-                }
-            }
-            for &ti in &self.fired {
-                for &s in &p.transitions[ti as usize].to {
-                    let a = p.steps[s as usize].aux as usize;
-                    let (w, m) = p.layout.locate(Space::Aux, a, false);
-                    let was = self.state.get(w + half).is_some_and(|x| x & m != 0);
-                    let is = self.state.get(w).is_some_and(|x| x & m != 0);
-                    if !is && !was {
-                        self.activated_at[s as usize] = now;
-                        self.just_activated.set(s as usize, true);
-                    }
-                    if let Some(x) = self.state.get_mut(w) {
-                        *x |= m;
-                    }
-                }
-            }
-            let n = self.ring.len();
-            if n > 0 {
-                let slot = &mut self.ring[self.ring_head];
-                slot.time = now;
-                slot.scan = self.scans;
-                slot.fired.clear();
-                slot.fired.extend_from_slice(&self.fired);
-                self.ring_head = (self.ring_head + 1) % n;
-                self.ring_len = (self.ring_len + 1).min(n);
-            }
-            if !p.timers.is_empty() {
-                self.update_timers();
-            }
+            self.fire(p, now);
         }
 
         // Actions of the new situation.
