@@ -140,33 +140,7 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
 
     // A sensor of the term the plausibility stage holds (read as possibly either value
     // by the constraint): the sensor's reading, not the program, is the first suspect.
-    for l in c
-        .literals
-        .iter()
-        .filter(|l| l.space == Space::Aux && !l.previous && l.value)
-    {
-        let Some(sensor) = crate::plausibility::suspect_sensor(&l.name) else {
-            continue;
-        };
-        out.push((
-            Item::new(
-                "X414",
-                format!(
-                    "{sensor} is suspect: its reading made an edge the plant's physics does not allow, the plausibility stage holds its last plausible value and {} reads it as possibly either value. Check {sensor} (beam, reflector, cable) before the program.",
-                    c.id
-                ),
-                &[
-                    ("category", "sensor".into()),
-                    ("constraint", c.id.clone()),
-                    ("sensor", sensor.to_string()),
-                ],
-            ),
-            vec![Highlight {
-                element: sensor.to_string(),
-                mark: Mark::Suspect,
-            }],
-        ));
-    }
+    suspect_sensor_items(c, &mut out);
     // (a) sensors of the constraint that changed.
     for (name, from, to) in d
         .inputs
@@ -197,64 +171,7 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
         ));
     }
     // (b) sensors outside the constraint that changed with an actuator of it.
-    if !outputs_changed.is_empty() {
-        let acts: Vec<String> = outputs_changed
-            .iter()
-            .map(|(n, f, t)| format!("{n} {}", edge(*f, *t)))
-            .collect();
-        let outside: Vec<&(String, bool, bool)> = d
-            .inputs
-            .iter()
-            .filter(|(n, _, _)| !sensors.contains(&n.as_str()))
-            .collect();
-        for (name, from, to) in &outside {
-            out.push((
-                Item::new(
-                    "X402",
-                    format!(
-                        "{name} {} in the same cycle as {}; {name} is not part of {}: a receptivity or an output equation using {name} may have driven the actuator.",
-                        edge(*from, *to),
-                        acts.join(", "),
-                        c.id
-                    ),
-                    &[
-                        ("category", "b".into()),
-                        ("constraint", c.id.clone()),
-                        ("sensor", name.clone()),
-                        ("actuators", acts.join(",")),
-                    ],
-                ),
-                vec![Highlight {
-                    element: name.clone(),
-                    mark: Mark::Suspect,
-                }],
-            ));
-        }
-        // (d) no input change at all.
-        if d.inputs.is_empty() && d.observers.is_empty() {
-            out.push((
-                Item::new(
-                    "X404",
-                    format!(
-                        "{} while no input changed: an internal timer or memory of the program probably drove it.",
-                        acts.join(", ")
-                    ),
-                    &[
-                        ("category", "d".into()),
-                        ("constraint", c.id.clone()),
-                        ("actuators", acts.join(",")),
-                    ],
-                ),
-                outputs_changed
-                    .iter()
-                    .map(|(n, _, _)| Highlight {
-                        element: n.clone(),
-                        mark: Mark::Suspect,
-                    })
-                    .collect(),
-            ));
-        }
-    }
+    changed_with_actuators(c, d, &sensors, &outputs_changed, &mut out);
     if !d.observers.is_empty() && d.inputs.is_empty() {
         out.push((
             Item::new(
@@ -301,6 +218,107 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
         highlights,
     ));
     out
+}
+
+/// Items for sensors of the constraint held by the plausibility stage.
+fn suspect_sensor_items(c: &FiredConstraint, out: &mut Vec<Produced>) {
+    for l in c
+        .literals
+        .iter()
+        .filter(|l| l.space == Space::Aux && !l.previous && l.value)
+    {
+        let Some(sensor) = crate::plausibility::suspect_sensor(&l.name) else {
+            continue;
+        };
+        out.push((
+            Item::new(
+                "X414",
+                format!(
+                    "{sensor} is suspect: its reading made an edge the plant's physics does not allow, the plausibility stage holds its last plausible value and {} reads it as possibly either value. Check {sensor} (beam, reflector, cable) before the program.",
+                    c.id
+                ),
+                &[
+                    ("category", "sensor".into()),
+                    ("constraint", c.id.clone()),
+                    ("sensor", sensor.to_string()),
+                ],
+            ),
+            vec![Highlight {
+                element: sensor.to_string(),
+                mark: Mark::Suspect,
+            }],
+        ));
+    }
+}
+
+/// (b) sensors outside the constraint that changed with an actuator of it, and (d) no
+/// input change at all.
+fn changed_with_actuators(
+    c: &FiredConstraint,
+    d: &Delta,
+    sensors: &[&str],
+    outputs_changed: &[&(String, bool, bool)],
+    out: &mut Vec<Produced>,
+) {
+    if outputs_changed.is_empty() {
+        return;
+    }
+    let acts: Vec<String> = outputs_changed
+        .iter()
+        .map(|(n, f, t)| format!("{n} {}", edge(*f, *t)))
+        .collect();
+    let outside: Vec<&(String, bool, bool)> = d
+        .inputs
+        .iter()
+        .filter(|(n, _, _)| !sensors.contains(&n.as_str()))
+        .collect();
+    for (name, from, to) in &outside {
+        out.push((
+            Item::new(
+                "X402",
+                format!(
+                    "{name} {} in the same cycle as {}; {name} is not part of {}: a receptivity or an output equation using {name} may have driven the actuator.",
+                    edge(*from, *to),
+                    acts.join(", "),
+                    c.id
+                ),
+                &[
+                    ("category", "b".into()),
+                    ("constraint", c.id.clone()),
+                    ("sensor", name.clone()),
+                    ("actuators", acts.join(",")),
+                ],
+            ),
+            vec![Highlight {
+                element: name.clone(),
+                mark: Mark::Suspect,
+            }],
+        ));
+    }
+    // (d) no input change at all.
+    if d.inputs.is_empty() && d.observers.is_empty() {
+        out.push((
+            Item::new(
+                "X404",
+                format!(
+                    "{} while no input changed: an internal timer or memory of the program probably drove it.",
+                    acts.join(", ")
+                ),
+                &[
+                    ("category", "d".into()),
+                    ("constraint", c.id.clone()),
+                    ("actuators", acts.join(",")),
+                ],
+            ),
+            outputs_changed
+                .iter()
+                .map(|(n, _, _)| Highlight {
+                    element: n.clone(),
+                    mark: Mark::Suspect,
+                })
+                .collect(),
+        ));
+    }
 }
 
 /// The `expected` field: `A4=1`, or the alternatives `A2=0 or A3=0`.
