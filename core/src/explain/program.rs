@@ -314,99 +314,7 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
     for d in &drivers {
         match d {
             Driver::Action { step, qualifier } => {
-                let chart = v.chart_of_step(step);
-                let newly = !v.before.is_active(step);
-                let activation = v.last_firing(step, true);
-                let action_started = rose && !newly;
-                if newly
-                    || (rose
-                        && activation
-                            .as_ref()
-                            .is_some_and(|(_, t)| v.ms_before(*t) == 0))
-                {
-                    // X408: the transition that activated the step.
-                    if let Some((t, time)) = activation {
-                        let rec = v.receptivity(&t);
-                        let signals = v.transition_signals(&t);
-                        out.push(suspect(
-                            "X408",
-                            (u8::from(v.ms_before(time) > 0), 0),
-                            format!(
-                                "Transition {t} (receptivity `{rec}`) fired {} and activated step {step}, whose action {qualifier} {output} drives {output} ON: the receptivity of {t} is suspect (it reads {}).",
-                                v.when(time),
-                                signals.join(", ")
-                            ),
-                            &[
-                                ("output", output.to_string()),
-                                ("chart", chart),
-                                ("transition", t.clone()),
-                                ("receptivity", rec),
-                                ("signals", join(&signals)),
-                                ("step", step.clone()),
-                                ("qualifier", qualifier.to_string()),
-                                ("ms_before", v.ms_before(time).to_string()),
-                            ],
-                            &v.plant(&signals),
-                        ));
-                        continue;
-                    }
-                }
-                if action_started {
-                    // X409: a delayed action that began while the step was active.
-                    out.push(suspect(
-                        "X409",
-                        (0, 0),
-                        format!(
-                            "Step {step} was already active; its action {qualifier} {output} began to drive {output} ON in the stopping cycle: the qualifier of this action is suspect."
-                        ),
-                        &[
-                            ("output", output.to_string()),
-                            ("chart", chart),
-                            ("step", step.clone()),
-                            ("qualifier", qualifier.to_string()),
-                            ("ms_before", "0".into()),
-                        ],
-                        &[],
-                    ));
-                    continue;
-                }
-                // X412: the step stays active for too long.
-                let exits = v.exits(step);
-                let recs: Vec<String> = exits
-                    .iter()
-                    .map(|t| format!("{t} `{}`", v.receptivity(t)))
-                    .collect();
-                let mut signals: Vec<String> = Vec::new();
-                for t in &exits {
-                    for s in v.transition_signals(t) {
-                        if !signals.contains(&s) {
-                            signals.push(s);
-                        }
-                    }
-                }
-                let since = activation
-                    .as_ref()
-                    .map(|(t, time)| format!(" since {t} fired {}", v.when(*time)))
-                    .unwrap_or_default();
-                out.push(suspect(
-                    "X412",
-                    (1, 1),
-                    format!(
-                        "Step {step} has been active{since} and its action {qualifier} {output} drives {output} ON; the transition(s) leaving it, {}, did not fire: their receptivity is suspect.",
-                        recs.join(", ")
-                    ),
-                    &[
-                        ("output", output.to_string()),
-                        ("chart", chart),
-                        ("step", step.clone()),
-                        ("qualifier", qualifier.to_string()),
-                        ("transition", join(&exits)),
-                        ("receptivity", exits.iter().map(|t| v.receptivity(t)).collect::<Vec<_>>().join(" | ")),
-                        ("signals", join(&signals)),
-                        ("ms_before", activation.map(|(_, t)| v.ms_before(t)).unwrap_or(0).to_string()),
-                    ],
-                    &v.plant(&signals),
-                ));
+                action_forbidden_on(v, output, step, *qualifier, rose, out);
             }
             Driver::Stored { set_by } => {
                 let left: Vec<String> = set_by
@@ -445,6 +353,111 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
             }
         }
     }
+}
+
+/// The suspect for an action of a step that drives the forbidden ON: the transition that
+/// activated the step (X408), the action's qualifier (X409) or the step's exits (X412).
+fn action_forbidden_on(
+    v: &View<'_>,
+    output: &str,
+    step: &str,
+    qualifier: Qualifier,
+    rose: bool,
+    out: &mut Vec<Suspect>,
+) {
+    let chart = v.chart_of_step(step);
+    let newly = !v.before.is_active(step);
+    let activation = v.last_firing(step, true);
+    let action_started = rose && !newly;
+    if newly
+        || (rose
+            && activation
+                .as_ref()
+                .is_some_and(|(_, t)| v.ms_before(*t) == 0))
+    {
+        // X408: the transition that activated the step.
+        if let Some((t, time)) = activation {
+            let rec = v.receptivity(&t);
+            let signals = v.transition_signals(&t);
+            out.push(suspect(
+                "X408",
+                (u8::from(v.ms_before(time) > 0), 0),
+                format!(
+                    "Transition {t} (receptivity `{rec}`) fired {} and activated step {step}, whose action {qualifier} {output} drives {output} ON: the receptivity of {t} is suspect (it reads {}).",
+                    v.when(time),
+                    signals.join(", ")
+                ),
+                &[
+                    ("output", output.to_string()),
+                    ("chart", chart),
+                    ("transition", t.clone()),
+                    ("receptivity", rec),
+                    ("signals", join(&signals)),
+                    ("step", step.to_string()),
+                    ("qualifier", qualifier.to_string()),
+                    ("ms_before", v.ms_before(time).to_string()),
+                ],
+                &v.plant(&signals),
+            ));
+            return;
+        }
+    }
+    if action_started {
+        // X409: a delayed action that began while the step was active.
+        out.push(suspect(
+            "X409",
+            (0, 0),
+            format!(
+                "Step {step} was already active; its action {qualifier} {output} began to drive {output} ON in the stopping cycle: the qualifier of this action is suspect."
+            ),
+            &[
+                ("output", output.to_string()),
+                ("chart", chart),
+                ("step", step.to_string()),
+                ("qualifier", qualifier.to_string()),
+                ("ms_before", "0".into()),
+            ],
+            &[],
+        ));
+        return;
+    }
+    // X412: the step stays active for too long.
+    let exits = v.exits(step);
+    let recs: Vec<String> = exits
+        .iter()
+        .map(|t| format!("{t} `{}`", v.receptivity(t)))
+        .collect();
+    let mut signals: Vec<String> = Vec::new();
+    for t in &exits {
+        for s in v.transition_signals(t) {
+            if !signals.contains(&s) {
+                signals.push(s);
+            }
+        }
+    }
+    let since = activation
+        .as_ref()
+        .map(|(t, time)| format!(" since {t} fired {}", v.when(*time)))
+        .unwrap_or_default();
+    out.push(suspect(
+        "X412",
+        (1, 1),
+        format!(
+            "Step {step} has been active{since} and its action {qualifier} {output} drives {output} ON; the transition(s) leaving it, {}, did not fire: their receptivity is suspect.",
+            recs.join(", ")
+        ),
+        &[
+            ("output", output.to_string()),
+            ("chart", chart),
+            ("step", step.to_string()),
+            ("qualifier", qualifier.to_string()),
+            ("transition", join(&exits)),
+            ("receptivity", exits.iter().map(|t| v.receptivity(t)).collect::<Vec<_>>().join(" | ")),
+            ("signals", join(&signals)),
+            ("ms_before", activation.map(|(_, t)| v.ms_before(t)).unwrap_or(0).to_string()),
+        ],
+        &v.plant(&signals),
+    ));
 }
 
 /// An equation commands the forbidden value (`on`: true and the actuator must be OFF;
@@ -631,7 +644,17 @@ fn forbidden_off(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut V
             return;
         }
     }
-    // X411: nothing commands it.
+    nothing_commands(v, output, slot, &commanding, out);
+}
+
+/// X411: nothing commands the actuator that must be ON.
+fn nothing_commands(
+    v: &View<'_>,
+    output: &str,
+    slot: usize,
+    commanding: &[(String, Qualifier)],
+    out: &mut Vec<Suspect>,
+) {
     let steps: Vec<String> = commanding.iter().map(|(s, _)| s.clone()).collect();
     let eq = v.equation(slot);
     let mut signals = Vec::new();
@@ -720,18 +743,8 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
             let new: Vec<String> = read.into_iter().filter(|x| new_steps.contains(x)).collect();
             (!new.is_empty()).then_some((s, new))
         })?;
-    let on = driven
-        .item
-        .fields
-        .get("output")
-        .cloned()
-        .unwrap_or_default();
-    let off = undriven
-        .item
-        .fields
-        .get("output")
-        .cloned()
-        .unwrap_or_default();
+    let on = field(driven, "output");
+    let off = field(undriven, "output");
     let fired: Vec<String> = v
         .after
         .fired_last_scan()
@@ -745,24 +758,9 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
         })
         .map(str::to_string)
         .collect();
-    let equation = undriven
-        .item
-        .fields
-        .get("equation")
-        .cloned()
-        .unwrap_or_default();
-    let expression = undriven
-        .item
-        .fields
-        .get("expression")
-        .cloned()
-        .unwrap_or_default();
-    let commanding = undriven
-        .item
-        .fields
-        .get("steps")
-        .cloned()
-        .unwrap_or_default();
+    let equation = field(undriven, "equation");
+    let expression = field(undriven, "expression");
+    let commanding = field(undriven, "steps");
     let elsewhere = match (equation.is_empty(), commanding.is_empty()) {
         (false, _) => format!("the equation of {off} (`{expression}`)"),
         (true, false) => format!("the steps acting on {off} ({commanding})"),
@@ -802,6 +800,11 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
         }],
         rank: (0, 0),
     })
+}
+
+/// A suspect's field, empty when absent.
+fn field(s: &Suspect, key: &str) -> String {
+    s.item.fields.get(key).cloned().unwrap_or_default()
 }
 
 /// True when transition `t` has `step` upstream.
