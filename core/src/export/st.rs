@@ -192,7 +192,32 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
         bundle.dir.display()
     );
 
-    // Observers.
+    let obs = observers_fb(bundle);
+    let fil = filter_fb(bundle)?;
+
+    // Tasks.
+    let tfb = tasks.map(|set| task_fb(set, symbols));
+
+    obs.render(&mut out, "Observers (seed 004, section 6.2).");
+    fil.render(
+        &mut out,
+        "Safety filter: constraints on the commanded outputs, latch, fallback.",
+    );
+    if let Some(t) = &tfb {
+        t.render(
+            &mut out,
+            "Task monitors (seed 000): two stopwatches per task as offset variables.",
+        );
+    }
+
+    // Program.
+    program(&mut out, bundle, &obs, &fil, tfb.as_ref());
+    Ok(out)
+}
+
+/// The observers' function block.
+fn observers_fb(bundle: &PlantBundle) -> Fb {
+    let symbols = &bundle.symbols;
     let mut obs = Fb::new("FB_Observers");
     for (i, def) in bundle.observers.defs.iter().enumerate() {
         let o = ident(
@@ -249,7 +274,12 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
         obs.outputs.push((o, "BOOL"));
     }
 
-    // Filter.
+    obs
+}
+
+/// The safety filter's function block: violations, latch and fallback.
+fn filter_fb(bundle: &PlantBundle) -> Result<Fb, ExportError> {
+    let symbols = &bundle.symbols;
     let n_out = bundle.plant.outputs.len();
     let filter = Filter::for_plant(&bundle.constraints, &bundle.plant);
     let mut fil = Fb::new("FB_Filter");
@@ -314,22 +344,14 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
     fil.outputs.push(("TRIPPED".into(), "BOOL"));
     fil.locals.push(("LATCHED".into(), "BOOL"));
 
-    // Tasks.
-    let tfb = tasks.map(|set| task_fb(set, symbols));
+    Ok(fil)
+}
 
-    obs.render(&mut out, "Observers (seed 004, section 6.2).");
-    fil.render(
-        &mut out,
-        "Safety filter: constraints on the commanded outputs, latch, fallback.",
-    );
-    if let Some(t) = &tfb {
-        t.render(
-            &mut out,
-            "Task monitors (seed 000): two stopwatches per task as offset variables.",
-        );
-    }
-
-    // Program.
+/// The program `Vigie_Safety`: its variables, the plausibility stage, the calls of the
+/// function blocks and the values at t-1.
+fn program(out: &mut String, bundle: &PlantBundle, obs: &Fb, fil: &Fb, tfb: Option<&Fb>) {
+    let symbols = &bundle.symbols;
+    let n_out = bundle.plant.outputs.len();
     let mut all_vars: Vec<Var> = Vec::new();
     for space in Space::ALL {
         for i in 0..symbols.len(space) {
@@ -342,14 +364,74 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
             }
         }
     }
+    let rules = bundle.plausibility.export_rules();
+    program_interface(out, symbols, &rules, n_out, tfb);
+    let mut locals: Vec<(String, &'static str)> = all_vars
+        .iter()
+        .filter(|v| v.prev)
+        .map(|v| (ident(symbols, *v, false), "BOOL"))
+        .collect();
+    let (stage, mut stage_locals) = plausibility_stage(symbols, &rules);
+    locals.append(&mut stage_locals);
+    locals.push(("fbObservers".into(), "FB_Observers"));
+    locals.push(("fbFilter".into(), "FB_Filter"));
+    if tfb.is_some() {
+        locals.push(("fbTasks".into(), "FB_Tasks"));
+    }
+    section(out, "VAR", locals.into_iter());
+    out.push_str(&stage);
+    out.push_str(&obs.call("fbObservers"));
+    for (n, _) in &obs.outputs {
+        let _ = writeln!(out, "{n} := fbObservers.{n};");
+    }
+    out.push_str(&fil.call("fbFilter"));
+    for k in 0..n_out {
+        let q = ident(
+            symbols,
+            Var {
+                space: Space::Output,
+                index: u32::try_from(k).unwrap_or(0),
+                prev: false,
+            },
+            false,
+        );
+        let _ = writeln!(out, "{q} := fbFilter.{q};");
+    }
+    let _ = writeln!(out, "TRIPPED := fbFilter.TRIPPED;");
+    if let Some(t) = tfb {
+        out.push_str(&t.call("fbTasks"));
+        for (n, _) in &t.outputs {
+            let _ = writeln!(out, "{n} := fbTasks.{n};");
+        }
+    }
+    let _ = writeln!(out, "(* Values at t-1 for the next cycle. *)");
+    for v in all_vars.iter().filter(|v| v.prev) {
+        let now = Var { prev: false, ..*v };
+        let _ = writeln!(
+            out,
+            "{} := {};",
+            ident(symbols, *v, false),
+            ident(symbols, now, false)
+        );
+    }
+    let _ = writeln!(out, "END_PROGRAM");
+}
+
+/// The program's header and its input and output variables.
+fn program_interface(
+    out: &mut String,
+    symbols: &Symbols,
+    rules: &[ExportRule<'_>],
+    n_out: usize,
+    tfb: Option<&Fb>,
+) {
     let _ = writeln!(
         out,
         "(* One call per PLC cycle, after the control program. *)\nPROGRAM Vigie_Safety"
     );
-    let rules = bundle.plausibility.export_rules();
     let mut inputs: Vec<(String, &'static str)> = vec![("NOW_MS".into(), "LINT")];
     for i in 0..symbols.len(Space::Input) {
-        inputs.push((input_name(symbols, &rules, i), "BOOL"));
+        inputs.push((input_name(symbols, rules, i), "BOOL"));
     }
     for k in 0..n_out {
         inputs.push((
@@ -365,7 +447,7 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
             "BOOL",
         ));
     }
-    section(&mut out, "VAR_INPUT", inputs.into_iter());
+    section(out, "VAR_INPUT", inputs.into_iter());
     let mut outputs: Vec<(String, &'static str)> = Vec::new();
     for k in 0..n_out {
         outputs.push((
@@ -398,64 +480,14 @@ pub fn generate(bundle: &PlantBundle, tasks: Option<&TaskSet>) -> Result<String,
             ));
         }
     }
-    if let Some(t) = &tfb {
+    if let Some(t) = tfb {
         for (n, ty) in &t.outputs {
             if !outputs.iter().any(|(o, _)| o == n) {
                 outputs.push((n.clone(), ty));
             }
         }
     }
-    section(&mut out, "VAR_OUTPUT", outputs.iter().cloned());
-    let mut locals: Vec<(String, &'static str)> = all_vars
-        .iter()
-        .filter(|v| v.prev)
-        .map(|v| (ident(symbols, *v, false), "BOOL"))
-        .collect();
-    let (stage, mut stage_locals) = plausibility_stage(symbols, &rules);
-    locals.append(&mut stage_locals);
-    locals.push(("fbObservers".into(), "FB_Observers"));
-    locals.push(("fbFilter".into(), "FB_Filter"));
-    if tfb.is_some() {
-        locals.push(("fbTasks".into(), "FB_Tasks"));
-    }
-    section(&mut out, "VAR", locals.into_iter());
-    out.push_str(&stage);
-    out.push_str(&obs.call("fbObservers"));
-    for (n, _) in &obs.outputs {
-        let _ = writeln!(out, "{n} := fbObservers.{n};");
-    }
-    out.push_str(&fil.call("fbFilter"));
-    for k in 0..n_out {
-        let q = ident(
-            symbols,
-            Var {
-                space: Space::Output,
-                index: u32::try_from(k).unwrap_or(0),
-                prev: false,
-            },
-            false,
-        );
-        let _ = writeln!(out, "{q} := fbFilter.{q};");
-    }
-    let _ = writeln!(out, "TRIPPED := fbFilter.TRIPPED;");
-    if let Some(t) = &tfb {
-        out.push_str(&t.call("fbTasks"));
-        for (n, _) in &t.outputs {
-            let _ = writeln!(out, "{n} := fbTasks.{n};");
-        }
-    }
-    let _ = writeln!(out, "(* Values at t-1 for the next cycle. *)");
-    for v in all_vars.iter().filter(|v| v.prev) {
-        let now = Var { prev: false, ..*v };
-        let _ = writeln!(
-            out,
-            "{} := {};",
-            ident(symbols, *v, false),
-            ident(symbols, now, false)
-        );
-    }
-    let _ = writeln!(out, "END_PROGRAM");
-    Ok(out)
+    section(out, "VAR_OUTPUT", outputs.iter().cloned());
 }
 
 /// The name of input `i` in the program's `VAR_INPUT`: its identifier, or, for a sensor
