@@ -518,220 +518,29 @@ fn plausibility_stage(
     rules: &[ExportRule<'_>],
 ) -> (String, Vec<(String, &'static str)>) {
     let mut out = String::new();
-    let mut locals: Vec<(String, &'static str)> = Vec::new();
+    let locals: Vec<(String, &'static str)> = Vec::new();
     if rules.is_empty() {
         return (out, locals);
     }
-    let cond = |d: Option<&Dnf>| -> String {
-        let Some(d) = d else {
-            return "TRUE".into();
-        };
-        if d.is_empty() {
-            return "FALSE".into();
-        }
-        d.iter()
-            .map(|term| {
-                if term.is_empty() {
-                    return "TRUE".to_string();
-                }
-                let lits: Vec<String> = term
-                    .iter()
-                    .map(|l| {
-                        let raw = l.var.space == Space::Input && !l.var.prev;
-                        let id = if raw {
-                            input_name(symbols, rules, l.var.index as usize)
-                        } else {
-                            ident(symbols, l.var, false)
-                        };
-                        if l.positive { id } else { format!("NOT {id}") }
-                    })
-                    .collect();
-                format!("({})", lits.join(" AND "))
-            })
-            .collect::<Vec<_>>()
-            .join(" OR ")
-    };
-    let since = |k: &str, w: u64| {
-        if w == 0 {
-            "TRUE".to_string()
-        } else {
-            format!("(NOT PL_{k}_K OR NOW_MS - PL_{k}_T >= {w})")
-        }
-    };
     let _ = writeln!(
         out,
         "(* Plausibility of the sensors (plant.ron, `plausible`): an edge the physics does not allow is held. *)"
     );
-    let mut first = String::new();
-    let mut track = String::new();
-    let mut body = String::new();
+    let mut parts = StageParts {
+        first: String::new(),
+        track: String::new(),
+        body: String::new(),
+        locals,
+    };
     for r in rules {
-        let raw = input_name(symbols, rules, r.input);
-        let acc = ident(
-            symbols,
-            Var {
-                space: Space::Input,
-                index: u32::try_from(r.input).unwrap_or(0),
-                prev: false,
-            },
-            false,
-        );
-        let sus = ident(
-            symbols,
-            Var {
-                space: Space::Aux,
-                index: u32::try_from(r.aux).unwrap_or(0),
-                prev: false,
-            },
-            false,
-        );
-        let k = mangle(symbols.name(Space::Input, u32::try_from(r.input).unwrap_or(0)));
-        let confirm = |c: u64| {
-            if c == 0 {
-                "TRUE".to_string()
-            } else {
-                format!("NOW_MS - PL_{k}_PS >= {c}")
-            }
-        };
-        // A condition held for a time: tracked every cycle, before the decision.
-        let mut timed = |edge: &str, d: Option<&Dnf>, ms: u64| -> String {
-            if ms == 0 {
-                return "TRUE".to_string();
-            }
-            let _ = writeln!(first, "    PL_{k}_{edge}K := FALSE;");
-            let _ = writeln!(
-                track,
-                "IF {} THEN
-    IF NOT PL_{k}_{edge}K THEN
-        PL_{k}_{edge}K := TRUE;
-        PL_{k}_{edge}S := NOW_MS;
-    END_IF;
-ELSE
-    PL_{k}_{edge}K := FALSE;
-END_IF;",
-                cond(d)
-            );
-            locals.push((format!("PL_{k}_{edge}K"), "BOOL"));
-            locals.push((format!("PL_{k}_{edge}S"), "LINT"));
-            format!("PL_{k}_{edge}K AND NOW_MS - PL_{k}_{edge}S >= {ms}")
-        };
-        let mut rise_timed = timed("R", r.rise_when, r.rise_when_for_ms);
-        let mut fall_timed = timed("F", r.fall_when, r.fall_when_for_ms);
-        // A condition held for a time in all since the last accepted edge (PL_k_RA,
-        // PL_k_FA: the time of every cycle where it held; unknown before the first
-        // accepted edge, PL_k_K).
-        let mut reset_totals = String::new();
-        for (edge, d, ms, timed) in [
-            ("RA", r.rise_when, r.rise_when_total_ms, &mut rise_timed),
-            ("FA", r.fall_when, r.fall_when_total_ms, &mut fall_timed),
-        ] {
-            if ms == 0 {
-                continue;
-            }
-            let _ = writeln!(first, "    PL_{k}_{edge} := 0;");
-            let _ = writeln!(
-                track,
-                "IF {} THEN
-    PL_{k}_{edge} := PL_{k}_{edge} + (NOW_MS - PL_LAST);
-END_IF;",
-                cond(d)
-            );
-            let _ = write!(
-                reset_totals,
-                "
-                PL_{k}_{edge} := 0;"
-            );
-            locals.push((format!("PL_{k}_{edge}"), "LINT"));
-            *timed = format!("{timed} AND (NOT PL_{k}_K OR PL_{k}_{edge} >= {ms})");
-        }
-        // `rise_not_after`: the event's last cycle is tracked every cycle (PL_k_EK,
-        // PL_k_ES); a rise is plausible only that long after it.
-        if let Some((event, ms)) = r.rise_not_after {
-            let _ = writeln!(first, "    PL_{k}_EK := FALSE;");
-            let _ = writeln!(
-                track,
-                "IF {} THEN
-    PL_{k}_EK := TRUE;
-    PL_{k}_ES := NOW_MS;
-END_IF;",
-                cond(Some(event))
-            );
-            locals.push((format!("PL_{k}_EK"), "BOOL"));
-            locals.push((format!("PL_{k}_ES"), "LINT"));
-            rise_timed = format!("{rise_timed} AND (NOT PL_{k}_EK OR NOW_MS - PL_{k}_ES >= {ms})");
-        }
-        let _ = writeln!(
-            first,
-            "    {acc} := {raw};
-    {sus} := FALSE;
-    PL_{k}_K := FALSE;
-    PL_{k}_PK := FALSE;"
-        );
-        // `hold_until_back`: an edge inside the window latches the hold until the
-        // reading agrees again (PL_k_L).
-        let (latch_ok, latch_set, latch_clear) = if r.hold_until_back {
-            let _ = writeln!(first, "    PL_{k}_L := FALSE;");
-            locals.push((format!("PL_{k}_L"), "BOOL"));
-            (
-                format!(" AND NOT PL_{k}_L"),
-                format!(
-                    "
-            IF NOT PL_W THEN
-                PL_{k}_L := TRUE;
-            END_IF;"
-                ),
-                format!(
-                    "
-        PL_{k}_L := FALSE;"
-                ),
-            )
-        } else {
-            (String::new(), String::new(), String::new())
-        };
-        let _ = writeln!(
-            body,
-            "    IF {raw} <> {acc} THEN
-        IF {raw} THEN
-            PL_W := {};
-            PL_OK := PL_W AND ({}) AND ({rise_timed}){latch_ok};
-            PL_CF := {};
-        ELSE
-            PL_W := {};
-            PL_OK := PL_W AND ({}) AND ({fall_timed}){latch_ok};
-            PL_CF := {};
-        END_IF;
-        IF NOT PL_OK THEN
-            {sus} := TRUE;
-            PL_{k}_PK := FALSE;{latch_set}
-        ELSE
-            {sus} := FALSE;
-            IF NOT PL_{k}_PK THEN
-                PL_{k}_PK := TRUE;
-                PL_{k}_PS := NOW_MS;
-            END_IF;
-            IF PL_CF THEN
-                {acc} := {raw};
-                PL_{k}_T := NOW_MS;
-                PL_{k}_K := TRUE;
-                PL_{k}_PK := FALSE;{reset_totals}
-            END_IF;
-        END_IF;
-    ELSE
-        {sus} := FALSE;
-        PL_{k}_PK := FALSE;{latch_clear}
-    END_IF;",
-            since(&k, r.min_off_ms),
-            cond(r.rise_when),
-            confirm(r.rise_confirm_ms),
-            since(&k, r.min_on_ms),
-            cond(r.fall_when),
-            confirm(r.fall_confirm_ms),
-        );
-        locals.push((acc, "BOOL"));
-        for (n, t) in [("K", "BOOL"), ("T", "LINT"), ("PK", "BOOL"), ("PS", "LINT")] {
-            locals.push((format!("PL_{k}_{n}"), t));
-        }
+        stage_rule(symbols, rules, r, &mut parts);
     }
+    let StageParts {
+        first,
+        track,
+        body,
+        mut locals,
+    } = parts;
     let _ = write!(
         out,
         "IF NOT PL_STARTED THEN
@@ -749,6 +558,245 @@ PL_LAST := NOW_MS;
     locals.push(("PL_W".into(), "BOOL"));
     locals.push(("PL_CF".into(), "BOOL"));
     (out, locals)
+}
+
+/// The plausibility stage's text and locals, as they are built rule by rule.
+struct StageParts {
+    first: String,
+    track: String,
+    body: String,
+    locals: Vec<(String, &'static str)>,
+}
+
+/// One rule of the plausibility stage: its tracking, its decision and its locals.
+fn stage_rule(
+    symbols: &Symbols,
+    rules: &[ExportRule<'_>],
+    r: &ExportRule<'_>,
+    parts: &mut StageParts,
+) {
+    let raw = input_name(symbols, rules, r.input);
+    let acc = ident(
+        symbols,
+        Var {
+            space: Space::Input,
+            index: u32::try_from(r.input).unwrap_or(0),
+            prev: false,
+        },
+        false,
+    );
+    let sus = ident(
+        symbols,
+        Var {
+            space: Space::Aux,
+            index: u32::try_from(r.aux).unwrap_or(0),
+            prev: false,
+        },
+        false,
+    );
+    let k = mangle(symbols.name(Space::Input, u32::try_from(r.input).unwrap_or(0)));
+    let k = &k;
+    let (rise_timed, fall_timed, reset_totals) = stage_timing(symbols, rules, r, k, parts);
+    let _ = writeln!(
+        parts.first,
+        "    {acc} := {raw};
+{sus} := FALSE;
+PL_{k}_K := FALSE;
+PL_{k}_PK := FALSE;"
+    );
+    // `hold_until_back`: an edge inside the window latches the hold until the
+    // reading agrees again (PL_k_L).
+    let (latch_ok, latch_set, latch_clear) = if r.hold_until_back {
+        let _ = writeln!(parts.first, "    PL_{k}_L := FALSE;");
+        parts.locals.push((format!("PL_{k}_L"), "BOOL"));
+        (
+            format!(" AND NOT PL_{k}_L"),
+            format!(
+                "
+        IF NOT PL_W THEN
+            PL_{k}_L := TRUE;
+        END_IF;"
+            ),
+            format!(
+                "
+    PL_{k}_L := FALSE;"
+            ),
+        )
+    } else {
+        (String::new(), String::new(), String::new())
+    };
+    let _ = writeln!(
+        parts.body,
+        "    IF {raw} <> {acc} THEN
+    IF {raw} THEN
+        PL_W := {};
+        PL_OK := PL_W AND ({}) AND ({rise_timed}){latch_ok};
+        PL_CF := {};
+    ELSE
+        PL_W := {};
+        PL_OK := PL_W AND ({}) AND ({fall_timed}){latch_ok};
+        PL_CF := {};
+    END_IF;
+    IF NOT PL_OK THEN
+        {sus} := TRUE;
+        PL_{k}_PK := FALSE;{latch_set}
+    ELSE
+        {sus} := FALSE;
+        IF NOT PL_{k}_PK THEN
+            PL_{k}_PK := TRUE;
+            PL_{k}_PS := NOW_MS;
+        END_IF;
+        IF PL_CF THEN
+            {acc} := {raw};
+            PL_{k}_T := NOW_MS;
+            PL_{k}_K := TRUE;
+            PL_{k}_PK := FALSE;{reset_totals}
+        END_IF;
+    END_IF;
+ELSE
+    {sus} := FALSE;
+    PL_{k}_PK := FALSE;{latch_clear}
+END_IF;",
+        since(k, r.min_off_ms),
+        stage_cond(symbols, rules, r.rise_when),
+        confirm(k, r.rise_confirm_ms),
+        since(k, r.min_on_ms),
+        stage_cond(symbols, rules, r.fall_when),
+        confirm(k, r.fall_confirm_ms),
+    );
+    parts.locals.push((acc, "BOOL"));
+    for (n, t) in [("K", "BOOL"), ("T", "LINT"), ("PK", "BOOL"), ("PS", "LINT")] {
+        parts.locals.push((format!("PL_{k}_{n}"), t));
+    }
+}
+
+/// The timed conditions of a rule (held for a time, in total, after an event), tracked
+/// every cycle: the extra tests of a rise and of a fall, and the totals' resets.
+fn stage_timing(
+    symbols: &Symbols,
+    rules: &[ExportRule<'_>],
+    r: &ExportRule<'_>,
+    k: &str,
+    parts: &mut StageParts,
+) -> (String, String, String) {
+    let cond = |d: Option<&Dnf>| stage_cond(symbols, rules, d);
+    // A condition held for a time: tracked every cycle, before the decision.
+    let mut timed = |edge: &str, d: Option<&Dnf>, ms: u64| -> String {
+        if ms == 0 {
+            return "TRUE".to_string();
+        }
+        let _ = writeln!(parts.first, "    PL_{k}_{edge}K := FALSE;");
+        let _ = writeln!(
+            parts.track,
+            "IF {} THEN
+IF NOT PL_{k}_{edge}K THEN
+    PL_{k}_{edge}K := TRUE;
+    PL_{k}_{edge}S := NOW_MS;
+END_IF;
+ELSE
+PL_{k}_{edge}K := FALSE;
+END_IF;",
+            cond(d)
+        );
+        parts.locals.push((format!("PL_{k}_{edge}K"), "BOOL"));
+        parts.locals.push((format!("PL_{k}_{edge}S"), "LINT"));
+        format!("PL_{k}_{edge}K AND NOW_MS - PL_{k}_{edge}S >= {ms}")
+    };
+    let mut rise_timed = timed("R", r.rise_when, r.rise_when_for_ms);
+    let mut fall_timed = timed("F", r.fall_when, r.fall_when_for_ms);
+    // A condition held for a time in all since the last accepted edge (PL_k_RA,
+    // PL_k_FA: the time of every cycle where it held; unknown before the first
+    // accepted edge, PL_k_K).
+    let mut reset_totals = String::new();
+    for (edge, d, ms, timed) in [
+        ("RA", r.rise_when, r.rise_when_total_ms, &mut rise_timed),
+        ("FA", r.fall_when, r.fall_when_total_ms, &mut fall_timed),
+    ] {
+        if ms == 0 {
+            continue;
+        }
+        let _ = writeln!(parts.first, "    PL_{k}_{edge} := 0;");
+        let _ = writeln!(
+            parts.track,
+            "IF {} THEN
+PL_{k}_{edge} := PL_{k}_{edge} + (NOW_MS - PL_LAST);
+END_IF;",
+            cond(d)
+        );
+        let _ = write!(
+            reset_totals,
+            "
+            PL_{k}_{edge} := 0;"
+        );
+        parts.locals.push((format!("PL_{k}_{edge}"), "LINT"));
+        *timed = format!("{timed} AND (NOT PL_{k}_K OR PL_{k}_{edge} >= {ms})");
+    }
+    // `rise_not_after`: the event's last cycle is tracked every cycle (PL_k_EK,
+    // PL_k_ES); a rise is plausible only that long after it.
+    if let Some((event, ms)) = r.rise_not_after {
+        let _ = writeln!(parts.first, "    PL_{k}_EK := FALSE;");
+        let _ = writeln!(
+            parts.track,
+            "IF {} THEN
+PL_{k}_EK := TRUE;
+PL_{k}_ES := NOW_MS;
+END_IF;",
+            cond(Some(event))
+        );
+        parts.locals.push((format!("PL_{k}_EK"), "BOOL"));
+        parts.locals.push((format!("PL_{k}_ES"), "LINT"));
+        rise_timed = format!("{rise_timed} AND (NOT PL_{k}_EK OR NOW_MS - PL_{k}_ES >= {ms})");
+    }
+    (rise_timed, fall_timed, reset_totals)
+}
+
+/// A plausibility condition in ST (`TRUE` when absent); current readings are the raw inputs.
+fn stage_cond(symbols: &Symbols, rules: &[ExportRule<'_>], d: Option<&Dnf>) -> String {
+    let Some(d) = d else {
+        return "TRUE".into();
+    };
+    if d.is_empty() {
+        return "FALSE".into();
+    }
+    d.iter()
+        .map(|term| {
+            if term.is_empty() {
+                return "TRUE".to_string();
+            }
+            let lits: Vec<String> = term
+                .iter()
+                .map(|l| {
+                    let raw = l.var.space == Space::Input && !l.var.prev;
+                    let id = if raw {
+                        input_name(symbols, rules, l.var.index as usize)
+                    } else {
+                        ident(symbols, l.var, false)
+                    };
+                    if l.positive { id } else { format!("NOT {id}") }
+                })
+                .collect();
+            format!("({})", lits.join(" AND "))
+        })
+        .collect::<Vec<_>>()
+        .join(" OR ")
+}
+
+/// The ST test that `w` ms have passed since the last accepted edge of `k`.
+fn since(k: &str, w: u64) -> String {
+    if w == 0 {
+        "TRUE".to_string()
+    } else {
+        format!("(NOT PL_{k}_K OR NOW_MS - PL_{k}_T >= {w})")
+    }
+}
+
+/// The ST test that the reading has been stable `c` ms (always true for 0).
+fn confirm(k: &str, c: u64) -> String {
+    if c == 0 {
+        "TRUE".to_string()
+    } else {
+        format!("NOW_MS - PL_{k}_PS >= {c}")
+    }
 }
 
 fn output_var(k: usize, prev: bool) -> Var {
