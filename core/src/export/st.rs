@@ -901,63 +901,7 @@ fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(
                     .collect(),
             });
         }
-        let m = comp.len();
-        // Candidates: d_j = 1 when output comp[j] is away from its safe value; fewest
-        // away first, then lexicographic with comp[0] most significant, 0 first.
-        let mut order: Vec<u32> = (0..(1u32 << m)).collect();
-        order.sort_by_key(|&d| (d.count_ones(), d.reverse_bits() >> (32 - m)));
-        let value = |j: usize, d: u32| {
-            let n = name(comp[j]);
-            if d >> j & 1 == 1 {
-                format!("NOT FS_{n}")
-            } else {
-                format!("FS_{n}")
-            }
-        };
-        let _ = writeln!(
-            b,
-            "    (* Outputs {}: {} candidates. *)",
-            comp.iter().map(|&k| name(k)).collect::<Vec<_>>().join(", "),
-            order.len()
-        );
-        for (c, &d) in order.iter().enumerate() {
-            let mut ok = Vec::new();
-            for (j, &k) in comp.iter().enumerate().take(m) {
-                let n = name(k);
-                // x = 1 against F0, x = 0 against F1.
-                if d >> j & 1 == 1 {
-                    ok.push(format!(
-                        "NOT (F0_{n} AND NOT FS_{n}) AND NOT (F1_{n} AND FS_{n})"
-                    ));
-                } else {
-                    ok.push(format!(
-                        "NOT (F0_{n} AND FS_{n}) AND NOT (F1_{n} AND NOT FS_{n})"
-                    ));
-                }
-            }
-            for (i, t) in &multi {
-                let lits: Vec<String> = t
-                    .outputs
-                    .iter()
-                    .map(|&(k, positive)| {
-                        let j = comp.iter().position(|&o| o == k as usize).unwrap_or(0);
-                        let x = value(j, d);
-                        if positive {
-                            format!("({x})")
-                        } else {
-                            format!("NOT ({x})")
-                        }
-                    })
-                    .collect();
-                ok.push(format!("NOT (FT_{i} AND {})", lits.join(" AND ")));
-            }
-            let kw = if c == 0 { "IF" } else { "ELSIF" };
-            let _ = writeln!(b, "    {kw} {} THEN", ok.join(" AND "));
-            for (j, &k) in comp.iter().enumerate().take(m) {
-                let _ = writeln!(b, "        {} := {};", q(k), value(j, d));
-            }
-        }
-        let _ = writeln!(b, "    ELSE\n        CONFLICT := TRUE;\n    END_IF;");
+        component_candidates(symbols, &comp, &multi, b);
     }
     let _ = writeln!(
         b,
@@ -968,6 +912,75 @@ fn fallback_search(filter: &Filter, symbols: &Symbols, fil: &mut Fb) -> Result<(
     }
     let _ = writeln!(b, "    END_IF;");
     Ok(())
+}
+
+/// The candidates of a component of outputs bound by multi-output terms, fewest outputs
+/// away from their safe value first; none fits: `CONFLICT`.
+fn component_candidates(
+    symbols: &Symbols,
+    comp: &[usize],
+    multi: &[(usize, &crate::filter::TermView<'_>)],
+    b: &mut String,
+) {
+    let name = |k: usize| mangle(symbols.name(Space::Output, u32::try_from(k).unwrap_or(0)));
+    let q = |k: usize| ident(symbols, output_var(k, false), false);
+    let m = comp.len();
+    // Candidates: d_j = 1 when output comp[j] is away from its safe value; fewest
+    // away first, then lexicographic with comp[0] most significant, 0 first.
+    let mut order: Vec<u32> = (0..(1u32 << m)).collect();
+    order.sort_by_key(|&d| (d.count_ones(), d.reverse_bits() >> (32 - m)));
+    let value = |j: usize, d: u32| {
+        let n = name(comp[j]);
+        if d >> j & 1 == 1 {
+            format!("NOT FS_{n}")
+        } else {
+            format!("FS_{n}")
+        }
+    };
+    let _ = writeln!(
+        b,
+        "    (* Outputs {}: {} candidates. *)",
+        comp.iter().map(|&k| name(k)).collect::<Vec<_>>().join(", "),
+        order.len()
+    );
+    for (c, &d) in order.iter().enumerate() {
+        let mut ok = Vec::new();
+        for (j, &k) in comp.iter().enumerate().take(m) {
+            let n = name(k);
+            // x = 1 against F0, x = 0 against F1.
+            if d >> j & 1 == 1 {
+                ok.push(format!(
+                    "NOT (F0_{n} AND NOT FS_{n}) AND NOT (F1_{n} AND FS_{n})"
+                ));
+            } else {
+                ok.push(format!(
+                    "NOT (F0_{n} AND FS_{n}) AND NOT (F1_{n} AND NOT FS_{n})"
+                ));
+            }
+        }
+        for (i, t) in multi {
+            let lits: Vec<String> = t
+                .outputs
+                .iter()
+                .map(|&(k, positive)| {
+                    let j = comp.iter().position(|&o| o == k as usize).unwrap_or(0);
+                    let x = value(j, d);
+                    if positive {
+                        format!("({x})")
+                    } else {
+                        format!("NOT ({x})")
+                    }
+                })
+                .collect();
+            ok.push(format!("NOT (FT_{i} AND {})", lits.join(" AND ")));
+        }
+        let kw = if c == 0 { "IF" } else { "ELSIF" };
+        let _ = writeln!(b, "    {kw} {} THEN", ok.join(" AND "));
+        for (j, &k) in comp.iter().enumerate().take(m) {
+            let _ = writeln!(b, "        {} := {};", q(k), value(j, d));
+        }
+    }
+    let _ = writeln!(b, "    ELSE\n        CONFLICT := TRUE;\n    END_IF;");
 }
 
 fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
@@ -1065,14 +1078,20 @@ fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
         fb.locals.push((dy, "LINT"));
         fb.locals.push((since, "LINT"));
     }
+    task_body(&mut fb, set, &pre, &events, &post);
+    fb
+}
+
+/// The body of the task monitors: the three phases, then the auxiliary outputs.
+fn task_body(fb: &mut Fb, set: &TaskSet, pre: &str, events: &str, post: &str) {
     fb.body
         .push_str("(* 1. Violations strictly before NOW_MS. *)\n");
-    fb.body.push_str(&pre);
+    fb.body.push_str(pre);
     fb.body
         .push_str("(* 2. Events of this cycle: end, start, interrupt, resume. *)\n");
-    fb.body.push_str(&events);
+    fb.body.push_str(events);
     fb.body.push_str("(* 3. Violations at NOW_MS. *)\n");
-    fb.body.push_str(&post);
+    fb.body.push_str(post);
     // Auxiliary outputs for the safety filter.
     let aux: Vec<String> = set.aux_names();
     for (k, t) in set.tasks.iter().enumerate() {
@@ -1089,5 +1108,4 @@ fn task_fb(set: &TaskSet, symbols: &Symbols) -> Fb {
             "(* Unexpected events are warnings in the native monitor: no decision here. *)\n",
         );
     }
-    fb
 }
