@@ -329,18 +329,8 @@ impl Plausibility {
             let fall_ok = timed(&r.fall, r.fall_for, &mut st.fall_cond_since);
             // A condition held for a time in all: the time of every cycle where it held
             // (it reads the outputs applied over that cycle) is added.
-            let total = |d: &Option<Dnf>, ms: u64, acc: &mut Option<u64>| {
-                ms == 0 || {
-                    if let Some(a) = acc.as_mut()
-                        && holds(d)
-                    {
-                        *a = a.saturating_add(dt);
-                    }
-                    acc.is_none_or(|a| a >= ms)
-                }
-            };
-            let rise_total_ok = total(&r.rise, r.rise_total, &mut st.rise_total);
-            let fall_total_ok = total(&r.fall, r.fall_total, &mut st.fall_total);
+            let rise_total_ok = total_ok(|| holds(&r.rise), r.rise_total, &mut st.rise_total, dt);
+            let fall_total_ok = total_ok(|| holds(&r.fall), r.fall_total, &mut st.fall_total, dt);
             // The event is tracked every cycle; a rise is plausible only `ms` after it.
             let after_event = r.rise_after.as_ref().is_none_or(|(event, ms)| {
                 if eval_dnf(event, frame) {
@@ -378,75 +368,26 @@ impl Plausibility {
             } else {
                 st.latched = false;
                 if let Some(from) = st.pending_since.take() {
-                    // The reading came back before the confirmation: a transient filtered.
-                    self.held_edges += 1;
-                    let edge = if read { "fall" } else { "rise" };
-                    let confirm = if read { r.fall_confirm } else { r.rise_confirm };
-                    let name = &self.names[k];
-                    let ms = t.saturating_sub(from);
-                    let text = format!(
-                        "{name}: a {edge} of {ms} ms filtered (shorter than its {confirm} ms confirmation)"
-                    );
-                    let fields = fields(&[
-                        ("edge", edge.into()),
-                        ("ms", ms.to_string()),
-                        ("confirm_ms", confirm.to_string()),
-                    ]);
-                    notice(
+                    filtered_notice(
                         &mut self.notices,
+                        &mut self.held_edges,
+                        &self.names[k],
                         t,
-                        name,
-                        false,
-                        (text, "plausibility-filtered", fields),
+                        from,
+                        r,
+                        read,
                     );
                 }
             }
-            match (suspect, st.suspect_since) {
-                (true, None) => {
-                    st.suspect_since = Some(t);
-                    self.held_edges += 1;
-                    let edge = if read { "rise" } else { "fall" };
-                    let held = u8::from(st.accepted);
-                    let name = &self.names[k];
-                    let until = if st.latched {
-                        format!(
-                            " until it reads {held} again (so soon after the last edge, the last one was a transient)"
-                        )
-                    } else {
-                        String::new()
-                    };
-                    let text = format!(
-                        "{name} suspect: implausible {edge} (the plant's physics does not allow it now); {name} held at {held}{until}"
-                    );
-                    let fields = fields(&[
-                        ("edge", edge.into()),
-                        ("held", held.to_string()),
-                        ("latched", st.latched.to_string()),
-                    ]);
-                    notice(
-                        &mut self.notices,
-                        t,
-                        name,
-                        true,
-                        (text, "plausibility-suspect", fields),
-                    );
-                }
-                (false, Some(from)) => {
-                    st.suspect_since = None;
-                    let name = &self.names[k];
-                    let ms = t.saturating_sub(from);
-                    let text = format!("{name} plausible again after {ms} ms");
-                    let fields = fields(&[("ms", ms.to_string())]);
-                    notice(
-                        &mut self.notices,
-                        t,
-                        name,
-                        false,
-                        (text, "plausibility-again", fields),
-                    );
-                }
-                _ => {}
-            }
+            suspect_notices(
+                &mut self.notices,
+                &mut self.held_edges,
+                &self.names[k],
+                t,
+                st,
+                suspect,
+                read,
+            );
             decided.push((st.accepted, suspect));
         }
         for (r, &(accepted, suspect)) in self.rules.iter().zip(&decided) {
@@ -500,6 +441,107 @@ type Said = (
     &'static str,
     std::collections::BTreeMap<String, String>,
 );
+
+/// A condition held for a time in all: `dt` is added to `acc` when it holds; true once
+/// `acc` reaches `ms` (or while the total is unknown, or with no such condition).
+fn total_ok(holds: impl Fn() -> bool, ms: u64, acc: &mut Option<u64>, dt: u64) -> bool {
+    ms == 0 || {
+        if let Some(a) = acc.as_mut()
+            && holds()
+        {
+            *a = a.saturating_add(dt);
+        }
+        acc.is_none_or(|a| a >= ms)
+    }
+}
+
+/// Notices of a sensor becoming suspect or plausible again.
+fn suspect_notices(
+    notices: &mut Vec<Notice>,
+    held_edges: &mut u64,
+    name: &str,
+    t: u64,
+    st: &mut State,
+    suspect: bool,
+    read: bool,
+) {
+    match (suspect, st.suspect_since) {
+        (true, None) => {
+            st.suspect_since = Some(t);
+            *held_edges += 1;
+            let edge = if read { "rise" } else { "fall" };
+            let held = u8::from(st.accepted);
+            let until = if st.latched {
+                format!(
+                    " until it reads {held} again (so soon after the last edge, the last one was a transient)"
+                )
+            } else {
+                String::new()
+            };
+            let text = format!(
+                "{name} suspect: implausible {edge} (the plant's physics does not allow it now); {name} held at {held}{until}"
+            );
+            let fields = fields(&[
+                ("edge", edge.into()),
+                ("held", held.to_string()),
+                ("latched", st.latched.to_string()),
+            ]);
+            notice(
+                notices,
+                t,
+                name,
+                true,
+                (text, "plausibility-suspect", fields),
+            );
+        }
+        (false, Some(from)) => {
+            st.suspect_since = None;
+            let ms = t.saturating_sub(from);
+            let text = format!("{name} plausible again after {ms} ms");
+            let fields = fields(&[("ms", ms.to_string())]);
+            notice(
+                notices,
+                t,
+                name,
+                false,
+                (text, "plausibility-again", fields),
+            );
+        }
+        _ => {}
+    }
+}
+
+/// Notice of a transient filtered: the reading came back before the confirmation.
+fn filtered_notice(
+    notices: &mut Vec<Notice>,
+    held_edges: &mut u64,
+    name: &str,
+    t: u64,
+    from: u64,
+    r: &Rule,
+    read: bool,
+) {
+    // The reading came back before the confirmation: a transient filtered.
+    *held_edges += 1;
+    let edge = if read { "fall" } else { "rise" };
+    let confirm = if read { r.fall_confirm } else { r.rise_confirm };
+    let ms = t.saturating_sub(from);
+    let text = format!(
+        "{name}: a {edge} of {ms} ms filtered (shorter than its {confirm} ms confirmation)"
+    );
+    let fields = fields(&[
+        ("edge", edge.into()),
+        ("ms", ms.to_string()),
+        ("confirm_ms", confirm.to_string()),
+    ]);
+    notice(
+        notices,
+        t,
+        name,
+        false,
+        (text, "plausibility-filtered", fields),
+    );
+}
 
 fn notice(notices: &mut Vec<Notice>, time_ms: u64, sensor: &str, suspect: bool, said: Said) {
     let (text, code, fields) = said;
