@@ -271,26 +271,7 @@ impl TaskSet {
                     at(&t.id),
                 ));
             }
-            if t.alpha_ms > t.beta_ms {
-                problems.push(Problem::error(
-                    codes::TASK_ALPHA_BEYOND_BETA.id,
-                    format!(
-                        "task `{}`: α = {} ms is greater than β = {} ms; the normal duration [α, β] is empty",
-                        t.id, t.alpha_ms, t.beta_ms
-                    ),
-                    at(&t.id),
-                ));
-            }
-            if t.beta_ms >= t.gamma_ms {
-                problems.push(Problem::error(
-                    codes::TASK_BETA_NOT_BELOW_GAMMA.id,
-                    format!(
-                        "task `{}`: β = {} ms must be less than γ = {} ms (the acceptable duration [α, γ) must extend the normal one)",
-                        t.id, t.beta_ms, t.gamma_ms
-                    ),
-                    at(&t.id),
-                ));
-            }
+            check_durations(&t, at(&t.id), &mut problems);
             let interruption = match (t.interrupt, t.resume) {
                 (Some(i), Some(r)) => Some((i, r)),
                 (None, None) => None,
@@ -381,6 +362,30 @@ impl TaskSet {
             .iter()
             .flat_map(|t| AUX_QUALIFIERS.iter().map(move |q| format!("{}:{q}", t.id)))
             .collect()
+    }
+}
+
+/// Checks a task's durations: α ≤ β < γ.
+fn check_durations(t: &TaskDef, loc: Option<Location>, problems: &mut Vec<Problem>) {
+    if t.alpha_ms > t.beta_ms {
+        problems.push(Problem::error(
+            codes::TASK_ALPHA_BEYOND_BETA.id,
+            format!(
+                "task `{}`: α = {} ms is greater than β = {} ms; the normal duration [α, β] is empty",
+                t.id, t.alpha_ms, t.beta_ms
+            ),
+            loc.clone(),
+        ));
+    }
+    if t.beta_ms >= t.gamma_ms {
+        problems.push(Problem::error(
+            codes::TASK_BETA_NOT_BELOW_GAMMA.id,
+            format!(
+                "task `{}`: β = {} ms must be less than γ = {} ms (the acceptable duration [α, γ) must extend the normal one)",
+                t.id, t.beta_ms, t.gamma_ms
+            ),
+            loc.clone(),
+        ));
     }
 }
 
