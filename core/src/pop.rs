@@ -320,6 +320,26 @@ fn twin(
         }
         best[k] = m;
     }
+    let (silent, needs) = waiting_pairs(c, f, &g);
+    if let Some(w) = silent {
+        return (false, None, Some(w), needs.into_iter().collect());
+    }
+    (
+        true,
+        Some(best.iter().copied().max().unwrap_or(0)),
+        None,
+        needs.into_iter().collect(),
+    )
+}
+
+/// The pairs of the twin graph where both sides wait for ever on time-outs alone: the
+/// first silent one, and the actuator edges that certainty needs.
+fn waiting_pairs(
+    c: &Component,
+    f: usize,
+    g: &petgraph::graph::DiGraph<(usize, usize), usize>,
+) -> (Option<String>, std::collections::BTreeSet<String>) {
+    let mine = |m: Option<usize>| m == Some(f);
     // Pairs where the twins agree on nothing but time-outs and neither has a deadline
     // (both wait for ever): the fault side must leave through an edge the other cannot
     // make. None at all: the fault stays silent and the other hypothesis explains the
@@ -375,15 +395,7 @@ fn twin(
             ));
         }
     }
-    if let Some(w) = silent {
-        return (false, None, Some(w), needs.into_iter().collect());
-    }
-    (
-        true,
-        Some(best.iter().copied().max().unwrap_or(0)),
-        None,
-        needs.into_iter().collect(),
-    )
+    (silent, needs)
 }
 
 /// A name as libFAUDES accepts it in a token file (no blanks, no `*`, `+`, `"`):
@@ -470,17 +482,6 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
     let mut outputs = Vec::new();
     let mut comps = Vec::new();
     for i in 0..n {
-        let rename = |t: &str| -> String {
-            let mut out = t.to_string();
-            for s in &table.signals {
-                out = out.replace(&format!("({s})"), &format!("({s}_{i})"));
-            }
-            out
-        };
-        let mut c = table.clone();
-        c.id = format!("{}_{i}", table.id);
-        // The campaign's injections name the original signals: not copied.
-        c.injections.clear();
         for s in &table.signals {
             let kind = if s.starts_with('A') {
                 SignalKind::Actuator
@@ -494,87 +495,7 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
                 inputs.push(sig(id, kind))
             }
         }
-        c.signals = table.signals.iter().map(|s| format!("{s}_{i}")).collect();
-        let mut vals = table.initial_values.clone();
-        for s in &table.signals {
-            vals = vals
-                .split(" . ")
-                .map(|l| {
-                    if l.trim_start_matches('/') == s {
-                        format!("{l}_{i}")
-                    } else {
-                        l.to_string()
-                    }
-                })
-                .collect::<Vec<_>>()
-                .join(" . ");
-        }
-        c.initial_values = vals;
-        for e in &mut c.expected {
-            e.event = rename(&e.event);
-            e.within = e.within.as_ref().map(|w| format!("{w}_{i}"));
-        }
-        for iv in &mut c.intervals {
-            iv.id = format!("{}_{i}", iv.id);
-            iv.after = rename(&iv.after);
-            let rb = |b: &model::Bound| match b {
-                model::Bound::LoOf(x) => model::Bound::LoOf(format!("{x}_{i}")),
-                model::Bound::HiOf(x) => model::Bound::HiOf(format!("{x}_{i}")),
-                other => other.clone(),
-            };
-            iv.lo = rb(&iv.lo);
-            iv.hi = rb(&iv.hi);
-        }
-        c.initial_clock = c.initial_clock.as_deref().map(rename);
-        for f in &mut c.faults {
-            for b in &mut f.behaviours {
-                match b {
-                    model::Behaviour::StuckAt(s, _) | model::Behaviour::Spurious(s, _) => {
-                        *s = format!("{s}_{i}")
-                    }
-                    model::Behaviour::Moves(_, e) => *e = rename(e),
-                    model::Behaviour::Blocked(_)
-                    | model::Behaviour::Jumps(..)
-                    | model::Behaviour::Unguarded => {}
-                }
-            }
-        }
-        for p in &mut c.partitions {
-            p.id = format!("{}_{i}", p.id);
-            p.sensor = p.sensor.as_ref().map(|s| format!("{s}_{i}"));
-            // Actuators the component does not observe (A1 for the box beam) are not in
-            // the synthetic plant.
-            p.actuators = p
-                .actuators
-                .iter()
-                .filter(|a| table.signals.contains(a))
-                .map(|a| format!("{a}_{i}"))
-                .collect();
-        }
-        // The neighbours whose sensors a component assumes are not in the synthetic
-        // plant: each copy stands alone.
-        c.assumes.clear();
-        c.assumes_item.clear();
-        c.independent = c.independent.iter().map(|a| format!("{a}_{i}")).collect();
-        for e in &mut c.estimates {
-            e.sensor = format!("{}_{i}", e.sensor);
-            let mut x = e.expr.clone();
-            for iv in &table.intervals {
-                x = x
-                    .split(" + ")
-                    .map(|t| {
-                        if t == iv.id {
-                            format!("{t}_{i}")
-                        } else {
-                            t.to_string()
-                        }
-                    })
-                    .collect::<Vec<_>>()
-                    .join(" + ");
-            }
-            e.expr = x;
-        }
-        comps.push(c);
+        comps.push(synthetic_copy(table, i));
     }
     (
         Plant::new("synthetic turntables", inputs, outputs),
@@ -585,6 +506,102 @@ pub fn synthetic(n: usize, table: &model::ComponentDef) -> (Plant, DiagnoserFile
             components: comps,
         },
     )
+}
+
+/// Copy `i` of the component `table`: ids, signals, expressions and intervals renamed.
+fn synthetic_copy(table: &model::ComponentDef, i: usize) -> model::ComponentDef {
+    let rename = |t: &str| -> String {
+        let mut out = t.to_string();
+        for s in &table.signals {
+            out = out.replace(&format!("({s})"), &format!("({s}_{i})"));
+        }
+        out
+    };
+    let mut c = table.clone();
+    c.id = format!("{}_{i}", table.id);
+    // The campaign's injections name the original signals: not copied.
+    c.injections.clear();
+    c.signals = table.signals.iter().map(|s| format!("{s}_{i}")).collect();
+    let mut vals = table.initial_values.clone();
+    for s in &table.signals {
+        vals = vals
+            .split(" . ")
+            .map(|l| {
+                if l.trim_start_matches('/') == s {
+                    format!("{l}_{i}")
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(" . ");
+    }
+    c.initial_values = vals;
+    for e in &mut c.expected {
+        e.event = rename(&e.event);
+        e.within = e.within.as_ref().map(|w| format!("{w}_{i}"));
+    }
+    for iv in &mut c.intervals {
+        iv.id = format!("{}_{i}", iv.id);
+        iv.after = rename(&iv.after);
+        let rb = |b: &model::Bound| match b {
+            model::Bound::LoOf(x) => model::Bound::LoOf(format!("{x}_{i}")),
+            model::Bound::HiOf(x) => model::Bound::HiOf(format!("{x}_{i}")),
+            other => other.clone(),
+        };
+        iv.lo = rb(&iv.lo);
+        iv.hi = rb(&iv.hi);
+    }
+    c.initial_clock = c.initial_clock.as_deref().map(rename);
+    for f in &mut c.faults {
+        for b in &mut f.behaviours {
+            match b {
+                model::Behaviour::StuckAt(s, _) | model::Behaviour::Spurious(s, _) => {
+                    *s = format!("{s}_{i}")
+                }
+                model::Behaviour::Moves(_, e) => *e = rename(e),
+                model::Behaviour::Blocked(_)
+                | model::Behaviour::Jumps(..)
+                | model::Behaviour::Unguarded => {}
+            }
+        }
+    }
+    for p in &mut c.partitions {
+        p.id = format!("{}_{i}", p.id);
+        p.sensor = p.sensor.as_ref().map(|s| format!("{s}_{i}"));
+        // Actuators the component does not observe (A1 for the box beam) are not in
+        // the synthetic plant.
+        p.actuators = p
+            .actuators
+            .iter()
+            .filter(|a| table.signals.contains(a))
+            .map(|a| format!("{a}_{i}"))
+            .collect();
+    }
+    // The neighbours whose sensors a component assumes are not in the synthetic
+    // plant: each copy stands alone.
+    c.assumes.clear();
+    c.assumes_item.clear();
+    c.independent = c.independent.iter().map(|a| format!("{a}_{i}")).collect();
+    for e in &mut c.estimates {
+        e.sensor = format!("{}_{i}", e.sensor);
+        let mut x = e.expr.clone();
+        for iv in &table.intervals {
+            x = x
+                .split(" + ")
+                .map(|t| {
+                    if t == iv.id {
+                        format!("{t}_{i}")
+                    } else {
+                        t.to_string()
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(" + ");
+        }
+        e.expr = x;
+    }
+    c
 }
 
 #[cfg(test)]
