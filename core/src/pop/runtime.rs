@@ -416,46 +416,8 @@ impl Diagnosers {
                 estimate_of: c.estimates.iter().map(|(n, _)| estimate_of(c, n)).collect(),
             });
         }
-        let mut shared: std::collections::HashMap<Vec<u64>, std::sync::Arc<Tables>> =
-            std::collections::HashMap::new();
-        let tables = compiled
-            .components
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let key = if share {
-                    Tables::shape(c)
-                } else {
-                    vec![i as u64]
-                };
-                shared
-                    .entry(key)
-                    .or_insert_with(|| std::sync::Arc::new(Tables::new(c)))
-                    .clone()
-            })
-            .collect();
-        let interface: Vec<Vec<(usize, usize, bool)>> = compiled
-            .components
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let mut v = Vec::new();
-                for (j, o) in compiled.components.iter().enumerate() {
-                    for (pj, p) in o.partitions.iter().enumerate() {
-                        let Some(s) = p.sensor.as_ref().filter(|_| j != i) else {
-                            continue;
-                        };
-                        if c.assumes.contains(s) {
-                            v.push((j, pj, false));
-                        }
-                        if c.assumes_item.contains(s) {
-                            v.push((j, pj, true));
-                        }
-                    }
-                }
-                v
-            })
-            .collect();
+        let tables = share_tables(&compiled, share);
+        let interface = interfaces(&compiled);
         let held_assumed: Vec<Vec<u32>> = compiled
             .components
             .iter()
@@ -795,21 +757,7 @@ impl Diagnosers {
             r.next_deadline = i64::MAX;
         } else {
             // Edges: actuators first, then sensors (or the reverse, `sensors_first`).
-            ws.edges.clear();
-            for space in c.edge_order() {
-                if space == Space::Output && orders_forced {
-                    continue;
-                }
-                for (i, s) in c.signals.iter().enumerate() {
-                    if s.var.space != space {
-                        continue;
-                    }
-                    let v = frame.now(space).get(s.var.index as usize);
-                    if v != frame.prev(space).get(s.var.index as usize) {
-                        ws.edges.push((i, v));
-                    }
-                }
-            }
+            collect_edges(c, frame, orders_forced, &mut ws.edges);
             for e in 0..ws.edges.len() {
                 let (i, rise) = ws.edges[e];
                 let cands = &tab.by_edge[i][usize::from(rise)];
@@ -878,43 +826,57 @@ impl Diagnosers {
             safe_side_stop(c, r, t, &mut self.diagnoses);
         }
         // Flags, intervals, estimates.
-        let aux = frame.now_mut(Space::Aux);
-        for (p, a) in r.latched.iter().zip(&r.def_aux) {
-            if let Some(a) = a {
-                aux.set(*a as usize, *p);
-            }
-        }
-        if t >= r.next_boundary {
-            let mut next = i64::MAX;
-            for (k, iv) in c.intervals.iter().enumerate() {
-                let on = match r.clock {
-                    Some((ck, ct)) if ck == iv.clock => {
-                        let lo = ct.saturating_add(i64::try_from(iv.lo).unwrap_or(i64::MAX));
-                        let hi = iv.hi.map_or(i64::MAX, |h| {
-                            ct.saturating_add(i64::try_from(h).unwrap_or(i64::MAX))
-                        });
-                        if lo > t {
-                            next = next.min(lo);
-                        } else if hi > t {
-                            next = next.min(hi);
-                        }
-                        t >= lo && t < hi
-                    }
-                    _ => false,
-                };
-                if let Some(a) = r.interval_aux[k] {
-                    aux.set(a as usize, on);
-                }
-            }
-            r.next_boundary = next;
-            for (((_, d), a), of) in c.estimates.iter().zip(&r.estimate_aux).zip(&r.estimate_of) {
-                let v = state_value(c, r, of.as_ref()).unwrap_or_else(|| eval_dnf(d, frame));
-                if let Some(a) = a {
-                    frame.now_mut(Space::Aux).set(*a as usize, v);
-                }
-            }
-        }
+        write_flags(c, r, t, frame);
     }
+}
+
+/// The components' tables; with `share`, components of the same shape share theirs.
+fn share_tables(compiled: &Compiled, share: bool) -> Vec<std::sync::Arc<Tables>> {
+    let mut shared: std::collections::HashMap<Vec<u64>, std::sync::Arc<Tables>> =
+        std::collections::HashMap::new();
+    compiled
+        .components
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let key = if share {
+                Tables::shape(c)
+            } else {
+                vec![i as u64]
+            };
+            shared
+                .entry(key)
+                .or_insert_with(|| std::sync::Arc::new(Tables::new(c)))
+                .clone()
+        })
+        .collect()
+}
+
+/// For each component, the partitions of the others whose sensors it assumes
+/// (`(component, partition, item)`).
+fn interfaces(compiled: &Compiled) -> Vec<Vec<(usize, usize, bool)>> {
+    compiled
+        .components
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let mut v = Vec::new();
+            for (j, o) in compiled.components.iter().enumerate() {
+                for (pj, p) in o.partitions.iter().enumerate() {
+                    let Some(s) = p.sensor.as_ref().filter(|_| j != i) else {
+                        continue;
+                    };
+                    if c.assumes.contains(s) {
+                        v.push((j, pj, false));
+                    }
+                    if c.assumes_item.contains(s) {
+                        v.push((j, pj, true));
+                    }
+                }
+            }
+            v
+        })
+        .collect()
 }
 
 /// The signal index in `c` of the sensor that the estimate `name` (`EST(C5)`) is about,
@@ -1066,6 +1028,71 @@ fn valuation(c: &Component, frame: &Frame) -> u64 {
     c.signals.iter().enumerate().fold(0, |acc, (i, s)| {
         acc | (u64::from(frame.now(s.var.space).get(s.var.index as usize)) << i)
     })
+}
+
+/// The component's signal edges of this cycle, in its edge order; actuator edges are
+/// skipped when the orders are forced.
+fn collect_edges(
+    c: &Component,
+    frame: &Frame,
+    orders_forced: bool,
+    edges: &mut Vec<(usize, bool)>,
+) {
+    edges.clear();
+    for space in c.edge_order() {
+        if space == Space::Output && orders_forced {
+            continue;
+        }
+        for (i, s) in c.signals.iter().enumerate() {
+            if s.var.space != space {
+                continue;
+            }
+            let v = frame.now(space).get(s.var.index as usize);
+            if v != frame.prev(space).get(s.var.index as usize) {
+                edges.push((i, v));
+            }
+        }
+    }
+}
+
+/// Writes a component's flags, and at an interval boundary its intervals and estimates.
+fn write_flags(c: &Component, r: &mut Run, t: i64, frame: &mut Frame) {
+    let aux = frame.now_mut(Space::Aux);
+    for (p, a) in r.latched.iter().zip(&r.def_aux) {
+        if let Some(a) = a {
+            aux.set(*a as usize, *p);
+        }
+    }
+    if t >= r.next_boundary {
+        let mut next = i64::MAX;
+        for (k, iv) in c.intervals.iter().enumerate() {
+            let on = match r.clock {
+                Some((ck, ct)) if ck == iv.clock => {
+                    let lo = ct.saturating_add(i64::try_from(iv.lo).unwrap_or(i64::MAX));
+                    let hi = iv.hi.map_or(i64::MAX, |h| {
+                        ct.saturating_add(i64::try_from(h).unwrap_or(i64::MAX))
+                    });
+                    if lo > t {
+                        next = next.min(lo);
+                    } else if hi > t {
+                        next = next.min(hi);
+                    }
+                    t >= lo && t < hi
+                }
+                _ => false,
+            };
+            if let Some(a) = r.interval_aux[k] {
+                aux.set(a as usize, on);
+            }
+        }
+        r.next_boundary = next;
+        for (((_, d), a), of) in c.estimates.iter().zip(&r.estimate_aux).zip(&r.estimate_of) {
+            let v = state_value(c, r, of.as_ref()).unwrap_or_else(|| eval_dnf(d, frame));
+            if let Some(a) = a {
+                frame.now_mut(Space::Aux).set(*a as usize, v);
+            }
+        }
+    }
 }
 
 /// Restarts the estimate on the normal states that show the observed values.
