@@ -679,17 +679,7 @@ fn run_one(
     let reset_at = sim.now().0;
     // The operator stays at the console for the watch: a later trip (a consequence of
     // the transient met later) gets the same recovery, at most twice.
-    let watch_end = reset_at + config.recover_ms;
-    let mut again = 0;
-    while sim.now().0 < watch_end {
-        let next = (sim.now().0 + 1_000).min(watch_end);
-        sim.run_until(Millis(next));
-        if sim.engine.is_tripped() && again < 2 && sim.now().0 < watch_end {
-            again += 1;
-            out.tripped_again = true;
-            recover(&mut sim);
-        }
-    }
+    watch_recovery(&mut sim, reset_at + config.recover_ms, &mut out);
     out.tripped = !sim.engine.trips.is_empty();
     out.restored =
         Some(!sim.engine.is_tripped() && delivered(&sim) >= before + config.restored_items);
@@ -709,6 +699,21 @@ fn run_one(
         );
     }
     Ok(out)
+}
+
+/// Runs the operator's watch until `watch_end`: a later trip gets the same recovery, at
+/// most twice.
+fn watch_recovery(sim: &mut Simulation, watch_end: u64, out: &mut Outcome) {
+    let mut again = 0;
+    while sim.now().0 < watch_end {
+        let next = (sim.now().0 + 1_000).min(watch_end);
+        sim.run_until(Millis(next));
+        if sim.engine.is_tripped() && again < 2 && sim.now().0 < watch_end {
+            again += 1;
+            out.tripped_again = true;
+            recover(sim);
+        }
+    }
 }
 
 /// The hazards of a faulted actuator itself: those whose elements include it (a welded
@@ -815,6 +820,57 @@ fn load(dir: &Path) -> Result<Shared, Vec<Problem>> {
     })
 }
 
+/// One fault-free hour of the plant under `plan`.
+fn fault_free_hour(
+    shared: &Shared,
+    plan: &ArrivalPlan,
+    config: &Config,
+    h: u64,
+) -> Result<FaultFree, Vec<Problem>> {
+    let mut sim = simulation(shared, 20_000 + h, plan, config.plausibility, 16)?;
+    sim.run_until(Millis(3_600_000));
+    let mut examples: Vec<String> = sim
+        .journal()
+        .iter()
+        .filter(|j| j.kind == "plausibility" || j.kind == "diagnosis")
+        .take(3)
+        .map(|j| format!("hour {h}, {} ms {}: {}", j.time_ms, j.kind, j.text))
+        .collect();
+    examples.truncate(3);
+    Ok(FaultFree {
+        hours: 1,
+        delivered: u64::from(delivered(&sim)),
+        trips: sim.engine.trips.len(),
+        hazards: sim.emulator.hazards().len(),
+        diagnoses: sim.diagnosers.as_ref().map_or(0, |d| {
+            d.diagnoses
+                .iter()
+                .filter(|x| !x.partition.is_empty())
+                .count()
+        }),
+        held_edges: sim.engine.plausibility.held_edges,
+        examples,
+    })
+}
+
+/// The fault-free hours added up (at most five examples).
+fn sum_fault_free(free: Vec<Result<FaultFree, Vec<Problem>>>) -> Result<FaultFree, Vec<Problem>> {
+    let mut fault_free = FaultFree::default();
+    for f in free {
+        let f = f?;
+        fault_free.hours += f.hours;
+        fault_free.delivered += f.delivered;
+        fault_free.trips += f.trips;
+        fault_free.hazards += f.hazards;
+        fault_free.diagnoses += f.diagnoses;
+        fault_free.held_edges += f.held_edges;
+        if fault_free.examples.len() < 5 {
+            fault_free.examples.extend(f.examples);
+        }
+    }
+    Ok(fault_free)
+}
+
 /// Runs the campaign on the plant in `dir`.
 pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
     let shared = load(dir)?;
@@ -895,48 +951,10 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
         }
     }
     let hours: Vec<u64> = (0..config.fault_free_hours).collect();
-    let free = parallel(&hours, config.threads, &|&h| -> Result<
-        FaultFree,
-        Vec<Problem>,
-    > {
-        let mut sim = simulation(&shared, 20_000 + h, &plans.0, config.plausibility, 16)?;
-        sim.run_until(Millis(3_600_000));
-        let mut examples: Vec<String> = sim
-            .journal()
-            .iter()
-            .filter(|j| j.kind == "plausibility" || j.kind == "diagnosis")
-            .take(3)
-            .map(|j| format!("hour {h}, {} ms {}: {}", j.time_ms, j.kind, j.text))
-            .collect();
-        examples.truncate(3);
-        Ok(FaultFree {
-            hours: 1,
-            delivered: u64::from(delivered(&sim)),
-            trips: sim.engine.trips.len(),
-            hazards: sim.emulator.hazards().len(),
-            diagnoses: sim.diagnosers.as_ref().map_or(0, |d| {
-                d.diagnoses
-                    .iter()
-                    .filter(|x| !x.partition.is_empty())
-                    .count()
-            }),
-            held_edges: sim.engine.plausibility.held_edges,
-            examples,
-        })
+    let free = parallel(&hours, config.threads, &|&h| {
+        fault_free_hour(&shared, &plans.0, config, h)
     });
-    let mut fault_free = FaultFree::default();
-    for f in free {
-        let f = f?;
-        fault_free.hours += f.hours;
-        fault_free.delivered += f.delivered;
-        fault_free.trips += f.trips;
-        fault_free.hazards += f.hazards;
-        fault_free.diagnoses += f.diagnoses;
-        fault_free.held_edges += f.held_edges;
-        if fault_free.examples.len() < 5 {
-            fault_free.examples.extend(f.examples);
-        }
-    }
+    let fault_free = sum_fault_free(free)?;
     Ok(Report {
         seeds: config.seeds,
         transient_period_ms: (period, jitter),
