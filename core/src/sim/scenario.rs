@@ -23,9 +23,7 @@ pub const MAX_PROJECTION_MS: u64 = 3_600_000;
 /// The problems of a parsed scenario; `text` is the file it was parsed from.
 pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
     let fields = ron_fields(text);
-    let at = |f: Option<&RonField>| {
-        Some(f.map_or_else(|| Location::new(path, 1, 1), |f| f.location(path)))
-    };
+    let at = |f: Option<&RonField>| field_location(path, f);
     let top = |name: &str| at(ron_field(&fields, &[], name, 0));
     let mut out = Vec::new();
     if !(1..=MAX_CYCLE_MS).contains(&s.cycle_ms) {
@@ -59,15 +57,8 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
         ));
     }
     let end = s.duration_ms;
-    let after_end = |what: String, t: u64, location: Option<Location>| {
-        Problem::error(
-            codes::SCENARIO_AFTER_END.id,
-            format!(
-                "{what} at {t} ms is not before the end of the run (duration_ms {end}): it would never happen"
-            ),
-            location,
-        )
-    };
+    let after_end =
+        |what: String, t: u64, location: Option<Location>| not_before_end(end, what, t, location);
     for (k, a) in s.actions.iter().enumerate() {
         if a.at_ms >= end {
             out.push(after_end(
@@ -107,9 +98,38 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
         }
         Some(ArrivalPlan::Off) | None => {}
     }
+    check_faults(s, &fields, path, &mut out);
+    out
+}
+
+#[cfg(test)]
+mod tests;
+
+/// Where a field's value is written (the file's start when the field is absent).
+fn field_location(path: &Path, f: Option<&RonField>) -> Option<Location> {
+    Some(f.map_or_else(|| Location::new(path, 1, 1), |f| f.location(path)))
+}
+
+/// The problem of `what` at `t` ms, not before the end of the run at `end` ms.
+fn not_before_end(end: u64, what: String, t: u64, location: Option<Location>) -> Problem {
+    Problem::error(
+        codes::SCENARIO_AFTER_END.id,
+        format!(
+            "{what} at {t} ms is not before the end of the run (duration_ms {end}): it would never happen"
+        ),
+        location,
+    )
+}
+
+/// The problems of the scenario's faults: trigger time, duration and pulse length.
+fn check_faults(s: &Scenario, fields: &[RonField], path: &Path, out: &mut Vec<Problem>) {
+    let at = |f: Option<&RonField>| field_location(path, f);
+    let end = s.duration_ms;
+    let after_end =
+        |what: String, t: u64, location: Option<Location>| not_before_end(end, what, t, location);
     for (k, f) in s.faults.iter().enumerate() {
         // The fields of fault `k` share the container of its (required) trigger.
-        let trigger = ron_field(&fields, &["faults"], "trigger", k);
+        let trigger = ron_field(fields, &["faults"], "trigger", k);
         let own = |name: &str| {
             trigger.and_then(|t| {
                 fields
@@ -154,8 +174,4 @@ pub(crate) fn check(s: &Scenario, text: &str, path: &Path) -> Vec<Problem> {
             ));
         }
     }
-    out
 }
-
-#[cfg(test)]
-mod tests;
