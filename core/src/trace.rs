@@ -41,62 +41,7 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
         ));
     };
     let header_line = header_index + 1;
-    // column → (is_output, index); None for time.
-    let mut columns: Vec<Option<(bool, usize)>> = Vec::new();
-    // Name → column number (1-based character position of its cell).
-    let mut names: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
-    let mut has_time = false;
-    let mut col = 1;
-    for cell in header.split(',') {
-        let name = cell.trim();
-        if let Some(first) = names.insert(name, col) {
-            return Err(Problem::error(
-                codes::TRACE_DUPLICATE_COLUMN.id,
-                format!(
-                    "column `{name}` appears twice in the trace header (first at column {first})"
-                ),
-                Some(Location::new(file, header_line, col)),
-            ));
-        }
-        if name == "time_ms" {
-            has_time = true;
-            columns.push(None);
-        } else if let Some(i) = plant.input(name) {
-            columns.push(Some((false, i)));
-        } else if let Some(k) = plant.output(name) {
-            columns.push(Some((true, k)));
-        } else {
-            return Err(Problem::error(
-                codes::TRACE_UNKNOWN_SIGNAL.id,
-                format!("unknown signal `{name}` in trace header"),
-                Some(Location::new(file, header_line, col)),
-            ));
-        }
-        col += cell.chars().count() + 1;
-    }
-    if !has_time {
-        return Err(Problem::error(
-            codes::TRACE_NO_TIME_COLUMN.id,
-            "trace header has no `time_ms` column",
-            Some(Location::new(file, header_line, 1)),
-        ));
-    }
-    for s in plant.inputs.iter().chain(&plant.outputs) {
-        let present = columns.iter().flatten().any(|&(out, i)| {
-            if out {
-                plant.outputs[i].id == s.id
-            } else {
-                plant.inputs[i].id == s.id
-            }
-        });
-        if !present {
-            return Err(Problem::error(
-                codes::TRACE_MISSING_SIGNAL.id,
-                format!("trace has no column for signal `{}`", s.id),
-                Some(Location::new(file, header_line, 1)),
-            ));
-        }
-    }
+    let columns = parse_header(header, header_line, file, plant)?;
     let mut rows: Vec<TraceRow> = Vec::new();
     // The line of the previous row, for the time check.
     let mut previous_line = 0;
@@ -170,6 +115,73 @@ pub fn parse(text: &str, file: &Path, plant: &Plant) -> Result<Vec<TraceRow>, Pr
         previous_line = line_no;
     }
     Ok(rows)
+}
+
+/// The columns of the trace header: `(is_output, index)` of each signal, None for the
+/// time; every plant signal must have exactly one.
+fn parse_header(
+    header: &str,
+    header_line: usize,
+    file: &Path,
+    plant: &Plant,
+) -> Result<Vec<Option<(bool, usize)>>, Problem> {
+    // column → (is_output, index); None for time.
+    let mut columns: Vec<Option<(bool, usize)>> = Vec::new();
+    // Name → column number (1-based character position of its cell).
+    let mut names: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
+    let mut has_time = false;
+    let mut col = 1;
+    for cell in header.split(',') {
+        let name = cell.trim();
+        if let Some(first) = names.insert(name, col) {
+            return Err(Problem::error(
+                codes::TRACE_DUPLICATE_COLUMN.id,
+                format!(
+                    "column `{name}` appears twice in the trace header (first at column {first})"
+                ),
+                Some(Location::new(file, header_line, col)),
+            ));
+        }
+        if name == "time_ms" {
+            has_time = true;
+            columns.push(None);
+        } else if let Some(i) = plant.input(name) {
+            columns.push(Some((false, i)));
+        } else if let Some(k) = plant.output(name) {
+            columns.push(Some((true, k)));
+        } else {
+            return Err(Problem::error(
+                codes::TRACE_UNKNOWN_SIGNAL.id,
+                format!("unknown signal `{name}` in trace header"),
+                Some(Location::new(file, header_line, col)),
+            ));
+        }
+        col += cell.chars().count() + 1;
+    }
+    if !has_time {
+        return Err(Problem::error(
+            codes::TRACE_NO_TIME_COLUMN.id,
+            "trace header has no `time_ms` column",
+            Some(Location::new(file, header_line, 1)),
+        ));
+    }
+    for s in plant.inputs.iter().chain(&plant.outputs) {
+        let present = columns.iter().flatten().any(|&(out, i)| {
+            if out {
+                plant.outputs[i].id == s.id
+            } else {
+                plant.inputs[i].id == s.id
+            }
+        });
+        if !present {
+            return Err(Problem::error(
+                codes::TRACE_MISSING_SIGNAL.id,
+                format!("trace has no column for signal `{}`", s.id),
+                Some(Location::new(file, header_line, 1)),
+            ));
+        }
+    }
+    Ok(columns)
 }
 
 /// The header line for `plant` (no newline).
