@@ -911,7 +911,14 @@ impl Simulation {
     /// Applies an operator action now; the result is journaled.
     pub fn act(&mut self, action: &OperatorAction) -> Result<(), String> {
         let now = self.now();
-        let result = match action {
+        let result = self.apply_action(action);
+        self.journal_action(now, action, &result);
+        result
+    }
+
+    /// Carries out an operator action, without journaling it.
+    fn apply_action(&mut self, action: &OperatorAction) -> Result<(), String> {
+        match action {
             OperatorAction::Start | OperatorAction::Stop if self.manual.is_some() => Err(
                 "refused in manual mode: leave manual mode first (the program restarts \
                  from its initial steps)"
@@ -992,8 +999,17 @@ impl Simulation {
                 self.engine.set_hold(false);
                 Ok(())
             }
-        };
-        match (&result, action) {
+        }
+    }
+
+    /// Journals an operator action and its result.
+    fn journal_action(
+        &mut self,
+        now: Millis,
+        action: &OperatorAction,
+        result: &Result<(), String>,
+    ) {
+        match (result, action) {
             (Ok(()), OperatorAction::Reset) => {
                 for key in self.alarms.active_keys(AlarmKind::FilterTrip) {
                     self.alarms.clear(now, &key);
@@ -1007,33 +1023,7 @@ impl Simulation {
             }
             (Err(e), OperatorAction::Reset) => self.log("reset_refused", e.clone()),
             (Ok(()), &OperatorAction::Reinitialise { emptied }) => {
-                for key in self.alarms.active_keys(AlarmKind::FilterTrip) {
-                    self.alarms.clear(now, &key);
-                }
-                if self.diagnosers.is_some() {
-                    self.diagnosers_cleared(
-                        now,
-                        "diagnosers restarted with the re-initialisation: fault flags cleared, \
-                         sensors read again, no certain decision until each model is back in \
-                         its initial state",
-                    );
-                }
-                let observers = if emptied {
-                    "the plant emptied, every observer restarts empty"
-                } else {
-                    "the items left in place, the observers cleared where the sensors \
-                     leave no room for their item (the others kept)"
-                };
-                self.log_coded(
-                    "reinitialise",
-                    format!(
-                        "operator re-initialisation after a check of the plant: the \
-                         control program back to its initial steps, the sensors taken as \
-                         read, {observers}, the trip ended"
-                    ),
-                    "journal-reinitialise",
-                    fields([("emptied", emptied.to_string())]),
-                );
+                self.log_reinitialise(now, emptied);
             }
             (Ok(()), OperatorAction::Manual(true)) => self.log_coded(
                 "manual",
@@ -1055,40 +1045,7 @@ impl Simulation {
                 "journal-by-hand",
                 fields([("output", id.clone()), ("on", on.to_string())]),
             ),
-            (Err(e), OperatorAction::ManualSet(id, on)) => {
-                // What the refusal says, as data: the output, the request and each
-                // refusing constraint with the values that make it refuse.
-                let refused = self
-                    .check_manual(id, *on)
-                    .map(|(_, r)| r)
-                    .unwrap_or_default();
-                let (code, mut f) = if refused.is_empty() {
-                    ("", BTreeMap::new())
-                } else {
-                    (
-                        "journal-manual-refused",
-                        fields([
-                            ("output", id.clone()),
-                            ("on", on.to_string()),
-                            (
-                                "constraints",
-                                refused
-                                    .iter()
-                                    .map(|c| c.id.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(","),
-                            ),
-                        ]),
-                    )
-                };
-                for c in &refused {
-                    f.insert(
-                        format!("with-{}", c.id),
-                        texts::request_context(c).join(", "),
-                    );
-                }
-                self.log_coded("manual_refused", e.clone(), code, f);
-            }
+            (Err(e), OperatorAction::ManualSet(id, on)) => self.log_manual_refused(id, *on, e),
             (
                 Ok(()),
                 OperatorAction::Bypass {
@@ -1097,22 +1054,7 @@ impl Simulation {
                     reason,
                     by,
                 },
-            ) => self.log_coded(
-                "bypass",
-                format!(
-                    "{constraint} bypassed for {minutes} min by {by}: {reason} (the filter \
-                     does not enforce it until {} ms)",
-                    now.0 + minutes * 60_000
-                ),
-                "journal-bypass",
-                fields([
-                    ("constraint", constraint.clone()),
-                    ("minutes", minutes.to_string()),
-                    ("by", by.clone()),
-                    ("reason", reason.clone()),
-                    ("until_ms", (now.0 + minutes * 60_000).to_string()),
-                ]),
-            ),
+            ) => self.log_bypass(now, constraint, *minutes, reason, by),
             (Err(e), OperatorAction::Bypass { .. }) => self.log("bypass_refused", e.clone()),
             (Ok(()), OperatorAction::AnswerDoubt { component, .. }) => {
                 let conclusion = self.answers.get(component).cloned().unwrap_or_default();
@@ -1146,7 +1088,93 @@ impl Simulation {
             }
             (Err(e), a) => self.log("operator_refused", format!("{a:?}: {e}")),
         }
-        result
+    }
+
+    /// Clears the trip alarms and journals an operator re-initialisation.
+    fn log_reinitialise(&mut self, now: Millis, emptied: bool) {
+        for key in self.alarms.active_keys(AlarmKind::FilterTrip) {
+            self.alarms.clear(now, &key);
+        }
+        if self.diagnosers.is_some() {
+            self.diagnosers_cleared(
+                now,
+                "diagnosers restarted with the re-initialisation: fault flags cleared, \
+                 sensors read again, no certain decision until each model is back in \
+                 its initial state",
+            );
+        }
+        let observers = if emptied {
+            "the plant emptied, every observer restarts empty"
+        } else {
+            "the items left in place, the observers cleared where the sensors \
+             leave no room for their item (the others kept)"
+        };
+        self.log_coded(
+            "reinitialise",
+            format!(
+                "operator re-initialisation after a check of the plant: the \
+                 control program back to its initial steps, the sensors taken as \
+                 read, {observers}, the trip ended"
+            ),
+            "journal-reinitialise",
+            fields([("emptied", emptied.to_string())]),
+        );
+    }
+
+    /// Journals a refused manual command with the constraints that refuse it.
+    fn log_manual_refused(&mut self, id: &str, on: bool, e: &str) {
+        // What the refusal says, as data: the output, the request and each
+        // refusing constraint with the values that make it refuse.
+        let refused = self
+            .check_manual(id, on)
+            .map(|(_, r)| r)
+            .unwrap_or_default();
+        let (code, mut f) = if refused.is_empty() {
+            ("", BTreeMap::new())
+        } else {
+            (
+                "journal-manual-refused",
+                fields([
+                    ("output", id.to_string()),
+                    ("on", on.to_string()),
+                    (
+                        "constraints",
+                        refused
+                            .iter()
+                            .map(|c| c.id.as_str())
+                            .collect::<Vec<_>>()
+                            .join(","),
+                    ),
+                ]),
+            )
+        };
+        for c in &refused {
+            f.insert(
+                format!("with-{}", c.id),
+                texts::request_context(c).join(", "),
+            );
+        }
+        self.log_coded("manual_refused", e.to_string(), code, f);
+    }
+
+    /// Journals a bypass granted.
+    fn log_bypass(&mut self, now: Millis, constraint: &str, minutes: u64, reason: &str, by: &str) {
+        self.log_coded(
+            "bypass",
+            format!(
+                "{constraint} bypassed for {minutes} min by {by}: {reason} (the filter \
+             does not enforce it until {} ms)",
+                now.0 + minutes * 60_000
+            ),
+            "journal-bypass",
+            fields([
+                ("constraint", constraint.to_string()),
+                ("minutes", minutes.to_string()),
+                ("by", by.to_string()),
+                ("reason", reason.to_string()),
+                ("until_ms", (now.0 + minutes * 60_000).to_string()),
+            ]),
+        );
     }
 
     /// The diagnosers' flags were cleared (operator's reset, or a live link's restart):
