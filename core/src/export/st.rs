@@ -600,9 +600,9 @@ fn stage_rule(
     let _ = writeln!(
         parts.first,
         "    {acc} := {raw};
-{sus} := FALSE;
-PL_{k}_K := FALSE;
-PL_{k}_PK := FALSE;"
+    {sus} := FALSE;
+    PL_{k}_K := FALSE;
+    PL_{k}_PK := FALSE;"
     );
     // `hold_until_back`: an edge inside the window latches the hold until the
     // reading agrees again (PL_k_L).
@@ -613,13 +613,13 @@ PL_{k}_PK := FALSE;"
             format!(" AND NOT PL_{k}_L"),
             format!(
                 "
-        IF NOT PL_W THEN
-            PL_{k}_L := TRUE;
-        END_IF;"
+            IF NOT PL_W THEN
+                PL_{k}_L := TRUE;
+            END_IF;"
             ),
             format!(
                 "
-    PL_{k}_L := FALSE;"
+        PL_{k}_L := FALSE;"
             ),
         )
     } else {
@@ -628,35 +628,35 @@ PL_{k}_PK := FALSE;"
     let _ = writeln!(
         parts.body,
         "    IF {raw} <> {acc} THEN
-    IF {raw} THEN
-        PL_W := {};
-        PL_OK := PL_W AND ({}) AND ({rise_timed}){latch_ok};
-        PL_CF := {};
-    ELSE
-        PL_W := {};
-        PL_OK := PL_W AND ({}) AND ({fall_timed}){latch_ok};
-        PL_CF := {};
-    END_IF;
-    IF NOT PL_OK THEN
-        {sus} := TRUE;
-        PL_{k}_PK := FALSE;{latch_set}
+        IF {raw} THEN
+            PL_W := {};
+            PL_OK := PL_W AND ({}) AND ({rise_timed}){latch_ok};
+            PL_CF := {};
+        ELSE
+            PL_W := {};
+            PL_OK := PL_W AND ({}) AND ({fall_timed}){latch_ok};
+            PL_CF := {};
+        END_IF;
+        IF NOT PL_OK THEN
+            {sus} := TRUE;
+            PL_{k}_PK := FALSE;{latch_set}
+        ELSE
+            {sus} := FALSE;
+            IF NOT PL_{k}_PK THEN
+                PL_{k}_PK := TRUE;
+                PL_{k}_PS := NOW_MS;
+            END_IF;
+            IF PL_CF THEN
+                {acc} := {raw};
+                PL_{k}_T := NOW_MS;
+                PL_{k}_K := TRUE;
+                PL_{k}_PK := FALSE;{reset_totals}
+            END_IF;
+        END_IF;
     ELSE
         {sus} := FALSE;
-        IF NOT PL_{k}_PK THEN
-            PL_{k}_PK := TRUE;
-            PL_{k}_PS := NOW_MS;
-        END_IF;
-        IF PL_CF THEN
-            {acc} := {raw};
-            PL_{k}_T := NOW_MS;
-            PL_{k}_K := TRUE;
-            PL_{k}_PK := FALSE;{reset_totals}
-        END_IF;
-    END_IF;
-ELSE
-    {sus} := FALSE;
-    PL_{k}_PK := FALSE;{latch_clear}
-END_IF;",
+        PL_{k}_PK := FALSE;{latch_clear}
+    END_IF;",
         since(k, r.min_off_ms),
         stage_cond(symbols, rules, r.rise_when),
         confirm(k, r.rise_confirm_ms),
@@ -689,12 +689,12 @@ fn stage_timing(
         let _ = writeln!(
             parts.track,
             "IF {} THEN
-IF NOT PL_{k}_{edge}K THEN
-    PL_{k}_{edge}K := TRUE;
-    PL_{k}_{edge}S := NOW_MS;
-END_IF;
+    IF NOT PL_{k}_{edge}K THEN
+        PL_{k}_{edge}K := TRUE;
+        PL_{k}_{edge}S := NOW_MS;
+    END_IF;
 ELSE
-PL_{k}_{edge}K := FALSE;
+    PL_{k}_{edge}K := FALSE;
 END_IF;",
             cond(d)
         );
@@ -719,14 +719,14 @@ END_IF;",
         let _ = writeln!(
             parts.track,
             "IF {} THEN
-PL_{k}_{edge} := PL_{k}_{edge} + (NOW_MS - PL_LAST);
+    PL_{k}_{edge} := PL_{k}_{edge} + (NOW_MS - PL_LAST);
 END_IF;",
             cond(d)
         );
         let _ = write!(
             reset_totals,
             "
-            PL_{k}_{edge} := 0;"
+                PL_{k}_{edge} := 0;"
         );
         parts.locals.push((format!("PL_{k}_{edge}"), "LINT"));
         *timed = format!("{timed} AND (NOT PL_{k}_K OR PL_{k}_{edge} >= {ms})");
@@ -738,8 +738,8 @@ END_IF;",
         let _ = writeln!(
             parts.track,
             "IF {} THEN
-PL_{k}_EK := TRUE;
-PL_{k}_ES := NOW_MS;
+    PL_{k}_EK := TRUE;
+    PL_{k}_ES := NOW_MS;
 END_IF;",
             cond(Some(event))
         );
