@@ -118,6 +118,138 @@ fn gcd(a: i64, b: i64) -> i64 {
     if b == 0 { a.abs() } else { gcd(b, a % b) }
 }
 
+/// Length of a conveyor, mm.
+fn conveyor_len(c: &crate::emulator::Conveyor) -> i64 {
+    let (dx, dy) = (c.end.x - c.start.x, c.end.y - c.start.y);
+    ((dx * dx + dy * dy) as f64).sqrt().round() as i64
+}
+
+/// The chain of conveyors from the source, in order.
+fn conveyor_chain(layout: &Layout) -> Result<Vec<usize>, Problem> {
+    let mut chain = Vec::new();
+    let mut cur = layout
+        .conveyors
+        .iter()
+        .position(|c| c.id == layout.source.conveyor)
+        .ok_or_else(|| unsupported("the source conveyor is not in the layout"))?;
+    loop {
+        if chain.contains(&cur) {
+            return Err(unsupported("the conveyor chain loops"));
+        }
+        chain.push(cur);
+        let end = layout.conveyors[cur].end;
+        match layout.conveyors.iter().position(|c| c.start == end) {
+            Some(n) => cur = n,
+            None => break,
+        }
+    }
+    Ok(chain)
+}
+
+/// The exit conveyors at the table's + and − ends at the unloading angle, once the chain
+/// is checked to end at the table's −u end at the loading angle.
+fn table_exits(layout: &Layout, chain: &[usize]) -> Result<(usize, usize), Problem> {
+    let t = &layout.table;
+    let rad = |mdeg: i32| (f64::from(mdeg) / 1000.0).to_radians();
+    let table_end = |mdeg: i32, plus: bool| {
+        let a = rad(mdeg);
+        let s = if plus { 1.0 } else { -1.0 } * t.half_length_mm as f64;
+        (
+            t.center.x as f64 + s * a.cos(),
+            t.center.y as f64 + s * a.sin(),
+        )
+    };
+    let close =
+        |p: crate::emulator::Point, q: (f64, f64)| (p.x as f64 - q.0).hypot(p.y as f64 - q.1) < 1.0;
+    let last = layout.conveyors[*chain.last().unwrap_or(&0)].end;
+    if !close(last, table_end(t.loading_mdeg, false)) {
+        return Err(unsupported(
+            "the conveyor chain must end at the table's -u end at the loading angle",
+        ));
+    }
+    let exit_at = |plus: bool| {
+        layout
+            .conveyors
+            .iter()
+            .position(|c| close(c.start, table_end(t.unloading_mdeg, plus)))
+    };
+    let (Some(exit_plus), Some(exit_minus)) = (exit_at(true), exit_at(false)) else {
+        return Err(unsupported(
+            "the table needs an exit conveyor at each end at the unloading angle",
+        ));
+    };
+    Ok((exit_plus, exit_minus))
+}
+
+/// Where the sensors are: presence probes (mm), angle windows, sensors not modelled.
+struct SensorPlaces {
+    probes_mm: Vec<(usize, bool, i64, bool)>,
+    angles: Vec<(usize, i32, i32)>,
+    unmodelled: Vec<String>,
+}
+
+/// Places the sensors on the chain and the table; their positions join `lens`.
+fn place_sensors(
+    layout: &Layout,
+    plant: &Plant,
+    chain: &[usize],
+    (exit_plus, exit_minus): (usize, usize),
+    lens: &mut Vec<i64>,
+) -> SensorPlaces {
+    let t = &layout.table;
+    let dims = [layout.source.small, layout.source.large];
+    let max_box = dims.iter().map(|d| d.length_mm).max().unwrap_or(0);
+    let len_of = conveyor_len;
+    let mut probes_mm: Vec<(usize, bool, i64, bool)> = Vec::new();
+    let mut unmodelled = Vec::new();
+    let mut angles = Vec::new();
+    for s in &layout.sensors {
+        let Some(input) = plant.input(&s.id) else {
+            continue;
+        };
+        match &s.kind {
+            SensorKind::Angle { min_mdeg, max_mdeg } => {
+                angles.push((input, min_mdeg * 1000, max_mdeg * 1000));
+            }
+            SensorKind::Presence { part, at_mm, beam } => {
+                let large_only = matches!(beam, crate::emulator::Beam::High)
+                    && dims[0].height_mm < layout.high_beam_mm;
+                if dims[1].height_mm < layout.high_beam_mm
+                    && matches!(beam, crate::emulator::Beam::High)
+                {
+                    unmodelled.push(s.id.clone());
+                    continue;
+                }
+                if *part == t.id {
+                    probes_mm.push((input, true, at_mm + t.half_length_mm, large_only));
+                    lens.push(at_mm + t.half_length_mm);
+                } else if let Some(k) = chain.iter().position(|&c| layout.conveyors[c].id == *part)
+                {
+                    let base: i64 = chain[..k]
+                        .iter()
+                        .map(|&c| len_of(&layout.conveyors[c]))
+                        .sum();
+                    probes_mm.push((input, false, base + at_mm, large_only));
+                    lens.push(*at_mm);
+                } else if layout.conveyors[exit_plus].id == *part && *at_mm < max_box {
+                    probes_mm.push((input, true, 2 * t.half_length_mm + at_mm, large_only));
+                    lens.push(*at_mm);
+                } else if layout.conveyors[exit_minus].id == *part && *at_mm < max_box {
+                    probes_mm.push((input, true, -at_mm, large_only));
+                    lens.push(*at_mm);
+                } else {
+                    unmodelled.push(s.id.clone());
+                }
+            }
+        }
+    }
+    SensorPlaces {
+        probes_mm,
+        angles,
+        unmodelled,
+    }
+}
+
 fn unsupported(msg: impl Into<String>) -> Problem {
     Problem::error(codes::VERIFY_UNSUPPORTED.id, msg.into(), None)
 }
@@ -135,107 +267,20 @@ impl Geometry {
                 "the verifier needs every surface at the same speed",
             ));
         }
-        let len_of = |c: &crate::emulator::Conveyor| {
-            let (dx, dy) = (c.end.x - c.start.x, c.end.y - c.start.y);
-            ((dx * dx + dy * dy) as f64).sqrt().round() as i64
-        };
+        let len_of = conveyor_len;
         // Chain from the source.
-        let mut chain = Vec::new();
-        let mut cur = layout
-            .conveyors
-            .iter()
-            .position(|c| c.id == layout.source.conveyor)
-            .ok_or_else(|| unsupported("the source conveyor is not in the layout"))?;
-        loop {
-            if chain.contains(&cur) {
-                return Err(unsupported("the conveyor chain loops"));
-            }
-            chain.push(cur);
-            let end = layout.conveyors[cur].end;
-            match layout.conveyors.iter().position(|c| c.start == end) {
-                Some(n) => cur = n,
-                None => break,
-            }
-        }
-        let rad = |mdeg: i32| (f64::from(mdeg) / 1000.0).to_radians();
-        let table_end = |mdeg: i32, plus: bool| {
-            let a = rad(mdeg);
-            let s = if plus { 1.0 } else { -1.0 } * t.half_length_mm as f64;
-            (
-                t.center.x as f64 + s * a.cos(),
-                t.center.y as f64 + s * a.sin(),
-            )
-        };
-        let close = |p: crate::emulator::Point, q: (f64, f64)| {
-            (p.x as f64 - q.0).hypot(p.y as f64 - q.1) < 1.0
-        };
-        let last = layout.conveyors[*chain.last().unwrap_or(&0)].end;
-        if !close(last, table_end(t.loading_mdeg, false)) {
-            return Err(unsupported(
-                "the conveyor chain must end at the table's -u end at the loading angle",
-            ));
-        }
-        let exit_at = |plus: bool| {
-            layout
-                .conveyors
-                .iter()
-                .position(|c| close(c.start, table_end(t.unloading_mdeg, plus)))
-        };
-        let (Some(exit_plus), Some(exit_minus)) = (exit_at(true), exit_at(false)) else {
-            return Err(unsupported(
-                "the table needs an exit conveyor at each end at the unloading angle",
-            ));
-        };
+        let chain = conveyor_chain(layout)?;
+        let (exit_plus, exit_minus) = table_exits(layout, &chain)?;
         let dims = [layout.source.small, layout.source.large];
-        let max_box = dims.iter().map(|d| d.length_mm).max().unwrap_or(0);
         // Lengths that must fall on cell boundaries.
         let mut lens: Vec<i64> = vec![2 * t.half_length_mm];
         lens.extend(chain.iter().map(|&c| len_of(&layout.conveyors[c])));
         lens.extend(dims.iter().map(|d| d.length_mm));
-        let mut probes_mm: Vec<(usize, bool, i64, bool)> = Vec::new();
-        let mut unmodelled = Vec::new();
-        let mut angles = Vec::new();
-        for s in &layout.sensors {
-            let Some(input) = plant.input(&s.id) else {
-                continue;
-            };
-            match &s.kind {
-                SensorKind::Angle { min_mdeg, max_mdeg } => {
-                    angles.push((input, min_mdeg * 1000, max_mdeg * 1000));
-                }
-                SensorKind::Presence { part, at_mm, beam } => {
-                    let large_only = matches!(beam, crate::emulator::Beam::High)
-                        && dims[0].height_mm < layout.high_beam_mm;
-                    if dims[1].height_mm < layout.high_beam_mm
-                        && matches!(beam, crate::emulator::Beam::High)
-                    {
-                        unmodelled.push(s.id.clone());
-                        continue;
-                    }
-                    if *part == t.id {
-                        probes_mm.push((input, true, at_mm + t.half_length_mm, large_only));
-                        lens.push(at_mm + t.half_length_mm);
-                    } else if let Some(k) =
-                        chain.iter().position(|&c| layout.conveyors[c].id == *part)
-                    {
-                        let base: i64 = chain[..k]
-                            .iter()
-                            .map(|&c| len_of(&layout.conveyors[c]))
-                            .sum();
-                        probes_mm.push((input, false, base + at_mm, large_only));
-                        lens.push(*at_mm);
-                    } else if layout.conveyors[exit_plus].id == *part && *at_mm < max_box {
-                        probes_mm.push((input, true, 2 * t.half_length_mm + at_mm, large_only));
-                        lens.push(*at_mm);
-                    } else if layout.conveyors[exit_minus].id == *part && *at_mm < max_box {
-                        probes_mm.push((input, true, -at_mm, large_only));
-                        lens.push(*at_mm);
-                    } else {
-                        unmodelled.push(s.id.clone());
-                    }
-                }
-            }
-        }
+        let SensorPlaces {
+            probes_mm,
+            angles,
+            unmodelled,
+        } = place_sensors(layout, plant, &chain, (exit_plus, exit_minus), &mut lens);
         let cell = lens.iter().fold(0, |g, &l| gcd(g, l));
         if cell <= 0 {
             return Err(unsupported("degenerate layout lengths"));
