@@ -509,6 +509,80 @@ impl Geometry {
             }
         }
         // Drive.
+        let vels = self.drive(boxes, p1, out);
+        // Blocking (one cell per step: a blocked box stays).
+        self.block(boxes, &vels, &mut ev);
+        // Transfer: drops and deliveries.
+        let mut kept_a = [ABox::default(); MAX_BOXES];
+        let mut nk = 0usize;
+        for &b in boxes.iter() {
+            let (lo, l) = (i32::from(b.lo), self.len(&b));
+            let c2 = 2 * lo + l;
+            let bounds = self.parts(b.on_table, p1);
+            let bounds = bounds.as_slice();
+            let (first, last) = (bounds[0], bounds[bounds.len() - 1]);
+            if c2 > 2 * last || c2 < 2 * first {
+                ev.hazard.get_or_insert(HazardKind::Dropped);
+                continue;
+            }
+            if b.on_table && p1 == 1 {
+                // On an exit, past every modelled exit sensor: gone to the elevator.
+                let beyond_plus = lo > self.table_len
+                    && self
+                        .probes
+                        .iter()
+                        .all(|p| !p.on_table || p.at < lo || p.at <= self.table_len);
+                let beyond_minus = lo + l < 0
+                    && self
+                        .probes
+                        .iter()
+                        .all(|p| !p.on_table || p.at > lo + l || p.at >= 0);
+                if beyond_plus {
+                    ev.delivered_plus = true;
+                    continue;
+                }
+                if beyond_minus {
+                    ev.delivered_minus = true;
+                    continue;
+                }
+            }
+            kept_a[nk] = b;
+            nk += 1;
+        }
+        let kept = &mut kept_a[..nk];
+        // Shear and push.
+        self.shear_and_push(kept, p0, p1, out, &mut ev);
+        // Arrival at the source start.
+        if let Some(size) = arrival {
+            let nb = ABox {
+                on_table: false,
+                lo: 0,
+                large: size == BoxSize::Large,
+            };
+            let l = self.len(&nb);
+            let free = kept.iter().all(|b| {
+                b.on_table
+                    || i32::from(b.lo) >= l + self.spawn_gap
+                    || i32::from(b.lo) >= self.joints[0]
+            });
+            if free && nk < MAX_BOXES {
+                kept_a[nk] = nb;
+                nk += 1;
+            }
+        }
+        let kept = &mut kept_a[..nk];
+        kept.sort_unstable();
+        let mut next = PlantState {
+            angle,
+            n: nk as u8,
+            boxes: [ABox::default(); MAX_BOXES],
+        };
+        next.boxes[..nk].copy_from_slice(kept);
+        (next, ev)
+    }
+
+    /// The speed of each box: its part's, or a neighbour's under it by more than the margin.
+    fn drive(&self, boxes: &[ABox], p1: u8, out: u64) -> [i32; MAX_BOXES] {
         let mut vels = [0i32; MAX_BOXES];
         for (bi, b) in boxes.iter().enumerate() {
             let bounds = self.parts(b.on_table, p1);
@@ -531,7 +605,12 @@ impl Geometry {
             }
             vels[bi] = v;
         }
-        // Blocking (one cell per step: a blocked box stays).
+        vels
+    }
+
+    /// Moves the boxes by their speeds; a box that would overlap another stays, a collision
+    /// when the other does not move away fast enough.
+    fn block(&self, boxes: &mut [ABox], vels: &[i32; MAX_BOXES], ev: &mut StepEvents) {
         let mut new = [0i32; MAX_BOXES];
         for (i, b) in boxes.iter().enumerate() {
             new[i] = i32::from(b.lo) + vels[i];
@@ -572,45 +651,10 @@ impl Geometry {
         for (b, n) in boxes.iter_mut().zip(&new) {
             b.lo = *n as i16;
         }
-        // Transfer: drops and deliveries.
-        let mut kept_a = [ABox::default(); MAX_BOXES];
-        let mut nk = 0usize;
-        for &b in boxes.iter() {
-            let (lo, l) = (i32::from(b.lo), self.len(&b));
-            let c2 = 2 * lo + l;
-            let bounds = self.parts(b.on_table, p1);
-            let bounds = bounds.as_slice();
-            let (first, last) = (bounds[0], bounds[bounds.len() - 1]);
-            if c2 > 2 * last || c2 < 2 * first {
-                ev.hazard.get_or_insert(HazardKind::Dropped);
-                continue;
-            }
-            if b.on_table && p1 == 1 {
-                // On an exit, past every modelled exit sensor: gone to the elevator.
-                let beyond_plus = lo > self.table_len
-                    && self
-                        .probes
-                        .iter()
-                        .all(|p| !p.on_table || p.at < lo || p.at <= self.table_len);
-                let beyond_minus = lo + l < 0
-                    && self
-                        .probes
-                        .iter()
-                        .all(|p| !p.on_table || p.at > lo + l || p.at >= 0);
-                if beyond_plus {
-                    ev.delivered_plus = true;
-                    continue;
-                }
-                if beyond_minus {
-                    ev.delivered_minus = true;
-                    continue;
-                }
-            }
-            kept_a[nk] = b;
-            nk += 1;
-        }
-        let kept = &mut kept_a[..nk];
-        // Shear and push.
+    }
+
+    /// Shear hazards while rotating, and boxes pushed against a stopped surface.
+    fn shear_and_push(&self, kept: &[ABox], p0: u8, p1: u8, out: u64, ev: &mut StepEvents) {
         let rotating = p0 == 2 || p1 == 2;
         for b in kept.iter() {
             let (lo, l) = (i32::from(b.lo), self.len(b));
@@ -662,33 +706,6 @@ impl Geometry {
                 }
             }
         }
-        // Arrival at the source start.
-        if let Some(size) = arrival {
-            let nb = ABox {
-                on_table: false,
-                lo: 0,
-                large: size == BoxSize::Large,
-            };
-            let l = self.len(&nb);
-            let free = kept.iter().all(|b| {
-                b.on_table
-                    || i32::from(b.lo) >= l + self.spawn_gap
-                    || i32::from(b.lo) >= self.joints[0]
-            });
-            if free && nk < MAX_BOXES {
-                kept_a[nk] = nb;
-                nk += 1;
-            }
-        }
-        let kept = &mut kept_a[..nk];
-        kept.sort_unstable();
-        let mut next = PlantState {
-            angle,
-            n: nk as u8,
-            boxes: [ABox::default(); MAX_BOXES],
-        };
-        next.boxes[..nk].copy_from_slice(kept);
-        (next, ev)
     }
 
     /// True when a new box of `size` can appear at the source now.
