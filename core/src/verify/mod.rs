@@ -494,32 +494,14 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
         delivers.push([false, false]);
         let inputs = model.geo.sensors(&s.plant);
         let key = (inputs, s.prev, s.obs);
-        let ctx = match cache.get(&key) {
-            Some(c) => c.clone(),
-            None => {
-                let c = context(model, filter, &s, &mut frame, &mut obs, &mut viol, exits);
-                cache.insert(key, c.clone());
-                c
-            }
-        };
+        let ctx = cache
+            .entry(key)
+            .or_insert_with(|| context(model, filter, &s, &mut frame, &mut obs, &mut viol, exits))
+            .clone();
         let (ov, counts) = (ctx.ov, ctx.counts);
-        for (k, slot) in inv.iter_mut().enumerate() {
-            if slot.is_none() && ctx.inv >> k & 1 == 1 {
-                *slot = Some(si);
-            }
-        }
-        if ctx.no_fallback && no_fallback.is_none() {
-            no_fallback = Some(si);
-        }
+        first_seen(&ctx, si, &mut inv, &mut no_fallback);
         let applied_set = &ctx.applied;
-        let mut arrivals = vec![None];
-        if usize::from(s.plant.n) < model.max_boxes {
-            for size in [BoxSize::Small, BoxSize::Large] {
-                if model.geo.can_spawn(&s.plant, size) {
-                    arrivals.push(Some(size));
-                }
-            }
-        }
+        let arrivals = arrivals(model, &s);
         for &applied in applied_set.iter() {
             for &arrival in &arrivals {
                 transitions += 1;
@@ -556,27 +538,91 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
                     ),
                 };
                 let key = model.pack(&next);
-                let id = match index.get(&key) {
-                    Some(&id) => id,
-                    None => {
-                        let id = states.len() as u32;
-                        index.insert(key, id);
-                        states.push(key);
-                        edges.push(Some(edge));
-                        id
-                    }
-                };
+                let id = intern(&mut index, &mut states, &mut edges, key, edge);
                 succ.push(id);
             }
         }
     }
     // Backward reachability to a delivering state, per exit.
+    drop(index);
+    let (always, stuck_at) = deliverable(states.len(), succ, succ_start, &delivers);
+    let findings = Findings {
+        hazard,
+        kinds,
+        no_fallback,
+        delivered,
+        inv,
+    };
+    report(
+        model,
+        &states,
+        &edges,
+        transitions,
+        findings,
+        always,
+        stuck_at,
+    )
+}
+
+/// The id of state `key`, added (reached by `edge`) when new.
+fn intern(
+    index: &mut FxMap<u128, u32>,
+    states: &mut Vec<u128>,
+    edges: &mut Vec<Option<Edge>>,
+    key: u128,
+    edge: Edge,
+) -> u32 {
+    match index.get(&key) {
+        Some(&id) => id,
+        None => {
+            let id = states.len() as u32;
+            index.insert(key, id);
+            states.push(key);
+            edges.push(Some(edge));
+            id
+        }
+    }
+}
+
+/// Records state `si` as the first where each invariant holds, and where no fallback
+/// vector exists, when it is.
+fn first_seen(ctx: &Ctx, si: u32, inv: &mut [Option<u32>], no_fallback: &mut Option<u32>) {
+    for (k, slot) in inv.iter_mut().enumerate() {
+        if slot.is_none() && ctx.inv >> k & 1 == 1 {
+            *slot = Some(si);
+        }
+    }
+    if ctx.no_fallback && no_fallback.is_none() {
+        *no_fallback = Some(si);
+    }
+}
+
+/// The arrivals possible in `s`: none, and each box size that fits at the source.
+fn arrivals(model: &Model, s: &AState) -> Vec<Option<BoxSize>> {
+    let mut arrivals = vec![None];
+    if usize::from(s.plant.n) < model.max_boxes {
+        for size in [BoxSize::Small, BoxSize::Large] {
+            if model.geo.can_spawn(&s.plant, size) {
+                arrivals.push(Some(size));
+            }
+        }
+    }
+    arrivals
+}
+
+/// Backward reachability to a delivering state, per exit: whether every state can still
+/// deliver, and the first state that cannot.
+fn deliverable(
+    n_states: usize,
+    succ: Vec<u32>,
+    mut succ_start: Vec<usize>,
+    delivers: &[[bool; 2]],
+) -> ([bool; 2], [Option<u32>; 2]) {
     let mut always = [true, true];
     let mut stuck_at: [Option<u32>; 2] = [None, None];
-    drop(index);
     succ_start.push(succ.len());
     // Predecessors in compressed rows.
-    let n = states.len();
+    let n = n_states;
     let mut pstart = vec![0usize; n + 1];
     for &j in &succ {
         pstart[j as usize + 1] += 1;
@@ -595,9 +641,7 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
     drop(succ);
     for side in 0..2 {
         let mut good: Vec<bool> = delivers.iter().map(|d| d[side]).collect();
-        let mut stack: Vec<u32> = (0..states.len() as u32)
-            .filter(|&i| good[i as usize])
-            .collect();
+        let mut stack: Vec<u32> = (0..n_states as u32).filter(|&i| good[i as usize]).collect();
         while let Some(i) = stack.pop() {
             for &p in &pred[pstart[i as usize]..pstart[i as usize + 1]] {
                 if !good[p as usize] {
@@ -609,8 +653,37 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
         always[side] = good.iter().all(|&g| g);
         stuck_at[side] = good.iter().position(|&g| !g).map(|i| i as u32);
     }
+    (always, stuck_at)
+}
+
+/// What the exploration found, before traces are built.
+struct Findings {
+    hazard: Option<(String, u32, Edge)>,
+    kinds: Vec<(HazardKind, u32, Edge)>,
+    no_fallback: Option<u32>,
+    delivered: [Option<(u32, Edge)>; 2],
+    inv: Vec<Option<u32>>,
+}
+
+/// The exploration's report, with the traces of its findings.
+fn report(
+    model: &Model,
+    states: &[u128],
+    edges: &[Option<Edge>],
+    transitions: u64,
+    findings: Findings,
+    always: [bool; 2],
+    stuck_at: [Option<u32>; 2],
+) -> Exploration {
+    let Findings {
+        hazard,
+        kinds,
+        no_fallback,
+        delivered,
+        inv,
+    } = findings;
     let trace = |what: String, last: u32, extra: Option<Edge>| -> Trace {
-        build_trace(model, &states, &edges, what, last, extra)
+        build_trace(model, states, edges, what, last, extra)
     };
     Exploration {
         states: states.len() + kinds.len().min(1),
@@ -642,7 +715,7 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
             .collect(),
         hazard_kinds: kinds
             .iter()
-            .map(|(k, si, _)| (hazard_name(*k).to_string(), depth(&edges, *si) + 1))
+            .map(|(k, si, _)| (hazard_name(*k).to_string(), depth(edges, *si) + 1))
             .collect(),
     }
 }
