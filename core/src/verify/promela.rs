@@ -88,9 +88,20 @@ fn generate_with(
     symbols: &Symbols,
     deliveries: bool,
 ) -> String {
-    let g = &model.geo;
     let mut p = String::new();
     let _ = symbols;
+    header(&mut p, model);
+    geometry_inlines(&mut p, model);
+    observers_inline(&mut p, model, symbols);
+    step_motion(&mut p, model);
+    step_transfer(&mut p, model);
+    plc_process(&mut p, model, set, deliveries);
+    p
+}
+
+/// The model's constants and global variables, and the small macros.
+fn header(p: &mut String, model: &Model) {
+    let g = &model.geo;
     let nb_max = model.max_boxes;
     let te = g.joints.last().copied().unwrap_or(0);
     let mq = g.margin_mm / g.cell_mm;
@@ -127,6 +138,12 @@ fn generate_with(
     );
     p.push_str("#define LEN(x) (bl[x] -> LL : LS)\n#define SETHZ(x) if :: hz == 0 -> hz = x :: else -> skip fi\n");
     p.push_str("#define POS(a, r) if :: (a - LOAD <= DTOL && LOAD - a <= DTOL) -> r = 0 :: (a - UNLOAD <= DTOL && UNLOAD - a <= DTOL) -> r = 1 :: else -> r = 2 fi\n\n");
+}
+
+/// The inlines of the geometry: part bounds, part of a box, velocity of a part, sensors.
+fn geometry_inlines(p: &mut String, model: &Model) {
+    let g = &model.geo;
+    let te = g.joints.last().copied().unwrap_or(0);
     // Bounds.
     let mut line = String::new();
     line.push_str("bd[0] = 0; ");
@@ -189,6 +206,10 @@ fn generate_with(
         }
     }
     p.push_str("    i++\n  :: else -> break od\n}\n\n");
+}
+
+/// The observers' inline.
+fn observers_inline(p: &mut String, model: &Model, symbols: &Symbols) {
     // Observers.
     p.push_str("inline OBSERVERS() {\n");
     for (n, d) in model.observers.defs.iter().enumerate() {
@@ -224,34 +245,20 @@ fn generate_with(
         }
     }
     p.push_str("}\n\n");
+}
+
+/// The table-side test, and the first phases of the plant's step: rotation, drive,
+/// blocking.
+fn step_motion(p: &mut String, model: &Model) {
+    let g = &model.geo;
     // Table-side test and exit test.
     let tk = g.joints.len();
     let _ = writeln!(
         p,
         "inline TSIDE() {{\n  if\n  :: bt[i] && p1 == 1 -> ts = (k == 1) || (k == 0 && e == 1) || (k == 2 && e == 0)\n  :: bt[i] && p1 != 1 -> ts = 1\n  :: !bt[i] -> ts = (k + 1 == {tk} && e == 1) || (k == {tk})\n  fi\n}}\n"
     );
-    let plus_probes: Vec<i32> = g
-        .probes
-        .iter()
-        .filter(|p| p.on_table && p.at > g.table_len)
-        .map(|p| p.at)
-        .collect();
-    let minus_probes: Vec<i32> = g
-        .probes
-        .iter()
-        .filter(|p| p.on_table && p.at < 0)
-        .map(|p| p.at)
-        .collect();
-    let beyond_plus = plus_probes
-        .iter()
-        .map(|a| format!(" && {a} < lo"))
-        .collect::<String>();
-    let beyond_minus = minus_probes
-        .iter()
-        .map(|a| format!(" && {a} > lo + l"))
-        .collect::<String>();
     // The step.
-    let _ = writeln!(
+    let _ = write!(
         p,
         r#"inline STEP() {{
   hz = 0; dplus = 0; dminus = 0;
@@ -307,7 +314,37 @@ fn generate_with(
     :: else -> skip fi; i++
   :: else -> break od;
   i = 0; do :: i < nb -> blo[i] = nw[i]; i++ :: else -> break od;
-  /* transfer */
+"#,
+        rot = g.rotate
+    );
+}
+
+/// The last phases of the plant's step: transfer, shear and push, arrival.
+fn step_transfer(p: &mut String, model: &Model) {
+    let g = &model.geo;
+    let plus_probes: Vec<i32> = g
+        .probes
+        .iter()
+        .filter(|p| p.on_table && p.at > g.table_len)
+        .map(|p| p.at)
+        .collect();
+    let minus_probes: Vec<i32> = g
+        .probes
+        .iter()
+        .filter(|p| p.on_table && p.at < 0)
+        .map(|p| p.at)
+        .collect();
+    let beyond_plus = plus_probes
+        .iter()
+        .map(|a| format!(" && {a} < lo"))
+        .collect::<String>();
+    let beyond_minus = minus_probes
+        .iter()
+        .map(|a| format!(" && {a} > lo + l"))
+        .collect::<String>();
+    let _ = writeln!(
+        p,
+        r#"  /* transfer */
   i = 0; nk = 0;
   do :: i < nb ->
     l = LEN(i); lo = blo[i]; c2 = 2 * lo + l; tb = bt[i]; BOUNDS(tb, p1); keep = 1;
@@ -354,9 +391,13 @@ fn generate_with(
   :: else -> skip fi;
   arr = 0
 }}
-"#,
-        rot = g.rotate
+"#
     );
+}
+
+/// The PLC process: sensors, a command vector the constraints allow, the step.
+fn plc_process(p: &mut String, model: &Model, set: &ConstraintSet, deliveries: bool) {
+    let g = &model.geo;
     // The PLC loop.
     p.push_str("active proctype plc() {\nend:\n  do\n  :: !dead ->\n    d_step {\n      SENSORS(); OBSERVERS();\n      freeS = (nb < MB); freeL = (nb < MB);\n      i = 0;\n      do :: i < nb -> if :: !bt[i] && blo[i] < LS + GAP -> freeS = 0 :: else -> skip fi;\n                       if :: !bt[i] && blo[i] < LL + GAP -> freeL = 0 :: else -> skip fi; i++\n      :: else -> break od\n    };\n    if\n");
     let n_free = model.free_outputs.len();
@@ -402,7 +443,6 @@ fn generate_with(
         p.push_str(";\n      assert(!dplus); assert(!dminus)");
     }
     p.push_str("\n    }\n  od\n}\n");
-    p
 }
 
 /// What a `pan -c0` run of a generated model reported.
