@@ -281,36 +281,7 @@ fn compile_one(
 ) -> Option<Component> {
     let before = ctx.problems.len();
     // Signals.
-    let mut signals = Vec::new();
-    for s in &c.signals {
-        match symbols.lookup(s) {
-            Some((space @ (Space::Input | Space::Output), index)) => signals.push(Sig {
-                name: s.clone(),
-                var: Var {
-                    space,
-                    index,
-                    prev: false,
-                },
-            }),
-            _ => ctx.err(
-                codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
-                s,
-                format!("`{s}` is not a sensor or actuator of the plant"),
-            ),
-        }
-    }
-    if signals.len() > 64 {
-        ctx.err(
-            codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
-            &c.id,
-            "a component observes at most 64 signals".into(),
-        );
-    }
-    let sig_of = |v: Var| {
-        signals
-            .iter()
-            .position(|s| s.var.space == v.space && s.var.index == v.index)
-    };
+    let signals = component_signals(c, symbols, ctx);
     let states: Vec<String> = c.states.iter().map(|s| s.id.clone()).collect();
     let state_of = |n: &str| states.iter().position(|s| s == n);
     let Some(initial) = state_of(&c.initial) else {
@@ -322,79 +293,9 @@ fn compile_one(
         return None;
     };
     // Edges of an expression: (signal, rising, guard).
-    let edge_of = |text: &str| -> Result<(usize, bool, Option<Dnf>), String> {
-        let e = parse_str(text).map_err(|e| format!("`{text}`: {}", e.message))?;
-        let d = e
-            .to_dnf(symbols)
-            .map_err(|e| format!("`{text}`: {}", e.message))?;
-        let mut edge: Option<(usize, bool)> = None;
-        let mut guard: Dnf = Vec::new();
-        let mut unguarded = false;
-        for term in &d {
-            let mut here = None;
-            for l in term {
-                if !l.var.prev {
-                    continue;
-                }
-                let now = Var {
-                    prev: false,
-                    ..l.var
-                };
-                if let Some(n) = term
-                    .iter()
-                    .find(|m| m.var == now && m.positive != l.positive)
-                    && let Some(i) = sig_of(now)
-                {
-                    here = Some((i, n.positive));
-                }
-            }
-            let Some((i, rise)) = here else {
-                return Err(format!(
-                    "`{text}`: every term needs an edge RE(x)/FE(x) of a component signal"
-                ));
-            };
-            if edge.replace((i, rise)).is_some_and(|e| e != (i, rise)) {
-                return Err(format!("`{text}` has more than one edge"));
-            }
-            let now = signals[i].var;
-            let rest: Vec<Literal> = term
-                .iter()
-                .copied()
-                .filter(|l| !(l.var == now || l.var == Var { prev: true, ..now }))
-                .collect();
-            if rest.is_empty() {
-                unguarded = true;
-            }
-            guard.push(rest);
-        }
-        let Some((i, rise)) = edge else {
-            return Err(format!(
-                "`{text}` has no edge RE(x)/FE(x) of a component signal"
-            ));
-        };
-        Ok((i, rise, if unguarded { None } else { Some(guard) }))
-    };
+    let edge_of = |text: &str| edge_in(text, symbols, &signals);
     // Initial values.
-    let mut init_val = 0u64;
-    match term_of(&c.initial_values, symbols) {
-        Ok(t) => {
-            for l in t {
-                match sig_of(l.var) {
-                    Some(i) if !l.var.prev => {
-                        if l.positive {
-                            init_val |= 1 << i;
-                        }
-                    }
-                    _ => ctx.err(
-                        codes::DIAGNOSER_INITIAL_VALUES.id,
-                        &c.initial_values,
-                        format!("`{}`: only component signals at t", c.initial_values),
-                    ),
-                }
-            }
-        }
-        Err(m) => ctx.err(codes::DIAGNOSER_INITIAL_VALUES.id, &c.initial_values, m),
-    }
+    let init_val = initial_values(c, symbols, &signals, ctx);
     // Symbols: bare edges, then guarded.
     let mut syms: Vec<Symbol> = Vec::new();
     for (i, s) in signals.iter().enumerate() {
@@ -638,61 +539,7 @@ fn compile_one(
                 .any(|b| matches!(b, Behaviour::Blocked(_)))
         })
         .collect();
-    let mut partitions = Vec::new();
-    for p in &c.partitions {
-        let mut fs = Vec::new();
-        for f in &p.faults {
-            match faults.iter().position(|x| x == f) {
-                Some(k) => fs.push(k),
-                None => ctx.err(
-                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
-                    f,
-                    format!("partition `{}` names unknown fault `{f}`", p.id),
-                ),
-            }
-        }
-        for a in &p.actuators {
-            if !matches!(symbols.lookup(a), Some((Space::Output, _))) {
-                ctx.err(
-                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
-                    a,
-                    format!(
-                        "partition `{}` names `{a}`, not an actuator of the plant",
-                        p.id
-                    ),
-                );
-            }
-        }
-        partitions.push(Partition {
-            id: p.id.clone(),
-            faults: fs,
-            sensor: p.sensor.clone(),
-            stop: p.stop,
-        });
-    }
-    for i in &c.injections {
-        for e in &i.expected {
-            if !c.partitions.iter().any(|p| &p.id == e) {
-                ctx.err(
-                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
-                    &i.name,
-                    format!(
-                        "injection `{}` expects `{e}`, not a partition of `{}`",
-                        i.name, c.id
-                    ),
-                );
-            }
-        }
-        if let Some(when) = &i.when
-            && let Err(e) = parse_str(when).and_then(|x| x.to_dnf(symbols))
-        {
-            ctx.err(
-                codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
-                when,
-                format!("injection `{}`: `when`: {}", i.name, e.message),
-            );
-        }
-    }
+    let partitions = component_partitions(c, symbols, ctx);
     if ctx.problems.len() > before {
         return None;
     }
@@ -1450,6 +1297,191 @@ fn compile_one(
         pulse_sym,
         motion_sym,
     })
+}
+
+/// The component's signals, resolved in the plant (at most 64).
+fn component_signals(c: &ComponentDef, symbols: &Symbols, ctx: &mut Ctx<'_>) -> Vec<Sig> {
+    let mut signals = Vec::new();
+    for s in &c.signals {
+        match symbols.lookup(s) {
+            Some((space @ (Space::Input | Space::Output), index)) => signals.push(Sig {
+                name: s.clone(),
+                var: Var {
+                    space,
+                    index,
+                    prev: false,
+                },
+            }),
+            _ => ctx.err(
+                codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
+                s,
+                format!("`{s}` is not a sensor or actuator of the plant"),
+            ),
+        }
+    }
+    if signals.len() > 64 {
+        ctx.err(
+            codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
+            &c.id,
+            "a component observes at most 64 signals".into(),
+        );
+    }
+    signals
+}
+
+/// The edge of an expression: (signal, rising, guard); None for the guard when a term
+/// has no other literal.
+fn edge_in(
+    text: &str,
+    symbols: &Symbols,
+    signals: &[Sig],
+) -> Result<(usize, bool, Option<Dnf>), String> {
+    let sig_of = |v: Var| {
+        signals
+            .iter()
+            .position(|s| s.var.space == v.space && s.var.index == v.index)
+    };
+    let e = parse_str(text).map_err(|e| format!("`{text}`: {}", e.message))?;
+    let d = e
+        .to_dnf(symbols)
+        .map_err(|e| format!("`{text}`: {}", e.message))?;
+    let mut edge: Option<(usize, bool)> = None;
+    let mut guard: Dnf = Vec::new();
+    let mut unguarded = false;
+    for term in &d {
+        let mut here = None;
+        for l in term {
+            if !l.var.prev {
+                continue;
+            }
+            let now = Var {
+                prev: false,
+                ..l.var
+            };
+            if let Some(n) = term
+                .iter()
+                .find(|m| m.var == now && m.positive != l.positive)
+                && let Some(i) = sig_of(now)
+            {
+                here = Some((i, n.positive));
+            }
+        }
+        let Some((i, rise)) = here else {
+            return Err(format!(
+                "`{text}`: every term needs an edge RE(x)/FE(x) of a component signal"
+            ));
+        };
+        if edge.replace((i, rise)).is_some_and(|e| e != (i, rise)) {
+            return Err(format!("`{text}` has more than one edge"));
+        }
+        let now = signals[i].var;
+        let rest: Vec<Literal> = term
+            .iter()
+            .copied()
+            .filter(|l| !(l.var == now || l.var == Var { prev: true, ..now }))
+            .collect();
+        if rest.is_empty() {
+            unguarded = true;
+        }
+        guard.push(rest);
+    }
+    let Some((i, rise)) = edge else {
+        return Err(format!(
+            "`{text}` has no edge RE(x)/FE(x) of a component signal"
+        ));
+    };
+    Ok((i, rise, if unguarded { None } else { Some(guard) }))
+}
+
+/// The signal values of the initial state.
+fn initial_values(c: &ComponentDef, symbols: &Symbols, signals: &[Sig], ctx: &mut Ctx<'_>) -> u64 {
+    let sig_of = |v: Var| {
+        signals
+            .iter()
+            .position(|s| s.var.space == v.space && s.var.index == v.index)
+    };
+    let mut init_val = 0u64;
+    match term_of(&c.initial_values, symbols) {
+        Ok(t) => {
+            for l in t {
+                match sig_of(l.var) {
+                    Some(i) if !l.var.prev => {
+                        if l.positive {
+                            init_val |= 1 << i;
+                        }
+                    }
+                    _ => ctx.err(
+                        codes::DIAGNOSER_INITIAL_VALUES.id,
+                        &c.initial_values,
+                        format!("`{}`: only component signals at t", c.initial_values),
+                    ),
+                }
+            }
+        }
+        Err(m) => ctx.err(codes::DIAGNOSER_INITIAL_VALUES.id, &c.initial_values, m),
+    }
+    init_val
+}
+
+/// The component's partitions, and checks of its injections.
+fn component_partitions(c: &ComponentDef, symbols: &Symbols, ctx: &mut Ctx<'_>) -> Vec<Partition> {
+    let faults: Vec<String> = c.faults.iter().map(|f| f.id.clone()).collect();
+    let mut partitions = Vec::new();
+    for p in &c.partitions {
+        let mut fs = Vec::new();
+        for f in &p.faults {
+            match faults.iter().position(|x| x == f) {
+                Some(k) => fs.push(k),
+                None => ctx.err(
+                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
+                    f,
+                    format!("partition `{}` names unknown fault `{f}`", p.id),
+                ),
+            }
+        }
+        for a in &p.actuators {
+            if !matches!(symbols.lookup(a), Some((Space::Output, _))) {
+                ctx.err(
+                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
+                    a,
+                    format!(
+                        "partition `{}` names `{a}`, not an actuator of the plant",
+                        p.id
+                    ),
+                );
+            }
+        }
+        partitions.push(Partition {
+            id: p.id.clone(),
+            faults: fs,
+            sensor: p.sensor.clone(),
+            stop: p.stop,
+        });
+    }
+    for i in &c.injections {
+        for e in &i.expected {
+            if !c.partitions.iter().any(|p| &p.id == e) {
+                ctx.err(
+                    codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
+                    &i.name,
+                    format!(
+                        "injection `{}` expects `{e}`, not a partition of `{}`",
+                        i.name, c.id
+                    ),
+                );
+            }
+        }
+        if let Some(when) = &i.when
+            && let Err(e) = parse_str(when).and_then(|x| x.to_dnf(symbols))
+        {
+            ctx.err(
+                codes::DIAGNOSER_PARTITION_OR_INJECTION.id,
+                when,
+                format!("injection `{}`: `when`: {}", i.name, e.message),
+            );
+        }
+    }
+    partitions
 }
 
 /// A problem at the start of the file (for errors not tied to a name).
