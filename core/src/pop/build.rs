@@ -271,6 +271,17 @@ pub fn compile(
     }
 }
 
+/// An expected evolution: from a state, on one of its symbols, to a state, within an
+/// interval, on an edge of a signal.
+struct Ev {
+    from: usize,
+    syms: Vec<usize>,
+    to: usize,
+    window: Option<usize>,
+    sig: usize,
+    rise: bool,
+}
+
 #[allow(clippy::too_many_lines)]
 fn compile_one(
     c: &ComponentDef,
@@ -384,14 +395,6 @@ fn compile_one(
         },
     };
     // Expected evolutions: (from, symbols matched, to, window, edge).
-    struct Ev {
-        from: usize,
-        syms: Vec<usize>,
-        to: usize,
-        window: Option<usize>,
-        sig: usize,
-        rise: bool,
-    }
     let mut evs: Vec<Ev> = Vec::new();
     let mut guarded_specs = Vec::new();
     for e in &c.expected {
@@ -489,45 +492,7 @@ fn compile_one(
     });
     let motion_sym = syms.len() - 1;
     // Values of every state.
-    let mut values: Vec<Option<u64>> = vec![None; states.len()];
-    values[initial] = Some(init_val);
-    let mut work = vec![initial];
-    while let Some(x) = work.pop() {
-        let Some(v) = values[x] else { continue };
-        for ev in evs.iter().filter(|e| e.from == x) {
-            let before = (v >> ev.sig) & 1 == 1;
-            if before == ev.rise {
-                ctx.err(
-                    codes::DIAGNOSER_INCONSISTENT_VALUES.id,
-                    &c.states[x].id,
-                    format!(
-                        "in state `{}`, `{}` is already {}",
-                        states[x],
-                        signals[ev.sig].name,
-                        u8::from(before)
-                    ),
-                );
-                continue;
-            }
-            let nv = v ^ (1 << ev.sig);
-            match values[ev.to] {
-                None => {
-                    values[ev.to] = Some(nv);
-                    work.push(ev.to);
-                }
-                Some(o) if o != nv => ctx.err(
-                    codes::DIAGNOSER_INCONSISTENT_VALUES.id,
-                    &c.states[ev.to].id,
-                    format!(
-                        "state `{}` is reached with different signal values",
-                        states[ev.to]
-                    ),
-                ),
-                Some(_) => {}
-            }
-        }
-    }
-    let values: Vec<u64> = values.iter().map(|v| v.unwrap_or(init_val)).collect();
+    let values = state_values(c, &signals, &evs, initial, init_val, ctx);
     // Faults and partitions.
     let faults: Vec<String> = c.faults.iter().map(|f| f.id.clone()).collect();
     let blocking: Vec<bool> = c
@@ -1182,17 +1147,7 @@ fn compile_one(
         st.spawn.sort_unstable();
     }
     // Estimates.
-    let mut estimates = Vec::new();
-    for e in &c.estimates {
-        match parse_str(&e.expr).and_then(|x| x.to_dnf(symbols)) {
-            Ok(d) => estimates.push((crate::symbols::estimate_name(&e.sensor), d)),
-            Err(m) => ctx.err(
-                codes::DIAGNOSER_ESTIMATE.id,
-                &e.expr,
-                format!("estimate of `{}`: {}", e.sensor, m.message),
-            ),
-        }
-    }
+    let estimates = component_estimates(c, symbols, ctx);
     // Unexpected evolutions, pruned by the filter.
     let mut unexpected = Vec::new();
     for (x, name) in states.iter().enumerate() {
@@ -1245,29 +1200,7 @@ fn compile_one(
     if ctx.problems.len() > before {
         return None;
     }
-    for (field, list) in [("assumes", &c.assumes), ("assumes_item", &c.assumes_item)] {
-        for a in list {
-            if !matches!(symbols.lookup(a), Some((Space::Input, _))) {
-                ctx.err(
-                    codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
-                    a,
-                    format!("`{field}`: `{a}` is not a sensor of the plant"),
-                );
-            }
-        }
-    }
-    for a in &c.independent {
-        if !signals
-            .iter()
-            .any(|s| &s.name == a && s.var.space == Space::Input)
-        {
-            ctx.err(
-                codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
-                a,
-                format!("`independent`: `{a}` is not a sensor of the component"),
-            );
-        }
-    }
+    check_assumptions(c, symbols, &signals, ctx);
     if ctx.problems.len() > before {
         return None;
     }
@@ -1297,6 +1230,104 @@ fn compile_one(
         pulse_sym,
         motion_sym,
     })
+}
+
+/// The signal values of every state, propagated from the initial state along the
+/// expected evolutions (a state not reached keeps the initial values).
+fn state_values(
+    c: &ComponentDef,
+    signals: &[Sig],
+    evs: &[Ev],
+    initial: usize,
+    init_val: u64,
+    ctx: &mut Ctx<'_>,
+) -> Vec<u64> {
+    let mut values: Vec<Option<u64>> = vec![None; c.states.len()];
+    values[initial] = Some(init_val);
+    let mut work = vec![initial];
+    while let Some(x) = work.pop() {
+        let Some(v) = values[x] else { continue };
+        for ev in evs.iter().filter(|e| e.from == x) {
+            let before = (v >> ev.sig) & 1 == 1;
+            if before == ev.rise {
+                ctx.err(
+                    codes::DIAGNOSER_INCONSISTENT_VALUES.id,
+                    &c.states[x].id,
+                    format!(
+                        "in state `{}`, `{}` is already {}",
+                        c.states[x].id,
+                        signals[ev.sig].name,
+                        u8::from(before)
+                    ),
+                );
+                continue;
+            }
+            let nv = v ^ (1 << ev.sig);
+            match values[ev.to] {
+                None => {
+                    values[ev.to] = Some(nv);
+                    work.push(ev.to);
+                }
+                Some(o) if o != nv => ctx.err(
+                    codes::DIAGNOSER_INCONSISTENT_VALUES.id,
+                    &c.states[ev.to].id,
+                    format!(
+                        "state `{}` is reached with different signal values",
+                        c.states[ev.to].id
+                    ),
+                ),
+                Some(_) => {}
+            }
+        }
+    }
+    values.iter().map(|v| v.unwrap_or(init_val)).collect()
+}
+
+/// The component's estimates: (name, expression).
+fn component_estimates(
+    c: &ComponentDef,
+    symbols: &Symbols,
+    ctx: &mut Ctx<'_>,
+) -> Vec<(String, Dnf)> {
+    let mut estimates = Vec::new();
+    for e in &c.estimates {
+        match parse_str(&e.expr).and_then(|x| x.to_dnf(symbols)) {
+            Ok(d) => estimates.push((crate::symbols::estimate_name(&e.sensor), d)),
+            Err(m) => ctx.err(
+                codes::DIAGNOSER_ESTIMATE.id,
+                &e.expr,
+                format!("estimate of `{}`: {}", e.sensor, m.message),
+            ),
+        }
+    }
+    estimates
+}
+
+/// Checks the sensors the component assumes and those it declares independent.
+fn check_assumptions(c: &ComponentDef, symbols: &Symbols, signals: &[Sig], ctx: &mut Ctx<'_>) {
+    for (field, list) in [("assumes", &c.assumes), ("assumes_item", &c.assumes_item)] {
+        for a in list {
+            if !matches!(symbols.lookup(a), Some((Space::Input, _))) {
+                ctx.err(
+                    codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
+                    a,
+                    format!("`{field}`: `{a}` is not a sensor of the plant"),
+                );
+            }
+        }
+    }
+    for a in &c.independent {
+        if !signals
+            .iter()
+            .any(|s| &s.name == a && s.var.space == Space::Input)
+        {
+            ctx.err(
+                codes::DIAGNOSER_UNKNOWN_SIGNAL.id,
+                a,
+                format!("`independent`: `{a}` is not a sensor of the component"),
+            );
+        }
+    }
 }
 
 /// The component's signals, resolved in the plant (at most 64).
