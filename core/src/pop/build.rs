@@ -320,69 +320,7 @@ fn compile_one(
         }
     }
     // Intervals.
-    let mut clocks: Vec<(usize, bool)> = Vec::new();
-    let mut raw: Vec<(String, usize, Bound, Bound)> = Vec::new();
-    for iv in &c.intervals {
-        match edge_of(&iv.after) {
-            Ok((i, r, None)) => {
-                let k = clocks.iter().position(|&e| e == (i, r)).unwrap_or_else(|| {
-                    clocks.push((i, r));
-                    clocks.len() - 1
-                });
-                raw.push((iv.id.clone(), k, iv.lo.clone(), iv.hi.clone()));
-            }
-            Ok(_) => ctx.err(
-                codes::DIAGNOSER_CLOCK_EVENT.id,
-                &iv.after,
-                format!("clock event `{}` must be a bare edge", iv.after),
-            ),
-            Err(m) => ctx.err(codes::DIAGNOSER_CLOCK_EVENT.id, &iv.after, m),
-        }
-    }
-    let resolve = |b: &Bound, depth: usize| -> Result<Option<u64>, String> {
-        fn go(
-            b: &Bound,
-            raw: &[(String, usize, Bound, Bound)],
-            depth: usize,
-        ) -> Result<Option<u64>, String> {
-            if depth > 16 {
-                return Err("interval bounds refer to each other in a cycle".into());
-            }
-            let find = |n: &str| {
-                raw.iter()
-                    .find(|r| r.0 == n)
-                    .ok_or_else(|| format!("unknown interval `{n}`"))
-            };
-            match b {
-                Bound::Ms(v) => Ok(Some(*v)),
-                Bound::Never => Ok(None),
-                Bound::LoOf(n) => go(&find(n)?.2, raw, depth + 1),
-                Bound::HiOf(n) => go(&find(n)?.3, raw, depth + 1),
-            }
-        }
-        go(b, &raw, depth)
-    };
-    let mut intervals = Vec::new();
-    for (id, clock, lo, hi) in &raw {
-        match (resolve(lo, 0), resolve(hi, 0)) {
-            (Ok(Some(lo)), Ok(hi)) => intervals.push(Interval {
-                id: id.clone(),
-                clock: *clock,
-                lo,
-                hi,
-            }),
-            (Ok(None), _) => ctx.err(
-                codes::DIAGNOSER_INTERVAL.id,
-                id,
-                format!("interval `{id}` has no lower bound"),
-            ),
-            (Err(m), _) | (_, Err(m)) => ctx.err(
-                codes::DIAGNOSER_INTERVAL.id,
-                id,
-                format!("interval `{id}`: {m}"),
-            ),
-        }
-    }
+    let (clocks, mut intervals) = component_intervals(c, symbols, &signals, ctx);
     let interval_of = |n: &str| intervals.iter().position(|i| i.id == n);
     let initial_clock = match &c.initial_clock {
         None => None,
@@ -1149,6 +1087,129 @@ fn compile_one(
     // Estimates.
     let estimates = component_estimates(c, symbols, ctx);
     // Unexpected evolutions, pruned by the filter.
+    let unexpected =
+        unexpected_evolutions(&states, &signals, &values, &evs, filter, &g, &intervals);
+    if ctx.problems.len() > before {
+        return None;
+    }
+    check_assumptions(c, symbols, &signals, ctx);
+    if ctx.problems.len() > before {
+        return None;
+    }
+    Some(Component {
+        follows_safe_state: c.follows_safe_state,
+        sensors_first: c.sensors_first,
+        assumes: c.assumes.clone(),
+        assumes_item: c.assumes_item.clone(),
+        settle_ms: c.settle_ms,
+        confirm_ms: c.confirm_ms,
+        doubt_ms: c.doubt_ms,
+        id: c.id.clone(),
+        signals,
+        states,
+        values,
+        initial,
+        faults,
+        blocking,
+        partitions,
+        clocks,
+        initial_clock,
+        intervals,
+        symbols: syms,
+        g,
+        estimates,
+        unexpected,
+        pulse_sym,
+        motion_sym,
+    })
+}
+
+/// The component's clocks (the bare edges that start its intervals) and its intervals,
+/// bounds resolved.
+fn component_intervals(
+    c: &ComponentDef,
+    symbols: &Symbols,
+    signals: &[Sig],
+    ctx: &mut Ctx<'_>,
+) -> (Vec<(usize, bool)>, Vec<Interval>) {
+    let edge_of = |text: &str| edge_in(text, symbols, signals);
+    let mut clocks: Vec<(usize, bool)> = Vec::new();
+    let mut raw: Vec<(String, usize, Bound, Bound)> = Vec::new();
+    for iv in &c.intervals {
+        match edge_of(&iv.after) {
+            Ok((i, r, None)) => {
+                let k = clocks.iter().position(|&e| e == (i, r)).unwrap_or_else(|| {
+                    clocks.push((i, r));
+                    clocks.len() - 1
+                });
+                raw.push((iv.id.clone(), k, iv.lo.clone(), iv.hi.clone()));
+            }
+            Ok(_) => ctx.err(
+                codes::DIAGNOSER_CLOCK_EVENT.id,
+                &iv.after,
+                format!("clock event `{}` must be a bare edge", iv.after),
+            ),
+            Err(m) => ctx.err(codes::DIAGNOSER_CLOCK_EVENT.id, &iv.after, m),
+        }
+    }
+    let resolve = |b: &Bound, depth: usize| -> Result<Option<u64>, String> {
+        fn go(
+            b: &Bound,
+            raw: &[(String, usize, Bound, Bound)],
+            depth: usize,
+        ) -> Result<Option<u64>, String> {
+            if depth > 16 {
+                return Err("interval bounds refer to each other in a cycle".into());
+            }
+            let find = |n: &str| {
+                raw.iter()
+                    .find(|r| r.0 == n)
+                    .ok_or_else(|| format!("unknown interval `{n}`"))
+            };
+            match b {
+                Bound::Ms(v) => Ok(Some(*v)),
+                Bound::Never => Ok(None),
+                Bound::LoOf(n) => go(&find(n)?.2, raw, depth + 1),
+                Bound::HiOf(n) => go(&find(n)?.3, raw, depth + 1),
+            }
+        }
+        go(b, &raw, depth)
+    };
+    let mut intervals = Vec::new();
+    for (id, clock, lo, hi) in &raw {
+        match (resolve(lo, 0), resolve(hi, 0)) {
+            (Ok(Some(lo)), Ok(hi)) => intervals.push(Interval {
+                id: id.clone(),
+                clock: *clock,
+                lo,
+                hi,
+            }),
+            (Ok(None), _) => ctx.err(
+                codes::DIAGNOSER_INTERVAL.id,
+                id,
+                format!("interval `{id}` has no lower bound"),
+            ),
+            (Err(m), _) | (_, Err(m)) => ctx.err(
+                codes::DIAGNOSER_INTERVAL.id,
+                id,
+                format!("interval `{id}`: {m}"),
+            ),
+        }
+    }
+    (clocks, intervals)
+}
+
+/// The evolutions the model does not expect, each with the constraint that prunes it
+/// (an actuator edge the filter forbids), then each deadline's time-out.
+fn unexpected_evolutions(
+    states: &[String],
+    signals: &[Sig],
+    values: &[u64],
+    evs: &[Ev],
+    filter: Option<&ConstraintSet>,
+    g: &[GState],
+    intervals: &[Interval],
+) -> Vec<Unexpected> {
     let mut unexpected = Vec::new();
     for (x, name) in states.iter().enumerate() {
         for (i, s) in signals.iter().enumerate() {
@@ -1197,39 +1258,7 @@ fn compile_one(
             });
         }
     }
-    if ctx.problems.len() > before {
-        return None;
-    }
-    check_assumptions(c, symbols, &signals, ctx);
-    if ctx.problems.len() > before {
-        return None;
-    }
-    Some(Component {
-        follows_safe_state: c.follows_safe_state,
-        sensors_first: c.sensors_first,
-        assumes: c.assumes.clone(),
-        assumes_item: c.assumes_item.clone(),
-        settle_ms: c.settle_ms,
-        confirm_ms: c.confirm_ms,
-        doubt_ms: c.doubt_ms,
-        id: c.id.clone(),
-        signals,
-        states,
-        values,
-        initial,
-        faults,
-        blocking,
-        partitions,
-        clocks,
-        initial_clock,
-        intervals,
-        symbols: syms,
-        g,
-        estimates,
-        unexpected,
-        pulse_sym,
-        motion_sym,
-    })
+    unexpected
 }
 
 /// The signal values of every state, propagated from the initial state along the
