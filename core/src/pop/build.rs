@@ -321,7 +321,6 @@ fn compile_one(
     }
     // Intervals.
     let (clocks, mut intervals) = component_intervals(c, symbols, &signals, ctx);
-    let interval_of = |n: &str| intervals.iter().position(|i| i.id == n);
     let initial_clock = match &c.initial_clock {
         None => None,
         Some(t) => match edge_of(t) {
@@ -333,76 +332,7 @@ fn compile_one(
         },
     };
     // Expected evolutions: (from, symbols matched, to, window, edge).
-    let mut evs: Vec<Ev> = Vec::new();
-    let mut guarded_specs = Vec::new();
-    for e in &c.expected {
-        let (Some(from), Some(to)) = (state_of(&e.from), state_of(&e.to)) else {
-            ctx.err(
-                codes::DIAGNOSER_UNKNOWN_STATE.id,
-                if state_of(&e.from).is_none() {
-                    &e.from
-                } else {
-                    &e.to
-                },
-                format!("unknown state in evolution `{}` → `{}`", e.from, e.to),
-            );
-            continue;
-        };
-        let window = match &e.within {
-            None => None,
-            Some(w) => match interval_of(w) {
-                Some(k) => Some(k),
-                None => {
-                    ctx.err(
-                        codes::DIAGNOSER_INTERVAL.id,
-                        w,
-                        format!("unknown interval `{w}`"),
-                    );
-                    continue;
-                }
-            },
-        };
-        match edge_of(&e.event) {
-            Ok((i, rise, guard)) => {
-                let sym = if let Some(guard) = guard {
-                    let name = e.event.split_whitespace().collect::<Vec<_>>().join(" ");
-                    let k = syms.iter().position(|s| s.name == name).unwrap_or_else(|| {
-                        syms.push(Symbol {
-                            name,
-                            edge: Some((i, rise)),
-                            guard: Some(guard.clone()),
-                            timeout: None,
-                        });
-                        syms.len() - 1
-                    });
-                    Some(k)
-                } else {
-                    None
-                };
-                guarded_specs.push(sym);
-                evs.push(Ev {
-                    from,
-                    syms: sym.map_or_else(Vec::new, |k| vec![k]),
-                    to,
-                    window,
-                    sig: i,
-                    rise,
-                });
-            }
-            Err(m) => ctx.err(codes::DIAGNOSER_EDGE.id, &e.event, m),
-        }
-    }
-    // Unguarded evolutions match every symbol of their edge.
-    for ev in &mut evs {
-        if ev.syms.is_empty() {
-            ev.syms = syms
-                .iter()
-                .enumerate()
-                .filter(|(_, s)| s.edge == Some((ev.sig, ev.rise)))
-                .map(|(k, _)| k)
-                .collect();
-        }
-    }
+    let evs = expected_evolutions(c, symbols, &signals, &intervals, &mut syms, ctx);
     // Time-out symbols: one per interval used as a window, then the pulse.
     let first_tmo = syms.len();
     for (k, iv) in intervals.iter().enumerate() {
@@ -1122,6 +1052,92 @@ fn compile_one(
         pulse_sym,
         motion_sym,
     })
+}
+
+/// The expected evolutions; a guarded one adds its symbol, an unguarded one matches
+/// every symbol of its edge.
+fn expected_evolutions(
+    c: &ComponentDef,
+    symbols: &Symbols,
+    signals: &[Sig],
+    intervals: &[Interval],
+    syms: &mut Vec<Symbol>,
+    ctx: &mut Ctx<'_>,
+) -> Vec<Ev> {
+    let edge_of = |text: &str| edge_in(text, symbols, signals);
+    let state_of = |n: &str| c.states.iter().position(|s| s.id == n);
+    let interval_of = |n: &str| intervals.iter().position(|i| i.id == n);
+    let mut evs: Vec<Ev> = Vec::new();
+    let mut guarded_specs = Vec::new();
+    for e in &c.expected {
+        let (Some(from), Some(to)) = (state_of(&e.from), state_of(&e.to)) else {
+            ctx.err(
+                codes::DIAGNOSER_UNKNOWN_STATE.id,
+                if state_of(&e.from).is_none() {
+                    &e.from
+                } else {
+                    &e.to
+                },
+                format!("unknown state in evolution `{}` → `{}`", e.from, e.to),
+            );
+            continue;
+        };
+        let window = match &e.within {
+            None => None,
+            Some(w) => match interval_of(w) {
+                Some(k) => Some(k),
+                None => {
+                    ctx.err(
+                        codes::DIAGNOSER_INTERVAL.id,
+                        w,
+                        format!("unknown interval `{w}`"),
+                    );
+                    continue;
+                }
+            },
+        };
+        match edge_of(&e.event) {
+            Ok((i, rise, guard)) => {
+                let sym = if let Some(guard) = guard {
+                    let name = e.event.split_whitespace().collect::<Vec<_>>().join(" ");
+                    let k = syms.iter().position(|s| s.name == name).unwrap_or_else(|| {
+                        syms.push(Symbol {
+                            name,
+                            edge: Some((i, rise)),
+                            guard: Some(guard.clone()),
+                            timeout: None,
+                        });
+                        syms.len() - 1
+                    });
+                    Some(k)
+                } else {
+                    None
+                };
+                guarded_specs.push(sym);
+                evs.push(Ev {
+                    from,
+                    syms: sym.map_or_else(Vec::new, |k| vec![k]),
+                    to,
+                    window,
+                    sig: i,
+                    rise,
+                });
+            }
+            Err(m) => ctx.err(codes::DIAGNOSER_EDGE.id, &e.event, m),
+        }
+    }
+    // Unguarded evolutions match every symbol of their edge.
+    for ev in &mut evs {
+        if ev.syms.is_empty() {
+            ev.syms = syms
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.edge == Some((ev.sig, ev.rise)))
+                .map(|(k, _)| k)
+                .collect();
+        }
+    }
+    evs
 }
 
 /// The component's clocks (the bare edges that start its intervals) and its intervals,
