@@ -452,6 +452,8 @@ fn label_y(h: &Harness<'static, Console>, text: &str) -> f32 {
 /// raised before it; it cannot be shelved; a task alarm can, only with a reason, and
 /// the shelving is journaled with it.
 #[test]
+// One operator's session, step by step: split, the steps would lose their order.
+#[allow(clippy::too_many_lines)]
 fn alarms_by_priority_a_trip_never_shelved_and_shelving_needs_a_reason() {
     let data = temp_dir("priorities");
     let mut h = harness(options(Some(data.clone())));
@@ -1170,6 +1172,8 @@ fn a_damaged_historian_leaves_the_console_running_and_the_file_alone() {
 /// The paper's CSs10 trip in French: the next step, the alarm and the explanation
 /// levels from the plant's French texts and the items' codes; the records stay English.
 #[test]
+// One operator's session, step by step: split, the steps would lose their order.
+#[allow(clippy::too_many_lines)]
 fn the_cs10_trip_explained_in_french() {
     let mut opts = options(None);
     opts.lang = vigie_app::i18n::Lang::Fr;

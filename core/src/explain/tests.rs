@@ -193,6 +193,8 @@ fn outside_sensor_listed_when_it_changed_with_the_actuator() {
 /// actuators changing, with or without a change of a sensor outside it. The generator
 /// must produce the right first suspect and the expected action in each.
 #[test]
+// A table of cases read top to bottom; split, it would hide which case failed.
+#[allow(clippy::too_many_lines)]
 fn every_hypothesis_case_of_the_station() {
     use crate::engine::{FiredConstraint, LiteralValue};
     use crate::history::CycleRecord;

@@ -282,6 +282,8 @@ struct Ev {
     rise: bool,
 }
 
+// Not split yet (issue 24): its phases (signals, states, estimates, intervals,
+// expected and unexpected evolutions) are being moved into the helpers above one by one.
 #[allow(clippy::too_many_lines)]
 fn compile_one(
     c: &ComponentDef,
