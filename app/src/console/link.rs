@@ -484,23 +484,7 @@ pub(crate) fn toolbar_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>)
     ui.separator();
     let tripped = c.sim.engine.is_tripped();
     if link.mode == Mode::Gateway {
-        let reset = egui::Button::new(RichText::new(c.i18n.t("reset")).color(if tripped {
-            Color32::WHITE
-        } else {
-            c.palette.text
-        }))
-        .fill(if tripped {
-            c.palette.trip
-        } else {
-            c.palette.equipment.gamma_multiply(0.5)
-        });
-        if ui
-            .add(reset)
-            .on_hover_text(c.i18n.t("link-reset-hover"))
-            .clicked()
-        {
-            out.push(Command::Plant(OperatorAction::Reset));
-        }
+        super::views::reset_button_ui(c, ui, "link-reset-hover", out);
         ui.separator();
     }
     let unack = c.sim.alarms.unacknowledged();

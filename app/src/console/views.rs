@@ -256,23 +256,7 @@ fn plant_buttons_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) 
         c.manual_confirm = true;
     }
     let tripped = c.sim.engine.is_tripped();
-    let reset = egui::Button::new(RichText::new(c.i18n.t("reset")).color(if tripped {
-        Color32::WHITE
-    } else {
-        c.palette.text
-    }))
-    .fill(if tripped {
-        c.palette.trip
-    } else {
-        c.palette.equipment.gamma_multiply(0.5)
-    });
-    if ui
-        .add(reset)
-        .on_hover_text(c.i18n.t("reset-hover"))
-        .clicked()
-    {
-        out.push(Command::Plant(OperatorAction::Reset));
-    }
+    reset_button_ui(c, ui, "reset-hover", out);
     // The reset was refused since the trip: the re-initialisation is the next step,
     // shown in the alarm colour.
     let refused = tripped
@@ -1868,4 +1852,22 @@ fn paint_chronogram_marks(
 /// `12.34 s`.
 pub(crate) fn fmt_ms(ms: u64) -> String {
     format!("{}.{:02} s", ms / 1000, (ms % 1000) / 10)
+}
+
+/// The Reset button: red while the filter is tripped; `hover` is the id of its tooltip.
+pub(crate) fn reset_button_ui(c: &Console, ui: &mut egui::Ui, hover: &str, out: &mut Vec<Command>) {
+    let tripped = c.sim.engine.is_tripped();
+    let reset = egui::Button::new(RichText::new(c.i18n.t("reset")).color(if tripped {
+        Color32::WHITE
+    } else {
+        c.palette.text
+    }))
+    .fill(if tripped {
+        c.palette.trip
+    } else {
+        c.palette.equipment.gamma_multiply(0.5)
+    });
+    if ui.add(reset).on_hover_text(c.i18n.t(hover)).clicked() {
+        out.push(Command::Plant(OperatorAction::Reset));
+    }
 }

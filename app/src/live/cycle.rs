@@ -1048,7 +1048,7 @@ pub(crate) async fn gateway(
     }
     // A trip latched by an earlier run (a crash, a kill) holds from the first cycle.
     let (engine, restored) = restored_engine(&bundle, diagnosers.as_ref(), &config, &state_dir)?;
-    let (shared, server) = serve_plc(&server_config, &map, &config, (n_in, n_out)).await?;
+    let (shared, server) = serve_plc(&server_config, &map, &config, Bits::zeros(n_in)).await?;
     announce(
         emit,
         tap.as_ref(),
@@ -1146,16 +1146,18 @@ fn restored_engine(
     Ok((engine, restored))
 }
 
-/// Starts the Modbus server the PLC talks to, over a fresh shared image.
-async fn serve_plc(
+/// Starts the Modbus server the PLC talks to, over a fresh shared image whose inputs
+/// are `inputs` and whose outputs are zeros (one per output of the map, which maps
+/// every output of the plant).
+pub(super) async fn serve_plc(
     server_config: &vigie_core::live::config::ServerConfig,
     map: &vigie_core::live::iomap::IoMap,
     config: &vigie_core::live::config::GatewayConfig,
-    (n_in, n_out): (usize, usize),
+    inputs: Bits,
 ) -> anyhow::Result<(SharedImage, server::ServerHandle)> {
     let shared: SharedImage = Arc::new(Mutex::new(Shared {
-        inputs: Bits::zeros(n_in),
-        outputs: Bits::zeros(n_out),
+        inputs,
+        outputs: Bits::zeros(map.outputs.len()),
         ..Shared::default()
     }));
     let server = server::start(

@@ -35,12 +35,11 @@
 //! diagnoses of the run.
 
 use super::backend::{EmulatorBackend, IoBackend};
-use super::server::{self, Shared, SharedImage};
 use super::tap::{LinkAlarm, Tap};
 use anyhow::Context as _;
 use serde_json::json;
 use std::future::Future;
-use std::sync::{Arc, Mutex};
+
 use std::time::{Duration, Instant};
 use tokio::time::MissedTickBehavior;
 use vigie_core::alarms::{AlarmKind, AlarmList, AlarmText};
@@ -48,7 +47,6 @@ use vigie_core::bundle::PlantBundle;
 use vigie_core::engine::{Engine, Event};
 use vigie_core::live::age::Transition;
 use vigie_core::live::config::{GatewayConfig, Mode};
-use vigie_core::live::image::ServerImage;
 use vigie_core::live::iomap::IoMap;
 use vigie_core::pop::build::Compiled;
 use vigie_core::symbols::Space;
@@ -387,19 +385,8 @@ pub(crate) async fn serve_backend(
     stats: &mut CycleStats,
 ) -> anyhow::Result<()> {
     let n_out = map.outputs.len();
-    let shared: SharedImage = Arc::new(Mutex::new(Shared {
-        inputs: backend.read_inputs().clone(),
-        outputs: Bits::zeros(n_out),
-        ..Shared::default()
-    }));
-    let server = server::start(
-        server_config,
-        ServerImage::new(map, server_config.unit),
-        Arc::clone(&shared),
-        Duration::from_millis(config.link_timeout().0),
-    )
-    .await
-    .with_context(|| format!("cannot listen on {}", server_config.bind))?;
+    let (shared, server) =
+        super::cycle::serve_plc(server_config, map, config, backend.read_inputs().clone()).await?;
     tracing::info!("serving on {}", server.local);
     emit(json!({"event": "listening", "address": server.local.to_string()}));
     let clock = Clock(Instant::now());
