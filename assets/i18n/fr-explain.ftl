@@ -16,10 +16,12 @@ explain-X002 = { $reasons ->
    *[other] { $output } est maintenu EN MARCHE par le filtre : { $reasons }.
 }
 explain-X003 = Arrêtés : { $outputs }.
+# X004 recorded before X005 existed could name an observer: such records still read right.
 explain-X004 = { $observer ->
     [none] { $output } À L'ARRÊT : { $meaning }.
    *[other] L'observateur { $observer } est à 1 : une caisse qu'aucun capteur ne voit est déduite.
 }
+explain-X005 = L'observateur { $observer } est à 1 : une caisse qu'aucun capteur ne voit est déduite.
 
 ## Niveau 1 — projection
 explain-X101 = Sans le filtre, { $after_ms } ms plus tard : la caisse { $box } { $kind ->

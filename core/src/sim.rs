@@ -1704,7 +1704,7 @@ fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundl
     level.title = "Projection".into();
     if p.hazards.is_empty() {
         level.items.push(Item {
-            code: "X102",
+            code: codes::X_NO_DAMAGE_PREDICTED.id,
             fields: [("horizon_ms".to_string(), p.at_ms.saturating_sub(ex.time_ms).to_string())]
                 .into_iter()
                 .collect(),
@@ -1717,7 +1717,7 @@ fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundl
     for h in &p.hazards {
         let after = h.time_ms.saturating_sub(ex.time_ms);
         level.items.push(Item {
-            code: "X101",
+            code: codes::X_HAZARD_PREDICTED.id,
             fields: [
                 ("kind".to_string(), format!("{:?}", h.kind)),
                 ("place".to_string(), h.place.clone()),

@@ -99,7 +99,7 @@ fn the_reference_program_does_not_trip() {
 #[test]
 fn a_suspect_names_its_elements_not_the_actuator() {
     let item = Item::new(
-        "X407",
+        crate::diag::codes::X_TRANSITION_DEACTIVATED_STEP,
         String::new(),
         &[
             ("output", "A4".into()),

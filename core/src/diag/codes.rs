@@ -176,7 +176,8 @@ registry! {
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";
     X_ACTUATORS_STOPPED = "X003", "the actuators stopped";
-    X_OFF_MEANING_OR_OBSERVER = "X004", "what an actuator OFF does, or an observer set";
+    X_OFF_MEANING = "X004", "what an actuator OFF does";
+    X_OBSERVER_SET = "X005", "an observer is set";
     X_HAZARD_PREDICTED = "X101", "without the filter, a hazard is predicted";
     X_NO_DAMAGE_PREDICTED = "X102", "without the filter, no damage is predicted";
     X_CONSTRAINT_BECAME_TRUE = "X201", "a constraint became true";

@@ -18,6 +18,7 @@
 
 use super::{Highlight, Item, Level, Mark};
 use crate::constraints::ConstraintSet;
+use crate::diag::codes;
 use crate::engine::{Engine, FiredConstraint, Trip};
 use crate::history::CycleRecord;
 use crate::symbols::Space;
@@ -67,7 +68,7 @@ pub fn hypothesis(engine: &Engine, trip: &Trip) -> Level {
             ..Level::default()
         };
         level.items.push(Item::new(
-            "X406",
+            codes::X_NO_RECORDED_CYCLES,
             "The cycles before the stop are no longer in the history: no hypothesis.".into(),
             &[],
         ));
@@ -100,12 +101,28 @@ pub fn hypothesis_from(
         }
     }
     // Suspects first, then expected actions.
-    level.items.sort_by_key(|i| match i.code {
-        "X414" => 0,
-        "X401" | "X402" => 1,
-        "X404" | "X405" => 2,
-        _ => 3,
-    });
+    let rank = |code: &str| {
+        if code == codes::X_SUSPECT_SENSOR.id {
+            0
+        } else if [
+            codes::X_SENSOR_CHANGED_NO_EVOLUTION.id,
+            codes::X_SENSOR_OUTSIDE_CHANGED.id,
+        ]
+        .contains(&code)
+        {
+            1
+        } else if [
+            codes::X_ACTUATOR_CHANGED_NO_INPUT.id,
+            codes::X_OBSERVER_CHANGE.id,
+        ]
+        .contains(&code)
+        {
+            2
+        } else {
+            3
+        }
+    };
+    level.items.sort_by_key(|i| rank(i.code));
     level
 }
 
@@ -149,7 +166,7 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
     {
         out.push((
             Item::new(
-                "X401",
+                codes::X_SENSOR_CHANGED_NO_EVOLUTION,
                 format!(
                     "{name} {} in the stopping cycle and is part of {}; the control did not make the evolution this change requires: {expected_text}.",
                     edge(*from, *to),
@@ -175,7 +192,7 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
     if !d.observers.is_empty() && d.inputs.is_empty() {
         out.push((
             Item::new(
-                "X405",
+                codes::X_OBSERVER_CHANGE,
                 format!(
                     "Observer {} changed without a direct input change; {} became true through it.",
                     d.observers.join(", "),
@@ -207,7 +224,7 @@ fn constraint_hypothesis(c: &FiredConstraint, d: &Delta, prev: &CycleRecord) -> 
     }
     out.push((
         Item::new(
-            "X403",
+            codes::X_EXPECTED_ACTION,
             format!("Expected from the control: {expected_text}."),
             &[
                 ("category", "c".into()),
@@ -232,7 +249,7 @@ fn suspect_sensor_items(c: &FiredConstraint, out: &mut Vec<Produced>) {
         };
         out.push((
             Item::new(
-                "X414",
+                codes::X_SUSPECT_SENSOR,
                 format!(
                     "{sensor} is suspect: its reading made an edge the plant's physics does not allow, the plausibility stage holds its last plausible value and {} reads it as possibly either value. Check {sensor} (beam, reflector, cable) before the program.",
                     c.id
@@ -275,7 +292,7 @@ fn changed_with_actuators(
     for (name, from, to) in &outside {
         out.push((
             Item::new(
-                "X402",
+                codes::X_SENSOR_OUTSIDE_CHANGED,
                 format!(
                     "{name} {} in the same cycle as {}; {name} is not part of {}: a receptivity or an output equation using {name} may have driven the actuator.",
                     edge(*from, *to),
@@ -299,7 +316,7 @@ fn changed_with_actuators(
     if d.inputs.is_empty() && d.observers.is_empty() {
         out.push((
             Item::new(
-                "X404",
+                codes::X_ACTUATOR_CHANGED_NO_INPUT,
                 format!(
                     "{} while no input changed: an internal timer or memory of the program probably drove it.",
                     acts.join(", ")

@@ -25,6 +25,7 @@ mod observed;
 mod program;
 
 use crate::bits::Bits;
+use crate::diag::codes::{self, Code};
 use crate::engine::{Action, Engine, FiredConstraint, Trip};
 use crate::history::CycleRecord;
 use crate::symbols::{Space, Symbols};
@@ -92,9 +93,9 @@ pub struct Item {
 }
 
 impl Item {
-    pub(crate) fn new(code: &'static str, text: String, fields: &[(&str, String)]) -> Self {
+    pub(crate) fn new(code: Code, text: String, fields: &[(&str, String)]) -> Self {
         Self {
-            code,
+            code: code.id,
             fields: fields
                 .iter()
                 .map(|(k, v)| ((*k).to_string(), v.clone()))
@@ -247,7 +248,7 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
     let last = engine.history.last();
     let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
     level.items.push(Item::new(
-        "X001",
+        codes::X_FILTER_STOPPED,
         format!(
             "The safety filter stopped the plant at {} ms: {} would have been violated.",
             trip.time_ms,
@@ -272,7 +273,7 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
                 mark: Mark::ForcedOn,
             });
             level.items.push(Item::new(
-                "X002",
+                codes::X_ACTUATOR_KEPT_ON,
                 if reasons.is_empty() {
                     format!("{name} is kept ON.")
                 } else {
@@ -289,7 +290,7 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
             .map(|(_, n)| n.as_str())
             .collect();
         level.items.push(Item::new(
-            "X003",
+            codes::X_ACTUATORS_STOPPED,
             format!("Stopped (OFF): {}.", off.join(", ")),
             &[("outputs", off.join(","))],
         ));
@@ -297,7 +298,7 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
         for (k, name) in symbols.names(Space::Output).iter().enumerate() {
             if let Some(m) = engine.off_meaning(k).filter(|_| !rec.applied.get(k)) {
                 level.items.push(Item::new(
-                    "X004",
+                    codes::X_OFF_MEANING,
                     format!("{name} OFF: {m}."),
                     &[("output", name.clone()), ("meaning", m.to_string())],
                 ));
@@ -310,7 +311,7 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
                     mark: Mark::InferredBox,
                 });
                 level.items.push(Item::new(
-                    "X004",
+                    codes::X_OBSERVER_SET,
                     format!(
                         "Observer {} is set: {}.",
                         def.id,
@@ -367,7 +368,7 @@ fn before_stop(engine: &Engine, trip: &Trip, at_trip: Option<&CycleRecord>) -> L
             })
             .collect();
         level.items.push(Item::new(
-            "X201",
+            codes::X_CONSTRAINT_BECAME_TRUE,
             format!(
                 "{} = {} became true: {}.",
                 c.id,
@@ -384,8 +385,12 @@ fn before_stop(engine: &Engine, trip: &Trip, at_trip: Option<&CycleRecord>) -> L
     }
     for a in &trip.actions {
         let (mark, code, verb) = match a.action {
-            Action::ForcedOn => (Mark::ForcedOn, "X202", "held ON (commanded OFF)"),
-            Action::ForcedOff => (Mark::ForcedOff, "X203", "forced OFF (commanded ON)"),
+            Action::ForcedOn => (Mark::ForcedOn, codes::X_HELD_ON, "held ON (commanded OFF)"),
+            Action::ForcedOff => (
+                Mark::ForcedOff,
+                codes::X_FORCED_OFF,
+                "forced OFF (commanded ON)",
+            ),
             Action::Unchanged => continue,
         };
         level.highlights.push(Highlight {
@@ -515,7 +520,7 @@ fn advanced(
             )
         };
         level.items.push(Item::new(
-            "X301",
+            codes::X_LAST_CHANGE,
             format!(
                 "{} changed {}→{} at {} ms ({when}){}.",
                 ch.signal,
@@ -550,7 +555,7 @@ fn advanced(
                     mark: Mark::Steady { value: true },
                 });
                 level.items.push(Item::new(
-                    "X302",
+                    codes::X_STAYS_ON,
                     format!("{name} stays ON."),
                     &[("output", name.clone())],
                 ));

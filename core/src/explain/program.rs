@@ -30,6 +30,7 @@
 
 use super::{Explanation, Highlight, Item, Mark};
 use crate::control::{Driver, ProgramRuntime, Qualifier};
+use crate::diag::codes::{self, Code};
 use crate::engine::Trip;
 use crate::expr::Dnf;
 use crate::symbols::Space;
@@ -213,7 +214,7 @@ impl View<'_> {
 }
 
 fn suspect(
-    code: &'static str,
+    code: Code,
     rank: (u8, u8),
     text: String,
     fields: &[(&str, String)],
@@ -293,7 +294,11 @@ pub fn add_program_hypothesis(
     let level = &mut ex.hypothesis;
     let mut items = Vec::with_capacity(suspects.len() + level.items.len());
     // A suspect sensor (X414) stays first: the program read what the stage held.
-    let sensors = level.items.iter().take_while(|i| i.code == "X414").count();
+    let sensors = level
+        .items
+        .iter()
+        .take_while(|i| i.code == codes::X_SUSPECT_SENSOR.id)
+        .count();
     items.extend(level.items.drain(..sensors));
     for (item, highlights) in suspects {
         for h in highlights {
@@ -331,7 +336,7 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
                         .iter()
                         .any(|s| v.before.is_active(s) && !v.after.is_active(s));
                 out.push(suspect(
-                    "X409",
+                    codes::X_QUALIFIER,
                     (u8::from(!recent), 0),
                     format!(
                         "{output} is stored ON by the S action of step {} and no R action reset it{}: the qualifier S of this action is suspect.",
@@ -380,7 +385,7 @@ fn action_forbidden_on(
             let rec = v.receptivity(&t);
             let signals = v.transition_signals(&t);
             out.push(suspect(
-                "X408",
+                codes::X_TRANSITION_ACTIVATED_STEP,
                 (u8::from(v.ms_before(time) > 0), 0),
                 format!(
                     "Transition {t} (receptivity `{rec}`) fired {} and activated step {step}, whose action {qualifier} {output} drives {output} ON: the receptivity of {t} is suspect (it reads {}).",
@@ -405,7 +410,7 @@ fn action_forbidden_on(
     if action_started {
         // X409: a delayed action that began while the step was active.
         out.push(suspect(
-            "X409",
+            codes::X_QUALIFIER,
             (0, 0),
             format!(
                 "Step {step} was already active; its action {qualifier} {output} began to drive {output} ON in the stopping cycle: the qualifier of this action is suspect."
@@ -440,7 +445,7 @@ fn action_forbidden_on(
         .map(|(t, time)| format!(" since {t} fired {}", v.when(*time)))
         .unwrap_or_default();
     out.push(suspect(
-        "X412",
+        codes::X_STEP_NOT_LEFT,
         (1, 1),
         format!(
             "Step {step} has been active{since} and its action {qualifier} {output} drives {output} ON; the transition(s) leaving it, {}, did not fire: their receptivity is suspect.",
@@ -522,7 +527,7 @@ fn equation_suspect(
         )
     };
     out.push(suspect(
-        "X410",
+        codes::X_EQUATION_FORBIDDEN_VALUE,
         (u8::from(!recent), 2),
         format!(
             "The equation of {output}, `{expression}`, {how}, so {output} is commanded {}{via}: the equation of {output} is suspect.",
@@ -555,7 +560,7 @@ fn forbidden_off(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut V
                     // The step is still active: the action itself ended.
                     found = true;
                     out.push(suspect(
-                        "X409",
+                        codes::X_QUALIFIER,
                         (0, 0),
                         format!(
                             "Step {step} is still active but its action {qualifier} {output} no longer commands {output}{}: the qualifier of this action is suspect.",
@@ -600,7 +605,7 @@ fn forbidden_off(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut V
                     .map(|s| v.chart_of_step(s))
                     .unwrap_or_default();
                 out.push(suspect(
-                    "X409",
+                    codes::X_QUALIFIER,
                     (0, 0),
                     format!(
                         "{output} was stored ON (S action of {}) and was reset in the stopping cycle by the R action of {}: this reset is suspect.",
@@ -678,7 +683,7 @@ fn nothing_commands(
             .unwrap_or_default()
     );
     out.push(suspect(
-        "X411",
+        codes::X_NOTHING_COMMANDS,
         (1, 3),
         text,
         &[
@@ -712,7 +717,9 @@ fn nothing_commands(
 /// actuator without the second, so the actions of the new step or the elements that
 /// command the second are suspect.
 fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<Suspect> {
-    let undriven = suspects.iter().find(|s| s.item.code == "X411")?;
+    let undriven = suspects
+        .iter()
+        .find(|s| s.item.code == codes::X_NOTHING_COMMANDS.id)?;
     let new_steps: Vec<String> = v
         .after
         .active_steps()
@@ -734,7 +741,7 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
     };
     let (driven, steps) = suspects
         .iter()
-        .filter(|s| s.item.code != "X411")
+        .filter(|s| s.item.code != codes::X_NOTHING_COMMANDS.id)
         .find_map(|s| {
             let read: Vec<String> = names(s, "step")
                 .into_iter()
@@ -768,7 +775,7 @@ fn coordination(v: &View<'_>, constraint: &str, suspects: &[Suspect]) -> Option<
     };
     Some(Suspect {
         item: Item::new(
-            "X413",
+            codes::X_COMBINED_MISSING,
             format!(
                 "Step {} (activated by {} in the stopping cycle) drives {on} ON, but nothing commands {off}, which {constraint} requires ON with {on}: the actions of {} or {elsewhere} miss {off}.",
                 steps.join(", "),
@@ -836,7 +843,7 @@ fn deactivation(
     let signals = v.transition_signals(t);
     Suspect {
         item: Item::new(
-            "X407",
+            codes::X_TRANSITION_DEACTIVATED_STEP,
             format!(
                 "Transition {t} (receptivity `{rec}`) fired {} and deactivated step {step}, whose action {q} {output} held {output} ON; it activated {}, which does not command {output} now: the receptivity of {t} is suspect (it reads {}).",
                 v.when(time),

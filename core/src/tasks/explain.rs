@@ -42,7 +42,7 @@ pub enum AlarmCode {
 }
 
 impl AlarmCode {
-    /// The code as text (`"T001"`), from the registry [`codes`].
+    /// The code as text (`T001`), from the registry [`codes`].
     pub fn as_str(self) -> &'static str {
         match self {
             AlarmCode::T001 => codes::T_TOLERANCE_USED_UP.id,
