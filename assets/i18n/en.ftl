@@ -255,9 +255,9 @@ say-counterexample-unwritable = cannot write the counterexample: { $error }
 say-replaying = replaying the counterexample ({ $kind }) with the filter enforcing
 say-counterexample-unreadable = counterexample: { $error }
 fix-cannot-run = cannot re-run: { $error }
-fix-nothing-delivered = not fixed: no trip but no box was delivered in the re-run
-fix-correct = correct fix: no trip and no hazard in { $s } s, { $delivered } boxes delivered
-fix-not-fixed = not fixed: the re-run has trips [{ $trips }] and hazards [{ $hazards }]
+fix-nothing-delivered = not fixed: no trip but no box was delivered in the re-run (program { $version })
+fix-correct = correct fix: no trip and no hazard in { $s } s, { $delivered } boxes delivered (program { $version })
+fix-not-fixed = not fixed: the re-run has trips [{ $trips }] and hazards [{ $hazards }] (program { $version })
 
 say-fault-injected = fault injected: { $what }
 say-fault-refused = fault refused ({ $what }): { $error }
@@ -320,7 +320,16 @@ fault-table-between = Table blocked between the positions
 fault-slowed = { $signal } slowed to { $percent } %{ $description }
 
 ## Maintenance
-maint-program = Control program: { $name }
+maint-program = Control program: { $name }, version { $version }
+maint-program-exercise = Control program: { $name }, exercise { $id }, version { $version }
+maint-edit-condition = Receptivity { $id }
+maint-edit-actions = Actions of { $id }
+maint-edit-equation = Equation { $id }
+fix-check-title = Last fix check
+fix-check-ran = Ran { $name }, version { $version }, on « { $scenario } »
+fix-check-not-compiled = not compiled
+fix-check-changes = Changed from the running program: { $changes }
+fix-check-no-change = nothing (the running program itself)
 maint-recompile = Recompile
 maint-restart = Restart with edit
 maint-discard = Discard edits

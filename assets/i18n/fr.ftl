@@ -273,9 +273,9 @@ say-counterexample-unwritable = impossible d'écrire le contre-exemple : { $erro
 say-replaying = rejeu du contre-exemple ({ $kind }) avec le filtre actif
 say-counterexample-unreadable = contre-exemple : { $error }
 fix-cannot-run = impossible de rejouer : { $error }
-fix-nothing-delivered = pas corrigé : aucun arrêt, mais aucune caisse livrée pendant le rejeu
-fix-correct = correction juste : aucun arrêt ni dommage en { $s } s, { $delivered } caisses livrées
-fix-not-fixed = pas corrigé : le rejeu a des arrêts [{ $trips }] et des dommages [{ $hazards }]
+fix-nothing-delivered = pas corrigé : aucun arrêt, mais aucune caisse livrée pendant le rejeu (programme { $version })
+fix-correct = correction juste : aucun arrêt ni dommage en { $s } s, { $delivered } caisses livrées (programme { $version })
+fix-not-fixed = pas corrigé : le rejeu a des arrêts [{ $trips }] et des dommages [{ $hazards }] (programme { $version })
 
 say-fault-injected = défaut injecté : { $what }
 say-fault-refused = défaut refusé ({ $what }) : { $error }
@@ -338,7 +338,16 @@ fault-table-between = Table bloquée entre les positions
 fault-slowed = { $signal } ralenti à { $percent } %{ $description }
 
 ## Maintenance
-maint-program = Programme : { $name }
+maint-program = Programme : { $name }, version { $version }
+maint-program-exercise = Programme : { $name }, exercice { $id }, version { $version }
+maint-edit-condition = Réceptivité { $id }
+maint-edit-actions = Actions de { $id }
+maint-edit-equation = Équation { $id }
+fix-check-title = Dernière vérification de correction
+fix-check-ran = Rejoué : { $name }, version { $version }, sur « { $scenario } »
+fix-check-not-compiled = non compilé
+fix-check-changes = Modifié par rapport au programme en cours : { $changes }
+fix-check-no-change = rien (le programme en cours lui-même)
 maint-recompile = Recompiler
 maint-restart = Redémarrer avec la modification
 maint-discard = Abandonner les modifications

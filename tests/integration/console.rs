@@ -143,20 +143,12 @@ fn maintenance_fix_of_e01_passes_verification() {
     h.get_by_label("Chart table");
     h.get_by_label("X24");
     // A syntax error is reported, not a panic.
-    h.state_mut()
-        .draft_mut()
-        .expect("draft")
-        .conditions
-        .insert("t24".into(), "FE(C7".into());
+    edit_t24(&mut h, "FE(C7");
     h.get_by_label("Recompile").click();
     h.run_steps(2);
     assert!(h.state().status.contains("compilation failed"));
     // The correct receptivity.
-    h.state_mut()
-        .draft_mut()
-        .expect("draft")
-        .conditions
-        .insert("t24".into(), "FE(C7)".into());
+    edit_t24(&mut h, "FE(C7)");
     h.get_by_label("Verify fix").click();
     h.run_steps(2);
     assert!(
@@ -167,6 +159,79 @@ fn maintenance_fix_of_e01_passes_verification() {
     assert!(h.state().score().fixed);
     assert_eq!(h.state().score().attempts, 1);
     assert!(h.state().score().summary().contains("Fixed"));
+}
+
+/// Replaces t24's receptivity as a technician does: click the field, select all, type.
+fn edit_t24(h: &mut Harness<'_, Console>, text: &str) {
+    h.get_by_label("Receptivity t24").click();
+    h.run_steps(1);
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    h.run_steps(1);
+    h.get_by_label("Receptivity t24").type_text(text);
+    h.run_steps(2);
+    assert_eq!(
+        h.state().draft().expect("draft").conditions["t24"],
+        text,
+        "the field edits the draft"
+    );
+}
+
+/// Issue 20: every fix check runs the text on screen, not the last compiled one. The
+/// sequence that certified a wrong edit: a right fix verified, then a wrong edit
+/// verified with no Recompile between.
+#[test]
+fn verify_fix_runs_the_text_on_screen_every_time() {
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    h.get_by_label("Maintenance").click();
+    h.run_steps(2);
+    let running = h.state().sim.program.program().program.version();
+    let verify = |h: &mut Harness<'_, Console>| {
+        h.get_by_label("Verify fix").click();
+        h.run_steps(2);
+        h.state().last_fix.clone().expect("a fix check")
+    };
+    // Nothing edited: the variant itself re-runs and is not fixed.
+    let check = verify(&mut h);
+    assert_eq!(check.version, running);
+    assert!(check.changes.is_empty(), "{check:?}");
+    assert!(!check.outcome.is_fixed(), "{check:?}");
+    // The right fix.
+    edit_t24(&mut h, "FE(C7)");
+    let right = verify(&mut h);
+    assert!(right.outcome.is_fixed(), "{right:?}");
+    assert_ne!(right.version, running);
+    assert_eq!(right.changes, ["transition t24"]);
+    // A wrong edit with no Recompile: refused, and the version says it is another text.
+    edit_t24(&mut h, "FE(C6)");
+    let wrong = verify(&mut h);
+    assert!(
+        !wrong.outcome.is_fixed(),
+        "a wrong edit certified: {wrong:?}"
+    );
+    assert_ne!(wrong.version, right.version);
+    // Back to the right one: accepted again, same version as before.
+    edit_t24(&mut h, "FE(C7)");
+    let again = verify(&mut h);
+    assert!(again.outcome.is_fixed(), "{again:?}");
+    assert_eq!(again.version, right.version);
+    // The console shows what ran (not only the status line), and the score counts
+    // four checks, the last one fixed.
+    h.get_by_label("Last fix check");
+    assert!(
+        h.query_by_label_contains(&format!("version {}", right.version))
+            .is_some()
+    );
+    assert_eq!(h.state().score().attempts, 4);
+    assert!(h.state().score().fixed);
+    // Restart with edit runs the text on screen too.
+    edit_t24(&mut h, "FE(C6)");
+    h.get_by_label("Restart with edit").click();
+    h.run_steps(2);
+    assert_eq!(
+        h.state().sim.program.program().program.version(),
+        wrong.version
+    );
 }
 
 /// Training in French: the control-error library and the fault library from the
@@ -209,11 +274,12 @@ fn training_in_french() {
     );
     // The fix of E01 (the scenario's variant), checked: the verdict in French.
     h.state_mut().apply(Command::SetMode(Mode::Maintenance));
-    h.state_mut()
-        .draft_mut()
-        .expect("draft")
-        .conditions
-        .insert("t24".into(), "FE(C7)".into());
+    h.state_mut().apply(Command::EditDraft(
+        vigie_app::console::DraftEdit::Condition {
+            transition: "t24".into(),
+            text: "FE(C7)".into(),
+        },
+    ));
     h.state_mut().apply(Command::VerifyFix);
     h.run_steps(2);
     assert!(

@@ -7,6 +7,7 @@
 mod diagnosers;
 pub mod journal;
 pub mod link;
+mod maintenance;
 mod past;
 pub mod report;
 pub mod save;
@@ -24,11 +25,12 @@ use journal::Journal;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use vigie_core::access::{Permission, Role};
-use vigie_core::control::{CompiledProgram, ErrorLibrary, Origin, Program};
+use vigie_core::control::{CompiledProgram, ErrorLibrary};
 use vigie_core::emulator::FaultSpec;
 use vigie_core::sim::{OperatorAction, Options, ProgramChoice, Scenario, Simulation};
 use vigie_core::time::Millis;
 
+pub use maintenance::{Draft, DraftEdit, FixCheck, parse_actions};
 pub use training::{FixOutcome, Score, verify_fix};
 
 /// The console's modes.
@@ -152,8 +154,12 @@ pub enum Command {
     Logout,
     /// Training: inject a fault of the fault library now.
     InjectFault(usize),
-    /// Training: re-run the scenario with the compiled edit and score it.
+    /// Training and maintenance: compile the text on screen, re-run the scenario with
+    /// it, score it and keep what ran ([`FixCheck`]).
     VerifyFix,
+    /// Maintenance: edit one element of the draft (a receptivity, a step's actions, an
+    /// equation).
+    EditDraft(DraftEdit),
     /// Maintenance: verify the loaded constraint set (worker thread).
     VerifyConstraints,
     /// Maintenance: replay the verification's shortest hazard trace.
@@ -288,101 +294,6 @@ impl Source {
     }
 }
 
-/// Maintenance drafts: the text of every receptivity, step action list and equation.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Draft {
-    /// Transition id → condition.
-    pub conditions: BTreeMap<String, String>,
-    /// Step id → actions (`N A0, S M1, L(500) A2`).
-    pub actions: BTreeMap<String, String>,
-    /// Equations (target, expression).
-    pub equations: Vec<(String, String)>,
-}
-
-impl Draft {
-    /// The draft of a program.
-    pub fn of(p: &Program) -> Self {
-        Self {
-            conditions: p
-                .transitions()
-                .map(|(_, t)| (t.id.clone(), t.condition.clone()))
-                .collect(),
-            actions: p
-                .steps()
-                .map(|(_, s)| {
-                    let text: Vec<String> = s
-                        .actions
-                        .iter()
-                        .map(|a| format!("{} {}", a.qualifier, a.target))
-                        .collect();
-                    (s.id.clone(), text.join(", "))
-                })
-                .collect(),
-            equations: p.equations.clone(),
-        }
-    }
-
-    /// Applies the draft to `base`.
-    pub fn apply(&self, base: &Program) -> Result<Program, String> {
-        let mut p = base.clone();
-        for chart in &mut p.charts {
-            for t in &mut chart.transitions {
-                if let Some(c) = self.conditions.get(&t.id) {
-                    t.condition.clone_from(c);
-                }
-            }
-            for s in &mut chart.steps {
-                if let Some(text) = self.actions.get(&s.id) {
-                    s.actions = parse_actions(text).map_err(|e| format!("step {}: {e}", s.id))?;
-                }
-            }
-        }
-        p.equations.clone_from(&self.equations);
-        Ok(p)
-    }
-}
-
-/// Parses `N A0, S M1, L(500) A2`.
-pub fn parse_actions(text: &str) -> Result<Vec<vigie_core::control::Action>, String> {
-    use vigie_core::control::{Action, Qualifier};
-    let mut out = Vec::new();
-    for part in text
-        .split([',', ';'])
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-    {
-        let mut it = part.split_whitespace();
-        let (q, target) = match (it.next(), it.next(), it.next()) {
-            (Some(q), Some(t), None) => (q, t),
-            (Some(t), None, None) => ("N", t),
-            _ => return Err(format!("`{part}`: expected QUALIFIER TARGET")),
-        };
-        let num = |s: &str| -> Result<u64, String> {
-            s.trim_end_matches(')')
-                .parse::<u64>()
-                .map_err(|_| format!("`{part}`: bad duration"))
-        };
-        let qualifier = match q {
-            "N" => Qualifier::N,
-            "S" => Qualifier::S,
-            "R" => Qualifier::R,
-            "P" => Qualifier::P,
-            q if q.starts_with("L(") => Qualifier::L(num(&q[2..])?),
-            q if q.starts_with("D(") => Qualifier::D(num(&q[2..])?),
-            q => {
-                return Err(format!(
-                    "`{q}`: unknown qualifier (N, S, R, P, L(ms), D(ms))"
-                ));
-            }
-        };
-        out.push(Action {
-            qualifier,
-            target: target.to_string(),
-        });
-    }
-    Ok(out)
-}
-
 /// A running incident-report capture (one screenshot per level).
 #[derive(Clone, Debug)]
 pub(crate) struct ReportJob {
@@ -429,6 +340,8 @@ pub struct Console {
     pub(crate) synoptic_rect: Option<egui::Rect>,
     pub(crate) draft: Option<Draft>,
     pub(crate) compiled_edit: Option<CompiledProgram>,
+    /// The last fix check: what it ran and found.
+    pub last_fix: Option<FixCheck>,
     pub(crate) problems: String,
     pub(crate) variants: Vec<(String, String, String)>,
     pub(crate) faults: Vec<(String, FaultSpec)>,
@@ -579,6 +492,7 @@ impl Console {
             synoptic_rect: None,
             draft: None,
             compiled_edit: None,
+            last_fix: None,
             problems: String::new(),
             variants,
             chrono_signals,
@@ -692,9 +606,10 @@ impl Console {
         journal
     }
 
-    /// The maintenance draft (text of receptivities, actions, equations), if any.
-    pub fn draft_mut(&mut self) -> Option<&mut Draft> {
-        self.draft.as_mut()
+    /// The maintenance draft (text of receptivities, actions, equations), if any; it
+    /// changes through [`Command::EditDraft`].
+    pub fn draft(&self) -> Option<&Draft> {
+        self.draft.as_ref()
     }
 
     /// The training score.
@@ -985,13 +900,11 @@ impl Console {
             Command::ExportReport(dir) => self.start_report(self.export_path(&dir)),
             Command::Recompile => self.recompile(),
             Command::RestartWithEdit => {
-                if self.compiled_edit.is_none() {
-                    self.recompile();
-                }
-                if let Some(p) = self.compiled_edit.clone() {
+                if let Some(p) = self.compile_on_screen() {
                     self.restart(Some(p));
                 }
             }
+            Command::EditDraft(edit) => self.edit_draft(edit),
             Command::DiscardEdits => {
                 self.draft = Some(Draft::of(&self.sim.program.program().program));
                 self.compiled_edit = None;
@@ -1009,9 +922,10 @@ impl Console {
     /// Whether the role may give `cmd`: the permission it needs, if any, checked.
     fn permitted(&mut self, cmd: &Command) -> bool {
         let needs = match cmd {
-            Command::SetMode(Mode::Maintenance) | Command::Recompile | Command::RestartWithEdit => {
-                Some(Permission::EditProgram)
-            }
+            Command::SetMode(Mode::Maintenance)
+            | Command::Recompile
+            | Command::RestartWithEdit
+            | Command::EditDraft(_) => Some(Permission::EditProgram),
             Command::Plant(OperatorAction::Filter(_)) => Some(Permission::ChangeFilterMode),
             Command::Plant(OperatorAction::Bypass { .. }) => Some(Permission::BypassConstraint),
             Command::InjectFault(_) => Some(Permission::Train),
@@ -1319,36 +1233,6 @@ impl Console {
         }
     }
 
-    fn recompile(&mut self) {
-        let Some(draft) = &self.draft else {
-            return;
-        };
-        let base = self.sim.program.program().program.clone();
-        let result = draft.apply(&base).and_then(|p| {
-            CompiledProgram::new(&p, &self.sim.bundle.plant, &Origin::default())
-                .map_err(|e| vigie_core::diag::render(&e))
-        });
-        match result {
-            Ok(c) => {
-                let diff = vigie_core::control::differences(&base, &c.program);
-                self.problems = if diff.is_empty() {
-                    "compiled: no change".into()
-                } else {
-                    format!("compiled: {}", diff.join("; "))
-                };
-                self.compiled_edit = Some(c);
-                self.say(None, "say-compiled", &[]);
-            }
-            Err(e) => {
-                self.problems = e;
-                self.compiled_edit = None;
-                self.say(None, "say-compile-failed", &[]);
-            }
-        }
-        let text = self.status.clone();
-        self.journal.push(self.now().0, "maintenance", &text);
-    }
-
     fn restart(&mut self, program: Option<CompiledProgram>) {
         match self.source.build() {
             Ok(mut sim) => {
@@ -1376,23 +1260,6 @@ impl Console {
             }
             Err(e) => self.say(None, "say-restart-failed", &[("error", e)]),
         }
-    }
-
-    fn verify(&mut self) {
-        if self.compiled_edit.is_none() {
-            self.recompile();
-        }
-        let Some(program) = self.compiled_edit.clone() else {
-            self.say(None, "say-nothing-to-verify", &[]);
-            return;
-        };
-        let outcome = verify_fix(&self.source.scenario, &self.source.path, program);
-        if self.score.variant.is_none() {
-            self.score.variant = Some(self.source.scenario.name.clone());
-        }
-        self.score.record(&outcome, self.wall_s);
-        let (id, args) = outcome.message();
-        self.say(Some(("training", self.now().0)), id, &args);
     }
 
     fn start_report(&mut self, dir: PathBuf) {

@@ -1479,11 +1479,32 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let chart_label = |name: &str| c.i18n.ta("maint-chart", &[("name", name.into())]);
     let active_label = c.i18n.t("maint-active");
     let equations = c.i18n.t("maint-equations");
+    let exercise = match &c.source.scenario.program {
+        vigie_core::sim::ProgramChoice::Error(id) => Some(id.clone()),
+        _ => None,
+    };
     egui::Frame::NONE
         .fill(pal.panel)
         .inner_margin(8.0)
         .show(ui, |ui| {
-            maintenance_header_ui(&c.i18n, ui, &program.name, out);
+            let title = match &exercise {
+                Some(id) => c.i18n.ta(
+                    "maint-program-exercise",
+                    &[
+                        ("name", (&program.name).into()),
+                        ("id", id.into()),
+                        ("version", (&program.version()).into()),
+                    ],
+                ),
+                None => c.i18n.ta(
+                    "maint-program",
+                    &[
+                        ("name", (&program.name).into()),
+                        ("version", (&program.version()).into()),
+                    ],
+                ),
+            };
+            maintenance_header_ui(&c.i18n, ui, &title, out);
             if !c.problems.is_empty() {
                 let col = if c.compiled_edit.is_some() {
                     pal.text
@@ -1492,7 +1513,10 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                 };
                 ui.label(RichText::new(&c.problems).monospace().color(col));
             }
-            let Some(draft) = &mut c.draft else {
+            if let Some(check) = &c.last_fix {
+                fix_check_ui(&c.i18n, &pal, ui, check);
+            }
+            let Some(draft) = &c.draft else {
                 return;
             };
             egui::ScrollArea::vertical()
@@ -1505,21 +1529,25 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                             .striped(true)
                             .num_columns(3)
                             .show(ui, |ui| {
-                                chart_steps_ui(ui, chart, draft, &active, &active_label, &pal);
+                                let labels = (active_label.as_str(), &c.i18n);
+                                chart_steps_ui(ui, chart, draft, &active, labels, &pal, out);
                             });
                     }
                     if !draft.equations.is_empty() {
                         ui.add_space(6.0);
                         ui.label(RichText::new(&equations).strong().size(16.0));
                         egui::Grid::new("equations").num_columns(2).show(ui, |ui| {
-                            for (target, expr) in &mut draft.equations {
-                                let l = ui.label(RichText::new(format!("{target} =")).monospace());
-                                ui.add(
-                                    egui::TextEdit::singleline(expr)
-                                        .desired_width(300.0)
-                                        .font(egui::TextStyle::Monospace),
-                                )
-                                .labelled_by(l.id);
+                            for (target, expr) in &draft.equations {
+                                ui.label(RichText::new(format!("{target} =")).monospace());
+                                let mut text = expr.clone();
+                                let name =
+                                    c.i18n.ta("maint-edit-equation", &[("id", target.into())]);
+                                if text_field(ui, &mut text, &name) {
+                                    out.push(Command::EditDraft(super::DraftEdit::Equation {
+                                        target: target.clone(),
+                                        text,
+                                    }));
+                                }
                                 ui.end_row();
                             }
                         });
@@ -1528,15 +1556,75 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         });
 }
 
+/// A one-line monospace editor whose accessible name is `name`; true when edited.
+fn text_field(ui: &mut egui::Ui, text: &mut String, name: &str) -> bool {
+    let r = ui.add(
+        egui::TextEdit::singleline(text)
+            .desired_width(260.0)
+            .font(egui::TextStyle::Monospace),
+    );
+    ui.ctx()
+        .accesskit_node_builder(r.id, |node| node.set_label(name.to_string()));
+    r.changed()
+}
+
+/// The last fix check: the program version it ran, the scenario, what changed and the
+/// verdict with its trips and hazards.
+pub(super) fn fix_check_ui(
+    i18n: &crate::i18n::I18n,
+    pal: &crate::theme::Palette,
+    ui: &mut egui::Ui,
+    check: &super::FixCheck,
+) {
+    let ok = check.outcome.is_fixed();
+    egui::Frame::NONE
+        .stroke(egui::Stroke::new(
+            1.5,
+            if ok { pal.running } else { pal.trip },
+        ))
+        .inner_margin(6.0)
+        .show(ui, |ui| {
+            ui.label(RichText::new(i18n.t("fix-check-title")).strong());
+            let version = if check.version.is_empty() {
+                i18n.t("fix-check-not-compiled")
+            } else {
+                check.version.clone()
+            };
+            ui.label(i18n.ta(
+                "fix-check-ran",
+                &[
+                    ("name", (&check.program).into()),
+                    ("version", (&version).into()),
+                    ("scenario", (&check.scenario).into()),
+                ],
+            ));
+            let changes = if check.changes.is_empty() {
+                i18n.t("fix-check-no-change")
+            } else {
+                check.changes.join(", ")
+            };
+            ui.label(i18n.ta("fix-check-changes", &[("changes", (&changes).into())]));
+            let (id, mut args) = check.outcome.message();
+            args.push(("version", check.version.clone()));
+            let a: Vec<(&str, crate::i18n::Arg<'_>)> =
+                args.iter().map(|(k, v)| (*k, v.into())).collect();
+            ui.label(RichText::new(i18n.ta(id, &a)).strong().color(if ok {
+                pal.running
+            } else {
+                pal.trip
+            }));
+        });
+}
+
 /// The maintenance panel's heading with its buttons: recompile, restart, discard, verify.
 fn maintenance_header_ui(
     i18n: &crate::i18n::I18n,
     ui: &mut egui::Ui,
-    name: &str,
+    title: &str,
     out: &mut Vec<Command>,
 ) {
-    ui.horizontal(|ui| {
-        ui.heading(i18n.ta("maint-program", &[("name", name.into())]));
+    ui.horizontal_wrapped(|ui| {
+        ui.heading(title);
         if ui.button(i18n.t("maint-recompile")).clicked() {
             out.push(Command::Recompile);
         }
@@ -1557,14 +1645,15 @@ fn maintenance_header_ui(
 }
 
 /// One chart's grid: each step (lit when active) with its editable action, then the
-/// transitions leaving it with their editable conditions.
+/// transitions leaving it with their editable conditions; edits go out as commands.
 fn chart_steps_ui(
     ui: &mut egui::Ui,
     chart: &vigie_core::control::program::Chart,
-    draft: &mut super::Draft,
+    draft: &super::Draft,
     active: &BTreeSet<String>,
-    active_label: &str,
+    (active_label, i18n): (&str, &crate::i18n::I18n),
     pal: &crate::theme::Palette,
+    out: &mut Vec<Command>,
 ) {
     for s in &chart.steps {
         let on = active.contains(&s.id);
@@ -1574,7 +1663,7 @@ fn chart_steps_ui(
             s.id
         ))
         .monospace();
-        let l = ui.label(if on {
+        ui.label(if on {
             txt.strong()
                 .color(Color32::WHITE)
                 .background_color(pal.running)
@@ -1582,29 +1671,33 @@ fn chart_steps_ui(
             txt
         });
         ui.label(if on { active_label } else { "" });
-        if let Some(a) = draft.actions.get_mut(&s.id) {
-            ui.add(
-                egui::TextEdit::singleline(a)
-                    .desired_width(260.0)
-                    .font(egui::TextStyle::Monospace),
-            )
-            .labelled_by(l.id);
+        if let Some(a) = draft.actions.get(&s.id) {
+            let mut text = a.clone();
+            let name = i18n.ta("maint-edit-actions", &[("id", (&s.id).into())]);
+            if text_field(ui, &mut text, &name) {
+                out.push(Command::EditDraft(super::DraftEdit::Actions {
+                    step: s.id.clone(),
+                    text,
+                }));
+            }
         }
         ui.end_row();
         for t in chart.transitions.iter().filter(|t| t.from.contains(&s.id)) {
-            let l = ui.label(RichText::new(format!("   + {}", t.id)).monospace());
+            ui.label(RichText::new(format!("   + {}", t.id)).monospace());
             ui.label(
                 RichText::new(format!("→ {}", t.to.join(", ")))
                     .monospace()
                     .color(pal.text_dim),
             );
-            if let Some(cond) = draft.conditions.get_mut(&t.id) {
-                ui.add(
-                    egui::TextEdit::singleline(cond)
-                        .desired_width(260.0)
-                        .font(egui::TextStyle::Monospace),
-                )
-                .labelled_by(l.id);
+            if let Some(cond) = draft.conditions.get(&t.id) {
+                let mut text = cond.clone();
+                let name = i18n.ta("maint-edit-condition", &[("id", (&t.id).into())]);
+                if text_field(ui, &mut text, &name) {
+                    out.push(Command::EditDraft(super::DraftEdit::Condition {
+                        transition: t.id.clone(),
+                        text,
+                    }));
+                }
             }
             ui.end_row();
         }

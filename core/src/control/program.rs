@@ -124,6 +124,21 @@ pub struct Program {
 }
 
 impl Program {
+    /// The program's version: the first 12 hex digits of the BLAKE2s hash of its
+    /// canonical RON text. Two programs with the same steps, transitions, actions and
+    /// equations have the same version; any edit changes it. The console, the fix
+    /// check and the incident report name the program they ran by it.
+    pub fn version(&self) -> String {
+        use blake2::{Blake2s256, Digest};
+        use std::fmt::Write as _;
+        let text = ron::to_string(self).unwrap_or_default();
+        let hash = Blake2s256::digest(text.as_bytes());
+        hash.iter().take(6).fold(String::new(), |mut out, b| {
+            let _ = write!(out, "{b:02x}");
+            out
+        })
+    }
+
     /// Parses program text; `file` is used in messages only.
     pub fn from_ron(text: &str, file: &Path) -> Result<Self, Vec<Problem>> {
         ron::from_str(text).map_err(|e| vec![ron_problem(file, &e)])

@@ -684,3 +684,32 @@ fn quiescent_scans_are_skipped_without_changing_the_outputs() {
         assert_eq!(fast.active_steps(), full.active_steps(), "scan {k}");
     }
 }
+
+#[test]
+fn a_program_version_changes_with_any_edit_and_only_then() {
+    let path = station().join("programs/reference.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let p = Program::from_ron(&text, &path).unwrap();
+    let v = p.version();
+    assert_eq!(v.len(), 12);
+    assert!(v.bytes().all(|b| b.is_ascii_hexdigit()), "{v}");
+    // The same program read again (or cloned) has the same version.
+    assert_eq!(Program::from_ron(&text, &path).unwrap().version(), v);
+    // Any receptivity, action or equation edit changes it; undoing it restores it.
+    let mut edited = p.clone();
+    let t = &mut edited.charts[0].transitions[0];
+    let before = t.condition.clone();
+    t.condition = format!("({before}) . 1");
+    assert_ne!(edited.version(), v);
+    edited.charts[0].transitions[0].condition = before;
+    assert_eq!(edited.version(), v);
+    let mut edited = p.clone();
+    let step = edited
+        .charts
+        .iter_mut()
+        .flat_map(|c| c.steps.iter_mut())
+        .find(|s| !s.actions.is_empty())
+        .unwrap();
+    step.actions.pop();
+    assert_ne!(edited.version(), v, "an action removed");
+}
