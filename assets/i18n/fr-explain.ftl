@@ -71,6 +71,8 @@ explain-X411 = { $output } devrait être EN MARCHE mais rien dans le programme n
 explain-X412 = L'étape { $step } est active et son action { $qualifier } { $output } commande { $output } ; les transitions qui la quittent, { $transition } (`{ $receptivity }`), n'ont pas été franchies : leur réceptivité est suspecte (elles lisent { $signals }).
 explain-X413 = Contrainte combinée { $constraint } : l'étape { $step }, activée dans le cycle de l'arrêt, commande { $driven } alors que { $output }, que la contrainte exige avec lui, n'est commandé par rien : les actions de la nouvelle étape ou ce qui commande { $output } l'oublient.
 explain-X414 = { $sensor } est suspect : sa lecture a fait un front que la physique de la machine ne permet pas ; l'étage de plausibilité garde sa dernière valeur plausible et { $constraint } la lit comme pouvant valoir l'une ou l'autre. Vérifiez { $sensor } (cellule, réflecteur, câble) avant le programme.
+explain-X415 = Matériel d'abord : le diagnostiqueur { $component } a trouvé un défaut certain à { $time_ms } ms ({ $descriptions }). Vérifiez { $check } sur la machine avant le programme : les suspects du programme ci-dessous supposent que la machine a obéi à ses ordres.
+explain-X416 = Matériel d'abord : le diagnostiqueur { $component } tient le composant pour défaillant à { $time_ms } ms sans pouvoir choisir entre { $descriptions }. Vérifiez { $check } sur la machine avant le programme : les suspects du programme ci-dessous supposent que la machine a obéi à ses ordres.
 
 ## Alarmes (le texte du cœur reste l'enregistrement ; en français, à partir du code et
 ## des champs de l'alarme)

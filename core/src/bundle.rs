@@ -182,7 +182,7 @@ impl PlantBundle {
     pub fn unprotected(&self) -> Option<Problem> {
         let path = self.dir.join("constraints.txt");
         let generated = |c: &crate::constraints::Constraint| {
-            c.id.starts_with("DSTOP_") && c.location.file != path
+            crate::pop::coop::is_diagnoser_stop(&c.id) && c.location.file != path
         };
         if !self.constraints.constraints.iter().all(generated) {
             return None;

@@ -132,6 +132,42 @@ pub enum OperatorAction {
     ManualSet(String, bool),
 }
 
+/// What the hypothesis says of one diagnoser partition: its faults' descriptions and
+/// what to check on the machine.
+#[derive(Clone, Debug, Default)]
+struct PartitionInfo {
+    descriptions: BTreeMap<String, String>,
+    check: Vec<String>,
+}
+
+impl PartitionInfo {
+    fn of(file: &crate::pop::model::DiagnoserFile) -> BTreeMap<String, Self> {
+        let mut out = BTreeMap::new();
+        for c in &file.components {
+            for p in &c.partitions {
+                let descriptions = c
+                    .faults
+                    .iter()
+                    .filter(|f| p.faults.contains(&f.id))
+                    .map(|f| (f.id.clone(), f.description.clone()))
+                    .collect();
+                let check = match &p.sensor {
+                    Some(s) => vec![s.clone()],
+                    None => p.actuators.clone(),
+                };
+                out.insert(
+                    p.id.clone(),
+                    Self {
+                        descriptions,
+                        check,
+                    },
+                );
+            }
+        }
+        out
+    }
+}
+
 /// A question the console asks the operator while a diagnoser is in doubt between a
 /// drive that stops items and a sensor it cannot estimate: the operator's eyes tell
 /// them apart.
@@ -371,6 +407,9 @@ pub struct Simulation {
     live_now: Option<Millis>,
     /// The diagnosers, when enabled ([`Simulation::enable_diagnosers`]).
     pub diagnosers: Option<crate::pop::Diagnosers>,
+    /// Per diagnoser partition: its fault descriptions and what to check (its sensor or
+    /// actuators), from `diagnosers.ron`, for the hypothesis's hardware items.
+    partitions: BTreeMap<String, PartitionInfo>,
     diag_seen: usize,
     degraded: Vec<(usize, usize)>,
     /// Manual mode: the outputs the operator requested, in place of the program's (not
@@ -550,6 +589,7 @@ impl Simulation {
             tasks,
             live_now: None,
             diagnosers: None,
+            partitions: BTreeMap::new(),
             diag_seen: 0,
             degraded: Vec::new(),
             manual: None,
@@ -581,6 +621,7 @@ impl Simulation {
             &db.bundle.plant,
             &db.bundle.symbols,
         ));
+        self.partitions = PartitionInfo::of(&db.file);
         self.diagnosers = Some(crate::pop::Diagnosers::new(db.compiled, &db.bundle.symbols));
         self.bundle = db.bundle;
         Ok(())
@@ -767,7 +808,7 @@ impl Simulation {
                     .into(),
             );
         }
-        if self.bundle.constraints.get(id).is_none() || id.starts_with("DSTOP_") {
+        if self.bundle.constraints.get(id).is_none() || crate::pop::coop::is_diagnoser_stop(id) {
             return Err(format!("no safety constraint `{id}`"));
         }
         if reason.trim().is_empty() {
@@ -1480,6 +1521,50 @@ impl Simulation {
             self.alarms.raise(now, &n.key, AlarmKind::Diagnosis, text);
             self.log_coded("diagnosis", n.text, &code, f);
         }
+        // A diagnosis made while the plant is stopped completes the stop's hypothesis:
+        // the technician reads the hardware first even when it was decided late.
+        if self.engine.is_tripped() {
+            let faults = self.hardware_faults();
+            if let Some(ex) = self.explanations.values_mut().next_back() {
+                explain::add_hardware_hypothesis(ex, &faults);
+            }
+        }
+    }
+
+    /// The diagnosers' flagged partitions now, with their last decision: the hardware
+    /// the hypothesis names first.
+    pub fn hardware_faults(&self) -> Vec<explain::HardwareFault> {
+        let Some(d) = self.diagnosers.as_ref() else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (partition, _, _) in d.flagged() {
+            let Some(last) = d.diagnoses.iter().rev().find(|x| x.partition == partition) else {
+                continue;
+            };
+            let info = self.partitions.get(&partition);
+            let faults = last
+                .fault
+                .split('|')
+                .map(|l| {
+                    let l = l.trim().to_string();
+                    let text = info
+                        .and_then(|i| i.descriptions.get(&l))
+                        .cloned()
+                        .unwrap_or_default();
+                    (l, text)
+                })
+                .collect();
+            out.push(explain::HardwareFault {
+                time_ms: last.time_ms,
+                component: last.component.clone(),
+                partition,
+                faults,
+                certain: last.certainty != crate::pop::Certainty::Ambiguous,
+                check: info.map(|i| i.check.clone()).unwrap_or_default(),
+            });
+        }
+        out
     }
 
     /// Sensors whose implausible edge was held this cycle (an alarm while suspect) or
@@ -1530,9 +1615,16 @@ impl Simulation {
     ) -> Option<(Explanation, ProjectedPlant)> {
         let mut ex = explain::explain(&self.engine, index)?;
         // Beyond the paper: the program is known, so its elements lead the hypothesis.
-        if let Some(trip) = self.engine.trips.get(index) {
+        // A stop by the diagnosers alone is no program error: no program suspects.
+        if let Some(trip) = self.engine.trips.get(index).filter(|t| {
+            !t.constraints
+                .iter()
+                .all(|c| crate::pop::coop::is_diagnoser_stop(&c.id))
+        }) {
             explain::add_program_hypothesis(&mut ex, trip, &before, after);
         }
+        // Hardware before program: a component the diagnosers hold faulty comes first.
+        explain::add_hardware_hypothesis(&mut ex, &self.hardware_faults());
         let projected = self.project(emulator, after.clone());
         fill_projection(&mut ex, &projected, &self.bundle);
         Some((ex, projected))

@@ -199,6 +199,8 @@ registry! {
     X_STEP_NOT_LEFT = "X412", "a step drives the forbidden value and its transitions did not fire";
     X_COMBINED_MISSING = "X413", "combined constraint: one actuator driven, the other commanded by nothing";
     X_SUSPECT_SENSOR = "X414", "a sensor of the fired term is suspect";
+    X_HARDWARE_CERTAIN = "X415", "hardware first: a diagnoser found a fault with certainty";
+    X_HARDWARE_AMBIGUOUS = "X416", "hardware first: a diagnoser holds a component faulty between several faults";
     // T: task alarms (`tasks::explain::AlarmCode`)
     T_TOLERANCE_USED_UP = "T001", "interruption tolerance used up: the task can no longer finish before γ";
     T_SLOWDOWN = "T002", "slowdown: effective running time beyond β without the end event";

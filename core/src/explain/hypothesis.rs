@@ -123,6 +123,7 @@ pub fn hypothesis_from(
         }
     };
     level.items.sort_by_key(|i| rank(i.code));
+    super::merge_identical(&mut level.items);
     level
 }
 

@@ -20,6 +20,7 @@
 //!
 #![doc = include_str!("codes.md")]
 
+mod hardware;
 mod hypothesis;
 mod observed;
 mod program;
@@ -32,6 +33,7 @@ use crate::symbols::{Space, Symbols};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+pub use hardware::{HardwareFault, add_hardware_hypothesis, merge_identical};
 pub use hypothesis::{case_count, hypothesis, hypothesis_from};
 pub use observed::emulator_from_observation;
 pub use program::{add_program_hypothesis, program_suspects};
@@ -119,7 +121,7 @@ pub struct Level {
 }
 
 /// The five levels for one trip.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Explanation {
     /// Index of the trip in the engine's list.
     pub trip: usize,

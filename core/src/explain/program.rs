@@ -309,6 +309,7 @@ pub fn add_program_hypothesis(
         items.push(item);
     }
     items.append(&mut level.items);
+    super::merge_identical(&mut items);
     level.items = items;
 }
 

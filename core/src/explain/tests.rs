@@ -606,6 +606,7 @@ fn every_code_is_in_the_catalogue() {
     let sources = [
         include_str!("mod.rs"),
         include_str!("hypothesis.rs"),
+        include_str!("hardware.rs"),
         include_str!("program.rs"),
         include_str!("../sim.rs"),
     ]

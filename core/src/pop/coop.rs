@@ -143,7 +143,7 @@ pub fn rewrite(
         }
         let partition = f.trim_start_matches("def_");
         out.push_str(&format!(
-            "DSTOP_{partition} = {}  # the diagnosers stop the plant: {partition} at fault\n",
+            "{STOP_PREFIX}{partition} = {}  # the diagnosers stop the plant: {partition} at fault\n",
             render_dnf(&simplify(&terms), symbols)
         ));
     }
@@ -179,4 +179,13 @@ fn forcing(terms: &Dnf, index: u32, literal_positive: bool) -> Option<Dnf> {
         })
         .collect();
     (!conditions.is_empty()).then(|| simplify(&conditions))
+}
+
+/// The prefix of the constraints by which the diagnosers stop the plant (`DSTOP_P`).
+pub const STOP_PREFIX: &str = "DSTOP_";
+
+/// True for a constraint by which the diagnosers stop the plant: the program did not
+/// command anything wrong, a component is at fault.
+pub fn is_diagnoser_stop(constraint: &str) -> bool {
+    constraint.starts_with(STOP_PREFIX)
 }

@@ -1117,3 +1117,97 @@ fn a_diagnoser_in_doubt_asks_the_operator_and_uses_the_answer() {
     sim.act(&OperatorAction::ResetDiagnosers).expect("reset");
     assert!(sim.doubt_answers().is_empty());
 }
+
+/// Issue 20, hardware before program: with an actuator stuck ON the diagnosers stop
+/// the plant, and level 4 names the hardware first (with the stuck actuator among what
+/// to check), not the program's equation; a stop by the diagnosers alone lists no
+/// program suspect.
+#[test]
+fn an_actuator_stuck_on_is_named_as_hardware_before_the_program() {
+    let program_codes = [
+        codes::X_TRANSITION_DEACTIVATED_STEP.id,
+        codes::X_TRANSITION_ACTIVATED_STEP.id,
+        codes::X_QUALIFIER.id,
+        codes::X_EQUATION_FORBIDDEN_VALUE.id,
+        codes::X_NOTHING_COMMANDS.id,
+        codes::X_STEP_NOT_LEFT.id,
+        codes::X_COMBINED_MISSING.id,
+    ];
+    let hardware = [codes::X_HARDWARE_CERTAIN.id, codes::X_HARDWARE_AMBIGUOUS.id];
+    let mut named = Vec::new();
+    for actuator in ["A2", "A3", "A4"] {
+        let text = format!(
+            r#"Scenario(
+                name: "{actuator} stuck ON",
+                plant: ".",
+                program: Reference,
+                seed: 3,
+                arrivals: Some(Periodic(period_ms: 8000, jitter_ms: 1000, mix: Alternate)),
+                faults: [(trigger: At(20000), fault: ActuatorStuckOn("{actuator}"))],
+                actions: [(at_ms: 0, action: Start)],
+                duration_ms: 60000,
+                filter: Enforce,
+                diagnosers: true,
+            )"#
+        );
+        let s: Scenario = ron::from_str(&text).expect("scenario");
+        let sim = run(&s);
+        assert!(!sim.engine.trips.is_empty(), "{actuator}: no stop");
+        let ex = sim.explanations.values().next().expect("explained");
+        let first = &ex.hypothesis.items[0];
+        assert!(
+            hardware.contains(&first.code),
+            "{actuator}: level 4 starts with {} {}",
+            first.code,
+            first.text
+        );
+        assert!(
+            first.fields["check"].split(", ").any(|e| e == actuator),
+            "{actuator}: {}",
+            first.text
+        );
+        assert!(first.text.starts_with("Hardware first"), "{}", first.text);
+        let trip = &sim.engine.trips[0];
+        if trip
+            .constraints
+            .iter()
+            .all(|c| crate::pop::coop::is_diagnoser_stop(&c.id))
+        {
+            let blamed: Vec<&Item> = ex
+                .hypothesis
+                .items
+                .iter()
+                .filter(|i| program_codes.contains(&i.code))
+                .collect();
+            assert!(blamed.is_empty(), "{actuator}: {blamed:?}");
+        }
+        assert!(
+            ex.hypothesis
+                .highlights
+                .iter()
+                .any(|h| h.element == actuator && h.mark == Mark::Suspect),
+            "{actuator}"
+        );
+        named.push(actuator);
+    }
+    assert_eq!(named.len(), 3);
+    // A program error with the diagnosers on: no hardware item.
+    let path = station_dir().join("scenarios/cs10-paper.ron");
+    let mut s = Scenario::load(&path).expect("scenario");
+    s.diagnosers = true;
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(s.duration_ms));
+    let ex = sim.explanations.values().next().expect("explained");
+    assert!(
+        ex.hypothesis
+            .items
+            .iter()
+            .all(|i| !hardware.contains(&i.code)),
+        "{:?}",
+        ex.hypothesis.items
+    );
+    assert_eq!(
+        ex.hypothesis.items[0].code,
+        codes::X_TRANSITION_DEACTIVATED_STEP.id
+    );
+}
