@@ -127,6 +127,7 @@ journal-reinitialise = réinitialisation par l'opérateur après vérification d
    *[other] pièces laissées en place, observateurs effacés là où les capteurs ne laissent pas de place à leur pièce
 }, programme à ses étapes initiales, arrêt terminé
 journal-plant-emptied = l'opérateur a retiré { $n } pièce(s) de la machine
+journal-repair = réparation sur le simulateur : { $n } défaut(s) retiré(s)
 journal-manual-on = mode manuel : le programme n'est plus exécuté, les sorties restent en l'état ; chaque commande est vérifiée par les contraintes de sécurité
 journal-manual-off = mode automatique : le programme repart de ses étapes initiales ; appuyez sur Départ cycle
 journal-by-hand = { $output } { $on ->

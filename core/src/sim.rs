@@ -126,6 +126,11 @@ pub enum OperatorAction {
         /// The operator sees an item there.
         item: bool,
     },
+    /// On the simulator only: the technician repairs the plant, every fault of the
+    /// emulator (injected or still to come) ends now, and the diagnosers' flags are
+    /// cleared as after a real repair. The trip stays until the operator's Reset (the
+    /// plant may still be in a forbidden situation). Refused on a live link.
+    Repair,
     /// Manual mode: request an output ON or OFF. The request is checked against every
     /// constraint with the plant as it is; one that would violate a constraint is
     /// refused with the constraint's own description and never reaches the plant.
@@ -1005,6 +1010,13 @@ impl Simulation {
                 Ok(())
             }
             OperatorAction::Reset => self.engine.reset().map_err(|e| e.to_string()),
+            OperatorAction::Repair if self.is_live() => {
+                Err("refused on a live link: repair the machine itself".to_string())
+            }
+            OperatorAction::Repair => {
+                self.repair();
+                Ok(())
+            }
             OperatorAction::ResetDiagnosers => match self.diagnosers.as_mut() {
                 Some(d) => {
                     d.reset_in(self.engine.frame_mut());
@@ -1040,6 +1052,25 @@ impl Simulation {
                 self.engine.set_hold(false);
                 Ok(())
             }
+        }
+    }
+
+    /// The technician's repair on the simulator: the emulator's faults end, the
+    /// diagnosers' flags are cleared.
+    fn repair(&mut self) {
+        let n = self.emulator.repair_faults();
+        self.log_coded(
+            "repair",
+            format!("repair on the simulator: {n} faults removed"),
+            "journal-repair",
+            fields([("n", n.to_string())]),
+        );
+        if let Some(d) = self.diagnosers.as_mut() {
+            d.reset_in(self.engine.frame_mut());
+            self.diagnosers_cleared(
+                self.now(),
+                "diagnosers reset after the repair: fault flags cleared, sensors read again",
+            );
         }
     }
 

@@ -244,12 +244,10 @@ fn training_in_french() {
         .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
     h.state_mut().apply(Command::SetMode(Mode::Training));
     h.run_steps(2);
-    assert!(
-        h.query_by_label_contains("Rotation relâchée sur le front montant de C7")
-            .is_some(),
-        "variant E01 in French"
-    );
+    // The answer stays hidden while the exercise runs.
+    assert!(h.query_by_label_contains("Rotation relâchée").is_none());
     assert!(h.query_by_label_contains("Rotation released").is_none());
+    h.get_by_label("Exercice E01");
     // The operator may not inject a fault: refused in French.
     h.state_mut().apply(Command::InjectFault(0));
     assert!(
@@ -289,10 +287,185 @@ fn training_in_french() {
         "{}",
         h.state().status
     );
-    let e = h.state().journal.entries().last().cloned().expect("entry");
+    let e = h
+        .state()
+        .journal
+        .entries()
+        .iter()
+        .rev()
+        .find(|e| e.code == "fix-correct")
+        .cloned()
+        .expect("entry");
     assert_eq!(e.kind, "training");
     assert!(e.text.starts_with("correct fix: no trip"), "{}", e.text);
-    assert_eq!(e.code, "fix-correct");
+    // The fix ends the exercise: the debrief shows the mistake in French.
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    assert!(
+        h.query_by_label_contains("Rotation relâchée sur le front montant de C7")
+            .is_some(),
+        "variant E01 in French, after the fix"
+    );
+    h.get_by_label("Débriefing : exercice E01");
+}
+
+/// Clicks a button as a person does: scrolled into view first.
+fn press(h: &mut Harness<'static, Console>, label: &str) {
+    h.get_by_label(label).scroll_to_me();
+    // The scroll is animated: let it settle (a bounded number of frames, until the
+    // button stays in place three frames running).
+    let mut rect = h.get_by_label(label).rect();
+    let mut still = 0;
+    for _ in 0..120 {
+        h.step();
+        let now = h.get_by_label(label).rect();
+        still = if now == rect { still + 1 } else { 0 };
+        rect = now;
+        if still == 3 {
+            break;
+        }
+    }
+    h.get_by_label(label).click();
+    h.run_steps(2);
+}
+
+/// Issue 20, training for a trainer: the answer is hidden until the trainee asks for
+/// it or fixes the error; the debrief shows the mistake, the correct fix and the levels
+/// used; the history keeps every finished exercise in the data folder, across a
+/// restart of the console.
+#[test]
+fn training_hides_the_answer_until_the_debrief_and_keeps_a_history() {
+    let data = temp_dir("training-history");
+    let mut opts = options(Some(data.clone()));
+    opts.scenario = None;
+    let mut h = harness(opts.clone());
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    press(&mut h, "Load E05");
+    h.get_by_label("Exercise E05");
+    assert!(h.query_by_label_contains("/C4 instead of C5").is_none());
+    assert!(
+        h.query_by_label_contains("Right evacuation started")
+            .is_none()
+    );
+    run_to_trip(&mut h);
+    h.state_mut().apply(Command::ShowLevel(Some(4)));
+    h.run_steps(2);
+    // A wrong fix first: not fixed, the exercise goes on, the answer still hidden.
+    h.state_mut().apply(Command::EditDraft(
+        vigie_app::console::DraftEdit::Condition {
+            transition: "t23".into(),
+            text: "/C4 . C6".into(),
+        },
+    ));
+    press(&mut h, "Verify fix");
+    assert!(!h.state().score().revealed);
+    assert!(
+        h.query_by_label_contains("Right evacuation started")
+            .is_none()
+    );
+    press(&mut h, "Show the answer");
+    assert!(h.state().score().revealed);
+    h.get_by_label("Debrief: exercise E05");
+    assert!(
+        h.query_all_by_label_contains("Right evacuation started as soon as the table leaves")
+            .count()
+            >= 1
+    );
+    h.get_by_label("t23: /C4  →  C5");
+    h.get_by_label("Levels consulted: 4");
+    h.get_by_label("Answer shown after 1 fix checks, without a correct fix.");
+    // Shown once: a second request changes nothing.
+    h.state_mut().apply(Command::ShowAnswer);
+    assert_eq!(h.state().history.records.len(), 1);
+    // A second exercise, fixed.
+    press(&mut h, "Load E01");
+    assert!(!h.state().score().revealed);
+    h.state_mut().apply(Command::EditDraft(
+        vigie_app::console::DraftEdit::Condition {
+            transition: "t24".into(),
+            text: "FE(C7)".into(),
+        },
+    ));
+    h.state_mut().apply(Command::VerifyFix);
+    h.run_steps(2);
+    assert!(h.state().score().revealed);
+    h.get_by_label_contains("Fixed after 1 fix checks");
+    drop(h);
+    // The history is on disk and read back by a new console.
+    let csv = std::fs::read_to_string(data.join("training.csv")).expect("history file");
+    assert!(csv.starts_with("wall_ms,user,exercise,fixed,attempts,levels,seconds\n"));
+    let mut h = harness(opts);
+    let records: Vec<(String, bool)> = h
+        .state()
+        .history
+        .records
+        .iter()
+        .map(|r| (r.exercise.clone(), r.fixed))
+        .collect();
+    assert_eq!(records, [("E05".into(), false), ("E01".into(), true)]);
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    h.get_by_label("Training history (not logged in)").click();
+    h.run_steps(2);
+    h.get_by_label("given up");
+    h.get_by_label("fixed");
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+/// Issue 20: an injected fault is removed by the repair action; the filter's Reset is
+/// taken after it.
+#[test]
+fn a_repair_removes_an_injected_fault_and_the_reset_is_taken() {
+    let mut opts = options(None);
+    opts.scenario = None;
+    let mut h = harness(opts);
+    h.state_mut().role = vigie_core::access::Role::Trainer;
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    assert_eq!(h.state().sim.emulator.faults_in_force(), 0);
+    h.state_mut()
+        .apply(Command::Plant(vigie_core::sim::OperatorAction::Start));
+    let table = h
+        .state()
+        .faults
+        .iter()
+        .position(|(n, _)| n.starts_with("Table blocked"))
+        .expect("the table fault in faults.ron");
+    h.state_mut().apply(Command::InjectFault(table));
+    assert_eq!(h.state().sim.emulator.faults_in_force(), 1);
+    run_to_trip(&mut h);
+    assert!(
+        h.state().sim.engine.is_tripped(),
+        "the blocked table stops the plant"
+    );
+    h.state_mut()
+        .apply(Command::Plant(vigie_core::sim::OperatorAction::Reset));
+    assert!(
+        h.state().sim.engine.is_tripped(),
+        "Reset refused while the table is blocked"
+    );
+    press(&mut h, "Repair the plant");
+    assert_eq!(
+        h.state().sim.emulator.faults_in_force(),
+        0,
+        "{}",
+        h.state().status
+    );
+    assert!(
+        h.state()
+            .journal
+            .entries()
+            .iter()
+            .any(|e| e.text == "repair on the simulator: 1 faults removed")
+    );
+    h.state_mut()
+        .apply(Command::Plant(vigie_core::sim::OperatorAction::Reset));
+    assert!(
+        !h.state().sim.engine.is_tripped(),
+        "Reset taken after the repair: {}",
+        h.state().status
+    );
 }
 
 #[test]

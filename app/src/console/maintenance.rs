@@ -251,6 +251,7 @@ impl Console {
             self.score.variant = Some(self.source.scenario.name.clone());
         }
         self.score.record(&outcome, self.wall_s);
+        let fixed = outcome.is_fixed();
         let (id, mut args) = outcome.message();
         args.push(("version", version.clone()));
         self.last_fix = Some(FixCheck {
@@ -260,6 +261,43 @@ impl Console {
             scenario,
             outcome,
         });
+        if fixed && !self.score.revealed {
+            self.finish_exercise(true);
+        }
+        // The verdict is the status line's last word.
         self.say(Some(("training", self.now().0)), id, &args);
+    }
+
+    /// Ends the exercise: the debrief shows the answer, and the trainee's history
+    /// records it (fixed, or given up when `fixed` is false).
+    pub(super) fn finish_exercise(&mut self, fixed: bool) {
+        let Some(exercise) = self.exercise_id().map(str::to_string) else {
+            self.say(None, "say-no-exercise", &[]);
+            return;
+        };
+        if self.score.revealed {
+            return;
+        }
+        self.score.revealed = true;
+        let levels: Vec<String> = self.score.levels.iter().map(ToString::to_string).collect();
+        let record = super::ScoreRecord {
+            wall_ms: crate::historian::wall_ms(),
+            user: self.user.clone().unwrap_or_else(|| "-".to_string()),
+            exercise: exercise.clone(),
+            fixed,
+            attempts: self.score.attempts,
+            levels: levels.join(" "),
+            seconds: self.score.located_after_s,
+        };
+        let result = self.history.push(record);
+        let id = if fixed {
+            "say-exercise-fixed"
+        } else {
+            "say-exercise-given-up"
+        };
+        self.say(Some(("training", self.now().0)), id, &[("id", exercise)]);
+        if let Err(e) = result {
+            self.say(None, "say-history-unwritable", &[("error", e.to_string())]);
+        }
     }
 }

@@ -31,7 +31,7 @@ use vigie_core::sim::{OperatorAction, Options, ProgramChoice, Scenario, Simulati
 use vigie_core::time::Millis;
 
 pub use maintenance::{Draft, DraftEdit, FixCheck, parse_actions};
-pub use training::{FixOutcome, Score, verify_fix};
+pub use training::{FixLine, FixOutcome, History, Score, ScoreRecord, correct_fix, verify_fix};
 
 /// The console's modes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -143,6 +143,9 @@ pub enum Command {
     Restart,
     /// Training: load a variant of the control-error library.
     LoadVariant(String),
+    /// Training: end the exercise without a correct fix and show the answer (the
+    /// debrief; recorded in the trainee's history as given up).
+    ShowAnswer,
     /// Log in with a name and a password (checked against `users.ron`).
     Login {
         /// Login name.
@@ -344,7 +347,12 @@ pub struct Console {
     pub last_fix: Option<FixCheck>,
     pub(crate) problems: String,
     pub(crate) variants: Vec<(String, String, String)>,
-    pub(crate) faults: Vec<(String, FaultSpec)>,
+    /// Per exercise: its correct fix (the reference program's texts).
+    pub(crate) answers: BTreeMap<String, Vec<FixLine>>,
+    /// The trainees' finished exercises (`training.csv` of the data folder).
+    pub history: History,
+    /// The fault library (`faults.ron`): name and fault.
+    pub faults: Vec<(String, FaultSpec)>,
     pub(crate) chrono_signals: BTreeSet<String>,
     pub(crate) chrono_window_s: u64,
     pub(crate) score: Score,
@@ -445,7 +453,7 @@ impl Console {
         let linked = link::options(opts)?;
         let opts = linked.as_ref().unwrap_or(opts);
         let (source, mut sim, plant_dir) = Self::open_simulation(opts)?;
-        let variants = sim_variants(&plant_dir, &sim);
+        let (variants, answers) = sim_variants(&plant_dir, &sim);
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
         let descriptions = i18n.signal_descriptions(&sim.bundle.plant);
@@ -495,6 +503,8 @@ impl Console {
             last_fix: None,
             problems: String::new(),
             variants,
+            answers,
+            history: History::load(opts.data_dir.as_deref()),
             chrono_signals,
             chrono_window_s: 30,
             score: Score {
@@ -716,6 +726,14 @@ impl Console {
         self.link.is_none() && matches!(self.source.scenario.program, ProgramChoice::Error(_))
     }
 
+    /// The exercise running: the control-error variant's id (`E01`).
+    pub fn exercise_id(&self) -> Option<&str> {
+        match &self.source.scenario.program {
+            ProgramChoice::Error(id) if self.link.is_none() => Some(id),
+            _ => None,
+        }
+    }
+
     /// True when the role in force may do `p` (editing an exercise is everyone's).
     pub fn may(&self, p: Permission) -> bool {
         self.role.may(p) || (p == Permission::EditProgram && self.is_exercise())
@@ -912,6 +930,7 @@ impl Console {
             }
             Command::Restart => self.restart(None),
             Command::LoadVariant(id) => self.load_variant(id),
+            Command::ShowAnswer => self.finish_exercise(false),
             Command::InjectFault(i) => self.inject_fault(i, now),
             Command::VerifyFix => self.verify(),
             Command::VerifyConstraints => verification::start(self),
@@ -1398,20 +1417,32 @@ fn synoptic_words(i18n: &I18n) -> BTreeMap<&'static str, String> {
         .collect()
 }
 
-fn sim_variants(plant_dir: &Path, sim: &Simulation) -> Vec<(String, String, String)> {
+/// The control-error library's exercises (id, description, expected constraint) and
+/// their correct fixes.
+type Exercises = (
+    Vec<(String, String, String)>,
+    BTreeMap<String, Vec<FixLine>>,
+);
+
+fn sim_variants(plant_dir: &Path, sim: &Simulation) -> Exercises {
     match ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &sim.bundle.plant) {
-        Ok(lib) => lib
-            .variants
-            .iter()
-            .map(|v| {
-                (
-                    v.def.id.clone(),
-                    v.def.description.clone(),
-                    v.def.expected_constraint.clone(),
-                )
-            })
-            .collect(),
-        Err(_) => Vec::new(),
+        Ok(lib) => (
+            lib.variants
+                .iter()
+                .map(|v| {
+                    (
+                        v.def.id.clone(),
+                        v.def.description.clone(),
+                        v.def.expected_constraint.clone(),
+                    )
+                })
+                .collect(),
+            lib.variants
+                .iter()
+                .map(|v| (v.def.id.clone(), correct_fix(&lib.reference, &v.program)))
+                .collect(),
+        ),
+        Err(_) => (Vec::new(), BTreeMap::new()),
     }
 }
 

@@ -24,6 +24,9 @@ pub struct Score {
     pub attempts: u32,
     /// The last verification passed.
     pub fixed: bool,
+    /// The exercise is over (fixed, or the answer asked for): the debrief shows the
+    /// answer.
+    pub revealed: bool,
 }
 
 impl Score {
@@ -148,5 +151,206 @@ pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) ->
             .map(|h| format!("{:?} of box {} at {} ms", h.kind, h.box_id, h.time_ms))
             .collect();
         FixOutcome::NotFixed { trips, hazards }
+    }
+}
+
+/// One element of an exercise's correct fix: the element, the exercise's text and the
+/// reference program's.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FixLine {
+    /// `t24`, `X24`, `A0`.
+    pub element: String,
+    /// The exercise's (erroneous) text.
+    pub wrong: String,
+    /// The reference program's text.
+    pub right: String,
+}
+
+/// The elements where `variant` differs from `reference`: the debrief's correct fix.
+pub fn correct_fix(
+    reference: &vigie_core::control::Program,
+    variant: &vigie_core::control::Program,
+) -> Vec<FixLine> {
+    let (r, v) = (super::Draft::of(reference), super::Draft::of(variant));
+    let mut out = Vec::new();
+    let mut map = |a: &std::collections::BTreeMap<String, String>,
+                   b: &std::collections::BTreeMap<String, String>| {
+        for (k, right) in a {
+            let wrong = b.get(k).cloned().unwrap_or_default();
+            if &wrong != right {
+                out.push(FixLine {
+                    element: k.clone(),
+                    wrong,
+                    right: right.clone(),
+                });
+            }
+        }
+    };
+    map(&r.conditions, &v.conditions);
+    map(&r.actions, &v.actions);
+    let eq = |d: &super::Draft| d.equations.iter().cloned().collect();
+    map(&eq(&r), &eq(&v));
+    out
+}
+
+/// A finished exercise, as kept in the training history.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScoreRecord {
+    /// Wall-clock time of the end, ms since the Unix epoch.
+    pub wall_ms: u64,
+    /// The trainee (the logged-in user, `-` when nobody is).
+    pub user: String,
+    /// The exercise (`E01`).
+    pub exercise: String,
+    /// Fixed (a verified correct fix) or given up (the answer asked for).
+    pub fixed: bool,
+    /// Fix checks.
+    pub attempts: u32,
+    /// Levels consulted, `0 4`.
+    pub levels: String,
+    /// Seconds from the trip to the correct fix.
+    pub seconds: Option<f64>,
+}
+
+const HISTORY_HEADER: &str = "wall_ms,user,exercise,fixed,attempts,levels,seconds";
+
+/// The training history: one CSV file in the data folder, appended to at the end of
+/// each exercise (in memory only without a data folder).
+#[derive(Clone, Debug, Default)]
+pub struct History {
+    path: Option<std::path::PathBuf>,
+    /// The records, oldest first.
+    pub records: Vec<ScoreRecord>,
+    /// Lines of the file that could not be read (`line 3: …`), kept as written.
+    pub unreadable: Vec<String>,
+}
+
+impl History {
+    /// Reads `training.csv` of `data_dir` (none yet: empty).
+    pub fn load(data_dir: Option<&Path>) -> Self {
+        let path = data_dir.map(|d| d.join("training.csv"));
+        let mut h = Self {
+            path: path.clone(),
+            ..Self::default()
+        };
+        let Some(text) = path.and_then(|p| std::fs::read_to_string(p).ok()) else {
+            return h;
+        };
+        for (n, line) in text.lines().enumerate().skip(1) {
+            match parse_record(line) {
+                Some(r) => h.records.push(r),
+                None => h.unreadable.push(format!("line {}: {line}", n + 1)),
+            }
+        }
+        h
+    }
+
+    /// Appends a record, to the file first.
+    pub fn push(&mut self, r: ScoreRecord) -> std::io::Result<()> {
+        if let Some(path) = &self.path {
+            use std::io::Write as _;
+            let new = !path.exists();
+            let mut f = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(path)?;
+            if new {
+                writeln!(f, "{HISTORY_HEADER}")?;
+            }
+            writeln!(f, "{}", record_line(&r))?;
+            f.sync_data()?;
+        }
+        self.records.push(r);
+        Ok(())
+    }
+
+    /// The records of `user`, newest first.
+    pub fn of<'a>(&'a self, user: &'a str) -> impl Iterator<Item = &'a ScoreRecord> + 'a {
+        self.records.iter().rev().filter(move |r| r.user == user)
+    }
+}
+
+/// Commas and line breaks cannot occur in a user name or an exercise id of the files
+/// Vigie reads; they are replaced anyway so that a line stays one record.
+fn clean(s: &str) -> String {
+    s.replace([',', '\n', '\r'], " ")
+}
+
+fn record_line(r: &ScoreRecord) -> String {
+    format!(
+        "{},{},{},{},{},{},{}",
+        r.wall_ms,
+        clean(&r.user),
+        clean(&r.exercise),
+        r.fixed,
+        r.attempts,
+        clean(&r.levels),
+        r.seconds.map_or(String::new(), |s| format!("{s:.0}"))
+    )
+}
+
+fn parse_record(line: &str) -> Option<ScoreRecord> {
+    let f: Vec<&str> = line.split(',').collect();
+    let [wall, user, exercise, fixed, attempts, levels, seconds] = f.as_slice() else {
+        return None;
+    };
+    Some(ScoreRecord {
+        wall_ms: wall.parse().ok()?,
+        user: (*user).to_string(),
+        exercise: (*exercise).to_string(),
+        fixed: fixed.parse().ok()?,
+        attempts: attempts.parse().ok()?,
+        levels: (*levels).to_string(),
+        seconds: if seconds.is_empty() {
+            None
+        } else {
+            Some(seconds.parse().ok()?)
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_history_survives_a_restart_and_keeps_unreadable_lines_apart() {
+        let dir = std::env::temp_dir().join(format!("vigie-history-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut h = History::load(Some(&dir));
+        assert!(h.records.is_empty());
+        let r = ScoreRecord {
+            wall_ms: 1_700_000_000_000,
+            user: "ana, trainee".into(),
+            exercise: "E01".into(),
+            fixed: true,
+            attempts: 2,
+            levels: "0 4".into(),
+            seconds: Some(42.4),
+        };
+        h.push(r.clone()).unwrap();
+        h.push(ScoreRecord {
+            fixed: false,
+            seconds: None,
+            exercise: "E05".into(),
+            ..r.clone()
+        })
+        .unwrap();
+        // A line damaged by hand.
+        let path = dir.join("training.csv");
+        let mut text = std::fs::read_to_string(&path).unwrap();
+        text.push_str("garbage,line\n");
+        std::fs::write(&path, text).unwrap();
+        let back = History::load(Some(&dir));
+        assert_eq!(back.records.len(), 2);
+        assert_eq!(back.records[0].user, "ana  trainee");
+        assert_eq!(back.records[0].seconds, Some(42.0));
+        assert_eq!(back.records[1].seconds, None);
+        assert!(!back.records[1].fixed);
+        assert_eq!(back.unreadable, ["line 4: garbage,line"]);
+        assert_eq!(back.of("ana  trainee").next().unwrap().exercise, "E05");
+        assert_eq!(back.of("bob").count(), 0);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

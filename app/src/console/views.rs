@@ -62,10 +62,12 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
                         ui.separator();
                         super::verification::panel_ui(c, ui, out);
                     }
+                    // The paper's protocol: the stopped plant and its explanation
+                    // first, the exercise's tools below.
                     Mode::Training => {
-                        training_ui(c, ui, out);
-                        ui.separator();
                         explanation_ui(c, ui, out);
+                        ui.separator();
+                        training_ui(c, ui, out);
                         ui.separator();
                         alarms_ui(c, ui, out);
                     }
@@ -1406,9 +1408,16 @@ fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 
 fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.heading(c.i18n.t("training-title"));
+    let exercise = c.exercise_id().map(str::to_string);
+    if let Some(id) = &exercise {
+        ui.label(RichText::new(c.i18n.ta("training-exercise", &[("id", id.into())])).strong());
+        if !c.score.revealed {
+            ui.label(c.i18n.t("training-exercise-how"));
+        }
+    }
     ui.label(RichText::new(c.score.summary_in(&c.i18n)).strong());
-    if c.score.variant.is_some() {
-        ui.horizontal(|ui| {
+    if c.score.variant.is_some() || exercise.is_some() {
+        ui.horizontal_wrapped(|ui| {
             if ui
                 .button(c.i18n.t("training-verify-fix"))
                 .on_hover_text(c.i18n.t("training-verify-fix-hover"))
@@ -1419,14 +1428,30 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             if ui.button(c.i18n.t("training-edit-program")).clicked() {
                 out.push(Command::SetMode(Mode::Maintenance));
             }
+            if exercise.is_some()
+                && !c.score.revealed
+                && ui
+                    .button(c.i18n.t("training-show-answer"))
+                    .on_hover_text(c.i18n.t("training-show-answer-hover"))
+                    .clicked()
+            {
+                out.push(Command::ShowAnswer);
+            }
         });
     }
+    if let Some(check) = &c.last_fix {
+        fix_check_ui(&c.i18n, &c.palette, ui, check);
+    }
+    if let Some(id) = exercise.as_ref().filter(|_| c.score.revealed) {
+        debrief_ui(c, ui, id);
+    }
+    faults_ui(c, ui, out);
     egui::CollapsingHeader::new(c.i18n.t("training-errors"))
-        .default_open(true)
+        .default_open(exercise.is_none())
         .show(ui, |ui| {
             for (id, desc, _) in &c.variants {
                 ui.horizontal_wrapped(|ui| {
-                    let selected = c.score.variant.as_deref() == Some(id.as_str());
+                    let selected = exercise.as_deref() == Some(id.as_str());
                     if ui
                         .selectable_label(
                             selected,
@@ -1436,14 +1461,91 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                     {
                         out.push(Command::LoadVariant(id.clone()));
                     }
-                    let desc = c
-                        .i18n
-                        .plant(&format!("variant-{id}"))
-                        .unwrap_or_else(|| desc.clone());
-                    ui.label(RichText::new(desc).small());
+                    // The answer stays hidden until the exercise is over.
+                    if selected && c.score.revealed {
+                        let desc = c
+                            .i18n
+                            .plant(&format!("variant-{id}"))
+                            .unwrap_or_else(|| desc.clone());
+                        ui.label(RichText::new(desc).small());
+                    }
                 });
             }
         });
+    training_history_ui(c, ui);
+}
+
+/// The end of an exercise: the mistake, the correct fix, and how the trainee got there.
+fn debrief_ui(c: &Console, ui: &mut egui::Ui, id: &str) {
+    egui::Frame::NONE
+        .stroke(egui::Stroke::new(1.5, c.palette.text_dim))
+        .inner_margin(6.0)
+        .show(ui, |ui| {
+            ui.label(
+                RichText::new(c.i18n.ta("debrief-title", &[("id", id.into())]))
+                    .strong()
+                    .size(16.0),
+            );
+            let desc = c
+                .variants
+                .iter()
+                .find(|(v, _, _)| v == id)
+                .map(|(_, d, _)| {
+                    c.i18n
+                        .plant(&format!("variant-{id}"))
+                        .unwrap_or_else(|| d.clone())
+                })
+                .unwrap_or_default();
+            ui.label(c.i18n.ta("debrief-mistake", &[("text", (&desc).into())]));
+            ui.label(RichText::new(c.i18n.t("debrief-fix")).strong());
+            for line in c.answers.get(id).into_iter().flatten() {
+                ui.label(
+                    RichText::new(format!(
+                        "{}: {}  →  {}",
+                        line.element, line.wrong, line.right
+                    ))
+                    .monospace(),
+                );
+            }
+            let levels: Vec<String> = c.score.levels.iter().map(ToString::to_string).collect();
+            let levels = if levels.is_empty() {
+                c.i18n.t("score-none")
+            } else {
+                levels.join(", ")
+            };
+            ui.label(c.i18n.ta("debrief-levels", &[("levels", (&levels).into())]));
+            let verdict = match (c.score.fixed, c.score.located_after_s) {
+                (true, Some(s)) => c.i18n.ta(
+                    "debrief-fixed",
+                    &[
+                        ("attempts", c.score.attempts.into()),
+                        ("s", (&format!("{s:.0}")).into()),
+                    ],
+                ),
+                _ => c
+                    .i18n
+                    .ta("debrief-given-up", &[("attempts", c.score.attempts.into())]),
+            };
+            ui.label(verdict);
+        });
+}
+
+/// The fault library (inject: trainer) and the repair of the simulated plant.
+fn faults_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    let in_force = c.sim.emulator.faults_in_force();
+    ui.horizontal_wrapped(|ui| {
+        ui.label(
+            c.i18n
+                .ta("training-faults-in-force", &[("n", in_force.into())]),
+        );
+        if ui
+            .add_enabled(in_force > 0, egui::Button::new(c.i18n.t("training-repair")))
+            .on_hover_text(c.i18n.t("training-repair-hover"))
+            .clicked()
+        {
+            out.push(Command::Plant(OperatorAction::Repair));
+        }
+    });
     egui::CollapsingHeader::new(c.i18n.t("training-faults"))
         .default_open(false)
         .show(ui, |ui| {
@@ -1462,6 +1564,56 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                         spec,
                     ));
                 });
+            }
+        });
+}
+
+/// The trainee's finished exercises, newest first.
+fn training_history_ui(c: &Console, ui: &mut egui::Ui) {
+    let user = c.user.clone().unwrap_or_else(|| "-".to_string());
+    let title = match &c.user {
+        Some(u) => c.i18n.ta("history-training-title", &[("user", u.into())]),
+        None => c.i18n.t("history-training-anonymous"),
+    };
+    egui::CollapsingHeader::new(title)
+        .default_open(false)
+        .show(ui, |ui| {
+            let mut any = false;
+            egui::Grid::new("training-history")
+                .striped(true)
+                .show(ui, |ui| {
+                    for r in c.history.of(&user).take(20) {
+                        any = true;
+                        ui.label(super::past::fmt_wall(r.wall_ms));
+                        ui.label(&r.exercise);
+                        ui.label(if r.fixed {
+                            c.i18n.t("history-training-fixed")
+                        } else {
+                            c.i18n.t("history-training-given-up")
+                        });
+                        ui.label(
+                            c.i18n
+                                .ta("history-training-attempts", &[("n", r.attempts.into())]),
+                        );
+                        ui.label(
+                            c.i18n
+                                .ta("history-training-levels", &[("levels", (&r.levels).into())]),
+                        );
+                        ui.label(r.seconds.map_or(String::new(), |s| format!("{s:.0} s")));
+                        ui.end_row();
+                    }
+                });
+            if !any {
+                ui.label(c.i18n.t("history-training-none"));
+            }
+            for line in &c.history.unreadable {
+                ui.label(
+                    RichText::new(
+                        c.i18n
+                            .ta("history-training-unreadable", &[("line", line.into())]),
+                    )
+                    .color(c.palette.trip),
+                );
             }
         });
 }

@@ -120,15 +120,20 @@ impl Emulator {
             self.frame.shift();
         }
         if changed {
-            self.driven = None;
-            self.overrides = Default::default();
-            self.slow.iter_mut().for_each(|s| *s = 100);
-            for f in &self.faults {
-                f.apply(&mut self.overrides, &mut self.slow);
-            }
-            self.sensor_mask =
-                (self.sensor_raw & !self.overrides.sensor_off) | self.overrides.sensor_on;
+            self.refresh_overrides();
         }
+    }
+
+    /// Recomputes the combined effect of the active faults.
+    pub(super) fn refresh_overrides(&mut self) {
+        self.driven = None;
+        self.overrides = Default::default();
+        self.slow.iter_mut().for_each(|s| *s = 100);
+        for f in &self.faults {
+            f.apply(&mut self.overrides, &mut self.slow);
+        }
+        self.sensor_mask =
+            (self.sensor_raw & !self.overrides.sensor_off) | self.overrides.sensor_on;
     }
 
     fn rotate(&mut self, act: u64) {

@@ -316,6 +316,29 @@ impl Emulator {
             .collect()
     }
 
+    /// The faults active or still to come.
+    pub fn faults_in_force(&self) -> usize {
+        self.faults
+            .iter()
+            .filter(|f| f.phase != faults::Phase::Over)
+            .count()
+    }
+
+    /// A technician's repair on the simulator: every fault active or still to come ends
+    /// now (the sensors read the plant again, the drives obey their outputs). Returns
+    /// how many faults ended.
+    pub fn repair_faults(&mut self) -> usize {
+        let mut n = 0;
+        for f in &mut self.faults {
+            if f.phase != faults::Phase::Over {
+                f.phase = faults::Phase::Over;
+                n += 1;
+            }
+        }
+        self.refresh_overrides();
+        n
+    }
+
     /// Faults that could not be scheduled.
     pub fn fault_problems(&self) -> &[Problem] {
         &self.fault_problems
