@@ -141,7 +141,7 @@ fn maintenance_fix_of_e01_passes_verification() {
     h.run_steps(2);
     assert_eq!(h.state().mode, Mode::Maintenance);
     h.get_by_label("Chart table");
-    h.get_by_label("X24");
+    h.get_by_label("Step X24");
     // A syntax error is reported, not a panic.
     edit_t24(&mut h, "FE(C7");
     h.get_by_label("Recompile").click();
@@ -163,6 +163,7 @@ fn maintenance_fix_of_e01_passes_verification() {
 
 /// Replaces t24's receptivity as a technician does: click the field, select all, type.
 fn edit_t24(h: &mut Harness<'_, Console>, text: &str) {
+    reveal(h, "Receptivity t24");
     h.get_by_label("Receptivity t24").click();
     h.run_steps(1);
     h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
@@ -309,8 +310,47 @@ fn training_in_french() {
     h.get_by_label("Débriefing : exercice E01");
 }
 
+/// Issue 20: from the hypothesis to the program: the link of level 4 opens the
+/// maintenance view on the suspect transition, framed in the GRAFCET, the plant still
+/// on screen beside it; the ladder view draws the equations as rungs with their state.
+#[test]
+fn the_hypothesis_link_highlights_the_suspect_in_the_grafcet() {
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    run_to_trip(&mut h);
+    h.state_mut().apply(Command::ShowLevel(Some(4)));
+    h.run_steps(2);
+    // Not yet suspect: no trip explained in the program view before the link.
+    press(&mut h, "→ t24 in the program");
+    assert_eq!(h.state().mode, Mode::Maintenance, "{}", h.state().status);
+    assert_eq!(h.state().program_focus.as_deref(), Some("t24"));
+    h.get_by_label("Transition t24, suspect");
+    h.get_by_label("Transition t23");
+    h.get_by_label("Receptivity t24");
+    // Its step and the active ones are drawn as such.
+    assert!(h.query_by_label_contains("Step X25, active").is_some());
+    // The synoptic stays beside the program.
+    h.get_by_label("Synoptic");
+    // The ladder view: one rung per equation, its coil state said.
+    press(&mut h, "Ladder");
+    let rungs = h.query_all_by_label_contains("Rung ").count();
+    let equations = h.state().draft().expect("draft").equations.len();
+    assert!(
+        equations > 0 && rungs == equations,
+        "{rungs} rungs, {equations} equations"
+    );
+    h.get_by_label("Equation A0");
+}
+
 /// Clicks a button as a person does: scrolled into view first.
 fn press(h: &mut Harness<'static, Console>, label: &str) {
+    reveal(h, label);
+    h.get_by_label(label).click();
+    h.run_steps(2);
+}
+
+/// Scrolls a widget into view as a person does, and waits for the scroll to settle.
+fn reveal(h: &mut Harness<'_, Console>, label: &str) {
     h.get_by_label(label).scroll_to_me();
     // The scroll is animated: let it settle (a bounded number of frames, until the
     // button stays in place three frames running).
@@ -325,8 +365,6 @@ fn press(h: &mut Harness<'static, Console>, label: &str) {
             break;
         }
     }
-    h.get_by_label(label).click();
-    h.run_steps(2);
 }
 
 /// Issue 20, training for a trainer: the answer is hidden until the trainee asks for

@@ -5,7 +5,9 @@
 //! cycles, capped per frame; `App::ui` only renders (see `views.rs`).
 
 mod diagnosers;
+mod grafcet;
 pub mod journal;
+mod ladder;
 pub mod link;
 mod maintenance;
 mod past;
@@ -160,6 +162,11 @@ pub enum Command {
     /// Training and maintenance: compile the text on screen, re-run the scenario with
     /// it, score it and keep what ran ([`FixCheck`]).
     VerifyFix,
+    /// Maintenance: show the program as a GRAFCET, as ladder rungs or as text.
+    ShowProgramView(ProgramView),
+    /// From the hypothesis: open the program (maintenance) on this element (a step, a
+    /// transition or an equation's target), framed and scrolled into view.
+    ShowInProgram(String),
     /// Maintenance: edit one element of the draft (a receptivity, a step's actions, an
     /// equation).
     EditDraft(DraftEdit),
@@ -167,6 +174,18 @@ pub enum Command {
     VerifyConstraints,
     /// Maintenance: replay the verification's shortest hazard trace.
     ReplayCounterexample,
+}
+
+/// How the maintenance view shows the control program.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ProgramView {
+    /// The charts as GRAFCET (IEC 60848).
+    #[default]
+    Grafcet,
+    /// The output equations as ladder rungs.
+    Ladder,
+    /// Every element's text in a list.
+    Text,
 }
 
 /// Options for opening the console.
@@ -345,6 +364,10 @@ pub struct Console {
     pub(crate) compiled_edit: Option<CompiledProgram>,
     /// The last fix check: what it ran and found.
     pub last_fix: Option<FixCheck>,
+    /// How the program is shown in maintenance.
+    pub program_view: ProgramView,
+    /// The program element the hypothesis link asked to show.
+    pub program_focus: Option<String>,
     pub(crate) problems: String,
     pub(crate) variants: Vec<(String, String, String)>,
     /// Per exercise: its correct fix (the reference program's texts).
@@ -464,14 +487,7 @@ impl Console {
         if let Some(end) = opts.run_until_ms {
             sim.run_until(Millis(end));
         }
-        let chrono_signals = sim
-            .bundle
-            .plant
-            .inputs
-            .iter()
-            .chain(sim.bundle.plant.outputs.iter())
-            .map(|s| s.id.clone())
-            .collect();
+        let chrono_signals = plant_signals(&sim);
         let mut c = Self {
             faults: load_faults(&plant_dir),
             sim,
@@ -501,6 +517,8 @@ impl Console {
             draft: None,
             compiled_edit: None,
             last_fix: None,
+            program_view: ProgramView::default(),
+            program_focus: None,
             problems: String::new(),
             variants,
             answers,
@@ -726,6 +744,27 @@ impl Console {
         self.link.is_none() && matches!(self.source.scenario.program, ProgramChoice::Error(_))
     }
 
+    /// Opens the program in maintenance on `element`: the GRAFCET for a step or a
+    /// transition, the ladder for an equation's target.
+    fn show_in_program(&mut self, element: String) {
+        self.mode = Mode::Maintenance;
+        self.enter_maintenance();
+        let is_equation = self
+            .sim
+            .program
+            .program()
+            .program
+            .equations
+            .iter()
+            .any(|(t, _)| *t == element);
+        self.program_view = if is_equation {
+            ProgramView::Ladder
+        } else {
+            ProgramView::Grafcet
+        };
+        self.program_focus = Some(element);
+    }
+
     /// The exercise running: the control-error variant's id (`E01`).
     pub fn exercise_id(&self) -> Option<&str> {
         match &self.source.scenario.program {
@@ -923,6 +962,8 @@ impl Console {
                 }
             }
             Command::EditDraft(edit) => self.edit_draft(edit),
+            Command::ShowProgramView(v) => self.program_view = v,
+            Command::ShowInProgram(element) => self.show_in_program(element),
             Command::DiscardEdits => {
                 self.draft = Some(Draft::of(&self.sim.program.program().program));
                 self.compiled_edit = None;
@@ -942,6 +983,7 @@ impl Console {
     fn permitted(&mut self, cmd: &Command) -> bool {
         let needs = match cmd {
             Command::SetMode(Mode::Maintenance)
+            | Command::ShowInProgram(_)
             | Command::Recompile
             | Command::RestartWithEdit
             | Command::EditDraft(_) => Some(Permission::EditProgram),
@@ -1423,6 +1465,17 @@ type Exercises = (
     Vec<(String, String, String)>,
     BTreeMap<String, Vec<FixLine>>,
 );
+
+/// Every input and output of the plant, by id.
+fn plant_signals(sim: &Simulation) -> BTreeSet<String> {
+    let plant = &sim.bundle.plant;
+    plant
+        .inputs
+        .iter()
+        .chain(plant.outputs.iter())
+        .map(|s| s.id.clone())
+        .collect()
+}
 
 fn sim_variants(plant_dir: &Path, sim: &Simulation) -> Exercises {
     match ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &sim.bundle.plant) {

@@ -843,6 +843,51 @@ fn next_step_ui(c: &Console, ui: &mut egui::Ui) {
         });
 }
 
+/// The items of level `l`, each with its code; at level 4 a link to the program
+/// element an item names.
+fn level_items_ui(
+    c: &Console,
+    ui: &mut egui::Ui,
+    l: usize,
+    items: &[vigie_core::explain::Item],
+    out: &mut Vec<Command>,
+) {
+    for item in items {
+        ui.horizontal_wrapped(|ui| {
+            ui.label(
+                RichText::new(item.code)
+                    .monospace()
+                    .color(c.palette.text_dim),
+            );
+            let text = c.i18n.explain(item);
+            if text.contains('\u{305}') {
+                synoptic::overbar_formula(ui, &text, 14.0, c.palette.text);
+            } else {
+                ui.label(text);
+            }
+        });
+        // Level 4: a link to the element in the program, on its own line (not on a
+        // live link, whose program Vigie does not have).
+        if l == 4
+            && c.link.is_none()
+            && let Some(element) = program_element(item)
+        {
+            ui.horizontal(|ui| {
+                ui.add_space(36.0);
+                if ui
+                    .link(
+                        c.i18n
+                            .ta("expl-show-in-program", &[("element", (&element).into())]),
+                    )
+                    .clicked()
+                {
+                    out.push(Command::ShowInProgram(element));
+                }
+            });
+        }
+    }
+}
+
 fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     next_step_ui(c, ui);
     ui.heading(c.i18n.t("expl-title"));
@@ -898,21 +943,7 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             )
             .strong(),
         );
-        for item in &level.items {
-            ui.horizontal_wrapped(|ui| {
-                ui.label(
-                    RichText::new(item.code)
-                        .monospace()
-                        .color(c.palette.text_dim),
-                );
-                let text = c.i18n.explain(item);
-                if text.contains('\u{305}') {
-                    synoptic::overbar_formula(ui, &text, 14.0, c.palette.text);
-                } else {
-                    ui.label(text);
-                }
-            });
-        }
+        level_items_ui(c, ui, l, &level.items, out);
         if level.items.is_empty() {
             ui.label(c.i18n.t("expl-nothing"));
         }
@@ -1619,22 +1650,9 @@ fn training_history_ui(c: &Console, ui: &mut egui::Ui) {
 }
 
 fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
-    let active: BTreeSet<String> = c
-        .sim
-        .program
-        .active_steps()
-        .into_iter()
-        .map(str::to_string)
-        .collect();
     let program = c.sim.program.program().program.clone();
     let pal = c.palette.clone();
-    let chart_label = |name: &str| c.i18n.ta("maint-chart", &[("name", name.into())]);
-    let active_label = c.i18n.t("maint-active");
-    let equations = c.i18n.t("maint-equations");
-    let exercise = match &c.source.scenario.program {
-        vigie_core::sim::ProgramChoice::Error(id) => Some(id.clone()),
-        _ => None,
-    };
+    let exercise = c.exercise_id().map(str::to_string);
     egui::Frame::NONE
         .fill(pal.panel)
         .inner_margin(8.0)
@@ -1656,6 +1674,7 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
                     ],
                 ),
             };
+            ui.set_min_width(ui.available_width());
             maintenance_header_ui(&c.i18n, ui, &title, out);
             if !c.problems.is_empty() {
                 let col = if c.compiled_edit.is_some() {
@@ -1668,44 +1687,165 @@ fn maintenance_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             if let Some(check) = &c.last_fix {
                 fix_check_ui(&c.i18n, &pal, ui, check);
             }
-            let Some(draft) = &c.draft else {
-                return;
-            };
-            egui::ScrollArea::vertical()
-                .auto_shrink([false, false])
-                .show(ui, |ui| {
-                    for chart in &program.charts {
-                        ui.add_space(6.0);
-                        ui.label(RichText::new(chart_label(&chart.name)).strong().size(16.0));
-                        egui::Grid::new(format!("steps-{}", chart.name))
-                            .striped(true)
-                            .num_columns(3)
-                            .show(ui, |ui| {
-                                let labels = (active_label.as_str(), &c.i18n);
-                                chart_steps_ui(ui, chart, draft, &active, labels, &pal, out);
-                            });
+            ui.horizontal(|ui| {
+                for (v, id) in [
+                    (super::ProgramView::Grafcet, "maint-view-grafcet"),
+                    (super::ProgramView::Ladder, "maint-view-ladder"),
+                    (super::ProgramView::Text, "maint-view-text"),
+                ] {
+                    if ui
+                        .add(egui::Button::selectable(c.program_view == v, c.i18n.t(id)))
+                        .clicked()
+                    {
+                        out.push(Command::ShowProgramView(v));
                     }
-                    if !draft.equations.is_empty() {
-                        ui.add_space(6.0);
-                        ui.label(RichText::new(&equations).strong().size(16.0));
-                        egui::Grid::new("equations").num_columns(2).show(ui, |ui| {
-                            for (target, expr) in &draft.equations {
-                                ui.label(RichText::new(format!("{target} =")).monospace());
-                                let mut text = expr.clone();
-                                let name =
-                                    c.i18n.ta("maint-edit-equation", &[("id", target.into())]);
-                                if text_field(ui, &mut text, &name) {
-                                    out.push(Command::EditDraft(super::DraftEdit::Equation {
-                                        target: target.clone(),
-                                        text,
-                                    }));
-                                }
-                                ui.end_row();
-                            }
-                        });
-                    }
-                });
+                }
+            });
         });
+    // The program and, beside it, the plant: the technician follows both.
+    let avail = ui.available_rect_before_wrap();
+    let program_w = (avail.width() * 0.6).max(480.0).min(avail.width());
+    let left = egui::Rect::from_min_size(avail.min, vec2(program_w, avail.height()));
+    let right = egui::Rect::from_min_max(egui::pos2(left.right() + 4.0, avail.top()), avail.max);
+    ui.scope_builder(egui::UiBuilder::new().max_rect(left), |ui| {
+        program_body_ui(c, ui, &program, out);
+    });
+    if right.width() > 240.0 {
+        ui.scope_builder(egui::UiBuilder::new().max_rect(right), |ui| {
+            synoptic_panel_ui(c, ui);
+        });
+    }
+}
+
+/// The program in the chosen view, with the suspects of the latest hypothesis framed.
+fn program_body_ui(
+    c: &Console,
+    ui: &mut egui::Ui,
+    program: &vigie_core::control::Program,
+    out: &mut Vec<Command>,
+) {
+    let Some(draft) = &c.draft else {
+        return;
+    };
+    let active: BTreeSet<String> = c
+        .sim
+        .program
+        .active_steps()
+        .into_iter()
+        .map(str::to_string)
+        .collect();
+    let suspects = program_suspects(c);
+    let pal = &c.palette;
+    egui::ScrollArea::both()
+        .auto_shrink([false, false])
+        .show(ui, |ui| match c.program_view {
+            super::ProgramView::Grafcet => {
+                let live = super::grafcet::Live {
+                    active: &active,
+                    suspects: &suspects,
+                    focus: c.program_focus.as_deref(),
+                };
+                for chart in &program.charts {
+                    ui.add_space(10.0);
+                    ui.label(
+                        RichText::new(c.i18n.ta("maint-chart", &[("name", (&chart.name).into())]))
+                            .strong()
+                            .size(16.0),
+                    );
+                    super::grafcet::chart_ui(ui, chart, draft, &live, (&c.i18n, pal), out);
+                }
+            }
+            super::ProgramView::Ladder => {
+                if draft.equations.is_empty() {
+                    ui.label(c.i18n.t("maint-no-equations"));
+                }
+                let rt = &c.sim.program;
+                let state = |name: &str, kind| super::ladder::contact_state(rt, name, kind);
+                super::ladder::ladder_ui(
+                    ui,
+                    &draft.equations,
+                    &state,
+                    &suspects,
+                    (&c.i18n, pal),
+                    out,
+                );
+            }
+            super::ProgramView::Text => program_text_ui(c, ui, program, draft, &active, out),
+        });
+}
+
+/// The program elements the latest trip's hypothesis names (transitions, steps,
+/// equations).
+fn program_suspects(c: &Console) -> BTreeSet<String> {
+    let Some(ex) = c.latest_trip().and_then(|t| c.sim.explanations.get(&t)) else {
+        return BTreeSet::new();
+    };
+    ex.hypothesis
+        .items
+        .iter()
+        .filter_map(program_element)
+        .collect()
+}
+
+/// The program element an explanation item names: its transition, else its step, else
+/// its equation.
+pub(super) fn program_element(item: &vigie_core::explain::Item) -> Option<String> {
+    ["transition", "step", "equation"]
+        .iter()
+        .find_map(|k| item.fields.get(*k))
+        .filter(|v| !v.is_empty())
+        .cloned()
+}
+
+/// Every element's text in a list: steps with their actions, transitions with their
+/// receptivities, then the equations.
+fn program_text_ui(
+    c: &Console,
+    ui: &mut egui::Ui,
+    program: &vigie_core::control::Program,
+    draft: &super::Draft,
+    active: &BTreeSet<String>,
+    out: &mut Vec<Command>,
+) {
+    let pal = &c.palette;
+    let active_label = c.i18n.t("maint-active");
+    for chart in &program.charts {
+        ui.add_space(6.0);
+        ui.label(
+            RichText::new(c.i18n.ta("maint-chart", &[("name", (&chart.name).into())]))
+                .strong()
+                .size(16.0),
+        );
+        egui::Grid::new(format!("steps-{}", chart.name))
+            .striped(true)
+            .num_columns(3)
+            .show(ui, |ui| {
+                let labels = (active_label.as_str(), &c.i18n);
+                chart_steps_ui(ui, chart, draft, active, labels, pal, out);
+            });
+    }
+    if !draft.equations.is_empty() {
+        ui.add_space(6.0);
+        ui.label(
+            RichText::new(c.i18n.t("maint-equations"))
+                .strong()
+                .size(16.0),
+        );
+        egui::Grid::new("equations").num_columns(2).show(ui, |ui| {
+            for (target, expr) in &draft.equations {
+                ui.label(RichText::new(format!("{target} =")).monospace());
+                let mut text = expr.clone();
+                let name = c.i18n.ta("maint-edit-equation", &[("id", target.into())]);
+                if text_field(ui, &mut text, &name) {
+                    out.push(Command::EditDraft(super::DraftEdit::Equation {
+                        target: target.clone(),
+                        text,
+                    }));
+                }
+                ui.end_row();
+            }
+        });
+    }
 }
 
 /// A one-line monospace editor whose accessible name is `name`; true when edited.

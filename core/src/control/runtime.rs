@@ -274,6 +274,12 @@ impl ProgramRuntime {
         Some(self.get(space, index as usize, false))
     }
 
+    /// The value before the last scan of any program name (the previous cycle's).
+    pub fn previous_value(&self, name: &str) -> Option<bool> {
+        let (space, index) = self.program.symbols.lookup(name)?;
+        Some(self.get(space, index as usize, true))
+    }
+
     /// True when `step` is active.
     pub fn is_active(&self, step: &str) -> bool {
         self.program
