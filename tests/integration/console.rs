@@ -1734,3 +1734,70 @@ fn alarms_of_earlier_runs_from_the_historian() {
     drop(h);
     let _ = std::fs::remove_dir_all(&data);
 }
+
+/// Issue 20: the synoptic's sensor names and the explanation tags of every level stand
+/// beside their own element (the nearest symbol to a tag is its element's), on no
+/// symbol, no name and no other tag, at 1280x720 and at 1920x1080.
+#[test]
+fn tags_and_names_sit_at_their_element_without_overlap() {
+    for size in [egui::vec2(1280.0, 720.0), egui::vec2(1920.0, 1080.0)] {
+        let mut opts = options(None);
+        opts.lang = vigie_app::i18n::Lang::En;
+        let mut h = Harness::builder()
+            .with_size(size)
+            .with_step_dt(1.0 / 60.0)
+            .build_eframe(move |cc| {
+                let mut c = Console::new(&opts).expect("console opens");
+                c.setup(&cc.egui_ctx);
+                c
+            });
+        h.run_steps(2);
+        run_to_trip(&mut h);
+        for level in 0..5 {
+            h.state_mut().apply(Command::ShowLevel(Some(level)));
+            h.run_steps(3);
+            let placed = h.state().view.placed.clone();
+            assert!(!placed.symbols.is_empty());
+            let overlap =
+                |a: &egui::Rect, b: &egui::Rect| a.intersect(*b).area() > 0.5 && a.intersects(*b);
+            for (i, (a, ra)) in placed.names.iter().enumerate() {
+                for (b, rb) in placed.names.iter().skip(i + 1) {
+                    assert!(!overlap(ra, rb), "{size:?}: names {a} and {b} overlap");
+                }
+                for (b, rb) in &placed.symbols {
+                    assert!(!overlap(ra, rb), "{size:?}: name {a} on the symbol of {b}");
+                }
+            }
+            for (i, (a, ra)) in placed.tags.iter().enumerate() {
+                for (b, rb) in placed.tags.iter().skip(i + 1) {
+                    assert!(
+                        !overlap(ra, rb),
+                        "{size:?} level {level}: tags of {a} and {b} overlap"
+                    );
+                }
+                for (b, rb) in placed.symbols.iter().chain(&placed.names) {
+                    assert!(
+                        !overlap(ra, rb),
+                        "{size:?} level {level}: tag of {a} on {b}"
+                    );
+                }
+                let own = placed
+                    .symbols
+                    .iter()
+                    .find(|(s, _)| s == a)
+                    .map(|(_, r)| ra.distance_to_pos(r.center()))
+                    .expect("the tag's element is drawn");
+                for (b, rb) in &placed.symbols {
+                    let d = ra.distance_to_pos(rb.center());
+                    assert!(
+                        own <= d + 0.5,
+                        "{size:?} level {level}: the tag of {a} is nearer {b} ({d:.0} px) than {a} ({own:.0} px)"
+                    );
+                }
+            }
+            if level >= 2 {
+                assert!(!placed.tags.is_empty(), "level {level} has tags");
+            }
+        }
+    }
+}

@@ -11,6 +11,7 @@ mod ladder;
 pub mod link;
 mod maintenance;
 mod past;
+mod placement;
 pub mod report;
 pub mod save;
 pub mod synoptic;

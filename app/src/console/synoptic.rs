@@ -23,6 +23,21 @@ pub struct View {
     pub descriptions: std::collections::BTreeMap<String, String>,
     /// The synoptic's tags in the language shown, by key ([`TAGS`]).
     pub words: std::collections::BTreeMap<&'static str, String>,
+    /// Where the last frame put each sensor's name and each explanation tag, by the
+    /// element it belongs to (screen points): what the tests check against the
+    /// geometry.
+    pub placed: Placed,
+}
+
+/// The labels of the last frame, by element.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Placed {
+    /// Sensor id → its name's rectangle.
+    pub names: Vec<(String, Rect)>,
+    /// Element → one explanation tag's rectangle (several per element possible).
+    pub tags: Vec<(String, Rect)>,
+    /// Element → its symbol's rectangle (lamp or actuator).
+    pub symbols: Vec<(String, Rect)>,
 }
 
 /// The synoptic's tags: key (message `syn-<key>`) and English text (`%kind%` and
@@ -68,6 +83,7 @@ impl Default for View {
             pan: Vec2::ZERO,
             descriptions: std::collections::BTreeMap::new(),
             words: std::collections::BTreeMap::new(),
+            placed: Placed::default(),
         }
     }
 }
@@ -448,7 +464,15 @@ pub fn synoptic_ui(
     };
     paint_sensors(&cv, geom);
     paint_actuators(&cv, geom, pic.forced);
-    paint_marks(&cv, geom, view, pic.highlights);
+    let symbols = symbol_rects(&cv, geom);
+    let names = paint_sensor_names(&cv, geom, &symbols);
+    let taken: Vec<Rect> = symbols.iter().chain(&names).map(|(_, r)| *r).collect();
+    let tags = paint_marks(&cv, geom, view, pic.highlights, &taken);
+    view.placed = Placed {
+        names,
+        tags,
+        symbols,
+    };
     if let Some((text, col)) = &pic.banner {
         badge(
             &painter,
@@ -725,14 +749,57 @@ fn paint_sensors(cv: &Canvas<'_>, geom: &Geometry) {
             if on { pal.sensor_on } else { pal.sensor_off },
             Stroke::new(1.2, pal.equipment_edge),
         );
-        painter.text(
-            p + vec2(lamp_r + 2.0, 0.0),
-            Align2::LEFT_CENTER,
-            &s.id,
-            FontId::proportional(12.0),
-            pal.text,
-        );
     }
+}
+
+/// The symbols' rectangles on screen: sensor lamps and actuator symbols.
+fn symbol_rects(cv: &Canvas<'_>, geom: &Geometry) -> Vec<(String, Rect)> {
+    let (xf, lamp_r) = (&cv.xf, cv.lamp_r);
+    geom.sensors
+        .iter()
+        .map(|s| {
+            (
+                s.id.clone(),
+                Rect::from_center_size(xf.p(s.lamp), Vec2::splat(lamp_r * 2.0 + 2.0)),
+            )
+        })
+        .chain(geom.actuators.iter().map(|(id, at)| {
+            (
+                id.clone(),
+                Rect::from_center_size(xf.p(*at), Vec2::splat(lamp_r * 2.4)),
+            )
+        }))
+        .collect()
+}
+
+/// Paints the sensors' names, each beside its lamp on no symbol and no other name.
+fn paint_sensor_names(
+    cv: &Canvas<'_>,
+    geom: &Geometry,
+    symbols: &[(String, Rect)],
+) -> Vec<(String, Rect)> {
+    let (painter, xf, pal, lamp_r) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r);
+    let font = FontId::proportional(12.0);
+    let galleys: Vec<_> = geom
+        .sensors
+        .iter()
+        .map(|s| painter.layout_no_wrap(s.id.clone(), font.clone(), pal.text))
+        .collect();
+    let labels: Vec<(Pos2, Vec2)> = geom
+        .sensors
+        .iter()
+        .zip(&galleys)
+        .map(|(s, g)| (xf.p(s.lamp), g.size()))
+        .collect();
+    let obstacles: Vec<Rect> = symbols.iter().map(|(_, r)| *r).collect();
+    let centres: Vec<Pos2> = symbols.iter().map(|(_, r)| r.center()).collect();
+    let rects = super::placement::place(&labels, &centres, &obstacles, cv.rect, lamp_r + 3.0);
+    let mut out = Vec::new();
+    for ((s, g), r) in geom.sensors.iter().zip(galleys).zip(rects) {
+        painter.galley(r.min, g, pal.text);
+        out.push((s.id.clone(), r));
+    }
+    out
 }
 
 /// Paints the actuators' symbols (amber when forced, lit when on).
@@ -772,25 +839,25 @@ fn paint_actuators(cv: &Canvas<'_>, geom: &Geometry, forced: &BTreeSet<String>) 
     }
 }
 
-/// Paints the explanation marks (rings and stacked badges) on their elements.
-fn paint_marks(cv: &Canvas<'_>, geom: &Geometry, view: &View, highlights: &[Highlight]) {
+/// Paints the explanation marks: rings on their elements and tags beside them, on no
+/// symbol, no sensor name and no other tag, with a leader line when moved away.
+fn paint_marks(
+    cv: &Canvas<'_>,
+    geom: &Geometry,
+    view: &View,
+    highlights: &[Highlight],
+    taken: &[Rect],
+) -> Vec<(String, Rect)> {
     let (painter, xf, pal, lamp_r) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r);
-    let mut stacked: BTreeMap<&str, f32> = BTreeMap::new();
+    // The tags first, then their places all at once.
+    let mut tags: Vec<(String, Pos2, String, Color32, Color32)> = Vec::new();
     for h in highlights {
         let Some(w) = geom.element(&h.element) else {
             continue;
         };
         let p = xf.p(w);
         let mut put = |text: &str, fill: Color32, fg: Color32| {
-            let dy = stacked.entry(h.element.as_str()).or_insert(0.0);
-            badge(
-                painter,
-                p + vec2(lamp_r + 4.0, -lamp_r - 20.0 - *dy),
-                text,
-                fill,
-                fg,
-            );
-            *dy += 19.0;
+            tags.push((h.element.clone(), p, text.to_string(), fill, fg));
         };
         match &h.mark {
             Mark::Circle => {
@@ -828,6 +895,32 @@ fn paint_marks(cv: &Canvas<'_>, geom: &Geometry, view: &View, highlights: &[High
             }
         }
     }
+    let font = FontId::proportional(12.0);
+    let galleys: Vec<_> = tags
+        .iter()
+        .map(|(_, _, text, _, fg)| painter.layout_no_wrap(text.clone(), font.clone(), *fg))
+        .collect();
+    let labels: Vec<(Pos2, Vec2)> = tags
+        .iter()
+        .zip(&galleys)
+        .map(|((_, p, ..), g)| (*p, g.size() + vec2(8.0, 4.0)))
+        .collect();
+    let centres: Vec<Pos2> = symbol_rects(cv, geom)
+        .iter()
+        .map(|(_, r)| r.center())
+        .collect();
+    let rects = super::placement::place(&labels, &centres, taken, cv.rect, lamp_r * 1.3 + 4.0);
+    let mut out = Vec::new();
+    for (((element, p, _, fill, fg), g), r) in tags.into_iter().zip(galleys).zip(rects) {
+        let near = r.clamp(p);
+        if near.distance(p) > lamp_r * 1.3 + 6.0 {
+            painter.line_segment([p, near], Stroke::new(1.2, fill));
+        }
+        painter.rect_filled(r, 4.0, fill);
+        painter.galley(r.min + vec2(4.0, 2.0), g, fg);
+        out.push((element, r));
+    }
+    out
 }
 
 /// Paints the predicted-hazard labels, each with a leader line to its box.
