@@ -375,6 +375,9 @@ maint-active = active
 maint-equations = Equations
 
 ## Chronogram
+chrono-observers = Observers
+chrono-aux = Auxiliaries (diagnosers, plausibility)
+chrono-zoom-hover = Ctrl + mouse wheel over the chronogram zooms the time window
 chrono-title = Chronogram
 chrono-replay = Replay
 chrono-live = Live

@@ -393,6 +393,9 @@ maint-active = active
 maint-equations = Équations
 
 ## Chronogramme
+chrono-observers = Observateurs
+chrono-aux = Auxiliaires (diagnostiqueurs, plausibilité)
+chrono-zoom-hover = Ctrl + molette sur le chronogramme : zoom de la fenêtre de temps
 chrono-title = Chronogramme
 chrono-replay = Relecture
 chrono-live = Direct

@@ -1801,3 +1801,17 @@ fn tags_and_names_sit_at_their_element_without_overlap() {
         }
     }
 }
+
+/// Issue 20: the chronogram's window zooms between 2 s and one hour.
+#[test]
+fn the_chronogram_window_zooms_within_bounds() {
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    h.state_mut().apply(Command::ChronoWindow(1));
+    assert_eq!(h.state().chrono_window_ms, 2_000);
+    h.state_mut().apply(Command::ChronoWindow(u64::MAX));
+    assert_eq!(h.state().chrono_window_ms, 3_600_000);
+    h.get_by_label("60 s").click();
+    h.run_steps(2);
+    assert_eq!(h.state().chrono_window_ms, 60_000);
+}

@@ -163,6 +163,8 @@ pub enum Command {
     /// Training and maintenance: compile the text on screen, re-run the scenario with
     /// it, score it and keep what ran ([`FixCheck`]).
     VerifyFix,
+    /// The chronogram's time window, ms (clamped to 2 s .. 1 h).
+    ChronoWindow(u64),
     /// Maintenance: show the program as a GRAFCET, as ladder rungs or as text.
     ShowProgramView(ProgramView),
     /// From the hypothesis: open the program (maintenance) on this element (a step, a
@@ -378,7 +380,8 @@ pub struct Console {
     /// The fault library (`faults.ron`): name and fault.
     pub faults: Vec<(String, FaultSpec)>,
     pub(crate) chrono_signals: BTreeSet<String>,
-    pub(crate) chrono_window_s: u64,
+    /// The chronogram's time window, ms (2 s to 1 h).
+    pub chrono_window_ms: u64,
     pub(crate) score: Score,
     pub(crate) wall_s: f64,
     pub(crate) alarm_filter_shelved: bool,
@@ -525,7 +528,7 @@ impl Console {
             answers,
             history: History::load(opts.data_dir.as_deref()),
             chrono_signals,
-            chrono_window_s: 30,
+            chrono_window_ms: 30_000,
             score: Score {
                 variant: opts.variant.clone(),
                 ..Score::default()
@@ -964,6 +967,7 @@ impl Console {
             }
             Command::EditDraft(edit) => self.edit_draft(edit),
             Command::ShowProgramView(v) => self.program_view = v,
+            Command::ChronoWindow(ms) => self.chrono_window_ms = ms.clamp(2_000, 3_600_000),
             Command::ShowInProgram(element) => self.show_in_program(element),
             Command::DiscardEdits => {
                 self.draft = Some(Draft::of(&self.sim.program.program().program));
@@ -1467,7 +1471,8 @@ type Exercises = (
     BTreeMap<String, Vec<FixLine>>,
 );
 
-/// Every input and output of the plant, by id.
+/// The chronogram's rows at start: every input and output of the plant, and the
+/// observers.
 fn plant_signals(sim: &Simulation) -> BTreeSet<String> {
     let plant = &sim.bundle.plant;
     plant
@@ -1475,6 +1480,13 @@ fn plant_signals(sim: &Simulation) -> BTreeSet<String> {
         .iter()
         .chain(plant.outputs.iter())
         .map(|s| s.id.clone())
+        .chain(
+            sim.engine
+                .symbols
+                .names(vigie_core::symbols::Space::Observer)
+                .iter()
+                .cloned(),
+        )
         .collect()
 }
 

@@ -1996,102 +1996,287 @@ fn chart_steps_ui(
     }
 }
 
+/// One row of the chronogram: which record bits it shows.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Row {
+    /// A sensor.
+    Input(usize),
+    /// An actuator: applied (filled) and commanded (the line on top).
+    Output(usize),
+    /// An observer.
+    Observer(usize),
+    /// An auxiliary (diagnosers' flags, intervals, estimates, plausibility).
+    Aux(usize),
+}
+
+/// The chronogram's rows: the signals chosen, in the plant's order, then the
+/// observers and auxiliaries chosen.
+fn chronogram_rows(c: &Console) -> Vec<(Row, String)> {
+    use vigie_core::symbols::Space;
+    let symbols = &c.sim.engine.symbols;
+    let mut rows = Vec::new();
+    for (space, make) in [
+        (Space::Input, Row::Input as fn(usize) -> Row),
+        (Space::Output, Row::Output),
+        (Space::Observer, Row::Observer),
+        (Space::Aux, Row::Aux),
+    ] {
+        for (i, name) in symbols.names(space).iter().enumerate() {
+            if c.chrono_signals.contains(name) {
+                rows.push((make(i), name.clone()));
+            }
+        }
+    }
+    rows
+}
+
+/// Height of one chronogram row.
+const CHRONO_ROW_H: f32 = 18.0;
+/// Height of the time axis.
+const CHRONO_AXIS_H: f32 = 18.0;
+
 fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let title = c.i18n.t("chrono-title");
     chronogram_controls_ui(c, ui, &title, out);
-    let sim = &c.sim;
-    let now = sim.now().0;
-    let size = ui.available_size().max(vec2(100.0, 60.0));
-    let (resp, painter) = ui.allocate_painter(size, Sense::click_and_drag());
-    resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, &title));
-
-    let rect = resp.rect;
-    let pal = &c.palette;
-    painter.rect_filled(rect, 0.0, pal.background);
-    let plant = &sim.bundle.plant;
-    let rows: Vec<(bool, usize, &str)> = plant
-        .inputs
-        .iter()
-        .enumerate()
-        .filter(|(_, s)| c.chrono_signals.contains(&s.id))
-        .map(|(i, s)| (true, i, s.id.as_str()))
-        .chain(
-            plant
-                .outputs
-                .iter()
-                .enumerate()
-                .filter(|(_, s)| c.chrono_signals.contains(&s.id))
-                .map(|(i, s)| (false, i, s.id.as_str())),
-        )
-        .collect();
+    let rows = chronogram_rows(c);
     if rows.is_empty() {
         return;
     }
-    let label_w = 40.0;
-    #[allow(clippy::cast_precision_loss)]
-    let row_h = (rect.height() / rows.len() as f32).min(22.0);
-    let window = c.chrono_window_s * 1000;
+    let now = c.sim.now().0;
+    let window = c.chrono_window_ms;
     let t1 = now.max(window);
     let t0 = t1 - window;
-    let plot_w = rect.width() - label_w;
-    #[allow(clippy::cast_precision_loss)]
-    let x_of =
-        |t: u64| rect.left() + label_w + (t.saturating_sub(t0)) as f32 / window as f32 * plot_w;
-    let recs: Vec<&vigie_core::history::CycleRecord> = {
-        let mut v: Vec<_> = sim
-            .engine
-            .history
-            .iter()
-            .rev()
-            .take_while(|r| r.time.0 >= t0)
-            .collect();
-        v.reverse();
-        v
-    };
-    for (k, (input, i, name)) in rows.iter().enumerate() {
-        #[allow(clippy::cast_precision_loss)]
-        let y = rect.top() + k as f32 * row_h;
-        painter.text(
-            pos2(rect.left() + 4.0, y + row_h / 2.0),
-            Align2::LEFT_CENTER,
-            *name,
-            FontId::monospace(11.0),
-            pal.text,
-        );
-        painter.line_segment(
-            [
-                pos2(rect.left() + label_w, y + row_h),
-                pos2(rect.right(), y + row_h),
-            ],
-            Stroke::new(0.5, pal.equipment),
-        );
-        let get = |r: &vigie_core::history::CycleRecord| {
-            if *input {
-                r.inputs.get(*i)
-            } else {
-                r.applied.get(*i)
+    egui::ScrollArea::vertical()
+        .auto_shrink([false, false])
+        .show(ui, |ui| {
+            #[allow(clippy::cast_precision_loss)]
+            let height = rows.len() as f32 * CHRONO_ROW_H + CHRONO_AXIS_H;
+            let size = vec2(ui.available_width().max(100.0), height);
+            let (resp, painter) = ui.allocate_painter(size, Sense::click_and_drag());
+            resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, &title));
+            let rect = resp.rect;
+            let pal = &c.palette;
+            painter.rect_filled(rect, 0.0, pal.background);
+            let label_w = 56.0;
+            let plot_w = rect.width() - label_w;
+            #[allow(clippy::cast_precision_loss)]
+            let x_of = |t: u64| {
+                rect.left() + label_w + (t.saturating_sub(t0)) as f32 / window as f32 * plot_w
+            };
+            let recs: Vec<&vigie_core::history::CycleRecord> = {
+                let mut v: Vec<_> = c
+                    .sim
+                    .engine
+                    .history
+                    .iter()
+                    .rev()
+                    .take_while(|r| r.time.0 >= t0)
+                    .collect();
+                v.reverse();
+                v
+            };
+            for (k, (row, name)) in rows.iter().enumerate() {
+                #[allow(clippy::cast_precision_loss)]
+                let y = rect.top() + CHRONO_AXIS_H + k as f32 * CHRONO_ROW_H;
+                chronogram_row(
+                    &painter,
+                    (rect, label_w),
+                    (*row, name),
+                    &recs,
+                    (y, &x_of, now),
+                    pal,
+                );
             }
-        };
-        let col = if *input {
-            pal.running
+            chronogram_axis(&painter, rect, label_w, (t0, window), &x_of, pal);
+            paint_chronogram_marks(c, &painter, rect, t0, &x_of);
+            // Ctrl + wheel zooms the time window around the pointer's time.
+            if resp.hovered() {
+                let (zoom, ctrl) = ui.input(|i| (i.zoom_delta(), i.modifiers.command));
+                if (zoom - 1.0).abs() > 1e-3 || ctrl {
+                    #[allow(
+                        clippy::cast_possible_truncation,
+                        clippy::cast_sign_loss,
+                        clippy::cast_precision_loss
+                    )]
+                    let w = ((window as f32 / zoom) as u64).clamp(2_000, 3_600_000);
+                    if w != window {
+                        out.push(Command::ChronoWindow(w));
+                    }
+                }
+            }
+            if let Some(p) = resp.interact_pointer_pos()
+                && p.x > rect.left() + label_w
+            {
+                #[allow(
+                    clippy::cast_possible_truncation,
+                    clippy::cast_sign_loss,
+                    clippy::cast_precision_loss
+                )]
+                let t = t0
+                    + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32)
+                        as u64;
+                out.push(Command::Scrub(Some(t.min(now))));
+            }
+        });
+}
+
+/// One row: its name, its grid line and its spans; an actuator's commanded value is
+/// the line along the top of its row, amber where the filter applied another value.
+fn chronogram_row(
+    painter: &egui::Painter,
+    (rect, label_w): (egui::Rect, f32),
+    (row, name): (Row, &str),
+    recs: &[&vigie_core::history::CycleRecord],
+    (y, x_of, now): (f32, &impl Fn(u64) -> f32, u64),
+    pal: &crate::theme::Palette,
+) {
+    let h = CHRONO_ROW_H;
+    painter.text(
+        pos2(rect.left() + 4.0, y + h / 2.0),
+        Align2::LEFT_CENTER,
+        name,
+        FontId::monospace(11.0),
+        match row {
+            Row::Observer(_) | Row::Aux(_) => pal.text_dim,
+            _ => pal.text,
+        },
+    );
+    painter.line_segment(
+        [
+            pos2(rect.left() + label_w, y + h),
+            pos2(rect.right(), y + h),
+        ],
+        Stroke::new(0.5, pal.equipment),
+    );
+    match row {
+        Row::Input(i) => paint_spans(
+            painter,
+            recs,
+            |r| r.inputs.get(i),
+            (y + 2.0, h - 4.0),
+            pal.running,
+            x_of,
+            now,
+        ),
+        Row::Observer(i) => paint_spans(
+            painter,
+            recs,
+            |r| r.observers.get(i),
+            (y + 2.0, h - 4.0),
+            pal.highlight,
+            x_of,
+            now,
+        ),
+        Row::Aux(i) => paint_spans(
+            painter,
+            recs,
+            |r| r.aux.get(i),
+            (y + 2.0, h - 4.0),
+            pal.caution,
+            x_of,
+            now,
+        ),
+        Row::Output(i) => {
+            paint_spans(
+                painter,
+                recs,
+                |r| r.applied.get(i),
+                (y + 5.0, h - 7.0),
+                pal.equipment_edge,
+                x_of,
+                now,
+            );
+            // Commanded: a thin bar at the top; amber where it differs from applied.
+            paint_spans(
+                painter,
+                recs,
+                |r| r.commanded.get(i),
+                (y + 1.0, 5.0),
+                pal.text,
+                x_of,
+                now,
+            );
+            paint_spans(
+                painter,
+                recs,
+                |r| r.commanded.get(i) != r.applied.get(i),
+                (y + 1.0, h - 2.0),
+                pal.forced.gamma_multiply(0.55),
+                x_of,
+                now,
+            );
+        }
+    }
+}
+
+/// The time axis above the rows (always in view): ticks at a round step, labelled in
+/// seconds.
+fn chronogram_axis(
+    painter: &egui::Painter,
+    rect: egui::Rect,
+    label_w: f32,
+    (t0, window): (u64, u64),
+    x_of: &impl Fn(u64) -> f32,
+    pal: &crate::theme::Palette,
+) {
+    let y = rect.top() + CHRONO_AXIS_H - 1.0;
+    painter.line_segment(
+        [pos2(rect.left() + label_w, y), pos2(rect.right(), y)],
+        Stroke::new(1.0, pal.text_dim),
+    );
+    let step = axis_step_ms(window);
+    let first = t0.div_ceil(step) * step;
+    let mut t = first;
+    while t <= t0 + window {
+        let x = x_of(t);
+        painter.line_segment(
+            [pos2(x, y - 4.0), pos2(x, y)],
+            Stroke::new(1.0, pal.text_dim),
+        );
+        painter.text(
+            pos2(x, y - 4.0),
+            Align2::CENTER_BOTTOM,
+            fmt_tick(t, step),
+            FontId::proportional(11.0),
+            pal.text_dim,
+        );
+        t += step;
+    }
+}
+
+/// A checkbox adding or removing a chronogram row.
+fn chrono_toggle(shown: &mut BTreeSet<String>, ui: &mut egui::Ui, id: &str, text: &str) {
+    let mut on = shown.contains(id);
+    if ui.checkbox(&mut on, text).changed() {
+        if on {
+            shown.insert(id.to_string());
         } else {
-            pal.equipment_edge
-        };
-        paint_spans(&painter, &recs, get, (y, row_h), col, &x_of, now);
+            shown.remove(id);
+        }
     }
-    paint_chronogram_marks(c, &painter, rect, t0, &x_of);
-    if let Some(p) = resp.interact_pointer_pos()
-        && p.x > rect.left() + label_w
-    {
-        #[allow(
-            clippy::cast_possible_truncation,
-            clippy::cast_sign_loss,
-            clippy::cast_precision_loss
-        )]
-        let t =
-            t0 + (((p.x - rect.left() - label_w) / plot_w).clamp(0.0, 1.0) * window as f32) as u64;
-        out.push(Command::Scrub(Some(t.min(now))));
+}
+
+/// A tick's label: whole seconds when the step is, else tenths.
+fn fmt_tick(ms: u64, step: u64) -> String {
+    if step.is_multiple_of(1000) {
+        format!("{} s", ms / 1000)
+    } else {
+        format!("{}.{} s", ms / 1000, (ms % 1000) / 100)
     }
+}
+
+/// A round tick step (1, 2 or 5 × 10^k ms) giving about eight ticks over `window`.
+fn axis_step_ms(window: u64) -> u64 {
+    let raw = (window / 8).max(1);
+    let mut p = 1u64;
+    while p * 10 <= raw {
+        p *= 10;
+    }
+    [1, 2, 5, 10]
+        .iter()
+        .map(|m| m * p)
+        .find(|s| *s >= raw)
+        .unwrap_or(10 * p)
 }
 
 /// The chronogram's controls: window length, replay slider, back to live, signals shown.
@@ -2105,10 +2290,11 @@ fn chronogram_controls_ui(c: &mut Console, ui: &mut egui::Ui, title: &str, out: 
         ui.label(RichText::new(title).strong());
         for w in [10u64, 30, 60, 300] {
             if ui
-                .selectable_label(c.chrono_window_s == w, format!("{w} s"))
+                .selectable_label(c.chrono_window_ms == w * 1000, format!("{w} s"))
+                .on_hover_text(c.i18n.t("chrono-zoom-hover"))
                 .clicked()
             {
-                c.chrono_window_s = w;
+                out.push(Command::ChronoWindow(w * 1000));
             }
         }
         ui.separator();
@@ -2126,32 +2312,34 @@ fn chronogram_controls_ui(c: &mut Console, ui: &mut egui::Ui, title: &str, out: 
             out.push(Command::Scrub(None));
         }
         ui.menu_button(signals, |ui| {
-            for s in sim
-                .bundle
-                .plant
-                .inputs
-                .iter()
-                .chain(&sim.bundle.plant.outputs)
-            {
-                let mut on = c.chrono_signals.contains(&s.id);
-                if ui
-                    .checkbox(
-                        &mut on,
-                        format!(
+            egui::ScrollArea::vertical()
+                .max_height(420.0)
+                .show(ui, |ui| {
+                    for s in sim
+                        .bundle
+                        .plant
+                        .inputs
+                        .iter()
+                        .chain(&sim.bundle.plant.outputs)
+                    {
+                        let text = format!(
                             "{} {}",
                             s.id,
                             c.view.descriptions.get(&s.id).unwrap_or(&s.description)
-                        ),
-                    )
-                    .changed()
-                {
-                    if on {
-                        c.chrono_signals.insert(s.id.clone());
-                    } else {
-                        c.chrono_signals.remove(&s.id);
+                        );
+                        chrono_toggle(&mut c.chrono_signals, ui, &s.id, &text);
                     }
-                }
-            }
+                    ui.separator();
+                    ui.label(RichText::new(c.i18n.t("chrono-observers")).strong());
+                    let symbols = &sim.engine.symbols;
+                    for name in symbols.names(vigie_core::symbols::Space::Observer) {
+                        chrono_toggle(&mut c.chrono_signals, ui, name, name);
+                    }
+                    ui.label(RichText::new(c.i18n.t("chrono-aux")).strong());
+                    for name in symbols.names(vigie_core::symbols::Space::Aux) {
+                        chrono_toggle(&mut c.chrono_signals, ui, name, name);
+                    }
+                });
         });
     });
 }
@@ -2208,7 +2396,7 @@ fn paint_chronogram_marks(
             );
             let ids: Vec<&str> = t.constraints.iter().map(|c| c.id.as_str()).collect();
             painter.text(
-                pos2(x + 3.0, rect.top() + 2.0),
+                pos2(x + 3.0, rect.top() + CHRONO_AXIS_H + 2.0),
                 Align2::LEFT_TOP,
                 ids.join(","),
                 FontId::proportional(11.0),
@@ -2254,5 +2442,28 @@ pub(crate) fn reset_button_ui(c: &Console, ui: &mut egui::Ui, hover: &str, out: 
     });
     if ui.add(reset).on_hover_text(c.i18n.t(hover)).clicked() {
         out.push(Command::Plant(OperatorAction::Reset));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_time_axis_ticks_at_round_steps() {
+        assert_eq!(axis_step_ms(10_000), 2_000);
+        assert_eq!(axis_step_ms(30_000), 5_000);
+        assert_eq!(axis_step_ms(2_000), 250.max(axis_step_ms(2_000)));
+        assert_eq!(axis_step_ms(3_600_000), 500_000);
+        for w in [2_000u64, 7_777, 30_000, 300_000, 3_600_000] {
+            let step = axis_step_ms(w);
+            let ticks = w / step;
+            assert!(
+                (4..=10).contains(&ticks),
+                "{w} ms: {ticks} ticks of {step} ms"
+            );
+        }
+        assert_eq!(fmt_tick(12_000, 2_000), "12 s");
+        assert_eq!(fmt_tick(12_500, 500), "12.5 s");
     }
 }
