@@ -282,9 +282,8 @@ struct Ev {
     rise: bool,
 }
 
-// Not split yet (issue 24): its phases (signals, states, estimates, intervals,
-// expected and unexpected evolutions) are being moved into the helpers above one by one.
-#[allow(clippy::too_many_lines)]
+/// Compiles one component: its signals, states, symbols, intervals and expected
+/// evolutions, then the diagnoser automaton, the estimates and the unexpected evolutions.
 fn compile_one(
     c: &ComponentDef,
     symbols: &Symbols,
@@ -296,8 +295,7 @@ fn compile_one(
     // Signals.
     let signals = component_signals(c, symbols, ctx);
     let states: Vec<String> = c.states.iter().map(|s| s.id.clone()).collect();
-    let state_of = |n: &str| states.iter().position(|s| s == n);
-    let Some(initial) = state_of(&c.initial) else {
+    let Some(initial) = states.iter().position(|s| s == &c.initial) else {
         ctx.err(
             codes::DIAGNOSER_UNKNOWN_STATE.id,
             &c.initial,
@@ -305,717 +303,54 @@ fn compile_one(
         );
         return None;
     };
-    // Edges of an expression: (signal, rising, guard).
-    let edge_of = |text: &str| edge_in(text, symbols, &signals);
     // Initial values.
     let init_val = initial_values(c, symbols, &signals, ctx);
     // Symbols: bare edges, then guarded.
-    let mut syms: Vec<Symbol> = Vec::new();
-    for (i, s) in signals.iter().enumerate() {
-        for rise in [true, false] {
-            syms.push(Symbol {
-                name: format!("{}({})", if rise { "RE" } else { "FE" }, s.name),
-                edge: Some((i, rise)),
-                guard: None,
-                timeout: None,
-            });
-        }
-    }
+    let mut syms = edge_symbols(&signals);
     // Intervals.
     let (clocks, mut intervals) = component_intervals(c, symbols, &signals, ctx);
-    let initial_clock = match &c.initial_clock {
-        None => None,
-        Some(t) => match edge_of(t) {
-            Ok((i, r, _)) => clocks.iter().position(|&e| e == (i, r)),
-            Err(m) => {
-                ctx.err(codes::DIAGNOSER_CLOCK_EVENT.id, t, m);
-                None
-            }
-        },
-    };
+    let initial_clock = initial_clock(c, symbols, &signals, &clocks, ctx);
     // Expected evolutions: (from, symbols matched, to, window, edge).
     let evs = expected_evolutions(c, symbols, &signals, &intervals, &mut syms, ctx);
     // Time-out symbols: one per interval used as a window, then the pulse.
-    let first_tmo = syms.len();
-    for (k, iv) in intervals.iter().enumerate() {
-        if iv.hi.is_some() && evs.iter().any(|e| e.window == Some(k)) {
-            syms.push(Symbol {
-                name: format!("tmo({})", iv.id),
-                edge: None,
-                guard: None,
-                timeout: Some(k),
-            });
-        }
-    }
-    syms.push(Symbol {
-        name: "tmo(pulse)".into(),
-        edge: None,
-        guard: None,
-        timeout: None,
-    });
-    let pulse_sym = syms.len() - 1;
-    syms.push(Symbol {
-        name: "tmo(motion)".into(),
-        edge: None,
-        guard: None,
-        timeout: None,
-    });
-    let motion_sym = syms.len() - 1;
+    let (first_tmo, pulse_sym, motion_sym) = timeout_symbols(&mut syms, &intervals, &evs);
     // Values of every state.
     let values = state_values(c, &signals, &evs, initial, init_val, ctx);
     // Faults and partitions.
     let faults: Vec<String> = c.faults.iter().map(|f| f.id.clone()).collect();
-    let blocking: Vec<bool> = c
-        .faults
-        .iter()
-        .map(|f| {
-            f.behaviours
-                .iter()
-                .any(|b| matches!(b, Behaviour::Blocked(_)))
-        })
-        .collect();
+    let blocking = fault_blocking(c);
     let partitions = component_partitions(c, symbols, ctx);
     if ctx.problems.len() > before {
         return None;
     }
     // The automaton. Normal states first.
-    let deadline_of = |ws: &[Option<usize>]| -> Option<usize> {
-        if ws.is_empty()
-            || ws
-                .iter()
-                .any(|w| w.is_none_or(|k| intervals[k].hi.is_none()))
-        {
-            return None;
-        }
-        ws.iter()
-            .flatten()
-            .copied()
-            .max_by_key(|&k| intervals[k].hi)
+    let mut a = Automaton {
+        c,
+        symbols,
+        signals: &signals,
+        states: &states,
+        faults: &faults,
+        values: &values,
+        evs: &evs,
+        intervals: &intervals,
+        syms: &syms,
+        first_tmo,
+        pulse_sym,
+        motion_sym,
+        margin,
+        max_lo: intervals.iter().map(|i| i.lo).max().unwrap_or(0),
+        g: Vec::new(),
+        pending: Vec::new(),
+        index: BTreeMap::new(),
+        beh_of: Vec::new(),
+        relaxed: Vec::new(),
     };
-    let tmo_loops = |deadline: Option<usize>, own_dies: bool| -> Vec<usize> {
-        (first_tmo..syms.len())
-            .filter(|&s| {
-                !(own_dies && deadline.is_some() && syms[s].timeout == deadline && s < pulse_sym)
-            })
-            .collect()
-    };
-    let mut g: Vec<GState> = Vec::new();
-    let mut index: BTreeMap<(usize, usize, usize, Phase, Option<u64>), usize> = BTreeMap::new();
-    for (x, name) in states.iter().enumerate() {
-        let out: Vec<_> = evs.iter().filter(|e| e.from == x).collect();
-        let deadline = deadline_of(&out.iter().map(|e| e.window).collect::<Vec<_>>());
-        let mut obs = Vec::new();
-        for e in &out {
-            for &s in &e.syms {
-                obs.push((s, e.to, e.window));
-            }
-        }
-        for s in tmo_loops(deadline, true) {
-            obs.push((s, x, None));
-        }
-        g.push(GState {
-            name: name.clone(),
-            mode: None,
-            x,
-            phase: Phase::Timed,
-            obs,
-            silent: Vec::new(),
-            spawn: Vec::new(),
-            deadline,
-            hold_ms: None,
-        });
-    }
+    a.normal_states();
     // Fault copies, built from a work list.
-    let edge_syms = |sig: usize, rise: bool| -> Vec<usize> {
-        syms.iter()
-            .enumerate()
-            .filter(|(_, s)| s.edge == Some((sig, rise)))
-            .map(|(k, _)| k)
-            .collect()
-    };
-    let mut pending: Vec<usize> = Vec::new();
-    let mut beh_of: Vec<(usize, Option<u64>)> = vec![(0, None); g.len()];
-    let get = |g: &mut Vec<GState>,
-               pending: &mut Vec<usize>,
-               index: &mut BTreeMap<(usize, usize, usize, Phase, Option<u64>), usize>,
-               beh_of: &mut Vec<(usize, Option<u64>)>,
-               f: usize,
-               b: usize,
-               x: usize,
-               ph: Phase,
-               early: Option<u64>|
-     -> usize {
-        *index.entry((f, b, x, ph, early)).or_insert_with(|| {
-            beh_of.push((b, early));
-            // A timed copy whose clock event came up to `lead` ms after its motion
-            // started is `early<lead>`.
-            let phase = match early {
-                Some(lead) => format!("early{lead}"),
-                None => format!("{ph:?}").to_lowercase(),
-            };
-            g.push(GState {
-                // Behaviours of one fault are told apart in the name (`F6.2/x2/untimed`).
-                name: if c.faults[f].behaviours.len() > 1 {
-                    format!("{}.{}/{}/{phase}", faults[f], b + 1, states[x])
-                } else {
-                    format!("{}/{}/{phase}", faults[f], states[x])
-                },
-                mode: Some(f),
-                x,
-                phase: ph,
-                obs: Vec::new(),
-                silent: Vec::new(),
-                spawn: Vec::new(),
-                deadline: None,
-                hold_ms: None,
-            });
-            pending.push(g.len() - 1);
-            // Remember the behaviour in the name only; the key keeps it apart.
-            let _ = b;
-            g.len() - 1
-        })
-    };
-    for (f, fd) in c.faults.iter().enumerate() {
-        for (b, beh) in fd.behaviours.iter().enumerate() {
-            match beh {
-                Behaviour::StuckAt(s, v) | Behaviour::Spurious(s, v) => {
-                    let Some(si) = signals.iter().position(|x| &x.name == s) else {
-                        ctx.err(
-                            codes::DIAGNOSER_FAULT.id,
-                            s,
-                            format!("fault `{}`: `{s}` is not a signal of `{}`", fd.id, c.id),
-                        );
-                        continue;
-                    };
-                    let spur = matches!(beh, Behaviour::Spurious(..));
-                    for x in 0..states.len() {
-                        let cur = (values[x] >> si) & 1 == 1;
-                        // A pulse may also start with an edge the model expects: its end
-                        // (the sensor going back within the pulse limit) tells it apart.
-                        let t = if cur == *v {
-                            // A pulse that starts while the sensor already shows its value
-                            // is invisible, and changes nothing unless the plant makes its
-                            // own edge of that sensor meanwhile: the pulse hides it, and its
-                            // end shows it late. Only where the model expects such an edge.
-                            let masks = evs.iter().any(|e| e.from == x && e.sig == si);
-                            if spur && !masks {
-                                continue;
-                            }
-                            get(
-                                &mut g,
-                                &mut pending,
-                                &mut index,
-                                &mut beh_of,
-                                f,
-                                b,
-                                x,
-                                if spur { Phase::Spur } else { Phase::Timed },
-                                None,
-                            )
-                        } else {
-                            let p = get(
-                                &mut g,
-                                &mut pending,
-                                &mut index,
-                                &mut beh_of,
-                                f,
-                                b,
-                                x,
-                                Phase::Pending,
-                                None,
-                            );
-                            let after = get(
-                                &mut g,
-                                &mut pending,
-                                &mut index,
-                                &mut beh_of,
-                                f,
-                                b,
-                                x,
-                                if spur { Phase::Spur } else { Phase::Timed },
-                                None,
-                            );
-                            g[p].obs = edge_syms(si, *v)
-                                .into_iter()
-                                .map(|sy| (sy, after, None))
-                                .collect();
-                            p
-                        };
-                        g[x].spawn.push((f, t));
-                    }
-                }
-                Behaviour::Blocked(list) => {
-                    for n in list {
-                        match state_of(n) {
-                            Some(x) => {
-                                let t = get(
-                                    &mut g,
-                                    &mut pending,
-                                    &mut index,
-                                    &mut beh_of,
-                                    f,
-                                    b,
-                                    x,
-                                    Phase::Blocked,
-                                    None,
-                                );
-                                g[x].spawn.push((f, t));
-                            }
-                            None => ctx.err(
-                                codes::DIAGNOSER_UNKNOWN_STATE.id,
-                                n,
-                                format!("fault `{}`: unknown state `{n}`", fd.id),
-                            ),
-                        }
-                    }
-                }
-                Behaviour::Jumps(n, m) => match (state_of(n), state_of(m)) {
-                    (Some(x), Some(y)) => {
-                        let t = get(
-                            &mut g,
-                            &mut pending,
-                            &mut index,
-                            &mut beh_of,
-                            f,
-                            b,
-                            y,
-                            Phase::Untimed,
-                            None,
-                        );
-                        g[x].spawn.push((f, t));
-                    }
-                    _ => ctx.err(
-                        codes::DIAGNOSER_UNKNOWN_STATE.id,
-                        n,
-                        format!("fault `{}`: `Jumps({n}, {m})` needs two states", fd.id),
-                    ),
-                },
-                Behaviour::Unguarded => {
-                    for x in 0..states.len() {
-                        let t = get(
-                            &mut g,
-                            &mut pending,
-                            &mut index,
-                            &mut beh_of,
-                            f,
-                            b,
-                            x,
-                            Phase::Timed,
-                            None,
-                        );
-                        g[x].spawn.push((f, t));
-                    }
-                }
-                Behaviour::Moves(n, act) => {
-                    let (Some(x), Ok((i, r, _))) = (state_of(n), edge_of(act)) else {
-                        ctx.err(
-                            codes::DIAGNOSER_FAULT.id,
-                            n,
-                            format!(
-                                "fault `{}`: `Moves({n}, {act})` needs a state and an edge",
-                                fd.id
-                            ),
-                        );
-                        continue;
-                    };
-                    match evs
-                        .iter()
-                        .find(|e| e.from == x && e.sig == i && e.rise == r)
-                    {
-                        Some(e) => {
-                            let t = get(
-                                &mut g,
-                                &mut pending,
-                                &mut index,
-                                &mut beh_of,
-                                f,
-                                b,
-                                e.to,
-                                Phase::Untimed,
-                                None,
-                            );
-                            g[x].spawn.push((f, t));
-                        }
-                        None => ctx.err(
-                            codes::DIAGNOSER_FAULT.id,
-                            n,
-                            format!("fault `{}`: `{act}` is not expected in `{n}`", fd.id),
-                        ),
-                    }
-                }
-            }
-        }
-    }
-    // The next order of the controller ends an unexpected motion: where the fault
-    // blocks the plant (a stuck actuator), it stays blocked; elsewhere the order restarts
-    // the clock and the plant follows its windows again. (behaviour, phase, lead)
-    let after_order = |f: usize, b: usize, to: usize| -> (usize, Phase, Option<u64>) {
-        c.faults[f]
-            .behaviours
-            .iter()
-            .position(|bb| matches!(bb, Behaviour::Blocked(l) if l.contains(&states[to])))
-            .map_or((b, Phase::Timed, None), |bb| (bb, Phase::Blocked, None))
-    };
-    // The longest the plant may stay in a state during an unexpected motion before one of
-    // its expected sensor edges, counted from entering it (the largest upper bound of the
-    // windows of its sensor evolutions); None when an order (counted with `orders`) or
-    // an unbounded window leaves it.
-    let hold_with = |y: usize, orders: bool| -> Option<u64> {
-        let mut hold = Some(0u64);
-        for e in evs
-            .iter()
-            .filter(|e| e.from == y && (orders || signals[e.sig].var.space == Space::Input))
-        {
-            let bound = (signals[e.sig].var.space == Space::Input)
-                .then(|| e.window.and_then(|k| intervals[k].hi))
-                .flatten();
-            hold = match (hold, bound) {
-                (Some(h), Some(b)) => Some(h.max(b)),
-                _ => None,
-            };
-        }
-        hold.filter(|&h| h > 0)
-    };
-    let hold_of = |y: usize| hold_with(y, true);
-    // The state an unexpected motion (`Moves`, `Jumps`) starts in.
-    let entry_of = |f: usize, b: usize| -> Option<usize> {
-        match &c.faults[f].behaviours[b] {
-            Behaviour::Jumps(_, m) => state_of(m),
-            Behaviour::Moves(n, act) => {
-                let (x, (i, r, _)) = (state_of(n)?, edge_of(act).ok()?);
-                evs.iter()
-                    .find(|e| e.from == x && e.sig == i && e.rise == r)
-                    .map(|e| e.to)
-            }
-            _ => None,
-        }
-    };
-    // How long an unexpected motion that started in `entry` may have been under way in
-    // `y` without showing its next sensor edge: the holds (and margins) along the way.
-    // Capped at the largest lower bound of the windows (from there on, every window
-    // opens at 0).
-    let max_lo = intervals.iter().map(|i| i.lo).max().unwrap_or(0);
-    let lead_to = |entry: Option<usize>, y: usize| -> u64 {
-        let Some(entry) = entry else { return max_lo };
-        let here = |z: usize| hold_of(z).map_or(max_lo, |h| h + margin).min(max_lo);
-        let mut lead: Vec<Option<u64>> = vec![None; states.len()];
-        lead[entry] = Some(here(entry));
-        let mut work = vec![entry];
-        while let Some(a) = work.pop() {
-            let la = lead[a].unwrap_or(max_lo);
-            for e in evs
-                .iter()
-                .filter(|e| e.from == a && signals[e.sig].var.space == Space::Input)
-            {
-                let l = (la + here(e.to)).min(max_lo);
-                if lead[e.to].is_none_or(|o| o < l) {
-                    lead[e.to] = Some(l);
-                    work.push(e.to);
-                }
-            }
-        }
-        lead[y].unwrap_or(max_lo)
-    };
-    // Windows of the early copies: the lower bound moved back by the lead (`I9-270`).
-    let mut relaxed: Vec<Interval> = Vec::new();
-    while let Some(gi) = pending.pop() {
-        let (f, x, ph) = (g[gi].mode.unwrap_or(0), g[gi].x, g[gi].phase);
-        let (b, early) = beh_of[gi];
-        if ph == Phase::Pending {
-            continue;
-        }
-        let beh = c.faults[f].behaviours[b].clone();
-        let out: Vec<&Ev> = evs.iter().filter(|e| e.from == x).collect();
-        let mut obs = Vec::new();
-        let mut silent = Vec::new();
-        let mut windows = Vec::new();
-        match (&beh, ph) {
-            (Behaviour::StuckAt(s, _), _) => {
-                let si = signals
-                    .iter()
-                    .position(|z| &z.name == s)
-                    .unwrap_or(usize::MAX);
-                for e in &out {
-                    let t = get(
-                        &mut g,
-                        &mut pending,
-                        &mut index,
-                        &mut beh_of,
-                        f,
-                        b,
-                        e.to,
-                        Phase::Timed,
-                        None,
-                    );
-                    windows.push(e.window);
-                    if e.sig == si {
-                        silent.push(t);
-                    } else {
-                        obs.extend(e.syms.iter().map(|&sy| (sy, t, e.window)));
-                    }
-                }
-                let d = deadline_of(&windows);
-                obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
-                g[gi].deadline = d;
-            }
-            (Behaviour::Spurious(s, v), Phase::Spur) => {
-                let si = signals
-                    .iter()
-                    .position(|z| &z.name == s)
-                    .unwrap_or(usize::MAX);
-                for e in &out {
-                    let t = get(
-                        &mut g,
-                        &mut pending,
-                        &mut index,
-                        &mut beh_of,
-                        f,
-                        b,
-                        e.to,
-                        Phase::Spur,
-                        None,
-                    );
-                    if e.sig == si {
-                        silent.push(t);
-                    } else {
-                        obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
-                    }
-                }
-                let back = get(
-                    &mut g,
-                    &mut pending,
-                    &mut index,
-                    &mut beh_of,
-                    f,
-                    b,
-                    x,
-                    Phase::Timed,
-                    None,
-                );
-                if ((values[x] >> si) & 1 == 1) == *v {
-                    silent.push(back);
-                } else {
-                    obs.extend(edge_syms(si, !*v).into_iter().map(|sy| (sy, back, None)));
-                }
-                obs.extend(
-                    (first_tmo..syms.len())
-                        .filter(|&s| s != pulse_sym)
-                        .map(|s| (s, gi, None)),
-                );
-            }
-            (Behaviour::Unguarded, _) => {
-                for e in &out {
-                    let t = get(
-                        &mut g,
-                        &mut pending,
-                        &mut index,
-                        &mut beh_of,
-                        f,
-                        b,
-                        e.to,
-                        Phase::Timed,
-                        None,
-                    );
-                    obs.extend(
-                        edge_syms(e.sig, e.rise)
-                            .into_iter()
-                            .map(|sy| (sy, t, e.window)),
-                    );
-                    windows.push(e.window);
-                }
-                let d = deadline_of(&windows);
-                obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
-                g[gi].deadline = d;
-            }
-            (Behaviour::Blocked(list), Phase::Blocked) => {
-                // Orders, and the edges of a part the fault does not stop
-                // (`independent`), go on as expected; the plant stays blocked.
-                for e in out.iter().filter(|e| {
-                    signals[e.sig].var.space == Space::Output
-                        || c.independent.contains(&signals[e.sig].name)
-                }) {
-                    let t = get(
-                        &mut g,
-                        &mut pending,
-                        &mut index,
-                        &mut beh_of,
-                        f,
-                        b,
-                        e.to,
-                        Phase::Blocked,
-                        None,
-                    );
-                    obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
-                }
-                // An order the model does not foresee here starts a new motion of the
-                // plant (the next box, while the previous one is stuck): it goes on as
-                // from wherever the model foresees that order, untimed, and stops again
-                // where the fault blocks the plant.
-                for (si, sig) in signals.iter().enumerate() {
-                    if sig.var.space != Space::Output {
-                        continue;
-                    }
-                    for rise in [true, false] {
-                        for sy in edge_syms(si, rise) {
-                            if obs.iter().any(|&(o, _, _)| o == sy) {
-                                continue;
-                            }
-                            let targets: Vec<usize> = evs
-                                .iter()
-                                .filter(|e| e.syms.contains(&sy))
-                                .map(|e| e.to)
-                                .collect();
-                            if targets.is_empty() {
-                                obs.push((sy, gi, None));
-                            }
-                            for to in targets {
-                                let ph = if list.contains(&states[to]) {
-                                    Phase::Blocked
-                                } else {
-                                    Phase::Untimed
-                                };
-                                let t = get(
-                                    &mut g,
-                                    &mut pending,
-                                    &mut index,
-                                    &mut beh_of,
-                                    f,
-                                    b,
-                                    to,
-                                    ph,
-                                    None,
-                                );
-                                obs.push((sy, t, None));
-                            }
-                        }
-                    }
-                }
-                obs.extend((first_tmo..syms.len()).map(|s| (s, gi, None)));
-            }
-            (_, Phase::Untimed) => {
-                // The motion goes on with the plant's own dynamics: a sensor edge it
-                // expects comes at the latest at the upper bound of its window, counted
-                // from entering the state (a bound that can only be generous).
-                for e in &out {
-                    let (tb, tph, te) = if signals[e.sig].var.space == Space::Output {
-                        after_order(f, b, e.to)
-                    } else if matches!(&c.faults[f].behaviours[b],
-                        Behaviour::Blocked(l) if l.contains(&states[e.to]))
-                    {
-                        // A motion restarted on a blocked plant stops where it blocks.
-                        (b, Phase::Blocked, None)
-                    } else {
-                        (b, Phase::Untimed, None)
-                    };
-                    let t = get(
-                        &mut g,
-                        &mut pending,
-                        &mut index,
-                        &mut beh_of,
-                        f,
-                        tb,
-                        e.to,
-                        tph,
-                        te,
-                    );
-                    obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
-                }
-                // A motion without its order (`Moves`): the controller never gave that
-                // order, so it cannot take it back either; only the sensor windows
-                // bound the hold.
-                let hold = hold_with(
-                    x,
-                    !matches!(c.faults[f].behaviours[b], Behaviour::Moves(..)),
-                );
-                // The controller's order may catch up with a motion already under way
-                // (the plant left without its order, or went back while the order
-                // stayed): an actuator edge to the value this state already has. From
-                // that clock event on, the plant's edges come within the windows, but
-                // early by as much as the motion may have been under way: an early
-                // timed copy, with that lead.
-                let lead = lead_to(entry_of(f, b), x);
-                for (i, sg) in signals.iter().enumerate() {
-                    if sg.var.space == Space::Output {
-                        let rise = (values[x] >> i) & 1 == 1;
-                        let t = get(
-                            &mut g,
-                            &mut pending,
-                            &mut index,
-                            &mut beh_of,
-                            f,
-                            b,
-                            x,
-                            Phase::Timed,
-                            Some(lead),
-                        );
-                        obs.extend(edge_syms(i, rise).into_iter().map(|sy| (sy, t, None)));
-                    }
-                }
-                obs.extend(
-                    (first_tmo..syms.len())
-                        .filter(|&s| !(hold.is_some() && s == motion_sym))
-                        .map(|s| (s, gi, None)),
-                );
-                g[gi].hold_ms = hold;
-            }
-            (_, _) => {
-                // Normal-like copy after a spurious pulse or a move. An early copy (its
-                // clock event came up to `lead` ms after its motion started) has the
-                // lower bounds of its windows moved back by the lead, the upper ones
-                // stay (its deadline), until the next order.
-                for e in &out {
-                    let order = signals[e.sig].var.space == Space::Output;
-                    let (tb, tph, te) = if early.is_some() && order {
-                        after_order(f, b, e.to)
-                    } else {
-                        (b, Phase::Timed, early)
-                    };
-                    let t = get(
-                        &mut g,
-                        &mut pending,
-                        &mut index,
-                        &mut beh_of,
-                        f,
-                        tb,
-                        e.to,
-                        tph,
-                        te,
-                    );
-                    windows.push(e.window);
-                    let w = match (early, e.window) {
-                        (Some(lead), Some(k)) if intervals[k].lo > 0 && lead > 0 => {
-                            let iv = &intervals[k];
-                            let id = format!("{}-{lead}", iv.id);
-                            let j = relaxed.iter().position(|r| r.id == id).unwrap_or_else(|| {
-                                relaxed.push(Interval {
-                                    id,
-                                    clock: iv.clock,
-                                    lo: iv.lo.saturating_sub(lead),
-                                    hi: iv.hi,
-                                });
-                                relaxed.len() - 1
-                            });
-                            Some(intervals.len() + j)
-                        }
-                        (_, w) => w,
-                    };
-                    obs.extend(e.syms.iter().map(|&sy| (sy, t, w)));
-                }
-                let d = deadline_of(&windows);
-                obs.extend(tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
-                g[gi].deadline = d;
-            }
-        }
-        obs.sort_unstable();
-        obs.dedup();
-        g[gi].obs = obs;
-        g[gi].silent = silent;
-    }
+    a.spawn_faults(ctx);
+    a.expand();
+    let (g, relaxed) = a.finish();
     intervals.extend(relaxed);
-    for st in &mut g {
-        st.obs.sort_unstable();
-        st.spawn.sort_unstable();
-    }
     // Estimates.
     let estimates = component_estimates(c, symbols, ctx);
     // Unexpected evolutions, pruned by the filter.
@@ -1054,6 +389,754 @@ fn compile_one(
         pulse_sym,
         motion_sym,
     })
+}
+
+/// The bare edge symbols: a rise and a fall of every signal.
+fn edge_symbols(signals: &[Sig]) -> Vec<Symbol> {
+    let mut syms: Vec<Symbol> = Vec::new();
+    for (i, s) in signals.iter().enumerate() {
+        for rise in [true, false] {
+            syms.push(Symbol {
+                name: format!("{}({})", if rise { "RE" } else { "FE" }, s.name),
+                edge: Some((i, rise)),
+                guard: None,
+                timeout: None,
+            });
+        }
+    }
+    syms
+}
+
+/// The clock assumed at the start (`initial_clock`), among the component's clocks.
+fn initial_clock(
+    c: &ComponentDef,
+    symbols: &Symbols,
+    signals: &[Sig],
+    clocks: &[(usize, bool)],
+    ctx: &mut Ctx<'_>,
+) -> Option<usize> {
+    match &c.initial_clock {
+        None => None,
+        Some(t) => match edge_in(t, symbols, signals) {
+            Ok((i, r, _)) => clocks.iter().position(|&e| e == (i, r)),
+            Err(m) => {
+                ctx.err(codes::DIAGNOSER_CLOCK_EVENT.id, t, m);
+                None
+            }
+        },
+    }
+}
+
+/// Adds the time-out symbols: one per interval used as a window, then `tmo(pulse)` and
+/// `tmo(motion)`. Returns the first time-out symbol, `tmo(pulse)` and `tmo(motion)`.
+fn timeout_symbols(
+    syms: &mut Vec<Symbol>,
+    intervals: &[Interval],
+    evs: &[Ev],
+) -> (usize, usize, usize) {
+    let first_tmo = syms.len();
+    for (k, iv) in intervals.iter().enumerate() {
+        if iv.hi.is_some() && evs.iter().any(|e| e.window == Some(k)) {
+            syms.push(Symbol {
+                name: format!("tmo({})", iv.id),
+                edge: None,
+                guard: None,
+                timeout: Some(k),
+            });
+        }
+    }
+    syms.push(Symbol {
+        name: "tmo(pulse)".into(),
+        edge: None,
+        guard: None,
+        timeout: None,
+    });
+    let pulse_sym = syms.len() - 1;
+    syms.push(Symbol {
+        name: "tmo(motion)".into(),
+        edge: None,
+        guard: None,
+        timeout: None,
+    });
+    let motion_sym = syms.len() - 1;
+    (first_tmo, pulse_sym, motion_sym)
+}
+
+/// Per fault: it stops items (one of its behaviours is `Blocked`).
+fn fault_blocking(c: &ComponentDef) -> Vec<bool> {
+    c.faults
+        .iter()
+        .map(|f| {
+            f.behaviours
+                .iter()
+                .any(|b| matches!(b, Behaviour::Blocked(_)))
+        })
+        .collect()
+}
+
+/// An observable transition of the automaton: symbol, target, window interval.
+type Obs = (usize, usize, Option<usize>);
+
+/// A fault copy's key: fault, behaviour, normal state, phase, lead of an early copy.
+type CopyKey = (usize, usize, usize, Phase, Option<u64>);
+
+/// The diagnoser automaton of one component while it is built: the normal states, then
+/// the fault copies, from a work list.
+struct Automaton<'a> {
+    c: &'a ComponentDef,
+    symbols: &'a Symbols,
+    signals: &'a [Sig],
+    states: &'a [String],
+    faults: &'a [String],
+    values: &'a [u64],
+    evs: &'a [Ev],
+    /// The intervals of the file (the early copies' windows come after them).
+    intervals: &'a [Interval],
+    syms: &'a [Symbol],
+    /// The first time-out symbol.
+    first_tmo: usize,
+    pulse_sym: usize,
+    motion_sym: usize,
+    margin: u64,
+    /// The largest lower bound of the intervals.
+    max_lo: u64,
+    g: Vec<GState>,
+    /// Fault copies still to build.
+    pending: Vec<usize>,
+    index: BTreeMap<CopyKey, usize>,
+    /// Per state: its behaviour and the lead of an early copy.
+    beh_of: Vec<(usize, Option<u64>)>,
+    /// Windows of the early copies: the lower bound moved back by the lead (`I9-270`).
+    relaxed: Vec<Interval>,
+}
+
+impl Automaton<'_> {
+    fn state_of(&self, n: &str) -> Option<usize> {
+        self.states.iter().position(|s| s == n)
+    }
+
+    /// The interval whose end kills a state with these windows (None when one of them
+    /// is unbounded).
+    fn deadline_of(&self, ws: &[Option<usize>]) -> Option<usize> {
+        let intervals = self.intervals;
+        if ws.is_empty()
+            || ws
+                .iter()
+                .any(|w| w.is_none_or(|k| intervals[k].hi.is_none()))
+        {
+            return None;
+        }
+        ws.iter()
+            .flatten()
+            .copied()
+            .max_by_key(|&k| intervals[k].hi)
+    }
+
+    /// The time-out symbols a state ignores (all but its own deadline's when it dies
+    /// of it, and the pulse's and the motion's).
+    fn tmo_loops(&self, deadline: Option<usize>, own_dies: bool) -> Vec<usize> {
+        let syms = self.syms;
+        (self.first_tmo..syms.len())
+            .filter(|&s| {
+                !(own_dies
+                    && deadline.is_some()
+                    && syms[s].timeout == deadline
+                    && s < self.pulse_sym)
+            })
+            .collect()
+    }
+
+    /// The symbols of an edge (bare and guarded).
+    fn edge_syms(&self, sig: usize, rise: bool) -> Vec<usize> {
+        self.syms
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.edge == Some((sig, rise)))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    /// The normal states, with their expected evolutions and deadlines.
+    fn normal_states(&mut self) {
+        let (states, evs) = (self.states, self.evs);
+        for (x, name) in states.iter().enumerate() {
+            let out: Vec<_> = evs.iter().filter(|e| e.from == x).collect();
+            let deadline = self.deadline_of(&out.iter().map(|e| e.window).collect::<Vec<_>>());
+            let mut obs = Vec::new();
+            for e in &out {
+                for &s in &e.syms {
+                    obs.push((s, e.to, e.window));
+                }
+            }
+            for s in self.tmo_loops(deadline, true) {
+                obs.push((s, x, None));
+            }
+            self.g.push(GState {
+                name: name.clone(),
+                mode: None,
+                x,
+                phase: Phase::Timed,
+                obs,
+                silent: Vec::new(),
+                spawn: Vec::new(),
+                deadline,
+                hold_ms: None,
+            });
+        }
+        self.beh_of = vec![(0, None); self.g.len()];
+    }
+
+    /// The fault copy of fault `f`, behaviour `b`, following normal state `x` in phase
+    /// `ph`; created (and put on the work list) the first time.
+    fn copy_of(&mut self, f: usize, b: usize, x: usize, ph: Phase, early: Option<u64>) -> usize {
+        if let Some(&k) = self.index.get(&(f, b, x, ph, early)) {
+            return k;
+        }
+        self.beh_of.push((b, early));
+        // A timed copy whose clock event came up to `lead` ms after its motion
+        // started is `early<lead>`.
+        let phase = match early {
+            Some(lead) => format!("early{lead}"),
+            None => format!("{ph:?}").to_lowercase(),
+        };
+        self.g.push(GState {
+            // Behaviours of one fault are told apart in the name (`F6.2/x2/untimed`).
+            name: if self.c.faults[f].behaviours.len() > 1 {
+                format!("{}.{}/{}/{phase}", self.faults[f], b + 1, self.states[x])
+            } else {
+                format!("{}/{}/{phase}", self.faults[f], self.states[x])
+            },
+            mode: Some(f),
+            x,
+            phase: ph,
+            obs: Vec::new(),
+            silent: Vec::new(),
+            spawn: Vec::new(),
+            deadline: None,
+            hold_ms: None,
+        });
+        self.pending.push(self.g.len() - 1);
+        self.index.insert((f, b, x, ph, early), self.g.len() - 1);
+        self.g.len() - 1
+    }
+
+    /// The unobservable fault events of the normal states, per fault and behaviour.
+    fn spawn_faults(&mut self, ctx: &mut Ctx<'_>) {
+        let c = self.c;
+        for (f, fd) in c.faults.iter().enumerate() {
+            for (b, beh) in fd.behaviours.iter().enumerate() {
+                match beh {
+                    Behaviour::StuckAt(s, v) | Behaviour::Spurious(s, v) => {
+                        let spur = matches!(beh, Behaviour::Spurious(..));
+                        self.spawn_sensor(f, b, s, *v, spur, ctx);
+                    }
+                    Behaviour::Blocked(list) => {
+                        for n in list {
+                            match self.state_of(n) {
+                                Some(x) => {
+                                    let t = self.copy_of(f, b, x, Phase::Blocked, None);
+                                    self.g[x].spawn.push((f, t));
+                                }
+                                None => ctx.err(
+                                    codes::DIAGNOSER_UNKNOWN_STATE.id,
+                                    n,
+                                    format!("fault `{}`: unknown state `{n}`", fd.id),
+                                ),
+                            }
+                        }
+                    }
+                    Behaviour::Jumps(n, m) => match (self.state_of(n), self.state_of(m)) {
+                        (Some(x), Some(y)) => {
+                            let t = self.copy_of(f, b, y, Phase::Untimed, None);
+                            self.g[x].spawn.push((f, t));
+                        }
+                        _ => ctx.err(
+                            codes::DIAGNOSER_UNKNOWN_STATE.id,
+                            n,
+                            format!("fault `{}`: `Jumps({n}, {m})` needs two states", fd.id),
+                        ),
+                    },
+                    Behaviour::Unguarded => {
+                        for x in 0..self.states.len() {
+                            let t = self.copy_of(f, b, x, Phase::Timed, None);
+                            self.g[x].spawn.push((f, t));
+                        }
+                    }
+                    Behaviour::Moves(n, act) => self.spawn_moves(f, b, n, act, ctx),
+                }
+            }
+        }
+    }
+
+    /// The fault events of a sensor stuck at `v`, or showing `v` spuriously (`spur`).
+    fn spawn_sensor(
+        &mut self,
+        f: usize,
+        b: usize,
+        s: &str,
+        v: bool,
+        spur: bool,
+        ctx: &mut Ctx<'_>,
+    ) {
+        let c = self.c;
+        let Some(si) = self.signals.iter().position(|x| x.name == s) else {
+            ctx.err(
+                codes::DIAGNOSER_FAULT.id,
+                s,
+                format!(
+                    "fault `{}`: `{s}` is not a signal of `{}`",
+                    c.faults[f].id, c.id
+                ),
+            );
+            return;
+        };
+        for x in 0..self.states.len() {
+            let cur = (self.values[x] >> si) & 1 == 1;
+            // A pulse may also start with an edge the model expects: its end
+            // (the sensor going back within the pulse limit) tells it apart.
+            let t = if cur == v {
+                // A pulse that starts while the sensor already shows its value
+                // is invisible, and changes nothing unless the plant makes its
+                // own edge of that sensor meanwhile: the pulse hides it, and its
+                // end shows it late. Only where the model expects such an edge.
+                let masks = self.evs.iter().any(|e| e.from == x && e.sig == si);
+                if spur && !masks {
+                    continue;
+                }
+                let ph = if spur { Phase::Spur } else { Phase::Timed };
+                self.copy_of(f, b, x, ph, None)
+            } else {
+                let p = self.copy_of(f, b, x, Phase::Pending, None);
+                let ph = if spur { Phase::Spur } else { Phase::Timed };
+                let after = self.copy_of(f, b, x, ph, None);
+                let obs = self
+                    .edge_syms(si, v)
+                    .into_iter()
+                    .map(|sy| (sy, after, None))
+                    .collect();
+                self.g[p].obs = obs;
+                p
+            };
+            self.g[x].spawn.push((f, t));
+        }
+    }
+
+    /// The fault event of an unexpected motion `act` from state `n`.
+    fn spawn_moves(&mut self, f: usize, b: usize, n: &str, act: &str, ctx: &mut Ctx<'_>) {
+        let fd = &self.c.faults[f];
+        let (Some(x), Ok((i, r, _))) = (self.state_of(n), edge_in(act, self.symbols, self.signals))
+        else {
+            ctx.err(
+                codes::DIAGNOSER_FAULT.id,
+                n,
+                format!(
+                    "fault `{}`: `Moves({n}, {act})` needs a state and an edge",
+                    fd.id
+                ),
+            );
+            return;
+        };
+        match self
+            .evs
+            .iter()
+            .find(|e| e.from == x && e.sig == i && e.rise == r)
+        {
+            Some(e) => {
+                let t = self.copy_of(f, b, e.to, Phase::Untimed, None);
+                self.g[x].spawn.push((f, t));
+            }
+            None => ctx.err(
+                codes::DIAGNOSER_FAULT.id,
+                n,
+                format!("fault `{}`: `{act}` is not expected in `{n}`", fd.id),
+            ),
+        }
+    }
+
+    /// The next order of the controller ends an unexpected motion: where the fault
+    /// blocks the plant (a stuck actuator), it stays blocked; elsewhere the order restarts
+    /// the clock and the plant follows its windows again. (behaviour, phase, lead)
+    fn after_order(&self, f: usize, b: usize, to: usize) -> (usize, Phase, Option<u64>) {
+        self.c.faults[f]
+            .behaviours
+            .iter()
+            .position(|bb| matches!(bb, Behaviour::Blocked(l) if l.contains(&self.states[to])))
+            .map_or((b, Phase::Timed, None), |bb| (bb, Phase::Blocked, None))
+    }
+
+    /// The longest the plant may stay in a state during an unexpected motion before one
+    /// of its expected sensor edges, counted from entering it (the largest upper bound of
+    /// the windows of its sensor evolutions); None when an order (counted with `orders`)
+    /// or an unbounded window leaves it.
+    fn hold_with(&self, y: usize, orders: bool) -> Option<u64> {
+        let (signals, intervals) = (self.signals, self.intervals);
+        let mut hold = Some(0u64);
+        for e in self
+            .evs
+            .iter()
+            .filter(|e| e.from == y && (orders || signals[e.sig].var.space == Space::Input))
+        {
+            let bound = (signals[e.sig].var.space == Space::Input)
+                .then(|| e.window.and_then(|k| intervals[k].hi))
+                .flatten();
+            hold = match (hold, bound) {
+                (Some(h), Some(b)) => Some(h.max(b)),
+                _ => None,
+            };
+        }
+        hold.filter(|&h| h > 0)
+    }
+
+    fn hold_of(&self, y: usize) -> Option<u64> {
+        self.hold_with(y, true)
+    }
+
+    /// The state an unexpected motion (`Moves`, `Jumps`) starts in.
+    fn entry_of(&self, f: usize, b: usize) -> Option<usize> {
+        match &self.c.faults[f].behaviours[b] {
+            Behaviour::Jumps(_, m) => self.state_of(m),
+            Behaviour::Moves(n, act) => {
+                let (x, (i, r, _)) = (
+                    self.state_of(n)?,
+                    edge_in(act, self.symbols, self.signals).ok()?,
+                );
+                self.evs
+                    .iter()
+                    .find(|e| e.from == x && e.sig == i && e.rise == r)
+                    .map(|e| e.to)
+            }
+            _ => None,
+        }
+    }
+
+    /// How long an unexpected motion that started in `entry` may have been under way in
+    /// `y` without showing its next sensor edge: the holds (and margins) along the way.
+    /// Capped at the largest lower bound of the windows (from there on, every window
+    /// opens at 0).
+    fn lead_to(&self, entry: Option<usize>, y: usize) -> u64 {
+        let max_lo = self.max_lo;
+        let Some(entry) = entry else { return max_lo };
+        let here = |z: usize| {
+            self.hold_of(z)
+                .map_or(max_lo, |h| h + self.margin)
+                .min(max_lo)
+        };
+        let mut lead: Vec<Option<u64>> = vec![None; self.states.len()];
+        lead[entry] = Some(here(entry));
+        let mut work = vec![entry];
+        while let Some(a) = work.pop() {
+            let la = lead[a].unwrap_or(max_lo);
+            for e in self
+                .evs
+                .iter()
+                .filter(|e| e.from == a && self.signals[e.sig].var.space == Space::Input)
+            {
+                let l = (la + here(e.to)).min(max_lo);
+                if lead[e.to].is_none_or(|o| o < l) {
+                    lead[e.to] = Some(l);
+                    work.push(e.to);
+                }
+            }
+        }
+        lead[y].unwrap_or(max_lo)
+    }
+
+    /// Builds the fault copies on the work list, each by its behaviour and phase.
+    fn expand(&mut self) {
+        while let Some(gi) = self.pending.pop() {
+            let (f, x, ph) = (self.g[gi].mode.unwrap_or(0), self.g[gi].x, self.g[gi].phase);
+            let (b, early) = self.beh_of[gi];
+            if ph == Phase::Pending {
+                continue;
+            }
+            let beh = self.c.faults[f].behaviours[b].clone();
+            let (mut obs, silent) = match (&beh, ph) {
+                (Behaviour::StuckAt(s, _), _) => self.expand_stuck(gi, f, b, x, s),
+                (Behaviour::Spurious(s, v), Phase::Spur) => {
+                    self.expand_spurious(gi, f, b, x, s, *v)
+                }
+                (Behaviour::Unguarded, _) => (self.expand_unguarded(gi, f, b, x), Vec::new()),
+                (Behaviour::Blocked(list), Phase::Blocked) => {
+                    (self.expand_blocked(gi, f, b, x, list), Vec::new())
+                }
+                (_, Phase::Untimed) => (self.expand_untimed(gi, f, b, x), Vec::new()),
+                (_, _) => (self.expand_timed(gi, f, b, x, early), Vec::new()),
+            };
+            obs.sort_unstable();
+            obs.dedup();
+            self.g[gi].obs = obs;
+            self.g[gi].silent = silent;
+        }
+    }
+
+    /// A stuck sensor: its edges are hidden, the rest follows the model.
+    fn expand_stuck(
+        &mut self,
+        gi: usize,
+        f: usize,
+        b: usize,
+        x: usize,
+        s: &str,
+    ) -> (Vec<Obs>, Vec<usize>) {
+        let evs = self.evs;
+        let si = self
+            .signals
+            .iter()
+            .position(|z| z.name == s)
+            .unwrap_or(usize::MAX);
+        let (mut obs, mut silent, mut windows) = (Vec::new(), Vec::new(), Vec::new());
+        for e in evs.iter().filter(|e| e.from == x) {
+            let t = self.copy_of(f, b, e.to, Phase::Timed, None);
+            windows.push(e.window);
+            if e.sig == si {
+                silent.push(t);
+            } else {
+                obs.extend(e.syms.iter().map(|&sy| (sy, t, e.window)));
+            }
+        }
+        let d = self.deadline_of(&windows);
+        obs.extend(self.tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
+        self.g[gi].deadline = d;
+        (obs, silent)
+    }
+
+    /// A spurious value shown: the sensor's edges are hidden until it goes back.
+    fn expand_spurious(
+        &mut self,
+        gi: usize,
+        f: usize,
+        b: usize,
+        x: usize,
+        s: &str,
+        v: bool,
+    ) -> (Vec<Obs>, Vec<usize>) {
+        let evs = self.evs;
+        let si = self
+            .signals
+            .iter()
+            .position(|z| z.name == s)
+            .unwrap_or(usize::MAX);
+        let (mut obs, mut silent) = (Vec::new(), Vec::new());
+        for e in evs.iter().filter(|e| e.from == x) {
+            let t = self.copy_of(f, b, e.to, Phase::Spur, None);
+            if e.sig == si {
+                silent.push(t);
+            } else {
+                obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
+            }
+        }
+        let back = self.copy_of(f, b, x, Phase::Timed, None);
+        if ((self.values[x] >> si) & 1 == 1) == v {
+            silent.push(back);
+        } else {
+            obs.extend(
+                self.edge_syms(si, !v)
+                    .into_iter()
+                    .map(|sy| (sy, back, None)),
+            );
+        }
+        obs.extend(
+            (self.first_tmo..self.syms.len())
+                .filter(|&s| s != self.pulse_sym)
+                .map(|s| (s, gi, None)),
+        );
+        (obs, silent)
+    }
+
+    /// An unguarded evolution: every symbol of an expected edge, guard or not.
+    fn expand_unguarded(&mut self, gi: usize, f: usize, b: usize, x: usize) -> Vec<Obs> {
+        let evs = self.evs;
+        let (mut obs, mut windows) = (Vec::new(), Vec::new());
+        for e in evs.iter().filter(|e| e.from == x) {
+            let t = self.copy_of(f, b, e.to, Phase::Timed, None);
+            obs.extend(
+                self.edge_syms(e.sig, e.rise)
+                    .into_iter()
+                    .map(|sy| (sy, t, e.window)),
+            );
+            windows.push(e.window);
+        }
+        let d = self.deadline_of(&windows);
+        obs.extend(self.tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
+        self.g[gi].deadline = d;
+        obs
+    }
+
+    /// A blocked plant.
+    fn expand_blocked(
+        &mut self,
+        gi: usize,
+        f: usize,
+        b: usize,
+        x: usize,
+        list: &[String],
+    ) -> Vec<Obs> {
+        let (c, signals, evs, states) = (self.c, self.signals, self.evs, self.states);
+        let mut obs = Vec::new();
+        // Orders, and the edges of a part the fault does not stop
+        // (`independent`), go on as expected; the plant stays blocked.
+        for e in evs.iter().filter(|e| e.from == x).filter(|e| {
+            signals[e.sig].var.space == Space::Output
+                || c.independent.contains(&signals[e.sig].name)
+        }) {
+            let t = self.copy_of(f, b, e.to, Phase::Blocked, None);
+            obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
+        }
+        // An order the model does not foresee here starts a new motion of the
+        // plant (the next box, while the previous one is stuck): it goes on as
+        // from wherever the model foresees that order, untimed, and stops again
+        // where the fault blocks the plant.
+        for (si, sig) in signals.iter().enumerate() {
+            if sig.var.space != Space::Output {
+                continue;
+            }
+            for rise in [true, false] {
+                for sy in self.edge_syms(si, rise) {
+                    if obs.iter().any(|&(o, _, _)| o == sy) {
+                        continue;
+                    }
+                    let targets: Vec<usize> = evs
+                        .iter()
+                        .filter(|e| e.syms.contains(&sy))
+                        .map(|e| e.to)
+                        .collect();
+                    if targets.is_empty() {
+                        obs.push((sy, gi, None));
+                    }
+                    for to in targets {
+                        let ph = if list.contains(&states[to]) {
+                            Phase::Blocked
+                        } else {
+                            Phase::Untimed
+                        };
+                        let t = self.copy_of(f, b, to, ph, None);
+                        obs.push((sy, t, None));
+                    }
+                }
+            }
+        }
+        obs.extend((self.first_tmo..self.syms.len()).map(|s| (s, gi, None)));
+        obs
+    }
+
+    /// An unexpected motion under way, until the next order.
+    fn expand_untimed(&mut self, gi: usize, f: usize, b: usize, x: usize) -> Vec<Obs> {
+        let (c, signals, evs, states) = (self.c, self.signals, self.evs, self.states);
+        let mut obs = Vec::new();
+        // The motion goes on with the plant's own dynamics: a sensor edge it
+        // expects comes at the latest at the upper bound of its window, counted
+        // from entering the state (a bound that can only be generous).
+        for e in evs.iter().filter(|e| e.from == x) {
+            let (tb, tph, te) = if signals[e.sig].var.space == Space::Output {
+                self.after_order(f, b, e.to)
+            } else if matches!(&c.faults[f].behaviours[b],
+                Behaviour::Blocked(l) if l.contains(&states[e.to]))
+            {
+                // A motion restarted on a blocked plant stops where it blocks.
+                (b, Phase::Blocked, None)
+            } else {
+                (b, Phase::Untimed, None)
+            };
+            let t = self.copy_of(f, tb, e.to, tph, te);
+            obs.extend(e.syms.iter().map(|&sy| (sy, t, None)));
+        }
+        // A motion without its order (`Moves`): the controller never gave that
+        // order, so it cannot take it back either; only the sensor windows
+        // bound the hold.
+        let hold = self.hold_with(
+            x,
+            !matches!(c.faults[f].behaviours[b], Behaviour::Moves(..)),
+        );
+        // The controller's order may catch up with a motion already under way
+        // (the plant left without its order, or went back while the order
+        // stayed): an actuator edge to the value this state already has. From
+        // that clock event on, the plant's edges come within the windows, but
+        // early by as much as the motion may have been under way: an early
+        // timed copy, with that lead.
+        let lead = self.lead_to(self.entry_of(f, b), x);
+        for (i, sg) in signals.iter().enumerate() {
+            if sg.var.space == Space::Output {
+                let rise = (self.values[x] >> i) & 1 == 1;
+                let t = self.copy_of(f, b, x, Phase::Timed, Some(lead));
+                obs.extend(self.edge_syms(i, rise).into_iter().map(|sy| (sy, t, None)));
+            }
+        }
+        obs.extend(
+            (self.first_tmo..self.syms.len())
+                .filter(|&s| !(hold.is_some() && s == self.motion_sym))
+                .map(|s| (s, gi, None)),
+        );
+        self.g[gi].hold_ms = hold;
+        obs
+    }
+
+    /// Normal-like copy after a spurious pulse or a move. An early copy (its clock event
+    /// came up to `lead` ms after its motion started) has the lower bounds of its windows
+    /// moved back by the lead, the upper ones stay (its deadline), until the next order.
+    fn expand_timed(
+        &mut self,
+        gi: usize,
+        f: usize,
+        b: usize,
+        x: usize,
+        early: Option<u64>,
+    ) -> Vec<Obs> {
+        let (signals, evs, intervals) = (self.signals, self.evs, self.intervals);
+        let (mut obs, mut windows) = (Vec::new(), Vec::new());
+        for e in evs.iter().filter(|e| e.from == x) {
+            let order = signals[e.sig].var.space == Space::Output;
+            let (tb, tph, te) = if early.is_some() && order {
+                self.after_order(f, b, e.to)
+            } else {
+                (b, Phase::Timed, early)
+            };
+            let t = self.copy_of(f, tb, e.to, tph, te);
+            windows.push(e.window);
+            let w = match (early, e.window) {
+                (Some(lead), Some(k)) if intervals[k].lo > 0 && lead > 0 => {
+                    Some(self.relaxed_window(k, lead))
+                }
+                (_, w) => w,
+            };
+            obs.extend(e.syms.iter().map(|&sy| (sy, t, w)));
+        }
+        let d = self.deadline_of(&windows);
+        obs.extend(self.tmo_loops(d, true).into_iter().map(|s| (s, gi, None)));
+        self.g[gi].deadline = d;
+        obs
+    }
+
+    /// The window of interval `k` with its lower bound moved back by `lead` (`I9-270`),
+    /// as an index after the intervals of the file.
+    fn relaxed_window(&mut self, k: usize, lead: u64) -> usize {
+        let intervals = self.intervals;
+        let iv = &intervals[k];
+        let id = format!("{}-{lead}", iv.id);
+        let j = self
+            .relaxed
+            .iter()
+            .position(|r| r.id == id)
+            .unwrap_or_else(|| {
+                self.relaxed.push(Interval {
+                    id,
+                    clock: iv.clock,
+                    lo: iv.lo.saturating_sub(lead),
+                    hi: iv.hi,
+                });
+                self.relaxed.len() - 1
+            });
+        intervals.len() + j
+    }
+
+    /// The automaton (transitions sorted) and the early copies' windows.
+    fn finish(self) -> (Vec<GState>, Vec<Interval>) {
+        let mut g = self.g;
+        for st in &mut g {
+            st.obs.sort_unstable();
+            st.spawn.sort_unstable();
+        }
+        (g, self.relaxed)
+    }
 }
 
 /// The expected evolutions; a guarded one adds its symbol, an unguarded one matches
