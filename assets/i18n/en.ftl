@@ -143,6 +143,7 @@ expl-as-written = as written: { $id } = { $notation }
 expl-level = Level { $level }
 expl-nothing = Nothing to report at this level.
 expl-choose-level = Choose a level to draw it on the synoptic.
+expl-save-report-as = Save report as…
 expl-report-folder = Report folder
 expl-export-report = Export incident report
 
@@ -535,6 +536,16 @@ linkp-dropped = { $n } cycles not shown (the console fell behind)
 linkp-status = { $poll } · { $stale } · { $cycles } cycles · { $exceptions } exceptions
 
 ## Incident report
+report-nobody = nobody logged in
+report-date = Exported: { $date }
+report-user = User: { $user } (role { $role })
+report-plant = Plant: { $name } (folder `{ $folder }`)
+report-program = Control program: { $name }, version `{ $version }`
+report-program-exercise = Control program: { $name }, exercise { $id }, version `{ $version }`
+report-run = Run: { $title }
+report-filter = Filter mode: { $mode }
+report-vigie = Vigie { $version }
+report-chronogram = Chronogram of the trip window
 report-title = Incident report
 report-trip = Trip at **{ $time_ms } ms** (cycle { $cycle })
 report-constraint = Constraint **{ $id }**: `{ $source }` — { $notation }

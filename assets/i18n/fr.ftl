@@ -150,6 +150,7 @@ expl-as-written = tel qu'écrit : { $id } = { $notation }
 expl-level = Niveau { $level }
 expl-nothing = Rien à signaler à ce niveau.
 expl-choose-level = Choisissez un niveau pour l'afficher sur le synoptique.
+expl-save-report-as = Enregistrer le rapport sous…
 expl-report-folder = Dossier des rapports
 expl-export-report = Exporter le rapport d'incident
 
@@ -566,6 +567,16 @@ linkp-dropped = { $n } cycles non montrés (la console a pris du retard)
 linkp-status = { $poll } · { $stale } · { $cycles } cycles · { $exceptions } exceptions
 
 ## Rapport d'incident
+report-nobody = personne de connecté
+report-date = Exporté le : { $date }
+report-user = Utilisateur : { $user } (rôle { $role })
+report-plant = Machine : { $name } (dossier `{ $folder }`)
+report-program = Programme : { $name }, version `{ $version }`
+report-program-exercise = Programme : { $name }, exercice { $id }, version `{ $version }`
+report-run = Marche : { $title }
+report-filter = Mode du filtre : { $mode }
+report-vigie = Vigie { $version }
+report-chronogram = Chronogramme de la fenêtre de l'arrêt
 report-title = Rapport d'incident
 report-trip = Arrêt sécurité à **{ $time_ms } ms** (cycle { $cycle })
 report-constraint = Contrainte **{ $id }** : `{ $source }` — { $notation }

@@ -524,6 +524,19 @@ fn journal_exports_to_csv_and_report_to_markdown() {
             && md.contains("## Level 4 Hypothesis")
             && md.contains("A4 should have been ON")
     );
+    // Issue 20: who, when, what ran.
+    let version = h.state().sim.program.program().program.version();
+    for needle in [
+        "- Exported: ",
+        " UTC\n",
+        "- User: nobody logged in (role Operator)",
+        "- Plant: ",
+        &format!("exercise E01, version `{version}`"),
+        "- Filter mode: Enforce",
+        "## Chronogram of the trip window",
+    ] {
+        assert!(md.contains(needle), "{needle:?} not in\n{md}");
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
 
@@ -1814,4 +1827,39 @@ fn the_chronogram_window_zooms_within_bounds() {
     h.get_by_label("60 s").click();
     h.run_steps(2);
     assert_eq!(h.state().chrono_window_ms, 60_000);
+}
+
+/// Issue 20: exporting the report captures every level and gives the view back as it
+/// was (the level shown, paused or running).
+#[test]
+fn exporting_the_report_does_not_change_the_view() {
+    let out = temp_dir("report-view");
+    let mut h = harness(options(None));
+    h.run_steps(1);
+    run_to_trip(&mut h);
+    h.state_mut().apply(Command::ShowLevel(Some(3)));
+    h.run_steps(2);
+    let running = h.state().running;
+    h.state_mut()
+        .apply(Command::ExportReport(out.join("report")));
+    // The capture runs over frames; bounded.
+    for _ in 0..2_000 {
+        h.step();
+        if h.state().status.contains("incident report complete")
+            || h.state().status.contains("PNG capture unavailable")
+        {
+            break;
+        }
+    }
+    assert!(
+        h.state().status.contains("incident report complete"),
+        "{}",
+        h.state().status
+    );
+    assert_eq!(h.state().level, Some(3), "the level shown is kept");
+    assert_eq!(h.state().running, running);
+    for f in ["level-0.png", "level-4.png", "chronogram.png", "report.md"] {
+        assert!(out.join("report").join(f).exists(), "{f}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
 }

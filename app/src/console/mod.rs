@@ -327,6 +327,8 @@ pub(crate) struct ReportJob {
     pub(crate) frames: u32,
     pub(crate) waiting: bool,
     pub(crate) shot: std::sync::Arc<std::sync::Mutex<Option<std::sync::Arc<egui::ColorImage>>>>,
+    /// The level shown and whether the plant ran before the capture: given back after.
+    pub(crate) restore: (Option<usize>, bool),
 }
 
 /// The console application.
@@ -363,6 +365,8 @@ pub struct Console {
     pub(crate) report_dir: String,
     pub(crate) report_job: Option<ReportJob>,
     pub(crate) synoptic_rect: Option<egui::Rect>,
+    /// Where the chronogram was drawn last (for the incident report's picture).
+    pub(crate) chrono_rect: Option<egui::Rect>,
     pub(crate) draft: Option<Draft>,
     pub(crate) compiled_edit: Option<CompiledProgram>,
     /// The last fix check: what it ran and found.
@@ -518,6 +522,7 @@ impl Console {
             report_dir: "incident-report".into(),
             report_job: None,
             synoptic_rect: None,
+            chrono_rect: None,
             draft: None,
             compiled_edit: None,
             last_fix: None,
@@ -1333,7 +1338,8 @@ impl Console {
             self.say(None, "say-no-trip", &[]);
             return;
         };
-        match report::write_markdown(&self.sim, &self.i18n, trip, &dir) {
+        let meta = self.report_meta();
+        match report::write_markdown(&self.sim, &self.i18n, &meta, trip, &dir) {
             Ok(path) => {
                 self.say(
                     Some(("report", self.now().0)),
@@ -1351,10 +1357,31 @@ impl Console {
                     frames: 0,
                     waiting: false,
                     shot: std::sync::Arc::default(),
+                    restore: (self.level, self.running),
                 });
                 self.running = false;
             }
             Err(e) => self.say(None, "say-report-failed", &[("error", e.to_string())]),
+        }
+    }
+
+    /// The incident report's header: now, who, the plant, the program and its version.
+    fn report_meta(&self) -> report::Meta {
+        let program = &self.sim.program.program().program;
+        report::Meta {
+            wall_ms: crate::historian::wall_ms(),
+            user: (self.user.clone(), format!("{:?}", self.role)),
+            plant: (
+                self.plant_dir.display().to_string(),
+                self.sim.bundle.plant.name.clone(),
+            ),
+            program: (
+                program.name.clone(),
+                program.version(),
+                self.exercise_id().map(str::to_string),
+            ),
+            scenario: self.source.title(&self.i18n),
+            filter: format!("{:?}", self.sim.engine.mode()),
         }
     }
 
@@ -1367,7 +1394,12 @@ impl Console {
         if let (Some(image), true) = (shot, job.waiting) {
             let ppp = ctx.pixels_per_point();
             let path = job.dir.join(format!("level-{}.png", job.level));
-            if let Err(e) = report::save_png(&image, self.synoptic_rect, ppp, &path) {
+            let mut saved = report::save_png(&image, self.synoptic_rect, ppp, &path);
+            if job.level == 0 {
+                let chrono = job.dir.join("chronogram.png");
+                saved = saved.and(report::save_png(&image, self.chrono_rect, ppp, &chrono));
+            }
+            if let Err(e) = saved {
                 self.status = self
                     .i18n
                     .ta("say-png-failed", &[("error", (&e.to_string()).into())]);
@@ -1381,8 +1413,9 @@ impl Console {
                 "say-report-complete",
                 &[("path", (&job.dir.display().to_string()).into())],
             );
+            // The view as it was: the export changes nothing the user sees.
+            (self.level, self.running) = job.restore;
             self.report_job = None;
-            self.level = Some(0);
             return;
         }
         self.level = Some(job.level);
@@ -1405,6 +1438,7 @@ impl Console {
                 "say-report-no-png",
                 &[("path", (&job.dir.display().to_string()).into())],
             );
+            (self.level, self.running) = job.restore;
             self.report_job = None;
             return;
         }

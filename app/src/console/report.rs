@@ -7,18 +7,38 @@ use std::path::{Path, PathBuf};
 use vigie_core::explain::overbar_notation;
 use vigie_core::sim::Simulation;
 
+/// Who wrote the report, when, and what ran: the report's header.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Meta {
+    /// Wall-clock time of the export, ms since the Unix epoch.
+    pub wall_ms: u64,
+    /// The logged-in user (`None`: nobody logged in) and the role in force.
+    pub user: (Option<String>, String),
+    /// The plant folder and the plant's name.
+    pub plant: (String, String),
+    /// The control program's name, its version ([`vigie_core::control::Program::version`])
+    /// and the training exercise, if one runs.
+    pub program: (String, String, Option<String>),
+    /// The run's title (the scenario, the exercise or the live link).
+    pub scenario: String,
+    /// The filter's mode.
+    pub filter: String,
+}
+
 /// Writes `dir/report.md` for trip `trip`; returns its path.
 /// The report is in the language `i18n` shows (the items of the levels as the console
 /// shows them).
 pub fn write_markdown(
     sim: &Simulation,
     i18n: &I18n,
+    meta: &Meta,
     trip: usize,
     dir: &Path,
 ) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
     let mut md = String::new();
     let _ = writeln!(md, "# {}\n", i18n.t("report-title"));
+    write_meta(&mut md, i18n, meta);
     if let Some(t) = sim.engine.trips.get(trip) {
         let _ = writeln!(
             md,
@@ -63,6 +83,11 @@ pub fn write_markdown(
             }
             md.push('\n');
         }
+        let _ = writeln!(
+            md,
+            "## {}\n\n![chronogram](chronogram.png)\n",
+            i18n.t("report-chronogram")
+        );
         // Trace window: the last 30 cycles before the trip, changes only.
         let _ = writeln!(
             md,
@@ -107,6 +132,57 @@ pub fn write_markdown(
     let path = dir.join("report.md");
     std::fs::write(&path, md)?;
     Ok(path)
+}
+
+/// The header: date, user, plant, program and version, run, filter, Vigie's version.
+fn write_meta(md: &mut String, i18n: &I18n, meta: &Meta) {
+    let none = i18n.t("report-nobody");
+    let user = meta.user.0.as_deref().unwrap_or(&none);
+    let program = match &meta.program.2 {
+        Some(id) => i18n.ta(
+            "report-program-exercise",
+            &[
+                ("name", (&meta.program.0).into()),
+                ("version", (&meta.program.1).into()),
+                ("id", id.into()),
+            ],
+        ),
+        None => i18n.ta(
+            "report-program",
+            &[
+                ("name", (&meta.program.0).into()),
+                ("version", (&meta.program.1).into()),
+            ],
+        ),
+    };
+    let lines = [
+        i18n.ta(
+            "report-date",
+            &[("date", (&super::past::fmt_wall(meta.wall_ms)).into())],
+        ),
+        i18n.ta(
+            "report-user",
+            &[("user", user.into()), ("role", (&meta.user.1).into())],
+        ),
+        i18n.ta(
+            "report-plant",
+            &[
+                ("name", (&meta.plant.1).into()),
+                ("folder", (&meta.plant.0).into()),
+            ],
+        ),
+        program,
+        i18n.ta("report-run", &[("title", (&meta.scenario).into())]),
+        i18n.ta("report-filter", &[("mode", (&meta.filter).into())]),
+        i18n.ta(
+            "report-vigie",
+            &[("version", env!("CARGO_PKG_VERSION").into())],
+        ),
+    ];
+    for l in lines {
+        let _ = writeln!(md, "- {l}");
+    }
+    md.push('\n');
 }
 
 /// Saves the part of a screenshot under `rect` (points) as PNG.

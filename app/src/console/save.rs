@@ -19,6 +19,8 @@ pub enum Export {
     Trend,
     /// The alarm history as filtered, laid out for paper (HTML), then opened to print.
     AlarmsPrint,
+    /// The incident report: a folder (report.md, one PNG per level, the chronogram).
+    Report,
 }
 
 impl Export {
@@ -29,6 +31,7 @@ impl Export {
             Self::Alarms => "vigie-alarms.csv",
             Self::Trend => "vigie-trend.csv",
             Self::AlarmsPrint => "vigie-alarms.html",
+            Self::Report => "incident-report",
         }
     }
 
@@ -47,6 +50,7 @@ impl Export {
             Self::Alarms => Command::ExportAlarms(path),
             Self::Trend => Command::ExportTrend(path),
             Self::AlarmsPrint => Command::PrintAlarms(path),
+            Self::Report => Command::ExportReport(path),
         }
     }
 }
@@ -83,12 +87,18 @@ impl SaveDialog {
             .name("vigie-save-dialog".into())
             .spawn(move || {
                 let _ = std::fs::create_dir_all(&dir);
-                let path = rfd::FileDialog::new()
+                let dialog = rfd::FileDialog::new()
                     .set_title("Vigie: export")
                     .set_directory(&dir)
-                    .set_file_name(what.default_name())
-                    .add_filter(what.filter().0, &[what.filter().1])
-                    .save_file();
+                    .set_file_name(what.default_name());
+                // A report is a folder of its own: named like a file, no type.
+                let path = if what == Export::Report {
+                    dialog.save_file()
+                } else {
+                    dialog
+                        .add_filter(what.filter().0, &[what.filter().1])
+                        .save_file()
+                };
                 let _ = tx.send(path);
             });
         if spawned.is_err() {

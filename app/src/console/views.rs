@@ -960,6 +960,15 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         if ui.button(export).clicked() {
             out.push(Command::ExportReport(c.report_dir.clone().into()));
         }
+        if ui
+            .add_enabled(
+                !c.save.is_open(),
+                egui::Button::new(c.i18n.t("expl-save-report-as")),
+            )
+            .clicked()
+        {
+            out.push(Command::SaveAs(super::save::Export::Report));
+        }
     });
 }
 
@@ -2055,6 +2064,7 @@ fn chronogram_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             let (resp, painter) = ui.allocate_painter(size, Sense::click_and_drag());
             resp.widget_info(|| egui::WidgetInfo::labeled(egui::Role::Canvas, true, &title));
             let rect = resp.rect;
+            c.chrono_rect = Some(ui.clip_rect().intersect(rect));
             let pal = &c.palette;
             painter.rect_filled(rect, 0.0, pal.background);
             let label_w = 56.0;
