@@ -138,6 +138,7 @@ level-3 = 3 Advanced
 level-4 = 4 Hypothesis
 expl-title = Explanation
 expl-no-trip = No trip: the plant runs within its safety constraints.
+expl-violation-at = Violation at { $time } (monitor mode: the plant was not stopped)
 expl-trip-at = Trip at { $time }
 expl-as-written = as written: { $id } = { $notation }
 expl-level = Level { $level }
@@ -462,6 +463,7 @@ syn-no-address = no fieldbus address
 
 ## Texts built from the plant's data (French only: English is the core's record)
 words-constraint-violated = constraint { $id } violated
+words-safety-violation = Safety violation, plant not stopped (monitor mode: the filter only reports): { $why }
 words-safety-stop = Safety stop: { $why }
 words-held-on = . Held ON: { $list }
 words-stopped = . Stopped: { $list }

@@ -22,6 +22,8 @@ explain-X004 = { $observer ->
    *[other] L'observateur { $observer } est à 1 : une caisse qu'aucun capteur ne voit est déduite.
 }
 explain-X005 = L'observateur { $observer } est à 1 : une caisse qu'aucun capteur ne voit est déduite.
+explain-X006 = Mode surveillance : à { $time_ms } ms, { $constraints } est devenue vraie ; en mode appliqué, le filtre de sécurité aurait arrêté la machine. Le filtre signale seulement : les sorties de l'automate n'ont pas été modifiées.
+explain-X007 = En mode appliqué, le filtre aurait maintenu EN MARCHE : { $held } ; arrêté : { $stopped }.
 
 ## Niveau 1 — projection
 explain-X101 = Sans le filtre, { $after_ms } ms plus tard : la caisse { $box } { $kind ->
@@ -31,6 +33,7 @@ explain-X101 = Sans le filtre, { $after_ms } ms plus tard : la caisse { $box } {
    *[other] serait poussée contre une surface arrêtée au niveau
 } de : { $place } ({ $elements }).
 explain-X102 = Sans le filtre, aucun dommage n'est prévu dans les { $horizon_ms } ms qui suivent : l'arrêt a empêché une situation interdite.
+explain-X103 = Mode surveillance : la machine continuant, aucun dommage n'est prévu dans les { $horizon_ms } ms ; la violation reste une situation que les contraintes interdisent.
 
 ## Niveau 2 — avant l'arrêt
 explain-X201 = { $constraint } = { $notation } est devenue vraie : { $values }.

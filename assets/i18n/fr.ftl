@@ -145,6 +145,7 @@ level-3 = 3 Avancé
 level-4 = 4 Hypothèse
 expl-title = Explication
 expl-no-trip = Aucun arrêt sécurité : la machine fonctionne dans ses contraintes de sécurité.
+expl-violation-at = Violation à { $time } (mode surveillance : la machine n'a pas été arrêtée)
 expl-trip-at = Arrêt sécurité à { $time }
 expl-as-written = tel qu'écrit : { $id } = { $notation }
 expl-level = Niveau { $level }
@@ -489,6 +490,7 @@ syn-no-address = pas d'adresse sur le bus
 
 ## Textes construits à partir des données de l'installation
 words-constraint-violated = contrainte { $id } violée
+words-safety-violation = Violation de sécurité, machine non arrêtée (mode surveillance : le filtre signale seulement) : { $why }
 words-safety-stop = Arrêt sécurité : { $why }
 words-held-on = . Maintenus EN MARCHE : { $list }
 words-stopped = . Arrêtés : { $list }

@@ -1657,7 +1657,8 @@ impl Simulation {
         // Hardware before program: a component the diagnosers hold faulty comes first.
         explain::add_hardware_hypothesis(&mut ex, &self.hardware_faults());
         let projected = self.project(emulator, after.clone());
-        fill_projection(&mut ex, &projected, &self.bundle);
+        let enforced = self.engine.trips.get(index).is_none_or(|t| t.enforced);
+        fill_projection(&mut ex, &projected, &self.bundle, enforced);
         Some((ex, projected))
     }
 
@@ -1818,14 +1819,25 @@ pub fn explain_live_projected(
             })
             .collect(),
     };
-    fill_projection(&mut ex, &projected, bundle);
+    fill_projection(&mut ex, &projected, bundle, trip.enforced);
     Some((ex, Some(projected)))
 }
 
-fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundle) {
+fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundle, enforced: bool) {
     let level = &mut ex.projection;
     level.title = "Projection".into();
-    if p.hazards.is_empty() {
+    if p.hazards.is_empty() && !enforced {
+        let horizon = p.at_ms.saturating_sub(ex.time_ms);
+        level.items.push(Item {
+            code: codes::X_NO_DAMAGE_PREDICTED_MONITOR.id,
+            fields: [("horizon_ms".to_string(), horizon.to_string())]
+                .into_iter()
+                .collect(),
+            text: format!(
+                "Monitor mode: as the plant runs on, no damage is predicted within {horizon} ms; the violation is still one the constraints forbid."
+            ),
+        });
+    } else if p.hazards.is_empty() {
         level.items.push(Item {
             code: codes::X_NO_DAMAGE_PREDICTED.id,
             fields: [("horizon_ms".to_string(), p.at_ms.saturating_sub(ex.time_ms).to_string())]

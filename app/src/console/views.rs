@@ -898,10 +898,17 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let Some(ex) = c.sim.explanations.get(&trip) else {
         return;
     };
+    // In monitor mode the filter did not stop the plant: a violation, not a trip.
+    let enforced = c.sim.engine.trips.get(trip).is_none_or(|t| t.enforced);
+    let heading = if enforced {
+        "expl-trip-at"
+    } else {
+        "expl-violation-at"
+    };
     ui.label(
         RichText::new(
             c.i18n
-                .ta("expl-trip-at", &[("time", (&fmt_ms(ex.time_ms)).into())]),
+                .ta(heading, &[("time", (&fmt_ms(ex.time_ms)).into())]),
         )
         .strong()
         .color(c.palette.trip),

@@ -159,7 +159,12 @@ fn trip_from_fields(
             .collect::<Vec<_>>()
             .join(", ")
     };
-    let mut text = i18n.ta("words-safety-stop", &[("why", (&why.join(" ; ")).into())]);
+    let id = if fields.get("enforced").is_some_and(|e| e == "false") {
+        "words-safety-violation"
+    } else {
+        "words-safety-stop"
+    };
+    let mut text = i18n.ta(id, &[("why", (&why.join(" ; ")).into())]);
     for (list, id) in [
         (list("held"), "words-held-on"),
         (list("stopped"), "words-stopped"),

@@ -27,7 +27,14 @@ pub fn trip(bundle: &PlantBundle, trip: &Trip) -> AlarmText {
             .map(|a| output_phrase(&bundle.plant, &a.output))
             .collect()
     };
-    let mut message = format!("Safety stop: {}", why.join("; "));
+    let mut message = if trip.enforced {
+        format!("Safety stop: {}", why.join("; "))
+    } else {
+        format!(
+            "Safety violation, plant not stopped (monitor mode: the filter only reports): {}",
+            why.join("; ")
+        )
+    };
     for (list, what) in [(changed(true), "Held ON"), (changed(false), "Stopped")] {
         if !list.is_empty() {
             message.push_str(&format!(". {what}: {}", list.join(", ")));
@@ -62,6 +69,7 @@ pub fn trip(bundle: &PlantBundle, trip: &Trip) -> AlarmText {
             ),
             ("held".to_string(), outputs(true)),
             ("stopped".to_string(), outputs(false)),
+            ("enforced".to_string(), trip.enforced.to_string()),
         ]
         .into_iter()
         .collect(),

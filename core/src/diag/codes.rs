@@ -178,8 +178,11 @@ registry! {
     X_ACTUATORS_STOPPED = "X003", "the actuators stopped";
     X_OFF_MEANING = "X004", "what an actuator OFF does";
     X_OBSERVER_SET = "X005", "an observer is set";
+    X_FILTER_WOULD_STOP = "X006", "monitor mode: the filter would have stopped the plant";
+    X_FILTER_WOULD_APPLY = "X007", "monitor mode: what the filter would have applied";
     X_HAZARD_PREDICTED = "X101", "without the filter, a hazard is predicted";
     X_NO_DAMAGE_PREDICTED = "X102", "without the filter, no damage is predicted";
+    X_NO_DAMAGE_PREDICTED_MONITOR = "X103", "monitor mode: no damage is predicted as the plant runs on";
     X_CONSTRAINT_BECAME_TRUE = "X201", "a constraint became true";
     X_HELD_ON = "X202", "the filter held an actuator ON";
     X_FORCED_OFF = "X203", "the filter forced an actuator OFF";

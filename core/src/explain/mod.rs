@@ -249,6 +249,9 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
     };
     let last = engine.history.last();
     let ids: Vec<&str> = trip.constraints.iter().map(|c| c.id.as_str()).collect();
+    if !trip.enforced {
+        return monitored_state(engine, trip, level, &ids);
+    }
     level.items.push(Item::new(
         codes::X_FILTER_STOPPED,
         format!(
@@ -324,6 +327,57 @@ fn current_state(engine: &Engine, trip: &Trip) -> Level {
             }
         }
     }
+    level
+}
+
+/// Level 0 of a violation in monitor mode (the filter only reports): what the filter
+/// would have done; the outputs are the PLC's own.
+fn monitored_state(engine: &Engine, trip: &Trip, mut level: Level, ids: &[&str]) -> Level {
+    level.items.push(Item::new(
+        codes::X_FILTER_WOULD_STOP,
+        format!(
+            "Monitor mode: at {} ms {} became true; enforcing, the safety filter would have stopped the plant. The filter only reports: the PLC's outputs were not changed.",
+            trip.time_ms,
+            ids.join(", ")
+        ),
+        &[
+            ("time_ms", trip.time_ms.to_string()),
+            ("constraints", ids.join(",")),
+        ],
+    ));
+    if let Some(rec) = engine.history.last() {
+        level.state = signal_state(&engine.symbols, &rec.inputs, &rec.applied);
+    }
+    let commanded: BTreeMap<&str, bool> = trip
+        .actions
+        .iter()
+        .map(|a| (a.output.as_str(), a.commanded))
+        .collect();
+    let changed = |on: bool| -> Vec<&str> {
+        trip.fallback
+            .iter()
+            .filter(|(o, v)| *v == on && commanded.get(o.as_str()) != Some(&on))
+            .map(|(o, _)| o.as_str())
+            .collect()
+    };
+    let (held, stopped) = (changed(true), changed(false));
+    level.items.push(Item::new(
+        codes::X_FILTER_WOULD_APPLY,
+        format!(
+            "Enforcing, the filter would have held ON: {}; stopped: {}.",
+            if held.is_empty() {
+                "-".to_string()
+            } else {
+                held.join(", ")
+            },
+            if stopped.is_empty() {
+                "-".to_string()
+            } else {
+                stopped.join(", ")
+            }
+        ),
+        &[("held", held.join(",")), ("stopped", stopped.join(","))],
+    ));
     level
 }
 

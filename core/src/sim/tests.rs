@@ -1211,3 +1211,55 @@ fn an_actuator_stuck_on_is_named_as_hardware_before_the_program() {
         codes::X_TRANSITION_DEACTIVATED_STEP.id
     );
 }
+
+/// Issue 20: in monitor mode (the filter only reports) the explanation and the alarm
+/// say what the filter would have done, never that it stopped the plant.
+#[test]
+fn a_report_only_violation_is_told_as_not_stopped() {
+    let path = station_dir().join("scenarios/cs10-paper.ron");
+    let mut s = Scenario::load(&path).expect("scenario");
+    s.filter = FilterMode::ReportOnly;
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(s.duration_ms));
+    let trip = sim.engine.trips.first().expect("the violation is recorded");
+    assert!(!trip.enforced);
+    let ex = &sim.explanations[&0];
+    let codes0: Vec<&str> = ex.current_state.items.iter().map(|i| i.code).collect();
+    assert_eq!(
+        codes0,
+        [
+            codes::X_FILTER_WOULD_STOP.id,
+            codes::X_FILTER_WOULD_APPLY.id
+        ]
+    );
+    let would = &ex.current_state.items[1];
+    assert_eq!(would.fields["held"], "A4", "{}", would.text);
+    for level in ex.levels() {
+        for item in &level.items {
+            assert!(
+                !item.text.contains("stopped the plant at")
+                    && !item.text.contains("held ON by the filter")
+                    && !item.text.contains("the stop prevented"),
+                "{}: {}",
+                item.code,
+                item.text
+            );
+        }
+    }
+    let alarm = &sim.alarms.all()[0];
+    assert!(
+        alarm
+            .message
+            .starts_with("Safety violation, plant not stopped"),
+        "{}",
+        alarm.message
+    );
+    // Enforced, the same run says it stopped the plant.
+    let s = Scenario::load(&path).expect("scenario");
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+    sim.run_until(Millis(s.duration_ms));
+    assert_eq!(
+        sim.explanations[&0].current_state.items[0].code,
+        codes::X_FILTER_STOPPED.id
+    );
+}
