@@ -348,7 +348,7 @@ fault-slowed = { $signal } slowed to { $percent } %{ $description }
 
 ## Maintenance
 maint-program = Control program: { $name }, version { $version }
-maint-program-exercise = Control program: { $name }, exercise { $id }, version { $version }
+maint-program-exercise = Control program: exercise { $id } (a variant of « { $name } »), version { $version }
 maint-edit-condition = Receptivity { $id }
 maint-edit-actions = Actions of { $id }
 maint-edit-equation = Equation { $id }

@@ -366,7 +366,7 @@ fault-slowed = { $signal } ralenti à { $percent } %{ $description }
 
 ## Maintenance
 maint-program = Programme : { $name }, version { $version }
-maint-program-exercise = Programme : { $name }, exercice { $id }, version { $version }
+maint-program-exercise = Programme : exercice { $id } (variante de « { $name } »), version { $version }
 maint-edit-condition = Réceptivité { $id }
 maint-edit-actions = Actions de { $id }
 maint-edit-equation = Équation { $id }

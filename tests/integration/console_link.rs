@@ -92,9 +92,12 @@ fn console_follows_a_monitor_link_to_pymodbus() {
     // A box at C7 with the turntable's A4 off (CSs10 = C7 · /A4): the monitored plant
     // violates the constraint; the console explains it from the observed cycles.
     plant.set_inputs(&[(7, true)]);
-    wait_for_label(&mut h, "Trip at");
+    // A violation, not a stop: the monitored PLC keeps its outputs (issue 20).
+    wait_for_label(&mut h, "Violation at");
     h.get_by_label("CSs10 = C7 · A\u{305}4\u{305}");
-    h.get_by_label("2 Before stop").click();
+    // The live link moves the layout between frames: the button is pressed through
+    // its accessibility action, as a screen reader does.
+    h.get_by_label("2 Before stop").click_accesskit();
     wait_for_label(
         &mut h,
         "CSs10 = C7 · A\u{305}4\u{305} became true: C7=1, A4=0.",
@@ -104,6 +107,8 @@ fn console_follows_a_monitor_link_to_pymodbus() {
         !h.state().sim.engine.trips[trip].enforced,
         "monitor mode reports, never enforces"
     );
+    let level0 = &h.state().sim.explanations[&trip].current_state.items;
+    assert_eq!(level0[0].code, "X006", "{:?}", level0[0].text);
 
     // The peer killed: reconnecting with backoff, the link alarm (active, in the
     // console's alarm list), stale inputs. (On a loaded machine the slow peer may have
