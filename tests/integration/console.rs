@@ -526,12 +526,14 @@ fn journal_exports_to_csv_and_report_to_markdown() {
     );
     // Issue 20: who, when, what ran.
     let version = h.state().sim.program.program().program.version();
+    assert!(!md.contains("/.."), "the plant folder tidied:\n{md}");
     for needle in [
         "- Exported: ",
         " UTC\n",
         "- User: nobody logged in (role Operator)",
         "- Plant: ",
-        &format!("exercise E01, version `{version}`"),
+        &format!("exercise E01 (a variant of « Sorting station: reference »), version `{version}`"),
+        "(folder `",
         "- Filter mode: Enforce",
         "## Chronogram of the trip window",
     ] {

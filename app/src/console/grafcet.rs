@@ -266,8 +266,11 @@ pub(crate) struct Live<'a> {
     pub active: &'a BTreeSet<String>,
     /// Program elements named by the hypothesis (steps, transitions).
     pub suspects: &'a BTreeSet<String>,
-    /// The element the hypothesis link asked to show.
+    /// The element the hypothesis link asked to show (framed).
     pub focus: Option<&'a str>,
+    /// Scroll it into view this frame (once, after the link: the technician then
+    /// scrolls freely).
+    pub scroll: bool,
 }
 
 /// Paints one chart and its in-place editors; edits go to `out`.
@@ -322,16 +325,21 @@ pub(crate) fn chart_ui(
                 text: c,
             }));
         }
-        if focus == Some(t.id.as_str())
-            || (focus.is_some() && focus == t.from.first().map(String::as_str))
-        {
-            ui.scroll_to_rect(rect.translate(o).expand(40.0), Some(egui::Align::Center));
-        }
     }
-    if let Some(f) = focus
-        && let Some(r) = geometry.steps.get(f)
+    // The focused element into view, its step and bar at the left of the view.
+    if live.scroll
+        && let Some(f) = focus
     {
-        ui.scroll_to_rect(r.translate(o).expand(40.0), Some(egui::Align::Center));
+        let at = geometry
+            .transitions
+            .get(f)
+            .map(|(bar, _)| *bar)
+            .or_else(|| geometry.steps.get(f).map(|r| r.center()));
+        if let Some(at) = at {
+            let view = Rect::from_min_max(pos2(0.0, at.y - 90.0), pos2(at.x + 260.0, at.y + 90.0))
+                .translate(o);
+            ui.scroll_to_rect(view, Some(egui::Align::Center));
+        }
     }
 }
 

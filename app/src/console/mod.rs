@@ -165,6 +165,8 @@ pub enum Command {
     VerifyFix,
     /// The chronogram's time window, ms (clamped to 2 s .. 1 h).
     ChronoWindow(u64),
+    /// The program view scrolled to the focused element: no more scrolling to it.
+    ProgramScrolled,
     /// Maintenance: show the program as a GRAFCET, as ladder rungs or as text.
     ShowProgramView(ProgramView),
     /// From the hypothesis: open the program (maintenance) on this element (a step, a
@@ -180,7 +182,7 @@ pub enum Command {
 }
 
 /// How the maintenance view shows the control program.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum ProgramView {
     /// The charts as GRAFCET (IEC 60848).
     #[default]
@@ -375,6 +377,8 @@ pub struct Console {
     pub program_view: ProgramView,
     /// The program element the hypothesis link asked to show.
     pub program_focus: Option<String>,
+    /// The program view scrolls to the focused element at the next frame (once).
+    pub(crate) program_scroll: bool,
     pub(crate) problems: String,
     pub(crate) variants: Vec<(String, String, String)>,
     /// Per exercise: its correct fix (the reference program's texts).
@@ -528,6 +532,7 @@ impl Console {
             last_fix: None,
             program_view: ProgramView::default(),
             program_focus: None,
+            program_scroll: false,
             problems: String::new(),
             variants,
             answers,
@@ -772,6 +777,7 @@ impl Console {
             ProgramView::Grafcet
         };
         self.program_focus = Some(element);
+        self.program_scroll = true;
     }
 
     /// The exercise running: the control-error variant's id (`E01`).
@@ -972,6 +978,7 @@ impl Console {
             }
             Command::EditDraft(edit) => self.edit_draft(edit),
             Command::ShowProgramView(v) => self.program_view = v,
+            Command::ProgramScrolled => self.program_scroll = false,
             Command::ChronoWindow(ms) => self.chrono_window_ms = ms.clamp(2_000, 3_600_000),
             Command::ShowInProgram(element) => self.show_in_program(element),
             Command::DiscardEdits => {
@@ -1372,7 +1379,7 @@ impl Console {
             wall_ms: crate::historian::wall_ms(),
             user: (self.user.clone(), format!("{:?}", self.role)),
             plant: (
-                self.plant_dir.display().to_string(),
+                tidy(&self.plant_dir).display().to_string(),
                 self.sim.bundle.plant.name.clone(),
             ),
             program: (
@@ -1504,6 +1511,24 @@ type Exercises = (
     Vec<(String, String, String)>,
     BTreeMap<String, Vec<FixLine>>,
 );
+
+/// `a/b/../c` as `a/c`: a path as a person writes it (lexically, no file system).
+fn tidy(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in path.components() {
+        match c {
+            Component::ParentDir
+                if matches!(out.components().next_back(), Some(Component::Normal(_))) =>
+            {
+                out.pop();
+            }
+            Component::CurDir => {}
+            other => out.push(other),
+        }
+    }
+    out
+}
 
 /// The chronogram's rows at start: every input and output of the plant, and the
 /// observers.

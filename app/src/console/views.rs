@@ -1753,6 +1753,7 @@ fn program_body_ui(
     let suspects = program_suspects(c);
     let pal = &c.palette;
     egui::ScrollArea::both()
+        .id_salt(("program", c.program_view))
         .auto_shrink([false, false])
         .show(ui, |ui| match c.program_view {
             super::ProgramView::Grafcet => {
@@ -1760,7 +1761,11 @@ fn program_body_ui(
                     active: &active,
                     suspects: &suspects,
                     focus: c.program_focus.as_deref(),
+                    scroll: c.program_scroll,
                 };
+                if c.program_scroll {
+                    out.push(Command::ProgramScrolled);
+                }
                 for chart in &program.charts {
                     ui.add_space(10.0);
                     ui.label(
