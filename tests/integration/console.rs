@@ -1865,3 +1865,32 @@ fn exporting_the_report_does_not_change_the_view() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Issue 20, hardware before program: with the turntable's valve stuck ON, the console's
+/// level 4 starts with the hardware (the diagnoser's certain fault and A4 to check), and
+/// the stop by the diagnosers lists no program suspect to link to.
+#[test]
+fn an_actuator_stuck_on_is_told_as_hardware_first_on_the_console() {
+    let mut opts = options(None);
+    opts.scenario = Some(root().join("layouts/sorting-station/scenarios/a4-stuck-on.ron"));
+    let mut h = harness(opts);
+    h.run_steps(2);
+    run_to_trip(&mut h);
+    h.state_mut().apply(Command::ShowLevel(Some(4)));
+    h.run_steps(3);
+    let items = &h
+        .state()
+        .sim
+        .explanations
+        .values()
+        .next_back()
+        .expect("explained")
+        .hypothesis
+        .items;
+    assert_eq!(items[0].code, "X415", "{:?}", items[0].text);
+    assert!(items[0].fields["check"].split(", ").any(|e| e == "A4"));
+    // What the technician reads first, on screen.
+    h.get_by_label_contains("Hardware first: the table diagnoser found a fault with certainty");
+    h.get_by_label_contains("Check A4 on the machine before the program");
+    assert!(h.query_by_label_contains("in the program").is_none());
+}

@@ -60,6 +60,7 @@ off-A4 = la table tournante revient en position de chargement
 
 # Les scénarios (`scenario-<nom du fichier>` : son titre dans la ligne d'état).
 scenario-a1-dead-belt = A1 en panne sous une caisse poussée
+scenario-a4-stuck-on = A4 bloquée EN MARCHE (distributeur de la table)
 scenario-c4-stuck-degraded = C4 bloqué à 0, mode dégradé
 scenario-c6-phantom = C6 fantôme en position de chargement
 scenario-cs10-paper = CSs10 : A4 relâchée pendant que la caisse sort à droite
