@@ -2,30 +2,43 @@
 //!
 //! Every variant of the control-error library (`programs/errors.ron`) and every single
 //! mutation of the reference program ([`crate::control::mutations`]: literal negated,
-//! edge swapped, sensor swapped, term dropped, qualifier changed) runs in the closed loop
+//! edge swapped, sensor swapped, term dropped, qualifier changed, action moved to another
+//! step of its chart) runs in the closed loop
 //! ([`crate::sim::Simulation`], filter in Enforce mode, a few boxes to both sides). For a
 //! mutant that trips the filter, the first trip's explanation is taken, and the mutant is
 //! *localised* when the FIRST suspect of the hypothesis names an element of the mutated
 //! place:
 //! - the place's own id: the transition (mutated receptivity), the step (mutated action)
-//!   or the equation's target (mutated equation);
+//!   or the equation's target (mutated equation); a moved action edits two steps, and
+//!   either localises it: the step it was moved to (its place, whose action drives the
+//!   output where it must not) or the step it was taken from (which no longer commands
+//!   the actuator: a trip can come from that absence alone, before the other step is
+//!   ever active);
 //! - or a name its mutated expression reads (a literal the mutation dropped does not
 //!   count: the suspect must name the place or what it reads now).
 //!
 //! The names of a suspect are its fields `transition`, `step`, `activated`, `steps`,
-//! `transitions`, `equation`, `signals` (program suspects, `X407`-`X412`) and `sensor`
+//! `transitions`, `equation`, `signals` (program suspects, `X407`-`X413`) and `sensor`
 //! (the paper's suspects `X401`/`X402`); never the actuator of the constraint itself,
 //! which every suspect names.
+//!
+//! The moved actions (misplaced actions) are also counted apart ([`Report::misplaced`]),
+//! with a stricter test: of those that trip, how many have a first suspect that BLAMES
+//! the step the action was moved to ([`accused`]: the element a suspect holds
+//! responsible, not every name it gives; an `X408` that names the step it activated but
+//! blames the receptivity of its transition does not count); and, among them, those
+//! whose first trip the moved action drove ([`Outcome::driven`]).
 //!
 //! Runs are independent and deterministic; they are spread over named threads.
 
 use crate::bundle::PlantBundle;
-use crate::control::mutation::Place;
-use crate::control::{CompiledProgram, ErrorLibrary, Origin, Patch, Program, mutations};
+use crate::control::mutation::{Operator, Place};
+use crate::control::{CompiledProgram, Driver, ErrorLibrary, Origin, Patch, Program, mutations};
 use crate::diag::Problem;
 use crate::emulator::{ArrivalPlan, BoxSize};
 use crate::explain::Item;
 use crate::sim::{OperatorAction, Options, Simulation};
+use crate::symbols::Space;
 use crate::time::Millis;
 use serde::Serialize;
 use std::collections::BTreeSet;
@@ -70,6 +83,12 @@ pub struct Mutant {
     pub place: String,
     /// Names that localise it (place id and the names its expression reads).
     pub names: BTreeSet<String>,
+    /// The place's own element: the transition, the step (for a moved action, the step
+    /// it was moved to) or the equation's target; what a suspect must blame
+    /// ([`Outcome::blamed`]).
+    pub element: String,
+    /// The mutation operator (`None` for a library variant).
+    pub operator: Option<Operator>,
     /// The mutant program.
     pub program: Program,
 }
@@ -85,6 +104,8 @@ pub struct Outcome {
     pub place: String,
     /// Names that localise it.
     pub names: Vec<String>,
+    /// The mutation operator (`None` for a library variant).
+    pub operator: Option<Operator>,
     /// Time of the first trip, if any.
     pub trip_ms: Option<u64>,
     /// Constraints of the first trip.
@@ -95,6 +116,12 @@ pub struct Outcome {
     pub first_names: usize,
     /// True when the first suspect names the place.
     pub localised: bool,
+    /// True when the first suspect blames ([`accused`]) the place's own element
+    /// ([`Mutant::element`]).
+    pub blamed: bool,
+    /// True when an action of the place's step drove an actuator of the first trip to
+    /// its forbidden value (ON): the mutated action itself, not its absence, tripped.
+    pub driven: bool,
     /// Why not, when tripped and not localised (or why the mutant did not run).
     pub why: String,
 }
@@ -110,8 +137,60 @@ pub struct Report {
     pub localised: usize,
     /// Mean number of names in the first suspect (how specific it is).
     pub mean_first_names: f64,
+    /// The misplaced actions ([`Operator::MoveAction`]) alone: localised means that the
+    /// first suspect blames the step the action was moved to ([`Outcome::blamed`]).
+    pub misplaced: Subset,
     /// Every outcome, in mutant order.
     pub outcomes: Vec<Outcome>,
+}
+
+/// The figures of one kind of mutant.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Subset {
+    /// Mutants of that kind run.
+    pub mutants: usize,
+    /// Those that tripped the filter.
+    pub tripped: usize,
+    /// Tripped ones whose first suspect blames the mutated place.
+    pub localised: usize,
+    /// `localised / tripped` in percent (100 when nothing tripped).
+    pub rate_percent: f64,
+    /// Tripped ones whose trip the mutated action drove ([`Outcome::driven`]).
+    pub driven: usize,
+    /// Among those, the ones whose first suspect blames the mutated place.
+    pub driven_localised: usize,
+}
+
+impl Subset {
+    /// The figures of the outcomes `keep` selects, localised when `hit`.
+    fn of(
+        outcomes: &[Outcome],
+        keep: impl Fn(&Outcome) -> bool,
+        hit: impl Fn(&Outcome) -> bool,
+    ) -> Self {
+        let mine: Vec<&Outcome> = outcomes.iter().filter(|o| keep(o)).collect();
+        let tripped = mine.iter().filter(|o| o.trip_ms.is_some()).count();
+        let localised = mine
+            .iter()
+            .filter(|o| o.trip_ms.is_some() && hit(o))
+            .count();
+        let driven: Vec<&&Outcome> = mine
+            .iter()
+            .filter(|o| o.trip_ms.is_some() && o.driven)
+            .collect();
+        Self {
+            mutants: mine.len(),
+            tripped,
+            localised,
+            driven: driven.len(),
+            driven_localised: driven.iter().filter(|o| hit(o)).count(),
+            rate_percent: if tripped == 0 {
+                100.0
+            } else {
+                localised as f64 * 100.0 / tripped as f64
+            },
+        }
+    }
 }
 
 impl Report {
@@ -144,6 +223,18 @@ fn expr_names(text: &str) -> Vec<String> {
         .unwrap_or_default()
 }
 
+/// The place's own element of a patch (see [`Mutant::element`]).
+fn patch_element(patch: &Patch) -> String {
+    match patch {
+        Patch::Condition { transition, .. } => transition.clone(),
+        Patch::ReplaceAction { step, .. }
+        | Patch::RemoveAction { step, .. }
+        | Patch::AddAction { step, .. }
+        | Patch::MoveAction { to: step, .. } => step.clone(),
+        Patch::Equation { target, .. } => target.clone(),
+    }
+}
+
 /// The names that localise a patch of `reference`, and its place in words.
 fn patch_names(patch: &Patch) -> (String, BTreeSet<String>) {
     let mut names = BTreeSet::new();
@@ -161,6 +252,11 @@ fn patch_names(patch: &Patch) -> (String, BTreeSet<String>) {
         | Patch::AddAction { step, .. } => {
             names.insert(step.clone());
             format!("step {step}")
+        }
+        Patch::MoveAction { from, to, .. } => {
+            names.insert(to.clone());
+            names.insert(from.clone());
+            format!("step {to}")
         }
         Patch::Equation { target, expression } => {
             names.insert(target.clone());
@@ -182,6 +278,8 @@ pub fn mutants(bundle: &PlantBundle) -> Result<Vec<Mutant>, Vec<Problem>> {
             description: v.def.description.clone(),
             place,
             names,
+            element: patch_element(&v.def.patch),
+            operator: None,
             program: v.program.clone(),
         });
     }
@@ -203,6 +301,8 @@ pub fn mutants(bundle: &PlantBundle) -> Result<Vec<Mutant>, Vec<Problem>> {
             description: m.description,
             place,
             names,
+            element: patch_element(&m.patch),
+            operator: Some(m.operator),
             program,
         });
     }
@@ -234,6 +334,43 @@ pub fn suspect_names(item: &Item) -> BTreeSet<String> {
     out
 }
 
+/// The element a suspect holds responsible: the transition whose receptivity it blames
+/// (`X407`, `X408`, `X412`), the step whose action it blames (`X409`, `X413`),
+/// the equation (`X410`, and `X411` when the actuator has one), the sensor (`X401`,
+/// `X402`, `X414`); nothing for the other items.
+pub fn accused(item: &Item) -> BTreeSet<String> {
+    use crate::diag::codes;
+    let key = match item.code {
+        c if c == codes::X_TRANSITION_DEACTIVATED_STEP.id
+            || c == codes::X_TRANSITION_ACTIVATED_STEP.id
+            || c == codes::X_STEP_NOT_LEFT.id =>
+        {
+            "transition"
+        }
+        c if c == codes::X_QUALIFIER.id || c == codes::X_COMBINED_MISSING.id => "step",
+        c if c == codes::X_EQUATION_FORBIDDEN_VALUE.id || c == codes::X_NOTHING_COMMANDS.id => {
+            "equation"
+        }
+        c if c == codes::X_SENSOR_CHANGED_NO_EVOLUTION.id
+            || c == codes::X_SENSOR_OUTSIDE_CHANGED.id
+            || c == codes::X_SUSPECT_SENSOR.id =>
+        {
+            "sensor"
+        }
+        _ => return BTreeSet::new(),
+    };
+    item.fields
+        .get(key)
+        .map(|v| {
+            v.split(',')
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(str::to_string)
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// Runs one mutant in the closed loop until its first trip or the end of the run.
 pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcome {
     let mut outcome = Outcome {
@@ -241,11 +378,14 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
         description: mutant.description.clone(),
         place: mutant.place.clone(),
         names: mutant.names.iter().cloned().collect(),
+        operator: mutant.operator,
         trip_ms: None,
         constraints: Vec::new(),
         first: None,
         first_names: 0,
         localised: false,
+        blamed: false,
+        driven: false,
         why: String::new(),
     };
     let compiled = match CompiledProgram::new(&mutant.program, &bundle.plant, &Origin::default()) {
@@ -290,6 +430,17 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
     };
     outcome.trip_ms = Some(trip.time_ms);
     outcome.constraints = trip.constraints.iter().map(|c| c.id.clone()).collect();
+    outcome.driven = trip
+        .constraints
+        .iter()
+        .flat_map(|c| &c.literals)
+        .filter(|l| l.space == Space::Output && !l.previous && l.value)
+        .any(|l| {
+            sim.program.drivers(&l.name).is_some_and(|ds| {
+                ds.iter()
+                    .any(|d| matches!(d, Driver::Action { step, .. } if *step == mutant.element))
+            })
+        });
     let first = sim
         .explanations
         .get(&0)
@@ -300,6 +451,7 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
             let names = suspect_names(&item);
             outcome.first_names = names.len();
             outcome.localised = names.iter().any(|n| mutant.names.contains(n));
+            outcome.blamed = accused(&item).contains(&mutant.element);
             if !outcome.localised {
                 outcome.why = format!(
                     "first suspect {} names {{{}}}, the place reads {{{}}}",
@@ -366,11 +518,17 @@ pub fn run_mutants(bundle: &PlantBundle, all: &[Mutant], config: &Config) -> Rep
     } else {
         tripped.iter().map(|o| o.first_names as f64).sum::<f64>() / tripped.len() as f64
     };
+    let misplaced = Subset::of(
+        &outcomes,
+        |o| o.operator == Some(Operator::MoveAction),
+        |o| o.blamed,
+    );
     Report {
         mutants: outcomes.len(),
         tripped: tripped.len(),
         localised,
         mean_first_names,
+        misplaced,
         outcomes,
     }
 }

@@ -130,6 +130,17 @@ fn run(plant_dir: &Path, threads: Option<usize>, json: bool) -> anyhow::Result<E
         "  names in the first suspect (mean): {:.2}",
         report.mean_first_names
     )?;
+    let m = &report.misplaced;
+    writeln!(
+        out,
+        "misplaced actions (an action moved to another step of its chart): {} mutants, {} tripped",
+        m.mutants, m.tripped
+    )?;
+    writeln!(
+        out,
+        "  the first suspect blames the step it was moved to: {} ({:.1} %); of the {} trips the moved action drove: {}",
+        m.localised, m.rate_percent, m.driven, m.driven_localised
+    )?;
     let misses: Vec<_> = report.misses().collect();
     if !misses.is_empty() {
         writeln!(out, "misses:")?;

@@ -41,21 +41,29 @@ fn mutation_campaign_localises_the_errors() {
             o.why
         );
     }
+    let m = &report.misplaced;
     eprintln!(
-        "mutants {} tripped {} localised {} rate {:.1}% mean names {:.2}",
+        "mutants {} tripped {} localised {} rate {:.1}% mean names {:.2}; misplaced actions {} tripped {} blamed {} ({:.1}%), driven {} blamed {}",
         report.mutants,
         report.tripped,
         report.localised,
         report.rate_percent(),
-        report.mean_first_names
+        report.mean_first_names,
+        m.mutants,
+        m.tripped,
+        m.localised,
+        m.rate_percent,
+        m.driven,
+        m.driven_localised
     );
-    // Measured: 404 mutants (14 library variants + 390 mutations), 141 trip, 132 are
-    // localised (93.6 %). Every library variant but E14 trips (E14 needs two boxes
-    // closer than C0-C1 on the entry conveyor). The misses are feed-chart receptivities
-    // (t11, t12) that keep X11 active: the first suspect is then the A0/A1 equation that
-    // reads X11, not the transition that should have left it.
-    assert_eq!(report.mutants, 404);
-    assert!(report.tripped >= 130, "{} tripped", report.tripped);
+    // Measured: 490 mutants (14 library variants + 390 single mutations + 86 actions
+    // moved to another step of their chart), 182 trip, 173 are localised (95.1 %). Every
+    // library variant but E14 trips (E14 needs two boxes closer than C0-C1 on the entry
+    // conveyor). The misses are feed-chart receptivities (t11, t12) that keep X11
+    // active: the first suspect is then the A0/A1 equation that reads X11, not the
+    // transition that should have left it.
+    assert_eq!(report.mutants, 490);
+    assert!(report.tripped >= 170, "{} tripped", report.tripped);
     let library: Vec<&str> = report
         .outcomes
         .iter()
@@ -69,6 +77,19 @@ fn mutation_campaign_localises_the_errors() {
         "localisation rate {rate:.1}% below the floor of 93%"
     );
     assert_eq!(library.len(), 13, "{library:?}");
+    // Misplaced actions, measured: 41 of the 86 trip; the first suspect blames the step
+    // the action was moved to for 5 only (12.2 %, the X409 of an initial step): the 22
+    // others whose moved action drove the trip are blamed on the receptivity of the
+    // transition that activated the step (X408) or on its exits (X412), and 14 trip on
+    // the action's absence from its own step before the step it was moved to is ever
+    // active (the first suspect then names the step it was taken from).
+    assert_eq!(m.mutants, 86);
+    assert!(m.tripped >= 35, "{} misplaced actions tripped", m.tripped);
+    assert!(
+        m.rate_percent >= 12.0,
+        "misplaced actions: the first suspect blames the step for {:.1}%, below the floor of 12%",
+        m.rate_percent
+    );
     // The paper's case is localised on t24 and its receptivity.
     let e01 = report.outcomes.iter().find(|o| o.id == "E01").expect("E01");
     let first = e01.first.as_ref().expect("hypothesis");
@@ -89,6 +110,8 @@ fn the_reference_program_does_not_trip() {
         description: "reference".into(),
         place: String::new(),
         names: BTreeSet::new(),
+        element: String::new(),
+        operator: None,
         program: lib.reference,
     };
     let o = run_one(&bundle, &reference, &Config::default());
@@ -126,4 +149,15 @@ fn library_patches_name_their_place() {
     });
     assert_eq!(place, "step X24");
     assert_eq!(names.into_iter().collect::<Vec<_>>(), vec!["X24"]);
+    // A moved action: its place is the step it goes to; either step localises it, the
+    // step it goes to is what a suspect must blame.
+    let moved = Patch::MoveAction {
+        from: "X23".into(),
+        to: "X22".into(),
+        target: "A4".into(),
+    };
+    let (place, names) = patch_names(&moved);
+    assert_eq!(place, "step X22");
+    assert_eq!(names.into_iter().collect::<Vec<_>>(), vec!["X22", "X23"]);
+    assert_eq!(patch_element(&moved), "X22");
 }

@@ -41,6 +41,16 @@ pub enum Patch {
         /// The new action.
         action: Action,
     },
+    /// Moves the action of step `from` that drives `target` to step `to` (an action
+    /// written in the wrong step); `to` must not act on `target` already.
+    MoveAction {
+        /// The step the action belongs to.
+        from: String,
+        /// The step it is moved to.
+        to: String,
+        /// The target of the action moved.
+        target: String,
+    },
     /// Replaces (or adds) the equation of `target`.
     Equation {
         /// Actuator or memory.
@@ -82,6 +92,20 @@ impl Patch {
             }
             Patch::AddAction { step, action } => {
                 find_step(&mut p, step)?.actions.push(action.clone());
+            }
+            Patch::MoveAction { from, to, target } => {
+                let s = find_step(&mut p, from)?;
+                let k = s
+                    .actions
+                    .iter()
+                    .position(|a| a.target == *target)
+                    .ok_or_else(|| format!("step `{from}` has no action on `{target}`"))?;
+                let action = s.actions.remove(k);
+                let d = find_step(&mut p, to)?;
+                if from == to || d.actions.iter().any(|a| a.target == *target) {
+                    return Err(format!("step `{to}` already acts on `{target}`"));
+                }
+                d.actions.push(action);
             }
             Patch::Equation { target, expression } => {
                 match p.equations.iter_mut().find(|e| e.0 == *target) {

@@ -5,7 +5,12 @@
 //! - [`Operator::SwapEdge`]: `RE(x)` ↔ `FE(x)`;
 //! - [`Operator::SwapSignal`]: a sensor replaced by another sensor;
 //! - [`Operator::DropTerm`]: one operand of a product or a sum removed;
-//! - [`Operator::ChangeQualifier`]: an action's qualifier changed (`N`→`S`, `N`→`P`, …).
+//! - [`Operator::ChangeQualifier`]: an action's qualifier changed (`N`→`S`, `N`→`P`, …);
+//! - [`Operator::MoveAction`]: an action moved from its step to another step of the same
+//!   chart that does not act on its target (the action written in the wrong step: the
+//!   next or previous one, the symmetric step of another branch, …). Its place is the
+//!   step the action was moved TO: that step's action drives the target when it must
+//!   not; the step it came from no longer acts on it.
 
 use super::library::Patch;
 use super::program::{Action, Program, Qualifier};
@@ -55,7 +60,7 @@ impl std::fmt::Display for Place {
 }
 
 /// The kind of mutation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
 pub enum Operator {
     /// A literal negated (or its negation removed).
     NegateLiteral,
@@ -67,6 +72,8 @@ pub enum Operator {
     DropTerm,
     /// An action qualifier changed.
     ChangeQualifier,
+    /// An action moved to another step of its chart.
+    MoveAction,
 }
 
 /// One single mutation of a program.
@@ -293,8 +300,43 @@ fn qualifier_alternatives(q: Qualifier) -> Vec<Qualifier> {
     }
 }
 
+/// The actions of every step moved to each other step of the same chart that does not
+/// act on their target already, in program order (source step, action, destination).
+fn moved_actions(program: &Program, out: &mut Vec<Mutation>) {
+    for chart in &program.charts {
+        for s in &chart.steps {
+            for a in &s.actions {
+                for d in &chart.steps {
+                    if d.id == s.id || d.actions.iter().any(|x| x.target == a.target) {
+                        continue;
+                    }
+                    let place = Place::Action {
+                        chart: chart.name.clone(),
+                        step: d.id.clone(),
+                        target: a.target.clone(),
+                    };
+                    out.push(Mutation {
+                        description: format!(
+                            "{place}: `{} {}` moved there from step {}",
+                            a.qualifier, a.target, s.id
+                        ),
+                        place,
+                        signal: a.target.clone(),
+                        operator: Operator::MoveAction,
+                        patch: Patch::MoveAction {
+                            from: s.id.clone(),
+                            to: d.id.clone(),
+                            target: a.target.clone(),
+                        },
+                    });
+                }
+            }
+        }
+    }
+}
+
 /// Every single mutation of `program`, in program order: receptivities, then step
-/// actions, then equations.
+/// actions (qualifiers changed), then equations, then actions moved to another step.
 pub fn mutations(program: &Program, plant: &Plant) -> Vec<Mutation> {
     let mut out = Vec::new();
     for (chart, t) in program.transitions() {
@@ -355,5 +397,6 @@ pub fn mutations(program: &Program, plant: &Plant) -> Vec<Mutation> {
             &mut out,
         );
     }
+    moved_actions(program, &mut out);
     out
 }

@@ -522,6 +522,8 @@ fn control_error_library_loads_and_each_variant_differs_once() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Every mutation edits one place (a moved action: its step and the one it goes to) and
+/// compiles.
 #[test]
 fn control_mutations_are_single_place_and_compile() {
     let plant = plant();
@@ -530,10 +532,25 @@ fn control_mutations_are_single_place_and_compile() {
     let ms = mutations(&reference, &plant);
     assert!(ms.len() > 200, "{}", ms.len());
     let ops: std::collections::BTreeSet<_> = ms.iter().map(|m| m.operator).collect();
-    assert_eq!(ops.len(), 5);
+    assert_eq!(ops.len(), 6);
     for m in &ms {
         let p = m.patch.apply(&reference).unwrap();
-        assert_eq!(differences(&reference, &p).len(), 1, "{}", m.description);
+        let places = differences(&reference, &p);
+        if let Patch::MoveAction { from, to, .. } = &m.patch {
+            // A moved action edits its step and the one it goes to, in the same chart.
+            let mut places = places;
+            places.sort();
+            let mut expected = vec![format!("step {from}"), format!("step {to}")];
+            expected.sort();
+            assert_eq!(places, expected, "{}", m.description);
+            assert!(
+                matches!(&m.place, mutation::Place::Action { step, .. } if step == to),
+                "{}",
+                m.description
+            );
+        } else {
+            assert_eq!(places.len(), 1, "{}", m.description);
+        }
         CompiledProgram::new(&p, &plant, &Origin::default())
             .unwrap_or_else(|e| panic!("{}: {e:?}", m.description));
     }
@@ -546,6 +563,18 @@ fn control_mutations_are_single_place_and_compile() {
     assert!(ms.iter().any(
         |m| m.description.contains("equation A1") && m.operator == mutation::Operator::DropTerm
     ));
+    // The rotation A4 written one step early, in X22 (the finding of issue 20).
+    assert!(ms.iter().any(|m| m.patch
+        == Patch::MoveAction {
+            from: "X23".into(),
+            to: "X22".into(),
+            target: "A4".into()
+        }));
+    let moved = ms
+        .iter()
+        .filter(|m| m.operator == mutation::Operator::MoveAction)
+        .count();
+    assert_eq!(moved, 86);
 }
 
 #[test]
