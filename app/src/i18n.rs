@@ -83,7 +83,7 @@ impl Lang {
 const FR_EXPLAIN: &str = include_str!("../../assets/i18n/fr-explain.ftl");
 
 /// Fields of explanation items that hold comma-separated lists.
-const LIST_FIELDS: [&str; 12] = [
+const LIST_FIELDS: [&str; 13] = [
     "constraints",
     "outputs",
     "elements",
@@ -96,6 +96,7 @@ const LIST_FIELDS: [&str; 12] = [
     "activated",
     "driven",
     "reasons",
+    "exits",
 ];
 
 /// Fields of explanation items that are numbers (Fluent selects on them).
@@ -601,6 +602,28 @@ mod explain_tests {
             ],
         );
         assert!(i.explain(&x201).contains('\u{305}'), "{}", i.explain(&x201));
+        // X417: the action in the wrong step, from the step's exits.
+        let x417 = item(
+            "X417",
+            "…",
+            &[
+                ("output", "A3"),
+                ("chart", "table"),
+                ("step", "X23"),
+                ("qualifier", "N"),
+                ("constraint", "CSs5"),
+                ("condition", "/C5"),
+                ("evidence", "exits"),
+                ("activated_by", "t22"),
+                ("receptivity", "C5"),
+                ("exits", "t23"),
+                ("ms_before", "0"),
+            ],
+        );
+        assert_eq!(
+            i.explain(&x417),
+            "L'action N A3 de l'étape X23 commande A3 dans la situation où CSs5 l'interdit (/C5) : les transitions qui la quittent, t23 (`C5`), attendent la fin de cette situation. L'action de X23 sur A3 est suspecte : elle appartient à une autre étape."
+        );
         // In English, the core's text, untouched.
         i.set_lang(Lang::En);
         assert_eq!(i.explain(&x301), x301.text);

@@ -73,6 +73,11 @@ explain-X410 = L'équation de { $output } (`{ $expression }`) commande la valeur
 explain-X411 = { $output } devrait être EN MARCHE mais rien dans le programme ne le commande : les étapes qui agissent sur lui ({ $steps }) sont inactives et son équation est fausse.
 explain-X412 = L'étape { $step } est active et son action { $qualifier } { $output } commande { $output } ; les transitions qui la quittent, { $transition } (`{ $receptivity }`), n'ont pas été franchies : leur réceptivité est suspecte (elles lisent { $signals }).
 explain-X413 = Contrainte combinée { $constraint } : l'étape { $step }, activée dans le cycle de l'arrêt, commande { $driven } alors que { $output }, que la contrainte exige avec lui, n'est commandé par rien : les actions de la nouvelle étape ou ce qui commande { $output } l'oublient.
+explain-X417 = L'action { $qualifier } { $output } de l'étape { $step } commande { $output } dans la situation où { $constraint } l'interdit ({ $condition }) : { $evidence ->
+    [entry] l'étape a été activée dans le cycle de l'arrêt par { $activated_by }, dont la réceptivité `{ $receptivity }` exige cette situation
+    [exits] les transitions qui la quittent, { $exits } (`{ $receptivity }`), attendent la fin de cette situation
+   *[other] c'est une étape initiale qui commande { $output } dès le premier cycle, aucune transition ne l'a activée
+}. L'action de { $step } sur { $output } est suspecte : elle appartient à une autre étape.
 explain-X414 = { $sensor } est suspect : sa lecture a fait un front que la physique de la machine ne permet pas ; l'étage de plausibilité garde sa dernière valeur plausible et { $constraint } la lit comme pouvant valoir l'une ou l'autre. Vérifiez { $sensor } (cellule, réflecteur, câble) avant le programme.
 explain-X415 = Matériel d'abord : le diagnostiqueur { $component } a trouvé un défaut certain à { $time_ms } ms ({ $descriptions }). Vérifiez { $check } sur la machine avant le programme : les suspects du programme ci-dessous supposent que la machine a obéi à ses ordres.
 explain-X416 = Matériel d'abord : le diagnostiqueur { $component } tient le composant pour défaillant à { $time_ms } ms sans pouvoir choisir entre { $descriptions }. Vérifiez { $check } sur la machine avant le programme : les suspects du programme ci-dessous supposent que la machine a obéi à ses ordres.

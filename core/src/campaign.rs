@@ -18,9 +18,9 @@
 //!   count: the suspect must name the place or what it reads now).
 //!
 //! The names of a suspect are its fields `transition`, `step`, `activated`, `steps`,
-//! `transitions`, `equation`, `signals` (program suspects, `X407`-`X413`) and `sensor`
-//! (the paper's suspects `X401`/`X402`); never the actuator of the constraint itself,
-//! which every suspect names.
+//! `transitions`, `equation`, `signals` (program suspects, `X407`-`X413`, `X417`) and
+//! `sensor` (the paper's suspects `X401`/`X402`); never the actuator of the constraint
+//! itself, which every suspect names.
 //!
 //! The moved actions (misplaced actions) are also counted apart ([`Report::misplaced`]),
 //! with a stricter test: of those that trip, how many have a first suspect that BLAMES
@@ -335,7 +335,7 @@ pub fn suspect_names(item: &Item) -> BTreeSet<String> {
 }
 
 /// The element a suspect holds responsible: the transition whose receptivity it blames
-/// (`X407`, `X408`, `X412`), the step whose action it blames (`X409`, `X413`),
+/// (`X407`, `X408`, `X412`), the step whose action it blames (`X409`, `X413`, `X417`),
 /// the equation (`X410`, and `X411` when the actuator has one), the sensor (`X401`,
 /// `X402`, `X414`); nothing for the other items.
 pub fn accused(item: &Item) -> BTreeSet<String> {
@@ -347,7 +347,12 @@ pub fn accused(item: &Item) -> BTreeSet<String> {
         {
             "transition"
         }
-        c if c == codes::X_QUALIFIER.id || c == codes::X_COMBINED_MISSING.id => "step",
+        c if c == codes::X_QUALIFIER.id
+            || c == codes::X_COMBINED_MISSING.id
+            || c == codes::X_MISPLACED_ACTION.id =>
+        {
+            "step"
+        }
         c if c == codes::X_EQUATION_FORBIDDEN_VALUE.id || c == codes::X_NOTHING_COMMANDS.id => {
             "equation"
         }

@@ -204,6 +204,7 @@ registry! {
     X_SUSPECT_SENSOR = "X414", "a sensor of the fired term is suspect";
     X_HARDWARE_CERTAIN = "X415", "hardware first: a diagnoser found a fault with certainty";
     X_HARDWARE_AMBIGUOUS = "X416", "hardware first: a diagnoser holds a component faulty between several faults";
+    X_MISPLACED_ACTION = "X417", "a step's action drives the actuator where the step's place in its chart forbids it";
     // T: task alarms (`tasks::explain::AlarmCode`)
     T_TOLERANCE_USED_UP = "T001", "interruption tolerance used up: the task can no longer finish before γ";
     T_SLOWDOWN = "T002", "slowdown: effective running time beyond β without the end event";

@@ -14,7 +14,7 @@
 //! fields, the plant elements it concerns (for drawing on the synoptic) and an English
 //! text. The catalogue of codes is `core/src/explain/codes.md` (included below).
 //!
-//! In emulator mode the hypothesis also names the chart elements (`X407`-`X412`,
+//! In emulator mode the hypothesis also names the chart elements (`X407`-`X413`, `X417`,
 //! [`program_suspects`]); in live mode [`emulator_from_observation`] rebuilds a plant
 //! for the projection from the observed inputs and observers.
 //!

@@ -19,21 +19,30 @@
 //!   transitions leaving it have not fired: their receptivity is suspect;
 //! - `X413` (combined constraints): a step activated in the stopping cycle drives one
 //!   actuator of the constraint ON while another, required ON with it, is commanded by
-//!   nothing: the new step's actions or what commands the other actuator miss it.
+//!   nothing: the new step's actions or what commands the other actuator miss it;
+//! - `X417`: a step's action drives the forbidden value ON and the step's place in its
+//!   chart puts it in the situation the constraint forbids (the fired term's sensor
+//!   literals): the transition that activated it in the stopping cycle waited for a
+//!   receptivity that requires that situation, or the step, just entered, is left only
+//!   by transitions that wait for its end, or it is an initial step that drove the
+//!   actuator from the first scan. The action is then in the wrong step (written one
+//!   step early, in the other branch, …): it comes before the X408 (or X409) of the same
+//!   action, which stays as the alternative.
 //!
 //! Every item has the fields `output`, `chart`, and as they apply `transition`,
 //! `receptivity`, `step`, `activated`, `qualifier`, `equation`, `expression`, `steps`,
 //! `transitions`, `signals` (names the receptivity or equation reads, comma-separated)
-//! and `ms_before` (0 = the stopping cycle). Items are ordered: elements that changed
-//! in the stopping cycle first, then by kind (`X413`, `X407`-`X409`, `X412`, `X410`,
-//! `X411`).
+//! and `ms_before` (0 = the stopping cycle); X417 has `constraint`, `condition`,
+//! `evidence`, `activated_by`, `exits` instead of `transition`. Items are ordered:
+//! elements that changed in the stopping cycle first, then by kind (`X413`, `X417`,
+//! `X407`-`X409`, `X412`, `X410`, `X411`).
 
 use super::{Explanation, Highlight, Item, Mark};
 use crate::control::{Driver, ProgramRuntime, Qualifier};
 use crate::diag::codes::{self, Code};
-use crate::engine::Trip;
+use crate::engine::{FiredConstraint, Trip};
 use crate::expr::Dnf;
-use crate::symbols::Space;
+use crate::symbols::{Literal, Space, Var};
 
 /// One program suspect with its ordering key.
 struct Suspect {
@@ -41,6 +50,81 @@ struct Suspect {
     highlights: Vec<Highlight>,
     /// (0 when it happened in the stopping cycle, kind rank).
     rank: (u8, u8),
+}
+
+/// Where a fired constraint forbids its actuators: the literals of its fired term on the
+/// sensors the program reads (at t, the actuators and observers left out).
+struct Situation {
+    /// Constraint id.
+    constraint: String,
+    /// The sensor literals, in the program's variables.
+    literals: Vec<Literal>,
+    /// The same in the file notation (`C4 . /C6`).
+    notation: String,
+}
+
+impl Situation {
+    fn of(c: &FiredConstraint, v: &View<'_>) -> Self {
+        let mut literals = Vec::new();
+        let mut notation = Vec::new();
+        for l in c
+            .literals
+            .iter()
+            .filter(|l| l.space == Space::Input && !l.previous)
+        {
+            if let Some((Space::Input, index)) = v.p().symbols.lookup(&l.name) {
+                literals.push(Literal {
+                    var: Var {
+                        space: Space::Input,
+                        index,
+                        prev: false,
+                    },
+                    positive: l.value,
+                });
+                notation.push(l.literal.clone());
+            }
+        }
+        Self {
+            constraint: c.id.clone(),
+            literals,
+            notation: notation.join(" . "),
+        }
+    }
+
+    /// True when the product holds every literal of the situation: it is true only in
+    /// the situation.
+    fn required_by(&self, product: &[Literal]) -> bool {
+        !self.literals.is_empty() && self.literals.iter().all(|l| product.contains(l))
+    }
+
+    /// True when the product holds the negation of a literal of the situation: it is
+    /// false as long as the situation lasts.
+    fn excluded_by(&self, product: &[Literal]) -> bool {
+        self.literals.iter().any(|l| {
+            product.contains(&Literal {
+                var: l.var,
+                positive: !l.positive,
+            })
+        })
+    }
+}
+
+/// Why the action of a step, rather than a transition, is held to be in the wrong place:
+/// the step's own place in its chart puts it in the situation where its action is
+/// forbidden.
+#[derive(Default)]
+struct Misplaced {
+    /// The transition that activated the step in the stopping cycle, if it did.
+    activated_by: Option<String>,
+    /// Its receptivity (the product that fired) requires the situation, and it waited
+    /// for it: the step is entered there.
+    entry: bool,
+    /// The transitions leaving the step, which all wait for the end of the situation:
+    /// the step lasts through it.
+    exits: Vec<String>,
+    /// The step is initial and drove the actuator from the first scan: no transition
+    /// brought it there.
+    initial: bool,
 }
 
 /// The program view shared by the helpers.
@@ -253,6 +337,7 @@ pub fn program_suspects(
     let mut seen: Vec<String> = Vec::new();
     for c in &trip.constraints {
         let first = out.len();
+        let situation = Situation::of(c, &view);
         for l in c
             .literals
             .iter()
@@ -267,7 +352,7 @@ pub fn program_suspects(
             };
             let was = before.value(&l.name).unwrap_or(false);
             if l.value {
-                forbidden_on(&view, &l.name, slot, was, &mut out);
+                forbidden_on(&view, &l.name, slot, (was, &situation), &mut out);
             } else {
                 forbidden_off(&view, &l.name, slot, was, &mut out);
             }
@@ -313,14 +398,21 @@ pub fn add_program_hypothesis(
     level.items = items;
 }
 
-/// The actuator is commanded ON and must not be.
-fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Vec<Suspect>) {
+/// The actuator is commanded ON and must not be (`was`: commanded ON in the cycle
+/// before; `situation`: where the constraint forbids it).
+fn forbidden_on(
+    v: &View<'_>,
+    output: &str,
+    slot: usize,
+    (was, situation): (bool, &Situation),
+    out: &mut Vec<Suspect>,
+) {
     let rose = !was;
     let drivers = v.after.drivers(output).unwrap_or_default();
     for d in &drivers {
         match d {
             Driver::Action { step, qualifier } => {
-                action_forbidden_on(v, output, step, *qualifier, rose, out);
+                action_forbidden_on(v, output, (step, *qualifier), rose, situation, out);
             }
             Driver::Stored { set_by } => {
                 let left: Vec<String> = set_by
@@ -362,25 +454,39 @@ fn forbidden_on(v: &View<'_>, output: &str, slot: usize, was: bool, out: &mut Ve
 }
 
 /// The suspect for an action of a step that drives the forbidden ON: the transition that
-/// activated the step (X408), the action's qualifier (X409) or the step's exits (X412).
+/// activated the step (X408), the action's qualifier (X409) or the step's exits (X412);
+/// before them, the action itself (X417) when the step's place in its chart puts it in
+/// the situation where the constraint forbids the actuator ([`misplacement`]).
 fn action_forbidden_on(
     v: &View<'_>,
     output: &str,
-    step: &str,
-    qualifier: Qualifier,
+    (step, qualifier): (&str, Qualifier),
     rose: bool,
+    situation: &Situation,
     out: &mut Vec<Suspect>,
 ) {
     let chart = v.chart_of_step(step);
     let newly = !v.before.is_active(step);
     let activation = v.last_firing(step, true);
     let action_started = rose && !newly;
-    if newly
+    let entered_now = newly
         || (rose
             && activation
                 .as_ref()
-                .is_some_and(|(_, t)| v.ms_before(*t) == 0))
-    {
+                .is_some_and(|(_, t)| v.ms_before(*t) == 0));
+    let entry = activation.as_ref().filter(|_| entered_now);
+    if let Some(m) = misplacement(v, step, qualifier, situation, (entry, action_started)) {
+        let rank = u8::from(entry.is_some_and(|(_, t)| v.ms_before(*t) > 0));
+        let since = activation.as_ref().map_or(0, |(_, t)| v.ms_before(*t));
+        out.push(misplaced_suspect(
+            v,
+            (output, step, qualifier),
+            situation,
+            &m,
+            (rank, since),
+        ));
+    }
+    if entered_now {
         // X408: the transition that activated the step.
         if let Some((t, time)) = activation {
             let rec = v.receptivity(&t);
@@ -428,6 +534,24 @@ fn action_forbidden_on(
         return;
     }
     // X412: the step stays active for too long.
+    out.push(step_not_left(
+        v,
+        output,
+        (step, qualifier),
+        chart,
+        activation,
+    ));
+}
+
+/// X412: `step`, active since `activation`, drives `output` ON and the transitions
+/// leaving it did not fire.
+fn step_not_left(
+    v: &View<'_>,
+    output: &str,
+    (step, qualifier): (&str, Qualifier),
+    chart: String,
+    activation: Option<(String, u64)>,
+) -> Suspect {
     let exits = v.exits(step);
     let recs: Vec<String> = exits
         .iter()
@@ -445,7 +569,7 @@ fn action_forbidden_on(
         .as_ref()
         .map(|(t, time)| format!(" since {t} fired {}", v.when(*time)))
         .unwrap_or_default();
-    out.push(suspect(
+    suspect(
         codes::X_STEP_NOT_LEFT,
         (1, 1),
         format!(
@@ -458,12 +582,211 @@ fn action_forbidden_on(
             ("step", step.to_string()),
             ("qualifier", qualifier.to_string()),
             ("transition", join(&exits)),
-            ("receptivity", exits.iter().map(|t| v.receptivity(t)).collect::<Vec<_>>().join(" | ")),
+            (
+                "receptivity",
+                exits
+                    .iter()
+                    .map(|t| v.receptivity(t))
+                    .collect::<Vec<_>>()
+                    .join(" | "),
+            ),
             ("signals", join(&signals)),
-            ("ms_before", activation.map(|(_, t)| v.ms_before(t)).unwrap_or(0).to_string()),
+            (
+                "ms_before",
+                activation
+                    .map(|(_, t)| v.ms_before(t))
+                    .unwrap_or(0)
+                    .to_string(),
+            ),
         ],
         &v.plant(&signals),
-    ));
+    )
+}
+
+/// Whether the action of `step` on the actuator is in the wrong step rather than its
+/// step entered too early (X408) or at the first scan for a qualifier's reason (X409),
+/// from the program and its recorded evolution. The evidence never comes from the
+/// element the alternative suspect blames:
+/// - entry: the transition that activated the step in the stopping cycle (`entry`)
+///   waited in its upstream steps (they were not entered in the scan just before, see
+///   [`waited`]) and every product of its receptivity that was true when it fired holds
+///   the whole situation where the constraint forbids the actuator: the chart entered
+///   the step where it was written to, and the step commands what is forbidden there;
+/// - exits: the step was entered in the stopping cycle and every transition leaving it
+///   waits for the end of that situation (each product holds the negation of one of its
+///   literals): the step is the one that lasts through it. Not for a step active for a
+///   while, whose alternative suspect is its exits (X412);
+/// - initial: the step is initial, never moved by a recorded evolution, and its action
+///   (not delayed) began while it was active (`started`): the first scan.
+fn misplacement(
+    v: &View<'_>,
+    step: &str,
+    qualifier: Qualifier,
+    situation: &Situation,
+    (entry, started): (Option<&(String, u64)>, bool),
+) -> Option<Misplaced> {
+    if situation.literals.is_empty() {
+        return None;
+    }
+    let p = v.p();
+    let frame = v.after.frame();
+    let product_holds = |c: &&Vec<Literal>| {
+        c.iter()
+            .filter(|l| l.var.space == Space::Input)
+            .all(|l| frame.literal(*l))
+    };
+    let mut m = Misplaced {
+        activated_by: entry.map(|(t, _)| t.clone()),
+        ..Misplaced::default()
+    };
+    if let Some((t, _)) = entry
+        && let Some(info) = p.transitions.iter().find(|x| &x.id == t)
+        && waited(v, info)
+    {
+        // The products of the receptivity that were true when it fired all require the
+        // situation: the transition waited for it.
+        let fired: Vec<&Vec<Literal>> = info.condition.iter().filter(product_holds).collect();
+        if !fired.is_empty() && fired.iter().all(|c| situation.required_by(c)) {
+            m.entry = true;
+        }
+    }
+    // The exits are evidence only when the step was entered in the stopping cycle: the
+    // alternative is then its entry, not its exits (a step active for a while whose
+    // exits wait for the end of the situation may be one whose exits are wrong, X412).
+    let exits = v.exits(step);
+    let waits = |t: &String| {
+        p.transitions
+            .iter()
+            .find(|x| &x.id == t)
+            .is_some_and(|x| x.condition.iter().all(|c| situation.excluded_by(c)))
+    };
+    if entry.is_some() && !exits.is_empty() && exits.iter().all(waits) {
+        m.exits = exits;
+    }
+    m.initial = started
+        && !matches!(qualifier, Qualifier::D(_))
+        && p.steps.iter().any(|s| s.id == step && s.initial)
+        && v.last_firing(step, true).is_none()
+        && v.last_firing(step, false).is_none();
+    (m.entry || !m.exits.is_empty() || m.initial).then_some(m)
+}
+
+/// True when transition `info`, fired in the stopping cycle, had waited in its upstream
+/// steps: none of them had been activated in the scan just before (a receptivity already
+/// true when its upstream step is entered lets the chart cross that step without
+/// waiting, and is then suspect itself). An upstream step activated before the
+/// evolutions recorded (or initial) has waited.
+fn waited(v: &View<'_>, info: &crate::control::program::TransitionInfo) -> bool {
+    let evolutions = v.after.evolutions();
+    let Some(now) = evolutions
+        .iter()
+        .rev()
+        .find(|e| e.fired.contains(&info.id))
+        .map(|e| e.scan)
+    else {
+        return true;
+    };
+    let p = v.p();
+    info.from.iter().all(|&f| {
+        // A step that commands nothing (no action, no equation reads it) has nothing to
+        // let act: crossing it in one scan is no sign.
+        let Some(aux) = p.steps.get(f as usize).map(|s| s.aux) else {
+            return true;
+        };
+        let read = p
+            .equations
+            .iter()
+            .flat_map(|e| e.dnf.iter().flatten())
+            .any(|l| l.var.space == Space::Aux && l.var.index == aux);
+        if !read && !p.actions.iter().any(|a| a.step == f) {
+            return true;
+        }
+        let entered = evolutions.iter().rev().filter(|e| e.scan < now).find(|e| {
+            e.fired.iter().any(|t| {
+                p.transitions
+                    .iter()
+                    .find(|x| &x.id == t)
+                    .is_some_and(|x| x.to.contains(&f))
+            })
+        });
+        entered.is_none_or(|e| e.scan + 1 < now)
+    })
+}
+
+/// X417: the action of `step` drives `output` ON where the step's place in its chart
+/// puts it in the situation where the constraint forbids `output` (`rank`: the first
+/// component of the ordering key; `since`: ms between the step's activation and the
+/// stop).
+fn misplaced_suspect(
+    v: &View<'_>,
+    (output, step, qualifier): (&str, &str, Qualifier),
+    situation: &Situation,
+    m: &Misplaced,
+    (rank, since): (u8, u64),
+) -> Suspect {
+    let cond = &situation.notation;
+    let constraint = &situation.constraint;
+    let recs = |ts: &[String]| {
+        ts.iter()
+            .map(|t| v.receptivity(t))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    };
+    let mut reasons = Vec::new();
+    match &m.activated_by {
+        Some(t) if m.entry => reasons.push(format!(
+            "it was activated by {t} in the stopping cycle, whose receptivity `{}` waited for {cond}",
+            v.receptivity(t)
+        )),
+        Some(t) => reasons.push(format!("it was activated by {t} in the stopping cycle")),
+        None => {}
+    }
+    if !m.exits.is_empty() {
+        reasons.push(format!(
+            "it is left only by {} (`{}`), which {} for the end of {cond}",
+            m.exits.join(", "),
+            recs(&m.exits),
+            if m.exits.len() == 1 { "waits" } else { "wait" }
+        ));
+    }
+    if m.initial {
+        reasons.push(
+            "it is an initial step, active from the first scan: no transition activated it"
+                .to_string(),
+        );
+    }
+    let (evidence, receptivity) = match (&m.activated_by, m.exits.is_empty()) {
+        (Some(t), _) if m.entry => ("entry", v.receptivity(t)),
+        (_, false) => ("exits", recs(&m.exits)),
+        _ => ("initial", String::new()),
+    };
+    let condition: Vec<String> = situation
+        .literals
+        .iter()
+        .map(|l| v.p().symbols.name(l.var.space, l.var.index).to_string())
+        .collect();
+    suspect(
+        codes::X_MISPLACED_ACTION,
+        (rank, 0),
+        format!(
+            "The action {qualifier} {output} of step {step} drives {output} ON in the situation where {constraint} forbids it ({cond}): {}. The action of {step} on {output} is suspect: it belongs to another step.",
+            reasons.join("; ")
+        ),
+        &[
+            ("output", output.to_string()),
+            ("chart", v.chart_of_step(step)),
+            ("step", step.to_string()),
+            ("qualifier", qualifier.to_string()),
+            ("constraint", constraint.clone()),
+            ("condition", cond.clone()),
+            ("evidence", evidence.to_string()),
+            ("activated_by", m.activated_by.clone().unwrap_or_default()),
+            ("receptivity", receptivity),
+            ("exits", join(&m.exits)),
+            ("ms_before", since.to_string()),
+        ],
+        &v.plant(&condition),
+    )
 }
 
 /// An equation commands the forbidden value (`on`: true and the actuator must be OFF;

@@ -641,3 +641,140 @@ fn every_code_is_in_the_catalogue() {
     assert!(emitted.len() >= 24, "{emitted:?}");
     assert_eq!(emitted, documented);
 }
+
+/// Runs `program` in the closed loop (a small box, then a large one: one to each side)
+/// until its first trip: the trip and its hypothesis level.
+fn first_trip_hypothesis(
+    bundle: &PlantBundle,
+    program: &crate::control::Program,
+) -> Option<(crate::engine::Trip, Vec<Item>)> {
+    use crate::control::{CompiledProgram, Origin};
+    use crate::emulator::{ArrivalPlan, BoxSize};
+    use crate::sim::{OperatorAction, Options, Simulation};
+    let compiled = CompiledProgram::new(program, &bundle.plant, &Origin::default()).ok()?;
+    let options = Options {
+        history_cycles: 2_000,
+        explain: true,
+    };
+    let mut sim = Simulation::new(bundle.clone(), compiled, 1, options).ok()?;
+    sim.emulator.set_arrivals(ArrivalPlan::List(vec![
+        (0, BoxSize::Small),
+        (6_000, BoxSize::Large),
+    ]));
+    sim.act(&OperatorAction::Start).ok()?;
+    while sim.engine.trips.is_empty() && sim.now().0 < 30_000 {
+        sim.cycle();
+    }
+    let trip = sim.engine.trips.first()?.clone();
+    let items = sim.explanations.get(&0)?.hypothesis.items.clone();
+    Some((trip, items))
+}
+
+/// Issue 20, "an action placed in the wrong step is blamed on the receptivity of the next
+/// transition": the reference program with an action written in the wrong step by hand,
+/// run in the closed loop (the campaign's boxes). The first suspect is the step whose
+/// action drove the actuator (X417, "the action of X23 on A3 is suspect"), with the
+/// receptivity of the transition that activated it (X408) after it as the alternative.
+#[test]
+fn a_misplaced_action_is_blamed_on_its_step() {
+    use crate::control::{Program, differences};
+    let bundle = station();
+    let file = bundle.dir.join("programs/reference.ron");
+    let text = std::fs::read_to_string(&file).expect("reference");
+    let reference = Program::from_ron(&text, &file).expect("reference parses");
+    let step = |id: &str, actions: &[&str]| {
+        if actions.is_empty() {
+            format!(r#"Step(id: "{id}"),"#)
+        } else {
+            let a: Vec<String> = actions
+                .iter()
+                .map(|t| format!(r#"Action(qualifier: N, target: "{t}")"#))
+                .collect();
+            format!(r#"Step(id: "{id}", actions: [{}]),"#, a.join(", "))
+        }
+    };
+    let a3_in_x24 = r#"Action(qualifier: N, target: "A3"),"#;
+    let x20 = r#"Step(id: "X20", initial: true),"#;
+    for s in [a3_in_x24, x20, &step("X21", &["A2"]), &step("X23", &["A4"])] {
+        assert_eq!(text.matches(s).count(), 1, "{s}");
+    }
+    // (what, program text, step, constraint, evidence, transition that activated it)
+    let cases = [
+        // The right evacuation A3 written in the rotation step X23, one step early: X23
+        // is left only by t23 `C5`, which waits for the end of the situation where CSs5
+        // forbids A3 (`/C5`). Before: "the receptivity of t22 is suspect".
+        (
+            "A3 in X23",
+            text.replace(a3_in_x24, "")
+                .replace(&step("X23", &["A4"]), &step("X23", &["A4", "A3"])),
+            "X23",
+            "CSs5",
+            "exits",
+            "t22",
+        ),
+        // The rotation A4 of the right branch written in X21, the step entered when a
+        // box reaches C3 with the empty table at C4: t20R waited for `C4 . /C6`, where
+        // CSs13 forbids A4. Before: "the receptivity of t20R is suspect".
+        (
+            "A4 in X21",
+            text.replace(&step("X23", &["A4"]), &step("X23", &[]))
+                .replace(&step("X21", &["A2"]), &step("X21", &["A2", "A4"])),
+            "X21",
+            "CSs13",
+            "entry",
+            "t20R",
+        ),
+        // The rotation written in the initial step X20: the table rotates from the first
+        // scan, no transition to blame. Before: "the qualifier N is suspect".
+        (
+            "A4 in X20",
+            text.replace(&step("X23", &["A4"]), &step("X23", &[]))
+                .replace(x20, r#"Step(id: "X20", initial: true, actions: [Action(qualifier: N, target: "A4")]),"#),
+            "X20",
+            "CSs13",
+            "initial",
+            "",
+        ),
+    ];
+    for (what, text, step, constraint, evidence, entry) in cases {
+        let program = Program::from_ron(&text, &file).expect(what);
+        // Hand-written: one action left its step for another one.
+        let places = differences(&reference, &program);
+        assert_eq!(places.len(), 2, "{what}: {places:?}");
+        assert!(
+            places.contains(&format!("step {step}")),
+            "{what}: {places:?}"
+        );
+        let (trip, items) = first_trip_hypothesis(&bundle, &program).expect(what);
+        assert!(
+            trip.constraints.iter().any(|c| c.id == constraint),
+            "{what}: {trip:?}"
+        );
+        let first = &items[0];
+        assert_eq!(
+            (first.code, first.fields["step"].as_str()),
+            ("X417", step),
+            "{what}: {}",
+            first.text
+        );
+        assert_eq!(first.fields["constraint"], constraint, "{what}");
+        assert_eq!(first.fields["evidence"], evidence, "{what}");
+        assert_eq!(first.fields["activated_by"], entry, "{what}");
+        assert!(
+            first.text.contains(&format!("The action of {step} on")),
+            "{what}: {}",
+            first.text
+        );
+        // The link to the program shows the step, not a transition.
+        assert!(!first.fields.contains_key("transition"), "{what}");
+        // The receptivity that activated the step stays as the alternative.
+        if !entry.is_empty() {
+            assert!(
+                items[1..].iter().any(|i| i.code == "X408"
+                    && i.fields["transition"] == entry
+                    && i.fields["step"] == step),
+                "{what}: {items:?}"
+            );
+        }
+    }
+}

@@ -1132,6 +1132,7 @@ fn an_actuator_stuck_on_is_named_as_hardware_before_the_program() {
         codes::X_NOTHING_COMMANDS.id,
         codes::X_STEP_NOT_LEFT.id,
         codes::X_COMBINED_MISSING.id,
+        codes::X_MISPLACED_ACTION.id,
     ];
     let hardware = [codes::X_HARDWARE_CERTAIN.id, codes::X_HARDWARE_AMBIGUOUS.id];
     let mut named = Vec::new();
