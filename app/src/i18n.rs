@@ -638,8 +638,8 @@ mod explain_tests {
 mod plant_tests {
     use super::*;
 
-    /// Every scenario file and every variant of the control-error library of the station
-    /// has its French text, and the plant folder holds no text for a file or a variant
+    /// Every scenario file, every variant of the control-error library and every
+    /// plant-fault exercise of the station has its French text, and the plant folder holds no text for a file or a variant
     /// that does not exist (a renamed scenario would lose its title silently).
     #[test]
     fn the_station_titles_its_scenarios_and_variants_in_french() {
@@ -664,12 +664,21 @@ mod plant_tests {
         for v in &lib.variants {
             expected.insert(format!("variant-{}", v.def.id));
         }
+        let exercises =
+            vigie_core::emulator::load_exercises(&dir.join("exercises.ron"), &bundle.plant)
+                .unwrap();
+        for e in &exercises {
+            expected.insert(format!("exercise-{}", e.id));
+        }
         for id in &expected {
             assert!(fr.plant(id).is_some(), "{id} has no French text");
         }
         let text = std::fs::read_to_string(dir.join("i18n/fr.ftl")).unwrap();
         for id in ids(&text) {
-            if id.starts_with("scenario-") || id.starts_with("variant-") {
+            if ["scenario-", "variant-", "exercise-"]
+                .iter()
+                .any(|p| id.starts_with(p))
+            {
                 assert!(expected.contains(&id), "{id} names nothing");
             }
         }

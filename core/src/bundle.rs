@@ -39,7 +39,7 @@ pub struct PlantBundle {
 
 /// The files of a plant folder its loaders may read (besides `programs/*.ron`), each
 /// checked against [`crate::diag::MAX_FILE_BYTES`] before anything is read.
-pub const FOLDER_FILES: [&str; 9] = [
+pub const FOLDER_FILES: [&str; 10] = [
     "plant.ron",
     "observers.ron",
     "constraints.txt",
@@ -48,6 +48,7 @@ pub const FOLDER_FILES: [&str; 9] = [
     "layout.ron",
     "diagnosers.ron",
     "faults.ron",
+    "exercises.ron",
     "io-map.ron",
 ];
 

@@ -447,7 +447,124 @@ fn training_hides_the_answer_until_the_debrief_and_keeps_a_history() {
     h.get_by_label("Training history (not logged in)").click();
     h.run_steps(2);
     h.get_by_label("given up");
-    h.get_by_label("fixed");
+    h.get_by_label("solved");
+    let _ = std::fs::remove_dir_all(&data);
+}
+
+/// Issue 20: every plant-fault exercise of the station stops the plant (the trainee
+/// meets a stopped plant, as the paper's protocol wants), with its fault in force and
+/// the run titled by the exercise only.
+#[test]
+fn every_plant_fault_exercise_stops_the_plant() {
+    let mut opts = options(None);
+    opts.scenario = None;
+    let mut h = harness(opts);
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    let ids: Vec<String> = h
+        .state()
+        .library
+        .exercises
+        .iter()
+        .map(|e| e.id.clone())
+        .collect();
+    assert!(ids.len() >= 4, "{ids:?}");
+    for id in ids {
+        h.state_mut().apply(Command::LoadPlantExercise(id.clone()));
+        assert_eq!(h.state().exercise_id(), Some(id.as_str()));
+        assert_eq!(h.state().source_title(), format!("Training: {id}"));
+        run_to_trip(&mut h);
+        let c = h.state();
+        assert!(
+            c.latest_trip().is_some(),
+            "{id}: the plant did not stop by {} ms",
+            c.sim.now().0
+        );
+        assert_eq!(c.sim.emulator.faults_in_force(), 1, "{id}");
+        assert!(
+            c.sim.emulator.hazards().is_empty(),
+            "{id}: {:?}",
+            c.sim.emulator.hazards()
+        );
+    }
+}
+
+/// Picks `component` in the plant-fault exercise's form and submits it, as a trainee
+/// does: open the list, click the component, press Submit diagnosis.
+fn name_component(h: &mut Harness<'static, Console>, component: &str) {
+    press(h, "Faulty component:");
+    let option = format!("{component} — ");
+    h.get_by_label_contains(&option).click();
+    h.run_steps(2);
+    press(h, "Submit diagnosis");
+}
+
+/// Issue 20: a plant-fault exercise, as a trainee meets it: the fault hidden, the plant
+/// stopped, a wrong component refused, the right one found, the debrief, the repair,
+/// and the history; the same exercise opened from the command line.
+#[test]
+fn a_plant_fault_exercise_hides_the_fault_until_the_trainee_names_it() {
+    let data = temp_dir("plant-exercise");
+    let mut opts = options(Some(data.clone()));
+    opts.scenario = None;
+    let mut h = harness(opts.clone());
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    press(&mut h, "Load P03");
+    h.get_by_label("Exercise P03");
+    h.get_by_label_contains("A component of the plant failed");
+    for secret in ["believes it holds", "C6 stuck", "stuck at 1"] {
+        assert!(h.query_by_label_contains(secret).is_none(), "{secret}");
+    }
+    assert!(h.query_by_label("Verify fix").is_none());
+    run_to_trip(&mut h);
+    assert!(h.state().latest_trip().is_some());
+    h.state_mut().apply(Command::ShowLevel(Some(0)));
+    h.state_mut().apply(Command::ShowLevel(Some(4)));
+    h.run_steps(2);
+    // A wrong component: counted, said, the exercise goes on.
+    name_component(&mut h, "C3");
+    assert!(!h.state().score().revealed);
+    h.get_by_label("C3 is not the faulty component.");
+    assert!(h.query_by_label_contains("believes it holds").is_none());
+    // The right one: the debrief.
+    name_component(&mut h, "C6");
+    assert!(h.state().score().revealed, "{}", h.state().status);
+    h.get_by_label("Debrief: exercise P03");
+    h.get_by_label_contains("believes it holds a box");
+    h.get_by_label_contains("C6 stuck at 1");
+    h.get_by_label("The faulty component: C6");
+    h.get_by_label("Your diagnoses: C3 ✘, C6 ✔");
+    h.get_by_label("Levels consulted: 0, 4");
+    h.get_by_label_contains("Found after 2 attempts");
+    h.get_by_label_contains("The fault is still in force: Repair the plant");
+    // Repaired, reset, started: the plant runs again.
+    press(&mut h, "Repair the plant");
+    assert_eq!(h.state().sim.emulator.faults_in_force(), 0);
+    assert!(h.query_by_label_contains("still in force").is_none());
+    // The stuck beam made the program believe in a box: the reset is refused, the
+    // re-initialisation (plant emptied) ends the stop.
+    press(&mut h, "Reset");
+    assert!(h.state().sim.engine.is_tripped());
+    press(&mut h, "Re-initialise…");
+    press(&mut h, "Plant emptied: re-initialise");
+    assert!(!h.state().sim.engine.is_tripped(), "{}", h.state().status);
+    let r = h.state().history.records.last().expect("a record").clone();
+    assert_eq!((r.exercise.as_str(), r.fixed, r.attempts), ("P03", true, 2));
+    assert_eq!(r.levels, "0 4");
+    // Given up: the answer shown, recorded as not found.
+    press(&mut h, "Load P05");
+    assert!(!h.state().score().revealed);
+    press(&mut h, "Show the answer");
+    h.get_by_label("The faulty component: A2");
+    h.get_by_label("Your diagnoses: none");
+    h.get_by_label_contains("Answer shown after 0 attempts");
+    assert!(!h.state().history.records.last().unwrap().fixed);
+    drop(h);
+    // From the command line (`--variant P02`): the same exercise, fault in force.
+    opts.variant = Some("P02".into());
+    let h = harness(opts);
+    assert_eq!(h.state().exercise_id(), Some("P02"));
+    assert!(h.state().plant_exercise().is_some());
     let _ = std::fs::remove_dir_all(&data);
 }
 
@@ -466,6 +583,7 @@ fn a_repair_removes_an_injected_fault_and_the_reset_is_taken() {
         .apply(Command::Plant(vigie_core::sim::OperatorAction::Start));
     let table = h
         .state()
+        .library
         .faults
         .iter()
         .position(|(n, _)| n.starts_with("Table blocked"))

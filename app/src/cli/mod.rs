@@ -98,7 +98,8 @@ pub(crate) struct ConsoleArgs {
     /// Press the plant's Start button at once.
     #[arg(long)]
     pub(crate) start: bool,
-    /// Load this variant of the control-error library (training), e.g. E01.
+    /// Load this variant of the control-error library (E01), or this plant-fault
+    /// exercise (P01), for training.
     #[arg(long)]
     pub(crate) variant: Option<String>,
     /// Follow the live link of this monitor or gateway configuration (e.g.

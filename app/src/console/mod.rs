@@ -29,7 +29,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use vigie_core::access::{Permission, Role};
 use vigie_core::control::{CompiledProgram, ErrorLibrary};
-use vigie_core::emulator::FaultSpec;
+use vigie_core::emulator::{NamedFault, PlantExercise};
 use vigie_core::sim::{OperatorAction, Options, ProgramChoice, Scenario, Simulation};
 use vigie_core::time::Millis;
 
@@ -146,6 +146,10 @@ pub enum Command {
     Restart,
     /// Training: load a variant of the control-error library.
     LoadVariant(String),
+    /// Training: load a plant-fault exercise (`exercises.ron`).
+    LoadPlantExercise(String),
+    /// Training, plant-fault exercise: the trainee names the faulty component.
+    SubmitDiagnosis(String),
     /// Training: end the exercise without a correct fix and show the answer (the
     /// debrief; recorded in the trainee's history as given up).
     ShowAnswer,
@@ -255,6 +259,8 @@ const FREE_RUN: &str = "console.ron";
 pub(crate) struct Source {
     pub(crate) scenario: Scenario,
     pub(crate) path: PathBuf,
+    /// The plant-fault exercise this run is (its fault is among the scenario's).
+    pub(crate) plant_exercise: Option<String>,
 }
 
 impl Source {
@@ -273,6 +279,13 @@ impl Source {
         let mut f = BTreeMap::new();
         f.insert("scenario".to_string(), self.scenario.name.clone());
         let key = match (&self.scenario.program, free) {
+            (ProgramChoice::Reference, true) if self.plant_exercise.is_some() => {
+                f.insert(
+                    "id".to_string(),
+                    self.plant_exercise.clone().unwrap_or_default(),
+                );
+                "scenario-training".to_string()
+            }
             (ProgramChoice::Reference, true) => "scenario-reference".to_string(),
             (ProgramChoice::Error(id), true) => {
                 f.insert("id".to_string(), id.clone());
@@ -312,7 +325,25 @@ impl Source {
                 plausibility: true,
             },
             path: plant_dir.join(FREE_RUN),
+            plant_exercise: None,
         }
+    }
+
+    /// The free run of the plant-fault exercise `e`: the reference program from Start,
+    /// the exercise's fault hidden among the scenario's.
+    fn plant_exercise(plant_dir: &Path, e: &PlantExercise) -> Self {
+        let mut s = Self::free_run(
+            plant_dir,
+            ProgramChoice::Reference,
+            &format!("Training: {}", e.id),
+        );
+        s.scenario.actions.push(vigie_core::sim::TimedAction {
+            at_ms: 0,
+            action: OperatorAction::Start,
+        });
+        s.scenario.faults.push(e.fault.clone());
+        s.plant_exercise = Some(e.id.clone());
+        s
     }
 
     fn build(&self) -> Result<Simulation, String> {
@@ -385,8 +416,9 @@ pub struct Console {
     pub(crate) answers: BTreeMap<String, Vec<FixLine>>,
     /// The trainees' finished exercises (`training.csv` of the data folder).
     pub history: History,
-    /// The fault library (`faults.ron`): name and fault.
-    pub faults: Vec<(String, FaultSpec)>,
+    /// The training library: the fault library (`faults.ron`), the plant-fault
+    /// exercises (`exercises.ron`) and the problems that kept a file out.
+    pub library: Library,
     pub(crate) chrono_signals: BTreeSet<String>,
     /// The chronogram's time window, ms (2 s to 1 h).
     pub chrono_window_ms: u64,
@@ -436,6 +468,8 @@ pub struct Console {
     pub(crate) login: Option<(String, String)>,
     /// The bypass form: constraint, reason, minutes.
     pub(crate) bypass_form: (String, String, u64),
+    /// The component picked in the plant-fault exercise's diagnosis form.
+    pub(crate) diagnosis_pick: String,
     /// Failed logins in a row, and since when logins are locked after too many.
     failed_logins: (u32, Option<std::time::Instant>),
 }
@@ -457,15 +491,31 @@ pub(crate) struct ShelveForm {
     pub(crate) minutes: u64,
 }
 
-fn load_faults(plant_dir: &Path) -> Vec<(String, FaultSpec)> {
-    let path = plant_dir.join("faults.ron");
-    let Ok(text) = std::fs::read_to_string(&path) else {
-        return Vec::new();
-    };
-    ron::from_str::<Vec<(String, FaultSpec)>>(&text).unwrap_or_else(|e| {
-        tracing::warn!("{}: {e}", path.display());
-        Vec::new()
-    })
+/// The plant folder's training library, as data a trainer edits.
+#[derive(Clone, Debug, Default)]
+pub struct Library {
+    /// The fault library (`faults.ron`): name and fault.
+    pub faults: Vec<NamedFault>,
+    /// The plant-fault exercises (`exercises.ron`).
+    pub exercises: Vec<PlantExercise>,
+    /// What kept a file of the library out (rendered problems, file:line:column), shown
+    /// in the training view: a broken file is never skipped silently.
+    pub problems: Vec<String>,
+}
+
+fn load_library(plant_dir: &Path, sim: &Simulation) -> Library {
+    use vigie_core::emulator::{load_exercises, load_faults};
+    let plant = &sim.bundle.plant;
+    let mut lib = Library::default();
+    match load_faults(&plant_dir.join("faults.ron"), plant) {
+        Ok(f) => lib.faults = f,
+        Err(p) => lib.problems.push(vigie_core::diag::render(&p)),
+    }
+    match load_exercises(&plant_dir.join("exercises.ron"), plant) {
+        Ok(e) => lib.exercises = e,
+        Err(p) => lib.problems.push(vigie_core::diag::render(&p)),
+    }
+    lib
 }
 
 /// The users file of the data folder (none without one; a broken one is logged and
@@ -501,7 +551,7 @@ impl Console {
         }
         let chrono_signals = plant_signals(&sim);
         let mut c = Self {
-            faults: load_faults(&plant_dir),
+            library: load_library(&plant_dir, &sim),
             sim,
             source,
             plant_dir,
@@ -566,6 +616,7 @@ impl Console {
             role: Role::Operator,
             login: None,
             bypass_form: (String::new(), String::new(), 15),
+            diagnosis_pick: String::new(),
             failed_logins: (0, None),
             open_files: opts.open_files,
         };
@@ -590,6 +641,7 @@ impl Console {
             Some(path) => Source {
                 scenario: Scenario::load(path).map_err(|p| vigie_core::diag::render(&p))?,
                 path: path.clone(),
+                plant_exercise: None,
             },
             None => Source::free_run(
                 &opts.plant_dir,
@@ -610,11 +662,17 @@ impl Console {
             .join(&source.scenario.plant);
         let (source, sim) = match &opts.variant {
             Some(id) => {
-                let s = Source::free_run(
-                    &plant_dir,
-                    ProgramChoice::Error(id.clone()),
-                    &format!("Training: {id}"),
-                );
+                // A plant-fault exercise's id, else a control-error variant's.
+                let reference = Source::free_run(&plant_dir, ProgramChoice::Reference, "");
+                let lib = load_library(&plant_dir, &reference.build()?);
+                let s = match lib.exercises.iter().find(|e| &e.id == id) {
+                    Some(e) => Source::plant_exercise(&plant_dir, e),
+                    None => Source::free_run(
+                        &plant_dir,
+                        ProgramChoice::Error(id.clone()),
+                        &format!("Training: {id}"),
+                    ),
+                };
                 let sim = s.build()?;
                 (s, sim)
             }
@@ -782,10 +840,28 @@ impl Console {
 
     /// The exercise running: the control-error variant's id (`E01`).
     pub fn exercise_id(&self) -> Option<&str> {
-        match &self.source.scenario.program {
-            ProgramChoice::Error(id) if self.link.is_none() => Some(id),
-            _ => None,
+        if self.link.is_some() {
+            return None;
         }
+        match &self.source.scenario.program {
+            ProgramChoice::Error(id) => Some(id),
+            _ => self.source.plant_exercise.as_deref(),
+        }
+    }
+
+    /// The run's title in the language shown (the status line's).
+    pub fn source_title(&self) -> String {
+        self.source.title(&self.i18n)
+    }
+
+    /// The plant-fault exercise running, if any.
+    pub fn plant_exercise(&self) -> Option<&PlantExercise> {
+        let id = self
+            .source
+            .plant_exercise
+            .as_deref()
+            .filter(|_| self.link.is_none())?;
+        self.library.exercises.iter().find(|e| e.id == id)
     }
 
     /// True when the role in force may do `p` (editing an exercise is everyone's).
@@ -988,6 +1064,8 @@ impl Console {
             }
             Command::Restart => self.restart(None),
             Command::LoadVariant(id) => self.load_variant(id),
+            Command::LoadPlantExercise(id) => self.load_plant_exercise(&id),
+            Command::SubmitDiagnosis(component) => self.submit_diagnosis(&component),
             Command::ShowAnswer => self.finish_exercise(false),
             Command::InjectFault(i) => self.inject_fault(i, now),
             Command::VerifyFix => self.verify(),
@@ -1291,9 +1369,60 @@ impl Console {
         }
     }
 
+    /// Restarts on the plant-fault exercise `id` with a new score.
+    fn load_plant_exercise(&mut self, id: &str) {
+        let Some(e) = self.library.exercises.iter().find(|e| e.id == id).cloned() else {
+            self.say(None, "say-no-such-exercise", &[("id", id.to_string())]);
+            return;
+        };
+        self.source = Source::plant_exercise(&self.plant_dir, &e);
+        self.diagnosis_pick.clear();
+        self.score = Score {
+            variant: Some(e.id),
+            plant: true,
+            ..Score::default()
+        };
+        self.draft = None;
+        self.compiled_edit = None;
+        self.last_fix = None;
+        self.restart(None);
+    }
+
+    /// The trainee names `component` as the faulty one: right ends the exercise (the
+    /// debrief), wrong counts an attempt.
+    fn submit_diagnosis(&mut self, component: &str) {
+        let Some(e) = self.plant_exercise().cloned() else {
+            self.say(None, "say-no-plant-exercise", &[]);
+            return;
+        };
+        if self.score.revealed {
+            return;
+        }
+        let right = e.is_answer(component);
+        self.score.attempts += 1;
+        self.score.diagnoses.push((component.to_string(), right));
+        let now = self.now().0;
+        if right {
+            self.score.fixed = true;
+            self.score.located_after_s = Some(self.wall_s - self.score.trip_wall_s.unwrap_or(0.0));
+            self.finish_exercise(true);
+            self.say(
+                Some(("training", now)),
+                "say-diagnosis-right",
+                &[("component", component.to_string())],
+            );
+        } else {
+            self.say(
+                Some(("training", now)),
+                "say-diagnosis-wrong",
+                &[("component", component.to_string())],
+            );
+        }
+    }
+
     /// Injects the training fault `i`, its time taken from now.
     fn inject_fault(&mut self, i: usize, now: u64) {
-        if let Some((name, spec)) = self.faults.get(i).cloned() {
+        if let Some((name, spec)) = self.library.faults.get(i).cloned() {
             let mut spec = spec;
             if let vigie_core::emulator::Trigger::At(t) = &mut spec.trigger {
                 *t += now;

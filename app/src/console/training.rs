@@ -27,6 +27,11 @@ pub struct Score {
     /// The exercise is over (fixed, or the answer asked for): the debrief shows the
     /// answer.
     pub revealed: bool,
+    /// Plant-fault exercise: the components the trainee named, in order, and whether
+    /// each was right.
+    pub diagnoses: Vec<(String, bool)>,
+    /// A plant-fault exercise (the result is a component found, not a fix).
+    pub plant: bool,
 }
 
 impl Score {
@@ -52,10 +57,16 @@ impl Score {
         } else {
             levels.join(", ")
         };
-        let result = match (self.fixed, self.located_after_s) {
-            (true, Some(s)) => i18n.ta("score-fixed-in", &[("s", (&format!("{s:.0}")).into())]),
-            (true, None) => i18n.t("score-fixed"),
-            (false, _) => i18n.t("score-not-fixed"),
+        let result = match (self.fixed, self.located_after_s, self.plant) {
+            (true, Some(s), true) => {
+                i18n.ta("score-found-in", &[("s", (&format!("{s:.0}")).into())])
+            }
+            (true, Some(s), false) => {
+                i18n.ta("score-fixed-in", &[("s", (&format!("{s:.0}")).into())])
+            }
+            (true, None, _) => i18n.t("score-fixed"),
+            (false, _, true) => i18n.t("score-not-found"),
+            (false, _, false) => i18n.t("score-not-fixed"),
         };
         i18n.ta(
             "score-summary",

@@ -125,7 +125,11 @@ pub(crate) fn replay(c: &mut Console) {
     };
     match vigie_core::sim::Scenario::load(&path) {
         Ok(scenario) => {
-            c.source = Source { scenario, path };
+            c.source = Source {
+                scenario,
+                path,
+                plant_exercise: None,
+            };
             c.mode = Mode::Production;
             c.draft = None;
             c.compiled_edit = None;

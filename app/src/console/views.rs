@@ -1455,44 +1455,39 @@ fn journal_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
 
 fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     ui.heading(c.i18n.t("training-title"));
+    for p in &c.library.problems {
+        ui.colored_label(c.palette.alarm, RichText::new(p).monospace().small());
+    }
     let exercise = c.exercise_id().map(str::to_string);
+    let plant = c.plant_exercise().is_some();
     if let Some(id) = &exercise {
         ui.label(RichText::new(c.i18n.ta("training-exercise", &[("id", id.into())])).strong());
         if !c.score.revealed {
-            ui.label(c.i18n.t("training-exercise-how"));
+            ui.label(c.i18n.t(if plant {
+                "training-plant-exercise-how"
+            } else {
+                "training-exercise-how"
+            }));
         }
     }
     ui.label(RichText::new(c.score.summary_in(&c.i18n)).strong());
-    if c.score.variant.is_some() || exercise.is_some() {
-        ui.horizontal_wrapped(|ui| {
-            if ui
-                .button(c.i18n.t("training-verify-fix"))
-                .on_hover_text(c.i18n.t("training-verify-fix-hover"))
-                .clicked()
-            {
-                out.push(Command::VerifyFix);
-            }
-            if ui.button(c.i18n.t("training-edit-program")).clicked() {
-                out.push(Command::SetMode(Mode::Maintenance));
-            }
-            if exercise.is_some()
-                && !c.score.revealed
-                && ui
-                    .button(c.i18n.t("training-show-answer"))
-                    .on_hover_text(c.i18n.t("training-show-answer-hover"))
-                    .clicked()
-            {
-                out.push(Command::ShowAnswer);
-            }
-        });
+    if plant {
+        diagnosis_ui(c, ui, out);
+    } else if c.score.variant.is_some() || exercise.is_some() {
+        fix_buttons_ui(c, ui, out, exercise.is_some());
     }
-    if let Some(check) = &c.last_fix {
+    if let Some(check) = c.last_fix.as_ref().filter(|_| !plant) {
         fix_check_ui(&c.i18n, &c.palette, ui, check);
     }
     if let Some(id) = exercise.as_ref().filter(|_| c.score.revealed) {
-        debrief_ui(c, ui, id);
+        if plant {
+            plant_debrief_ui(c, ui, id);
+        } else {
+            debrief_ui(c, ui, id);
+        }
     }
     faults_ui(c, ui, out);
+    plant_exercises_ui(c, ui, out, exercise.as_deref());
     egui::CollapsingHeader::new(c.i18n.t("training-errors"))
         .default_open(exercise.is_none())
         .show(ui, |ui| {
@@ -1520,6 +1515,191 @@ fn training_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             }
         });
     training_history_ui(c, ui);
+}
+
+/// Verify fix, Edit the program and Show the answer (a control-error exercise).
+fn fix_buttons_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>, exercise: bool) {
+    ui.horizontal_wrapped(|ui| {
+        if ui
+            .button(c.i18n.t("training-verify-fix"))
+            .on_hover_text(c.i18n.t("training-verify-fix-hover"))
+            .clicked()
+        {
+            out.push(Command::VerifyFix);
+        }
+        if ui.button(c.i18n.t("training-edit-program")).clicked() {
+            out.push(Command::SetMode(Mode::Maintenance));
+        }
+        if exercise && !c.score.revealed {
+            show_answer_button(c, ui, out);
+        }
+    });
+}
+
+fn show_answer_button(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    if ui
+        .button(c.i18n.t("training-show-answer"))
+        .on_hover_text(c.i18n.t("training-show-answer-hover"))
+        .clicked()
+    {
+        out.push(Command::ShowAnswer);
+    }
+}
+
+/// The plant-fault exercise's form: the trainee picks the faulty component among the
+/// plant's sensors and actuators and submits it.
+fn diagnosis_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    if c.score.revealed {
+        return;
+    }
+    let plant = &c.sim.bundle.plant;
+    let signals: Vec<&str> = plant
+        .inputs
+        .iter()
+        .chain(&plant.outputs)
+        .map(|s| s.id.as_str())
+        .collect();
+    // The description in the language shown, else the plant file's.
+    let name = |id: &str| {
+        let own = plant
+            .inputs
+            .iter()
+            .chain(&plant.outputs)
+            .find(|s| s.id == id);
+        match c.view.descriptions.get(id).or(own.map(|s| &s.description)) {
+            Some(d) if !d.is_empty() => format!("{id} — {d}"),
+            _ => id.to_string(),
+        }
+    };
+    let shown = if c.diagnosis_pick.is_empty() {
+        c.i18n.t("training-pick-component")
+    } else {
+        name(&c.diagnosis_pick)
+    };
+    let mut pick = c.diagnosis_pick.clone();
+    ui.horizontal_wrapped(|ui| {
+        let label = ui.label(c.i18n.t("training-faulty-component"));
+        egui::ComboBox::from_id_salt("diagnosis-pick")
+            .selected_text(shown)
+            .width(260.0)
+            .show_ui(ui, |ui| {
+                for id in &signals {
+                    ui.selectable_value(&mut pick, (*id).to_string(), name(id));
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        if ui
+            .add_enabled(
+                !pick.is_empty(),
+                egui::Button::new(c.i18n.t("training-submit-diagnosis")),
+            )
+            .on_hover_text(c.i18n.t("training-submit-diagnosis-hover"))
+            .clicked()
+        {
+            out.push(Command::SubmitDiagnosis(pick.clone()));
+        }
+        show_answer_button(c, ui, out);
+    });
+    for (component, right) in c.score.diagnoses.iter().filter(|(_, r)| !r) {
+        debug_assert!(!right);
+        ui.weak(c.i18n.ta(
+            "training-diagnosis-wrong",
+            &[("component", component.into())],
+        ));
+    }
+    c.diagnosis_pick = pick;
+}
+
+/// The plant-fault exercises: Load buttons that do not give the fault away.
+fn plant_exercises_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>, now: Option<&str>) {
+    if c.library.exercises.is_empty() {
+        return;
+    }
+    egui::CollapsingHeader::new(c.i18n.t("training-plant-exercises"))
+        .default_open(now.is_none())
+        .show(ui, |ui| {
+            ui.horizontal_wrapped(|ui| {
+                for e in &c.library.exercises {
+                    let selected = now == Some(e.id.as_str());
+                    if ui
+                        .selectable_label(
+                            selected,
+                            c.i18n.ta("training-load", &[("id", (&e.id).into())]),
+                        )
+                        .clicked()
+                    {
+                        out.push(Command::LoadPlantExercise(e.id.clone()));
+                    }
+                }
+            });
+        });
+}
+
+/// The end of a plant-fault exercise: what failed, the answers given, the levels used.
+fn plant_debrief_ui(c: &Console, ui: &mut egui::Ui, id: &str) {
+    let Some(e) = c.plant_exercise() else {
+        return;
+    };
+    egui::Frame::NONE
+        .stroke(egui::Stroke::new(1.5, c.palette.text_dim))
+        .inner_margin(6.0)
+        .show(ui, |ui| {
+            ui.label(
+                RichText::new(c.i18n.ta("debrief-title", &[("id", id.into())]))
+                    .strong()
+                    .size(16.0),
+            );
+            let desc = c
+                .i18n
+                .plant(&format!("exercise-{id}"))
+                .unwrap_or_else(|| e.description.clone());
+            ui.label(c.i18n.ta("debrief-fault", &[("text", (&desc).into())]));
+            let fault = super::words::fault_told(&c.i18n, &c.view.descriptions, &e.fault);
+            ui.label(RichText::new(fault).monospace());
+            let answer = e.answer.join(", ");
+            ui.label(c.i18n.ta("debrief-answer", &[("answer", (&answer).into())]));
+            let given: Vec<String> = c
+                .score
+                .diagnoses
+                .iter()
+                .map(|(d, right)| format!("{d} {}", if *right { "✔" } else { "✘" }))
+                .collect();
+            let given = if given.is_empty() {
+                c.i18n.t("score-none")
+            } else {
+                given.join(", ")
+            };
+            ui.label(c.i18n.ta("debrief-named", &[("named", (&given).into())]));
+            debrief_levels_ui(c, ui);
+            let verdict = match (c.score.fixed, c.score.located_after_s) {
+                (true, Some(s)) => c.i18n.ta(
+                    "debrief-found",
+                    &[
+                        ("attempts", c.score.attempts.into()),
+                        ("s", (&format!("{s:.0}")).into()),
+                    ],
+                ),
+                _ => c.i18n.ta(
+                    "debrief-not-found",
+                    &[("attempts", c.score.attempts.into())],
+                ),
+            };
+            ui.label(verdict);
+            if c.sim.emulator.faults_in_force() > 0 {
+                ui.label(RichText::new(c.i18n.t("debrief-repair")).strong());
+            }
+        });
+}
+
+fn debrief_levels_ui(c: &Console, ui: &mut egui::Ui) {
+    let levels: Vec<String> = c.score.levels.iter().map(ToString::to_string).collect();
+    let levels = if levels.is_empty() {
+        c.i18n.t("score-none")
+    } else {
+        levels.join(", ")
+    };
+    ui.label(c.i18n.ta("debrief-levels", &[("levels", (&levels).into())]));
 }
 
 /// The end of an exercise: the mistake, the correct fix, and how the trainee got there.
@@ -1554,13 +1734,7 @@ fn debrief_ui(c: &Console, ui: &mut egui::Ui, id: &str) {
                     .monospace(),
                 );
             }
-            let levels: Vec<String> = c.score.levels.iter().map(ToString::to_string).collect();
-            let levels = if levels.is_empty() {
-                c.i18n.t("score-none")
-            } else {
-                levels.join(", ")
-            };
-            ui.label(c.i18n.ta("debrief-levels", &[("levels", (&levels).into())]));
+            debrief_levels_ui(c, ui);
             let verdict = match (c.score.fixed, c.score.located_after_s) {
                 (true, Some(s)) => c.i18n.ta(
                     "debrief-fixed",
@@ -1596,10 +1770,10 @@ fn faults_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     egui::CollapsingHeader::new(c.i18n.t("training-faults"))
         .default_open(false)
         .show(ui, |ui| {
-            if c.faults.is_empty() {
+            if c.library.faults.is_empty() {
                 ui.label(c.i18n.t("training-no-faults"));
             }
-            for (i, (name, spec)) in c.faults.iter().enumerate() {
+            for (i, (name, spec)) in c.library.faults.iter().enumerate() {
                 ui.horizontal(|ui| {
                     if ui.button(c.i18n.t("training-inject")).clicked() {
                         out.push(Command::InjectFault(i));

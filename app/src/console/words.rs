@@ -320,6 +320,16 @@ pub(crate) fn fault(
     fault_of(i18n, descriptions, &spec.fault.fields())
 }
 
+/// A fault told from its kind and signal in the language shown (the debrief's words,
+/// whatever its name in the library).
+pub(crate) fn fault_told(
+    i18n: &I18n,
+    descriptions: &std::collections::BTreeMap<String, String>,
+    spec: &FaultSpec,
+) -> String {
+    fault_of(i18n, descriptions, &spec.fault.fields())
+}
+
 /// A fault told from its fields ([`FaultKind::fields`]) in the language shown.
 fn fault_of(
     i18n: &I18n,

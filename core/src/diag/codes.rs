@@ -143,6 +143,8 @@ registry! {
     FAULT_UNKNOWN_SIGNAL = "V0703", "an emulator fault names an unknown sensor or actuator";
     FAULT_CONDITION_INVALID = "V0704", "an emulator fault condition that does not parse";
     EMULATOR_UNKNOWN_PART = "V0705", "no such part in the layout";
+    EXERCISE_DUPLICATE = "V0706", "a plant-fault exercise declared twice";
+    EXERCISE_ANSWER = "V0707", "a plant-fault exercise without an answer, or one that names no plant signal";
     // V08xx: tasks (formerly V0301..V0307, V0310)
     TASK_ID_INVALID = "V0801", "invalid task id";
     TASK_DUPLICATE = "V0802", "a task declared twice";

@@ -44,6 +44,7 @@ mod dynamics;
 mod faults;
 mod layout;
 mod model;
+mod training;
 
 pub use faults::{FaultKind, FaultSpec, Trigger};
 pub use layout::{
@@ -51,6 +52,7 @@ pub use layout::{
     Side, SizeMix, Source, Turntable,
 };
 pub use model::{BoxState, BoxStats, BoxView, Hazard, HazardKind, Place};
+pub use training::{NamedFault, PlantExercise, load_exercises, load_faults};
 
 use crate::bits::Bits;
 use crate::diag::Problem;

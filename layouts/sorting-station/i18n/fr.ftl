@@ -84,3 +84,10 @@ variant-E11 = Convoyeur intermédiaire non démarré pendant la poussée de la c
 variant-E12 = Rouleaux non démarrés pendant que la caisse est tirée de A1 (action A2 absente de X21) : la caisse est poussée sur des rouleaux arrêtés
 variant-E13 = Convoyeur intermédiaire jamais arrêté en C3 (le facteur d'arrêt manque dans l'équation de A1)
 variant-E14 = La poussée finit quand la caisse a passé C1 (FE(C1)) au lieu de C0 : A0 continue d'alimenter et la caisse suivante atteint C0 pendant que la première couvre encore C1
+
+# Les exercices de défaut de la partie opérative (exercises.ron).
+exercise-P01 = La cellule C3 en bout du convoyeur intermédiaire est bloquée à 1 : le filtre voit une caisse à la jonction alors qu'il n'y en a pas
+exercise-P02 = Le distributeur de rotation A4 est bloqué fermé : la table ne quitte jamais la position de chargement avec sa caisse
+exercise-P03 = La cellule de la table C6 est bloquée à 1 : la table croit porter une caisse alors qu'elle est vide
+exercise-P04 = La table tournante est bloquée mécaniquement en position de déchargement : A4 relâché, elle ne revient pas en C4
+exercise-P05 = Le moteur des rouleaux de la table A2 ne tourne pas (contacteur mort) : la caisse n'est pas tirée sur la table
