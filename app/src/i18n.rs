@@ -638,8 +638,8 @@ mod explain_tests {
 mod plant_tests {
     use super::*;
 
-    /// Every scenario file, every variant of the control-error library and every
-    /// plant-fault exercise of the station has its French text, and the plant folder holds no text for a file or a variant
+    /// Every scenario file, every variant of the control-error library, every
+    /// plant-fault exercise and every task of the station has its French text, and the plant folder holds no text for a file or a variant
     /// that does not exist (a renamed scenario would lose its title silently).
     #[test]
     fn the_station_titles_its_scenarios_and_variants_in_french() {
@@ -670,12 +670,15 @@ mod plant_tests {
         for e in &exercises {
             expected.insert(format!("exercise-{}", e.id));
         }
+        for t in bundle.tasks.iter().flat_map(|t| t.tasks.iter()) {
+            expected.insert(format!("task-{}", t.id));
+        }
         for id in &expected {
             assert!(fr.plant(id).is_some(), "{id} has no French text");
         }
         let text = std::fs::read_to_string(dir.join("i18n/fr.ftl")).unwrap();
         for id in ids(&text) {
-            if ["scenario-", "variant-", "exercise-"]
+            if ["scenario-", "variant-", "exercise-", "task-"]
                 .iter()
                 .any(|p| id.starts_with(p))
             {

@@ -484,6 +484,7 @@ syn-no-address = no fieldbus address
 words-constraint-violated = constraint { $id } violated
 words-safety-violation = Safety violation, plant not stopped (monitor mode: the filter only reports): { $why }
 words-safety-stop = Safety stop: { $why }
+words-diagnoser-stop = the diagnosers stop the plant: { $partition } at fault
 words-held-on = . Held ON: { $list }
 words-stopped = . Stopped: { $list }
 words-not-tripped = the filter has not tripped

@@ -511,6 +511,7 @@ syn-no-address = pas d'adresse sur le bus
 words-constraint-violated = contrainte { $id } violée
 words-safety-violation = Violation de sécurité, machine non arrêtée (mode surveillance : le filtre signale seulement) : { $why }
 words-safety-stop = Arrêt sécurité : { $why }
+words-diagnoser-stop = les diagnostiqueurs arrêtent la machine : { $partition } en défaut
 words-held-on = . Maintenus EN MARCHE : { $list }
 words-stopped = . Arrêtés : { $list }
 words-not-tripped = le filtre n'est pas déclenché

@@ -565,7 +565,44 @@ fn a_plant_fault_exercise_hides_the_fault_until_the_trainee_names_it() {
     let h = harness(opts);
     assert_eq!(h.state().exercise_id(), Some("P02"));
     assert!(h.state().plant_exercise().is_some());
+    assert!(h.state().score().plant, "scored as a plant-fault exercise");
     let _ = std::fs::remove_dir_all(&data);
+}
+
+/// A plant-fault exercise in French, as a French trainee reads it: the diagnosers' stop
+/// and the task alarm in French (they were the core's English text), the form and the
+/// debrief in French.
+#[test]
+fn a_plant_fault_exercise_in_french() {
+    let mut opts = options(None);
+    opts.scenario = None;
+    let mut h = harness(opts);
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.state_mut()
+        .apply(Command::LoadPlantExercise("P02".into()));
+    run_to_trip(&mut h);
+    // The belt's task alarm comes 7 s after the stop.
+    h.state_mut().cycles(1_000);
+    h.run_steps(2);
+    for french in [
+        "les diagnostiqueurs arrêtent la machine : P en défaut (DSTOP_P)",
+        "Caisse portée par le convoyeur intermédiaire de C1 à son bout C3",
+    ] {
+        let n = h.query_all_by_label_contains(french).count();
+        assert!(n >= 1, "{french}");
+    }
+    for english in ["the diagnosers stop", "Box carried by"] {
+        assert!(h.query_by_label_contains(english).is_none(), "{english}");
+    }
+    h.get_by_label_contains("Un composant de la machine est en défaut");
+    h.state_mut().apply(Command::SubmitDiagnosis("A4".into()));
+    h.run_steps(2);
+    h.get_by_label("Débriefing : exercice P02");
+    h.get_by_label_contains("Le distributeur de rotation A4 est bloqué fermé");
+    h.get_by_label_contains("A4 bloqué À L'ARRÊT");
+    h.get_by_label("Vos diagnostics : A4 ✔");
 }
 
 /// Issue 20: an injected fault is removed by the repair action; the filter's Reset is

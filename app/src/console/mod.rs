@@ -550,6 +550,7 @@ impl Console {
             sim.run_until(Millis(end));
         }
         let chrono_signals = plant_signals(&sim);
+        let plant_exercise = source.plant_exercise.is_some();
         let mut c = Self {
             library: load_library(&plant_dir, &sim),
             sim,
@@ -591,6 +592,7 @@ impl Console {
             chrono_window_ms: 30_000,
             score: Score {
                 variant: opts.variant.clone(),
+                plant: plant_exercise,
                 ..Score::default()
             },
             wall_s: 0.0,

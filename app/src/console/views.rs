@@ -1571,10 +1571,11 @@ fn diagnosis_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             _ => id.to_string(),
         }
     };
+    // The id only once picked: the form keeps its width, Submit stays in place.
     let shown = if c.diagnosis_pick.is_empty() {
         c.i18n.t("training-pick-component")
     } else {
-        name(&c.diagnosis_pick)
+        c.diagnosis_pick.clone()
     };
     let mut pick = c.diagnosis_pick.clone();
     ui.horizontal_wrapped(|ui| {

@@ -33,13 +33,21 @@ fn constraint_phrase(i18n: &I18n, bundle: &PlantBundle, id: &str) -> String {
 
 /// What a constraint protects, its id and `with` (`, avec C4 = 1`).
 fn constraint_phrase_with(i18n: &I18n, bundle: &PlantBundle, id: &str, with: &str) -> String {
-    let description = i18n.plant(&format!("constraint-{id}")).or_else(|| {
-        bundle
-            .constraints
-            .get(id)
-            .map(|c| c.description.clone())
-            .filter(|d| !d.is_empty())
+    use vigie_core::pop::coop::{STOP_PREFIX, is_diagnoser_stop};
+    let generated = is_diagnoser_stop(id).then(|| {
+        let partition = id.trim_start_matches(STOP_PREFIX);
+        i18n.ta("words-diagnoser-stop", &[("partition", partition.into())])
     });
+    let description = i18n
+        .plant(&format!("constraint-{id}"))
+        .or(generated)
+        .or_else(|| {
+            bundle
+                .constraints
+                .get(id)
+                .map(|c| c.description.clone())
+                .filter(|d| !d.is_empty())
+        });
     match description {
         Some(d) => format!("{d} ({id}{with})"),
         None => i18n.ta("words-constraint-violated", &[("id", id.into())]) + with,

@@ -85,6 +85,15 @@ variant-E12 = Rouleaux non démarrés pendant que la caisse est tirée de A1 (ac
 variant-E13 = Convoyeur intermédiaire jamais arrêté en C3 (le facteur d'arrêt manque dans l'équation de A1)
 variant-E14 = La poussée finit quand la caisse a passé C1 (FE(C1)) au lieu de C0 : A0 continue d'alimenter et la caisse suivante atteint C0 pendant que la première couvre encore C1
 
+
+# Les tâches surveillées (tasks.ron) : le sujet de leurs alarmes.
+task-entry = Caisse poussée du convoyeur d'entrée sur le convoyeur intermédiaire (de C0 à C1)
+task-intermediate = Caisse portée par le convoyeur intermédiaire de C1 à son bout C3
+task-load_table = Caisse passant de C3 sur la table (rouleaux A2) jusqu'à C6
+task-turn_out = Rotation de la table de la position de chargement (C4) à celle de déchargement (C5)
+task-turn_back = Retour de la table de la position de déchargement (C5) à celle de chargement (C4)
+task-evac_left = Caisse portée par le convoyeur de sortie gauche A5 de C8 à C10
+task-evac_right = Caisse portée par le convoyeur de sortie droit A6 de C7 à C9
 # Les exercices de défaut de la partie opérative (exercises.ron).
 exercise-P01 = La cellule C3 en bout du convoyeur intermédiaire est bloquée à 1 : le filtre voit une caisse à la jonction alors qu'il n'y en a pas
 exercise-P02 = Le distributeur de rotation A4 est bloqué fermé : la table ne quitte jamais la position de chargement avec sa caisse
