@@ -303,7 +303,7 @@ impl I18n {
             if k == "expected" {
                 v = v.replace(" or ", &format!(" {} ", self.t("word-or")));
             }
-            if k == "notation" {
+            if k == "notation" || k == "term" {
                 v = vigie_core::explain::overbar_notation(&v);
             }
             if k == "meaning"
@@ -424,6 +424,28 @@ mod tests {
         );
         // Both parse without error.
         I18n::new(Lang::Fr, None).unwrap();
+    }
+
+    /// No file declares a message twice (Fluent keeps one silently: an edit of the other
+    /// would change nothing on screen).
+    #[test]
+    fn no_message_is_declared_twice() {
+        let plant = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station/i18n/fr.ftl"),
+        )
+        .unwrap();
+        for (name, text) in [
+            ("en.ftl", builtin(Lang::En)),
+            ("fr.ftl", builtin(Lang::Fr)),
+            ("the station's fr.ftl", plant.as_str()),
+        ] {
+            let mut seen = std::collections::BTreeSet::new();
+            let twice: Vec<String> = ids(text)
+                .into_iter()
+                .filter(|i| !seen.insert(i.clone()))
+                .collect();
+            assert!(twice.is_empty(), "{name} declares twice: {twice:?}");
+        }
     }
 
     /// Every `t("…")` / `ta("…"` id in the console's sources is a message.
@@ -602,6 +624,22 @@ mod explain_tests {
             ],
         );
         assert!(i.explain(&x201).contains('\u{305}'), "{}", i.explain(&x201));
+        // A sum of terms: the term that became true, not the whole sum.
+        let x201 = item(
+            "X201",
+            "…",
+            &[
+                ("constraint", "DSTOP_P"),
+                ("notation", "/C5 . A4 . def_P + A0 . def_P"),
+                ("term", "A0 . def_P"),
+                ("multi", "yes"),
+                ("values", "A0=1,def_P=1"),
+            ],
+        );
+        assert_eq!(
+            i.explain(&x201),
+            "DSTOP_P : son terme A0 · def_P est devenu vrai : A0=1, def_P=1."
+        );
         // X417: the action in the wrong step, from the step's exits.
         let x417 = item(
             "X417",

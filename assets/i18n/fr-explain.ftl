@@ -36,7 +36,10 @@ explain-X102 = Sans le filtre, aucun dommage n'est prévu dans les { $horizon_ms
 explain-X103 = Mode surveillance : la machine continuant, aucun dommage n'est prévu dans les { $horizon_ms } ms ; la violation reste une situation que les contraintes interdisent.
 
 ## Niveau 2 — avant l'arrêt
-explain-X201 = { $constraint } = { $notation } est devenue vraie : { $values }.
+explain-X201 = { $multi ->
+    [yes] { $constraint } : son terme { $term } est devenu vrai : { $values }.
+   *[other] { $constraint } = { $notation } est devenue vraie : { $values }.
+}
 explain-X202 = { $meaning ->
     [none] Le filtre a maintenu EN MARCHE { $output } (commandé À L'ARRÊT).
    *[other] Le filtre a maintenu EN MARCHE { $output } (commandé À L'ARRÊT ; { $output } À L'ARRÊT : { $meaning }).

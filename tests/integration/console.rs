@@ -2015,7 +2015,13 @@ fn exporting_the_report_does_not_change_the_view() {
     );
     assert_eq!(h.state().level, Some(3), "the level shown is kept");
     assert_eq!(h.state().running, running);
-    for f in ["level-0.png", "level-4.png", "chronogram.png", "report.md"] {
+    for f in [
+        "level-0.png",
+        "level-4.png",
+        "chronogram.png",
+        "chronogram.svg",
+        "report.md",
+    ] {
         assert!(out.join("report").join(f).exists(), "{f}");
     }
     let _ = std::fs::remove_dir_all(&out);

@@ -1,5 +1,6 @@
 //! The incident report: a Markdown file (trip, constraint, the five levels' items, the
-//! trace window) and one PNG of the synoptic per level.
+//! trace window), one PNG of the synoptic per level, the chronogram of the trip window
+//! with every signal (SVG) and as it was on screen (PNG).
 
 use crate::i18n::I18n;
 use std::fmt::Write as _;
@@ -83,55 +84,75 @@ pub fn write_markdown(
             }
             md.push('\n');
         }
-        let _ = writeln!(
-            md,
-            "## {}\n\n![chronogram](chronogram.png)\n",
-            i18n.t("report-chronogram")
-        );
-        // Trace window: the last 30 cycles before the trip, changes only.
-        let _ = writeln!(
-            md,
-            "## {}\n\n| {} | {} |\n|---|---|",
-            i18n.t("report-trace"),
-            i18n.t("report-time-ms"),
-            i18n.t("report-changes")
-        );
-        let names: Vec<&String> = sim
-            .bundle
-            .plant
-            .inputs
-            .iter()
-            .chain(&sim.bundle.plant.outputs)
-            .map(|s| &s.id)
-            .collect();
-        let n_in = sim.bundle.plant.inputs.len();
-        let recs: Vec<_> = sim
+        let constraints: Vec<String> = sim
             .engine
-            .history
-            .iter()
-            .filter(|r| r.time.0 <= ex.time_ms)
-            .collect();
-        let start = recs.len().saturating_sub(300);
-        for w in recs[start..].windows(2) {
-            let mut ch = Vec::new();
-            for (i, name) in names.iter().enumerate() {
-                let (a, b) = if i < n_in {
-                    (w[0].inputs.get(i), w[1].inputs.get(i))
-                } else {
-                    (w[0].applied.get(i - n_in), w[1].applied.get(i - n_in))
-                };
-                if a != b {
-                    ch.push(format!("{name} {}→{}", u8::from(a), u8::from(b)));
-                }
-            }
-            if !ch.is_empty() {
-                let _ = writeln!(md, "| {} | {} |", w[1].time.0, ch.join(", "));
-            }
-        }
+            .trips
+            .get(trip)
+            .map(|t| t.constraints.iter().map(|c| c.id.clone()).collect())
+            .unwrap_or_default();
+        std::fs::write(
+            dir.join("chronogram.svg"),
+            chronogram_svg(
+                sim,
+                ex.time_ms,
+                &constraints,
+                &i18n.t("report-chronogram-legend"),
+            ),
+        )?;
+        let _ = writeln!(
+            md,
+            "## {}\n\n![chronogram](chronogram.svg)\n\n{}\n\n![chronogram](chronogram.png)\n",
+            i18n.t("report-chronogram"),
+            i18n.t("report-chronogram-screen")
+        );
+        write_trace(&mut md, sim, i18n, ex.time_ms);
     }
     let path = dir.join("report.md");
     std::fs::write(&path, md)?;
     Ok(path)
+}
+
+/// The trace window: the last 300 cycles before the trip, changes only.
+fn write_trace(md: &mut String, sim: &Simulation, i18n: &I18n, trip_ms: u64) {
+    let _ = writeln!(
+        md,
+        "## {}\n\n| {} | {} |\n|---|---|",
+        i18n.t("report-trace"),
+        i18n.t("report-time-ms"),
+        i18n.t("report-changes")
+    );
+    let names: Vec<&String> = sim
+        .bundle
+        .plant
+        .inputs
+        .iter()
+        .chain(&sim.bundle.plant.outputs)
+        .map(|s| &s.id)
+        .collect();
+    let n_in = sim.bundle.plant.inputs.len();
+    let recs: Vec<_> = sim
+        .engine
+        .history
+        .iter()
+        .filter(|r| r.time.0 <= trip_ms)
+        .collect();
+    let start = recs.len().saturating_sub(300);
+    for w in recs[start..].windows(2) {
+        let mut ch = Vec::new();
+        for (i, name) in names.iter().enumerate() {
+            let (a, b) = if i < n_in {
+                (w[0].inputs.get(i), w[1].inputs.get(i))
+            } else {
+                (w[0].applied.get(i - n_in), w[1].applied.get(i - n_in))
+            };
+            if a != b {
+                ch.push(format!("{name} {}→{}", u8::from(a), u8::from(b)));
+            }
+        }
+        if !ch.is_empty() {
+            let _ = writeln!(md, "| {} | {} |", w[1].time.0, ch.join(", "));
+        }
+    }
 }
 
 /// The header: date, user, plant, program and version, run, filter, Vigie's version.
@@ -218,6 +239,231 @@ pub fn save_png(
         }
     }
     buf.save(path).map_err(|e| e.to_string())
+}
+
+/// The chronogram of the trip window as SVG (`chronogram.svg` of the report): every
+/// input, every output (applied as a bar, an amber line over it where the filter
+/// applied another value than the command) and every observer, from [`CHRONO_BEFORE_MS`] before
+/// the trip to the last record, with a time axis and the trip's line. The console's
+/// chronogram shows the rows the user chose and fits its panel; the report keeps them
+/// all.
+pub fn chronogram_svg(
+    sim: &Simulation,
+    trip_ms: u64,
+    constraints: &[String],
+    legend: &str,
+) -> String {
+    let start = trip_ms.saturating_sub(CHRONO_BEFORE_MS);
+    let recs: Vec<_> = sim
+        .engine
+        .history
+        .iter()
+        .filter(|r| r.time.0 >= start)
+        .collect();
+    let plant = &sim.bundle.plant;
+    let observers = sim
+        .bundle
+        .symbols
+        .names(vigie_core::symbols::Space::Observer);
+    let rows: Vec<(&str, Row, usize)> = plant
+        .inputs
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (s.id.as_str(), Row::Input, i))
+        .chain(
+            plant
+                .outputs
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (s.id.as_str(), Row::Output, i)),
+        )
+        .chain(
+            observers
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (s.as_str(), Row::Observer, i)),
+        )
+        .collect();
+    let end = recs.last().map_or(trip_ms, |r| r.time.0).max(start + 1);
+    let g = Svg::new(start, end, rows.len());
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" \
+         font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>",
+        g.width(),
+        g.height
+    );
+    g.axis(&mut s);
+    for (n, &(name, kind, i)) in rows.iter().enumerate() {
+        g.row(&mut s, n, name, kind, |value| {
+            runs(&recs, |r| value(r, i), end)
+        });
+    }
+    let tx = g.x(trip_ms);
+    let _ = writeln!(
+        s,
+        "<line x1=\"{tx:.1}\" y1=\"{:.1}\" x2=\"{tx:.1}\" y2=\"{:.1}\" stroke=\"#c00\" stroke-width=\"1.5\"/>\n\
+         <text x=\"{:.1}\" y=\"{:.1}\" fill=\"#c00\">{}</text>\n\
+         <text x=\"4\" y=\"{:.1}\" fill=\"#555\">{}</text>\n</svg>",
+        g.top - 4.0,
+        g.height,
+        tx + 3.0,
+        g.top + 8.0,
+        html_escape(&constraints.join(", ")),
+        g.height - 6.0,
+        html_escape(legend)
+    );
+    s
+}
+
+/// What a chronogram row shows.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Row {
+    Input,
+    Output,
+    Observer,
+}
+
+/// A value of a record: what the bar shows, or (outputs) where the filter applied
+/// another value than the command.
+type Probe = fn(&vigie_core::history::CycleRecord, usize) -> bool;
+
+/// The chronogram's geometry: a label column, the plot, one row per signal.
+struct Svg {
+    start: u64,
+    end: u64,
+    top: f64,
+    row_h: f64,
+    label_w: f64,
+    plot_w: f64,
+    height: f64,
+}
+
+impl Svg {
+    fn new(start: u64, end: u64, rows: usize) -> Self {
+        let (top, row_h) = (28.0, 18.0);
+        #[allow(clippy::cast_precision_loss)]
+        let height = top + rows as f64 * row_h + 28.0;
+        Self {
+            start,
+            end,
+            top,
+            row_h,
+            label_w: 70.0,
+            plot_w: 1100.0,
+            height,
+        }
+    }
+
+    fn width(&self) -> f64 {
+        self.label_w + self.plot_w + 20.0
+    }
+
+    #[allow(clippy::cast_precision_loss)]
+    fn x(&self, t: u64) -> f64 {
+        self.label_w
+            + t.saturating_sub(self.start) as f64 / (self.end - self.start) as f64 * self.plot_w
+    }
+
+    /// The time axis: a tick per second, a label every 5 s (every second under 10 s).
+    fn axis(&self, s: &mut String) {
+        let every = if (self.end - self.start).div_ceil(1000) <= 10 {
+            1
+        } else {
+            5
+        };
+        for k in self.start.div_ceil(1000)..=self.end / 1000 {
+            let tx = self.x(k * 1000);
+            let _ = writeln!(
+                s,
+                "<line x1=\"{tx:.1}\" y1=\"{:.1}\" x2=\"{tx:.1}\" y2=\"{:.1}\" stroke=\"#eee\"/>",
+                self.top - 4.0,
+                self.height
+            );
+            if k % every == 0 {
+                let _ = writeln!(
+                    s,
+                    "<text x=\"{tx:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{k} s</text>",
+                    self.top - 8.0
+                );
+            }
+        }
+    }
+
+    /// Row `n`: its name, its bars (`spans` of a probe), and for an output the amber
+    /// line where the filter applied another value than the command.
+    fn row(
+        &self,
+        s: &mut String,
+        n: usize,
+        name: &str,
+        kind: Row,
+        spans: impl Fn(Probe) -> Vec<(u64, u64)>,
+    ) {
+        #[allow(clippy::cast_precision_loss)]
+        let y = self.top + n as f64 * self.row_h;
+        let _ = writeln!(
+            s,
+            "<text x=\"4\" y=\"{:.1}\">{}</text>\n<line x1=\"{}\" y1=\"{:.1}\" x2=\"{:.1}\" y2=\"{:.1}\" stroke=\"#ccc\"/>",
+            y + self.row_h - 5.0,
+            html_escape(name),
+            self.label_w,
+            y + self.row_h - 2.0,
+            self.label_w + self.plot_w,
+            y + self.row_h - 2.0
+        );
+        let (probe, fill): (Probe, &str) = match kind {
+            Row::Input => (|r, i| r.inputs.get(i), "#333"),
+            Row::Output => (|r, i| r.applied.get(i), "#1f5fbf"),
+            Row::Observer => (|r, i| r.observers.get(i), "#6a3d9a"),
+        };
+        let bar = |s: &mut String, (from, to): (u64, u64), dy: f64, h: f64, fill: &str| {
+            let _ = writeln!(
+                s,
+                "<rect x=\"{:.1}\" y=\"{:.1}\" width=\"{:.1}\" height=\"{h:.1}\" fill=\"{fill}\"/>",
+                self.x(from),
+                y + dy,
+                (self.x(to) - self.x(from)).max(1.0),
+            );
+        };
+        for span in spans(probe) {
+            bar(s, span, 4.0, self.row_h - 8.0, fill);
+        }
+        if kind == Row::Output {
+            for span in spans(|r, i| r.commanded.get(i) != r.applied.get(i)) {
+                bar(s, span, 1.0, 3.0, "#e08a00");
+            }
+        }
+    }
+}
+
+/// How far back the report's chronogram goes before the trip, ms.
+pub const CHRONO_BEFORE_MS: u64 = 30_000;
+
+/// The intervals `[from, to)` where `value` holds, over records in time order (the last
+/// one lasting to `end`).
+fn runs(
+    recs: &[&vigie_core::history::CycleRecord],
+    value: impl Fn(&vigie_core::history::CycleRecord) -> bool,
+    end: u64,
+) -> Vec<(u64, u64)> {
+    let mut out = Vec::new();
+    let mut open: Option<u64> = None;
+    for r in recs {
+        match (value(r), open) {
+            (true, None) => open = Some(r.time.0),
+            (false, Some(from)) => {
+                out.push((from, r.time.0));
+                open = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(from) = open {
+        out.push((from, end));
+    }
+    out
 }
 
 /// `text` with `&`, `<`, `>` and `"` escaped for HTML.
@@ -343,6 +589,50 @@ pub(crate) fn alarms_html(c: &super::Console, list: &[&vigie_core::alarms::Alarm
 
 #[cfg(test)]
 mod tests {
+    /// The report's chronogram keeps every row whatever the console showed: every input,
+    /// every output, every observer, the trip's line and a time axis.
+    #[test]
+    fn the_reports_chronogram_has_every_signal_and_the_trip() {
+        use vigie_core::sim::{Options, Scenario, Simulation};
+        use vigie_core::time::Millis;
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../layouts/sorting-station/scenarios/cs10-paper.ron");
+        let scenario = Scenario::load(&path).unwrap();
+        let mut sim = Simulation::from_scenario(&scenario, &path, Options::default()).unwrap();
+        sim.run_until(Millis(14_000));
+        let trip = sim
+            .engine
+            .trips
+            .first()
+            .expect("the paper's CSs10 trip")
+            .clone();
+        let svg = super::chronogram_svg(&sim, trip.time_ms, &["CSs10".to_string()], "legend");
+        assert!(svg.starts_with("<svg ") && svg.ends_with("</svg>\n"));
+        let plant = &sim.bundle.plant;
+        for id in plant
+            .inputs
+            .iter()
+            .chain(&plant.outputs)
+            .map(|s| s.id.as_str())
+            .chain(["P36", "P67", "2P"])
+        {
+            assert!(svg.contains(&format!(">{id}</text>")), "row {id}");
+        }
+        assert!(
+            svg.contains("fill=\"#c00\">CSs10</text>"),
+            "the trip's line"
+        );
+        assert!(svg.contains(">10 s</text>"), "the time axis");
+        // Bars for the outputs that ran; amber where the filter applied another value
+        // (A0, A5, A6 stopped against the command, A4 held ON).
+        assert!(svg.matches("fill=\"#1f5fbf\"").count() >= 3);
+        assert!(svg.matches("fill=\"#e08a00\"").count() >= 4);
+        assert!(svg.contains(">legend</text>"));
+        // Before any record, only the axis and the rows.
+        let empty = super::chronogram_svg(&sim, 0, &[], "");
+        assert!(empty.contains(">C0</text>"));
+    }
+
     /// What an operator typed (a note, a search) cannot break the printed page.
     #[test]
     fn html_escape_neutralises_markup() {

@@ -423,17 +423,34 @@ fn before_stop(engine: &Engine, trip: &Trip, at_trip: Option<&CycleRecord>) -> L
                 )
             })
             .collect();
-        level.items.push(Item::new(
-            codes::X_CONSTRAINT_BECAME_TRUE,
+        // A constraint of several terms is told by the term that became true (a
+        // diagnosers' stop has one per component state: the whole sum hides it).
+        let term: Vec<&str> = c.literals.iter().map(|l| l.literal.as_str()).collect();
+        let term = term.join(" . ");
+        let multi = c.notation.contains('+');
+        let text = if multi {
+            format!(
+                "{}: its term {} became true: {}.",
+                c.id,
+                overbar_notation(&term),
+                values.join(", ")
+            )
+        } else {
             format!(
                 "{} = {} became true: {}.",
                 c.id,
                 overbar_notation(&c.notation),
                 values.join(", ")
-            ),
+            )
+        };
+        level.items.push(Item::new(
+            codes::X_CONSTRAINT_BECAME_TRUE,
+            text,
             &[
                 ("constraint", c.id.clone()),
                 ("notation", c.notation.clone()),
+                ("term", term),
+                ("multi", if multi { "yes" } else { "no" }.to_string()),
                 ("elements", elements.join(",")),
                 ("values", values.join(",")),
             ],
