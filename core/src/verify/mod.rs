@@ -269,13 +269,6 @@ impl Model {
             ));
         }
         let n_out = bundle.plant.outputs.len();
-        if n_out + bundle.plant.inputs.len() + bundle.observers.len() > 128 - 99 {
-            return Err(Problem::error(
-                codes::VERIFY_UNSUPPORTED.id,
-                "too many signals for the verifier",
-                None,
-            ));
-        }
         let free_outputs = (0..n_out).filter(|k| !geo.exit_act.contains(k)).collect();
         let mut prev_mask = (0u64, 0u64, 0u64);
         let mut dnfs: Vec<expr::Dnf> = bundle
@@ -315,6 +308,31 @@ impl Model {
                 }
             }
         }
+        // The state keeps only the previous-cycle values something reads (packed one
+        // bit each, [`Model::pack`]): the plant's size does not count, only those.
+        let n_in = bundle.plant.inputs.len();
+        let n_obs = bundle.observers.len();
+        let widths = [n_in, n_out, n_obs];
+        prev_mask = (
+            prev_mask.0 & low_bits(n_in),
+            prev_mask.1 & low_bits(n_out),
+            prev_mask.2 & low_bits(n_obs),
+        );
+        let kept = [prev_mask.0, prev_mask.1, prev_mask.2]
+            .iter()
+            .map(|m| m.count_ones() as usize)
+            .sum::<usize>();
+        if widths.iter().any(|&w| w > 64) || kept > PREV_BITS {
+            return Err(Problem::error(
+                codes::VERIFY_UNSUPPORTED.id,
+                format!(
+                    "the verifier keeps at most {PREV_BITS} previous-cycle values in its state \
+                     and 64 signals of each kind; this plant's constraints, observers and \
+                     invariants read {kept} at t-1 ({n_in} inputs, {n_out} outputs, {n_obs} observers)"
+                ),
+                None,
+            ));
+        }
         Ok(Self {
             geo,
             observers: bundle.observers.clone(),
@@ -347,20 +365,27 @@ impl Model {
         for c in s.obs {
             k = k << 4 | u128::from(c.min(15));
         }
-        k = k << self.n_in | u128::from(s.prev.0);
-        k = k << self.n_out | u128::from(s.prev.1);
-        k << self.n_obs | u128::from(s.prev.2)
+        for (v, m) in [
+            (s.prev.0, self.prev_mask.0),
+            (s.prev.1, self.prev_mask.1),
+            (s.prev.2, self.prev_mask.2),
+        ] {
+            k = k << m.count_ones() | u128::from(compact(v, m));
+        }
+        k
     }
 
     /// Inverse of [`Model::pack`].
     pub fn unpack(&self, mut k: u128) -> AState {
-        let mask = |n: usize| (1u128 << n) - 1;
-        let ov = (k & mask(self.n_obs)) as u64;
-        k >>= self.n_obs;
-        let out = (k & mask(self.n_out)) as u64;
-        k >>= self.n_out;
-        let inp = (k & mask(self.n_in)) as u64;
-        k >>= self.n_in;
+        let mut take = |m: u64| {
+            let n = m.count_ones();
+            let v = expand((k & ((1u128 << n) - 1)) as u64, m);
+            k >>= n;
+            v
+        };
+        let ov = take(self.prev_mask.2);
+        let out = take(self.prev_mask.1);
+        let inp = take(self.prev_mask.0);
         let mut obs = [0u16; 4];
         for c in obs.iter_mut().rev() {
             *c = (k & 15) as u16;
@@ -450,6 +475,43 @@ impl Model {
         }
         s
     }
+}
+
+/// Bits of the state left for the previous-cycle values (the plant's positions, its
+/// items and the observers' counts take the other 99 of 128).
+const PREV_BITS: usize = 128 - 99;
+
+/// The `n` low bits set.
+fn low_bits(n: usize) -> u64 {
+    if n >= 64 { u64::MAX } else { (1u64 << n) - 1 }
+}
+
+/// The bits of `v` under `mask`, packed to the low end in mask order.
+fn compact(v: u64, mask: u64) -> u64 {
+    let (mut out, mut k, mut m) = (0u64, 0, mask);
+    while m != 0 {
+        let bit = m & m.wrapping_neg();
+        if v & bit != 0 {
+            out |= 1 << k;
+        }
+        k += 1;
+        m &= m - 1;
+    }
+    out
+}
+
+/// Inverse of [`compact`]: the packed low bits of `v` put back under `mask`.
+fn expand(v: u64, mask: u64) -> u64 {
+    let (mut out, mut k, mut m) = (0u64, 0, mask);
+    while m != 0 {
+        let bit = m & m.wrapping_neg();
+        if v >> k & 1 == 1 {
+            out |= bit;
+        }
+        k += 1;
+        m &= m - 1;
+    }
+    out
 }
 
 /// What a transition leads to.

@@ -263,3 +263,55 @@ fn promela_dump() {
     )
     .expect("write");
 }
+
+/// The verifier's budget counts the previous-cycle values its state keeps, not the
+/// plant's signals: the station with 40 more sensors that nothing reads (51 inputs, 69
+/// signals in all) explores the same states as the station. Before, past 29 signals in
+/// all, it was refused ("too many signals for the verifier").
+#[test]
+fn extra_signals_that_nothing_reads_cost_the_verifier_nothing() {
+    let spare: String = (0..40)
+        .map(|k| format!("        (id: \"X{k}\", kind: Sensor, description: \"spare\"),\n"))
+        .collect();
+    let anchor = "        (id: \"A0\", kind: Actuator";
+    let with_spare = format!("{spare}{anchor}");
+    let (_guard, b, l) = patched("spare", &[("plant.ron", anchor, &with_spare)]);
+    assert_eq!(b.plant.inputs.len(), 51);
+    let o = Options {
+        max_boxes: 1,
+        necessity_boxes: None,
+    };
+    let big = verify(&b, &l, &o).expect("verify with 40 spare sensors");
+    let (sb, sl) = station();
+    let small = verify(&sb, &sl, &o).expect("verify the station");
+    assert!(big.safe && big.permissive);
+    assert_eq!(big.full.states, small.full.states);
+    assert_eq!(big.full.transitions, small.full.transitions);
+}
+
+/// More previous-cycle values read than the state keeps: refused with the count, not
+/// explored wrong.
+#[test]
+fn too_many_previous_values_read_are_refused_with_the_count() {
+    let spare: String = (0..30)
+        .map(|k| format!("        (id: \"X{k}\", kind: Sensor, description: \"spare\"),\n"))
+        .collect();
+    let anchor = "        (id: \"A0\", kind: Actuator";
+    let with_spare = format!("{spare}{anchor}");
+    let reads: Vec<String> = (0..30).map(|k| format!("X{k}*")).collect();
+    let line = format!("CSs1  = 2P . A0\nCSx = {} . A0\n", reads.join(" . "));
+    let (_guard, b, l) = patched(
+        "prev-reads",
+        &[
+            ("plant.ron", anchor, &with_spare),
+            ("constraints.txt", "CSs1  = 2P . A0", line.trim_end()),
+        ],
+    );
+    let err = Model::new(&b, &l, 1).err().expect("refused");
+    assert!(
+        err.message.contains("at most 29 previous-cycle values")
+            && err.message.contains("read 3"),
+        "{}",
+        err.message
+    );
+}
