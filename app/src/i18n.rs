@@ -303,6 +303,17 @@ impl I18n {
             if k == "expected" {
                 v = v.replace(" or ", &format!(" {} ", self.t("word-or")));
             }
+            if k == "follows" {
+                v = v
+                    .split(',')
+                    .map(|id| {
+                        let id = id.trim();
+                        self.plant(&format!("observer-{id}"))
+                            .map_or_else(|| id.to_string(), |d| format!("{id} = {d}"))
+                    })
+                    .collect::<Vec<_>>()
+                    .join(" ; ");
+            }
             if k == "notation" || k == "term" {
                 v = vigie_core::explain::overbar_notation(&v);
             }
@@ -670,6 +681,50 @@ mod explain_tests {
         let unknown = item("X999", "as the core wrote it", &[]);
         assert_eq!(i.explain(&unknown), "as the core wrote it");
     }
+
+    /// X418 in French: the observer the expectation follows, in the plant's words.
+    #[test]
+    fn an_unexpected_edge_in_french() {
+        let item =
+            |code: &'static str, text: &str, fields: &[(&str, &str)]| vigie_core::explain::Item {
+                code,
+                text: text.into(),
+                fields: fields
+                    .iter()
+                    .map(|(k, v)| ((*k).into(), (*v).into()))
+                    .collect(),
+            };
+        let i = I18n::new(Lang::Fr, None).unwrap();
+        // X418: the observer the expectation follows, in the plant's French words.
+        let x418 = item(
+            "X418",
+            "…",
+            &[
+                ("sensor", "C6"),
+                ("from", "0"),
+                ("to", "1"),
+                ("expected", "P36*"),
+                ("follows", "P36"),
+            ],
+        );
+        assert!(
+            i.explain(&x418).starts_with(
+                "C6 est passé de 0 à 1 au cycle d'arrêt alors que la physique de la machine ne l'attendait pas (seulement quand P36* : P36)"
+            ),
+            "{}",
+            i.explain(&x418)
+        );
+        // With the plant folder, the observer in the plant's French words.
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+        let with_plant = I18n::new(Lang::Fr, Some(&dir)).unwrap();
+        assert!(
+            with_plant
+                .explain(&x418)
+                .contains("(seulement quand P36* : P36 = une caisse entre C3 et C6 (exclus)"),
+            "{}",
+            with_plant.explain(&x418)
+        );
+    }
 }
 
 #[cfg(test)]
@@ -711,12 +766,15 @@ mod plant_tests {
         for t in bundle.tasks.iter().flat_map(|t| t.tasks.iter()) {
             expected.insert(format!("task-{}", t.id));
         }
+        for o in &bundle.observers.defs {
+            expected.insert(format!("observer-{}", o.id));
+        }
         for id in &expected {
             assert!(fr.plant(id).is_some(), "{id} has no French text");
         }
         let text = std::fs::read_to_string(dir.join("i18n/fr.ftl")).unwrap();
         for id in ids(&text) {
-            if ["scenario-", "variant-", "exercise-", "task-"]
+            if ["scenario-", "variant-", "exercise-", "task-", "observer-"]
                 .iter()
                 .any(|p| id.starts_with(p))
             {

@@ -151,6 +151,16 @@ pub struct PlausibleRule {
     /// reaches the middle of the table no sooner than its shortest travel takes).
     #[serde(default)]
     pub rise_not_after: Option<AfterEvent>,
+    /// A rise is expected only when this holds (logic notation, like `rise_when`); a
+    /// rise outside it is taken (the stage holds nothing: an upstream sensor that
+    /// missed the item must not hide it), but when the sensor takes part in a stop in
+    /// that cycle, level 4 names it first (X418): no item could have reached it, so its
+    /// reading, or what the expectation follows, is suspect before the program.
+    #[serde(default)]
+    pub rise_expected_when: Option<String>,
+    /// A fall is expected only when this holds (see `rise_expected_when`).
+    #[serde(default)]
+    pub fall_expected_when: Option<String>,
 }
 
 /// An event and a time after it, for [`PlausibleRule::rise_not_after`]:

@@ -91,6 +91,9 @@ struct Rule {
     hold_until_back: bool,
     /// `rise_not_after`: the event and the time after it.
     rise_after: Option<(Dnf, u64)>,
+    /// `rise_expected_when` / `fall_expected_when`: the condition and its text.
+    rise_expected: Option<(Dnf, String)>,
+    fall_expected: Option<(Dnf, String)>,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -215,6 +218,10 @@ impl Plausibility {
             };
             let rise = cond("rise_when", &r.rise_when);
             let fall = cond("fall_when", &r.fall_when);
+            let rise_expected =
+                cond("rise_expected_when", &r.rise_expected_when).zip(r.rise_expected_when.clone());
+            let fall_expected =
+                cond("fall_expected_when", &r.fall_expected_when).zip(r.fall_expected_when.clone());
             let rise_after = r
                 .rise_not_after
                 .as_ref()
@@ -246,6 +253,8 @@ impl Plausibility {
                 fall_total: r.fall_when_total_ms,
                 hold_until_back: r.hold_until_back,
                 rise_after,
+                rise_expected,
+                fall_expected,
             });
             names.push(s.id.clone());
         }
@@ -264,6 +273,20 @@ impl Plausibility {
             last_t: 0,
             held_edges: 0,
         })
+    }
+
+    /// The expectation (`rise_expected_when` / `fall_expected_when`, as written) that an
+    /// edge of input `input` broke, read over `frame` (the cycle of the edge: its values
+    /// at t and t-1); `None` when the edge was expected or the sensor has no
+    /// expectation.
+    pub fn unexpected_edge(&self, input: usize, rose: bool, frame: &Frame) -> Option<&str> {
+        let r = self.rules.iter().find(|r| r.input == input)?;
+        let (dnf, text) = if rose {
+            r.rise_expected.as_ref()?
+        } else {
+            r.fall_expected.as_ref()?
+        };
+        (!eval_dnf(dnf, frame)).then_some(text.as_str())
     }
 
     /// True when the plant has no rule (the stage changes nothing).

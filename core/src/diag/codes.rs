@@ -207,6 +207,7 @@ registry! {
     X_HARDWARE_CERTAIN = "X415", "hardware first: a diagnoser found a fault with certainty";
     X_HARDWARE_AMBIGUOUS = "X416", "hardware first: a diagnoser holds a component faulty between several faults";
     X_MISPLACED_ACTION = "X417", "a step's action drives the actuator where the step's place in its chart forbids it";
+    X_UNEXPECTED_EDGE = "X418", "a sensor of the fired term changed where the plant's physics did not expect it";
     // T: task alarms (`tasks::explain::AlarmCode`)
     T_TOLERANCE_USED_UP = "T001", "interruption tolerance used up: the task can no longer finish before γ";
     T_SLOWDOWN = "T002", "slowdown: effective running time beyond β without the end event";

@@ -74,7 +74,113 @@ pub fn hypothesis(engine: &Engine, trip: &Trip) -> Level {
         ));
         return level;
     };
-    hypothesis_from(&engine.symbols, trip, prev, cur)
+    let mut level = hypothesis_from(&engine.symbols, trip, prev, cur);
+    let unexpected = unexpected_edges(engine, trip, prev, cur);
+    for (_, highlights) in &unexpected {
+        for h in highlights {
+            if !level.highlights.contains(h) {
+                level.highlights.push(h.clone());
+            }
+        }
+    }
+    level
+        .items
+        .splice(0..0, unexpected.into_iter().map(|(item, _)| item));
+    level
+}
+
+/// X418: the sensors of the fired terms that changed in the stopping cycle where the
+/// plant's physics did not expect it (`rise_expected_when` / `fall_expected_when`).
+fn unexpected_edges(
+    engine: &Engine,
+    trip: &Trip,
+    prev: &CycleRecord,
+    cur: &CycleRecord,
+) -> Vec<(Item, Vec<Highlight>)> {
+    let symbols = &engine.symbols;
+    let mut frame = crate::frame::Frame::new(symbols.sizes());
+    for (space, now, before) in [
+        (Space::Input, &cur.inputs, &prev.inputs),
+        (Space::Output, &cur.applied, &prev.applied),
+        (Space::Observer, &cur.observers, &prev.observers),
+        (Space::Aux, &cur.aux, &prev.aux),
+    ] {
+        frame.now_mut(space).copy_from(now);
+        frame.prev_mut(space).copy_from(before);
+    }
+    let mut out: Vec<(Item, Vec<Highlight>)> = Vec::new();
+    for l in trip.constraints.iter().flat_map(|c| &c.literals) {
+        let Some((Space::Input, k)) = symbols.lookup(&l.name) else {
+            continue;
+        };
+        let k = k as usize;
+        let (from, to) = (prev.inputs.get(k), cur.inputs.get(k));
+        if l.previous || from == to || out.iter().any(|(i, _)| i.fields["sensor"] == l.name) {
+            continue;
+        }
+        let Some(expected) = engine.plausibility.unexpected_edge(k, to, &frame) else {
+            continue;
+        };
+        let (ids, follows) = follows(engine, expected);
+        out.push((
+            Item::new(
+                codes::X_UNEXPECTED_EDGE,
+                format!(
+                    "{} {} in the stopping cycle where the plant's physics did not expect it (only when {expected}: {follows}): no item could have reached it. Its reading, or the sensor that should have announced the item, is the first suspect: check {} on the machine before the program.",
+                    l.name,
+                    edge(from, to),
+                    l.name
+                ),
+                &[
+                    ("sensor", l.name.clone()),
+                    ("from", u8::from(from).to_string()),
+                    ("to", u8::from(to).to_string()),
+                    ("expected", expected.to_string()),
+                    ("follows", ids),
+                ],
+            ),
+            vec![Highlight {
+                element: l.name.clone(),
+                mark: Mark::Suspect,
+            }],
+        ));
+    }
+    out
+}
+
+/// What an expectation reads: the names (`P36`), and in words each with its observer's
+/// description (`P36 = A box between C3 and C6`).
+fn follows(engine: &Engine, expected: &str) -> (String, String) {
+    let names: Vec<String> = crate::expr::parse_str(expected)
+        .map(|e| {
+            e.leaves()
+                .iter()
+                .map(|(n, _, _)| (*n).to_string())
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut out: Vec<String> = Vec::new();
+    let mut ids: Vec<String> = Vec::new();
+    for n in names {
+        if ids.contains(&n) {
+            continue;
+        }
+        ids.push(n.clone());
+        let described = engine
+            .observers
+            .defs
+            .iter()
+            .find(|d| d.id == n)
+            .map(|d| d.description.clone());
+        let text = match described {
+            Some(d) if !d.is_empty() => format!("{n} = {d}"),
+            _ => n,
+        };
+        if !out.contains(&text) {
+            out.push(text);
+        }
+    }
+    (ids.join(","), out.join("; "))
 }
 
 /// The hypothesis level from the two cycles around the stop.

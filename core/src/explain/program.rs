@@ -378,11 +378,14 @@ pub fn add_program_hypothesis(
     let suspects = program_suspects(trip, before, after);
     let level = &mut ex.hypothesis;
     let mut items = Vec::with_capacity(suspects.len() + level.items.len());
-    // A suspect sensor (X414) stays first: the program read what the stage held.
+    // A suspect sensor (X414) and an unexpected edge (X418) stay first: the program
+    // read what the stage held, or what the plant could not have shown.
     let sensors = level
         .items
         .iter()
-        .take_while(|i| i.code == codes::X_SUSPECT_SENSOR.id)
+        .take_while(|i| {
+            i.code == codes::X_SUSPECT_SENSOR.id || i.code == codes::X_UNEXPECTED_EDGE.id
+        })
         .count();
     items.extend(level.items.drain(..sensors));
     for (item, highlights) in suspects {

@@ -1264,3 +1264,62 @@ fn a_report_only_violation_is_told_as_not_stopped() {
         codes::X_FILTER_STOPPED.id
     );
 }
+
+/// The table's beam stuck at 1 while a box waits at C3 (the training exercise P03):
+/// the filter stops the plant in that cycle, before any diagnoser can tell. C6 rose with
+/// no box between C3 and C6 (`rise_expected_when: "P36*"`), so level 4 names C6 first
+/// (X418), before the program's receptivity and equation, which only read it. A box
+/// that really reaches C7 (the paper's CSs10, E01) is expected there: no X418.
+#[test]
+fn a_beam_that_rises_where_no_item_can_come_is_named_first() {
+    let text = r#"Scenario(
+        name: "C6 stuck at 1",
+        plant: ".",
+        program: Reference,
+        seed: 1,
+        faults: [(trigger: At(25000), fault: SensorStuckAt1("C6"))],
+        actions: [(at_ms: 0, action: Start)],
+        duration_ms: 30000,
+        filter: Enforce,
+        diagnosers: true,
+    )"#;
+    let s: Scenario = ron::from_str(text).expect("scenario");
+    let sim = run(&s);
+    let trip = sim.engine.trips.first().expect("a stop");
+    assert_eq!(trip.time_ms, 25_000, "stopped in the cycle of the fault");
+    let ex = sim.explanations.values().next().expect("explained");
+    let first = &ex.hypothesis.items[0];
+    assert_eq!(
+        first.code,
+        codes::X_UNEXPECTED_EDGE.id,
+        "{:?}",
+        ex.hypothesis.items
+    );
+    assert_eq!(first.fields["sensor"], "C6");
+    assert_eq!(first.fields["follows"], "P36");
+    assert!(
+        first.text.contains("P36 = A box between C3 and C6"),
+        "{}",
+        first.text
+    );
+    assert!(
+        ex.hypothesis
+            .highlights
+            .iter()
+            .any(|h| h.element == "C6" && h.mark == Mark::Suspect)
+    );
+    // The paper's trip: C7 rose with a box leaving to the right (P67 at t-1).
+    let path = station_dir().join("scenarios/cs10-paper.ron");
+    let paper = Scenario::load(&path).expect("cs10-paper");
+    let mut sim = Simulation::from_scenario(&paper, &path, Options::default()).expect("sim");
+    sim.run_until(Millis(14_000));
+    let ex = sim.explanations.values().next().expect("explained");
+    assert!(
+        ex.hypothesis
+            .items
+            .iter()
+            .all(|i| i.code != codes::X_UNEXPECTED_EDGE.id),
+        "{:?}",
+        ex.hypothesis.items
+    );
+}

@@ -307,10 +307,11 @@ fn too_many_previous_values_read_are_refused_with_the_count() {
             ("constraints.txt", "CSs1  = 2P . A0", line.trim_end()),
         ],
     );
-    let err = Model::new(&b, &l, 1).err().expect("refused");
+    let Err(err) = Model::new(&b, &l, 1) else {
+        panic!("30 previous-cycle reads accepted");
+    };
     assert!(
-        err.message.contains("at most 29 previous-cycle values")
-            && err.message.contains("read 3"),
+        err.message.contains("at most 29 previous-cycle values") && err.message.contains("read 3"),
         "{}",
         err.message
     );

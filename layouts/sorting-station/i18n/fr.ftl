@@ -86,6 +86,11 @@ variant-E13 = Convoyeur intermédiaire jamais arrêté en C3 (le facteur d'arrê
 variant-E14 = La poussée finit quand la caisse a passé C1 (FE(C1)) au lieu de C0 : A0 continue d'alimenter et la caisse suivante atteint C0 pendant que la première couvre encore C1
 
 
+
+# Les observateurs (observers.ron) : ce qu'ils suivent, dans les explications.
+observer-P36 = une caisse entre C3 et C6 (exclus) : elle quitte le convoyeur intermédiaire pour la table
+observer-P67 = une caisse entre C6 et C7 (exclus) : elle quitte la table vers la droite
+observer-2P = deux caisses entre C0 et C1, et non une seule à cheval sur les deux
 # Les tâches surveillées (tasks.ron) : le sujet de leurs alarmes.
 task-entry = Caisse poussée du convoyeur d'entrée sur le convoyeur intermédiaire (de C0 à C1)
 task-intermediate = Caisse portée par le convoyeur intermédiaire de C1 à son bout C3
