@@ -758,7 +758,7 @@ mod plant_tests {
             expected.insert(format!("variant-{}", v.def.id));
         }
         let exercises =
-            vigie_core::emulator::load_exercises(&dir.join("exercises.ron"), &bundle.plant)
+            vigie_core::emulator::load_exercises(&dir.join("exercises.ron"), &bundle.plant, None)
                 .unwrap();
         for e in &exercises {
             expected.insert(format!("exercise-{}", e.id));

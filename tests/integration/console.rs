@@ -605,6 +605,47 @@ fn a_plant_fault_exercise_in_french() {
     h.get_by_label("Vos diagnostics : A4 ✔");
 }
 
+/// A trainer's broken library is shown in the training view with its file, line and
+/// column, never skipped: an exercise whose fault the emulator refuses, one that takes a
+/// control-error variant's id, and an `errors.ron` that does not parse. What loads
+/// still works.
+#[test]
+fn a_broken_training_library_is_shown_not_skipped() {
+    let dir = crate::bad_input::station_copy("training-library");
+    std::fs::write(
+        dir.join("exercises.ron"),
+        r#"(exercises: [
+    (id: "P01", description: "ok", answer: ["C3"], fault: (trigger: At(20000), fault: SensorStuckAt1("C3"))),
+    (id: "P02", description: "an actuator as a sensor", answer: ["A1"], fault: (trigger: At(0), fault: SensorStuckAt0("A1"))),
+])"#,
+    )
+    .unwrap();
+    let mut opts = ConsoleOptions::new(&dir);
+    opts.data_dir = None;
+    let mut h = harness(opts.clone());
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    h.get_by_label_contains("exercises.ron:3:10: error[V0703]: exercise `P02`");
+    assert!(h.state().library.exercises.is_empty());
+    // A clash with a variant's id, and errors.ron broken.
+    std::fs::write(
+        dir.join("exercises.ron"),
+        r#"(exercises: [(id: "E01", description: "", answer: ["C3"], fault: (trigger: At(20000), fault: SensorStuckAt1("C3")))])"#,
+    )
+    .unwrap();
+    let mut h = harness(opts.clone());
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    h.get_by_label_contains("exercise `E01` has the id of a control-error variant");
+    std::fs::write(dir.join("programs/errors.ron"), "ErrorsFile(reference: ").unwrap();
+    let mut h = harness(opts);
+    h.state_mut().apply(Command::SetMode(Mode::Training));
+    h.run_steps(2);
+    h.get_by_label_contains("errors.ron:1:");
+    assert_eq!(h.state().library.exercises.len(), 1, "the exercises still load");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Issue 20: an injected fault is removed by the repair action; the filter's Reset is
 /// taken after it.
 #[test]

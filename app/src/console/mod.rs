@@ -507,11 +507,12 @@ fn load_library(plant_dir: &Path, sim: &Simulation) -> Library {
     use vigie_core::emulator::{load_exercises, load_faults};
     let plant = &sim.bundle.plant;
     let mut lib = Library::default();
-    match load_faults(&plant_dir.join("faults.ron"), plant) {
+    let emulator = Some(&sim.emulator);
+    match load_faults(&plant_dir.join("faults.ron"), plant, emulator) {
         Ok(f) => lib.faults = f,
         Err(p) => lib.problems.push(vigie_core::diag::render(&p)),
     }
-    match load_exercises(&plant_dir.join("exercises.ron"), plant) {
+    match load_exercises(&plant_dir.join("exercises.ron"), plant, emulator) {
         Ok(e) => lib.exercises = e,
         Err(p) => lib.problems.push(vigie_core::diag::render(&p)),
     }
@@ -538,7 +539,19 @@ impl Console {
         let linked = link::options(opts)?;
         let opts = linked.as_ref().unwrap_or(opts);
         let (source, mut sim, plant_dir) = Self::open_simulation(opts)?;
-        let (variants, answers) = sim_variants(&plant_dir, &sim);
+        let ((variants, answers), broken) = sim_variants(&plant_dir, &sim);
+        let mut library = load_library(&plant_dir, &sim);
+        library.problems.extend(broken);
+        for e in &library.exercises {
+            if variants.iter().any(|(v, _, _)| *v == e.id) {
+                library.problems.push(format!(
+                    "exercises.ron: exercise `{}` has the id of a control-error variant of \
+                     programs/errors.ron: `--variant {}` and the history cannot tell them apart; \
+                     the variant is loaded",
+                    e.id, e.id
+                ));
+            }
+        }
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
         let descriptions = i18n.signal_descriptions(&sim.bundle.plant);
@@ -552,7 +565,7 @@ impl Console {
         let chrono_signals = plant_signals(&sim);
         let plant_exercise = source.plant_exercise.is_some();
         let mut c = Self {
-            library: load_library(&plant_dir, &sim),
+            library,
             sim,
             source,
             plant_dir,
@@ -1680,25 +1693,37 @@ fn plant_signals(sim: &Simulation) -> BTreeSet<String> {
         .collect()
 }
 
-fn sim_variants(plant_dir: &Path, sim: &Simulation) -> Exercises {
-    match ErrorLibrary::load(&plant_dir.join("programs/errors.ron"), &sim.bundle.plant) {
+/// The control-error library's exercises, and the rendered problems of a library that
+/// cannot be loaded (shown in the training view, not skipped).
+fn sim_variants(plant_dir: &Path, sim: &Simulation) -> (Exercises, Option<String>) {
+    let path = plant_dir.join("programs/errors.ron");
+    if !path.exists() {
+        return ((Vec::new(), BTreeMap::new()), None);
+    }
+    match ErrorLibrary::load(&path, &sim.bundle.plant) {
         Ok(lib) => (
-            lib.variants
-                .iter()
-                .map(|v| {
-                    (
-                        v.def.id.clone(),
-                        v.def.description.clone(),
-                        v.def.expected_constraint.clone(),
-                    )
-                })
-                .collect(),
-            lib.variants
-                .iter()
-                .map(|v| (v.def.id.clone(), correct_fix(&lib.reference, &v.program)))
-                .collect(),
+            (
+                lib.variants
+                    .iter()
+                    .map(|v| {
+                        (
+                            v.def.id.clone(),
+                            v.def.description.clone(),
+                            v.def.expected_constraint.clone(),
+                        )
+                    })
+                    .collect(),
+                lib.variants
+                    .iter()
+                    .map(|v| (v.def.id.clone(), correct_fix(&lib.reference, &v.program)))
+                    .collect(),
+            ),
+            None,
         ),
-        Err(_) => (Vec::new(), BTreeMap::new()),
+        Err(p) => (
+            (Vec::new(), BTreeMap::new()),
+            Some(vigie_core::diag::render(&p)),
+        ),
     }
 }
 

@@ -41,8 +41,15 @@ struct ExercisesFile {
     exercises: Vec<PlantExercise>,
 }
 
-/// Reads `faults.ron`: the trainer's fault library (none without the file).
-pub fn load_faults(path: &Path, plant: &Plant) -> Result<Vec<NamedFault>, Vec<Problem>> {
+/// Reads `faults.ron`: the trainer's fault library (none without the file). With an
+/// emulator, each fault is also scheduled on a copy of it, so that a fault the emulator
+/// refuses (a sensor it does not place, a condition that does not parse) is a load
+/// problem with its line, not a refusal when the trainer injects it.
+pub fn load_faults(
+    path: &Path,
+    plant: &Plant,
+    emulator: Option<&super::Emulator>,
+) -> Result<Vec<NamedFault>, Vec<Problem>> {
     let Some(text) = read_text_optional(path).map_err(|p| vec![p])? else {
         return Ok(Vec::new());
     };
@@ -50,12 +57,18 @@ pub fn load_faults(path: &Path, plant: &Plant) -> Result<Vec<NamedFault>, Vec<Pr
     let problems: Vec<Problem> = faults
         .iter()
         .filter_map(|(name, spec)| {
-            unknown_signal(plant, spec).map(|s| {
-                Problem::error(
+            let at = Some(locate(path, &text, name, 0));
+            if let Some(s) = unknown_signal(plant, spec) {
+                return Some(Problem::error(
                     codes::FAULT_UNKNOWN_SIGNAL.id,
                     format!("fault `{name}` names `{s}`, which the plant does not declare"),
-                    Some(locate(path, &text, name, 0)),
-                )
+                    at,
+                ));
+            }
+            refused(emulator, spec).map(|p| Problem {
+                message: format!("fault `{name}`: {}", p.message),
+                location: at,
+                ..p
             })
         })
         .collect();
@@ -67,8 +80,13 @@ pub fn load_faults(path: &Path, plant: &Plant) -> Result<Vec<NamedFault>, Vec<Pr
 }
 
 /// Reads `exercises.ron`: the plant-fault exercises (none without the file). Every id
-/// is unique, every answer names a plant signal, and the fault's signal exists.
-pub fn load_exercises(path: &Path, plant: &Plant) -> Result<Vec<PlantExercise>, Vec<Problem>> {
+/// is unique, every answer names a plant signal, the fault's signal exists and, with an
+/// emulator, the fault can be scheduled on it (see [`load_faults`]).
+pub fn load_exercises(
+    path: &Path,
+    plant: &Plant,
+    emulator: Option<&super::Emulator>,
+) -> Result<Vec<PlantExercise>, Vec<Problem>> {
     let Some(text) = read_text_optional(path).map_err(|p| vec![p])? else {
         return Ok(Vec::new());
     };
@@ -112,6 +130,12 @@ pub fn load_exercises(path: &Path, plant: &Plant) -> Result<Vec<PlantExercise>, 
                 ),
                 at(),
             ));
+        } else if let Some(p) = refused(emulator, &e.fault) {
+            problems.push(Problem {
+                message: format!("exercise `{}`: {}", e.id, p.message),
+                location: at(),
+                ..p
+            });
         }
     }
     if problems.is_empty() {
@@ -119,6 +143,11 @@ pub fn load_exercises(path: &Path, plant: &Plant) -> Result<Vec<PlantExercise>, 
     } else {
         Err(problems)
     }
+}
+
+/// Why `emulator` refuses to schedule `spec` (on a copy), if it does.
+fn refused(emulator: Option<&super::Emulator>, spec: &FaultSpec) -> Option<Problem> {
+    emulator?.clone().try_schedule_fault(spec.clone()).err()
 }
 
 fn is_signal(plant: &Plant, id: &str) -> bool {
@@ -174,9 +203,9 @@ mod tests {
     #[test]
     fn the_stations_library_loads() {
         let plant = plant();
-        let faults = load_faults(&station_dir().join("faults.ron"), &plant).unwrap();
+        let faults = load_faults(&station_dir().join("faults.ron"), &plant, None).unwrap();
         assert!(faults.len() >= 8);
-        let ex = load_exercises(&station_dir().join("exercises.ron"), &plant).unwrap();
+        let ex = load_exercises(&station_dir().join("exercises.ron"), &plant, None).unwrap();
         assert!(ex.len() >= 3);
         assert!(ex.iter().all(|e| !e.answer.is_empty()));
     }
@@ -185,8 +214,8 @@ mod tests {
     fn no_file_is_an_empty_library() {
         let plant = plant();
         let none = std::env::temp_dir().join("vigie-no-such-dir/exercises.ron");
-        assert_eq!(load_exercises(&none, &plant).unwrap(), Vec::new());
-        assert_eq!(load_faults(&none, &plant).unwrap(), Vec::new());
+        assert_eq!(load_exercises(&none, &plant, None).unwrap(), Vec::new());
+        assert_eq!(load_faults(&none, &plant, None).unwrap(), Vec::new());
     }
 
     #[test]
@@ -200,7 +229,7 @@ mod tests {
     (id: "P2", description: "", answer: ["Z9"], fault: (trigger: At(0), fault: ActuatorStuckOn("A1"))),
 ])"#,
         );
-        let err = load_exercises(&path, &plant).unwrap_err();
+        let err = load_exercises(&path, &plant, None).unwrap_err();
         let text = crate::diag::render(&err);
         assert!(text.contains("V0706"), "{text}");
         assert!(text.contains("`P1` is declared twice"), "{text}");
@@ -210,7 +239,7 @@ mod tests {
         assert!(text.contains("bad-exercises.ron:4:10"), "{text}");
         assert!(text.contains("bad-exercises.ron:3:10"), "{text}");
         let syntax = write("syntax.ron", "(exercises: [(id: 1)])");
-        let err = load_exercises(&syntax, &plant).unwrap_err();
+        let err = load_exercises(&syntax, &plant, None).unwrap_err();
         assert!(
             crate::diag::render(&err).contains("syntax.ron:1:"),
             "{err:?}"
@@ -224,11 +253,47 @@ mod tests {
             "bad-faults.ron",
             "[\n (\"ok\", (trigger: At(0), fault: SensorStuckAt0(\"C7\"))),\n (\"ghost\", (trigger: At(0), fault: SensorStuckAt1(\"C99\"))),\n]",
         );
-        let err = load_faults(&path, &plant).unwrap_err();
+        let err = load_faults(&path, &plant, None).unwrap_err();
         let text = crate::diag::render(&err);
         assert!(
             text.contains("V0703") && text.contains("bad-faults.ron:3:3"),
             "{text}"
         );
+    }
+
+    /// What the emulator refuses is refused at load, with the line: an actuator named
+    /// as a sensor, a condition that does not parse.
+    #[test]
+    fn a_fault_the_emulator_refuses_is_a_load_problem() {
+        let bundle = crate::test_support::station();
+        let layout = crate::emulator::Layout::load(&station_dir().join("layout.ron")).unwrap();
+        let emu = super::super::Emulator::new(&layout, &bundle.plant, 1).unwrap();
+        let path = write(
+            "refused-exercises.ron",
+            r#"(exercises: [
+    (id: "P1", description: "", answer: ["A1"], fault: (trigger: At(0), fault: SensorStuckAt0("A1"))),
+    (id: "P2", description: "", answer: ["C3"], fault: (trigger: When("C3 . "), fault: SensorStuckAt1("C3"))),
+])"#,
+        );
+        // The plant declares A1: only the emulator can tell it is no sensor.
+        assert!(load_exercises(&path, &bundle.plant, None).is_ok());
+        let text =
+            crate::diag::render(&load_exercises(&path, &bundle.plant, Some(&emu)).unwrap_err());
+        assert!(
+            text.contains("refused-exercises.ron:2:10") && text.contains("V0703"),
+            "{text}"
+        );
+        assert!(
+            text.contains("refused-exercises.ron:3:10") && text.contains("V0704"),
+            "{text}"
+        );
+        let faults = load_faults(&station_dir().join("faults.ron"), &bundle.plant, Some(&emu));
+        assert!(faults.is_ok(), "{faults:?}");
+        let ex = load_exercises(
+            &station_dir().join("exercises.ron"),
+            &bundle.plant,
+            Some(&emu),
+        );
+        assert!(ex.is_ok(), "{ex:?}");
     }
 }
