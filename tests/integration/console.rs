@@ -642,7 +642,11 @@ fn a_broken_training_library_is_shown_not_skipped() {
     h.state_mut().apply(Command::SetMode(Mode::Training));
     h.run_steps(2);
     h.get_by_label_contains("errors.ron:1:");
-    assert_eq!(h.state().library.exercises.len(), 1, "the exercises still load");
+    assert_eq!(
+        h.state().library.exercises.len(),
+        1,
+        "the exercises still load"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

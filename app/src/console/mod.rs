@@ -503,6 +503,25 @@ pub struct Library {
     pub problems: Vec<String>,
 }
 
+/// The control-error library's exercises and the training library, with the problems
+/// of both and the ids they share.
+fn training_library(plant_dir: &Path, sim: &Simulation) -> (Exercises, Library) {
+    let (variants, broken) = sim_variants(plant_dir, sim);
+    let mut library = load_library(plant_dir, sim);
+    library.problems.extend(broken);
+    for e in &library.exercises {
+        if variants.0.iter().any(|(v, _, _)| *v == e.id) {
+            library.problems.push(format!(
+                "exercises.ron: exercise `{}` has the id of a control-error variant of \
+                 programs/errors.ron: `--variant {}` and the history cannot tell them apart; \
+                 the variant is loaded",
+                e.id, e.id
+            ));
+        }
+    }
+    (variants, library)
+}
+
 fn load_library(plant_dir: &Path, sim: &Simulation) -> Library {
     use vigie_core::emulator::{load_exercises, load_faults};
     let plant = &sim.bundle.plant;
@@ -539,19 +558,7 @@ impl Console {
         let linked = link::options(opts)?;
         let opts = linked.as_ref().unwrap_or(opts);
         let (source, mut sim, plant_dir) = Self::open_simulation(opts)?;
-        let ((variants, answers), broken) = sim_variants(&plant_dir, &sim);
-        let mut library = load_library(&plant_dir, &sim);
-        library.problems.extend(broken);
-        for e in &library.exercises {
-            if variants.iter().any(|(v, _, _)| *v == e.id) {
-                library.problems.push(format!(
-                    "exercises.ron: exercise `{}` has the id of a control-error variant of \
-                     programs/errors.ron: `--variant {}` and the history cannot tell them apart; \
-                     the variant is loaded",
-                    e.id, e.id
-                ));
-            }
-        }
+        let ((variants, answers), library) = training_library(&plant_dir, &sim);
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
         let descriptions = i18n.signal_descriptions(&sim.bundle.plant);
