@@ -551,6 +551,14 @@ fn a_plant_fault_exercise_hides_the_fault_until_the_trainee_names_it() {
     let r = h.state().history.records.last().expect("a record").clone();
     assert_eq!((r.exercise.as_str(), r.fixed, r.attempts), ("P03", true, 2));
     assert_eq!(r.levels, "0 4");
+    // A guess before any stop (the fault not even started): found, with no time from a
+    // stop that has not happened.
+    press(&mut h, "Load P01");
+    h.state_mut().apply(Command::SubmitDiagnosis("C3".into()));
+    h.run_steps(2);
+    assert!(h.state().latest_trip().is_none());
+    h.get_by_label("Found after 1 attempts, before the plant stopped.");
+    assert_eq!(h.state().history.records.last().unwrap().seconds, None);
     // Given up: the answer shown, recorded as not found.
     press(&mut h, "Load P05");
     assert!(!h.state().score().revealed);

@@ -1426,7 +1426,8 @@ impl Console {
         let now = self.now().0;
         if right {
             self.score.fixed = true;
-            self.score.located_after_s = Some(self.wall_s - self.score.trip_wall_s.unwrap_or(0.0));
+            // From the stop; a component named before any stop has no such time.
+            self.score.located_after_s = self.score.trip_wall_s.map(|t| self.wall_s - t);
             self.finish_exercise(true);
             self.say(
                 Some(("training", now)),

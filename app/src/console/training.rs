@@ -64,7 +64,8 @@ impl Score {
             (true, Some(s), false) => {
                 i18n.ta("score-fixed-in", &[("s", (&format!("{s:.0}")).into())])
             }
-            (true, None, _) => i18n.t("score-fixed"),
+            (true, None, true) => i18n.t("score-found"),
+            (true, None, false) => i18n.t("score-fixed"),
             (false, _, true) => i18n.t("score-not-found"),
             (false, _, false) => i18n.t("score-not-fixed"),
         };

@@ -1681,7 +1681,11 @@ fn plant_debrief_ui(c: &Console, ui: &mut egui::Ui, id: &str) {
                         ("s", (&format!("{s:.0}")).into()),
                     ],
                 ),
-                _ => c.i18n.ta(
+                (true, None) => c.i18n.ta(
+                    "debrief-found-before-stop",
+                    &[("attempts", c.score.attempts.into())],
+                ),
+                (false, _) => c.i18n.ta(
                     "debrief-not-found",
                     &[("attempts", c.score.attempts.into())],
                 ),
