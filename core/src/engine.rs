@@ -182,6 +182,9 @@ pub struct Engine {
     pub plausibility: crate::plausibility::Plausibility,
     /// The plausibility stage runs (on by default).
     plausibility_on: bool,
+    /// Outputs the safety function keeps ON whatever the control program
+    /// (`held_on` in `plant.ron`: a safety contactor): only the fallback takes them off.
+    held_on: Vec<usize>,
     /// Sensors the diagnosers estimate: (input, flag auxiliary, estimate auxiliary).
     estimates: Vec<(usize, usize, usize)>,
     /// Per entry of `estimates`: read from the estimate in the previous cycle.
@@ -243,6 +246,9 @@ impl Engine {
             observers: bundle.observers.clone(),
             plausibility: bundle.plausibility.clone(),
             plausibility_on: true,
+            held_on: (0..n_out)
+                .filter(|&k| bundle.plant.outputs[k].held_on)
+                .collect(),
             estimates: Vec::new(),
             estimated: Vec::new(),
             filter_state: Filter::new(&bundle.constraints, n_out).new_state(),
@@ -459,6 +465,9 @@ impl Engine {
             self.frame.prev_mut(Space::Observer).copy_from(&observed);
         }
         control.scan(now, &self.frame, &mut self.commanded);
+        for &k in &self.held_on {
+            self.commanded.set(k, true);
+        }
         self.frame.now_mut(Space::Output).copy_from(&self.commanded);
         if attach {
             self.frame

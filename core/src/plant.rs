@@ -87,6 +87,21 @@ pub struct Signal {
     /// ([`crate::plausibility`]); an edge outside it is held and the sensor is suspect.
     #[serde(default)]
     pub plausible: Option<PlausibleRule>,
+    /// Actuators: the actuators this one powers (a safety contactor on the drives'
+    /// supply, in series with each drive's own contactor): they move only while it is
+    /// applied, even with their own contactor welded.
+    #[serde(default)]
+    pub supplies: Vec<String>,
+    /// Actuators: commanded ON every cycle whatever the control program (an output the
+    /// safety function owns, such as a safety contactor): only the filter's fallback
+    /// takes it off.
+    #[serde(default)]
+    pub held_on: bool,
+    /// Sensors: the actuator whose contactor this input mirrors (its auxiliary contact):
+    /// it reads the contactor's state, as commanded, welded or dead, one cycle after
+    /// the command.
+    #[serde(default)]
+    pub feedback_of: Option<String>,
 }
 
 /// The timed plausibility of a sensor's edges, from the plant's physics: a beam cannot
@@ -188,6 +203,9 @@ impl Signal {
             off: None,
             initial: false,
             plausible: None,
+            supplies: Vec::new(),
+            held_on: false,
+            feedback_of: None,
         }
     }
 
@@ -287,6 +305,7 @@ impl Plant {
                 seen.insert(&s.id, i);
             }
         }
+        check_wiring(&file.signals, &id_at, &mut problems);
         if !problems.is_empty() {
             return Err(problems);
         }
@@ -334,9 +353,76 @@ impl Plant {
         self.outputs.iter().position(|s| s.id == id)
     }
 
+    /// The safety contactors (`supplies`): each one's output and the outputs it powers.
+    pub fn supplies(&self) -> Vec<(usize, Vec<usize>)> {
+        self.outputs
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| !s.supplies.is_empty())
+            .map(|(o, s)| {
+                (
+                    o,
+                    s.supplies.iter().filter_map(|a| self.output(a)).collect(),
+                )
+            })
+            .collect()
+    }
+
+    /// The mirror contacts (`feedback_of`): each one's input and the output it mirrors.
+    pub fn mirrors(&self) -> Vec<(usize, usize)> {
+        self.inputs
+            .iter()
+            .enumerate()
+            .filter_map(|(i, s)| Some((i, self.output(s.feedback_of.as_deref()?)?)))
+            .collect()
+    }
+
     /// A signal by id.
     pub fn signal(&self, id: &str) -> Option<&Signal> {
         self.inputs.iter().chain(&self.outputs).find(|s| s.id == id)
+    }
+}
+
+/// `supplies`, `held_on` and `feedback_of` name actuators, on the kind of signal they
+/// belong to.
+fn check_wiring(
+    signals: &[Signal],
+    id_at: &dyn Fn(usize) -> Option<Location>,
+    problems: &mut Vec<Problem>,
+) {
+    let actuator = |id: &str| {
+        signals
+            .iter()
+            .any(|s| s.id == id && s.kind == SignalKind::Actuator)
+    };
+    for (i, s) in signals.iter().enumerate() {
+        let mut bad = |message: String| {
+            problems.push(Problem::error(codes::PLANT_WIRING.id, message, id_at(i)));
+        };
+        let is_sensor = s.kind == SignalKind::Sensor;
+        if is_sensor && (s.held_on || !s.supplies.is_empty()) {
+            bad(format!(
+                "`supplies` and `held_on` are for actuators; `{}` is a sensor",
+                s.id
+            ));
+        }
+        for a in s.supplies.iter().filter(|a| !actuator(a) || *a == &s.id) {
+            bad(format!(
+                "`{}` supplies `{a}`, which is not another actuator of the plant",
+                s.id
+            ));
+        }
+        match &s.feedback_of {
+            Some(_) if !is_sensor => bad(format!(
+                "`feedback_of` is for sensors (a contactor's mirror contact); `{}` is an actuator",
+                s.id
+            )),
+            Some(a) if !actuator(a) => bad(format!(
+                "`{}` mirrors `{a}`, which is not an actuator of the plant",
+                s.id
+            )),
+            _ => {}
+        }
     }
 }
 

@@ -67,6 +67,7 @@ registry! {
     SIGNAL_DUPLICATE = "V0011", "a signal declared twice";
     PLAUSIBLE_ON_ACTUATOR = "V0012", "a plausibility rule on an actuator";
     PLAUSIBILITY_INVALID = "V0013", "a plausibility rule that does not parse or names an unknown signal";
+    PLANT_WIRING = "V0014", "`supplies`, `held_on` or `feedback_of` on the wrong kind of signal, or naming no actuator";
     // V01xx: constraints and invariants
     CONSTRAINT_SYNTAX = "V0101", "syntax error or unknown name in a constraint";
     CONSTRAINT_DUPLICATE = "V0102", "duplicate constraint id";

@@ -31,7 +31,7 @@ impl Emulator {
         if !self.faults.is_empty() {
             self.update_faults();
         }
-        let act = (self.cmd & !self.overrides.act_off) | self.overrides.act_on;
+        let act = self.acting();
         self.rotate(act);
         self.drive(act);
         self.move_boxes();
@@ -54,7 +54,7 @@ impl Emulator {
         if max < 2 || !self.faults.is_empty() || !self.pending.is_empty() || self.no_skip {
             return 1;
         }
-        let act = (self.cmd & !self.overrides.act_off) | self.overrides.act_on;
+        let act = self.acting();
         let t = &self.layout.table;
         let target = if act >> (self.table + 2) & 1 == 1 {
             i64::from(t.unloading_mdeg) * 1000

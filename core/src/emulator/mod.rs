@@ -130,6 +130,14 @@ pub struct Emulator {
     slow: Vec<u8>,
     frame: Frame,
     has_conditions: bool,
+    /// Safety contactors (`supplies` in `plant.ron`): the plant output, and the roles
+    /// it powers.
+    supply: Vec<(usize, u64)>,
+    /// The roles without power this period (a supplying contactor released).
+    unpowered: u64,
+    /// Mirror contacts (`feedback_of`): the plant input, the role of the actuator it
+    /// mirrors (`None`: not a drive of the layout, the output itself), its output.
+    feedback: Vec<(usize, Option<u8>, usize)>,
 }
 
 impl Emulator {
@@ -163,6 +171,20 @@ impl Emulator {
         let frame = Frame::new(symbols.sizes());
         let n_roles = role_plant.len();
         let n_parts = parts.len();
+        let role_of = |o: usize| role_plant.iter().position(|&r| r == o).map(|r| r as u8);
+        let supply = plant
+            .supplies()
+            .into_iter()
+            .map(|(o, fed)| {
+                let roles = fed.into_iter().filter_map(role_of);
+                (o, roles.fold(0u64, |m, r| m | 1 << r))
+            })
+            .collect();
+        let feedback = plant
+            .mirrors()
+            .into_iter()
+            .map(|(i, o)| (i, role_of(o), o))
+            .collect();
         let mut emu = Self {
             layout: layout.clone(),
             parts,
@@ -213,6 +235,9 @@ impl Emulator {
             slow: vec![100; n_roles],
             frame,
             has_conditions: false,
+            supply,
+            unpowered: 0,
+            feedback,
         };
         emu.update_links(true);
         emu.set_arrivals(layout.source.arrivals.clone());
@@ -230,6 +255,11 @@ impl Emulator {
             }
         }
         self.cmd = cmd;
+        self.unpowered = self
+            .supply
+            .iter()
+            .filter(|(o, _)| !outputs.get(*o))
+            .fold(0, |m, (_, mask)| m | mask);
         self.carry += dt.0;
         while self.carry >= self.step_ms {
             let quiet = self.quiet_steps(self.carry / self.step_ms);
@@ -245,6 +275,24 @@ impl Emulator {
             self.tick(self.carry < self.step_ms);
         }
         self.publish();
+        // Mirror contacts: the contactor as it is (commanded, welded or dead), powered
+        // or not; a mirrored output that drives nothing of the layout reads as applied.
+        let closed = self.contactors();
+        for &(input, role, output) in &self.feedback {
+            let on = role.map_or_else(|| outputs.get(output), |r| closed >> r & 1 == 1);
+            self.sensors.set(input, on);
+        }
+    }
+
+    /// The roles whose contactor is closed: commanded, or stuck on by a fault, and not
+    /// dead.
+    fn contactors(&self) -> u64 {
+        (self.cmd & !self.overrides.act_off) | self.overrides.act_on
+    }
+
+    /// The roles that act: their contactor closed and their supply on.
+    pub(super) fn acting(&self) -> u64 {
+        self.contactors() & !self.unpowered
     }
 
     /// Sensor values by plant input index, faults applied.

@@ -83,3 +83,37 @@ fn a_sensor_and_an_actuator_with_one_id_are_a_duplicate() {
         ["plant.ron:1:75: error[V0011]: signal `X` is declared twice (first on line 1)"]
     );
 }
+
+/// Safety devices wired to the wrong kind of signal, or to nothing: V0014 at the
+/// signal's line, every one.
+#[test]
+fn safety_devices_wired_wrong_are_reported_where_they_are_written() {
+    let text = r#"Plant(name: "p", signals: [
+    (id: "S1", kind: Sensor, description: "", supplies: ["M1"]),
+    (id: "S2", kind: Sensor, description: "", feedback_of: Some("S1")),
+    (id: "M1", kind: Actuator, description: "", feedback_of: Some("M1")),
+    (id: "K1", kind: Actuator, description: "", supplies: ["M1", "K1", "X9"], held_on: true),
+    (id: "M1_fb", kind: Sensor, description: "", feedback_of: Some("M1")),
+])"#;
+    let p = problems(text);
+    let expect = [
+        "plant.ron:2:10: error[V0014]: `supplies` and `held_on` are for actuators; `S1` is a sensor",
+        "plant.ron:3:10: error[V0014]: `S2` mirrors `S1`, which is not an actuator of the plant",
+        "plant.ron:4:10: error[V0014]: `feedback_of` is for sensors (a contactor's mirror contact); `M1` is an actuator",
+        "plant.ron:5:10: error[V0014]: `K1` supplies `K1`, which is not another actuator of the plant",
+        "plant.ron:5:10: error[V0014]: `K1` supplies `X9`, which is not another actuator of the plant",
+    ];
+    assert_eq!(p, expect);
+    // Wired right: the supplies and the mirrors by index.
+    let ok = Plant::from_ron(
+        r#"Plant(name: "p", signals: [
+    (id: "M1_fb", kind: Sensor, description: "", feedback_of: Some("M1")),
+    (id: "M1", kind: Actuator, description: ""),
+    (id: "K1", kind: Actuator, description: "", supplies: ["M1"], held_on: true),
+])"#,
+        Path::new("plant.ron"),
+    )
+    .unwrap();
+    assert_eq!(ok.supplies(), [(1, vec![0])]);
+    assert_eq!(ok.mirrors(), [(0, 0)]);
+}

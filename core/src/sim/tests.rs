@@ -1323,3 +1323,135 @@ fn a_beam_that_rises_where_no_item_can_come_is_named_first() {
         ex.hypothesis.items
     );
 }
+
+/// A copy of the station folder with a safety contactor on the drives' supply and a
+/// mirror contact on the intermediate conveyor's contactor (issue 17's welded actuators),
+/// removed on drop.
+struct WithContactor(PathBuf);
+
+impl Drop for WithContactor {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn with_contactor(tag: &str) -> WithContactor {
+    fn copy(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap() {
+            let e = e.unwrap();
+            if e.file_type().unwrap().is_dir() {
+                copy(&e.path(), &to.join(e.file_name()));
+            } else {
+                std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+            }
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("vigie-km-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    copy(&station_dir(), &dir);
+    let plant = std::fs::read_to_string(dir.join("plant.ron")).unwrap();
+    let anchor = "        (id: \"A0\", kind: Actuator";
+    let plant = plant.replacen(
+        anchor,
+        &format!(
+            "        (id: \"A1_fb\", kind: Sensor, description: \"A1's contactor closed (mirror contact)\", feedback_of: Some(\"A1\")),\n\
+             {anchor}"
+        ),
+        1,
+    );
+    let plant = plant.replacen(
+        "    ],\n)",
+        "        (id: \"KM0\", kind: Actuator, description: \"Safety contactor: the drives' supply\", supplies: [\"A0\", \"A1\", \"A2\", \"A3\", \"A5\", \"A6\"], held_on: true),\n    ],\n)",
+        1,
+    );
+    std::fs::write(dir.join("plant.ron"), plant).unwrap();
+    let mut constraints = std::fs::read_to_string(dir.join("constraints.txt")).unwrap();
+    constraints.push_str(
+        "CSk1 = KM0 . A1_fb . /A1*   # A1's contactor still closed a cycle after its release: welded, cut the supply\n\
+         CSk2 = KM0 . A1* . /A1_fb   # A1's contactor still open a cycle after its command: dead, cut the supply\n",
+    );
+    std::fs::write(dir.join("constraints.txt"), constraints).unwrap();
+    WithContactor(dir)
+}
+
+/// Issue 17, welded actuators: no output of the paper's station can stop a welded
+/// contactor, so a welded intermediate conveyor keeps pushing boxes, and damages them.
+/// With a safety contactor on the drives' supply and a mirror contact on A1's
+/// contactor (plant data only: `supplies`, `held_on`, `feedback_of`, two monomials),
+/// the weld shows one cycle after A1's release, the filter releases the contactor and
+/// the belt stops: no hazard, a trip on CSk1. Fault-free, the contactor changes
+/// nothing (no trip, the same deliveries).
+#[test]
+fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
+    let km = with_contactor("welded");
+    let text = |at: u64| {
+        format!(
+            r#"Scenario(
+                name: "A1 welded",
+                plant: ".",
+                program: Reference,
+                seed: 5,
+                arrivals: Some(Periodic(period_ms: 8000, jitter_ms: 1000, mix: Alternate)),
+                faults: [(trigger: At({at}), fault: ActuatorStuckOn("A1"))],
+                actions: [(at_ms: 0, action: Start)],
+                duration_ms: 90000,
+                filter: Enforce,
+                diagnosers: true,
+            )"#
+        )
+    };
+    let (mut plain_hazards, mut km_hazards, mut km_trips) = (0, 0, 0);
+    for k in 0..12u64 {
+        let s: Scenario = ron::from_str(&text(20_000 + 1_300 * k)).expect("scenario");
+        let plain = run(&s);
+        plain_hazards += plain.emulator.hazards().len();
+        let path = km.0.join("scenario.ron");
+        let mut sim = Simulation::from_scenario(&s, &path, Options::default())
+            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        sim.run_until(Millis(s.duration_ms));
+        km_hazards += sim.emulator.hazards().len();
+        if sim
+            .engine
+            .trips
+            .iter()
+            .any(|t| t.constraints.iter().any(|c| c.id == "CSk1"))
+        {
+            km_trips += 1;
+        }
+    }
+    assert!(
+        plain_hazards > 0,
+        "the paper's station cannot stop a welded belt"
+    );
+    assert_eq!(km_hazards, 0, "with the contactor");
+    assert!(
+        km_trips >= 10,
+        "the weld shows on the mirror contact: {km_trips} of 12"
+    );
+    // Fault-free: the contactor stays ON, nothing trips, the same boxes are delivered.
+    let free: Scenario = ron::from_str(
+        r#"Scenario(
+            name: "fault-free",
+            plant: ".",
+            program: Reference,
+            seed: 5,
+            arrivals: Some(Periodic(period_ms: 8000, jitter_ms: 1000, mix: Alternate)),
+            actions: [(at_ms: 0, action: Start)],
+            duration_ms: 120000,
+            filter: Enforce,
+            diagnosers: true,
+        )"#,
+    )
+    .expect("scenario");
+    let plain = run(&free);
+    let mut sim = Simulation::from_scenario(&free, &km.0.join("scenario.ron"), Options::default())
+        .expect("sim");
+    sim.run_until(Millis(free.duration_ms));
+    assert!(
+        sim.engine.trips.is_empty(),
+        "{:?}",
+        sim.engine.trips.first()
+    );
+    assert_eq!(sim.emulator.stats(), plain.emulator.stats());
+}

@@ -255,6 +255,11 @@ pub struct Model {
     /// Variables read at t-1 by a constraint, an observer or an invariant (inputs,
     /// outputs, observers): the state keeps only these of the previous cycle.
     prev_mask: (u64, u64, u64),
+    /// Mirror contacts (`feedback_of`): the input reads the output applied at t-1 (the
+    /// model's contactors neither weld nor die).
+    feedback: Vec<(usize, usize)>,
+    /// Safety contactors (`supplies`): the output, and the outputs it powers.
+    supply: Vec<(usize, u64)>,
 }
 
 impl Model {
@@ -308,31 +313,19 @@ impl Model {
                 }
             }
         }
-        // The state keeps only the previous-cycle values something reads (packed one
-        // bit each, [`Model::pack`]): the plant's size does not count, only those.
+        let feedback = bundle.plant.mirrors();
+        for &(_, o) in &feedback {
+            prev_mask.1 |= 1 << o;
+        }
+        let supply = bundle
+            .plant
+            .supplies()
+            .into_iter()
+            .map(|(o, fed)| (o, fed.iter().fold(0u64, |m, k| m | 1 << k)))
+            .collect();
         let n_in = bundle.plant.inputs.len();
         let n_obs = bundle.observers.len();
-        let widths = [n_in, n_out, n_obs];
-        prev_mask = (
-            prev_mask.0 & low_bits(n_in),
-            prev_mask.1 & low_bits(n_out),
-            prev_mask.2 & low_bits(n_obs),
-        );
-        let kept = [prev_mask.0, prev_mask.1, prev_mask.2]
-            .iter()
-            .map(|m| m.count_ones() as usize)
-            .sum::<usize>();
-        if widths.iter().any(|&w| w > 64) || kept > PREV_BITS {
-            return Err(Problem::error(
-                codes::VERIFY_UNSUPPORTED.id,
-                format!(
-                    "the verifier keeps at most {PREV_BITS} previous-cycle values in its state \
-                     and 64 signals of each kind; this plant's constraints, observers and \
-                     invariants read {kept} at t-1 ({n_in} inputs, {n_out} outputs, {n_obs} observers)"
-                ),
-                None,
-            ));
-        }
+        let prev_mask = budget(prev_mask, [n_in, n_out, n_obs])?;
         Ok(Self {
             geo,
             observers: bundle.observers.clone(),
@@ -351,6 +344,8 @@ impl Model {
             max_boxes: max_boxes.clamp(1, model::MAX_BOXES),
             free_outputs,
             prev_mask,
+            feedback,
+            supply,
         })
     }
 
@@ -414,6 +409,20 @@ impl Model {
         }
     }
 
+    /// True when the plant has safety contactors or mirror contacts (which the Promela
+    /// model does not have yet).
+    pub fn has_safety_devices(&self) -> bool {
+        !self.feedback.is_empty() || !self.supply.is_empty()
+    }
+
+    /// The outputs that act: `applied` less those whose safety contactor is released.
+    fn powered(&self, applied: u64) -> u64 {
+        self.supply
+            .iter()
+            .filter(|(o, _)| applied >> o & 1 == 0)
+            .fold(applied, |a, (_, mask)| a & !mask)
+    }
+
     /// The initial state.
     pub fn initial(&self) -> AState {
         AState {
@@ -436,7 +445,12 @@ impl Model {
     /// The frame of a state at the start of its cycle (inputs and observers at t,
     /// previous cycle at t-1), and the updated observer counts.
     fn frame(&self, s: &AState, frame: &mut Frame, obs: &mut Observers) -> (u64, u64, [u16; 4]) {
-        let inputs = self.geo.sensors(&s.plant);
+        let mut inputs = self.geo.sensors(&s.plant);
+        for &(i, o) in &self.feedback {
+            if s.prev.1 >> o & 1 == 1 {
+                inputs |= 1 << i;
+            }
+        }
         for (i, b) in [s.prev.0, s.prev.1, s.prev.2].iter().enumerate() {
             let space = Space::ALL[i];
             let n = frame.prev[space as usize].len();
@@ -480,6 +494,34 @@ impl Model {
 /// Bits of the state left for the previous-cycle values (the plant's positions, its
 /// items and the observers' counts take the other 99 of 128).
 const PREV_BITS: usize = 128 - 99;
+
+/// The previous-cycle values the state keeps (`mask` within each kind's width), checked
+/// against [`PREV_BITS`]: the state keeps only the values something reads (packed one
+/// bit each, [`Model::pack`]), so the plant's size does not count, only those.
+fn budget(mask: (u64, u64, u64), widths: [usize; 3]) -> Result<(u64, u64, u64), Problem> {
+    let [n_in, n_out, n_obs] = widths;
+    let mask = (
+        mask.0 & low_bits(n_in),
+        mask.1 & low_bits(n_out),
+        mask.2 & low_bits(n_obs),
+    );
+    let kept = [mask.0, mask.1, mask.2]
+        .iter()
+        .map(|m| m.count_ones() as usize)
+        .sum::<usize>();
+    if widths.iter().any(|&w| w > 64) || kept > PREV_BITS {
+        return Err(Problem::error(
+            codes::VERIFY_UNSUPPORTED.id,
+            format!(
+                "the verifier keeps at most {PREV_BITS} previous-cycle values in its state \
+                 and 64 signals of each kind; this plant's constraints, observers and \
+                 invariants read {kept} at t-1 ({n_in} inputs, {n_out} outputs, {n_obs} observers)"
+            ),
+            None,
+        ));
+    }
+    Ok(mask)
+}
 
 /// The `n` low bits set.
 fn low_bits(n: usize) -> u64 {
@@ -567,7 +609,7 @@ pub fn explore(model: &Model, filter: &Filter) -> Exploration {
         for &applied in applied_set.iter() {
             for &arrival in &arrivals {
                 transitions += 1;
-                let (p, ev) = model.geo.step(&s.plant, applied, arrival);
+                let (p, ev) = model.geo.step(&s.plant, model.powered(applied), arrival);
                 let edge = Edge {
                     parent: si,
                     applied,

@@ -316,3 +316,69 @@ fn too_many_previous_values_read_are_refused_with_the_count() {
         err.message
     );
 }
+
+/// A safety contactor on the drives' supply and a mirror contact (issue 17): the model's
+/// mirror reads the output applied at t-1 and the contactor gates the drives it feeds,
+/// so the station with them stays safe and permissive (unmodelled, the mirror would read
+/// 0 and CSk2 would cut the supply whenever A1 runs: no delivery).
+#[test]
+fn a_safety_contactor_and_a_mirror_contact_are_modelled() {
+    let anchor = "        (id: \"A0\", kind: Actuator";
+    let mirror = format!(
+        "        (id: \"A1_fb\", kind: Sensor, description: \"mirror\", feedback_of: Some(\"A1\")),\n{anchor}"
+    );
+    let km = "        (id: \"KM0\", kind: Actuator, description: \"supply\", supplies: [\"A0\", \"A1\", \"A2\", \"A3\", \"A5\", \"A6\"], held_on: true),\n    ],\n)";
+    let rules = "CSs1  = 2P . A0\nCSk1 = KM0 . A1_fb . /A1*\nCSk2 = KM0 . A1* . /A1_fb";
+    let (_guard, b, l) = patched(
+        "contactor",
+        &[
+            ("plant.ron", anchor, &mirror),
+            ("plant.ron", "    ],\n)", km),
+            ("constraints.txt", "CSs1  = 2P . A0", rules),
+        ],
+    );
+    let r = verify(
+        &b,
+        &l,
+        &Options {
+            max_boxes: 1,
+            necessity_boxes: None,
+        },
+    )
+    .expect("verify");
+    assert!(r.safe, "{:?}", kinds(&r.full));
+    assert!(
+        r.permissive,
+        "{:?}",
+        r.full
+            .delivered
+            .iter()
+            .map(Option::is_some)
+            .collect::<Vec<_>>()
+    );
+    // The mirror reads A1 as applied at t-1; the released contactor unpowers its drives.
+    let m = Model::new(&b, &l, 1).expect("model");
+    let (a1, km0) = (
+        b.plant.output("A1").unwrap(),
+        b.plant.output("KM0").unwrap(),
+    );
+    let fb = b.plant.input("A1_fb").unwrap();
+    let mut frame = Frame::new([m.n_in, m.n_out, m.n_obs, 0]);
+    let mut obs = m.observers.clone();
+    let mut s = m.initial();
+    let (inputs, _, _) = m.frame(&s, &mut frame, &mut obs);
+    assert_eq!(
+        inputs >> fb & 1,
+        0,
+        "A1 released at t-1: the mirror reads open"
+    );
+    s.prev.1 |= 1 << a1;
+    let (inputs, _, _) = m.frame(&s, &mut frame, &mut obs);
+    assert_eq!(
+        inputs >> fb & 1,
+        1,
+        "A1 applied at t-1: the mirror reads closed"
+    );
+    assert_eq!(m.powered(1 << a1 | 1 << km0), 1 << a1 | 1 << km0);
+    assert_eq!(m.powered(1 << a1), 0, "no supply: A1 does not act");
+}
