@@ -259,12 +259,6 @@ fn compare_with_spin(
     full: &verify::Exploration,
     t_full: f64,
 ) -> anyhow::Result<()> {
-    if model.has_safety_devices() {
-        anyhow::bail!(
-            "the SPIN cross-check does not model safety contactors (`supplies`) and mirror \
-             contacts (`feedback_of`) yet; vigie's own exploration above does"
-        );
-    }
     let text = promela::generate(model, &bundle.constraints, &bundle.symbols);
     if let Some(out) = &args.out {
         std::fs::create_dir_all(out)?;

@@ -409,12 +409,6 @@ impl Model {
         }
     }
 
-    /// True when the plant has safety contactors or mirror contacts (which the Promela
-    /// model does not have yet).
-    pub fn has_safety_devices(&self) -> bool {
-        !self.feedback.is_empty() || !self.supply.is_empty()
-    }
-
     /// The outputs that act: `applied` less those whose safety contactor is released.
     fn powered(&self, applied: u64) -> u64 {
         self.supply

@@ -140,6 +140,15 @@ fn header(p: &mut String, model: &Model) {
     p.push_str("#define POS(a, r) if :: (a - LOAD <= DTOL && LOAD - a <= DTOL) -> r = 0 :: (a - UNLOAD <= DTOL && UNLOAD - a <= DTOL) -> r = 1 :: else -> r = 2 fi\n\n");
 }
 
+/// Output `k` acting: applied, and every safety contactor that supplies it applied.
+fn acts(model: &Model, k: usize) -> String {
+    let mut e = format!("o[{k}]");
+    for (s, _) in model.supply.iter().filter(|(_, mask)| mask >> k & 1 == 1) {
+        e = format!("({e} && o[{s}])");
+    }
+    e
+}
+
 /// The inlines of the geometry: part bounds, part of a box, velocity of a part, sensors.
 fn geometry_inlines(p: &mut String, model: &Model) {
     let g = &model.geo;
@@ -163,17 +172,22 @@ fn geometry_inlines(p: &mut String, model: &Model) {
     // Velocity of part kq.
     let mut chain = String::new();
     for (n, &a) in g.chain_act.iter().enumerate() {
-        let _ = write!(chain, ":: kq == {n} -> v = o[{a}] ");
+        let _ = write!(chain, ":: kq == {n} -> v = {} ", acts(model, a));
     }
     let _ = writeln!(
         p,
-        "inline VEL(ot, ps) {{\n  tab = o[{}] - o[{}];\n  if\n  :: ot && ps == 1 -> if :: kq == 0 -> v = -1 :: kq == 1 -> v = tab :: else -> v = 1 fi\n  :: ot && ps != 1 -> v = tab\n  :: !ot -> if {chain}:: else -> v = tab fi\n  fi\n}}\n",
-        g.plus, g.minus
+        "inline VEL(ot, ps) {{\n  tab = {} - {};\n  if\n  :: ot && ps == 1 -> if :: kq == 0 -> v = -1 :: kq == 1 -> v = tab :: else -> v = 1 fi\n  :: ot && ps != 1 -> v = tab\n  :: !ot -> if {chain}:: else -> v = tab fi\n  fi\n}}\n",
+        acts(model, g.plus),
+        acts(model, g.minus)
     );
     // Sensors.
     p.push_str(
         "inline SENSORS() {\n  i = 0; do :: i < NI -> ci[i] = 0; i++ :: else -> break od;\n",
     );
+    // A mirror contact reads its contactor as applied in the previous cycle.
+    for &(inp, out) in &model.feedback {
+        let _ = writeln!(p, "  ci[{inp}] = po[{out}];");
+    }
     for &(inp, lo, hi) in &g.angles {
         let _ = writeln!(p, "  ci[{inp}] = (angle >= {lo} && angle <= {hi});");
     }
@@ -263,7 +277,7 @@ fn step_motion(p: &mut String, model: &Model) {
         r#"inline STEP() {{
   hz = 0; dplus = 0; dminus = 0;
   told = angle;
-  if :: o[{rot}] -> tgt = 1 :: else -> tgt = 0 fi;
+  if :: {rot} -> tgt = 1 :: else -> tgt = 0 fi;
   if
   :: tgt == 1 && angle < UNLOAD -> angle = angle + ROUT; if :: angle > UNLOAD -> angle = UNLOAD :: else -> skip fi
   :: tgt == 0 && angle > LOAD -> angle = angle - RBACK; if :: angle < LOAD -> angle = LOAD :: else -> skip fi
@@ -315,7 +329,7 @@ fn step_motion(p: &mut String, model: &Model) {
   :: else -> break od;
   i = 0; do :: i < nb -> blo[i] = nw[i]; i++ :: else -> break od;
 "#,
-        rot = g.rotate
+        rot = acts(model, g.rotate)
     );
 }
 

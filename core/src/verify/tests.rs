@@ -323,20 +323,7 @@ fn too_many_previous_values_read_are_refused_with_the_count() {
 /// 0 and CSk2 would cut the supply whenever A1 runs: no delivery).
 #[test]
 fn a_safety_contactor_and_a_mirror_contact_are_modelled() {
-    let anchor = "        (id: \"A0\", kind: Actuator";
-    let mirror = format!(
-        "        (id: \"A1_fb\", kind: Sensor, description: \"mirror\", feedback_of: Some(\"A1\")),\n{anchor}"
-    );
-    let km = "        (id: \"KM0\", kind: Actuator, description: \"supply\", supplies: [\"A0\", \"A1\", \"A2\", \"A3\", \"A5\", \"A6\"], held_on: true),\n    ],\n)";
-    let rules = "CSs1  = 2P . A0\nCSk1 = KM0 . A1_fb . /A1*\nCSk2 = KM0 . A1* . /A1_fb";
-    let (_guard, b, l) = patched(
-        "contactor",
-        &[
-            ("plant.ron", anchor, &mirror),
-            ("plant.ron", "    ],\n)", km),
-            ("constraints.txt", "CSs1  = 2P . A0", rules),
-        ],
-    );
+    let (_guard, b, l) = with_contactor("contactor");
     let r = verify(
         &b,
         &l,
@@ -381,4 +368,50 @@ fn a_safety_contactor_and_a_mirror_contact_are_modelled() {
     );
     assert_eq!(m.powered(1 << a1 | 1 << km0), 1 << a1 | 1 << km0);
     assert_eq!(m.powered(1 << a1), 0, "no supply: A1 does not act");
+}
+
+/// The station with a safety contactor KM0 on the drives' supply, a mirror contact on
+/// A1's contactor and the two monomials that watch it.
+fn with_contactor(tag: &str) -> (Patched, PlantBundle, Layout) {
+    let anchor = "        (id: \"A0\", kind: Actuator";
+    let mirror = format!(
+        "        (id: \"A1_fb\", kind: Sensor, description: \"mirror\", feedback_of: Some(\"A1\")),\n{anchor}"
+    );
+    let km = "        (id: \"KM0\", kind: Actuator, description: \"supply\", supplies: [\"A0\", \"A1\", \"A2\", \"A3\", \"A5\", \"A6\"], held_on: true),\n    ],\n)";
+    let rules = "CSs1  = 2P . A0\nCSk1 = KM0 . A1_fb . /A1*\nCSk2 = KM0 . A1* . /A1_fb";
+    patched(
+        tag,
+        &[
+            ("plant.ron", anchor, &mirror),
+            ("plant.ron", "    ],\n)", km),
+            ("constraints.txt", "CSs1  = 2P . A0", rules),
+        ],
+    )
+}
+
+/// SPIN and the explorer agree on the station with a safety contactor and a mirror
+/// contact (the Promela model reads the mirror as the output applied at t-1 and gates
+/// the drives by the contactor, as the explorer does).
+#[test]
+fn spin_agrees_with_a_safety_contactor() {
+    let (_guard, b, l) = with_contactor("contactor-spin");
+    let m = Model::new(&b, &l, 1).expect("model");
+    let e = explore(&m, &Filter::new(&b.constraints, b.plant.outputs.len()));
+    let s = run_spin(&promela::generate(&m, &b.constraints, &b.symbols), 0, false);
+    assert!(s.complete, "SPIN search incomplete");
+    assert_eq!(
+        (s.hazards.clone(), s.delivered, s.no_fallback),
+        rust_verdict(&e),
+        "SPIN vs explorer"
+    );
+    // The model's text: the mirror reads A1 as applied at t-1, the drives act only with
+    // the contactor applied.
+    let text = promela::generate(&m, &b.constraints, &b.symbols);
+    let (a1, km0) = (
+        b.plant.output("A1").unwrap(),
+        b.plant.output("KM0").unwrap(),
+    );
+    let fb = b.plant.input("A1_fb").unwrap();
+    assert!(text.contains(&format!("ci[{fb}] = po[{a1}];")), "mirror");
+    assert!(text.contains(&format!("(o[{a1}] && o[{km0}])")), "supply");
 }
