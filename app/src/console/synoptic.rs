@@ -468,6 +468,7 @@ pub fn synoptic_ui(
     let names = paint_sensor_names(&cv, geom, &symbols);
     let taken: Vec<Rect> = symbols.iter().chain(&names).map(|(_, r)| *r).collect();
     let tags = paint_marks(&cv, geom, view, pic.highlights, &taken);
+    repaint_ringed_names(&cv, pic.highlights, &names);
     view.placed = Placed {
         names,
         tags,
@@ -836,6 +837,24 @@ fn paint_actuators(cv: &Canvas<'_>, geom: &Geometry, forced: &BTreeSet<String>) 
             FontId::proportional(11.0),
             fg,
         );
+    }
+}
+
+/// A ring (suspect, estimated) is wider than the lamp the name sits beside: the name is
+/// painted again over it, on the floor's colour, so that the ring never crosses it.
+fn repaint_ringed_names(cv: &Canvas<'_>, highlights: &[Highlight], names: &[(String, Rect)]) {
+    let ringed = |h: &Highlight| matches!(h.mark, Mark::Suspect | Mark::Estimated);
+    for (id, r) in names {
+        if highlights.iter().any(|h| ringed(h) && &h.element == id) {
+            cv.painter.rect_filled(r.expand(1.0), 2.0, cv.pal.floor);
+            cv.painter.text(
+                r.min,
+                Align2::LEFT_TOP,
+                id,
+                FontId::proportional(12.0),
+                cv.pal.text,
+            );
+        }
     }
 }
 
