@@ -253,8 +253,9 @@ pub fn ron_fields(text: &str) -> Vec<RonField> {
     while i < b.len() {
         let c = b[i];
         // Whitespace and comments are not tokens.
-        if c.is_ascii_whitespace() {
-            i += 1;
+        let ws = whitespace_len(b, i);
+        if ws > 0 {
+            i += ws;
             continue;
         }
         if c == b'/' && b.get(i + 1) == Some(&b'/') {
@@ -490,11 +491,24 @@ fn skip_number(b: &[u8], mut i: usize) -> usize {
     i
 }
 
+/// The length in bytes of the whitespace character at `i`, 0 if there is none: RON's
+/// whitespace (`ron::parse::is_whitespace_char`), vertical tab, form feed, U+0085,
+/// U+200E, U+200F, U+2028 and U+2029 included.
+fn whitespace_len(b: &[u8], i: usize) -> usize {
+    match b.get(i..).unwrap_or(&[]) {
+        [b' ' | b'\t' | b'\n' | b'\r' | 0x0B | 0x0C, ..] => 1,
+        [0xC2, 0x85, ..] => 2,
+        [0xE2, 0x80, 0x8E | 0x8F | 0xA8 | 0xA9, ..] => 3,
+        _ => 0,
+    }
+}
+
 /// Past whitespace and comments.
 fn skip_trivia(b: &[u8], mut i: usize) -> usize {
     loop {
-        if i < b.len() && b[i].is_ascii_whitespace() {
-            i += 1;
+        let ws = whitespace_len(b, i);
+        if ws > 0 {
+            i += ws;
         } else if b.get(i) == Some(&b'/') && b.get(i + 1) == Some(&b'/') {
             i = skip_line_comment(b, i);
         } else if b.get(i) == Some(&b'/') && b.get(i + 1) == Some(&b'*') {

@@ -196,3 +196,30 @@ fn unreadable_files_are_v0002_problems_naming_the_file() {
     assert_eq!(read_text(&dir).unwrap_err().code, "V0002");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// RON's whitespace is wider than ASCII's: a vertical tab, a form feed or a line
+/// separator between a field's name and its colon still leaves the field found where
+/// RON reads it (`vigie diagnose learn` rewrites bounds by these positions).
+#[test]
+fn ron_fields_skip_every_whitespace_ron_skips() {
+    #[derive(serde::Deserialize)]
+    struct I {
+        lo: u32,
+        hi: u32,
+    }
+    for ws in [
+        "\u{b}",
+        "\u{c}",
+        "\u{85}",
+        "\u{200e}",
+        "\u{2028}",
+        " \u{2029}\t",
+    ] {
+        let text = format!("(lo{ws}: 1,{ws}hi{ws}:{ws}22)");
+        let parsed: I = ron::from_str(&text).unwrap_or_else(|e| panic!("{ws:?}: {e}"));
+        assert_eq!((parsed.lo, parsed.hi), (1, 22));
+        let fields = ron_fields(&text);
+        let hi = ron_field(&fields, &[], "hi", 0).unwrap_or_else(|| panic!("{ws:?}: {fields:?}"));
+        assert_eq!(&text[hi.value.clone()], "22", "{ws:?}");
+    }
+}
