@@ -540,6 +540,18 @@ mod tests {
 mod explain_tests {
     use super::*;
 
+    /// An explanation item with its fields, as the core records it.
+    fn item(code: &'static str, text: &str, fields: &[(&str, &str)]) -> vigie_core::explain::Item {
+        vigie_core::explain::Item {
+            code,
+            text: text.into(),
+            fields: fields
+                .iter()
+                .map(|(k, v)| ((*k).into(), (*v).into()))
+                .collect(),
+        }
+    }
+
     /// Every code of `core/src/explain/codes.md` has its French message.
     #[test]
     fn every_explanation_code_has_a_french_message() {
@@ -588,15 +600,6 @@ mod explain_tests {
 
     #[test]
     fn an_item_in_french_from_its_fields() {
-        let item =
-            |code: &'static str, text: &str, fields: &[(&str, &str)]| vigie_core::explain::Item {
-                code,
-                text: text.into(),
-                fields: fields
-                    .iter()
-                    .map(|(k, v)| ((*k).into(), (*v).into()))
-                    .collect(),
-            };
         let mut i = I18n::new(Lang::Fr, None).unwrap();
         let x301 = item(
             "X301",
@@ -685,15 +688,6 @@ mod explain_tests {
     /// X418 in French: the observer the expectation follows, in the plant's words.
     #[test]
     fn an_unexpected_edge_in_french() {
-        let item =
-            |code: &'static str, text: &str, fields: &[(&str, &str)]| vigie_core::explain::Item {
-                code,
-                text: text.into(),
-                fields: fields
-                    .iter()
-                    .map(|(k, v)| ((*k).into(), (*v).into()))
-                    .collect(),
-            };
         let i = I18n::new(Lang::Fr, None).unwrap();
         // X418: the observer the expectation follows, in the plant's French words.
         let x418 = item(

@@ -25,6 +25,31 @@ impl Location {
             column,
         }
     }
+
+    /// The location of byte `offset` of `text` (the file's end past it), in `file`.
+    pub fn at_offset(file: &Path, text: &str, offset: usize) -> Self {
+        let (line, column) = line_col(text, offset);
+        Self::new(file, line, column)
+    }
+
+    /// The location of the `nth` occurrence (from 0) of `needle` in `text`, else the
+    /// file's start.
+    pub fn of_nth(file: &Path, text: &str, needle: &str, nth: usize) -> Self {
+        text.match_indices(needle).nth(nth).map_or_else(
+            || Self::new(file, 1, 1),
+            |(off, _)| Self::at_offset(file, text, off),
+        )
+    }
+}
+
+/// 1-based line and column (in characters) of a byte offset of `text`.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(text.len());
+    let before = text.get(..offset).unwrap_or("");
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |p| p + 1);
+    let column = before.get(line_start..).unwrap_or("").chars().count() + 1;
+    (line, column)
 }
 
 impl std::fmt::Display for Location {

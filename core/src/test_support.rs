@@ -11,6 +11,26 @@ pub(crate) fn station_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
 }
 
+/// A copy of the station's folder (programs and scenarios included) in a fresh
+/// temporary directory `vigie-<tag>-<pid>`.
+pub(crate) fn station_copy(tag: &str) -> PathBuf {
+    fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap() {
+            let e = e.unwrap();
+            if e.file_type().unwrap().is_dir() {
+                copy_dir(&e.path(), &to.join(e.file_name()));
+            } else {
+                std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+            }
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("vigie-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    copy_dir(&station_dir(), &dir);
+    dir
+}
+
 /// The sorting station, loaded from its folder; panics (in tests only) on any loading
 /// problem other than the static property (6) check, which the constraint tests cover.
 pub(crate) fn station() -> PlantBundle {

@@ -684,10 +684,16 @@ impl Console {
             .join(&source.scenario.plant);
         let (source, sim) = match &opts.variant {
             Some(id) => {
-                // A plant-fault exercise's id, else a control-error variant's.
-                let reference = Source::free_run(&plant_dir, ProgramChoice::Reference, "");
-                let lib = load_library(&plant_dir, &reference.build()?);
-                let s = match lib.exercises.iter().find(|e| &e.id == id) {
+                // A plant-fault exercise's id, else a control-error variant's (a broken
+                // `exercises.ron` is shown in the training view once the console opens).
+                let exercises = vigie_core::plant::Plant::load(&plant_dir.join("plant.ron"))
+                    .ok()
+                    .and_then(|plant| {
+                        let path = plant_dir.join("exercises.ron");
+                        vigie_core::emulator::load_exercises(&path, &plant, None).ok()
+                    })
+                    .unwrap_or_default();
+                let s = match exercises.iter().find(|e| &e.id == id) {
                     Some(e) => Source::plant_exercise(&plant_dir, e),
                     None => Source::free_run(
                         &plant_dir,

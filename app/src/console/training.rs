@@ -44,6 +44,15 @@ impl Score {
         }
     }
 
+    /// The levels consulted (`0, 4`), or "none" in the language `i18n` shows.
+    pub fn levels_in(&self, i18n: &I18n) -> String {
+        if self.levels.is_empty() {
+            return i18n.t("score-none");
+        }
+        let levels: Vec<String> = self.levels.iter().map(ToString::to_string).collect();
+        levels.join(", ")
+    }
+
     /// One line summary, in English.
     pub fn summary(&self) -> String {
         I18n::new(Lang::En, None).map_or_else(|e| e.to_string(), |i| self.summary_in(&i))
@@ -51,12 +60,7 @@ impl Score {
 
     /// One line summary, in the language `i18n` shows.
     pub fn summary_in(&self, i18n: &I18n) -> String {
-        let levels: Vec<String> = self.levels.iter().map(ToString::to_string).collect();
-        let levels = if levels.is_empty() {
-            i18n.t("score-none")
-        } else {
-            levels.join(", ")
-        };
+        let levels = self.levels_in(i18n);
         let result = match (self.fixed, self.located_after_s, self.plant) {
             (true, Some(s), true) => {
                 i18n.ta("score-found-in", &[("s", (&format!("{s:.0}")).into())])

@@ -1642,6 +1642,60 @@ fn plant_debrief_ui(c: &Console, ui: &mut egui::Ui, id: &str) {
     let Some(e) = c.plant_exercise() else {
         return;
     };
+    debrief_frame(c, ui, id, |ui| {
+        let desc = c
+            .i18n
+            .plant(&format!("exercise-{id}"))
+            .unwrap_or_else(|| e.description.clone());
+        ui.label(c.i18n.ta("debrief-fault", &[("text", (&desc).into())]));
+        let fault = super::words::fault_told(&c.i18n, &c.view.descriptions, &e.fault);
+        ui.label(RichText::new(fault).monospace());
+        let answer = e.answer.join(", ");
+        ui.label(c.i18n.ta("debrief-answer", &[("answer", (&answer).into())]));
+        let given: Vec<String> = c
+            .score
+            .diagnoses
+            .iter()
+            .map(|(d, right)| format!("{d} {}", if *right { "✔" } else { "✘" }))
+            .collect();
+        let given = if given.is_empty() {
+            c.i18n.t("score-none")
+        } else {
+            given.join(", ")
+        };
+        ui.label(c.i18n.ta("debrief-named", &[("named", (&given).into())]));
+        debrief_levels_ui(c, ui);
+        let verdict = match (c.score.fixed, c.score.located_after_s) {
+            (true, Some(s)) => c.i18n.ta(
+                "debrief-found",
+                &[
+                    ("attempts", c.score.attempts.into()),
+                    ("s", (&format!("{s:.0}")).into()),
+                ],
+            ),
+            (true, None) => c.i18n.ta(
+                "debrief-found-before-stop",
+                &[("attempts", c.score.attempts.into())],
+            ),
+            (false, _) => c.i18n.ta(
+                "debrief-not-found",
+                &[("attempts", c.score.attempts.into())],
+            ),
+        };
+        ui.label(verdict);
+        if c.sim.emulator.faults_in_force() > 0 {
+            ui.label(RichText::new(c.i18n.t("debrief-repair")).strong());
+        }
+    });
+}
+
+fn debrief_levels_ui(c: &Console, ui: &mut egui::Ui) {
+    let levels = c.score.levels_in(&c.i18n);
+    ui.label(c.i18n.ta("debrief-levels", &[("levels", (&levels).into())]));
+}
+
+/// The debrief's frame and title, around `body`.
+fn debrief_frame(c: &Console, ui: &mut egui::Ui, id: &str, body: impl FnOnce(&mut egui::Ui)) {
     egui::Frame::NONE
         .stroke(egui::Stroke::new(1.5, c.palette.text_dim))
         .inner_margin(6.0)
@@ -1651,109 +1705,49 @@ fn plant_debrief_ui(c: &Console, ui: &mut egui::Ui, id: &str) {
                     .strong()
                     .size(16.0),
             );
-            let desc = c
-                .i18n
-                .plant(&format!("exercise-{id}"))
-                .unwrap_or_else(|| e.description.clone());
-            ui.label(c.i18n.ta("debrief-fault", &[("text", (&desc).into())]));
-            let fault = super::words::fault_told(&c.i18n, &c.view.descriptions, &e.fault);
-            ui.label(RichText::new(fault).monospace());
-            let answer = e.answer.join(", ");
-            ui.label(c.i18n.ta("debrief-answer", &[("answer", (&answer).into())]));
-            let given: Vec<String> = c
-                .score
-                .diagnoses
-                .iter()
-                .map(|(d, right)| format!("{d} {}", if *right { "✔" } else { "✘" }))
-                .collect();
-            let given = if given.is_empty() {
-                c.i18n.t("score-none")
-            } else {
-                given.join(", ")
-            };
-            ui.label(c.i18n.ta("debrief-named", &[("named", (&given).into())]));
-            debrief_levels_ui(c, ui);
-            let verdict = match (c.score.fixed, c.score.located_after_s) {
-                (true, Some(s)) => c.i18n.ta(
-                    "debrief-found",
-                    &[
-                        ("attempts", c.score.attempts.into()),
-                        ("s", (&format!("{s:.0}")).into()),
-                    ],
-                ),
-                (true, None) => c.i18n.ta(
-                    "debrief-found-before-stop",
-                    &[("attempts", c.score.attempts.into())],
-                ),
-                (false, _) => c.i18n.ta(
-                    "debrief-not-found",
-                    &[("attempts", c.score.attempts.into())],
-                ),
-            };
-            ui.label(verdict);
-            if c.sim.emulator.faults_in_force() > 0 {
-                ui.label(RichText::new(c.i18n.t("debrief-repair")).strong());
-            }
+            body(ui);
         });
-}
-
-fn debrief_levels_ui(c: &Console, ui: &mut egui::Ui) {
-    let levels: Vec<String> = c.score.levels.iter().map(ToString::to_string).collect();
-    let levels = if levels.is_empty() {
-        c.i18n.t("score-none")
-    } else {
-        levels.join(", ")
-    };
-    ui.label(c.i18n.ta("debrief-levels", &[("levels", (&levels).into())]));
 }
 
 /// The end of an exercise: the mistake, the correct fix, and how the trainee got there.
 fn debrief_ui(c: &Console, ui: &mut egui::Ui, id: &str) {
-    egui::Frame::NONE
-        .stroke(egui::Stroke::new(1.5, c.palette.text_dim))
-        .inner_margin(6.0)
-        .show(ui, |ui| {
+    debrief_frame(c, ui, id, |ui| {
+        let desc = c
+            .variants
+            .iter()
+            .find(|(v, _, _)| v == id)
+            .map(|(_, d, _)| {
+                c.i18n
+                    .plant(&format!("variant-{id}"))
+                    .unwrap_or_else(|| d.clone())
+            })
+            .unwrap_or_default();
+        ui.label(c.i18n.ta("debrief-mistake", &[("text", (&desc).into())]));
+        ui.label(RichText::new(c.i18n.t("debrief-fix")).strong());
+        for line in c.answers.get(id).into_iter().flatten() {
             ui.label(
-                RichText::new(c.i18n.ta("debrief-title", &[("id", id.into())]))
-                    .strong()
-                    .size(16.0),
+                RichText::new(format!(
+                    "{}: {}  →  {}",
+                    line.element, line.wrong, line.right
+                ))
+                .monospace(),
             );
-            let desc = c
-                .variants
-                .iter()
-                .find(|(v, _, _)| v == id)
-                .map(|(_, d, _)| {
-                    c.i18n
-                        .plant(&format!("variant-{id}"))
-                        .unwrap_or_else(|| d.clone())
-                })
-                .unwrap_or_default();
-            ui.label(c.i18n.ta("debrief-mistake", &[("text", (&desc).into())]));
-            ui.label(RichText::new(c.i18n.t("debrief-fix")).strong());
-            for line in c.answers.get(id).into_iter().flatten() {
-                ui.label(
-                    RichText::new(format!(
-                        "{}: {}  →  {}",
-                        line.element, line.wrong, line.right
-                    ))
-                    .monospace(),
-                );
-            }
-            debrief_levels_ui(c, ui);
-            let verdict = match (c.score.fixed, c.score.located_after_s) {
-                (true, Some(s)) => c.i18n.ta(
-                    "debrief-fixed",
-                    &[
-                        ("attempts", c.score.attempts.into()),
-                        ("s", (&format!("{s:.0}")).into()),
-                    ],
-                ),
-                _ => c
-                    .i18n
-                    .ta("debrief-given-up", &[("attempts", c.score.attempts.into())]),
-            };
-            ui.label(verdict);
-        });
+        }
+        debrief_levels_ui(c, ui);
+        let verdict = match (c.score.fixed, c.score.located_after_s) {
+            (true, Some(s)) => c.i18n.ta(
+                "debrief-fixed",
+                &[
+                    ("attempts", c.score.attempts.into()),
+                    ("s", (&format!("{s:.0}")).into()),
+                ],
+            ),
+            _ => c
+                .i18n
+                .ta("debrief-given-up", &[("attempts", c.score.attempts.into())]),
+        };
+        ui.label(verdict);
+    });
 }
 
 /// The fault library (inject: trainer) and the repair of the simulated plant.

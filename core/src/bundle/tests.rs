@@ -3,22 +3,7 @@ use crate::test_support::station_dir;
 
 /// A copy of the sorting station's folder (programs included) in a fresh directory.
 fn station_copy(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("vigie-bundle-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    copy_dir(&station_dir(), &dir);
-    dir
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &to.join(e.file_name()));
-        } else {
-            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-        }
-    }
+    crate::test_support::station_copy(&format!("bundle-{name}"))
 }
 
 fn load(dir: &Path) -> (PlantBundle, Vec<Problem>) {

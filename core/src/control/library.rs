@@ -259,15 +259,7 @@ impl ErrorLibrary {
         let mut variants = Vec::new();
         let mut ids = std::collections::BTreeSet::new();
         for def in file.variants {
-            let loc = text
-                .find(&format!("\"{}\"", def.id))
-                .map(|off| {
-                    let before = &text[..off];
-                    let line = before.matches('\n').count() + 1;
-                    let col = before.rsplit('\n').next().unwrap_or("").chars().count() + 1;
-                    Location::new(path, line, col)
-                })
-                .unwrap_or_else(|| Location::new(path, 1, 1));
+            let loc = Location::of_nth(path, &text, &format!("\"{}\"", def.id), 0);
             if !ids.insert(def.id.clone()) {
                 problems.push(Problem::error(
                     codes::LIBRARY_VARIANT_DUPLICATE.id,

@@ -2,6 +2,7 @@
 
 use super::packed::{Cond, Conds, Layout};
 use crate::diag::codes;
+use crate::diag::line_col;
 use crate::diag::{Location, Problem, ron_problem};
 use crate::expr::{self, Dnf, Span};
 use crate::plant::{Plant, is_valid_name};
@@ -232,16 +233,6 @@ impl Origin {
         }
         None
     }
-}
-
-/// 1-based line and column (in characters) of a byte offset.
-fn line_col(text: &str, offset: usize) -> (usize, usize) {
-    let offset = offset.min(text.len());
-    let before = text.get(..offset).unwrap_or("");
-    let line = before.matches('\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |p| p + 1);
-    let column = before.get(line_start..).unwrap_or("").chars().count() + 1;
-    (line, column)
 }
 
 /// What an action or an equation drives.

@@ -50,10 +50,9 @@ pub fn load_faults(
     plant: &Plant,
     emulator: Option<&super::Emulator>,
 ) -> Result<Vec<NamedFault>, Vec<Problem>> {
-    let Some(text) = read_text_optional(path).map_err(|p| vec![p])? else {
+    let Some((text, faults)) = read::<Vec<NamedFault>>(path)? else {
         return Ok(Vec::new());
     };
-    let faults: Vec<NamedFault> = ron::from_str(&text).map_err(|e| vec![ron_problem(path, &e)])?;
     let problems: Vec<Problem> = faults
         .iter()
         .filter_map(|(name, spec)| {
@@ -87,10 +86,9 @@ pub fn load_exercises(
     plant: &Plant,
     emulator: Option<&super::Emulator>,
 ) -> Result<Vec<PlantExercise>, Vec<Problem>> {
-    let Some(text) = read_text_optional(path).map_err(|p| vec![p])? else {
+    let Some((text, file)) = read::<ExercisesFile>(path)? else {
         return Ok(Vec::new());
     };
-    let file: ExercisesFile = ron::from_str(&text).map_err(|e| vec![ron_problem(path, &e)])?;
     let mut ids = BTreeSet::new();
     let mut problems = Vec::new();
     for (i, e) in file.exercises.iter().enumerate() {
@@ -145,6 +143,15 @@ pub fn load_exercises(
     }
 }
 
+/// The text of an optional file of the library and what it parses to (`None`: no file).
+fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<(String, T)>, Vec<Problem>> {
+    let Some(text) = read_text_optional(path).map_err(|p| vec![p])? else {
+        return Ok(None);
+    };
+    let parsed = ron::from_str(&text).map_err(|e| vec![ron_problem(path, &e)])?;
+    Ok(Some((text, parsed)))
+}
+
 /// Why `emulator` refuses to schedule `spec` (on a copy), if it does.
 fn refused(emulator: Option<&super::Emulator>, spec: &FaultSpec) -> Option<Problem> {
     emulator?.clone().try_schedule_fault(spec.clone()).err()
@@ -168,19 +175,7 @@ fn unknown_signal(plant: &Plant, spec: &FaultSpec) -> Option<String> {
 
 /// The position of the `nth` occurrence of `"key"` in `text`, else the file's start.
 fn locate(path: &Path, text: &str, key: &str, nth: usize) -> Location {
-    let quoted = format!("\"{key}\"");
-    text.match_indices(&quoted)
-        .nth(nth)
-        .map(|(off, _)| off)
-        .map_or_else(
-            || Location::new(path, 1, 1),
-            |off| {
-                let before = &text[..off];
-                let line = before.matches('\n').count() + 1;
-                let col = before.rsplit('\n').next().unwrap_or("").chars().count() + 1;
-                Location::new(path, line, col)
-            },
-        )
+    Location::of_nth(path, text, &format!("\"{key}\""), nth)
 }
 
 #[cfg(test)]

@@ -75,17 +75,12 @@ pub fn hypothesis(engine: &Engine, trip: &Trip) -> Level {
         return level;
     };
     let mut level = hypothesis_from(&engine.symbols, trip, prev, cur);
-    let unexpected = unexpected_edges(engine, trip, prev, cur);
-    for (_, highlights) in &unexpected {
-        for h in highlights {
-            if !level.highlights.contains(h) {
-                level.highlights.push(h.clone());
-            }
-        }
+    let mut first = Vec::new();
+    for (item, highlights) in unexpected_edges(engine, trip, prev, cur) {
+        highlights.into_iter().for_each(|h| level.highlight(h));
+        first.push(item);
     }
-    level
-        .items
-        .splice(0..0, unexpected.into_iter().map(|(item, _)| item));
+    level.items.splice(0..0, first);
     level
 }
 
@@ -172,13 +167,10 @@ fn follows(engine: &Engine, expected: &str) -> (String, String) {
             .iter()
             .find(|d| d.id == n)
             .map(|d| d.description.clone());
-        let text = match described {
+        out.push(match described {
             Some(d) if !d.is_empty() => format!("{n} = {d}"),
             _ => n,
-        };
-        if !out.contains(&text) {
-            out.push(text);
-        }
+        });
     }
     (ids.join(","), out.join("; "))
 }
@@ -198,11 +190,7 @@ pub fn hypothesis_from(
     for c in &trip.constraints {
         for item in constraint_hypothesis(c, &d, prev) {
             let (item, highlights) = item;
-            for h in highlights {
-                if !level.highlights.contains(&h) {
-                    level.highlights.push(h);
-                }
-            }
+            highlights.into_iter().for_each(|h| level.highlight(h));
             level.items.push(item);
         }
     }

@@ -120,6 +120,15 @@ pub struct Level {
     pub state: BTreeMap<String, bool>,
 }
 
+impl Level {
+    /// Marks `h` on the synoptic, once.
+    pub fn highlight(&mut self, h: Highlight) {
+        if !self.highlights.contains(&h) {
+            self.highlights.push(h);
+        }
+    }
+}
+
 /// The five levels for one trip.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct Explanation {

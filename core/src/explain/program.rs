@@ -389,11 +389,7 @@ pub fn add_program_hypothesis(
         .count();
     items.extend(level.items.drain(..sensors));
     for (item, highlights) in suspects {
-        for h in highlights {
-            if !level.highlights.contains(&h) {
-                level.highlights.push(h);
-            }
-        }
+        highlights.into_iter().for_each(|h| level.highlight(h));
         items.push(item);
     }
     items.append(&mut level.items);

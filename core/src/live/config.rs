@@ -301,7 +301,7 @@ impl GatewayConfig {
             *d = base.join(&*d);
         }
         let mut problems = Vec::new();
-        let at = |n: &str| Some(super::iomap::locate(text, file, n));
+        let at = |n: &str| Some(crate::diag::Location::of_nth(file, text, n, 0));
         if config.cycle_ms == 0 {
             problems.push(Problem::error(
                 codes::GATEWAY_CYCLE.id,
@@ -364,7 +364,7 @@ impl GatewayConfig {
 
     /// Checks the server section's unit id, connection limit and idle timeout.
     fn check_server(&self, problems: &mut Vec<Problem>, text: &str, file: &Path) {
-        let at = |n: &str| Some(super::iomap::locate(text, file, n));
+        let at = |n: &str| Some(crate::diag::Location::of_nth(file, text, n, 0));
         let Some(s) = &self.server else {
             return;
         };

@@ -232,7 +232,7 @@ impl IoMap {
     ) -> Result<(Self, Vec<Problem>), Vec<Problem>> {
         let mut errors = Vec::new();
         let mut warnings = Vec::new();
-        let at = |needle: &str| Some(locate(text, path, needle));
+        let at = |needle: &str| Some(Location::of_nth(path, text, needle, 0));
         let mut inputs: Vec<Option<Mapped>> = vec![None; plant.inputs.len()];
         let mut outputs: Vec<Option<Mapped>> = vec![None; plant.outputs.len()];
         let mut taken: BTreeMap<Point, String> = BTreeMap::new();
@@ -394,15 +394,4 @@ fn check_unmapped(
             Some(Location::new(path, 1, 1)),
         ));
     }
-}
-
-/// The 1-based line and column of the first occurrence of `needle` in `text`, or 1:1.
-pub(crate) fn locate(text: &str, path: &Path, needle: &str) -> Location {
-    let Some(pos) = text.find(needle) else {
-        return Location::new(path, 1, 1);
-    };
-    let before = text.get(..pos).unwrap_or("");
-    let line = before.matches('\n').count() + 1;
-    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    Location::new(path, line, column)
 }

@@ -311,11 +311,5 @@ impl DiagnoserFile {
 
 /// Where `needle` (a quoted name) first appears in `text`, for semantic errors.
 pub fn locate(text: &str, file: &Path, needle: &str) -> Location {
-    let quoted = format!("\"{needle}\"");
-    for (i, line) in text.lines().enumerate() {
-        if let Some(c) = line.find(&quoted) {
-            return Location::new(file, i + 1, line[..c].chars().count() + 1);
-        }
-    }
-    Location::new(file, 1, 1)
+    Location::of_nth(file, text, &format!("\"{needle}\""), 0)
 }

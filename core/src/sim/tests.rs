@@ -1336,20 +1336,7 @@ impl Drop for WithContactor {
 }
 
 fn with_contactor(tag: &str) -> WithContactor {
-    fn copy(from: &Path, to: &Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for e in std::fs::read_dir(from).unwrap() {
-            let e = e.unwrap();
-            if e.file_type().unwrap().is_dir() {
-                copy(&e.path(), &to.join(e.file_name()));
-            } else {
-                std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-            }
-        }
-    }
-    let dir = std::env::temp_dir().join(format!("vigie-km-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    copy(&station_dir(), &dir);
+    let dir = crate::test_support::station_copy(&format!("km-{tag}"));
     let plant = std::fs::read_to_string(dir.join("plant.ron")).unwrap();
     let anchor = "        (id: \"A0\", kind: Actuator";
     let plant = plant.replacen(

@@ -335,9 +335,9 @@ impl Model {
                 .iter()
                 .map(|c| c.dnf.clone())
                 .collect(),
-            n_in: bundle.plant.inputs.len(),
+            n_in,
             n_out,
-            n_obs: bundle.observers.len(),
+            n_obs,
             input_names: bundle.symbols.names(Space::Input).to_vec(),
             output_names: bundle.symbols.names(Space::Output).to_vec(),
             obs_names: bundle.symbols.names(Space::Observer).to_vec(),
