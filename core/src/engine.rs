@@ -185,6 +185,9 @@ pub struct Engine {
     /// Outputs the safety function keeps ON whatever the control program
     /// (`held_on` in `plant.ron`: a safety contactor): only the fallback takes them off.
     held_on: Vec<usize>,
+    /// Mirror contacts (`feedback_of`): (input, output). At an attach to a running
+    /// plant, the output's previous value is what its mirror shows, not the command.
+    mirrors: Vec<(usize, usize)>,
     /// Sensors the diagnosers estimate: (input, flag auxiliary, estimate auxiliary).
     estimates: Vec<(usize, usize, usize)>,
     /// Per entry of `estimates`: read from the estimate in the previous cycle.
@@ -249,6 +252,7 @@ impl Engine {
             held_on: (0..n_out)
                 .filter(|&k| bundle.plant.outputs[k].held_on)
                 .collect(),
+            mirrors: bundle.plant.mirrors(),
             estimates: Vec::new(),
             estimated: Vec::new(),
             filter_state: Filter::new(&bundle.constraints, n_out).new_state(),
@@ -473,6 +477,14 @@ impl Engine {
             self.frame
                 .prev_mut(Space::Output)
                 .copy_from(&self.commanded);
+            // A contactor with a mirror contact is observed: the running plant's
+            // previous value is what the mirror shows (a safety contactor not yet
+            // closed by the link is not taken for a dead one).
+            for &(i, o) in &self.mirrors {
+                if i < inputs.len() && o < self.commanded.len() {
+                    self.frame.prev_mut(Space::Output).set(o, inputs.get(i));
+                }
+            }
         }
 
         if self.mode != FilterMode::Off {

@@ -83,7 +83,12 @@ pub fn from_text(
         &bundle.symbols,
         Some(&bundle.constraints),
     )?;
-    let safe: Vec<_> = bundle.plant.outputs.iter().map(|s| s.safe).collect();
+    let safe: Vec<_> = bundle
+        .plant
+        .outputs
+        .iter()
+        .map(|s| (!(s.held_on && s.safe == crate::plant::SafeValue::One)).then_some(s.safe))
+        .collect();
     let rewritten = coop::rewrite(&bundle.constraints, &bundle.symbols, &compiled, &safe)
         .map_err(|m| vec![Problem::error(codes::DIAGNOSER_REWRITE.id, m, None)])?;
     let file_name = dir.join("constraints.txt (rewritten by the diagnosers)");

@@ -128,7 +128,8 @@ pub(crate) struct Plant {
 impl Plant {
     pub(crate) fn start(port: Option<u16>) -> Self {
         let mut cmd = Command::new(python());
-        cmd.arg(repo().join("tests/peers/plant.py"));
+        cmd.arg(repo().join("tests/peers/plant.py"))
+            .args(["--mirror", &station_mirrors()]);
         if let Some(p) = port {
             cmd.args(["--port", &p.to_string()]);
         }
@@ -162,6 +163,28 @@ impl Plant {
             .unwrap_or_else(|| panic!("plant: {line}"))[..7]
             .to_string()
     }
+}
+
+/// The sorting station's mirror contacts as the plant peer's `--mirror` wiring
+/// (`coil:input,...`), read from `plant.ron`: each contactor's auxiliary contact follows
+/// its coil, as the real plant's wiring does.
+pub(crate) fn station_mirrors() -> String {
+    use vigie_core::plant::{Address, Plant};
+    let plant = Plant::load(&repo().join("layouts/sorting-station/plant.ron"))
+        .unwrap_or_else(|p| panic!("{p:?}"));
+    plant
+        .mirrors()
+        .into_iter()
+        .filter_map(
+            |(i, o)| match (plant.inputs[i].address, plant.outputs[o].address) {
+                (Some(Address::DiscreteInput(d)), Some(Address::Coil(c))) => {
+                    Some(format!("{c}:{d}"))
+                }
+                _ => None,
+            },
+        )
+        .collect::<Vec<_>>()
+        .join(",")
 }
 
 /// The pymodbus PLC.

@@ -1,7 +1,9 @@
 """A plant for Vigie's integration tests: a pymodbus Modbus TCP server on 127.0.0.1.
 
-Sensors are discrete inputs 0..15, actuators coils 0..15 (unit 1), like the sorting
-station's io-map. Driven line by line on stdin, answers on stdout:
+Sensors are discrete inputs 0..31, actuators coils 0..31 (unit 1), like the sorting
+station's io-map. `--mirror C:D,...` wires mirror contacts: a write to coil C sets
+discrete input D in the same request (a contactor's auxiliary contact, read by the next
+scan); `di` still sets any input by hand (a welded or dead contactor). Driven line by line on stdin, answers on stdout:
   di ADDR 0|1     set a discrete input            -> "ok"
   co ADDR 0|1     set a coil (a plant that exposes commanded outputs) -> "ok"
   coils           the first 16 coils              -> "coils 0100..."
@@ -23,6 +25,26 @@ from pymodbus.datastore import (
 from pymodbus.server import ModbusTcpServer
 
 
+class Mirrored:
+    """The server's datastore, with coil writes copied to the inputs wired to them."""
+
+    def __init__(self, inner, wiring):
+        self.inner = inner
+        self.wiring = wiring
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+    async def async_setValues(self, device_id, func_code, address, values):  # noqa: N802
+        result = await self.inner.async_setValues(device_id, func_code, address, values)
+        if func_code in (5, 15) and not result:
+            for k, v in enumerate(values):
+                d = self.wiring.get(address + k)
+                if d is not None:
+                    await self.inner.async_setValues(device_id, 2, d, [bool(v)])
+        return result
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -32,14 +54,17 @@ def free_port() -> int:
 async def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--port", type=int, default=0)
+    parser.add_argument("--mirror", default="", help="C:D,... coil C mirrored on input D")
     args = parser.parse_args()
+    wiring = {int(c): int(d) for c, d in (p.split(":") for p in args.mirror.split(",") if p)}
     logging.disable(logging.WARNING)
     port = args.port or free_port()
     device = ModbusDeviceContext(
-        di=ModbusSequentialDataBlock(1, [False] * 16),
-        co=ModbusSequentialDataBlock(1, [False] * 16),
+        di=ModbusSequentialDataBlock(1, [False] * 32),
+        co=ModbusSequentialDataBlock(1, [False] * 32),
     )
     server = ModbusTcpServer(ModbusServerContext(devices={1: device}), address=("127.0.0.1", port))
+    server.context = Mirrored(server.context, wiring)
     task = asyncio.create_task(server.serve_forever())
     # Wait until the socket accepts connections.
     for _ in range(200):

@@ -79,7 +79,7 @@ pub(crate) fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     } else {
         let g = &report.geometry;
         println!(
-            "plant: {}\nabstraction: cell {} mm, step {:.1} ms, rotation {}/{} mdeg per step, at most {} boxes, exits always running",
+            "plant: {}\nabstraction: cell {} mm, step {:.1} ms, rotation {}/{} mdeg per step, at most {} boxes, exits always running, safety contactors held ON (only the fallback releases them)",
             report.plant,
             g.cell_mm,
             g.step_us as f64 / 1000.0,
@@ -92,7 +92,7 @@ pub(crate) fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
             full.states, full.transitions, t_full
         );
         println!(
-            "assumptions: at most {} boxes at once, exits always running, boxes travel forward on the feed line, PLC cycle shorter than a step",
+            "assumptions: at most {} boxes at once, exits always running, safety contactors held ON and never welded or dead, boxes travel forward on the feed line, PLC cycle shorter than a step",
             report.max_boxes
         );
         match &report.full.hazard {

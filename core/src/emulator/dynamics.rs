@@ -61,7 +61,7 @@ impl Emulator {
         } else {
             i64::from(t.loading_mdeg) * 1000
         };
-        if self.angle != target {
+        if self.angle != target && self.unpowered() >> (self.table + 2) & 1 == 0 {
             return 1;
         }
         self.drive(act);
@@ -95,6 +95,7 @@ impl Emulator {
         let k = i64::try_from(k).unwrap_or(0);
         for b in &mut self.bodies {
             b.c += self.vel[b.part as usize] * k;
+            b.slip = 0;
         }
         self.moving = false;
         self.rot_dir = 0;
@@ -144,7 +145,10 @@ impl Emulator {
         let target = if a4 { unload } else { load };
         let dir = (target - self.angle).signum();
         let ov = self.overrides.table;
+        // Without its supply (a safety valve released) the table stays where it is,
+        // whatever its valve says: it does not return on its own.
         let blocked = ov & 4 != 0
+            || self.unpowered() >> (self.table + 2) & 1 == 1
             || (ov & 1 != 0 && self.angle == load)
             || (ov & 2 != 0 && self.angle == unload);
         let old = self.angle;
@@ -393,9 +397,11 @@ impl Emulator {
         // Within the docking tolerance the guides accept the misalignment: the table is
         // joined to the conveyors and a straddling box is not sheared.
         let rotating = self.pos == TablePos::Other;
+        let tolerance = self.layout.push_tolerance_mm.max(0) * 1000;
         for i in 0..self.bodies.len() {
             let b = self.bodies[i];
             let p = b.part as usize;
+            let mut pushing = 0;
             for e in [START, END] {
                 let over = overhang(&b, e, self.parts[p].len);
                 if over <= 0 {
@@ -423,12 +429,19 @@ impl Emulator {
                 let out = if e == END { 1 } else { -1 };
                 let vp = self.vel[p] * out;
                 let vq = self.vel[q.part as usize] * if q.end == START { 1 } else { -1 };
-                if ((vp > 0 && vq <= 0) || (vq < 0 && vp >= 0))
-                    && self.first(i, HazardKind::PushedAgainstStopped)
-                {
-                    self.report_pushed(i, q);
+                if (vp > 0 && vq <= 0) || (vq < 0 && vp >= 0) {
+                    // The driving surface slides under the box held by the other one:
+                    // damage once it has slid `push_tolerance_mm` without a break.
+                    pushing = pushing.max((vp - vq).abs());
+                    if self.bodies[i].slip + pushing > tolerance
+                        && self.first(i, HazardKind::PushedAgainstStopped)
+                    {
+                        self.report_pushed(i, q);
+                    }
                 }
             }
+            let b = &mut self.bodies[i];
+            b.slip = if pushing > 0 { b.slip + pushing } else { 0 };
         }
     }
 

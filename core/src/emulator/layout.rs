@@ -218,6 +218,12 @@ pub struct Layout {
     pub straddle_margin_mm: i64,
     /// A box straddles the table edge (shear hazard) when it passes it by more than this, mm.
     pub shear_margin_mm: i64,
+    /// A box pushed against a stopped surface is damaged once the driving surface has
+    /// slid this far under it without a break, mm (0, the default: at once). A belt
+    /// that slips a few millimetres under a box before the drives are cut does not
+    /// damage it; one that keeps pushing does.
+    #[serde(default)]
+    pub push_tolerance_mm: i64,
     /// Height of the high beam, mm.
     pub high_beam_mm: i64,
     /// Straight conveyors.
@@ -284,9 +290,8 @@ impl Layout {
         id == self.table.id || self.conveyors.iter().any(|c| c.id == id)
     }
 
-    /// Internal consistency: parts referenced exist, sizes are positive.
-    pub fn check(&self) -> Vec<Problem> {
-        let mut out = Vec::new();
+    /// The simulation step and the push tolerance are within their bounds.
+    fn check_steps(&self, out: &mut Vec<Problem>) {
         if !(1..=MAX_STEP_MS).contains(&self.step_ms) {
             out.push(Problem::error(
                 codes::LAYOUT_INVALID.id,
@@ -297,6 +302,22 @@ impl Layout {
                 self.field_location("step_ms"),
             ));
         }
+        if !(0..=1000).contains(&self.push_tolerance_mm) {
+            out.push(Problem::error(
+                codes::LAYOUT_INVALID.id,
+                format!(
+                    "push_tolerance_mm is {} mm: from 0 to 1000 mm",
+                    self.push_tolerance_mm
+                ),
+                self.field_location("push_tolerance_mm"),
+            ));
+        }
+    }
+
+    /// Internal consistency: parts referenced exist, sizes are positive.
+    pub fn check(&self) -> Vec<Problem> {
+        let mut out = Vec::new();
+        self.check_steps(&mut out);
         if let ArrivalPlan::Periodic {
             period_ms,
             jitter_ms,

@@ -130,11 +130,9 @@ pub struct Emulator {
     slow: Vec<u8>,
     frame: Frame,
     has_conditions: bool,
-    /// Safety contactors (`supplies` in `plant.ron`): the plant output, and the roles
-    /// it powers.
+    /// Safety contactors (`supplies` in `plant.ron`): the contactor's role, and the
+    /// roles it powers.
     supply: Vec<(usize, u64)>,
-    /// The roles without power this period (a supplying contactor released).
-    unpowered: u64,
     /// Mirror contacts (`feedback_of`): the plant input, the role of the actuator it
     /// mirrors (`None`: not a drive of the layout, the output itself), its output.
     feedback: Vec<(usize, Option<u8>, usize)>,
@@ -156,17 +154,7 @@ impl Emulator {
         let table = parts.len() - 1;
         let (probes, angles, sensor_plant) = sensor_probes(layout, plant, table, parts.len());
         let t = &layout.table;
-        let role_plant = layout
-            .conveyors
-            .iter()
-            .map(|c| c.actuator.as_str())
-            .chain([
-                t.plus_actuator.as_str(),
-                t.minus_actuator.as_str(),
-                t.rotate_actuator.as_str(),
-            ])
-            .map(|a| plant.output(a).unwrap_or(usize::MAX))
-            .collect::<Vec<_>>();
+        let role_plant = roles(layout, plant);
         let symbols = plant.symbols();
         let frame = Frame::new(symbols.sizes());
         let n_roles = role_plant.len();
@@ -175,9 +163,12 @@ impl Emulator {
         let supply = plant
             .supplies()
             .into_iter()
-            .map(|(o, fed)| {
+            .filter_map(|(o, fed)| {
                 let roles = fed.into_iter().filter_map(role_of);
-                (o, roles.fold(0u64, |m, r| m | 1 << r))
+                Some((
+                    usize::from(role_of(o)?),
+                    roles.fold(0u64, |m, r| m | 1 << r),
+                ))
             })
             .collect();
         let feedback = plant
@@ -236,7 +227,6 @@ impl Emulator {
             frame,
             has_conditions: false,
             supply,
-            unpowered: 0,
             feedback,
         };
         emu.update_links(true);
@@ -255,11 +245,6 @@ impl Emulator {
             }
         }
         self.cmd = cmd;
-        self.unpowered = self
-            .supply
-            .iter()
-            .filter(|(o, _)| !outputs.get(*o))
-            .fold(0, |m, (_, mask)| m | mask);
         self.carry += dt.0;
         while self.carry >= self.step_ms {
             let quiet = self.quiet_steps(self.carry / self.step_ms);
@@ -290,9 +275,19 @@ impl Emulator {
         (self.cmd & !self.overrides.act_off) | self.overrides.act_on
     }
 
+    /// The roles without power: a safety contactor that supplies them is open
+    /// (released, or dead; a fault changes it within the step).
+    pub(super) fn unpowered(&self) -> u64 {
+        let closed = self.contactors();
+        self.supply
+            .iter()
+            .filter(|(r, _)| closed >> r & 1 == 0)
+            .fold(0, |m, (_, mask)| m | mask)
+    }
+
     /// The roles that act: their contactor closed and their supply on.
     pub(super) fn acting(&self) -> u64 {
-        self.contactors() & !self.unpowered
+        self.contactors() & !self.unpowered()
     }
 
     /// Sensor values by plant input index, faults applied.
@@ -351,9 +346,11 @@ impl Emulator {
         Ok(())
     }
 
-    /// The actuators the emulator drives, by role (the ids a fault may name).
+    /// The actuators the emulator drives, by role (the ids a fault may name): the
+    /// layout's drives, then the safety contactors that supply them.
     pub fn actuators(&self) -> Vec<String> {
         let t = &self.layout.table;
+        let drives = self.layout.conveyors.len() + 3;
         self.layout
             .conveyors
             .iter()
@@ -363,6 +360,11 @@ impl Emulator {
                 t.minus_actuator.clone(),
                 t.rotate_actuator.clone(),
             ])
+            .chain(self.role_plant[drives..].iter().map(|&o| {
+                self.symbols
+                    .name(crate::symbols::Space::Output, o as u32)
+                    .to_owned()
+            }))
             .collect()
     }
 
@@ -494,6 +496,7 @@ impl Emulator {
             c,
             damaged: false,
             reported: 0,
+            slip: 0,
         });
         id
     }
@@ -617,6 +620,30 @@ fn sensor_probes(layout: &Layout, plant: &Plant, table: usize, n_parts: usize) -
         }
     }
     (probes, angles, sensor_plant)
+}
+
+/// The plant output of each role: the layout's drives (conveyors, then the table's
+/// rollers + and -, then its rotation), then each safety contactor that is not one
+/// (`supplies`): a fault may weld or kill it like any other contactor.
+fn roles(layout: &Layout, plant: &Plant) -> Vec<usize> {
+    let t = &layout.table;
+    let mut role_plant = layout
+        .conveyors
+        .iter()
+        .map(|c| c.actuator.as_str())
+        .chain([
+            t.plus_actuator.as_str(),
+            t.minus_actuator.as_str(),
+            t.rotate_actuator.as_str(),
+        ])
+        .map(|a| plant.output(a).unwrap_or(usize::MAX))
+        .collect::<Vec<_>>();
+    for (o, _) in plant.supplies() {
+        if !role_plant.contains(&o) {
+            role_plant.push(o);
+        }
+    }
+    role_plant
 }
 
 #[cfg(test)]

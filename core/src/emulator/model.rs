@@ -69,6 +69,9 @@ pub(crate) struct Body {
     pub(crate) damaged: bool,
     /// Hazard kinds already reported, one bit per [`HazardKind`].
     pub(crate) reported: u8,
+    /// How far a driving surface has slid under it against a stopped one without a
+    /// break, µm.
+    pub(crate) slip: i64,
 }
 
 /// Where a box is.

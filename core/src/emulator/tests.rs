@@ -587,3 +587,90 @@ fn quiet_steps_change_nothing() {
     assert_eq!(fast.stats(), slow.stats());
     assert!(fast.stats().created > 10);
 }
+
+/// `push_tolerance_mm`: a box pushed against a stopped surface is damaged once the
+/// driving surface has slid that far under it without a break (10 mm: 33 ms at
+/// 300 mm/s), not at the first millimetre; a push broken off sooner damages nothing,
+/// and the next push counts from zero.
+#[test]
+fn a_push_is_damage_once_the_belt_has_slid_the_tolerance() {
+    let at_once = {
+        let mut e = emu(1);
+        e.place_box("entry", 1000, BoxSize::Small);
+        until(&mut e, &outs(&["A0"]), 3000, |e| !e.hazards().is_empty()).expect("hazard")
+    };
+    let mut l = layout();
+    l.push_tolerance_mm = 10;
+    let tolerant = |e: &mut Emulator| {
+        e.place_box("entry", 1000, BoxSize::Small);
+    };
+    let mut e = Emulator::new(&l, &plant(), 1).expect("emulator");
+    e.set_arrivals(ArrivalPlan::Off);
+    tolerant(&mut e);
+    let later = until(&mut e, &outs(&["A0"]), 3000, |e| !e.hazards().is_empty()).expect("hazard");
+    // 10 mm at 300 µm per ms: the 34th millisecond of sliding.
+    assert_eq!(later - at_once, 33, "{at_once} → {later}");
+    // Pushes of 20 ms with pauses: never 10 mm in one go.
+    let mut e = Emulator::new(&l, &plant(), 1).expect("emulator");
+    e.set_arrivals(ArrivalPlan::Off);
+    tolerant(&mut e);
+    until(&mut e, &outs(&["A0"]), 3000, |e| e.boxes()[0].x_mm > 1055.0).expect("straddles");
+    for _ in 0..20 {
+        e.step(Millis(20), &outs(&["A0"]));
+        e.step(Millis(20), &outs(&[]));
+    }
+    assert!(e.hazards().is_empty(), "{:?}", e.hazards());
+    let mut bad = l.clone();
+    bad.push_tolerance_mm = -1;
+    assert_eq!(bad.check().len(), 1, "a negative tolerance is refused");
+}
+
+/// A plant with a safety valve on the turntable's air and a safety contactor on the
+/// drives (`supplies` in `plant.ron`): without its supply the table stays where it is
+/// (it does not return as a released monostable valve would), the drives stop
+/// whatever their own output, and the safety devices are actuators a fault can weld or
+/// kill, mirrored by their contacts.
+#[test]
+fn supplies_freeze_the_table_stop_the_drives_and_can_fail() {
+    let dir = crate::test_support::edm_station("edm-emulator");
+    let path = dir.join("plant.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let p = Plant::from_ron(&text.replacen("\nPlant(", "\n(", 1), &path).expect("plant");
+    let l = Layout::load(&dir.join("layout.ron")).expect("layout");
+    let on = |names: &[&str]| {
+        let mut b = Bits::zeros(p.outputs.len());
+        for a in names {
+            b.set(p.output(a).expect("actuator"), true);
+        }
+        b
+    };
+    let mut e = Emulator::new(&l, &p, 1).expect("emulator");
+    e.set_arrivals(ArrivalPlan::Off);
+    assert!(e.actuators().iter().any(|a| a == "KM0") && e.actuators().iter().any(|a| a == "YV0"));
+    e.step(Millis(1500), &on(&["A4", "YV0", "KM0"]));
+    let half = e.table_angle_mdeg();
+    assert!((40_000..50_000).contains(&half), "{half}");
+    for out in [on(&["A4", "KM0"]), on(&["KM0"])] {
+        e.step(Millis(2000), &out);
+        assert_eq!(e.table_angle_mdeg(), half, "frozen without its air");
+    }
+    e.step(Millis(4000), &on(&["YV0", "KM0"]));
+    assert_eq!(e.table_angle_mdeg(), 0, "back with its air");
+    // The drives stop without KM0, and a dead KM0 stops them although it is commanded.
+    e.place_box("entry", 100, BoxSize::Small);
+    let x0 = e.boxes()[0].x_mm;
+    e.step(Millis(500), &on(&["A0", "YV0"]));
+    assert!((e.boxes()[0].x_mm - x0).abs() < 0.5, "no supply, no motion");
+    let fb = p.input("KM0_fb").unwrap();
+    e.step(Millis(10), &on(&["A0", "KM0", "YV0"]));
+    assert!(e.sensors().get(fb), "KM0's mirror shows it closed");
+    e.schedule_fault(fault(
+        Trigger::At(0),
+        FaultKind::ActuatorStuckOff("KM0".into()),
+        None,
+    ));
+    let x1 = e.boxes()[0].x_mm;
+    e.step(Millis(500), &on(&["A0", "KM0", "YV0"]));
+    assert!((e.boxes()[0].x_mm - x1).abs() < 0.5, "KM0 dead: no motion");
+    assert!(!e.sensors().get(fb), "KM0's mirror shows it open");
+}

@@ -494,3 +494,32 @@ fn the_reinitialisation_of_an_emptied_plant_clears_every_observer() {
     assert_eq!(run.engine.reinit_cleared, ["P36"]);
     assert!(!run.engine.is_tripped());
 }
+
+/// An attach to a running plant takes a mirrored contactor's previous value from its
+/// mirror contact, not from the command: a safety contactor the link has not closed yet
+/// (its mirror open, KM0 commanded ON by the safety function) is not taken for a dead
+/// one (CSk15 = KM0 . KM0* . /KM0_fb). A cold start reads every previous output as 0 and
+/// does not trip either; an attach where the mirror shows the contactor closed while the
+/// plant's previous command is unknown keeps it closed.
+#[test]
+fn an_attach_reads_a_mirrored_contactor_from_its_mirror() {
+    let dir = crate::test_support::edm_station("edm-attach");
+    let (b, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+    let mut attached = Run::with_bundle(b.clone(), FilterMode::Enforce);
+    attached.engine.set_first_cycle(FirstCycle::Attach);
+    attached.cycle(&[], &[]);
+    assert!(
+        !attached.engine.is_tripped(),
+        "{:?}",
+        attached.engine.trips.first().map(|t| &t.constraints)
+    );
+    // The contactors close with the link: their mirrors follow in the next cycle.
+    attached.cycle(&["KM0_fb", "YV0_fb"], &[]);
+    assert!(!attached.engine.is_tripped());
+    // Then KM0 drops out while the safety function holds it: a dead contactor.
+    attached.cycle(&["YV0_fb"], &[]);
+    assert!(attached.engine.is_tripped(), "KM0 dead");
+    let mut cold = Run::with_bundle(b, FilterMode::Enforce);
+    cold.cycle(&[], &[]);
+    assert!(!cold.engine.is_tripped());
+}

@@ -53,11 +53,16 @@ fn substitute(e: &Expr, sensors: &[(String, String)]) -> Expr {
 /// table under a box), and the constraints stay whole, so the stop and the protection
 /// never conflict. A forcing term is one whose other literals read no output of the
 /// current cycle (those the stop itself moves to their safe values).
+///
+/// `safe` is the value the stop takes each output to, by output index; `None` leaves
+/// the output alone: a safety contactor held ON whose safe value is 1 (`held_on`,
+/// `safe: One`) is 1 whatever the program, and only a term that forces it off (a
+/// welded drive's mirror contact) releases it, which the constraints already say.
 pub fn rewrite(
     set: &ConstraintSet,
     symbols: &Symbols,
     compiled: &Compiled,
-    safe: &[SafeValue],
+    safe: &[Option<SafeValue>],
 ) -> Result<String, String> {
     let mut sensors = Vec::new();
     let mut stops = Vec::new();
@@ -114,7 +119,10 @@ pub fn rewrite(
             Some(c) if c.iter().any(Vec::is_empty) => None,
             Some(c) => Some(format!(" . /({})", render_dnf(&c, symbols))),
         };
-        let texts = match safe.get(o).copied().unwrap_or_default() {
+        let Some(value) = safe.get(o).copied().unwrap_or(Some(SafeValue::Zero)) else {
+            continue;
+        };
+        let texts = match value {
             SafeValue::Zero => vec![unless(false).map(|u| format!("{name}{u}"))],
             SafeValue::One => vec![unless(true).map(|u| format!("/{name}{u}"))],
             SafeValue::Hold => vec![

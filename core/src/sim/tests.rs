@@ -1324,9 +1324,8 @@ fn a_beam_that_rises_where_no_item_can_come_is_named_first() {
     );
 }
 
-/// A copy of the station folder with a safety contactor on the drives' supply and a
-/// mirror contact on the intermediate conveyor's contactor (issue 17's welded actuators),
-/// removed on drop.
+/// The station with external device monitoring (`test_support::edm_station`), removed
+/// on drop.
 struct WithContactor(PathBuf);
 
 impl Drop for WithContactor {
@@ -1336,38 +1335,15 @@ impl Drop for WithContactor {
 }
 
 fn with_contactor(tag: &str) -> WithContactor {
-    let dir = crate::test_support::station_copy(&format!("km-{tag}"));
-    let plant = std::fs::read_to_string(dir.join("plant.ron")).unwrap();
-    let anchor = "        (id: \"A0\", kind: Actuator";
-    let plant = plant.replacen(
-        anchor,
-        &format!(
-            "        (id: \"A1_fb\", kind: Sensor, description: \"A1's contactor closed (mirror contact)\", feedback_of: Some(\"A1\")),\n\
-             {anchor}"
-        ),
-        1,
-    );
-    let plant = plant.replacen(
-        "    ],\n)",
-        "        (id: \"KM0\", kind: Actuator, description: \"Safety contactor: the drives' supply\", supplies: [\"A0\", \"A1\", \"A2\", \"A3\", \"A5\", \"A6\"], held_on: true),\n    ],\n)",
-        1,
-    );
-    std::fs::write(dir.join("plant.ron"), plant).unwrap();
-    let mut constraints = std::fs::read_to_string(dir.join("constraints.txt")).unwrap();
-    constraints.push_str(
-        "CSk1 = KM0 . A1_fb . /A1*   # A1's contactor still closed a cycle after its release: welded, cut the supply\n\
-         CSk2 = KM0 . A1* . /A1_fb   # A1's contactor still open a cycle after its command: dead, cut the supply\n",
-    );
-    std::fs::write(dir.join("constraints.txt"), constraints).unwrap();
-    WithContactor(dir)
+    WithContactor(crate::test_support::edm_station(&format!("km-{tag}")))
 }
 
 /// Issue 17, welded actuators: no output of the paper's station can stop a welded
 /// contactor, so a welded intermediate conveyor keeps pushing boxes, and damages them.
 /// With a safety contactor on the drives' supply and a mirror contact on A1's
-/// contactor (plant data only: `supplies`, `held_on`, `feedback_of`, two monomials),
+/// contactor (plant data only: `supplies`, `held_on`, `feedback_of`, monomials),
 /// the weld shows one cycle after A1's release, the filter releases the contactor and
-/// the belt stops: no hazard, a trip on CSk1. Fault-free, the contactor changes
+/// the belt stops: no hazard, a trip on CSk3. Fault-free, the contactor changes
 /// nothing (no trip, the same deliveries).
 #[test]
 fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
@@ -1402,7 +1378,7 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
             .engine
             .trips
             .iter()
-            .any(|t| t.constraints.iter().any(|c| c.id == "CSk1"))
+            .any(|t| t.constraints.iter().any(|c| c.id == "CSk3"))
         {
             km_trips += 1;
         }
@@ -1441,4 +1417,46 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
         sim.engine.trips.first()
     );
     assert_eq!(sim.emulator.stats(), plain.emulator.stats());
+}
+
+/// Issue 17's welded and dead actuators, the campaign's way: every drive and both
+/// safety devices of the station with external device monitoring, welded and dead, at
+/// the sustained arrival period, filter and diagnosers on: no hazard and no wrong
+/// certain diagnosis (a dead drive shows on its mirror in the next cycle and its
+/// supply is cut before a belt has slid 10 mm under a box; a welded table valve is
+/// frozen within the docking tolerance). The paper's station under the same faults
+/// damages boxes.
+#[test]
+fn with_device_monitoring_no_welded_or_dead_drive_damages_a_box() {
+    use crate::pop::transients::{Config, run as campaign};
+    let edm = with_contactor("campaign");
+    let config = |only: &str| Config {
+        seeds: 2,
+        first_seed: 3,
+        only: Some(only.into()),
+        fault_free_hours: 0,
+        ..Config::default()
+    };
+    let mut paper_hazards = 0;
+    for only in [" welded", " dead"] {
+        let r = campaign(&edm.0, &config(only))
+            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        assert_eq!(r.rows.len(), 9, "{only}: seven drives, KM0 and YV0");
+        for row in &r.rows {
+            assert_eq!(
+                (row.hazards, row.wrong),
+                (0, 0),
+                "{}: {:?}",
+                row.name,
+                row.failures
+            );
+        }
+        let paper = campaign(&crate::test_support::station_dir(), &config(only))
+            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        paper_hazards += paper.rows.iter().map(|r| r.hazards).sum::<usize>();
+    }
+    assert!(
+        paper_hazards > 0,
+        "the paper's station cannot stop a welded or dead drive"
+    );
 }

@@ -27,7 +27,8 @@
 //!   FE(C3), 2P's RE(C0)), as the filter sees it on the real plant.
 //!
 //! Assumptions (stated in every report): at most `max_boxes` boxes, exits always
-//! running, boxes on the feed line only travel forward, PLC cycle shorter than the
+//! commanded, safety contactors held ON by the safety function (`held_on`; only the
+//! fallback releases them), contactors that neither weld nor die, boxes on the feed line only travel forward, PLC cycle shorter than the
 //! time a box takes to cross a 20 mm gap.
 //!
 //! [`verify`] answers safety, permissiveness (a box can be delivered at each exit),
@@ -250,8 +251,10 @@ pub struct Model {
     output_names: Vec<String>,
     obs_names: Vec<String>,
     max_boxes: usize,
-    /// Outputs the control may command (all but the exits').
+    /// Outputs the control may command (all but the exits' and the safety contactors').
     free_outputs: Vec<usize>,
+    /// Outputs ON whatever the control: the exits, the safety contactors (`held_on`).
+    always_on: u64,
     /// Variables read at t-1 by a constraint, an observer or an invariant (inputs,
     /// outputs, observers): the state keeps only these of the previous cycle.
     prev_mask: (u64, u64, u64),
@@ -274,49 +277,14 @@ impl Model {
             ));
         }
         let n_out = bundle.plant.outputs.len();
-        let free_outputs = (0..n_out).filter(|k| !geo.exit_act.contains(k)).collect();
-        let mut prev_mask = (0u64, 0u64, 0u64);
-        let mut dnfs: Vec<expr::Dnf> = bundle
-            .constraints
-            .constraints
-            .iter()
-            .chain(&bundle.invariants.constraints)
-            .map(|c| c.dnf.clone())
-            .collect();
-        for d in &bundle.observers.defs {
-            let texts: Vec<&String> = match &d.rule {
-                crate::observers::Rule::Memory { set, reset } => vec![set, reset],
-                crate::observers::Rule::Counter {
-                    up, down, clear, ..
-                } => {
-                    let mut v = vec![up, down];
-                    v.extend(clear.as_ref());
-                    v
-                }
-            };
-            for t in texts {
-                match expr::parse_str(t).and_then(|e| e.to_dnf(&bundle.symbols)) {
-                    Ok(dnf) => dnfs.push(dnf),
-                    // Unreadable rule: keep every previous value.
-                    Err(_) => prev_mask = (u64::MAX, u64::MAX, u64::MAX),
-                }
-            }
-        }
-        for l in dnfs.iter().flatten().flatten() {
-            if l.var.prev && l.var.index < 64 {
-                let bit = 1u64 << l.var.index;
-                match l.var.space {
-                    Space::Input => prev_mask.0 |= bit,
-                    Space::Output => prev_mask.1 |= bit,
-                    Space::Observer => prev_mask.2 |= bit,
-                    Space::Aux => {}
-                }
-            }
-        }
+        // The exits always run, and the safety function holds its contactors ON
+        // (`held_on`): the control commands neither; only the fallback releases them.
+        let always_on = (0..n_out)
+            .filter(|&k| geo.exit_act.contains(&k) || bundle.plant.outputs[k].held_on)
+            .fold(0u64, |m, k| m | 1 << k);
+        let free_outputs = (0..n_out).filter(|k| always_on >> k & 1 == 0).collect();
         let feedback = bundle.plant.mirrors();
-        for &(_, o) in &feedback {
-            prev_mask.1 |= 1 << o;
-        }
+        let prev_mask = prev_reads(bundle, &feedback);
         let supply = bundle
             .plant
             .supplies()
@@ -343,6 +311,7 @@ impl Model {
             obs_names: bundle.symbols.names(Space::Observer).to_vec(),
             max_boxes: max_boxes.clamp(1, model::MAX_BOXES),
             free_outputs,
+            always_on,
             prev_mask,
             feedback,
             supply,
@@ -409,12 +378,16 @@ impl Model {
         }
     }
 
-    /// The outputs that act: `applied` less those whose safety contactor is released.
-    fn powered(&self, applied: u64) -> u64 {
-        self.supply
+    /// The outputs that act: `applied` less those whose safety contactor is released;
+    /// and whether the rotation is without its supply (the table then stays where it
+    /// is, as in the emulator: it does not return on its own).
+    fn powered(&self, applied: u64) -> (u64, bool) {
+        let unpowered = self
+            .supply
             .iter()
             .filter(|(o, _)| applied >> o & 1 == 0)
-            .fold(applied, |a, (_, mask)| a & !mask)
+            .fold(0, |a, (_, mask)| a | mask);
+        (applied & !unpowered, unpowered >> self.geo.rotate & 1 == 1)
     }
 
     /// The initial state.
@@ -483,6 +456,77 @@ impl Model {
         }
         s
     }
+}
+
+/// The variables read at t-1 by a constraint, an observer or an invariant (inputs,
+/// outputs, observers), one bit each; a mirror contact read as its output at t-1.
+fn prev_reads(bundle: &PlantBundle, feedback: &[(usize, usize)]) -> (u64, u64, u64) {
+    let mut prev_mask = (0u64, 0u64, 0u64);
+    let mut dnfs: Vec<expr::Dnf> = bundle
+        .constraints
+        .constraints
+        .iter()
+        .chain(&bundle.invariants.constraints)
+        .map(|c| c.dnf.clone())
+        .collect();
+    for d in &bundle.observers.defs {
+        let texts: Vec<&String> = match &d.rule {
+            crate::observers::Rule::Memory { set, reset } => vec![set, reset],
+            crate::observers::Rule::Counter {
+                up, down, clear, ..
+            } => {
+                let mut v = vec![up, down];
+                v.extend(clear.as_ref());
+                v
+            }
+        };
+        for t in texts {
+            match expr::parse_str(t).and_then(|e| e.to_dnf(&bundle.symbols)) {
+                Ok(dnf) => dnfs.push(dnf),
+                // Unreadable rule: keep every previous value.
+                Err(_) => prev_mask = (u64::MAX, u64::MAX, u64::MAX),
+            }
+        }
+    }
+    // A mirror contact reads its output as applied at t-1, and the model's
+    // contactors neither weld nor die: a term that reads a mirror and its output at
+    // t-1 with opposite polarities (`KM0 . A1_fb . /A1*`, a welded drive) is never
+    // true, and keeps no previous output in the state (both read 0 there).
+    let as_read = |l: &crate::symbols::Literal| {
+        let mut l = *l;
+        if l.var.space == Space::Input
+            && !l.var.prev
+            && let Some(&(_, o)) = feedback.iter().find(|(i, _)| *i == l.var.index as usize)
+        {
+            l.var.space = Space::Output;
+            l.var.index = o as u32;
+            l.var.prev = true;
+        }
+        l
+    };
+    let possible = |t: &&Vec<crate::symbols::Literal>| {
+        let t: Vec<_> = t.iter().map(as_read).collect();
+        !t.iter()
+            .any(|a| t.iter().any(|b| a.var == b.var && a.positive != b.positive))
+    };
+    for l in dnfs
+        .iter()
+        .flatten()
+        .filter(possible)
+        .flatten()
+        .map(as_read)
+    {
+        if l.var.prev && l.var.index < 64 {
+            let bit = 1u64 << l.var.index;
+            match l.var.space {
+                Space::Input => prev_mask.0 |= bit,
+                Space::Output => prev_mask.1 |= bit,
+                Space::Observer => prev_mask.2 |= bit,
+                Space::Aux => {}
+            }
+        }
+    }
+    prev_mask
 }
 
 /// Bits of the state left for the previous-cycle values (the plant's positions, its
@@ -850,7 +894,7 @@ fn context(
     let mut applied_set: Vec<u64> = Vec::new();
     let n_free = model.free_outputs.len();
     for c in 0..(1u64 << n_free) {
-        let mut cmd = exits;
+        let mut cmd = model.always_on;
         for (j, &k) in model.free_outputs.iter().enumerate() {
             if c >> j & 1 == 1 {
                 cmd |= 1 << k;

@@ -451,10 +451,12 @@ impl Geometry {
         let table = on(self.plus) - on(self.minus);
         if on_table {
             if pos == 1 {
+                // The exits run away from the table while their output acts (the
+                // control always commands them; a released supply stops them).
                 match k {
-                    0 => -1, // exit at −u runs away from the table
+                    0 => -on(self.exit_act[1]),
                     1 => table,
-                    _ => 1,
+                    _ => on(self.exit_act[0]),
                 }
             } else {
                 table
@@ -466,12 +468,13 @@ impl Geometry {
         }
     }
 
-    /// One step with the applied outputs `out`; `arrival` puts a new box at the source.
+    /// One step with the outputs that act `out`; `arrival` puts a new box at the source;
+    /// `frozen`: the rotation's supply is released (the table stays where it is).
     /// Returns the successor and the events; a hazard ends the exploration of a path.
     pub fn step(
         &self,
         s: &PlantState,
-        out: u64,
+        (out, frozen): (u64, bool),
         arrival: Option<BoxSize>,
     ) -> (PlantState, StepEvents) {
         let mut ev = StepEvents::default();
@@ -481,7 +484,9 @@ impl Geometry {
         let a4 = out >> self.rotate & 1 == 1;
         let target = if a4 { self.unload } else { self.load };
         let old = s.angle;
-        let angle = if target > old {
+        let angle = if frozen {
+            old
+        } else if target > old {
             (old + self.rot_out).min(target)
         } else if target < old {
             (old - self.rot_back).max(target)

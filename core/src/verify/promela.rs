@@ -149,6 +149,22 @@ fn acts(model: &Model, k: usize) -> String {
     e
 }
 
+/// Output `k` without its supply: some safety contactor that supplies it released
+/// (`0` when none supplies it).
+fn unsupplied(model: &Model, k: usize) -> String {
+    let released: Vec<String> = model
+        .supply
+        .iter()
+        .filter(|(_, mask)| mask >> k & 1 == 1)
+        .map(|(s, _)| format!("!o[{s}]"))
+        .collect();
+    if released.is_empty() {
+        "0".to_string()
+    } else {
+        format!("({})", released.join(" || "))
+    }
+}
+
 /// The inlines of the geometry: part bounds, part of a box, velocity of a part, sensors.
 fn geometry_inlines(p: &mut String, model: &Model) {
     let g = &model.geo;
@@ -176,9 +192,11 @@ fn geometry_inlines(p: &mut String, model: &Model) {
     }
     let _ = writeln!(
         p,
-        "inline VEL(ot, ps) {{\n  tab = {} - {};\n  if\n  :: ot && ps == 1 -> if :: kq == 0 -> v = -1 :: kq == 1 -> v = tab :: else -> v = 1 fi\n  :: ot && ps != 1 -> v = tab\n  :: !ot -> if {chain}:: else -> v = tab fi\n  fi\n}}\n",
+        "inline VEL(ot, ps) {{\n  tab = {} - {};\n  if\n  :: ot && ps == 1 -> if :: kq == 0 -> v = -({em}) :: kq == 1 -> v = tab :: else -> v = {ep} fi\n  :: ot && ps != 1 -> v = tab\n  :: !ot -> if {chain}:: else -> v = tab fi\n  fi\n}}\n",
         acts(model, g.plus),
-        acts(model, g.minus)
+        acts(model, g.minus),
+        em = acts(model, g.exit_act[1]),
+        ep = acts(model, g.exit_act[0])
     );
     // Sensors.
     p.push_str(
@@ -277,7 +295,7 @@ fn step_motion(p: &mut String, model: &Model) {
         r#"inline STEP() {{
   hz = 0; dplus = 0; dminus = 0;
   told = angle;
-  if :: {rot} -> tgt = 1 :: else -> tgt = 0 fi;
+  if :: {frozen} -> tgt = 2 :: {rot} -> tgt = 1 :: else -> tgt = 0 fi;
   if
   :: tgt == 1 && angle < UNLOAD -> angle = angle + ROUT; if :: angle > UNLOAD -> angle = UNLOAD :: else -> skip fi
   :: tgt == 0 && angle > LOAD -> angle = angle - RBACK; if :: angle < LOAD -> angle = LOAD :: else -> skip fi
@@ -329,7 +347,8 @@ fn step_motion(p: &mut String, model: &Model) {
   :: else -> break od;
   i = 0; do :: i < nb -> blo[i] = nw[i]; i++ :: else -> break od;
 "#,
-        rot = acts(model, g.rotate)
+        rot = acts(model, g.rotate),
+        frozen = unsupplied(model, g.rotate)
     );
 }
 
@@ -411,13 +430,11 @@ fn step_transfer(p: &mut String, model: &Model) {
 
 /// The PLC process: sensors, a command vector the constraints allow, the step.
 fn plc_process(p: &mut String, model: &Model, set: &ConstraintSet, deliveries: bool) {
-    let g = &model.geo;
     // The PLC loop.
     p.push_str("active proctype plc() {\nend:\n  do\n  :: !dead ->\n    d_step {\n      SENSORS(); OBSERVERS();\n      freeS = (nb < MB); freeL = (nb < MB);\n      i = 0;\n      do :: i < nb -> if :: !bt[i] && blo[i] < LS + GAP -> freeS = 0 :: else -> skip fi;\n                       if :: !bt[i] && blo[i] < LL + GAP -> freeL = 0 :: else -> skip fi; i++\n      :: else -> break od\n    };\n    if\n");
     let n_free = model.free_outputs.len();
-    let exits: u64 = g.exit_act.iter().fold(0, |m, &k| m | 1 << k);
     for c in 0..(1u64 << n_free) {
-        let mut cmd = exits;
+        let mut cmd = model.always_on;
         for (j, &k) in model.free_outputs.iter().enumerate() {
             if c >> j & 1 == 1 {
                 cmd |= 1 << k;
