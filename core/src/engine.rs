@@ -541,6 +541,17 @@ impl Engine {
         self.frame.now(Space::Output)
     }
 
+    /// Sets the outputs the safety function holds ON (`held_on`: a safety contactor),
+    /// as every cycle does after the control's scan: for a projection that runs the
+    /// program without the engine.
+    pub fn hold_on(&self, outputs: &mut Bits) {
+        for &k in &self.held_on {
+            if k < outputs.len() {
+                outputs.set(k, true);
+            }
+        }
+    }
+
     /// After [`Engine::cycle`]: the outputs the plant really received in this cycle when
     /// they differ from the filter's (a live gateway's safe outputs for a lost peer or
     /// stale inputs; the outputs a followed live run applied). The frame (read as the

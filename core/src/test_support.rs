@@ -82,75 +82,30 @@ pub(crate) fn frame_with(symbols: &Symbols, ones: &[&str]) -> Frame {
     f
 }
 
-/// A copy of the station with external device monitoring (issue 17): a safety contactor
-/// KM0 on the conveyor and roller drives' supply, a safety valve YV0 on the turntable's
-/// air, a mirror contact on each of them and on every drive (`A0_fb`..`A6_fb`,
-/// `KM0_fb`, `YV0_fb`), sixteen monomials `CSk*` that cut the supply of a welded or dead
-/// drive, YV0 in the table's actuator partition, and a 10 mm push tolerance. All of it
-/// plant data: no code knows these names.
+/// A copy of the station with external device monitoring (issue 17): the station
+/// itself now has it (KM0, YV0, their mirrors and every drive's, `CSk1`..`CSk16`).
 pub(crate) fn edm_station(tag: &str) -> PathBuf {
+    station_copy(tag)
+}
+
+/// A copy of the station as the paper has it: no safety contactor, no safety valve, no
+/// mirror contact, no `CSk*` monomial, pushes damage at the first millimetre (to show
+/// what external device monitoring changes).
+pub(crate) fn paper_station(tag: &str) -> PathBuf {
     let dir = station_copy(tag);
-    let edit = |file: &str, f: &dyn Fn(String) -> String| {
+    let edm = |l: &str| {
+        l.contains("_fb") || l.contains("\"KM0\"") || l.contains("\"YV0\"") || l.starts_with("CSk")
+            || l.contains("push_tolerance_mm:")
+    };
+    for file in ["plant.ron", "constraints.txt", "io-map.ron", "layout.ron"] {
         let path = dir.join(file);
         let text = std::fs::read_to_string(&path).unwrap();
-        let new = f(text.clone());
-        assert_ne!(new, text, "{file} unchanged: its anchor moved");
-        std::fs::write(path, new).unwrap();
-    };
-    let drives = ["A0", "A1", "A2", "A3", "A4", "A5", "A6"];
-    let supply = |a: &str| if a == "A4" { "YV0" } else { "KM0" };
-    let mut mirrors = String::new();
-    let mut map = String::new();
-    let mut csk = String::from("\n");
-    for (k, a) in drives.iter().chain(&["KM0", "YV0"]).enumerate() {
-        let d = 11 + k;
-        mirrors.push_str(&format!(
-            "        (id: \"{a}_fb\", kind: Sensor, description: \"{a} closed (mirror contact)\", address: Some(DiscreteInput({d})), feedback_of: Some(\"{a}\")),\n"
-        ));
-        map.push_str(&format!(
-            "        (signal: \"{a}_fb\", address: DiscreteInput({d})),\n"
-        ));
+        let kept: Vec<&str> = text.lines().filter(|l| !edm(l.trim_start())).collect();
+        std::fs::write(&path, kept.join("\n") + "\n").unwrap();
     }
-    for (k, a) in drives.iter().enumerate() {
-        let s = supply(a);
-        csk.push_str(&format!(
-            "CSk{} = {s} . {a}_fb . /{a}*   # {a} welded: cut {s}\nCSk{} = {s} . {a}* . /{a}_fb   # {a} dead: cut {s}\n",
-            2 * k + 1,
-            2 * k + 2
-        ));
-    }
-    csk.push_str("CSk15 = KM0 . KM0* . /KM0_fb   # KM0 dead: every output off until the repair\n");
-    csk.push_str("CSk16 = YV0 . YV0* . /YV0_fb   # YV0 dead: every output off until the repair\n");
-    let anchor = "        (id: \"A0\", kind: Actuator";
-    edit("plant.ron", &|t| {
-        t.replacen(anchor, &format!("{mirrors}{anchor}"), 1).replacen(
-            "    ],\n)",
-            "        (id: \"KM0\", kind: Actuator, description: \"Safety contactor of the drives\", address: Some(Coil(7)), supplies: [\"A0\", \"A1\", \"A2\", \"A3\", \"A5\", \"A6\"], held_on: true, safe: One),\n\
-             \x20       (id: \"YV0\", kind: Actuator, description: \"Safety valve of the turntable's air\", address: Some(Coil(8)), supplies: [\"A4\"], held_on: true, safe: One),\n    ],\n)",
-            1,
-        )
-    });
-    edit("constraints.txt", &|t| t + &csk);
-    edit("io-map.ron", &|t| {
-        t.replacen(
-            "    ],\n)",
-            &format!("{map}        (signal: \"KM0\", address: Coil(7)),\n        (signal: \"YV0\", address: Coil(8)),\n    ],\n)"),
-            1,
-        )
-    });
-    edit("diagnosers.ron", &|t| {
-        t.replacen(
-            "stop: true, actuators: [\"A4\"]",
-            "stop: true, actuators: [\"A4\", \"YV0\"]",
-            1,
-        )
-    });
-    edit("layout.ron", &|t| {
-        t.replacen(
-            "    shear_margin_mm: 2,\n",
-            "    shear_margin_mm: 2,\n    push_tolerance_mm: 10,\n",
-            1,
-        )
-    });
+    let path = dir.join("diagnosers.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::write(&path, text.replace("actuators: [\"A4\", \"YV0\"]", "actuators: [\"A4\"]")).unwrap();
     dir
 }
+

@@ -31,9 +31,13 @@ fn emu(seed: u64) -> Emulator {
     e
 }
 
+/// These outputs ON, and the safety contactors the safety function holds ON.
 fn outs(on: &[&str]) -> Bits {
     let p = plant();
     let mut b = Bits::zeros(p.outputs.len());
+    for k in (0..p.outputs.len()).filter(|&k| p.outputs[k].held_on) {
+        b.set(k, true);
+    }
     for a in on {
         b.set(p.output(a).expect("actuator"), true);
     }

@@ -1364,10 +1364,17 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
             )"#
         )
     };
+    let paper = crate::test_support::paper_station("paper-welded");
+    let run_in = |dir: &std::path::Path, s: &Scenario| {
+        let mut sim = Simulation::from_scenario(s, &dir.join("scenario.ron"), Options::default())
+            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        sim.run_until(Millis(s.duration_ms));
+        sim
+    };
     let (mut plain_hazards, mut km_hazards, mut km_trips) = (0, 0, 0);
     for k in 0..12u64 {
         let s: Scenario = ron::from_str(&text(20_000 + 1_300 * k)).expect("scenario");
-        let plain = run(&s);
+        let plain = run_in(&paper, &s);
         plain_hazards += plain.emulator.hazards().len();
         let path = km.0.join("scenario.ron");
         let mut sim = Simulation::from_scenario(&s, &path, Options::default())
@@ -1407,7 +1414,7 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
         )"#,
     )
     .expect("scenario");
-    let plain = run(&free);
+    let plain = run_in(&paper, &free);
     let mut sim = Simulation::from_scenario(&free, &km.0.join("scenario.ron"), Options::default())
         .expect("sim");
     sim.run_until(Millis(free.duration_ms));
@@ -1451,7 +1458,7 @@ fn with_device_monitoring_no_welded_or_dead_drive_damages_a_box() {
                 row.failures
             );
         }
-        let paper = campaign(&crate::test_support::station_dir(), &config(only))
+        let paper = campaign(&crate::test_support::paper_station("paper-campaign"), &config(only))
             .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
         paper_hazards += paper.rows.iter().map(|r| r.hazards).sum::<usize>();
     }
