@@ -26,7 +26,14 @@ impl Run {
                 e.set_plausibility(false);
                 e
             },
-            applied: Bits::zeros(bundle.plant.outputs.len()),
+            // Before the first cycle, the outputs' initial values (a cold start).
+            applied: {
+                let mut b = Bits::zeros(bundle.plant.outputs.len());
+                for (k, o) in bundle.plant.outputs.iter().enumerate() {
+                    b.set(k, o.initial);
+                }
+                b
+            },
             plant: bundle.plant,
             t: 0,
         }
@@ -130,6 +137,8 @@ fn a_trip_latches_and_records_what_happened() {
             ("A4", false, true, Action::ForcedOn),
             ("A5", false, false, Action::Unchanged),
             ("A6", false, false, Action::Unchanged),
+            ("KM0", true, true, Action::Unchanged),
+            ("YV0", true, true, Action::Unchanged),
         ]
     );
     let fallback: Vec<(&str, bool)> = trip
@@ -146,14 +155,16 @@ fn a_trip_latches_and_records_what_happened() {
             ("A3", false),
             ("A4", true),
             ("A5", false),
-            ("A6", false)
+            ("A6", false),
+            ("KM0", true),
+            ("YV0", true)
         ]
     );
     let rec = run.engine.history.last().unwrap();
     assert_eq!((rec.time, rec.tripped), (Millis(40), true));
     assert_eq!(
         (rec.commanded.to_string(), rec.applied.to_string()),
-        ("0001000".into(), "0000100".into())
+        ("000100011".into(), "000010011".into())
     );
 
     // Latched: compliant commands are not applied, the fallback is.
@@ -186,7 +197,7 @@ fn reset_is_refused_while_the_commands_still_violate() {
     );
     assert!(run.engine.is_tripped());
     // The outputs applied are untouched by the refused reset.
-    assert_eq!(run.engine.applied().to_string(), "0000100");
+    assert_eq!(run.engine.applied().to_string(), "000010011");
     run.cycle(&["C5", "C7"], &["A3"]);
     assert_eq!(
         run.engine.reset(),
@@ -342,7 +353,12 @@ fn specification_error_drives_every_output_to_zero_once_reported() {
     );
     let trip = &run.engine.trips[0];
     assert_eq!(trip.spec_error.as_deref(), Some(message.as_str()));
-    assert!(trip.fallback.iter().all(|(_, v)| !v));
+    // Every output at its safe value: 0, and the safety contactors (safe: One) ON.
+    assert!(
+        trip.fallback
+            .iter()
+            .all(|(name, v)| *v == (name == "KM0" || name == "YV0"))
+    );
     let forced: Vec<&str> = trip
         .actions
         .iter()
@@ -374,7 +390,11 @@ fn attaching_to_a_running_plant_shows_no_edge_on_the_first_cycle() {
     );
     let mut attached = Run::new(FilterMode::Enforce);
     attached.engine.set_first_cycle(FirstCycle::Attach);
-    assert_eq!(attached.cycle(&["C5", "C6"], &["A4"]), ["A4"]);
+    // The running plant's contactors are closed: their mirrors say so.
+    assert_eq!(
+        attached.cycle_raw(&["C5", "C6", "A4_fb", "KM0_fb", "YV0_fb"], &["A4"]),
+        ["A4"]
+    );
     assert!(!attached.engine.is_tripped());
     attached.cycle(&["C5", "C6"], &["A4"]);
     assert!(!attached.engine.is_tripped());

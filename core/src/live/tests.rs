@@ -28,8 +28,8 @@ fn station_map() -> IoMap {
 #[test]
 fn station_map_matches_the_plant_addresses() {
     let map = station_map();
-    assert_eq!(map.inputs.len(), 11);
-    assert_eq!(map.outputs.len(), 7);
+    assert_eq!(map.inputs.len(), 20);
+    assert_eq!(map.outputs.len(), 9);
     let from_plant = IoMap::from_plant(&plant(), 1, 10).unwrap();
     let points = |m: &IoMap| {
         m.inputs

@@ -33,7 +33,7 @@ fn check_error(text: &str, expected: &str) {
 fn header_lists_time_then_sensors_then_actuators() {
     assert_eq!(
         header(&plant()),
-        "time_ms,C0,C1,C2,C3,C4,C5,C6,C7,C8,C9,C10,A0,A1,A2,A3,A4,A5,A6"
+        "time_ms,C0,C1,C2,C3,C4,C5,C6,C7,C8,C9,C10,A0_fb,A1_fb,A2_fb,A3_fb,A4_fb,A5_fb,A6_fb,KM0_fb,YV0_fb,A0,A1,A2,A3,A4,A5,A6,KM0,YV0"
     );
 }
 
