@@ -731,10 +731,24 @@ impl Engine {
 
     /// The constraints that `outputs` would violate if applied at the next cycle, the
     /// inputs and observers staying as they are now (the check of a manual request),
-    /// each with its true term.
+    /// each with its true term. A mirror contact follows its contactor into the next
+    /// cycle, keeping the disagreement it shows now: a healthy contactor reads as the
+    /// output applied now, a welded or dead one stays welded or dead.
     pub fn check_request(&self, outputs: &Bits) -> Vec<FiredConstraint> {
         let mut frame = self.frame.clone();
+        let next: Vec<(usize, bool)> = self
+            .mirrors
+            .iter()
+            .filter(|&&(i, o)| i < frame.now(Space::Input).len() && o < outputs.len())
+            .map(|&(i, o)| {
+                let fault = frame.now(Space::Input).get(i) != frame.prev(Space::Output).get(o);
+                (i, frame.now(Space::Output).get(o) != fault)
+            })
+            .collect();
         frame.shift();
+        for (i, v) in next {
+            frame.now_mut(Space::Input).set(i, v);
+        }
         frame.now_mut(Space::Output).copy_from(outputs);
         self.filter
             .violations(&frame)

@@ -565,3 +565,46 @@ fn an_attach_reads_a_mirrored_contactor_from_its_mirror() {
     cold.cycle_raw(&[], &[]);
     assert!(!cold.engine.is_tripped());
 }
+
+/// The check of a manual request on a plant with mirror contacts: in the next cycle a
+/// healthy contactor's mirror follows what is applied now (a drive released in this
+/// cycle is not taken for a welded one when it is requested again), and a welded one
+/// stays welded (its request is refused on its monomial).
+#[test]
+fn a_manual_request_lets_healthy_mirrors_follow_and_refuses_a_weld() {
+    let dir = crate::test_support::edm_station("edm-manual");
+    let (b, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+    let mut run = Run::with_bundle(b, FilterMode::Enforce);
+    let healthy = |run: &mut Run, mirrors: &[&str], commanded: &[&str]| {
+        let mut s = vec!["C4"];
+        s.extend_from_slice(mirrors);
+        run.cycle(&s, commanded);
+    };
+    healthy(&mut run, &[], &["A6"]);
+    healthy(&mut run, &["KM0_fb", "YV0_fb", "A6_fb"], &["A6"]);
+    // A6 released now: its mirror still shows it closed (it reads the cycle before).
+    healthy(&mut run, &["KM0_fb", "YV0_fb", "A6_fb"], &[]);
+    assert!(!run.engine.is_tripped());
+    let request = |run: &Run, on: &[&str]| {
+        let mut out = Bits::zeros(run.plant.outputs.len());
+        for a in on.iter().chain(&["KM0", "YV0"]) {
+            out.set(run.plant.output(a).unwrap(), true);
+        }
+        run.engine
+            .check_request(&out)
+            .into_iter()
+            .map(|c| c.id)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(request(&run, &["A6"]), Vec::<String>::new(), "A6 ON again");
+    assert_eq!(request(&run, &[]), Vec::<String>::new(), "A6 stays OFF");
+    // Welded: released two cycles ago, its mirror still shows it closed.
+    healthy(&mut run, &["KM0_fb", "YV0_fb", "A6_fb"], &[]);
+    assert!(run.engine.is_tripped(), "CSk13 trips on the weld");
+    assert_eq!(
+        request(&run, &[]),
+        ["CSk13"],
+        "a request does not hide the weld"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
