@@ -578,7 +578,7 @@ fn a_manual_request_lets_healthy_mirrors_follow_and_refuses_a_weld() {
     let healthy = |run: &mut Run, mirrors: &[&str], commanded: &[&str]| {
         let mut s = vec!["C4"];
         s.extend_from_slice(mirrors);
-        run.cycle(&s, commanded);
+        run.cycle_raw(&s, commanded);
     };
     healthy(&mut run, &[], &["A6"]);
     healthy(&mut run, &["KM0_fb", "YV0_fb", "A6_fb"], &["A6"]);
