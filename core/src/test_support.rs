@@ -82,13 +82,29 @@ pub(crate) fn frame_with(symbols: &Symbols, ones: &[&str]) -> Frame {
     f
 }
 
+/// A folder of the tests' own, removed when it drops (read through it as a `Path`).
+pub(crate) struct Scratch(pub(crate) PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// A copy of the station with external device monitoring (issue 17): a safety contactor
 /// KM0 on the conveyor and roller drives' supply, a safety valve YV0 on the turntable's
 /// air, a mirror contact on each of them and on every drive (`A0_fb`..`A6_fb`,
 /// `KM0_fb`, `YV0_fb`), sixteen monomials `CSk*` that cut the supply of a welded or dead
 /// drive, YV0 in the table's actuator partition, and a 10 mm push tolerance. All of it
 /// plant data: no code knows these names.
-pub(crate) fn edm_station(tag: &str) -> PathBuf {
+pub(crate) fn edm_station(tag: &str) -> Scratch {
     let dir = station_copy(tag);
     let edit = |file: &str, f: &dyn Fn(String) -> String| {
         let path = dir.join(file);
@@ -152,5 +168,5 @@ pub(crate) fn edm_station(tag: &str) -> PathBuf {
             1,
         )
     });
-    dir
+    Scratch(dir)
 }

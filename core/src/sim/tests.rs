@@ -1324,20 +1324,6 @@ fn a_beam_that_rises_where_no_item_can_come_is_named_first() {
     );
 }
 
-/// The station with external device monitoring (`test_support::edm_station`), removed
-/// on drop.
-struct WithContactor(PathBuf);
-
-impl Drop for WithContactor {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn with_contactor(tag: &str) -> WithContactor {
-    WithContactor(crate::test_support::edm_station(&format!("km-{tag}")))
-}
-
 /// Issue 17, welded actuators: no output of the paper's station can stop a welded
 /// contactor, so a welded intermediate conveyor keeps pushing boxes, and damages them.
 /// With a safety contactor on the drives' supply and a mirror contact on A1's
@@ -1347,7 +1333,7 @@ fn with_contactor(tag: &str) -> WithContactor {
 /// nothing (no trip, the same deliveries).
 #[test]
 fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
-    let km = with_contactor("welded");
+    let km = crate::test_support::edm_station("km-welded");
     let text = |at: u64| {
         format!(
             r#"Scenario(
@@ -1369,7 +1355,7 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
         let s: Scenario = ron::from_str(&text(20_000 + 1_300 * k)).expect("scenario");
         let plain = run(&s);
         plain_hazards += plain.emulator.hazards().len();
-        let path = km.0.join("scenario.ron");
+        let path = km.join("scenario.ron");
         let mut sim = Simulation::from_scenario(&s, &path, Options::default())
             .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
         sim.run_until(Millis(s.duration_ms));
@@ -1408,7 +1394,7 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
     )
     .expect("scenario");
     let plain = run(&free);
-    let mut sim = Simulation::from_scenario(&free, &km.0.join("scenario.ron"), Options::default())
+    let mut sim = Simulation::from_scenario(&free, &km.join("scenario.ron"), Options::default())
         .expect("sim");
     sim.run_until(Millis(free.duration_ms));
     assert!(
@@ -1429,7 +1415,7 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
 #[test]
 fn with_device_monitoring_no_welded_or_dead_drive_damages_a_box() {
     use crate::pop::transients::{Config, run as campaign};
-    let edm = with_contactor("campaign");
+    let edm = crate::test_support::edm_station("km-campaign");
     let config = |only: &str| Config {
         seeds: 2,
         first_seed: 3,
@@ -1439,8 +1425,8 @@ fn with_device_monitoring_no_welded_or_dead_drive_damages_a_box() {
     };
     let mut paper_hazards = 0;
     for only in [" welded", " dead"] {
-        let r = campaign(&edm.0, &config(only))
-            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        let r =
+            campaign(&edm, &config(only)).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
         assert_eq!(r.rows.len(), 9, "{only}: seven drives, KM0 and YV0");
         for row in &r.rows {
             assert_eq!(

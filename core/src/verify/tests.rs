@@ -1,5 +1,6 @@
 use super::*;
 use crate::diag::Problem;
+use crate::test_support::Scratch;
 use std::path::Path;
 
 fn station() -> (PlantBundle, Layout) {
@@ -11,17 +12,7 @@ fn station() -> (PlantBundle, Layout) {
 
 /// A copy of the station folder in a temporary directory with textual patches applied
 /// (`(file, from, to)`), loaded; the folder is removed when the guard drops.
-struct Patched {
-    dir: std::path::PathBuf,
-}
-
-impl Drop for Patched {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
-fn patched(tag: &str, patches: &[(&str, &str, &str)]) -> (Patched, PlantBundle, Layout) {
+fn patched(tag: &str, patches: &[(&str, &str, &str)]) -> (Scratch, PlantBundle, Layout) {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
     let dir = std::env::temp_dir().join(format!("vigie-verify-{}-{tag}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -45,7 +36,7 @@ fn patched(tag: &str, patches: &[(&str, &str, &str)]) -> (Patched, PlantBundle, 
     let (b, problems) = PlantBundle::load(&dir).expect("patched bundle");
     assert!(!problems.iter().any(Problem::is_error), "{problems:?}");
     let l = Layout::load(&dir.join("layout.ron")).expect("patched layout");
-    (Patched { dir }, b, l)
+    (Scratch(dir), b, l)
 }
 
 fn kinds(e: &Exploration) -> Vec<&str> {
@@ -120,12 +111,12 @@ fn counterexample_of_a_weakened_set_is_real() {
         "the emulator does not reproduce {kind}: {:?}",
         rp.hazards
     );
-    let out = _guard.dir.join("cex");
+    let out = _guard.join("cex");
     let path = scenario::write(
         &out,
         trace,
         &b.plant,
-        &_guard.dir.to_string_lossy(),
+        &_guard.to_string_lossy(),
         r.geometry.step_us,
     )
     .expect("write scenario");
@@ -379,7 +370,7 @@ fn a_safety_contactor_and_a_mirror_contact_are_modelled() {
 
 /// The station with a safety contactor KM0 on the drives' supply, a mirror contact on
 /// A1's contactor and the two monomials that watch it.
-fn with_contactor(tag: &str) -> (Patched, PlantBundle, Layout) {
+fn with_contactor(tag: &str) -> (Scratch, PlantBundle, Layout) {
     let anchor = "        (id: \"A0\", kind: Actuator";
     let mirror = format!(
         "        (id: \"A1_fb\", kind: Sensor, description: \"mirror\", feedback_of: Some(\"A1\")),\n{anchor}"
@@ -449,5 +440,4 @@ fn device_monitoring_costs_the_verifier_nothing() {
     };
     assert!(edm.safe && edm.permissive, "{:#?}", last(&edm.full.hazard));
     assert_eq!(edm.full.states, plain.full.states);
-    let _ = std::fs::remove_dir_all(dir);
 }
