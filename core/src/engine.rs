@@ -729,6 +729,11 @@ impl Engine {
         self.fired_in(ci, &self.frame)
     }
 
+    /// The plant's mirror contacts: each one's input and the output it mirrors.
+    pub fn mirrors(&self) -> &[(usize, usize)] {
+        &self.mirrors
+    }
+
     /// The constraints that `outputs` would violate if applied at the next cycle, the
     /// inputs and observers staying as they are now (the check of a manual request),
     /// each with its true term. A mirror contact follows its contactor into the next

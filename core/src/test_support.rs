@@ -82,16 +82,33 @@ pub(crate) fn frame_with(symbols: &Symbols, ones: &[&str]) -> Frame {
     f
 }
 
+/// A folder of the tests' own, removed when it drops (read through it as a `Path`).
+pub(crate) struct Scratch(pub(crate) PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// A copy of the station with external device monitoring (issue 17): the station
-/// itself now has it (KM0, YV0, their mirrors and every drive's, `CSk1`..`CSk16`).
-pub(crate) fn edm_station(tag: &str) -> PathBuf {
-    station_copy(tag)
+/// itself has it (KM0, YV0, their mirrors and every drive's, `CSk1`..`CSk16`).
+pub(crate) fn edm_station(tag: &str) -> Scratch {
+    Scratch(station_copy(tag))
 }
 
 /// A copy of the station as the paper has it: no safety contactor, no safety valve, no
 /// mirror contact, no `CSk*` monomial, pushes damage at the first millimetre (to show
-/// what external device monitoring changes).
-pub(crate) fn paper_station(tag: &str) -> PathBuf {
+/// what external device monitoring changes, and for the checks that enumerate the
+/// paper's twelve variables).
+pub(crate) fn paper_station(tag: &str) -> Scratch {
     let dir = station_copy(tag);
     let edm = |l: &str| {
         l.contains("_fb") || l.contains("\"KM0\"") || l.contains("\"YV0\"") || l.starts_with("CSk")
@@ -101,11 +118,23 @@ pub(crate) fn paper_station(tag: &str) -> PathBuf {
         let path = dir.join(file);
         let text = std::fs::read_to_string(&path).unwrap();
         let kept: Vec<&str> = text.lines().filter(|l| !edm(l.trim_start())).collect();
+        assert_ne!(kept.len(), text.lines().count(), "{file}: no device monitoring to remove");
         std::fs::write(&path, kept.join("\n") + "\n").unwrap();
     }
     let path = dir.join("diagnosers.ron");
     let text = std::fs::read_to_string(&path).unwrap();
-    std::fs::write(&path, text.replace("actuators: [\"A4\", \"YV0\"]", "actuators: [\"A4\"]")).unwrap();
-    dir
+    let paper = text.replace("actuators: [\"A4\", \"YV0\"]", "actuators: [\"A4\"]");
+    assert_ne!(paper, text, "diagnosers.ron: YV0 not in the table's partition");
+    std::fs::write(&path, paper).unwrap();
+    Scratch(dir)
 }
 
+/// The paper's station (see [`paper_station`]), loaded: its twelve context variables
+/// make the filter's exhaustive checks small.
+pub(crate) fn paper_bundle() -> PlantBundle {
+    let dir = paper_station("paper-bundle");
+    match PlantBundle::load(&dir) {
+        Ok((bundle, _)) => bundle,
+        Err(p) => panic!("cannot load the paper's station: {}", crate::diag::render(&p)),
+    }
+}

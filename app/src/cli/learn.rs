@@ -119,10 +119,19 @@ pub(crate) fn campaign(
     )?;
     writeln!(
         out,
-        "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
-        "fault", "expected partition", "runs", "right", "wrong", "early", "ambig", "none", "lost"
+        "{:<34} {:<22} {:>5} {:>5} {:>6} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
+        "fault",
+        "expected partition",
+        "runs",
+        "right",
+        "mirror",
+        "wrong",
+        "early",
+        "ambig",
+        "none",
+        "lost"
     )?;
-    let (mut right, mut runs, mut bad, mut lost) = (0, 0, 0, 0);
+    let (mut right, mut mirror, mut runs, mut bad, mut lost) = (0, 0, 0, 0, 0);
     for row in &r.rows {
         let q = |p| {
             row.delay_quantile(p)
@@ -130,11 +139,12 @@ pub(crate) fn campaign(
         };
         writeln!(
             out,
-            "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
+            "{:<34} {:<22} {:>5} {:>5} {:>6} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
             row.name,
             row.expected.join("|"),
             row.runs,
             row.right,
+            row.monitored,
             row.wrong,
             row.early,
             row.ambiguous.values().sum::<usize>(),
@@ -157,13 +167,14 @@ pub(crate) fn campaign(
             writeln!(out, "      lost track (no fault claimed) {l}")?;
         }
         right += row.right;
+        mirror += row.monitored;
         lost += row.lost;
         runs += row.runs;
         bad += row.wrong + row.early;
     }
     writeln!(
         out,
-        "total: {runs} runs, {right} right, {bad} wrong or early, {lost} lost track (unexplained, no fault claimed)"
+        "total: {runs} runs, {right} right, {mirror} stopped on the faulted actuator by its mirror contact, {bad} wrong or early, {lost} lost track (unexplained, no fault claimed)"
     )?;
     writeln!(
         out,

@@ -407,16 +407,21 @@ impl Layout {
         out
     }
 
-    /// Every signal the layout names must exist in the plant, with the right kind.
-    pub fn check_signals(&self, plant: &Plant) -> Vec<Problem> {
-        let mut out = Vec::new();
+    /// The actuators of the drives, in the emulator's role order: the conveyors, then
+    /// the table's rollers + and -, then its rotation.
+    pub fn drives(&self) -> impl Iterator<Item = &str> {
         let t = &self.table;
-        let actuators = self.conveyors.iter().map(|c| c.actuator.as_str()).chain([
+        self.conveyors.iter().map(|c| c.actuator.as_str()).chain([
             t.plus_actuator.as_str(),
             t.minus_actuator.as_str(),
             t.rotate_actuator.as_str(),
-        ]);
-        for a in actuators {
+        ])
+    }
+
+    /// Every signal the layout names must exist in the plant, with the right kind.
+    pub fn check_signals(&self, plant: &Plant) -> Vec<Problem> {
+        let mut out = Vec::new();
+        for a in self.drives() {
             if plant.output(a).is_none() {
                 out.push(Problem::error(
                     codes::LAYOUT_UNKNOWN_SIGNAL.id,

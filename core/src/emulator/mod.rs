@@ -349,22 +349,13 @@ impl Emulator {
     /// The actuators the emulator drives, by role (the ids a fault may name): the
     /// layout's drives, then the safety contactors that supply them.
     pub fn actuators(&self) -> Vec<String> {
-        let t = &self.layout.table;
-        let drives = self.layout.conveyors.len() + 3;
-        self.layout
-            .conveyors
+        self.role_plant
             .iter()
-            .map(|c| c.actuator.clone())
-            .chain([
-                t.plus_actuator.clone(),
-                t.minus_actuator.clone(),
-                t.rotate_actuator.clone(),
-            ])
-            .chain(self.role_plant[drives..].iter().map(|&o| {
+            .map(|&o| {
                 self.symbols
                     .name(crate::symbols::Space::Output, o as u32)
                     .to_owned()
-            }))
+            })
             .collect()
     }
 
@@ -622,20 +613,12 @@ fn sensor_probes(layout: &Layout, plant: &Plant, table: usize, n_parts: usize) -
     (probes, angles, sensor_plant)
 }
 
-/// The plant output of each role: the layout's drives (conveyors, then the table's
-/// rollers + and -, then its rotation), then each safety contactor that is not one
+/// The plant output of each role: the layout's drives ([`Layout::drives`]), then each
+/// safety contactor that is not one
 /// (`supplies`): a fault may weld or kill it like any other contactor.
 fn roles(layout: &Layout, plant: &Plant) -> Vec<usize> {
-    let t = &layout.table;
     let mut role_plant = layout
-        .conveyors
-        .iter()
-        .map(|c| c.actuator.as_str())
-        .chain([
-            t.plus_actuator.as_str(),
-            t.minus_actuator.as_str(),
-            t.rotate_actuator.as_str(),
-        ])
+        .drives()
         .map(|a| plant.output(a).unwrap_or(usize::MAX))
         .collect::<Vec<_>>();
     for (o, _) in plant.supplies() {

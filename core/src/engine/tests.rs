@@ -606,5 +606,4 @@ fn a_manual_request_lets_healthy_mirrors_follow_and_refuses_a_weld() {
         ["CSk13"],
         "a request does not hide the weld"
     );
-    let _ = std::fs::remove_dir_all(dir);
 }
