@@ -11,23 +11,14 @@ pub(crate) fn station_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
 }
 
+mod paper;
+
 /// A copy of the station's folder (programs and scenarios included) in a fresh
 /// temporary directory `vigie-<tag>-<pid>`.
 pub(crate) fn station_copy(tag: &str) -> PathBuf {
-    fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
-        std::fs::create_dir_all(to).unwrap();
-        for e in std::fs::read_dir(from).unwrap() {
-            let e = e.unwrap();
-            if e.file_type().unwrap().is_dir() {
-                copy_dir(&e.path(), &to.join(e.file_name()));
-            } else {
-                std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-            }
-        }
-    }
     let dir = std::env::temp_dir().join(format!("vigie-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    copy_dir(&station_dir(), &dir);
+    paper::copy_dir(&station_dir(), &dir);
     dir
 }
 
@@ -110,22 +101,7 @@ pub(crate) fn edm_station(tag: &str) -> Scratch {
 /// paper's twelve variables).
 pub(crate) fn paper_station(tag: &str) -> Scratch {
     let dir = station_copy(tag);
-    let edm = |l: &str| {
-        l.contains("_fb") || l.contains("\"KM0\"") || l.contains("\"YV0\"") || l.starts_with("CSk")
-            || l.contains("push_tolerance_mm:")
-    };
-    for file in ["plant.ron", "constraints.txt", "io-map.ron", "layout.ron"] {
-        let path = dir.join(file);
-        let text = std::fs::read_to_string(&path).unwrap();
-        let kept: Vec<&str> = text.lines().filter(|l| !edm(l.trim_start())).collect();
-        assert_ne!(kept.len(), text.lines().count(), "{file}: no device monitoring to remove");
-        std::fs::write(&path, kept.join("\n") + "\n").unwrap();
-    }
-    let path = dir.join("diagnosers.ron");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let paper = text.replace("actuators: [\"A4\", \"YV0\"]", "actuators: [\"A4\"]");
-    assert_ne!(paper, text, "diagnosers.ron: YV0 not in the table's partition");
-    std::fs::write(&path, paper).unwrap();
+    paper::strip_device_monitoring(&dir);
     Scratch(dir)
 }
 
