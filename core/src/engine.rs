@@ -729,6 +729,14 @@ impl Engine {
         self.fired_in(ci, &self.frame)
     }
 
+    /// The safety devices (`held_on`) are driven by someone else, the PLC a monitor
+    /// watches: their commanded values are taken as observed, never held ON (Vigie
+    /// writes no output there; holding them would report a contactor the PLC left open
+    /// as commanded and dead).
+    pub fn observe_safety_devices(&mut self) {
+        self.held_on.clear();
+    }
+
     /// The plant's mirror contacts: each one's input and the output it mirrors.
     pub fn mirrors(&self) -> &[(usize, usize)] {
         &self.mirrors

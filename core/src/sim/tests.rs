@@ -588,6 +588,35 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
     );
 }
 
+/// A monitor takes the safety devices as the PLC commands them: a PLC that leaves KM0
+/// and YV0 open (their mirrors open) is not reported as commanding dead contactors
+/// (it was, every cycle, when the engine held them ON); one that closes KM0 while its
+/// mirror stays open is (CSk15); a gateway holds them ON whatever the PLC commands.
+#[test]
+fn a_monitor_takes_the_safety_devices_as_the_plc_commands_them() {
+    let mut sim = following(FilterMode::ReportOnly);
+    let idle = "00001000000000000000";
+    for t in [10, 20, 30] {
+        sim.observe(&observed(t, idle, "000000000", "000000000", false));
+    }
+    assert!(sim.engine.trips.is_empty(), "{:?}", sim.engine.trips);
+    // KM0 commanded (coil 7) and applied, its mirror (input 18) stays open.
+    for t in [40, 50, 60] {
+        sim.observe(&observed(t, idle, "000000010", "000000010", false));
+    }
+    let ids: Vec<&str> = sim
+        .engine
+        .trips
+        .iter()
+        .flat_map(|t| t.constraints.iter().map(|c| c.id.as_str()))
+        .collect();
+    assert!(ids.contains(&"CSk15"), "{ids:?}");
+    // A gateway holds them ON: the commanded vector it filters has KM0 and YV0.
+    let mut gw = following(FilterMode::Enforce);
+    gw.observe(&observed(10, idle, "000000000", "000000011", false));
+    assert_eq!(gw.engine.frame().now(Space::Output).to_string(), "000000011");
+}
+
 fn following_with_diagnosers(mode: FilterMode) -> Simulation {
     let mut s = scenario(
         ProgramChoice::Reference,
