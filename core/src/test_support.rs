@@ -111,6 +111,9 @@ pub(crate) fn paper_bundle() -> PlantBundle {
     let dir = paper_station("paper-bundle");
     match PlantBundle::load(&dir) {
         Ok((bundle, _)) => bundle,
-        Err(p) => panic!("cannot load the paper's station: {}", crate::diag::render(&p)),
+        Err(p) => panic!(
+            "cannot load the paper's station: {}",
+            crate::diag::render(&p)
+        ),
     }
 }

@@ -597,14 +597,23 @@ fn a_plant_fault_exercise_in_french() {
     // The valve's spool monitoring contact reads it open after its order: the safety
     // valve YV0 cuts the table's air.
     let french = "Arrêt sécurité : A4 ne commute pas : couper YV0 (CSk10)";
-    assert!(h.query_all_by_label_contains(french).count() >= 1, "{french}");
+    assert!(
+        h.query_all_by_label_contains(french).count() >= 1,
+        "{french}"
+    );
     assert!(h.query_by_label_contains("Safety stop").is_none());
     // The table blocked at C5 (mechanical: no mirror contact shows it): the diagnosers'
     // stop; the rollers' contactor dead (P05): KM0 stops the intermediate belt under its
     // box, whose task alarm comes 7 s later. In French, never the core's English.
     let expected = [
-        ("P04", "les diagnostiqueurs arrêtent la machine : P en défaut (DSTOP_P)"),
-        ("P05", "Caisse portée par le convoyeur intermédiaire de C1 à son bout C3"),
+        (
+            "P04",
+            "les diagnostiqueurs arrêtent la machine : P en défaut (DSTOP_P)",
+        ),
+        (
+            "P05",
+            "Caisse portée par le convoyeur intermédiaire de C1 à son bout C3",
+        ),
     ];
     for (exercise, french) in expected {
         let mut opts = options(None);

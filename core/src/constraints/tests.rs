@@ -54,9 +54,16 @@ fn the_paper_set_loads_without_problems_and_classifies() {
         .map(|&(id, class, outs, dnf)| (id, class, outs.to_vec(), dnf.to_string()))
         .collect();
     assert_eq!(got, want);
-    let edm: Vec<_> = set.constraints.iter().filter(|c| c.id.starts_with("CSk")).collect();
+    let edm: Vec<_> = set
+        .constraints
+        .iter()
+        .filter(|c| c.id.starts_with("CSk"))
+        .collect();
     assert_eq!(edm.len(), 16);
-    assert!(edm.iter().all(|c| c.class == Class::Simple), "each cuts one supply");
+    assert!(
+        edm.iter().all(|c| c.class == Class::Simple),
+        "each cuts one supply"
+    );
     // Locations point at the id; sources are the text after `=`, comment removed.
     let c10 = set.get("CSs10").unwrap();
     assert_eq!(c10.location.to_string(), "constraints.txt:14:1");

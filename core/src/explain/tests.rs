@@ -261,7 +261,10 @@ fn every_hypothesis_case_of_the_station() {
             prev.time = crate::Millis(90);
             // The outputs at t-1 of the term were applied in the previous cycle (what
             // a mirror contact is compared with).
-            for l in term.iter().filter(|l| l.var.space == Space::Output && l.var.prev) {
+            for l in term
+                .iter()
+                .filter(|l| l.var.space == Space::Output && l.var.prev)
+            {
                 prev.applied.set(l.var.index as usize, l.positive);
             }
             let bit = |i: usize| mask >> i & 1 == 1;

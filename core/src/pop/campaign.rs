@@ -364,9 +364,8 @@ fn run_one(
         .map(describe);
     let (verdict, context) = verdict_of(inj, d, first_named, at, effect, context);
     let verdict = match verdict {
-        Verdict::Ambiguous(_) | Verdict::NoEffect => {
-            monitored(&sim, &inj.kind, at).map_or(verdict, |delay_ms| Verdict::Monitored { delay_ms })
-        }
+        Verdict::Ambiguous(_) | Verdict::NoEffect => monitored(&sim, &inj.kind, at)
+            .map_or(verdict, |delay_ms| Verdict::Monitored { delay_ms }),
         v => v,
     };
     Ok((verdict, context, lost))
@@ -379,13 +378,17 @@ fn monitored(sim: &Simulation, kind: &FaultKind, at: u64) -> Option<u64> {
         return None;
     };
     let mirrors = sim.bundle.plant.mirrors();
-    sim.engine.trips.iter().filter(|t| t.time_ms >= at).find_map(|t| {
-        t.constraints
-            .iter()
-            .flat_map(|c| crate::explain::contactors_at_fault(&sim.engine.symbols, &mirrors, c))
-            .any(|(o, _, _)| &o == a)
-            .then(|| t.time_ms - at)
-    })
+    sim.engine
+        .trips
+        .iter()
+        .filter(|t| t.time_ms >= at)
+        .find_map(|t| {
+            t.constraints
+                .iter()
+                .flat_map(|c| crate::explain::contactors_at_fault(&sim.engine.symbols, &mirrors, c))
+                .any(|(o, _, _)| &o == a)
+                .then(|| t.time_ms - at)
+        })
 }
 
 fn verdict_of(

@@ -585,7 +585,13 @@ fn a_stopping_fault_never_releases_the_table_under_a_box() {
     // A healthy plant: A4 and the safety devices were on, their mirror contacts show it.
     let healthy = ["A4_fb", "KM0*", "KM0_fb", "YV0*", "YV0_fb"];
     // The safety devices stay at their safe value (ON): the stop leaves them alone.
-    let held = |id: &str| d.bundle.plant.outputs.iter().any(|o| o.id == id && o.held_on);
+    let held = |id: &str| {
+        d.bundle
+            .plant
+            .outputs
+            .iter()
+            .any(|o| o.id == id && o.held_on)
+    };
     for protect in ["C8", "C7", "P67"] {
         let ones: Vec<&str> = ["def_C6_drive", "A4*", "C5", protect]
             .into_iter()
@@ -595,13 +601,18 @@ fn a_stopping_fault_never_releases_the_table_under_a_box() {
         let a4 = v.iter().find(|(id, _)| id == "A4").unwrap().1;
         assert!(a4, "{protect}: {v:?}\n{}", d.rewritten);
         assert!(
-            v.iter().filter(|(id, _)| id != "A4").all(|(id, on)| *on == held(id)),
+            v.iter()
+                .filter(|(id, _)| id != "A4")
+                .all(|(id, on)| *on == held(id)),
             "{protect}: {v:?}"
         );
     }
     // Nothing to protect: every output at its safe value (0 on the station, 1 for the
     // safety devices).
-    let ones: Vec<&str> = ["def_C6_drive", "A4*", "C5"].into_iter().chain(healthy).collect();
+    let ones: Vec<&str> = ["def_C6_drive", "A4*", "C5"]
+        .into_iter()
+        .chain(healthy)
+        .collect();
     let v = stop_vector(&d, &ones);
     assert!(v.iter().all(|(id, on)| *on == held(id)), "{v:?}");
     // The stop constraint says so in the rewritten text, under its own name.

@@ -559,12 +559,21 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
         (20, "00000110000"),
         (30, "00000100000"),
     ] {
-        sim.observe(&observed_healthy(&sim, t, inputs, "0000100", "0000100", false));
+        sim.observe(&observed_healthy(
+            &sim, t, inputs, "0000100", "0000100", false,
+        ));
     }
     assert!(!sim.engine.is_tripped());
     // The PLC releases A4 with the box at C7: the gateway trips on CSs10 and holds A4;
     // the mirror trips in the same cycle and records what the plant received.
-    sim.observe(&observed_healthy(&sim, 40, "00000101000", "0000000", "0000100", false));
+    sim.observe(&observed_healthy(
+        &sim,
+        40,
+        "00000101000",
+        "0000000",
+        "0000100",
+        false,
+    ));
     assert!(sim.engine.is_tripped());
     assert!(
         sim.engine.trips[0]
@@ -572,12 +581,29 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
             .iter()
             .any(|c| c.id == "CSs10")
     );
-    assert_eq!(sim.engine.history.last().unwrap().applied, bits("000010011"));
+    assert_eq!(
+        sim.engine.history.last().unwrap().applied,
+        bits("000010011")
+    );
     assert_eq!(sim.engine.applied(), &bits("000010011"));
     // The box has left; the gateway resets before the next cycle, the mirror follows.
-    sim.observe(&observed_healthy(&sim, 50, "00000100000", "0000000", "0000100", false));
+    sim.observe(&observed_healthy(
+        &sim,
+        50,
+        "00000100000",
+        "0000000",
+        "0000100",
+        false,
+    ));
     assert!(sim.engine.is_tripped());
-    sim.observe(&observed_healthy(&sim, 60, "00000100000", "0000000", "0000000", true));
+    sim.observe(&observed_healthy(
+        &sim,
+        60,
+        "00000100000",
+        "0000000",
+        "0000000",
+        true,
+    ));
     assert!(!sim.engine.is_tripped());
     assert!(sim.journal().iter().any(|e| e.kind == "reset"));
     assert!(
@@ -614,7 +640,10 @@ fn a_monitor_takes_the_safety_devices_as_the_plc_commands_them() {
     // A gateway holds them ON: the commanded vector it filters has KM0 and YV0.
     let mut gw = following(FilterMode::Enforce);
     gw.observe(&observed(10, idle, "000000000", "000000011", false));
-    assert_eq!(gw.engine.frame().now(Space::Output).to_string(), "000000011");
+    assert_eq!(
+        gw.engine.frame().now(Space::Output).to_string(),
+        "000000011"
+    );
 }
 
 fn following_with_diagnosers(mode: FilterMode) -> Simulation {
@@ -1514,8 +1543,11 @@ fn with_device_monitoring_no_welded_or_dead_drive_damages_a_box() {
                 row.failures
             );
         }
-        let paper = campaign(&crate::test_support::paper_station("paper-campaign"), &config(only))
-            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        let paper = campaign(
+            &crate::test_support::paper_station("paper-campaign"),
+            &config(only),
+        )
+        .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
         paper_hazards += paper.rows.iter().map(|r| r.hazards).sum::<usize>();
     }
     assert!(

@@ -35,12 +35,19 @@ pub(crate) fn strip_device_monitoring(dir: &Path) {
         let path = dir.join(file);
         let text = std::fs::read_to_string(&path).expect("read a station file");
         let kept: Vec<&str> = text.lines().filter(|l| !edm(l.trim_start())).collect();
-        assert_ne!(kept.len(), text.lines().count(), "{file}: no device monitoring to remove");
+        assert_ne!(
+            kept.len(),
+            text.lines().count(),
+            "{file}: no device monitoring to remove"
+        );
         std::fs::write(&path, kept.join("\n") + "\n").expect("write a station file");
     }
     let path = dir.join("diagnosers.ron");
     let text = std::fs::read_to_string(&path).expect("read diagnosers.ron");
     let paper = text.replace("actuators: [\"A4\", \"YV0\"]", "actuators: [\"A4\"]");
-    assert_ne!(paper, text, "diagnosers.ron: YV0 not in the table's partition");
+    assert_ne!(
+        paper, text,
+        "diagnosers.ron: YV0 not in the table's partition"
+    );
     std::fs::write(&path, paper).expect("write diagnosers.ron");
 }

@@ -404,8 +404,7 @@ fn spin_agrees_with_a_safety_contactor() {
 fn device_monitoring_costs_the_verifier_nothing() {
     let (b, l) = station();
     let dir = crate::test_support::paper_station("verify-paper");
-    let (sb, _) =
-        PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+    let (sb, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
     let sl = Layout::load(&dir.join("layout.ron")).expect("layout");
     assert_eq!(
         Model::new(&b, &l, 1).expect("model").prev_mask.1 & 0x7f,
