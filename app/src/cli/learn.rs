@@ -117,6 +117,39 @@ pub(crate) fn campaign(
         config.watch_ms / 1000,
         start.elapsed().as_secs_f64()
     )?;
+    let (right, mirror, runs, bad, lost) = campaign_rows(&mut out, &r)?;
+    writeln!(
+        out,
+        "total: {runs} runs, {right} right, {mirror} stopped on the faulted actuator by its mirror contact, {bad} wrong or early, {lost} lost track (unexplained, no fault claimed)"
+    )?;
+    writeln!(
+        out,
+        "fault-free: {} simulated hours, {} boxes delivered, {} hazards, {} certain diagnoses (all false)",
+        r.fault_free_hours,
+        r.fault_free_delivered,
+        r.fault_free_hazards,
+        r.false_diagnoses.len()
+    )?;
+    for d in r.false_diagnoses.iter().take(10) {
+        writeln!(
+            out,
+            "      FALSE {} ms {}/{} {}",
+            d.time_ms, d.component, d.partition, d.fault
+        )?;
+    }
+    Ok(if bad == 0 && r.false_diagnoses.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+/// The diagnoser campaign's table, one row per injection with its notes; the totals
+/// (right, by the mirror, runs, wrong or early, lost).
+fn campaign_rows(
+    out: &mut impl Write,
+    r: &pop::campaign::Report,
+) -> anyhow::Result<(usize, usize, usize, usize, usize)> {
     writeln!(
         out,
         "{:<34} {:<22} {:>5} {:>5} {:>6} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
@@ -172,30 +205,7 @@ pub(crate) fn campaign(
         runs += row.runs;
         bad += row.wrong + row.early;
     }
-    writeln!(
-        out,
-        "total: {runs} runs, {right} right, {mirror} stopped on the faulted actuator by its mirror contact, {bad} wrong or early, {lost} lost track (unexplained, no fault claimed)"
-    )?;
-    writeln!(
-        out,
-        "fault-free: {} simulated hours, {} boxes delivered, {} hazards, {} certain diagnoses (all false)",
-        r.fault_free_hours,
-        r.fault_free_delivered,
-        r.fault_free_hazards,
-        r.false_diagnoses.len()
-    )?;
-    for d in r.false_diagnoses.iter().take(10) {
-        writeln!(
-            out,
-            "      FALSE {} ms {}/{} {}",
-            d.time_ms, d.component, d.partition, d.fault
-        )?;
-    }
-    Ok(if bad == 0 && r.false_diagnoses.is_empty() {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    })
+    Ok((right, mirror, runs, bad, lost))
 }
 
 /// `vigie campaign transients`: transient sensor faults, pairs, and welded and dead

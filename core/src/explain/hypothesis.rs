@@ -51,10 +51,10 @@ pub fn contactors_at_fault(
             .literals
             .iter()
             .find(|l| l.space == Space::Output && l.previous && &l.name == output);
-        if let (Some(reads), Some(was)) = (reads, was) {
-            if reads.value != was.value {
-                out.push((output.clone(), mirror.clone(), reads.value));
-            }
+        if let (Some(reads), Some(was)) = (reads, was)
+            && reads.value != was.value
+        {
+            out.push((output.clone(), mirror.clone(), reads.value));
         }
     }
     out

@@ -18,7 +18,7 @@ fn station() -> (PlantBundle, TaskSet) {
 fn station_in(dir: &std::path::Path) -> (PlantBundle, TaskSet) {
     let set = TaskSet::load(&dir.join("tasks.ron")).unwrap();
     let plant = Plant::load(&dir.join("plant.ron")).unwrap();
-    let (bundle, problems) = PlantBundle::from_plant(&dir, plant, &set.aux_names());
+    let (bundle, problems) = PlantBundle::from_plant(dir, plant, &set.aux_names());
     // Property (6) findings (V0106) are static warnings about physically impossible
     // contexts of the paper's constraints; the fallback there is all-zero on both sides.
     assert!(
@@ -227,7 +227,7 @@ fn st_conforms_to_the_native_engine() {
                 // Mirror contacts follow the outputs applied last cycle, except for a
                 // rare weld or death (a `CSk*` trip); random, they trip every cycle.
                 for &(i, o) in &mirrors {
-                    if rng.next() % 200 != 0 {
+                    if !rng.next().is_multiple_of(200) {
                         inputs.set(i, engine.applied().get(o));
                     }
                 }
