@@ -85,6 +85,10 @@ explain-X417 = L'action { $qualifier } { $output } de l'étape { $step } command
 explain-X414 = { $sensor } est suspect : sa lecture a fait un front que la physique de la machine ne permet pas ; l'étage de plausibilité garde sa dernière valeur plausible et { $constraint } la lit comme pouvant valoir l'une ou l'autre. Vérifiez { $sensor } (cellule, réflecteur, câble) avant le programme.
 explain-X415 = Matériel d'abord : le diagnostiqueur { $component } a trouvé un défaut certain à { $time_ms } ms ({ $descriptions }). Vérifiez { $check } sur la machine avant le programme : les suspects du programme ci-dessous supposent que la machine a obéi à ses ordres.
 explain-X416 = Matériel d'abord : le diagnostiqueur { $component } tient le composant pour défaillant à { $time_ms } ms sans pouvoir choisir entre { $descriptions }. Vérifiez { $check } sur la machine avant le programme : les suspects du programme ci-dessous supposent que la machine a obéi à ses ordres.
+explain-X419 = { $state ->
+    [welded] Matériel d'abord : { $actuator } a été relâché et son contact miroir { $mirror } le lit toujours fermé ({ $constraint }) : son contacteur est soudé. Vérifiez le contacteur de { $actuator } sur la machine ; le programme l'a relâché.
+   *[dead] Matériel d'abord : { $actuator } a été commandé et son contact miroir { $mirror } le lit ouvert ({ $constraint }) : il ne s'est pas fermé (bobine, fusible, câblage ou contacteur). Vérifiez { $actuator } sur la machine ; le programme l'a commandé.
+}
 
 ## Alarmes (le texte du cœur reste l'enregistrement ; en français, à partir du code et
 ## des champs de l'alarme)

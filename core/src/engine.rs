@@ -188,6 +188,9 @@ pub struct Engine {
     /// Mirror contacts (`feedback_of`): (input, output). At an attach to a running
     /// plant, the output's previous value is what its mirror shows, not the command.
     mirrors: Vec<(usize, usize)>,
+    /// Supplied drives: (drive, its supply) for each `supplies` of a safety contactor.
+    /// The diagnosers read a drive as commanded only while its supply is ON.
+    supplied: Vec<(usize, usize)>,
     /// Sensors the diagnosers estimate: (input, flag auxiliary, estimate auxiliary).
     estimates: Vec<(usize, usize, usize)>,
     /// Per entry of `estimates`: read from the estimate in the previous cycle.
@@ -253,6 +256,12 @@ impl Engine {
                 .filter(|&k| bundle.plant.outputs[k].held_on)
                 .collect(),
             mirrors: bundle.plant.mirrors(),
+            supplied: bundle
+                .plant
+                .supplies()
+                .into_iter()
+                .flat_map(|(s, drives)| drives.into_iter().map(move |k| (k, s)))
+                .collect(),
             estimates: Vec::new(),
             estimated: Vec::new(),
             filter_state: Filter::new(&bundle.constraints, n_out).new_state(),
@@ -525,7 +534,7 @@ impl Engine {
         }
 
         let held = self.holds_outputs();
-        self.with_raw_inputs(|frame| after_filter(now, frame, held));
+        self.with_diagnosers_view(|frame| after_filter(now, frame, held));
         let tripped = self.latched;
         let frame = &self.frame;
         let commanded = &self.commanded;
@@ -539,6 +548,17 @@ impl Engine {
             r.tripped = tripped;
         });
         self.frame.now(Space::Output)
+    }
+
+    /// Sets the outputs the safety function holds ON (`held_on`: a safety contactor),
+    /// as every cycle does after the control's scan: for a projection that runs the
+    /// program without the engine.
+    pub fn hold_on(&self, outputs: &mut Bits) {
+        for &k in &self.held_on {
+            if k < outputs.len() {
+                outputs.set(k, true);
+            }
+        }
     }
 
     /// After [`Engine::cycle`]: the outputs the plant really received in this cycle when
@@ -563,7 +583,7 @@ impl Engine {
     pub fn after_filter(&mut self, stage: &mut dyn FnMut(Millis, &mut Frame, bool)) {
         let held = self.holds_outputs();
         let now = self.now;
-        self.with_raw_inputs(|frame| stage(now, frame, held));
+        self.with_diagnosers_view(|frame| stage(now, frame, held));
         if let Some(r) = self.history.last_mut() {
             r.aux.copy_from(self.frame.now(Space::Aux));
         }
@@ -614,6 +634,39 @@ impl Engine {
                 self.frame.prev_mut(Space::Input).set(input, v);
                 self.estimated[k] = flagged;
             }
+        }
+    }
+
+    /// Runs `f` (the diagnosers' stage) on the frame as the plant is: the sensors as
+    /// read ([`Engine::with_raw_inputs`]), and each supplied drive OFF while its supply
+    /// is. The outputs are put back afterwards.
+    fn with_diagnosers_view(&mut self, f: impl FnOnce(&mut Frame)) {
+        // A drive whose supply is cut does not act, whatever its own output: the
+        // diagnosers read it OFF (else a table frozen by its safety valve, its rotation
+        // still ordered, reads as a sensor that failed to see it arrive).
+        let outputs = (!self.supplied.is_empty()).then(|| {
+            let kept = (
+                self.frame.now(Space::Output).clone(),
+                self.frame.prev(Space::Output).clone(),
+            );
+            for &(k, s) in &self.supplied {
+                for prev in [false, true] {
+                    let bits = if prev {
+                        self.frame.prev_mut(Space::Output)
+                    } else {
+                        self.frame.now_mut(Space::Output)
+                    };
+                    if k < bits.len() && s < bits.len() && !bits.get(s) {
+                        bits.set(k, false);
+                    }
+                }
+            }
+            kept
+        });
+        self.with_raw_inputs(f);
+        if let Some((now, prev)) = outputs {
+            self.frame.now_mut(Space::Output).copy_from(&now);
+            self.frame.prev_mut(Space::Output).copy_from(&prev);
         }
     }
 
@@ -716,6 +769,19 @@ impl Engine {
 
     fn fired(&self, ci: usize) -> FiredConstraint {
         self.fired_in(ci, &self.frame)
+    }
+
+    /// The safety devices (`held_on`) are driven by someone else, the PLC a monitor
+    /// watches: their commanded values are taken as observed, never held ON (Vigie
+    /// writes no output there; holding them would report a contactor the PLC left open
+    /// as commanded and dead).
+    pub fn observe_safety_devices(&mut self) {
+        self.held_on.clear();
+    }
+
+    /// The plant's mirror contacts: each one's input and the output it mirrors.
+    pub fn mirrors(&self) -> &[(usize, usize)] {
+        &self.mirrors
     }
 
     /// The constraints that `outputs` would violate if applied at the next cycle, the

@@ -1680,6 +1680,7 @@ impl Simulation {
                 frame.shift();
                 frame.now_mut(Space::Input).copy_from(emu.sensors());
                 program.scan(now, &frame, &mut outputs);
+                self.engine.hold_on(&mut outputs);
             }
             first = false;
             emu.step(self.cycle, &outputs);
@@ -1694,6 +1695,7 @@ impl Simulation {
                     f.shift();
                     f.now_mut(Space::Input).copy_from(show.sensors());
                     p.scan(t, &f, &mut o);
+                    self.engine.hold_on(&mut o);
                     show.step(self.cycle, &o);
                 }
                 first_hazard_picture =

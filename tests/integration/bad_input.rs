@@ -28,20 +28,8 @@ fn fixture(name: &str) -> PathBuf {
 pub(crate) fn station_copy(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("vigie-bad-input-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    copy_dir(&station(), &dir);
+    crate::paper::copy_dir(&station(), &dir);
     dir
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &to.join(e.file_name()));
-        } else {
-            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
-        }
-    }
 }
 
 fn vigie(args: &[&str]) -> Output {

@@ -577,8 +577,8 @@ fn a_plant_fault_exercise_hides_the_fault_until_the_trainee_names_it() {
     let _ = std::fs::remove_dir_all(&data);
 }
 
-/// A plant-fault exercise in French, as a French trainee reads it: the diagnosers' stop
-/// and the task alarm in French (they were the core's English text), the form and the
+/// A plant-fault exercise in French, as a French trainee reads it: the device
+/// monitoring's stop and the task alarm in French (they were the core's English text), the form and the
 /// debrief in French.
 #[test]
 fn a_plant_fault_exercise_in_french() {
@@ -594,15 +594,47 @@ fn a_plant_fault_exercise_in_french() {
     // The belt's task alarm comes 7 s after the stop.
     h.state_mut().cycles(1_000);
     h.run_steps(2);
-    for french in [
-        "les diagnostiqueurs arrêtent la machine : P en défaut (DSTOP_P)",
-        "Caisse portée par le convoyeur intermédiaire de C1 à son bout C3",
-    ] {
-        let n = h.query_all_by_label_contains(french).count();
-        assert!(n >= 1, "{french}");
-    }
-    for english in ["the diagnosers stop", "Box carried by"] {
-        assert!(h.query_by_label_contains(english).is_none(), "{english}");
+    // The valve's spool monitoring contact reads it open after its order: the safety
+    // valve YV0 cuts the table's air.
+    let french = "Arrêt sécurité : A4 ne commute pas : couper YV0 (CSk10)";
+    assert!(
+        h.query_all_by_label_contains(french).count() >= 1,
+        "{french}"
+    );
+    assert!(h.query_by_label_contains("Safety stop").is_none());
+    // The table blocked at C5 (mechanical: no mirror contact shows it): the diagnosers'
+    // stop; the rollers' contactor dead (P05): KM0 stops the intermediate belt under its
+    // box, whose task alarm comes 7 s later. In French, never the core's English.
+    let expected = [
+        (
+            "P04",
+            "les diagnostiqueurs arrêtent la machine : P en défaut (DSTOP_P)",
+        ),
+        (
+            "P05",
+            "Caisse portée par le convoyeur intermédiaire de C1 à son bout C3",
+        ),
+    ];
+    for (exercise, french) in expected {
+        let mut opts = options(None);
+        opts.scenario = None;
+        let mut x = harness(opts);
+        x.state_mut()
+            .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+        x.state_mut().apply(Command::SetMode(Mode::Training));
+        x.state_mut()
+            .apply(Command::LoadPlantExercise(exercise.into()));
+        run_to_trip(&mut x);
+        x.state_mut().cycles(1_000);
+        x.run_steps(2);
+        let n = x.query_all_by_label_contains(french).count();
+        assert!(n >= 1, "{exercise}: {french}");
+        for english in ["the diagnosers stop", "Box carried by", "Safety stop"] {
+            assert!(
+                x.query_by_label_contains(english).is_none(),
+                "{exercise}: {english}"
+            );
+        }
     }
     h.get_by_label_contains("Un composant de la machine est en défaut");
     h.state_mut().apply(Command::SubmitDiagnosis("A4".into()));
@@ -818,15 +850,19 @@ fn maintenance_verifies_the_constraint_set() {
     );
 }
 
-/// Issue 17: a dead intermediate belt under a pushed box (`scenarios/a1-dead-belt.ron`)
-/// leaves the feed in doubt between the dead belt and a dead beam; after 4 s it stops
+/// Issue 17: a dead intermediate belt under a pushed box (`scenarios/a1-dead-belt.ron`,
+/// on the paper's station) leaves the feed in doubt between the dead belt and a dead beam; after 4 s it stops
 /// the plant on the safe side. The operator reads that no fault is certain, the
 /// candidates, and what to do; the diagnosers' header counts the stop apart from the
 /// certain diagnoses.
 #[test]
 fn a_stop_on_the_safe_side_says_it_is_in_doubt_and_what_to_do() {
-    let mut o = ConsoleOptions::new(&root().join("layouts/sorting-station"));
-    o.scenario = Some(root().join("layouts/sorting-station/scenarios/a1-dead-belt.ron"));
+    // The paper's station: the shipped one's mirror contact shows the dead belt's
+    // contactor open at the next cycle (CSk4), before any doubt.
+    let tmp = crate::live::TempDir::new("doubt");
+    let paper = crate::paper_station_in(&tmp.0);
+    let mut o = ConsoleOptions::new(&paper);
+    o.scenario = Some(paper.join("scenarios/a1-dead-belt.ron"));
     o.run_until_ms = Some(36_000);
     o.paused = true;
     let mut h = harness(o);
@@ -2081,8 +2117,8 @@ fn exporting_the_report_does_not_change_the_view() {
 }
 
 /// Issue 20, hardware before program: with the turntable's valve stuck ON, the console's
-/// level 4 starts with the hardware (the diagnoser's certain fault and A4 to check), and
-/// the stop by the diagnosers lists no program suspect to link to.
+/// level 4 starts with the hardware (its spool monitoring contact against its output,
+/// X419, and A4 to check), and lists no program suspect to link to.
 #[test]
 fn an_actuator_stuck_on_is_told_as_hardware_first_on_the_console() {
     let mut opts = options(None);
@@ -2101,10 +2137,11 @@ fn an_actuator_stuck_on_is_told_as_hardware_first_on_the_console() {
         .expect("explained")
         .hypothesis
         .items;
-    assert_eq!(items[0].code, "X415", "{:?}", items[0].text);
+    assert_eq!(items[0].code, "X419", "{:?}", items[0].text);
     assert!(items[0].fields["check"].split(", ").any(|e| e == "A4"));
-    // What the technician reads first, on screen.
-    h.get_by_label_contains("Hardware first: the table diagnoser found a fault with certainty");
-    h.get_by_label_contains("Check A4 on the machine before the program");
+    // What the technician reads first, on screen: the valve's spool monitoring contact
+    // still reads it switched after its release.
+    h.get_by_label_contains("Hardware first: A4 was released and its mirror contact A4_fb");
+    h.get_by_label_contains("Check A4's contactor on the machine");
     assert!(h.query_by_label_contains("in the program").is_none());
 }

@@ -28,8 +28,12 @@ fn filter(trace: &str, extra: &[&str]) -> (bool, String) {
 /// a rising edge of A4 away from C4 and trips on CSs14. A real edge later trips both.
 #[test]
 fn a_trace_recorded_mid_production_does_not_trip_on_its_first_row() {
-    let header = "time_ms,C0,C1,C2,C3,C4,C5,C6,C7,C8,C9,C10,A0,A1,A2,A3,A4,A5,A6\n";
-    let held = "0,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0,1,0,0\n10,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0,1,0,0\n";
+    // The mirror contacts follow the outputs one cycle late; the safety contactor and
+    // valve are closed.
+    let header = "time_ms,C0,C1,C2,C3,C4,C5,C6,C7,C8,C9,C10,A0,A1,A2,A3,A4,A5,A6,\
+                  A0_fb,A1_fb,A2_fb,A3_fb,A4_fb,A5_fb,A6_fb,KM0_fb,YV0_fb,KM0,YV0\n";
+    let held = "0,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0,1,0,0,0,0,0,0,1,0,0,1,1,1,1\n\
+                10,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0,1,0,0,0,0,0,0,1,0,0,1,1,1,1\n";
     let (ok, out) = filter(&format!("{header}{held}"), &[]);
     assert!(ok, "{out}");
     assert!(
@@ -44,7 +48,8 @@ fn a_trace_recorded_mid_production_does_not_trip_on_its_first_row() {
     );
     // Released at C5 (allowed), then pressed again on the way back, away from C4: a
     // real edge, a trip either way.
-    let later = "20,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0\n30,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,1,0,0\n";
+    let later = "20,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,1,0,0,1,1,1,1\n\
+                 30,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0,1,1,1,1\n";
     let (ok, out) = filter(&format!("{header}{held}{later}"), &[]);
     assert!(ok, "{out}");
     assert!(out.contains("CSs14"), "{out}");

@@ -594,8 +594,9 @@ fn plc_killed_gives_safe_outputs_then_recovers() {
         e["event"] == "alarm" && e["key"] == "link:plc"
     });
     let safe = gw.event("safe outputs", |e| e["event"] == "safe_outputs");
-    // The fallback: fewest outputs ON that keep every constraint false: A4 only.
-    assert_eq!(safe["outputs"], "0000100");
+    // The fallback: every output at its safe value but what a constraint forces: A4
+    // held, the safety contactor and valve (KM0, YV0, safe ON) left closed.
+    assert_eq!(safe["outputs"], "000010011");
     assert!(safe["time_ms"].as_u64() >= alarm["time_ms"].as_u64());
     wait_until("the plant to hold the fallback", || {
         plant.coils() == "0000100"
@@ -611,7 +612,7 @@ fn plc_killed_gives_safe_outputs_then_recovers() {
     });
     // Shutdown with the PLC still commanding A1: the plant gets the safe state.
     let stopped = gw.stop();
-    assert_eq!(stopped["outputs"], "0000100");
+    assert_eq!(stopped["outputs"], "000010011");
     assert_eq!(plant.coils(), "0000100");
 }
 
@@ -661,11 +662,11 @@ fn illegal_requests_get_exceptions_and_nothing_crashes() {
     let mut gw = Gateway::start(&gateway_config(plant.port, ""));
     let server = gw.listening();
     let mut plc = Plc::start(server, Some("127.0.0.2"));
-    // Past the 11 discrete inputs and the 7 coils; no registers at all.
-    assert_eq!(plc.0.ask("raw 2 8 5"), "exception 2");
-    assert_eq!(plc.0.ask("raw 1 7 1"), "exception 2");
+    // Past the 20 discrete inputs and the 9 coils; no registers at all.
+    assert_eq!(plc.0.ask("raw 2 17 5"), "exception 2");
+    assert_eq!(plc.0.ask("raw 1 9 1"), "exception 2");
     assert_eq!(plc.0.ask("raw 3 0 1"), "exception 2");
-    assert_eq!(plc.0.ask("raw 15 5 4"), "exception 2");
+    assert_eq!(plc.0.ask("raw 15 7 4"), "exception 2");
     assert_eq!(plc.0.ask("raw 2 0 11"), "ok 00000000000");
     // A client that is not the PLC (127.0.0.1) may read but not write.
     let mut other = Plc::start(server, None);
@@ -870,7 +871,7 @@ fn gateway_stops_the_plant_on_a_certain_fault_of_the_table_drive() {
         assert_eq!(plant.coils(), "0000100", "the PLC's A1 must not pass");
     }
     let stopped = gw.stop();
-    assert_eq!(stopped["outputs"], "0000100");
+    assert_eq!(stopped["outputs"], "000010011", "A4, KM0 and YV0 ON");
     assert!(
         stopped["diagnoses"]
             .as_array()
@@ -962,9 +963,11 @@ fn emulator_served_to_pymodbus_and_mbpoll() {
     args.extend(["-t", "1", "-r", "0", "-c", "11", "127.0.0.1"]);
     let out = mbpoll_run(&args);
     assert!(out.contains("[10]:"), "{out}");
-    // The soft-PLC (pymodbus, the configured PLC address) runs the entry conveyor.
+    // The soft-PLC (pymodbus, the configured PLC address) closes the safety contactor
+    // KM0 (coil 7: served, the emulator is the plant and obeys its coils) and runs the
+    // entry conveyor.
     let mut plc = Plc::start(server, Some("127.0.0.2"));
-    plc.command("1000000");
+    plc.command("100000010");
     // mbpoll reads the coils back.
     let mut args = base.to_vec();
     args.extend(["-t", "0", "-r", "0", "-c", "7", "127.0.0.1"]);
@@ -982,7 +985,7 @@ fn emulator_served_to_pymodbus_and_mbpoll() {
     let out = mbpoll_run(&args);
     assert!(out.to_lowercase().contains("illegal function"), "{out}");
     let mut args = base.to_vec();
-    args.extend(["-t", "1", "-r", "11", "-c", "2", "127.0.0.1"]);
+    args.extend(["-t", "1", "-r", "20", "-c", "2", "127.0.0.1"]);
     let out = mbpoll_run(&args);
     assert!(out.to_lowercase().contains("illegal data address"), "{out}");
     gw.stop();

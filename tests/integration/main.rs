@@ -16,6 +16,18 @@ mod fuzz_loaders;
 mod live;
 mod transients;
 
+#[path = "../../core/src/test_support/paper.rs"]
+mod paper;
+
+/// The paper's sorting station (no device monitoring), copied to `dir` (created): for
+/// the tests that count its eleven sensors and seven coils, such as the link's
+/// hardening against misbehaving peers.
+pub(crate) fn paper_station_in(dir: &std::path::Path) -> std::path::PathBuf {
+    paper::copy_dir(&live::repo().join("layouts/sorting-station"), dir);
+    paper::strip_device_monitoring(dir);
+    dir.to_path_buf()
+}
+
 /// The journal of the historian in `dir` (`vigie.sqlite`), one JSON object per line
 /// (`wall_ms`, `sim_ms`, `kind`, `text`), oldest first; empty when there is none.
 pub(crate) fn historian_journal(dir: &std::path::Path) -> String {

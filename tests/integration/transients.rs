@@ -40,6 +40,16 @@ fn campaign(
     seeds: std::ops::Range<u64>,
     fault_free_hours: u64,
 ) -> (Config, vigie_core::pop::transients::Report) {
+    campaign_in(&station(), only, seeds, fault_free_hours)
+}
+
+/// [`campaign`] on the plant folder `dir`.
+fn campaign_in(
+    dir: &std::path::Path,
+    only: &str,
+    seeds: std::ops::Range<u64>,
+    fault_free_hours: u64,
+) -> (Config, vigie_core::pop::transients::Report) {
     let config = Config {
         first_seed: seeds.start,
         seeds: seeds.end - seeds.start,
@@ -48,7 +58,7 @@ fn campaign(
         fault_free_hours,
         ..Config::default()
     };
-    let report = run(&station(), &config).unwrap();
+    let report = run(dir, &config).unwrap();
     (config, report)
 }
 
@@ -502,7 +512,11 @@ fn a_sensor_stuck_at_1_gives_no_more_hazards_with_the_plausibility_rules_than_wi
 /// no sensor shows before it happens), and the stop says it is ambiguous.
 #[test]
 fn a_dead_belt_under_a_pushed_box_stops_the_plant_before_the_next_box_collides() {
-    let (_, report) = campaign("A1 dead", 0..12, 0);
+    // The paper's station: the shipped one's mirror contact shows the dead belt's
+    // contactor open the next cycle and stops the plant before the diagnosers.
+    let tmp = crate::live::TempDir::new("dead-belt");
+    let paper = crate::paper_station_in(&tmp.0);
+    let (_, report) = campaign_in(&paper, "A1 dead", 0..12, 0);
     let row = &report.rows[0];
     assert!(row.runs == 12 && row.injected == 12, "{row:?}");
     assert_eq!(row.hazards, row.own_hazards, "{:?}", row.failures);
@@ -552,16 +566,19 @@ fn a_welded_belt_that_pushes_the_box_onto_the_table_is_not_blamed_on_c6() {
     welded_runs_not_blamed_on_a_sensor("A1 welded", &[5, 89, 98]);
 }
 
-/// One run of the actuator fault `only` per seed, each struck, with no wrong certain
+/// One run of the actuator fault `only` per seed on the paper's station (no mirror
+/// contact: the diagnosers alone see the weld), each struck, with no wrong certain
 /// diagnosis and no hazard but the faulted actuator's own; the rows, by seed.
 fn welded_runs_not_blamed_on_a_sensor(
     only: &str,
     seeds: &[u64],
 ) -> Vec<(u64, vigie_core::pop::transients::Row)> {
+    let tmp = crate::live::TempDir::new("welded");
+    let paper = crate::paper_station_in(&tmp.0);
     seeds
         .iter()
         .map(|&seed| {
-            let (_, mut report) = campaign(only, seed..seed + 1, 0);
+            let (_, mut report) = campaign_in(&paper, only, seed..seed + 1, 0);
             let row = report.rows.remove(0);
             assert_eq!(row.injected, 1, "{row:?}");
             assert_eq!(row.wrong, 0, "seed {seed}: {:?}", row.failures);

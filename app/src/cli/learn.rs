@@ -117,12 +117,54 @@ pub(crate) fn campaign(
         config.watch_ms / 1000,
         start.elapsed().as_secs_f64()
     )?;
+    let (right, mirror, runs, bad, lost) = campaign_rows(&mut out, &r)?;
     writeln!(
         out,
-        "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
-        "fault", "expected partition", "runs", "right", "wrong", "early", "ambig", "none", "lost"
+        "total: {runs} runs, {right} right, {mirror} stopped on the faulted actuator by its mirror contact, {bad} wrong or early, {lost} lost track (unexplained, no fault claimed)"
     )?;
-    let (mut right, mut runs, mut bad, mut lost) = (0, 0, 0, 0);
+    writeln!(
+        out,
+        "fault-free: {} simulated hours, {} boxes delivered, {} hazards, {} certain diagnoses (all false)",
+        r.fault_free_hours,
+        r.fault_free_delivered,
+        r.fault_free_hazards,
+        r.false_diagnoses.len()
+    )?;
+    for d in r.false_diagnoses.iter().take(10) {
+        writeln!(
+            out,
+            "      FALSE {} ms {}/{} {}",
+            d.time_ms, d.component, d.partition, d.fault
+        )?;
+    }
+    Ok(if bad == 0 && r.false_diagnoses.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+/// The diagnoser campaign's table, one row per injection with its notes; the totals
+/// (right, by the mirror, runs, wrong or early, lost).
+fn campaign_rows(
+    out: &mut impl Write,
+    r: &pop::campaign::Report,
+) -> anyhow::Result<(usize, usize, usize, usize, usize)> {
+    writeln!(
+        out,
+        "{:<34} {:<22} {:>5} {:>5} {:>6} {:>5} {:>5} {:>5} {:>5} {:>5}  delay ms p50/p90/max",
+        "fault",
+        "expected partition",
+        "runs",
+        "right",
+        "mirror",
+        "wrong",
+        "early",
+        "ambig",
+        "none",
+        "lost"
+    )?;
+    let (mut right, mut mirror, mut runs, mut bad, mut lost) = (0, 0, 0, 0, 0);
     for row in &r.rows {
         let q = |p| {
             row.delay_quantile(p)
@@ -130,11 +172,12 @@ pub(crate) fn campaign(
         };
         writeln!(
             out,
-            "{:<34} {:<22} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
+            "{:<34} {:<22} {:>5} {:>5} {:>6} {:>5} {:>5} {:>5} {:>5} {:>5}  {}/{}/{}",
             row.name,
             row.expected.join("|"),
             row.runs,
             row.right,
+            row.monitored,
             row.wrong,
             row.early,
             row.ambiguous.values().sum::<usize>(),
@@ -157,34 +200,12 @@ pub(crate) fn campaign(
             writeln!(out, "      lost track (no fault claimed) {l}")?;
         }
         right += row.right;
+        mirror += row.monitored;
         lost += row.lost;
         runs += row.runs;
         bad += row.wrong + row.early;
     }
-    writeln!(
-        out,
-        "total: {runs} runs, {right} right, {bad} wrong or early, {lost} lost track (unexplained, no fault claimed)"
-    )?;
-    writeln!(
-        out,
-        "fault-free: {} simulated hours, {} boxes delivered, {} hazards, {} certain diagnoses (all false)",
-        r.fault_free_hours,
-        r.fault_free_delivered,
-        r.fault_free_hazards,
-        r.false_diagnoses.len()
-    )?;
-    for d in r.false_diagnoses.iter().take(10) {
-        writeln!(
-            out,
-            "      FALSE {} ms {}/{} {}",
-            d.time_ms, d.component, d.partition, d.fault
-        )?;
-    }
-    Ok(if bad == 0 && r.false_diagnoses.is_empty() {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    })
+    Ok((right, mirror, runs, bad, lost))
 }
 
 /// `vigie campaign transients`: transient sensor faults, pairs, and welded and dead

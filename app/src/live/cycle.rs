@@ -673,7 +673,12 @@ pub(crate) async fn monitor(
         liveness,
         layout: vigie_core::emulator::Layout::load(&bundle.dir.join("layout.ron")).ok(),
         engine: with_estimates(
-            Engine::new(&bundle, FilterMode::ReportOnly, 6000),
+            {
+                // The PLC drives the safety devices; the monitor writes nothing.
+                let mut e = Engine::new(&bundle, FilterMode::ReportOnly, 6000);
+                e.observe_safety_devices();
+                e
+            },
             diagnosers.as_ref(),
             &bundle,
             config.plausibility,

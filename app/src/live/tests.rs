@@ -27,10 +27,13 @@ fn memory_backend_served_round_trip_and_exceptions() {
     let config = GatewayConfig::from_ron(&text, Path::new("t.ron")).unwrap();
     let server_config = config.server.clone().unwrap();
     let backend = MemoryBackend {
-        inputs: vigie_core::Bits::from_bools(&[
-            false, false, false, true, false, false, false, true, false, false, false,
-        ]),
-        outputs: vigie_core::Bits::zeros(7),
+        inputs: {
+            let mut b = vigie_core::Bits::zeros(plant.inputs.len());
+            b.set(3, true);
+            b.set(7, true);
+            b
+        },
+        outputs: vigie_core::Bits::zeros(plant.outputs.len()),
     };
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
@@ -79,7 +82,9 @@ fn memory_backend_served_round_trip_and_exceptions() {
                 vec![false, false, true, false, true, false, false]
             );
             assert_eq!(
-                ctx.read_discrete_inputs(10, 2).await.unwrap(),
+                ctx.read_discrete_inputs(plant.inputs.len() as u16 - 1, 2)
+                    .await
+                    .unwrap(),
                 Err(ExceptionCode::IllegalDataAddress)
             );
             assert_eq!(

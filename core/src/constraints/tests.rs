@@ -30,9 +30,11 @@ fn the_paper_set_loads_without_problems_and_classifies() {
     let text = std::fs::read_to_string(station_dir().join("constraints.txt")).unwrap();
     let (set, problems) = ConstraintSet::parse(&text, Path::new("constraints.txt"), &b.symbols);
     assert!(problems.is_empty(), "{}", crate::diag::render(&problems));
+    // The paper's equations (9) to (25); the device monitoring's CSk* follow them.
     let got: Vec<_> = set
         .constraints
         .iter()
+        .filter(|c| !c.id.starts_with("CSk"))
         .map(|c| {
             let outs: Vec<&str> = c
                 .outputs
@@ -52,6 +54,16 @@ fn the_paper_set_loads_without_problems_and_classifies() {
         .map(|&(id, class, outs, dnf)| (id, class, outs.to_vec(), dnf.to_string()))
         .collect();
     assert_eq!(got, want);
+    let edm: Vec<_> = set
+        .constraints
+        .iter()
+        .filter(|c| c.id.starts_with("CSk"))
+        .collect();
+    assert_eq!(edm.len(), 16);
+    assert!(
+        edm.iter().all(|c| c.class == Class::Simple),
+        "each cuts one supply"
+    );
     // Locations point at the id; sources are the text after `=`, comment removed.
     let c10 = set.get("CSs10").unwrap();
     assert_eq!(c10.location.to_string(), "constraints.txt:14:1");

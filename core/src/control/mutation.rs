@@ -233,8 +233,10 @@ fn expr_mutations(
             push(Operator::SwapEdge, name, swapped);
         }
         if plant.input(name).is_some() {
+            // Another process sensor: a mirror contact (`feedback_of`) belongs to the
+            // device monitoring, which a sequence does not read.
             for other in &plant.inputs {
-                if other.id == *name {
+                if other.id == *name || other.feedback_of.is_some() {
                     continue;
                 }
                 let swapped = rewrite_leaf(&e, i, &mut 0, &|leaf, under_not| {

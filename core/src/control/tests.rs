@@ -293,10 +293,16 @@ impl Closed {
         }
     }
 
+    /// One scan with these sensors on; every mirror contact reads its contactor as
+    /// applied in the previous cycle (healthy contactors). Returns the commanded
+    /// outputs, less the safety contactors the safety function holds ON.
     fn scan(&mut self, inputs: &[&str]) -> String {
         let mut bits = Bits::zeros(self.plant.inputs.len());
         for i in inputs {
             bits.set(self.plant.input(i).unwrap(), true);
+        }
+        for (i, o) in self.plant.mirrors() {
+            bits.set(i, self.engine.applied().get(o));
         }
         self.t += 10;
         self.engine.cycle(Millis(self.t), &bits, &mut self.rt);
@@ -304,6 +310,7 @@ impl Closed {
             .engine
             .commanded()
             .ones()
+            .filter(|&k| !self.plant.outputs[k].held_on)
             .map(|k| self.plant.outputs[k].id.clone())
             .collect();
         out.join(" ")
@@ -672,6 +679,9 @@ fn control_shipped_observers_let_the_reference_evacuate_both_ways() {
         let mut bits = Bits::zeros(p.inputs.len());
         for i in s {
             bits.set(p.input(i).unwrap(), true);
+        }
+        for (i, o) in p.mirrors() {
+            bits.set(i, engine.applied().get(o));
         }
         t += 10;
         engine.cycle(Millis(t), &bits, &mut rt);

@@ -209,6 +209,7 @@ registry! {
     X_HARDWARE_AMBIGUOUS = "X416", "hardware first: a diagnoser holds a component faulty between several faults";
     X_MISPLACED_ACTION = "X417", "a step's action drives the actuator where the step's place in its chart forbids it";
     X_UNEXPECTED_EDGE = "X418", "a sensor of the fired term changed where the plant's physics did not expect it";
+    X_CONTACTOR_DISAGREES = "X419", "hardware first: a mirror contact of the fired term disagrees with its output (welded or dead)";
     // T: task alarms (`tasks::explain::AlarmCode`)
     T_TOLERANCE_USED_UP = "T001", "interruption tolerance used up: the task can no longer finish before γ";
     T_SLOWDOWN = "T002", "slowdown: effective running time beyond β without the end event";

@@ -31,9 +31,13 @@ fn emu(seed: u64) -> Emulator {
     e
 }
 
+/// These outputs ON, and the safety contactors the safety function holds ON.
 fn outs(on: &[&str]) -> Bits {
     let p = plant();
     let mut b = Bits::zeros(p.outputs.len());
+    for k in (0..p.outputs.len()).filter(|&k| p.outputs[k].held_on) {
+        b.set(k, true);
+    }
     for a in on {
         b.set(p.output(a).expect("actuator"), true);
     }
@@ -595,7 +599,10 @@ fn quiet_steps_change_nothing() {
 #[test]
 fn a_push_is_damage_once_the_belt_has_slid_the_tolerance() {
     let at_once = {
-        let mut e = emu(1);
+        let mut l = layout();
+        l.push_tolerance_mm = 0;
+        let mut e = Emulator::new(&l, &plant(), 1).expect("emulator");
+        e.set_arrivals(ArrivalPlan::Off);
         e.place_box("entry", 1000, BoxSize::Small);
         until(&mut e, &outs(&["A0"]), 3000, |e| !e.hazards().is_empty()).expect("hazard")
     };

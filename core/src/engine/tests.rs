@@ -3,11 +3,14 @@ use crate::constraints::ConstraintSet;
 use crate::test_support::station;
 use std::path::Path;
 
-/// Drives an engine on the sorting station, cycle by cycle, every 10 ms.
+/// Drives an engine on the sorting station, cycle by cycle, every 10 ms. The mirror
+/// contacts read the outputs applied in the previous cycle (healthy contactors) unless a
+/// cycle is run `raw`.
 struct Run {
     engine: Engine,
     plant: crate::plant::Plant,
     t: u64,
+    applied: Bits,
 }
 
 impl Run {
@@ -23,18 +26,42 @@ impl Run {
                 e.set_plausibility(false);
                 e
             },
+            // Before the first cycle, the outputs' initial values (a cold start).
+            applied: {
+                let mut b = Bits::zeros(bundle.plant.outputs.len());
+                for (k, o) in bundle.plant.outputs.iter().enumerate() {
+                    b.set(k, o.initial);
+                }
+                b
+            },
             plant: bundle.plant,
             t: 0,
         }
     }
 
     /// One cycle with these sensors at 1 and these outputs commanded; returns the
-    /// outputs applied, by name.
+    /// outputs applied, by name, less the safety contactors held ON (`held_on`), which
+    /// are named only when released.
     fn cycle(&mut self, sensors: &[&str], commanded: &[&str]) -> Vec<String> {
+        self.cycle_with(sensors, commanded, true)
+    }
+
+    /// [`Run::cycle`] with every mirror contact as the sensors say (a welded or dead
+    /// contactor, or a link's first cycle).
+    fn cycle_raw(&mut self, sensors: &[&str], commanded: &[&str]) -> Vec<String> {
+        self.cycle_with(sensors, commanded, false)
+    }
+
+    fn cycle_with(&mut self, sensors: &[&str], commanded: &[&str], mirrors: bool) -> Vec<String> {
         self.t += 10;
         let mut inputs = Bits::zeros(self.plant.inputs.len());
         for s in sensors {
             inputs.set(self.plant.input(s).unwrap(), true);
+        }
+        if mirrors {
+            for (i, o) in self.plant.mirrors() {
+                inputs.set(i, self.applied.get(o));
+            }
         }
         let mut outputs = Bits::zeros(self.plant.outputs.len());
         for a in commanded {
@@ -44,8 +71,10 @@ impl Run {
             .engine
             .cycle(Millis(self.t), &inputs, &mut Commanded(outputs))
             .clone();
+        self.applied = applied.clone();
         applied
             .ones()
+            .filter(|&k| !self.plant.outputs[k].held_on)
             .map(|k| self.plant.outputs[k].id.clone())
             .collect()
     }
@@ -108,6 +137,8 @@ fn a_trip_latches_and_records_what_happened() {
             ("A4", false, true, Action::ForcedOn),
             ("A5", false, false, Action::Unchanged),
             ("A6", false, false, Action::Unchanged),
+            ("KM0", true, true, Action::Unchanged),
+            ("YV0", true, true, Action::Unchanged),
         ]
     );
     let fallback: Vec<(&str, bool)> = trip
@@ -124,14 +155,16 @@ fn a_trip_latches_and_records_what_happened() {
             ("A3", false),
             ("A4", true),
             ("A5", false),
-            ("A6", false)
+            ("A6", false),
+            ("KM0", true),
+            ("YV0", true)
         ]
     );
     let rec = run.engine.history.last().unwrap();
     assert_eq!((rec.time, rec.tripped), (Millis(40), true));
     assert_eq!(
         (rec.commanded.to_string(), rec.applied.to_string()),
-        ("0001000".into(), "0000100".into())
+        ("000100011".into(), "000010011".into())
     );
 
     // Latched: compliant commands are not applied, the fallback is.
@@ -164,7 +197,7 @@ fn reset_is_refused_while_the_commands_still_violate() {
     );
     assert!(run.engine.is_tripped());
     // The outputs applied are untouched by the refused reset.
-    assert_eq!(run.engine.applied().to_string(), "0000100");
+    assert_eq!(run.engine.applied().to_string(), "000010011");
     run.cycle(&["C5", "C7"], &["A3"]);
     assert_eq!(
         run.engine.reset(),
@@ -320,7 +353,12 @@ fn specification_error_drives_every_output_to_zero_once_reported() {
     );
     let trip = &run.engine.trips[0];
     assert_eq!(trip.spec_error.as_deref(), Some(message.as_str()));
-    assert!(trip.fallback.iter().all(|(_, v)| !v));
+    // Every output at its safe value: 0, and the safety contactors (safe: One) ON.
+    assert!(
+        trip.fallback
+            .iter()
+            .all(|(name, v)| *v == (name == "KM0" || name == "YV0"))
+    );
     let forced: Vec<&str> = trip
         .actions
         .iter()
@@ -352,7 +390,11 @@ fn attaching_to_a_running_plant_shows_no_edge_on_the_first_cycle() {
     );
     let mut attached = Run::new(FilterMode::Enforce);
     attached.engine.set_first_cycle(FirstCycle::Attach);
-    assert_eq!(attached.cycle(&["C5", "C6"], &["A4"]), ["A4"]);
+    // The running plant's contactors are closed: their mirrors say so.
+    assert_eq!(
+        attached.cycle_raw(&["C5", "C6", "A4_fb", "KM0_fb", "YV0_fb"], &["A4"]),
+        ["A4"]
+    );
     assert!(!attached.engine.is_tripped());
     attached.cycle(&["C5", "C6"], &["A4"]);
     assert!(!attached.engine.is_tripped());
@@ -507,20 +549,20 @@ fn an_attach_reads_a_mirrored_contactor_from_its_mirror() {
     let (b, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
     let mut attached = Run::with_bundle(b.clone(), FilterMode::Enforce);
     attached.engine.set_first_cycle(FirstCycle::Attach);
-    attached.cycle(&[], &[]);
+    attached.cycle_raw(&[], &[]);
     assert!(
         !attached.engine.is_tripped(),
         "{:?}",
         attached.engine.trips.first().map(|t| &t.constraints)
     );
     // The contactors close with the link: their mirrors follow in the next cycle.
-    attached.cycle(&["KM0_fb", "YV0_fb"], &[]);
+    attached.cycle_raw(&["KM0_fb", "YV0_fb"], &[]);
     assert!(!attached.engine.is_tripped());
     // Then KM0 drops out while the safety function holds it: a dead contactor.
-    attached.cycle(&["YV0_fb"], &[]);
+    attached.cycle_raw(&["YV0_fb"], &[]);
     assert!(attached.engine.is_tripped(), "KM0 dead");
     let mut cold = Run::with_bundle(b, FilterMode::Enforce);
-    cold.cycle(&[], &[]);
+    cold.cycle_raw(&[], &[]);
     assert!(!cold.engine.is_tripped());
 }
 
@@ -536,7 +578,7 @@ fn a_manual_request_lets_healthy_mirrors_follow_and_refuses_a_weld() {
     let healthy = |run: &mut Run, mirrors: &[&str], commanded: &[&str]| {
         let mut s = vec!["C4"];
         s.extend_from_slice(mirrors);
-        run.cycle(&s, commanded);
+        run.cycle_raw(&s, commanded);
     };
     healthy(&mut run, &[], &["A6"]);
     healthy(&mut run, &["KM0_fb", "YV0_fb", "A6_fb"], &["A6"]);

@@ -14,7 +14,11 @@
 //! - `X405`: nothing changed in the stopping cycle but an observer or another internal
 //!   variable (the constraint became true through it).
 //!
-//! Suspects are ordered: (a) and (b) items come first, in the order the changes appear.
+//! - `X419`: the term reads a mirror contact and its output at t-1 with opposite values:
+//!   the contactor is welded or dead (the machine, not the program).
+//!
+//! Suspects are ordered: X419, then a suspect sensor (X414), then (a) and (b) items, in
+//! the order the changes appear.
 
 use super::{Highlight, Item, Level, Mark};
 use crate::constraints::ConstraintSet;
@@ -23,6 +27,87 @@ use crate::engine::{Engine, FiredConstraint, Trip};
 use crate::history::CycleRecord;
 use crate::symbols::Space;
 
+/// The contactors a fired constraint shows at fault: its term reads a mirror contact and
+/// the output it mirrors at t-1 with opposite values. Each as (actuator, mirror,
+/// welded): released and still closed (welded), or commanded and still open (dead).
+pub fn contactors_at_fault(
+    symbols: &crate::symbols::Symbols,
+    mirrors: &[(usize, usize)],
+    c: &FiredConstraint,
+) -> Vec<(String, String, bool)> {
+    let mut out = Vec::new();
+    for &(i, o) in mirrors {
+        let (Some(mirror), Some(output)) = (
+            symbols.names(Space::Input).get(i),
+            symbols.names(Space::Output).get(o),
+        ) else {
+            continue;
+        };
+        let reads = c
+            .literals
+            .iter()
+            .find(|l| l.space == Space::Input && !l.previous && &l.name == mirror);
+        let was = c
+            .literals
+            .iter()
+            .find(|l| l.space == Space::Output && l.previous && &l.name == output);
+        if let (Some(reads), Some(was)) = (reads, was)
+            && reads.value != was.value
+        {
+            out.push((output.clone(), mirror.clone(), reads.value));
+        }
+    }
+    out
+}
+
+/// X419: the contactors the fired term shows at fault ([`contactors_at_fault`]). That is
+/// the machine, not the program: it comes first, with the contactor to check.
+fn contactor_disagrees(
+    symbols: &crate::symbols::Symbols,
+    mirrors: &[(usize, usize)],
+    c: &FiredConstraint,
+) -> Vec<(Item, Vec<Highlight>)> {
+    let mut out = Vec::new();
+    for (output, mirror, welded) in contactors_at_fault(symbols, mirrors, c) {
+        let (state, text) = if welded {
+            (
+                "welded",
+                format!(
+                    "Hardware first: {output} was released and its mirror contact {mirror} still reads it closed ({}): its contactor is welded. Check {output}'s contactor on the machine; the program released it.",
+                    c.id
+                ),
+            )
+        } else {
+            (
+                "dead",
+                format!(
+                    "Hardware first: {output} was commanded and its mirror contact {mirror} reads it open ({}): it did not close (coil, fuse, wiring or the contactor itself). Check {output} on the machine; the program commanded it.",
+                    c.id
+                ),
+            )
+        };
+        out.push((
+            Item::new(
+                codes::X_CONTACTOR_DISAGREES,
+                text,
+                &[
+                    ("category", "hardware".into()),
+                    ("constraint", c.id.clone()),
+                    ("actuator", output.clone()),
+                    ("mirror", mirror),
+                    ("state", state.into()),
+                    ("check", output.clone()),
+                ],
+            ),
+            vec![Highlight {
+                element: output,
+                mark: Mark::Suspect,
+            }],
+        ));
+    }
+    out
+}
+
 /// What changed between two records.
 struct Delta {
     inputs: Vec<(String, bool, bool)>,
@@ -30,7 +115,15 @@ struct Delta {
     observers: Vec<String>,
 }
 
-fn delta(symbols: &crate::symbols::Symbols, prev: &CycleRecord, cur: &CycleRecord) -> Delta {
+/// A mirror contact that changed to show the output applied the cycle before followed its
+/// contactor: not a change of the plant, so not in the inputs' delta (`mirrors`: each
+/// mirror's input and the output it mirrors).
+fn delta(
+    symbols: &crate::symbols::Symbols,
+    mirrors: &[(usize, usize)],
+    prev: &CycleRecord,
+    cur: &CycleRecord,
+) -> Delta {
     let diff = |space: Space, a: &crate::bits::Bits, b: &crate::bits::Bits| {
         symbols
             .names(space)
@@ -41,7 +134,14 @@ fn delta(symbols: &crate::symbols::Symbols, prev: &CycleRecord, cur: &CycleRecor
             .collect::<Vec<_>>()
     };
     Delta {
-        inputs: diff(Space::Input, &prev.inputs, &cur.inputs),
+        inputs: diff(Space::Input, &prev.inputs, &cur.inputs)
+            .into_iter()
+            .filter(|(n, _, to)| {
+                !mirrors.iter().any(|&(i, o)| {
+                    symbols.names(Space::Input).get(i) == Some(n) && prev.applied.get(o) == *to
+                })
+            })
+            .collect(),
         outputs: diff(Space::Output, &prev.commanded, &cur.commanded),
         observers: diff(Space::Observer, &prev.observers, &cur.observers)
             .into_iter()
@@ -74,7 +174,7 @@ pub fn hypothesis(engine: &Engine, trip: &Trip) -> Level {
         ));
         return level;
     };
-    let mut level = hypothesis_from(&engine.symbols, trip, prev, cur);
+    let mut level = hypothesis_from(&engine.symbols, engine.mirrors(), trip, prev, cur);
     let mut first = Vec::new();
     for (item, highlights) in unexpected_edges(engine, trip, prev, cur) {
         highlights.into_iter().for_each(|h| level.highlight(h));
@@ -175,9 +275,11 @@ fn follows(engine: &Engine, expected: &str) -> (String, String) {
     (ids.join(","), out.join("; "))
 }
 
-/// The hypothesis level from the two cycles around the stop.
+/// The hypothesis level from the two cycles around the stop (`mirrors`: the plant's
+/// mirror contacts, [`crate::plant::Plant::mirrors`]).
 pub fn hypothesis_from(
     symbols: &crate::symbols::Symbols,
+    mirrors: &[(usize, usize)],
     trip: &Trip,
     prev: &CycleRecord,
     cur: &CycleRecord,
@@ -186,7 +288,13 @@ pub fn hypothesis_from(
         title: "Hypothesis".into(),
         ..Level::default()
     };
-    let d = delta(symbols, prev, cur);
+    let d = delta(symbols, mirrors, prev, cur);
+    for c in &trip.constraints {
+        for (item, highlights) in contactor_disagrees(symbols, mirrors, c) {
+            highlights.into_iter().for_each(|h| level.highlight(h));
+            level.items.push(item);
+        }
+    }
     for c in &trip.constraints {
         for item in constraint_hypothesis(c, &d, prev) {
             let (item, highlights) = item;
@@ -196,24 +304,26 @@ pub fn hypothesis_from(
     }
     // Suspects first, then expected actions.
     let rank = |code: &str| {
-        if code == codes::X_SUSPECT_SENSOR.id {
+        if code == codes::X_CONTACTOR_DISAGREES.id {
             0
+        } else if code == codes::X_SUSPECT_SENSOR.id {
+            1
         } else if [
             codes::X_SENSOR_CHANGED_NO_EVOLUTION.id,
             codes::X_SENSOR_OUTSIDE_CHANGED.id,
         ]
         .contains(&code)
         {
-            1
+            2
         } else if [
             codes::X_ACTUATOR_CHANGED_NO_INPUT.id,
             codes::X_OBSERVER_CHANGE.id,
         ]
         .contains(&code)
         {
-            2
-        } else {
             3
+        } else {
+            4
         }
     };
     level.items.sort_by_key(|i| rank(i.code));

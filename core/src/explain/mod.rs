@@ -34,7 +34,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 pub use hardware::{HardwareFault, add_hardware_hypothesis, merge_identical};
-pub use hypothesis::{case_count, hypothesis, hypothesis_from};
+pub use hypothesis::{case_count, contactors_at_fault, hypothesis, hypothesis_from};
 pub use observed::emulator_from_observation;
 pub use program::{add_program_hypothesis, program_suspects};
 

@@ -384,6 +384,23 @@ fn program(out: &mut String, bundle: &PlantBundle, obs: &Fb, fil: &Fb, tfb: Opti
     for (n, _) in &obs.outputs {
         let _ = writeln!(out, "{n} := fbObservers.{n};");
     }
+    for (k, o) in bundle.plant.outputs.iter().enumerate() {
+        if o.held_on {
+            let cmd = ident(
+                symbols,
+                Var {
+                    space: Space::Output,
+                    index: u32::try_from(k).unwrap_or(0),
+                    prev: false,
+                },
+                true,
+            );
+            let _ = writeln!(
+                out,
+                "{cmd} := TRUE; (* held ON by the safety function: only the fallback releases it *)"
+            );
+        }
+    }
     out.push_str(&fil.call("fbFilter"));
     for k in 0..n_out {
         let q = ident(

@@ -11,6 +11,15 @@ fn station_filter() -> (PlantBundle, Filter) {
     (b, f)
 }
 
+/// The paper's station (no device monitoring) and its filter: the space the exhaustive
+/// checks enumerate (the shipped station's `CSk*` add 17 variables, covered by
+/// `fallback_of_the_shipped_station_matches_brute_force`).
+fn paper_filter() -> (PlantBundle, Filter) {
+    let b = crate::test_support::paper_bundle();
+    let f = Filter::new(&b.constraints, b.plant.outputs.len());
+    (b, f)
+}
+
 fn ids(filter: &Filter, v: &[usize]) -> Vec<String> {
     v.iter().map(|&i| filter.id(i).to_string()).collect()
 }
@@ -18,7 +27,7 @@ fn ids(filter: &Filter, v: &[usize]) -> Vec<String> {
 /// The minimal violating cycle of each constraint, written out for the sorting station:
 /// the variables at 1 (everything else 0) and every constraint that fires there.
 /// `fires_on_its_minimal_cycle_only` derives the same frames from the DNFs.
-const MINIMAL_CYCLES: [(&str, &[&str], &[&str]); 17] = [
+const MINIMAL_CYCLES: [(&str, &[&str], &[&str]); 33] = [
     ("CSs1", &["2P", "A0"], &["CSs1"]),
     ("CSs2", &["C3", "A1"], &["CSs2"]),
     ("CSs3", &["C3", "C4", "C6", "A1"], &["CSs3", "CSc2"]),
@@ -36,6 +45,22 @@ const MINIMAL_CYCLES: [(&str, &[&str], &[&str]); 17] = [
     ("CSs15", &["A4*"], &["CSs15"]),
     ("CSc1", &["C0", "A0"], &["CSc1"]),
     ("CSc2", &["C3", "C4", "A1"], &["CSc2"]),
+    ("CSk1", &["KM0", "A0_fb"], &["CSk1"]),
+    ("CSk2", &["KM0", "A0*"], &["CSk2"]),
+    ("CSk3", &["KM0", "A1_fb"], &["CSk3"]),
+    ("CSk4", &["KM0", "A1*"], &["CSk4"]),
+    ("CSk5", &["KM0", "A2_fb"], &["CSk5"]),
+    ("CSk6", &["KM0", "A2*"], &["CSk6"]),
+    ("CSk7", &["KM0", "A3_fb"], &["CSk7"]),
+    ("CSk8", &["KM0", "A3*"], &["CSk8"]),
+    ("CSk9", &["YV0", "A4_fb"], &["CSk9"]),
+    ("CSk10", &["YV0", "A4*"], &["CSs15", "CSk10"]),
+    ("CSk11", &["KM0", "A5_fb"], &["CSk11"]),
+    ("CSk12", &["KM0", "A5*"], &["CSk12"]),
+    ("CSk13", &["KM0", "A6_fb"], &["CSk13"]),
+    ("CSk14", &["KM0", "A6*"], &["CSk14"]),
+    ("CSk15", &["KM0", "KM0*"], &["CSk15"]),
+    ("CSk16", &["YV0", "YV0*"], &["CSk16"]),
 ];
 
 #[test]
@@ -198,7 +223,7 @@ fn support(filter: &Filter) -> Vec<Var> {
 
 #[test]
 fn fallback_is_safe_minimal_and_lexicographic_on_the_support() {
-    let (b, filter) = station_filter();
+    let (b, filter) = paper_filter();
     let vars = support(&filter);
     let names: Vec<String> = vars
         .iter()
@@ -230,7 +255,7 @@ fn fallback_is_safe_minimal_and_lexicographic_on_the_support() {
 
 #[test]
 fn fallback_exhaustive_over_all_sensors_observers_and_a4_prev() {
-    let (b, filter) = station_filter();
+    let (b, filter) = paper_filter();
     let mut vars: Vec<Var> = (0..b.plant.inputs.len())
         .map(|i| Var {
             space: Space::Input,
@@ -292,7 +317,7 @@ fn combined_nogoods_are_searched_with_the_tie_break() {
     // Either A0 or A1 must be ON: A0 stays OFF (first output), A1 ON.
     let (b, f) = filter_for("X = C0 . /A0 . /A1");
     let out = f.fallback(&frame_with(&b.symbols, &["C0"])).unwrap();
-    assert_eq!(out.to_string(), "0100000");
+    assert_eq!(out.to_string(), "010000000");
     // A0 forced ON by a simple constraint, then A0 . /A2 forces A2 ON by propagation;
     // one of A3, A4, A5 must be ON: the last one, so that the earlier ones stay OFF.
     let (b, f) = filter_for("S = C0 . /A0\nX = C0 . A0 . /A2\nY = C1 . /A3 . /A4 . /A5");
@@ -300,13 +325,13 @@ fn combined_nogoods_are_searched_with_the_tie_break() {
         f.fallback(&frame_with(&b.symbols, &["C0", "C1"]))
             .unwrap()
             .to_string(),
-        "1010010"
+        "101001000"
     );
     assert_eq!(
         f.fallback(&frame_with(&b.symbols, &["C1"]))
             .unwrap()
             .to_string(),
-        "0000010"
+        "000001000"
     );
 }
 
@@ -443,7 +468,7 @@ fn the_fallback_prefers_each_outputs_safe_value() {
     let (b, f) = filter_for("X = C0 . A0");
     let f = f.with_safe_values(vec![Zero, One, Zero, Zero, Zero, Zero, Zero]);
     let out = f.fallback(&frame_with(&b.symbols, &["C0"])).unwrap();
-    assert_eq!(out.to_string(), "0100000");
+    assert_eq!(out.to_string(), "010000000");
     // A constraint that forbids the safe value wins over it.
     let (b, f) = filter_for("X = C0 . A1");
     let f = f.with_safe_values(vec![Zero, One, Zero, Zero, Zero, Zero, Zero]);
@@ -451,17 +476,17 @@ fn the_fallback_prefers_each_outputs_safe_value() {
         f.fallback(&frame_with(&b.symbols, &["C0"]))
             .unwrap()
             .to_string(),
-        "0000000"
+        "000000000"
     );
     // Hold keeps the previous applied value, in either direction.
     let (b, f) = filter_for("X = C0 . A0");
     let f = f.with_safe_values(vec![Zero, Hold, Hold, Zero, Zero, Zero, Zero]);
     let mut frame = frame_with(&b.symbols, &["C0"]);
     frame.prev_mut(Space::Output).set(1, true);
-    assert_eq!(f.fallback(&frame).unwrap().to_string(), "0100000");
+    assert_eq!(f.fallback(&frame).unwrap().to_string(), "010000000");
     frame.prev_mut(Space::Output).set(1, false);
     frame.prev_mut(Space::Output).set(2, true);
-    assert_eq!(f.fallback(&frame).unwrap().to_string(), "0010000");
+    assert_eq!(f.fallback(&frame).unwrap().to_string(), "001000000");
     // Combined: one of A0, A1 must leave its safe value; with A0 safe at 1 and A1 safe
     // at 0, "A0 . A1 forbidden" keeps A0 (first output) and moves nothing else.
     let (b, f) = filter_for("X = C0 . A0 . /A1");
@@ -470,7 +495,7 @@ fn the_fallback_prefers_each_outputs_safe_value() {
         f.fallback(&frame_with(&b.symbols, &["C0"]))
             .unwrap()
             .to_string(),
-        "1100000"
+        "110000000"
     );
     // On a conflict, every output takes its safe value.
     let (b, f) = filter_for("X = C0 . /A0\nY = C0 . A0");
@@ -478,7 +503,7 @@ fn the_fallback_prefers_each_outputs_safe_value() {
     let mut frame = frame_with(&b.symbols, &["C0"]);
     frame.prev_mut(Space::Output).set(2, true);
     assert!(f.fallback(&frame).is_err());
-    assert_eq!(f.safe_vector(&frame).to_string(), "0110000");
+    assert_eq!(f.safe_vector(&frame).to_string(), "011000000");
 }
 
 /// The priority to the safe values is the priority to zero read relative to them:
@@ -539,4 +564,56 @@ fn safe_value_fallback_matches_brute_force() {
             }
         }
     }
+}
+
+/// The shipped station's fallback (with its safe values: KM0 and YV0 at One) against
+/// brute force over its 512 output vectors, in random contexts of the constraints'
+/// whole support (29 variables: too many to enumerate): the satisfying vector with the
+/// fewest outputs away from their safe value, then lexicographic.
+#[test]
+fn fallback_of_the_shipped_station_matches_brute_force() {
+    let b = station();
+    let f = Filter::for_plant(&b.constraints, &b.plant);
+    let vars = support(&f);
+    assert_eq!(vars.len(), 29, "the support grew: widen the sample");
+    let n = b.plant.outputs.len();
+    let mut rng = crate::synthetic::SplitMix64::new(17);
+    let (mut cut, mut conflicts) = (0, 0);
+    for case in 0..4_000 {
+        let mut frame = Frame::new(b.symbols.sizes());
+        for v in &vars {
+            set_var(&mut frame, *v, rng.next_u64() & 1 == 1);
+        }
+        let pref = f.safe_vector(&frame);
+        let mut best: Option<(usize, Vec<bool>, Bits)> = None;
+        for v in 0..1u32 << n {
+            let mut fr = frame.clone();
+            for k in 0..n {
+                fr.now_mut(Space::Output).set(k, v >> k & 1 == 1);
+            }
+            if !f.violations(&fr).is_empty() {
+                continue;
+            }
+            let away: Vec<bool> = (0..n).map(|k| (v >> k & 1 == 1) != pref.get(k)).collect();
+            let key = (away.iter().filter(|x| **x).count(), away);
+            if best
+                .as_ref()
+                .is_none_or(|(bn, ba, _)| (key.0, &key.1) < (*bn, ba))
+            {
+                best = Some((key.0, key.1, fr.now(Space::Output).clone()));
+            }
+        }
+        match (f.fallback(&frame), best) {
+            (Ok(out), Some((_, _, want))) => {
+                assert_eq!(out, want, "case {case}");
+                let km0 = b.symbols.lookup("KM0").expect("KM0").1 as usize;
+                cut += usize::from(!out.get(km0));
+            }
+            (Err(_), None) => conflicts += 1,
+            (got, want) => panic!("case {case}: {got:?} vs {want:?}"),
+        }
+    }
+    // The sample reaches both sides: contexts where a welded or dead drive cuts KM0.
+    assert!(cut > 1_000, "{cut}");
+    assert!(conflicts < 4_000, "{conflicts}");
 }

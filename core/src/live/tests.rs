@@ -19,6 +19,20 @@ fn plant() -> Plant {
     Plant::load(&station().join("plant.ron")).unwrap()
 }
 
+/// The paper's station (11 sensors at inputs 0-10, 7 actuators at coils 0-6), for the
+/// tests of block planning and the served image, which count its addresses.
+fn paper() -> (Plant, IoMap) {
+    static PAPER: std::sync::OnceLock<(Plant, IoMap)> = std::sync::OnceLock::new();
+    PAPER
+        .get_or_init(|| {
+            let dir = crate::test_support::paper_station("live-paper");
+            let plant = Plant::load(&dir.join("plant.ron")).unwrap();
+            let (map, _) = IoMap::load(&dir.join("io-map.ron"), &plant).unwrap();
+            (plant, map)
+        })
+        .clone()
+}
+
 fn station_map() -> IoMap {
     let (map, warnings) = IoMap::load(&station().join("io-map.ron"), &plant()).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
@@ -28,8 +42,8 @@ fn station_map() -> IoMap {
 #[test]
 fn station_map_matches_the_plant_addresses() {
     let map = station_map();
-    assert_eq!(map.inputs.len(), 11);
-    assert_eq!(map.outputs.len(), 7);
+    assert_eq!(map.inputs.len(), 20);
+    assert_eq!(map.outputs.len(), 9);
     let from_plant = IoMap::from_plant(&plant(), 1, 10).unwrap();
     let points = |m: &IoMap| {
         m.inputs
@@ -108,7 +122,7 @@ fn stale_bound_below_the_poll_is_a_warning() {
 
 #[test]
 fn read_plan_and_decode_round_trip() {
-    let map = station_map();
+    let (_, map) = paper();
     let inputs_only = plan_reads(&map, false, 8);
     assert_eq!(inputs_only.len(), 1);
     assert_eq!(
@@ -160,7 +174,7 @@ fn gaps_split_blocks_and_register_bits_decode() {
         (signal: "A2", address: Coil(0)), (signal: "A3", address: Coil(1)), (signal: "A4", address: Coil(3)),
         (signal: "A5", address: Coil(4)), (signal: "A6", address: Coil(5)),
     ])"#;
-    let (map, _) = IoMap::from_ron(text, Path::new("m.ron"), &plant()).unwrap();
+    let (map, _) = IoMap::from_ron(text, Path::new("m.ron"), &paper().0).unwrap();
     let blocks = plan_reads(&map, false, 8);
     let shape: Vec<_> = blocks
         .iter()
@@ -228,7 +242,7 @@ fn gaps_split_blocks_and_register_bits_decode() {
 
 #[test]
 fn server_image_answers_and_refuses() {
-    let map = station_map();
+    let (_, map) = paper();
     let image = ServerImage::new(&map, 1);
     let inputs = Bits::from_bools(&[
         true, false, false, false, false, false, false, true, false, false, true,

@@ -55,6 +55,12 @@ pub enum Verdict {
     /// No certain diagnosis, and the fault changed no sensor and no output over the
     /// watch (compared with a fault-free twin run of the same seed).
     NoEffect,
+    /// No certain diagnosis, but the device monitoring stopped the plant on the faulted
+    /// actuator itself: a mirror contact disagreed with it (explanation X419).
+    Monitored {
+        /// Delay from the fault to that stop, ms.
+        delay_ms: u64,
+    },
 }
 
 /// The figures of one injection over every seed.
@@ -72,11 +78,14 @@ pub struct Row {
     pub wrong: usize,
     /// False diagnosis before the injection.
     pub early: usize,
+    /// Not diagnosed, but stopped by the device monitoring on the faulted actuator (its
+    /// mirror contact): localised on the machine by the stop itself.
+    pub monitored: usize,
     /// Not diagnosed, ambiguous: reason (faults still possible, state at injection) and count.
     pub ambiguous: BTreeMap<String, usize>,
     /// Not diagnosed, no observable effect: state at injection and count.
     pub no_effect: BTreeMap<String, usize>,
-    /// Detection delays of the right runs, sorted, ms.
+    /// Detection delays of the right and monitored runs, sorted, ms.
     pub delays_ms: Vec<u64>,
     /// Examples of wrong or early runs (seed and text).
     pub failures: Vec<String>,
@@ -354,7 +363,32 @@ fn run_one(
         .find(|x| x.partition.is_empty())
         .map(describe);
     let (verdict, context) = verdict_of(inj, d, first_named, at, effect, context);
+    let verdict = match verdict {
+        Verdict::Ambiguous(_) | Verdict::NoEffect => monitored(&sim, &inj.kind, at)
+            .map_or(verdict, |delay_ms| Verdict::Monitored { delay_ms }),
+        v => v,
+    };
     Ok((verdict, context, lost))
+}
+
+/// The delay to the first stop after `at` whose constraint shows the faulted actuator's
+/// contactor at fault through its mirror contact, if any.
+fn monitored(sim: &Simulation, kind: &FaultKind, at: u64) -> Option<u64> {
+    let (FaultKind::ActuatorStuckOff(a) | FaultKind::ActuatorStuckOn(a)) = kind else {
+        return None;
+    };
+    let mirrors = sim.bundle.plant.mirrors();
+    sim.engine
+        .trips
+        .iter()
+        .filter(|t| t.time_ms >= at)
+        .find_map(|t| {
+            t.constraints
+                .iter()
+                .flat_map(|c| crate::explain::contactors_at_fault(&sim.engine.symbols, &mirrors, c))
+                .any(|(o, _, _)| &o == a)
+                .then(|| t.time_ms - at)
+        })
 }
 
 fn verdict_of(
@@ -520,6 +554,10 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
                 *row.ambiguous
                     .entry(format!("{t}, injected in {context}"))
                     .or_default() += 1;
+            }
+            Verdict::Monitored { delay_ms } => {
+                row.monitored += 1;
+                row.delays_ms.push(delay_ms);
             }
             Verdict::NoEffect => {
                 *row.no_effect

@@ -21,6 +21,11 @@ fn component<'a>(d: &'a DiagBundle, id: &str) -> &'a build::Component {
 /// One run of the fault campaign: injection `name` (the first whose name contains it)
 /// with seed `seed`.
 fn one_run(name: &str, seed: u64) -> campaign::Row {
+    one_run_in(&station_dir(), name, seed)
+}
+
+/// [`one_run`] on the plant folder `dir`.
+fn one_run_in(dir: &std::path::Path, name: &str, seed: u64) -> campaign::Row {
     let config = campaign::Config {
         seeds: 1,
         first_seed: seed,
@@ -29,19 +34,19 @@ fn one_run(name: &str, seed: u64) -> campaign::Row {
         threads: 1,
         ..campaign::Config::default()
     };
-    let mut r = campaign::run(&station_dir(), &config).unwrap();
+    let mut r = campaign::run(dir, &config).unwrap();
     r.rows.swap_remove(0)
 }
 
 /// Every run of the campaign's injections `name` with these seeds names the right
-/// partition first.
+/// partition first, or stops on the faulted actuator through its mirror contact.
 fn all_right(runs: &[(&str, &[u64])]) {
     for (name, seeds) in runs {
         for &seed in *seeds {
             let row = one_run(name, seed);
             assert_eq!(
-                (row.runs, row.right),
-                (1, 1),
+                (row.runs, row.right + row.monitored, row.wrong),
+                (1, 1, 0),
                 "{name}, seed {seed}: {row:#?}"
             );
         }
@@ -290,16 +295,38 @@ fn conveyor_faults_are_diagnosed_by_the_timed_models() {
         ("C9 stuck at 1", &[0]),
         ("C8 stuck at 0", &[0]),
         ("C10 spurious rise", &[0]),
-        ("A6 stuck off", &[4, 7]),
-        ("A5 stuck off", &[1]),
-        ("A2 stuck on", &[0]),
-        ("A4 stuck off", &[0, 8]),
     ];
     for (name, seeds) in runs {
         for &seed in *seeds {
             let row = one_run(name, seed);
             assert_eq!(
                 (row.runs, row.right, row.lost),
+                (1, 1, 0),
+                "{name}, seed {seed}: {row:#?}"
+            );
+        }
+    }
+    // The actuator faults, on the paper's station (no mirror contact): the models alone
+    // find them. On the shipped station the faulted drive's mirror contact stops the
+    // plant on it (`monitored`) unless the diagnosers decide first.
+    let paper = crate::test_support::paper_station("conveyor-faults");
+    let actuators: &[(&str, &[u64])] = &[
+        ("A6 stuck off", &[4, 7]),
+        ("A5 stuck off", &[1]),
+        ("A2 stuck on", &[0]),
+        ("A4 stuck off", &[0, 8]),
+    ];
+    for (name, seeds) in actuators {
+        for &seed in *seeds {
+            let row = one_run_in(&paper, name, seed);
+            assert_eq!(
+                (row.runs, row.right, row.lost),
+                (1, 1, 0),
+                "paper: {name}, seed {seed}: {row:#?}"
+            );
+            let row = one_run(name, seed);
+            assert_eq!(
+                (row.runs, row.right + row.monitored, row.wrong),
                 (1, 1, 0),
                 "{name}, seed {seed}: {row:#?}"
             );
@@ -434,8 +461,11 @@ fn a_c6_that_rises_before_the_box_is_blamed_on_c6_not_on_the_left_exit() {
     // Ambiguous for the C6 model (the box left without the order, or C6 died), never a
     // certain C6; the exit finds the rollers. A3 stuck on pushes the box away the other
     // way.
+    // On the paper's station: the shipped one's mirror contact stops the plant on the
+    // welded rollers first.
+    let paper = crate::test_support::paper_station("c6-rollers");
     for seed in [0, 1, 2, 5, 6] {
-        let row = one_run("A2 stuck on", seed);
+        let row = one_run_in(&paper, "A2 stuck on", seed);
         assert_eq!(
             (row.right, row.wrong + row.early),
             (1, 0),
@@ -443,6 +473,8 @@ fn a_c6_that_rises_before_the_box_is_blamed_on_c6_not_on_the_left_exit() {
         );
     }
     for seed in [6, 12, 17, 23] {
+        let row = one_run_in(&paper, "A3 stuck on", seed);
+        assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
         let row = one_run("A3 stuck on", seed);
         assert_eq!(row.wrong + row.early, 0, "seed {seed}: {row:#?}");
     }
@@ -550,18 +582,39 @@ fn stop_vector(d: &DiagBundle, ones: &[&str]) -> Vec<(String, bool)> {
 #[test]
 fn a_stopping_fault_never_releases_the_table_under_a_box() {
     let d = station();
+    // A healthy plant: A4 and the safety devices were on, their mirror contacts show it.
+    let healthy = ["A4_fb", "KM0*", "KM0_fb", "YV0*", "YV0_fb"];
+    // The safety devices stay at their safe value (ON): the stop leaves them alone.
+    let held = |id: &str| {
+        d.bundle
+            .plant
+            .outputs
+            .iter()
+            .any(|o| o.id == id && o.held_on)
+    };
     for protect in ["C8", "C7", "P67"] {
-        let v = stop_vector(&d, &["def_C6_drive", "A4*", "C5", protect]);
+        let ones: Vec<&str> = ["def_C6_drive", "A4*", "C5", protect]
+            .into_iter()
+            .chain(healthy)
+            .collect();
+        let v = stop_vector(&d, &ones);
         let a4 = v.iter().find(|(id, _)| id == "A4").unwrap().1;
         assert!(a4, "{protect}: {v:?}\n{}", d.rewritten);
         assert!(
-            v.iter().filter(|(id, _)| id != "A4").all(|(_, on)| !on),
+            v.iter()
+                .filter(|(id, _)| id != "A4")
+                .all(|(id, on)| *on == held(id)),
             "{protect}: {v:?}"
         );
     }
-    // Nothing to protect: every output at its safe value (0 on the station).
-    let v = stop_vector(&d, &["def_C6_drive", "A4*", "C5"]);
-    assert!(v.iter().all(|(_, on)| !on), "{v:?}");
+    // Nothing to protect: every output at its safe value (0 on the station, 1 for the
+    // safety devices).
+    let ones: Vec<&str> = ["def_C6_drive", "A4*", "C5"]
+        .into_iter()
+        .chain(healthy)
+        .collect();
+    let v = stop_vector(&d, &ones);
+    assert!(v.iter().all(|(id, on)| *on == held(id)), "{v:?}");
     // The stop constraint says so in the rewritten text, under its own name.
     let stop = d
         .rewritten

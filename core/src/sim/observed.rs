@@ -52,6 +52,10 @@ impl Simulation {
         self.live_now = Some(self.live_now.unwrap_or(Millis::ZERO));
         self.pending.clear();
         self.engine.set_mode(mode);
+        if mode == FilterMode::ReportOnly {
+            // A monitor: the PLC drives the safety devices, Vigie writes nothing.
+            self.engine.observe_safety_devices();
+        }
         self.emulator.set_arrivals(ArrivalPlan::List(Vec::new()));
         self.log("link", format!("following a live link, filter {mode:?}"));
     }

@@ -305,7 +305,11 @@ fn bad_scenarios_are_reported() {
 }
 
 fn load_station_scenario(name: &str) -> (Scenario, Simulation) {
-    let path = station_dir().join("scenarios").join(name);
+    load_scenario_in(&station_dir(), name)
+}
+
+fn load_scenario_in(dir: &Path, name: &str) -> (Scenario, Simulation) {
+    let path = dir.join("scenarios").join(name);
     let s = Scenario::load(&path).expect("scenario");
     let sim = Simulation::from_scenario(
         &s,
@@ -464,6 +468,35 @@ fn observed(time: u64, inputs: &str, commanded: &str, applied: &str, reset: bool
     }
 }
 
+/// [`observed`] for the paper's eleven sensors and seven actuators, completed for the
+/// shipped station as a healthy plant shows it: the safety contactors commanded and
+/// applied ON, each mirror contact reading the output applied the cycle before.
+fn observed_healthy(
+    sim: &Simulation,
+    time: u64,
+    inputs: &str,
+    commanded: &str,
+    applied: &str,
+    reset: bool,
+) -> ObservedCycle {
+    let plant = &sim.bundle.plant;
+    let held: String = plant.outputs[commanded.len()..]
+        .iter()
+        .map(|o| if o.held_on { '1' } else { '0' })
+        .collect();
+    let mut cycle = observed(
+        time,
+        &format!("{inputs:0<width$}", width = plant.inputs.len()),
+        &format!("{commanded}{held}"),
+        &format!("{applied}{held}"),
+        reset,
+    );
+    for (i, o) in plant.mirrors() {
+        cycle.inputs.set(i, sim.engine.applied().get(o));
+    }
+    cycle
+}
+
 fn following(mode: FilterMode) -> Simulation {
     let mut s = scenario(
         ProgramChoice::Reference,
@@ -526,12 +559,21 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
         (20, "00000110000"),
         (30, "00000100000"),
     ] {
-        sim.observe(&observed(t, inputs, "0000100", "0000100", false));
+        sim.observe(&observed_healthy(
+            &sim, t, inputs, "0000100", "0000100", false,
+        ));
     }
     assert!(!sim.engine.is_tripped());
     // The PLC releases A4 with the box at C7: the gateway trips on CSs10 and holds A4;
     // the mirror trips in the same cycle and records what the plant received.
-    sim.observe(&observed(40, "00000101000", "0000000", "0000100", false));
+    sim.observe(&observed_healthy(
+        &sim,
+        40,
+        "00000101000",
+        "0000000",
+        "0000100",
+        false,
+    ));
     assert!(sim.engine.is_tripped());
     assert!(
         sim.engine.trips[0]
@@ -539,12 +581,29 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
             .iter()
             .any(|c| c.id == "CSs10")
     );
-    assert_eq!(sim.engine.history.last().unwrap().applied, bits("0000100"));
-    assert_eq!(sim.engine.applied(), &bits("0000100"));
+    assert_eq!(
+        sim.engine.history.last().unwrap().applied,
+        bits("000010011")
+    );
+    assert_eq!(sim.engine.applied(), &bits("000010011"));
     // The box has left; the gateway resets before the next cycle, the mirror follows.
-    sim.observe(&observed(50, "00000100000", "0000000", "0000100", false));
+    sim.observe(&observed_healthy(
+        &sim,
+        50,
+        "00000100000",
+        "0000000",
+        "0000100",
+        false,
+    ));
     assert!(sim.engine.is_tripped());
-    sim.observe(&observed(60, "00000100000", "0000000", "0000000", true));
+    sim.observe(&observed_healthy(
+        &sim,
+        60,
+        "00000100000",
+        "0000000",
+        "0000000",
+        true,
+    ));
     assert!(!sim.engine.is_tripped());
     assert!(sim.journal().iter().any(|e| e.kind == "reset"));
     assert!(
@@ -552,6 +611,38 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
             .all()
             .iter()
             .all(|a| a.kind != AlarmKind::FilterTrip || a.cleared.is_some())
+    );
+}
+
+/// A monitor takes the safety devices as the PLC commands them: a PLC that leaves KM0
+/// and YV0 open (their mirrors open) is not reported as commanding dead contactors
+/// (it was, every cycle, when the engine held them ON); one that closes KM0 while its
+/// mirror stays open is (CSk15); a gateway holds them ON whatever the PLC commands.
+#[test]
+fn a_monitor_takes_the_safety_devices_as_the_plc_commands_them() {
+    let mut sim = following(FilterMode::ReportOnly);
+    let idle = "00001000000000000000";
+    for t in [10, 20, 30] {
+        sim.observe(&observed(t, idle, "000000000", "000000000", false));
+    }
+    assert!(sim.engine.trips.is_empty(), "{:?}", sim.engine.trips);
+    // KM0 commanded (coil 7) and applied, its mirror (input 18) stays open.
+    for t in [40, 50, 60] {
+        sim.observe(&observed(t, idle, "000000010", "000000010", false));
+    }
+    let ids: Vec<&str> = sim
+        .engine
+        .trips
+        .iter()
+        .flat_map(|t| t.constraints.iter().map(|c| c.id.as_str()))
+        .collect();
+    assert!(ids.contains(&"CSk15"), "{ids:?}");
+    // A gateway holds them ON: the commanded vector it filters has KM0 and YV0.
+    let mut gw = following(FilterMode::Enforce);
+    gw.observe(&observed(10, idle, "000000000", "000000011", false));
+    assert_eq!(
+        gw.engine.frame().now(Space::Output).to_string(),
+        "000000011"
     );
 }
 
@@ -1052,10 +1143,13 @@ fn a_bypass_is_bounded_journaled_lifts_only_its_constraint_and_ends_by_itself() 
 /// box held against the stopped belt) and stops the plant on the safe side. The console
 /// asks the operator the question that tells them apart, in the plant's own words; the
 /// answer gives the conclusion, journaled; the question is not asked again; the
-/// diagnosers' reset forgets the answer.
+/// diagnosers' reset forgets the answer. On the paper's station: the shipped one's
+/// mirror contact shows the dead belt's contactor open at the next cycle (CSk4), before
+/// any doubt.
 #[test]
 fn a_diagnoser_in_doubt_asks_the_operator_and_uses_the_answer() {
-    let (s, mut sim) = load_station_scenario("a1-dead-belt.ron");
+    let paper = crate::test_support::paper_station("doubt-paper");
+    let (s, mut sim) = load_scenario_in(&paper, "a1-dead-belt.ron");
     sim.run_until(Millis(s.duration_ms));
     let questions = sim.doubt_questions();
     assert_eq!(questions.len(), 1, "{questions:?}");
@@ -1072,7 +1166,7 @@ fn a_diagnoser_in_doubt_asks_the_operator_and_uses_the_answer() {
     assert_eq!(q.sensor_faults, ["C0_stuck1", "C0_rise"]);
     assert_eq!(q.other_faults, ["M1_blocked"]);
     // Were there no box at C0, the beam would be at fault.
-    let mut other = load_station_scenario("a1-dead-belt.ron").1;
+    let mut other = load_scenario_in(&paper, "a1-dead-belt.ron").1;
     other.run_until(Millis(s.duration_ms));
     other
         .act(&OperatorAction::AnswerDoubt {
@@ -1118,8 +1212,9 @@ fn a_diagnoser_in_doubt_asks_the_operator_and_uses_the_answer() {
     assert!(sim.doubt_answers().is_empty());
 }
 
-/// Issue 20, hardware before program: with an actuator stuck ON the diagnosers stop
-/// the plant, and level 4 names the hardware first (with the stuck actuator among what
+/// Issue 20, hardware before program: with an actuator stuck ON its mirror contact
+/// (X419) or the diagnosers (X415, X416) stop the plant, and level 4 names the hardware
+/// first (with the stuck actuator among what
 /// to check), not the program's equation; a stop by the diagnosers alone lists no
 /// program suspect.
 #[test]
@@ -1134,7 +1229,11 @@ fn an_actuator_stuck_on_is_named_as_hardware_before_the_program() {
         codes::X_COMBINED_MISSING.id,
         codes::X_MISPLACED_ACTION.id,
     ];
-    let hardware = [codes::X_HARDWARE_CERTAIN.id, codes::X_HARDWARE_AMBIGUOUS.id];
+    let hardware = [
+        codes::X_HARDWARE_CERTAIN.id,
+        codes::X_HARDWARE_AMBIGUOUS.id,
+        codes::X_CONTACTOR_DISAGREES.id,
+    ];
     let mut named = Vec::new();
     for actuator in ["A2", "A3", "A4"] {
         let text = format!(
@@ -1350,10 +1449,17 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
             )"#
         )
     };
+    let paper = crate::test_support::paper_station("paper-welded");
+    let run_in = |dir: &std::path::Path, s: &Scenario| {
+        let mut sim = Simulation::from_scenario(s, &dir.join("scenario.ron"), Options::default())
+            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        sim.run_until(Millis(s.duration_ms));
+        sim
+    };
     let (mut plain_hazards, mut km_hazards, mut km_trips) = (0, 0, 0);
     for k in 0..12u64 {
         let s: Scenario = ron::from_str(&text(20_000 + 1_300 * k)).expect("scenario");
-        let plain = run(&s);
+        let plain = run_in(&paper, &s);
         plain_hazards += plain.emulator.hazards().len();
         let path = km.join("scenario.ron");
         let mut sim = Simulation::from_scenario(&s, &path, Options::default())
@@ -1393,7 +1499,7 @@ fn a_safety_contactor_stops_a_welded_belt_that_the_paper_station_cannot() {
         )"#,
     )
     .expect("scenario");
-    let plain = run(&free);
+    let plain = run_in(&paper, &free);
     let mut sim = Simulation::from_scenario(&free, &km.join("scenario.ron"), Options::default())
         .expect("sim");
     sim.run_until(Millis(free.duration_ms));
@@ -1437,8 +1543,11 @@ fn with_device_monitoring_no_welded_or_dead_drive_damages_a_box() {
                 row.failures
             );
         }
-        let paper = campaign(&crate::test_support::station_dir(), &config(only))
-            .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+        let paper = campaign(
+            &crate::test_support::paper_station("paper-campaign"),
+            &config(only),
+        )
+        .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
         paper_hazards += paper.rows.iter().map(|r| r.hazards).sum::<usize>();
     }
     assert!(

@@ -33,7 +33,7 @@ fn check_error(text: &str, expected: &str) {
 fn header_lists_time_then_sensors_then_actuators() {
     assert_eq!(
         header(&plant()),
-        "time_ms,C0,C1,C2,C3,C4,C5,C6,C7,C8,C9,C10,A0,A1,A2,A3,A4,A5,A6"
+        "time_ms,C0,C1,C2,C3,C4,C5,C6,C7,C8,C9,C10,A0_fb,A1_fb,A2_fb,A3_fb,A4_fb,A5_fb,A6_fb,KM0_fb,YV0_fb,A0,A1,A2,A3,A4,A5,A6,KM0,YV0"
     );
 }
 
@@ -64,7 +64,7 @@ fn round_trip() {
     }
     assert_eq!(parse(&text, Path::new("t.csv"), &p).unwrap(), rows);
     // Columns in another order, spaces and blank lines are accepted.
-    let text = "A6, A5,A4,A3,A2,A1,A0,C10,C9,C8,C7,C6,C5,C4,C3,C2,C1,C0,time_ms\n\n1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0, 1 ,5\n";
+    let text = "YV0,KM0,A6, A5,A4,A3,A2,A1,A0,YV0_fb,KM0_fb,A6_fb,A5_fb,A4_fb,A3_fb,A2_fb,A1_fb,A0_fb,C10,C9,C8,C7,C6,C5,C4,C3,C2,C1,C0,time_ms\n\n0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0, 1 ,5\n";
     let rows = parse(text, Path::new("t.csv"), &p).unwrap();
     assert_eq!(rows.len(), 1);
     assert_eq!(
@@ -73,7 +73,7 @@ fn round_trip() {
             rows[0].inputs.to_string(),
             rows[0].outputs.to_string()
         ),
-        (Millis(5), "10000000000".into(), "0000001".into())
+        (Millis(5), "10000000000000000000".into(), "000000100".into())
     );
 }
 
@@ -89,11 +89,11 @@ fn errors_have_line_and_column() {
     );
     check_error(
         &good.replacen("20,0,", "20,", 1),
-        "t.csv:3:1: error[V0305]: expected 19 values, found 18",
+        "t.csv:3:1: error[V0305]: expected 30 values, found 29",
     );
     check_error(
         &good.replacen("\n10,", "\n\n10,0,", 1),
-        "t.csv:3:1: error[V0305]: expected 19 values, found 20",
+        "t.csv:3:1: error[V0305]: expected 30 values, found 31",
     );
     // Header problems.
     check_error(
@@ -170,12 +170,12 @@ fn a_repeated_column_is_an_error_at_its_header_cell() {
     );
     // A second time column, and a name repeated with spaces around it.
     check_error(
-        &good.replacen(",A6", ",time_ms", 1),
-        "t.csv:1:61: error[V0330]: column `time_ms` appears twice in the trace header (first at column 1)",
+        &good.replacen(",YV0\n", ",time_ms\n", 1),
+        "t.csv:1:124: error[V0330]: column `time_ms` appears twice in the trace header (first at column 1)",
     );
     check_error(
         &good.replacen(",A0,", ", A1 ,", 1),
-        "t.csv:1:48: error[V0330]: column `A1` appears twice in the trace header (first at column 43)",
+        "t.csv:1:104: error[V0330]: column `A1` appears twice in the trace header (first at column 99)",
     );
 }
 

@@ -263,7 +263,7 @@ fn promela_dump() {
 }
 
 /// The verifier's budget counts the previous-cycle values its state keeps, not the
-/// plant's signals: the station with 40 more sensors that nothing reads (51 inputs, 69
+/// plant's signals: the station with 40 more sensors that nothing reads (60 inputs, 69
 /// signals in all) explores the same states as the station. Before, past 29 signals in
 /// all, it was refused ("too many signals for the verifier").
 #[test]
@@ -274,7 +274,7 @@ fn extra_signals_that_nothing_reads_cost_the_verifier_nothing() {
     let anchor = "        (id: \"A0\", kind: Actuator";
     let with_spare = format!("{spare}{anchor}");
     let (_guard, b, l) = patched("spare", &[("plant.ron", anchor, &with_spare)]);
-    assert_eq!(b.plant.inputs.len(), 51);
+    assert_eq!(b.plant.inputs.len(), 60);
     let o = Options {
         max_boxes: 1,
         necessity_boxes: None,
@@ -321,7 +321,7 @@ fn too_many_previous_values_read_are_refused_with_the_count() {
 /// 0 and CSk2 would cut the supply whenever A1 runs: no delivery).
 #[test]
 fn a_safety_contactor_and_a_mirror_contact_are_modelled() {
-    let (_guard, b, l) = with_contactor("contactor");
+    let (b, l) = with_contactor();
     let r = verify(
         &b,
         &l,
@@ -368,23 +368,10 @@ fn a_safety_contactor_and_a_mirror_contact_are_modelled() {
     assert_eq!(m.powered(1 << a1).0, 0, "no supply: A1 does not act");
 }
 
-/// The station with a safety contactor KM0 on the drives' supply, a mirror contact on
-/// A1's contactor and the two monomials that watch it.
-fn with_contactor(tag: &str) -> (Scratch, PlantBundle, Layout) {
-    let anchor = "        (id: \"A0\", kind: Actuator";
-    let mirror = format!(
-        "        (id: \"A1_fb\", kind: Sensor, description: \"mirror\", feedback_of: Some(\"A1\")),\n{anchor}"
-    );
-    let km = "        (id: \"KM0\", kind: Actuator, description: \"supply\", supplies: [\"A0\", \"A1\", \"A2\", \"A3\", \"A5\", \"A6\"], held_on: true),\n    ],\n)";
-    let rules = "CSs1  = 2P . A0\nCSk1 = KM0 . A1_fb . /A1*\nCSk2 = KM0 . A1* . /A1_fb";
-    patched(
-        tag,
-        &[
-            ("plant.ron", anchor, &mirror),
-            ("plant.ron", "    ],\n)", km),
-            ("constraints.txt", "CSs1  = 2P . A0", rules),
-        ],
-    )
+/// The station: a safety contactor KM0 on the drives' supply, mirror contacts on every
+/// drive and the monomials that watch them (`CSk*`), all in its data.
+fn with_contactor() -> (PlantBundle, Layout) {
+    station()
 }
 
 /// SPIN and the explorer agree on the station with a safety contactor and a mirror
@@ -392,7 +379,7 @@ fn with_contactor(tag: &str) -> (Scratch, PlantBundle, Layout) {
 /// the drives by the contactor, as the explorer does).
 #[test]
 fn spin_agrees_with_a_safety_contactor() {
-    let (_guard, b, l) = with_contactor("contactor-spin");
+    let (b, l) = with_contactor();
     let (m, _) = spin_agrees(&b, &l);
     // The model's text: the mirror reads A1 as applied at t-1, the drives act only with
     // the contactor applied.
@@ -415,10 +402,10 @@ fn spin_agrees_with_a_safety_contactor() {
 /// and SPIN agrees (the table without its air stays where it is in both models).
 #[test]
 fn device_monitoring_costs_the_verifier_nothing() {
-    let dir = crate::test_support::edm_station("verify-edm");
-    let (b, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
-    let l = Layout::load(&dir.join("layout.ron")).expect("layout");
-    let (sb, sl) = station();
+    let (b, l) = station();
+    let dir = crate::test_support::paper_station("verify-paper");
+    let (sb, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+    let sl = Layout::load(&dir.join("layout.ron")).expect("layout");
     assert_eq!(
         Model::new(&b, &l, 1).expect("model").prev_mask.1 & 0x7f,
         Model::new(&sb, &sl, 1).expect("model").prev_mask.1,

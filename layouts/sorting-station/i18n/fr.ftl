@@ -20,6 +20,17 @@ signal-A3 = Rouleaux de la table : évacuation à droite
 signal-A4 = Rotation de la table vers la position de déchargement (monostable : revient au relâchement)
 signal-A5 = Moteur du convoyeur de sortie gauche
 signal-A6 = Moteur du convoyeur de sortie droit
+signal-A0_fb = Contacteur de A0 fermé (contact miroir)
+signal-A1_fb = Contacteur de A1 fermé (contact miroir)
+signal-A2_fb = Contacteur de A2 fermé (contact miroir)
+signal-A3_fb = Contacteur de A3 fermé (contact miroir)
+signal-A4_fb = Distributeur de A4 commuté (contrôle de tiroir)
+signal-A5_fb = Contacteur de A5 fermé (contact miroir)
+signal-A6_fb = Contacteur de A6 fermé (contact miroir)
+signal-KM0_fb = KM0 fermé (contact miroir)
+signal-YV0_fb = YV0 ouvert sur l'alimentation (contrôle de tiroir)
+signal-KM0 = Contacteur de sécurité sur l'alimentation des convoyeurs et des rouleaux
+signal-YV0 = Distributeur de sécurité sur l'air de la table tournante
 
 # Les éléments de l'installation (`element` dans plant.ron : minuscules, espaces en
 # tirets).
@@ -28,6 +39,7 @@ element-intermediate-conveyor = Convoyeur intermédiaire
 element-left-exit-conveyor = Convoyeur de sortie gauche
 element-right-exit-conveyor = Convoyeur de sortie droit
 element-turntable = Table tournante
+element-safety = Sécurité
 
 # Les parties de layout.ron (`id`), pour dire où une caisse est endommagée.
 part-entry = Convoyeur d'entrée
@@ -54,9 +66,27 @@ constraint-CSs14 = la rotation ne part que de la position de chargement
 constraint-CSs15 = la rotation n'est relâchée qu'en position de déchargement
 constraint-CSc1 = caisse poussée de A0 sur A1 arrêté
 constraint-CSc2 = caisse poussée de A1 sur des rouleaux arrêtés
+constraint-CSk1 = A0 soudé : couper KM0
+constraint-CSk2 = A0 ne se ferme pas : couper KM0
+constraint-CSk3 = A1 soudé : couper KM0
+constraint-CSk4 = A1 ne se ferme pas : couper KM0
+constraint-CSk5 = A2 soudé : couper KM0
+constraint-CSk6 = A2 ne se ferme pas : couper KM0
+constraint-CSk7 = A3 soudé : couper KM0
+constraint-CSk8 = A3 ne se ferme pas : couper KM0
+constraint-CSk9 = A4 collé : couper YV0
+constraint-CSk10 = A4 ne commute pas : couper YV0
+constraint-CSk11 = A5 soudé : couper KM0
+constraint-CSk12 = A5 ne se ferme pas : couper KM0
+constraint-CSk13 = A6 soudé : couper KM0
+constraint-CSk14 = A6 ne se ferme pas : couper KM0
+constraint-CSk15 = KM0 ne se ferme pas : toutes les sorties à l'arrêt jusqu'à la réparation
+constraint-CSk16 = YV0 ne s'ouvre pas : toutes les sorties à l'arrêt jusqu'à la réparation
 
 # A4 à l'arrêt (`off` dans plant.ron : une sortie à 0 qui fait bouger quelque chose).
 off-A4 = la table tournante revient en position de chargement
+off-KM0 = tous les convoyeurs et les rouleaux s'arrêtent, quel que soit leur propre contacteur
+off-YV0 = la table tournante reste où elle est, quel que soit son distributeur
 
 # Les scénarios (`scenario-<nom du fichier>` : son titre dans la ligne d'état).
 scenario-a1-dead-belt = A1 en panne sous une caisse poussée

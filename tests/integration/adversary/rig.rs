@@ -3,7 +3,7 @@
 //! and a raw Modbus client for requests no well-behaved client would send.
 
 use super::fake_plant::{self, FakePlant, Write};
-use crate::live::{Plc, TempDir, repo};
+use crate::live::{Plc, TempDir};
 use std::collections::VecDeque;
 use std::io::{BufRead as _, BufReader, Read as _, Write as _};
 use std::net::{SocketAddr, TcpStream};
@@ -60,11 +60,10 @@ impl Default for Cfg {
 }
 
 /// The configuration body of the contract.
-fn config_text(plant: SocketAddr, cfg: &Cfg, state: &Path) -> String {
-    let station = repo()
-        .join("layouts/sorting-station")
-        .canonicalize()
-        .unwrap();
+/// The gateway runs the paper's station (eleven sensors, seven coils: the fake plant's
+/// image), copied into `station`.
+fn config_text(plant: SocketAddr, cfg: &Cfg, state: &Path, station: &Path) -> String {
+    let station = crate::paper_station_in(station).canonicalize().unwrap();
     format!(
         "Gateway(plant: {station:?}, mode: Gateway, cycle_ms: 10, link_timeout_cycles: 10, \
          auto_reset: {auto_reset}, \
@@ -288,7 +287,12 @@ impl Rig {
         let config = dir.0.join("gateway.ron");
         std::fs::write(
             &config,
-            config_text(plant.addr(), &cfg, &dir.0.join("state")),
+            config_text(
+                plant.addr(),
+                &cfg,
+                &dir.0.join("state"),
+                &dir.0.join("station"),
+            ),
         )
         .unwrap();
         let gw = GatewayProc::spawn(&config, cfg.spawn);
