@@ -481,6 +481,7 @@ syn-expected-off = expected OFF
 syn-inferred-box = inferred box
 syn-estimated = estimated
 syn-no-address = no fieldbus address
+syn-other-signals = Other signals
 
 ## Texts built from the plant's data (French only: English is the core's record)
 words-constraint-violated = constraint { $id } violated

@@ -508,6 +508,7 @@ syn-expected-off = attendu À L'ARRÊT
 syn-inferred-box = caisse déduite
 syn-estimated = estimé
 syn-no-address = pas d'adresse sur le bus
+syn-other-signals = Autres signaux
 
 ## Textes construits à partir des données de l'installation
 words-constraint-violated = contrainte { $id } violée

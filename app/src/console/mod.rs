@@ -1371,6 +1371,16 @@ impl Console {
         self.i18n.set_lang(lang);
         self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
         self.view.words = synoptic_words(&self.i18n);
+        self.view.elements = self
+            .sim
+            .bundle
+            .plant
+            .inputs
+            .iter()
+            .chain(&self.sim.bundle.plant.outputs)
+            .filter(|s| !s.element.is_empty())
+            .map(|s| (s.element.clone(), words::element(&self.i18n, &s.element)))
+            .collect();
         let status = std::mem::take(&mut self.status);
         self.say(
             Some(("operator", now)),

@@ -23,6 +23,9 @@ pub struct View {
     pub descriptions: std::collections::BTreeMap<String, String>,
     /// The synoptic's tags in the language shown, by key ([`TAGS`]).
     pub words: std::collections::BTreeMap<&'static str, String>,
+    /// The plant's element names in the language shown (`element-<name>`), for the
+    /// schematic strip's labels; an element without one shows the plant's own.
+    pub elements: std::collections::BTreeMap<String, String>,
     /// Where the last frame put each sensor's name and each explanation tag, by the
     /// element it belongs to (screen points): what the tests check against the
     /// geometry.
@@ -42,7 +45,7 @@ pub struct Placed {
 
 /// The synoptic's tags: key (message `syn-<key>`) and English text (`%kind%` and
 /// `%box%` are filled in by the synoptic).
-pub const TAGS: [(&str, &str); 17] = [
+pub const TAGS: [(&str, &str); 18] = [
     ("predicted", "predicted: %kind% box %box%"),
     ("hazard-sheared", "Sheared"),
     ("hazard-dropped", "Dropped"),
@@ -60,6 +63,7 @@ pub const TAGS: [(&str, &str); 17] = [
     ("inferred-box", "inferred box"),
     ("estimated", "estimated"),
     ("no-address", "no fieldbus address"),
+    ("other-signals", "Other signals"),
 ];
 
 impl View {
@@ -83,6 +87,7 @@ impl Default for View {
             pan: Vec2::ZERO,
             descriptions: std::collections::BTreeMap::new(),
             words: std::collections::BTreeMap::new(),
+            elements: std::collections::BTreeMap::new(),
             placed: Placed::default(),
         }
     }
@@ -137,6 +142,85 @@ pub struct Geometry {
     pub bounds: ([f32; 2], [f32; 2]),
     /// Table actuators: (+u, -u, rotation).
     pub table_actuators: [String; 3],
+    /// The schematic strip under the layout: the signals `layout.ron` does not place
+    /// (a safety contactor, mirror contacts, panel buttons), by their plant element
+    /// (`element` in `plant.ron`, "" for none) with the label's world position; their
+    /// lamps and symbols are in `sensors` and `actuators` like the placed ones.
+    pub schematic: Vec<(String, [f32; 2])>,
+}
+
+/// Spacing of the schematic strip's symbols and rows, world mm (room for a name such
+/// as `KM0_fb` beside each lamp).
+const STRIP_STEP: f32 = 450.0;
+
+/// Places the signals the layout does not (see [`Geometry::schematic`]) in rows under
+/// the layout's `min` corner, one block per element in the plant's order, wrapped to
+/// the layout's width; returns the blocks' labels and grows `min` and `max` around them.
+fn place_schematic(
+    plant: &Plant,
+    sensors: &mut Vec<SensorGeom>,
+    actuators: &mut BTreeMap<String, [f32; 2]>,
+    (min, max): (&mut [f32; 2], &mut [f32; 2]),
+) -> Vec<(String, [f32; 2])> {
+    let mut blocks: Vec<(String, Vec<(&str, bool)>)> = Vec::new();
+    for (s, input) in plant
+        .inputs
+        .iter()
+        .map(|s| (s, true))
+        .chain(plant.outputs.iter().map(|s| (s, false)))
+    {
+        let placed = sensors.iter().any(|g| g.id == s.id) || actuators.contains_key(&s.id);
+        if placed {
+            continue;
+        }
+        match blocks.iter_mut().find(|(e, _)| *e == s.element) {
+            Some((_, v)) => v.push((&s.id, input)),
+            None => blocks.push((s.element.clone(), vec![(&s.id, input)])),
+        }
+    }
+    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+    let per_row = (((max[0] - min[0]) / STRIP_STEP) as usize).max(4);
+    let mut labels = Vec::new();
+    let x0 = min[0] + STRIP_STEP / 2.0;
+    let mut y = min[1] - STRIP_STEP * 0.6;
+    for (element, signals) in blocks {
+        labels.push((element, [min[0], y]));
+        // The lamps in rows, then the actuators' symbols in a row of their own, two
+        // steps apart: room for their tags (held ON, forced OFF) beside and under them.
+        let lamps: Vec<&str> = signals.iter().filter(|s| s.1).map(|s| s.0).collect();
+        let symbols: Vec<&str> = signals.iter().filter(|s| !s.1).map(|s| s.0).collect();
+        let mut row_y = y - STRIP_STEP * 1.2;
+        for (k, id) in lamps.iter().enumerate() {
+            #[allow(clippy::cast_precision_loss)]
+            let at = [
+                x0 + STRIP_STEP * (k % per_row) as f32,
+                row_y - STRIP_STEP * (k / per_row) as f32 * 0.9,
+            ];
+            sensors.push(SensorGeom {
+                id: (*id).to_string(),
+                lamp: at,
+                beam: None,
+                high: false,
+            });
+            max[0] = max[0].max(at[0] + STRIP_STEP);
+            min[1] = min[1].min(at[1] - STRIP_STEP * 0.5);
+        }
+        if !lamps.is_empty() {
+            row_y = min[1] - STRIP_STEP * 0.9;
+        }
+        for (k, id) in symbols.iter().enumerate() {
+            #[allow(clippy::cast_precision_loss)]
+            let at = [
+                x0 + 2.0 * STRIP_STEP * (k % per_row.div_ceil(2)) as f32,
+                row_y - STRIP_STEP * 1.4 * (k / per_row.div_ceil(2)) as f32,
+            ];
+            actuators.insert((*id).to_string(), at);
+            max[0] = max[0].max(at[0] + 2.0 * STRIP_STEP);
+            min[1] = min[1].min(at[1] - STRIP_STEP * 1.0);
+        }
+        y = min[1] - STRIP_STEP * 0.3;
+    }
+    labels
 }
 
 fn unit(a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
@@ -150,8 +234,9 @@ fn add(a: [f32; 2], d: [f32; 2], k: f32) -> [f32; 2] {
 }
 
 impl Geometry {
-    /// Places every element of `layout` with the table at `angle_mdeg`.
-    pub fn new(layout: &Layout, angle_mdeg: i32) -> Self {
+    /// Places every element of `layout` with the table at `angle_mdeg`, and every other
+    /// signal of `plant` in the schematic strip.
+    pub fn new(layout: &Layout, plant: &Plant, angle_mdeg: i32) -> Self {
         #[allow(clippy::cast_precision_loss)]
         let p = |x: i64, y: i64| [x as f32, y as f32];
         let conveyors: Vec<ConveyorGeom> = layout
@@ -186,7 +271,7 @@ impl Geometry {
         actuators.insert(t.plus_actuator.clone(), [tc[0] + side, tc[1] + 170.0]);
         actuators.insert(t.rotate_actuator.clone(), [tc[0] + side, tc[1]]);
         actuators.insert(t.minus_actuator.clone(), [tc[0] + side, tc[1] - 170.0]);
-        let sensors = place_sensors(layout, &conveyors, tc, u, tw);
+        let mut sensors = place_sensors(layout, &conveyors, tc, u, tw);
         let elevators: Vec<(String, [f32; 2])> = layout
             .elevators
             .iter()
@@ -211,6 +296,7 @@ impl Geometry {
         for (_, e) in &elevators {
             grow(*e, 200.0);
         }
+        let schematic = place_schematic(plant, &mut sensors, &mut actuators, (&mut min, &mut max));
         Self {
             conveyors,
             table_center: tc,
@@ -224,6 +310,7 @@ impl Geometry {
                 t.minus_actuator.clone(),
                 t.rotate_actuator.clone(),
             ],
+            schematic,
         }
     }
 
@@ -454,6 +541,7 @@ pub fn synoptic_ui(
 
     paint_conveyors(&cv, geom, t_s);
     paint_elevators(&cv, geom, view);
+    paint_schematic_labels(&cv, geom, view);
     paint_table(&cv, geom, table_angle_mdeg, (pal.equipment, edge), true);
     paint_table_motion(&cv, geom, table_angle_mdeg, t_s);
     paint_boxes(&cv, pic.boxes);
@@ -585,6 +673,24 @@ fn paint_elevators(cv: &Canvas<'_>, geom: &Geometry, view: &View) {
             name,
             FontId::proportional(11.0),
             pal.text_dim,
+        );
+    }
+}
+
+/// The schematic strip's labels: each element's name in the language shown.
+fn paint_schematic_labels(cv: &Canvas<'_>, geom: &Geometry, view: &View) {
+    for (element, at) in &geom.schematic {
+        let name = if element.is_empty() {
+            view.word("other-signals")
+        } else {
+            view.elements.get(element).unwrap_or(element)
+        };
+        cv.painter.text(
+            cv.xf.p(*at),
+            Align2::LEFT_BOTTOM,
+            name,
+            FontId::proportional(12.0),
+            cv.pal.text_dim,
         );
     }
 }
@@ -764,13 +870,23 @@ fn symbol_rects(cv: &Canvas<'_>, geom: &Geometry) -> Vec<(String, Rect)> {
                 Rect::from_center_size(xf.p(s.lamp), Vec2::splat(lamp_r * 2.0 + 2.0)),
             )
         })
-        .chain(geom.actuators.iter().map(|(id, at)| {
-            (
-                id.clone(),
-                Rect::from_center_size(xf.p(*at), Vec2::splat(lamp_r * 2.4)),
-            )
-        }))
+        .chain(
+            geom.actuators
+                .iter()
+                .map(|(id, at)| (id.clone(), actuator_rect(cv, id, xf.p(*at)))),
+        )
         .collect()
+}
+
+/// An actuator symbol's rectangle at `p`: a square, widened to its id (`KM0`).
+fn actuator_rect(cv: &Canvas<'_>, id: &str, p: Pos2) -> Rect {
+    let text = cv
+        .painter
+        .layout_no_wrap(id.to_string(), FontId::proportional(11.0), cv.pal.text)
+        .size()
+        .x;
+    let side = cv.lamp_r * 2.4;
+    Rect::from_center_size(p, vec2(side.max(text + 4.0), side))
 }
 
 /// Paints the sensors' names, each beside its lamp on no symbol and no other name.
@@ -805,12 +921,12 @@ fn paint_sensor_names(
 
 /// Paints the actuators' symbols (amber when forced, lit when on).
 fn paint_actuators(cv: &Canvas<'_>, geom: &Geometry, forced: &BTreeSet<String>) {
-    let (painter, xf, pal, lamp_r) = (cv.painter, &cv.xf, cv.pal, cv.lamp_r);
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
     for (id, at) in &geom.actuators {
         let p = xf.p(*at);
         let on = cv.val(id);
         let forced = forced.contains(id);
-        let r = Rect::from_center_size(p, Vec2::splat(lamp_r * 2.4));
+        let r = actuator_rect(cv, id, p);
         let fill = if forced {
             pal.forced
         } else if on {
@@ -1097,4 +1213,80 @@ pub fn overbar_label(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) -
         x += gw;
     }
     resp
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn station() -> (Layout, Plant) {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
+        (
+            Layout::load(&dir.join("layout.ron")).unwrap(),
+            Plant::load(&dir.join("plant.ron")).unwrap(),
+        )
+    }
+
+    /// Every signal of the plant is drawn: the ones `layout.ron` places where it says,
+    /// the others (the safety contactor and valve, the mirror contacts) in one row per
+    /// element under the layout, apart from each other and from the equipment; a signal
+    /// of no element goes to a row of its own.
+    #[test]
+    fn every_signal_is_drawn_and_the_unplaced_ones_sit_under_the_layout() {
+        let (layout, mut plant) = station();
+        let mut extra = plant.inputs[0].clone();
+        extra.id = "PB1".into();
+        extra.element = String::new();
+        extra.address = None;
+        plant.inputs.push(extra);
+        let g = Geometry::new(&layout, &plant, 0);
+        for s in plant.inputs.iter().chain(&plant.outputs) {
+            assert!(g.element(&s.id).is_some(), "{} not drawn", s.id);
+        }
+        let rows: Vec<&str> = g.schematic.iter().map(|(e, _)| e.as_str()).collect();
+        assert_eq!(rows, ["Safety", ""]);
+        // The layout's lowest point: the conveyors' and the table's edges.
+        let floor = layout
+            .conveyors
+            .iter()
+            .flat_map(|c| [c.start.y, c.end.y].map(|y| y - c.width_mm / 2))
+            .chain([layout.table.center.y - layout.table.half_length_mm])
+            .min()
+            .unwrap();
+        #[allow(clippy::cast_precision_loss)]
+        let floor = floor as f32;
+        let strip: Vec<(&str, [f32; 2])> = plant
+            .inputs
+            .iter()
+            .chain(&plant.outputs)
+            .filter(|s| s.element == "Safety" || s.id == "PB1")
+            .map(|s| (s.id.as_str(), g.element(&s.id).unwrap()))
+            .collect();
+        assert_eq!(strip.len(), 12, "{strip:?}");
+        for (i, (a, pa)) in strip.iter().enumerate() {
+            assert!(
+                pa[1] < floor - 100.0,
+                "{a} at {pa:?} is not under the layout"
+            );
+            assert!(
+                pa[1] > g.bounds.0[1] && pa[0] < g.bounds.1[0],
+                "{a} out of bounds"
+            );
+            for (b, pb) in &strip[i + 1..] {
+                let d = ((pa[0] - pb[0]).powi(2) + (pa[1] - pb[1]).powi(2)).sqrt();
+                assert!(d >= STRIP_STEP * 0.75, "{a} and {b} overlap");
+            }
+        }
+        // The paper's signals keep their places.
+        let mut bare = plant.clone();
+        bare.inputs
+            .retain(|s| s.element != "Safety" && s.id != "PB1");
+        bare.outputs.retain(|s| s.element != "Safety");
+        let paper = Geometry::new(&layout, &bare, 0);
+        for s in ["C4", "A0", "A4"] {
+            assert_eq!(g.element(s), paper.element(s), "{s}");
+        }
+        assert!(paper.schematic.is_empty());
+    }
 }

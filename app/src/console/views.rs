@@ -752,7 +752,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     } else if banner.is_none() && sim.engine.is_tripped() {
         banner = Some(trip_banner(c));
     }
-    let geom = Geometry::new(&sim.layout, angle);
+    let geom = Geometry::new(&sim.layout, plant, angle);
     let pic = Picture {
         boxes,
         values: &values,
