@@ -188,6 +188,9 @@ pub struct Engine {
     /// Mirror contacts (`feedback_of`): (input, output). At an attach to a running
     /// plant, the output's previous value is what its mirror shows, not the command.
     mirrors: Vec<(usize, usize)>,
+    /// Per entry of `mirrors`: how long a disagreement is read as agreement
+    /// (`feedback_ms`), and since when the mirror has disagreed with its output.
+    mirror_ms: Vec<(u64, Option<Millis>)>,
     /// Supplied drives: (drive, its supply) for each `supplies` of a safety contactor.
     /// The diagnosers read a drive as commanded only while its supply is ON.
     supplied: Vec<(usize, usize)>,
@@ -256,6 +259,12 @@ impl Engine {
                 .filter(|&k| bundle.plant.outputs[k].held_on)
                 .collect(),
             mirrors: bundle.plant.mirrors(),
+            mirror_ms: bundle
+                .plant
+                .mirrors()
+                .iter()
+                .map(|&(i, _)| (bundle.plant.inputs[i].feedback_ms, None))
+                .collect(),
             supplied: bundle
                 .plant
                 .supplies()
@@ -464,6 +473,7 @@ impl Engine {
             self.plausibility
                 .step(now, &mut self.frame, attach || reinit || self.cycles == 1);
         }
+        self.hold_mirrors(now, attach || reinit);
         self.read_estimates();
         if let Some(emptied) = reinit_mode {
             let cleared = self.observers.clear_at_reinit(&self.frame, emptied);
@@ -777,6 +787,35 @@ impl Engine {
     /// as commanded and dead).
     pub fn observe_safety_devices(&mut self) {
         self.held_on.clear();
+    }
+
+    /// A mirror contact that disagrees with the output applied at t-1 for less than its
+    /// `feedback_ms` is read as agreeing (the contactor is still switching, or the link
+    /// has not yet brought its new state); past it, as it reads. `fresh`: an attach or a
+    /// re-initialisation, which starts every count again.
+    fn hold_mirrors(&mut self, now: Millis, fresh: bool) {
+        for (k, &(i, o)) in self.mirrors.iter().enumerate() {
+            let Some((ms, since)) = self.mirror_ms.get_mut(k) else {
+                continue;
+            };
+            let (n_in, n_out) = (
+                self.frame.now(Space::Input).len(),
+                self.frame.prev(Space::Output).len(),
+            );
+            if *ms == 0 || fresh || i >= n_in || o >= n_out {
+                *since = None;
+                continue;
+            }
+            let expected = self.frame.prev(Space::Output).get(o);
+            if self.frame.now(Space::Input).get(i) == expected {
+                *since = None;
+                continue;
+            }
+            let from = *since.get_or_insert(now);
+            if now.0.saturating_sub(from.0) < *ms {
+                self.frame.now_mut(Space::Input).set(i, expected);
+            }
+        }
     }
 
     /// The plant's mirror contacts: each one's input and the output it mirrors.

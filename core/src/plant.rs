@@ -102,6 +102,12 @@ pub struct Signal {
     /// the command.
     #[serde(default)]
     pub feedback_of: Option<String>,
+    /// Mirror contacts: the longest the contact may take to follow its output, ms (the
+    /// contactor's switching time and a live link's latency). A disagreement with the
+    /// output applied at t-1 that has lasted less is read as agreement; 0: none (the
+    /// contact follows within one cycle).
+    #[serde(default)]
+    pub feedback_ms: u64,
 }
 
 /// The timed plausibility of a sensor's edges, from the plant's physics: a beam cannot
@@ -206,6 +212,7 @@ impl Signal {
             supplies: Vec::new(),
             held_on: false,
             feedback_of: None,
+            feedback_ms: 0,
         }
     }
 
@@ -420,6 +427,14 @@ fn check_wiring(
             Some(a) if !actuator(a) => bad(format!(
                 "`{}` mirrors `{a}`, which is not an actuator of the plant",
                 s.id
+            )),
+            None if s.feedback_ms > 0 => bad(format!(
+                "`{}` has `feedback_ms` but mirrors nothing (`feedback_of`)",
+                s.id
+            )),
+            _ if s.feedback_ms > 10_000 => bad(format!(
+                "`{}`: `feedback_ms` {} is longer than 10 s; a contact that slow cannot watch a contactor",
+                s.id, s.feedback_ms
             )),
             _ => {}
         }

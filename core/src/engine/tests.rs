@@ -537,6 +537,58 @@ fn the_reinitialisation_of_an_emptied_plant_clears_every_observer() {
     assert!(!run.engine.is_tripped());
 }
 
+/// The station with mirror contacts that follow within one cycle (`feedback_ms: 0`).
+fn instant_mirrors(mut b: PlantBundle) -> PlantBundle {
+    for s in &mut b.plant.inputs {
+        s.feedback_ms = 0;
+    }
+    b
+}
+
+/// A mirror contact that disagrees with its output for less than its `feedback_ms`
+/// (the contactor still switching, a live link's latency) is read as agreeing: no trip;
+/// a disagreement that lasts trips once it has lasted that long, not before; one that
+/// ends in time leaves no trace, and the count starts again at the next one.
+#[test]
+fn a_mirror_is_read_as_agreeing_for_its_feedback_time() {
+    let dir = crate::test_support::edm_station("edm-feedback-ms");
+    let (b, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+    let a6_fb = b.plant.input("A6_fb").unwrap();
+    assert_eq!(b.plant.inputs[a6_fb].feedback_ms, 30);
+    let mut run = Run::with_bundle(b, FilterMode::Enforce);
+    let safety = ["C4", "KM0_fb", "YV0_fb"];
+    run.cycle_raw(&["C4"], &[]);
+    run.cycle_raw(&safety, &[]);
+    // A6 commanded at 30 ms; its mirror closes only 40 ms later (cycles 40..60 read it
+    // open: 20 ms of disagreement, less than 30): no trip, and the frame read agreement.
+    run.cycle_raw(&safety, &["A6"]);
+    for _ in 0..3 {
+        run.cycle_raw(&safety, &["A6"]);
+        assert!(!run.engine.is_tripped(), "{:?}", run.engine.trips);
+        assert!(
+            run.engine.frame().now(Space::Input).get(a6_fb),
+            "held as closed"
+        );
+    }
+    let with_fb = ["C4", "KM0_fb", "YV0_fb", "A6_fb"];
+    run.cycle_raw(&with_fb, &["A6"]);
+    assert!(!run.engine.is_tripped());
+    // Released at 80 ms; the mirror stays closed (welded): held open at 90, 100, 110
+    // (0, 10, 20 ms of disagreement), read closed at 120 (30 ms): CSk13.
+    run.cycle_raw(&with_fb, &[]);
+    for t in [90, 100, 110] {
+        run.cycle_raw(&with_fb, &[]);
+        assert!(!run.engine.is_tripped(), "{t} ms");
+    }
+    run.cycle_raw(&with_fb, &[]);
+    let ids: Vec<&str> = run.engine.trips[0]
+        .constraints
+        .iter()
+        .map(|c| c.id.as_str())
+        .collect();
+    assert_eq!(ids, ["CSk13"]);
+}
+
 /// An attach to a running plant takes a mirrored contactor's previous value from its
 /// mirror contact, not from the command: a safety contactor the link has not closed yet
 /// (its mirror open, KM0 commanded ON by the safety function) is not taken for a dead
@@ -547,6 +599,7 @@ fn the_reinitialisation_of_an_emptied_plant_clears_every_observer() {
 fn an_attach_reads_a_mirrored_contactor_from_its_mirror() {
     let dir = crate::test_support::edm_station("edm-attach");
     let (b, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+    let b = instant_mirrors(b);
     let mut attached = Run::with_bundle(b.clone(), FilterMode::Enforce);
     attached.engine.set_first_cycle(FirstCycle::Attach);
     attached.cycle_raw(&[], &[]);
@@ -574,6 +627,7 @@ fn an_attach_reads_a_mirrored_contactor_from_its_mirror() {
 fn a_manual_request_lets_healthy_mirrors_follow_and_refuses_a_weld() {
     let dir = crate::test_support::edm_station("edm-manual");
     let (b, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+    let b = instant_mirrors(b);
     let mut run = Run::with_bundle(b, FilterMode::Enforce);
     let healthy = |run: &mut Run, mirrors: &[&str], commanded: &[&str]| {
         let mut s = vec!["C4"];

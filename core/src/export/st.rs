@@ -373,6 +373,8 @@ fn program(out: &mut String, bundle: &PlantBundle, obs: &Fb, fil: &Fb, tfb: Opti
         .collect();
     let (stage, mut stage_locals) = plausibility_stage(symbols, &rules);
     locals.append(&mut stage_locals);
+    let (mirror_stage, mut mirror_locals) = mirror_stage(bundle);
+    locals.append(&mut mirror_locals);
     locals.push(("fbObservers".into(), "FB_Observers"));
     locals.push(("fbFilter".into(), "FB_Filter"));
     if tfb.is_some() {
@@ -380,6 +382,7 @@ fn program(out: &mut String, bundle: &PlantBundle, obs: &Fb, fil: &Fb, tfb: Opti
     }
     section(out, "VAR", locals.into_iter());
     out.push_str(&stage);
+    out.push_str(&mirror_stage);
     out.push_str(&obs.call("fbObservers"));
     for (n, _) in &obs.outputs {
         let _ = writeln!(out, "{n} := fbObservers.{n};");
@@ -432,6 +435,49 @@ fn program(out: &mut String, bundle: &PlantBundle, obs: &Fb, fil: &Fb, tfb: Opti
         );
     }
     let _ = writeln!(out, "END_PROGRAM");
+}
+
+/// The mirror contacts with a `feedback_ms`: a disagreement with the output applied at
+/// t-1 that has lasted less is read as agreement, as the engine reads it
+/// (`Engine::hold_mirrors`). The code and its locals (`MH_<id>` since when, `MD_<id>`
+/// disagreeing).
+fn mirror_stage(bundle: &PlantBundle) -> (String, Vec<(String, &'static str)>) {
+    let symbols = &bundle.symbols;
+    let mut code = String::new();
+    let mut locals = Vec::new();
+    for (i, o) in bundle.plant.mirrors() {
+        let ms = bundle.plant.inputs[i].feedback_ms;
+        if ms == 0 {
+            continue;
+        }
+        let var = |space, index: usize, prev| Var {
+            space,
+            index: u32::try_from(index).unwrap_or(0),
+            prev,
+        };
+        let input = ident(symbols, var(Space::Input, i, false), false);
+        let applied = ident(symbols, var(Space::Output, o, true), false);
+        let id = mangle(&bundle.plant.inputs[i].id);
+        let (since, on) = (format!("MH_{id}"), format!("MD_{id}"));
+        let _ = writeln!(
+            code,
+            "(* {input} follows its output within {ms} ms: a shorter disagreement reads as agreement. *)
+             IF {input} <> {applied} THEN
+    IF NOT {on} THEN
+        {on} := TRUE;
+        {since} := NOW_MS;
+    END_IF;
+    IF NOW_MS - {since} < {ms} THEN
+        {input} := {applied};
+    END_IF;
+ELSE
+    {on} := FALSE;
+END_IF;"
+        );
+        locals.push((since, "LINT"));
+        locals.push((on, "BOOL"));
+    }
+    (code, locals)
 }
 
 /// The program's header and its input and output variables.

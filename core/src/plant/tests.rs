@@ -96,6 +96,8 @@ fn safety_devices_wired_wrong_are_reported_where_they_are_written() {
     (id: "M1", kind: Actuator, description: "", feedback_of: Some("M1")),
     (id: "K1", kind: Actuator, description: "", supplies: ["M1", "K1", "X9"], held_on: true),
     (id: "M1_fb", kind: Sensor, description: "", feedback_of: Some("M1")),
+    (id: "S3", kind: Sensor, description: "", feedback_ms: 30),
+    (id: "M2_fb", kind: Sensor, description: "", feedback_of: Some("M1"), feedback_ms: 60000),
 ])"#;
     let p = problems(text);
     let expect = [
@@ -104,6 +106,8 @@ fn safety_devices_wired_wrong_are_reported_where_they_are_written() {
         "plant.ron:4:10: error[V0014]: `feedback_of` is for sensors (a contactor's mirror contact); `M1` is an actuator",
         "plant.ron:5:10: error[V0014]: `K1` supplies `K1`, which is not another actuator of the plant",
         "plant.ron:5:10: error[V0014]: `K1` supplies `X9`, which is not another actuator of the plant",
+        "plant.ron:7:10: error[V0014]: `S3` has `feedback_ms` but mirrors nothing (`feedback_of`)",
+        "plant.ron:8:10: error[V0014]: `M2_fb`: `feedback_ms` 60000 is longer than 10 s; a contact that slow cannot watch a contactor",
     ];
     assert_eq!(p, expect);
     // Wired right: the supplies and the mirrors by index.
