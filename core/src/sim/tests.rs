@@ -622,12 +622,14 @@ fn a_gateway_is_mirrored_with_its_applied_outputs_and_resets() {
 fn a_monitor_takes_the_safety_devices_as_the_plc_commands_them() {
     let mut sim = following(FilterMode::ReportOnly);
     let idle = "00001000000000000000";
-    for t in [10, 20, 30] {
+    // Past the mirrors' 30 ms feedback time.
+    for t in [10, 20, 30, 40, 50, 60] {
         sim.observe(&observed(t, idle, "000000000", "000000000", false));
     }
     assert!(sim.engine.trips.is_empty(), "{:?}", sim.engine.trips);
-    // KM0 commanded (coil 7) and applied, its mirror (input 18) stays open.
-    for t in [40, 50, 60] {
+    // KM0 commanded (coil 7) and applied, its mirror (input 18) stays open past its
+    // 30 ms feedback time.
+    for t in [70, 80, 90, 100, 110, 120] {
         sim.observe(&observed(t, idle, "000000010", "000000010", false));
     }
     let ids: Vec<&str> = sim
