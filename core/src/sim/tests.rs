@@ -639,6 +639,26 @@ fn a_monitor_takes_the_safety_devices_as_the_plc_commands_them() {
         .flat_map(|t| t.constraints.iter().map(|c| c.id.as_str()))
         .collect();
     assert!(ids.contains(&"CSk15"), "{ids:?}");
+    // The engine of a live monitor (what it applies is what the PLC commanded): held
+    // ON, KM0 reads as commanded with its mirror open, a dead contactor after 30 ms.
+    let bundle = sim.bundle.clone();
+    let watch = |observe: bool| {
+        let mut e = crate::engine::Engine::new(&bundle, FilterMode::ReportOnly, 100);
+        if observe {
+            e.observe_safety_devices();
+        }
+        let inputs = bits(idle);
+        for t in 1..=6 {
+            e.cycle(Millis(10 * t), &inputs, &mut Commanded(bits("000000000")));
+        }
+        e.trips.len()
+    };
+    assert_eq!(watch(true), 0);
+    assert_eq!(
+        watch(false),
+        1,
+        "held ON, the monitor reports KM0 and YV0 dead"
+    );
     // A gateway holds them ON: the commanded vector it filters has KM0 and YV0.
     let mut gw = following(FilterMode::Enforce);
     gw.observe(&observed(10, idle, "000000000", "000000011", false));
