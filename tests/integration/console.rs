@@ -1710,6 +1710,26 @@ fn a_damaged_historian_leaves_the_console_running_and_the_file_alone() {
 #[test]
 // One operator's session, step by step: split, the steps would lose their order.
 #[allow(clippy::too_many_lines)]
+fn the_synoptic_names_its_elements_in_the_language_it_opens_in() {
+    // Opened in French: the schematic strip's block is "Sécurité" from the first frame
+    // (it read "Safety" until the language was switched by hand).
+    let mut opts = options(None);
+    opts.lang = vigie_app::i18n::Lang::Fr;
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1280.0, 720.0))
+        .build_eframe(move |cc| {
+            let mut c = Console::new(&opts).expect("console opens");
+            c.setup(&cc.egui_ctx);
+            c
+        });
+    h.run_steps(2);
+    assert_eq!(h.state().view.elements["Safety"], "Sécurité");
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::En));
+    assert_eq!(h.state().view.elements["Safety"], "Safety");
+}
+
+#[test]
 fn the_cs10_trip_explained_in_french() {
     let mut opts = options(None);
     opts.lang = vigie_app::i18n::Lang::Fr;

@@ -562,6 +562,7 @@ impl Console {
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
         let descriptions = i18n.signal_descriptions(&sim.bundle.plant);
+        let elements = element_names(&i18n, &sim.bundle.plant);
         let journal = Self::open_journal(opts, &sim, &source, &i18n);
         if opts.start {
             let _ = sim.act(&OperatorAction::Start);
@@ -589,6 +590,7 @@ impl Console {
             view: synoptic::View {
                 descriptions,
                 words: synoptic_words(&i18n),
+                elements,
                 ..synoptic::View::default()
             },
             status: String::new(),
@@ -1371,16 +1373,7 @@ impl Console {
         self.i18n.set_lang(lang);
         self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
         self.view.words = synoptic_words(&self.i18n);
-        self.view.elements = self
-            .sim
-            .bundle
-            .plant
-            .inputs
-            .iter()
-            .chain(&self.sim.bundle.plant.outputs)
-            .filter(|s| !s.element.is_empty())
-            .map(|s| (s.element.clone(), words::element(&self.i18n, &s.element)))
-            .collect();
+        self.view.elements = element_names(&self.i18n, &self.sim.bundle.plant);
         let status = std::mem::take(&mut self.status);
         self.say(
             Some(("operator", now)),
@@ -1666,6 +1659,17 @@ impl Console {
 }
 
 /// The synoptic's tags in the language shown.
+/// The plant's element names in the language shown, for the synoptic's schematic strip.
+fn element_names(i18n: &I18n, plant: &vigie_core::plant::Plant) -> BTreeMap<String, String> {
+    plant
+        .inputs
+        .iter()
+        .chain(&plant.outputs)
+        .filter(|s| !s.element.is_empty())
+        .map(|s| (s.element.clone(), words::element(i18n, &s.element)))
+        .collect()
+}
+
 fn synoptic_words(i18n: &I18n) -> BTreeMap<&'static str, String> {
     synoptic::TAGS
         .iter()
