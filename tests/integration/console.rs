@@ -1705,11 +1705,8 @@ fn a_damaged_historian_leaves_the_console_running_and_the_file_alone() {
     let _ = std::fs::remove_dir_all(&data);
 }
 
-/// The paper's CSs10 trip in French: the next step, the alarm and the explanation
-/// levels from the plant's French texts and the items' codes; the records stay English.
+/// The synoptic's element names in the language the console opens in.
 #[test]
-// One operator's session, step by step: split, the steps would lose their order.
-#[allow(clippy::too_many_lines)]
 fn the_synoptic_names_its_elements_in_the_language_it_opens_in() {
     // Opened in French: the schematic strip's block is "Sécurité" from the first frame
     // (it read "Safety" until the language was switched by hand).
@@ -1729,7 +1726,11 @@ fn the_synoptic_names_its_elements_in_the_language_it_opens_in() {
     assert_eq!(h.state().view.elements["Safety"], "Safety");
 }
 
+/// The paper's CSs10 trip in French: the next step, the alarm and the explanation
+/// levels from the plant's French texts and the items' codes; the records stay English.
 #[test]
+// One operator's session, step by step: split, the steps would lose their order.
+#[allow(clippy::too_many_lines)]
 fn the_cs10_trip_explained_in_french() {
     let mut opts = options(None);
     opts.lang = vigie_app::i18n::Lang::Fr;

@@ -561,8 +561,7 @@ impl Console {
         let ((variants, answers), library) = training_library(&plant_dir, &sim);
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
-        let descriptions = i18n.signal_descriptions(&sim.bundle.plant);
-        let elements = element_names(&i18n, &sim.bundle.plant);
+        let view = synoptic_view(&i18n, &sim.bundle.plant);
         let journal = Self::open_journal(opts, &sim, &source, &i18n);
         if opts.start {
             let _ = sim.act(&OperatorAction::Start);
@@ -587,12 +586,7 @@ impl Console {
             level: None,
             wanted_level: opts.level,
             replay: None,
-            view: synoptic::View {
-                descriptions,
-                words: synoptic_words(&i18n),
-                elements,
-                ..synoptic::View::default()
-            },
+            view,
             status: String::new(),
             notes: BTreeMap::new(),
             csv_path: "vigie-journal.csv".into(),
@@ -1371,9 +1365,10 @@ impl Console {
     /// Switches the console's language (descriptions and synoptic words too), keeping the status.
     fn set_language(&mut self, lang: Lang, now: u64) {
         self.i18n.set_lang(lang);
-        self.view.descriptions = self.i18n.signal_descriptions(&self.sim.bundle.plant);
-        self.view.words = synoptic_words(&self.i18n);
-        self.view.elements = element_names(&self.i18n, &self.sim.bundle.plant);
+        let view = synoptic_view(&self.i18n, &self.sim.bundle.plant);
+        self.view.descriptions = view.descriptions;
+        self.view.words = view.words;
+        self.view.elements = view.elements;
         let status = std::mem::take(&mut self.status);
         self.say(
             Some(("operator", now)),
@@ -1659,15 +1654,21 @@ impl Console {
 }
 
 /// The synoptic's tags in the language shown.
-/// The plant's element names in the language shown, for the synoptic's schematic strip.
-fn element_names(i18n: &I18n, plant: &vigie_core::plant::Plant) -> BTreeMap<String, String> {
-    plant
-        .inputs
-        .iter()
-        .chain(&plant.outputs)
-        .filter(|s| !s.element.is_empty())
-        .map(|s| (s.element.clone(), words::element(i18n, &s.element)))
-        .collect()
+/// The synoptic's texts in the language shown: the signals' descriptions, its tags and
+/// the plant's element names (the schematic strip's blocks); zoom and pan at rest.
+fn synoptic_view(i18n: &I18n, plant: &vigie_core::plant::Plant) -> synoptic::View {
+    synoptic::View {
+        descriptions: i18n.signal_descriptions(plant),
+        words: synoptic_words(i18n),
+        elements: plant
+            .inputs
+            .iter()
+            .chain(&plant.outputs)
+            .filter(|s| !s.element.is_empty())
+            .map(|s| (s.element.clone(), words::element(i18n, &s.element)))
+            .collect(),
+        ..synoptic::View::default()
+    }
 }
 
 fn synoptic_words(i18n: &I18n) -> BTreeMap<&'static str, String> {
