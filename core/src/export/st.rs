@@ -297,15 +297,8 @@ fn filter_fb(bundle: &PlantBundle) -> Result<Fb, ExportError> {
         viol.push(v);
     }
     for k in 0..n_out {
-        fil.inputs.insert(ident(
-            symbols,
-            Var {
-                space: Space::Output,
-                index: u32::try_from(k).unwrap_or(0),
-                prev: false,
-            },
-            true,
-        ));
+        fil.inputs
+            .insert(ident(symbols, output_var(k, false), true));
     }
     let any = if viol.is_empty() {
         "FALSE".to_string()
@@ -319,11 +312,7 @@ fn filter_fb(bundle: &PlantBundle) -> Result<Fb, ExportError> {
     fallback_search(&filter, symbols, &mut fil)?;
     let _ = writeln!(fil.body, "ELSE");
     for k in 0..n_out {
-        let v = Var {
-            space: Space::Output,
-            index: u32::try_from(k).unwrap_or(0),
-            prev: false,
-        };
+        let v = output_var(k, false);
         let _ = writeln!(
             fil.body,
             "    {} := {};",
@@ -333,11 +322,7 @@ fn filter_fb(bundle: &PlantBundle) -> Result<Fb, ExportError> {
     }
     let _ = writeln!(fil.body, "END_IF;\nTRIPPED := LATCHED;");
     for k in 0..n_out {
-        let v = Var {
-            space: Space::Output,
-            index: u32::try_from(k).unwrap_or(0),
-            prev: false,
-        };
+        let v = output_var(k, false);
         fil.outputs.push((ident(symbols, v, false), "BOOL"));
     }
     fil.outputs.push(("VIOLATION".into(), "BOOL"));
@@ -389,15 +374,7 @@ fn program(out: &mut String, bundle: &PlantBundle, obs: &Fb, fil: &Fb, tfb: Opti
     }
     for (k, o) in bundle.plant.outputs.iter().enumerate() {
         if o.held_on {
-            let cmd = ident(
-                symbols,
-                Var {
-                    space: Space::Output,
-                    index: u32::try_from(k).unwrap_or(0),
-                    prev: false,
-                },
-                true,
-            );
+            let cmd = ident(symbols, output_var(k, false), true);
             let _ = writeln!(
                 out,
                 "{cmd} := TRUE; (* held ON by the safety function: only the fallback releases it *)"
@@ -406,15 +383,7 @@ fn program(out: &mut String, bundle: &PlantBundle, obs: &Fb, fil: &Fb, tfb: Opti
     }
     out.push_str(&fil.call("fbFilter"));
     for k in 0..n_out {
-        let q = ident(
-            symbols,
-            Var {
-                space: Space::Output,
-                index: u32::try_from(k).unwrap_or(0),
-                prev: false,
-            },
-            false,
-        );
+        let q = ident(symbols, output_var(k, false), false);
         let _ = writeln!(out, "{q} := fbFilter.{q};");
     }
     let _ = writeln!(out, "TRIPPED := fbFilter.TRIPPED;");
@@ -450,13 +419,13 @@ fn mirror_stage(bundle: &PlantBundle) -> (String, Vec<(String, &'static str)>) {
         if ms == 0 {
             continue;
         }
-        let var = |space, index: usize, prev| Var {
-            space,
-            index: u32::try_from(index).unwrap_or(0),
-            prev,
+        let input = Var {
+            space: Space::Input,
+            index: u32::try_from(i).unwrap_or(0),
+            prev: false,
         };
-        let input = ident(symbols, var(Space::Input, i, false), false);
-        let applied = ident(symbols, var(Space::Output, o, true), false);
+        let input = ident(symbols, input, false);
+        let applied = ident(symbols, output_var(o, true), false);
         let id = mangle(&bundle.plant.inputs[i].id);
         let (since, on) = (format!("MH_{id}"), format!("MD_{id}"));
         let _ = writeln!(
@@ -497,34 +466,12 @@ fn program_interface(
         inputs.push((input_name(symbols, rules, i), "BOOL"));
     }
     for k in 0..n_out {
-        inputs.push((
-            ident(
-                symbols,
-                Var {
-                    space: Space::Output,
-                    index: u32::try_from(k).unwrap_or(0),
-                    prev: false,
-                },
-                true,
-            ),
-            "BOOL",
-        ));
+        inputs.push((ident(symbols, output_var(k, false), true), "BOOL"));
     }
     section(out, "VAR_INPUT", inputs.into_iter());
     let mut outputs: Vec<(String, &'static str)> = Vec::new();
     for k in 0..n_out {
-        outputs.push((
-            ident(
-                symbols,
-                Var {
-                    space: Space::Output,
-                    index: u32::try_from(k).unwrap_or(0),
-                    prev: false,
-                },
-                false,
-            ),
-            "BOOL",
-        ));
+        outputs.push((ident(symbols, output_var(k, false), false), "BOOL"));
     }
     outputs.push(("TRIPPED".into(), "BOOL"));
     for space in [Space::Observer, Space::Aux] {
