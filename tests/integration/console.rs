@@ -582,40 +582,9 @@ fn a_plant_fault_exercise_hides_the_fault_until_the_trainee_names_it() {
 /// debrief in French.
 #[test]
 fn a_plant_fault_exercise_in_french() {
-    let mut opts = options(None);
-    opts.scenario = None;
-    let mut h = harness(opts);
-    h.state_mut()
-        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
-    h.state_mut().apply(Command::SetMode(Mode::Training));
-    h.state_mut()
-        .apply(Command::LoadPlantExercise("P02".into()));
-    run_to_trip(&mut h);
-    // The belt's task alarm comes 7 s after the stop.
-    h.state_mut().cycles(1_000);
-    h.run_steps(2);
-    // The valve's spool monitoring contact reads it open after its order: the safety
-    // valve YV0 cuts the table's air.
-    let french = "Arrêt sécurité : A4 ne commute pas : couper YV0 (CSk10)";
-    assert!(
-        h.query_all_by_label_contains(french).count() >= 1,
-        "{french}"
-    );
-    assert!(h.query_by_label_contains("Safety stop").is_none());
-    // The table blocked at C5 (mechanical: no mirror contact shows it): the diagnosers'
-    // stop; the rollers' contactor dead (P05): KM0 stops the intermediate belt under its
-    // box, whose task alarm comes 7 s later. In French, never the core's English.
-    let expected = [
-        (
-            "P04",
-            "les diagnostiqueurs arrêtent la machine : P en défaut (DSTOP_P)",
-        ),
-        (
-            "P05",
-            "Caisse portée par le convoyeur intermédiaire de C1 à son bout C3",
-        ),
-    ];
-    for (exercise, french) in expected {
+    // The exercise in French, run to its stop and 10 s beyond (a task alarm comes 7 s
+    // after the stop); its stop's text in French, never the core's English.
+    let french_exercise = |exercise: &str, french: &str| {
         let mut opts = options(None);
         opts.scenario = None;
         let mut x = harness(opts);
@@ -635,7 +604,25 @@ fn a_plant_fault_exercise_in_french() {
                 "{exercise}: {english}"
             );
         }
-    }
+        x
+    };
+    // The valve's spool monitoring contact reads it open after its order: the safety
+    // valve YV0 cuts the table's air.
+    let mut h = french_exercise(
+        "P02",
+        "Arrêt sécurité : A4 ne commute pas : couper YV0 (CSk10)",
+    );
+    // The table blocked at C5 (mechanical: no mirror contact shows it): the diagnosers'
+    // stop; the rollers' contactor dead (P05): KM0 stops the intermediate belt under its
+    // box, whose task alarm comes 7 s later.
+    french_exercise(
+        "P04",
+        "les diagnostiqueurs arrêtent la machine : P en défaut (DSTOP_P)",
+    );
+    french_exercise(
+        "P05",
+        "Caisse portée par le convoyeur intermédiaire de C1 à son bout C3",
+    );
     h.get_by_label_contains("Un composant de la machine est en défaut");
     h.state_mut().apply(Command::SubmitDiagnosis("A4".into()));
     h.run_steps(2);
