@@ -240,6 +240,7 @@ impl Engine {
     /// Builds an engine for a loaded plant folder (a cold start, see [`FirstCycle`]).
     pub fn new(bundle: &PlantBundle, mode: FilterMode, history_cycles: usize) -> Self {
         let n_out = bundle.plant.outputs.len();
+        let mirrors = bundle.plant.mirrors();
         let mut frame = Frame::new(bundle.symbols.sizes());
         // The first cycle's shift makes these the values at t-1: the initial values.
         for (space, signals) in [
@@ -258,13 +259,11 @@ impl Engine {
             held_on: (0..n_out)
                 .filter(|&k| bundle.plant.outputs[k].held_on)
                 .collect(),
-            mirrors: bundle.plant.mirrors(),
-            mirror_ms: bundle
-                .plant
-                .mirrors()
+            mirror_ms: mirrors
                 .iter()
                 .map(|&(i, _)| (bundle.plant.inputs[i].feedback_ms, None))
                 .collect(),
+            mirrors,
             supplied: bundle
                 .plant
                 .supplies()
@@ -654,29 +653,29 @@ impl Engine {
         // A drive whose supply is cut does not act, whatever its own output: the
         // diagnosers read it OFF (else a table frozen by its safety valve, its rotation
         // still ordered, reads as a sensor that failed to see it arrive).
-        let outputs = (!self.supplied.is_empty()).then(|| {
-            let kept = (
-                self.frame.now(Space::Output).clone(),
-                self.frame.prev(Space::Output).clone(),
-            );
-            for &(k, s) in &self.supplied {
-                for prev in [false, true] {
-                    let bits = if prev {
-                        self.frame.prev_mut(Space::Output)
-                    } else {
-                        self.frame.now_mut(Space::Output)
-                    };
-                    if k < bits.len() && s < bits.len() && !bits.get(s) {
-                        bits.set(k, false);
-                    }
+        // Only the drives ON under a cut supply change, and only they are put back (the
+        // stage writes no output): nothing to do while every supply is ON.
+        let mut cut = Vec::new();
+        for &(k, s) in &self.supplied {
+            for prev in [false, true] {
+                let bits = if prev {
+                    self.frame.prev_mut(Space::Output)
+                } else {
+                    self.frame.now_mut(Space::Output)
+                };
+                if k < bits.len() && s < bits.len() && !bits.get(s) && bits.get(k) {
+                    bits.set(k, false);
+                    cut.push((k, prev));
                 }
             }
-            kept
-        });
+        }
         self.with_raw_inputs(f);
-        if let Some((now, prev)) = outputs {
-            self.frame.now_mut(Space::Output).copy_from(&now);
-            self.frame.prev_mut(Space::Output).copy_from(&prev);
+        for (k, prev) in cut {
+            if prev {
+                self.frame.prev_mut(Space::Output).set(k, true);
+            } else {
+                self.frame.now_mut(Space::Output).set(k, true);
+            }
         }
     }
 
