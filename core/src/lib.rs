@@ -32,6 +32,7 @@ pub mod filter;
 pub mod frame;
 pub mod history;
 pub mod live;
+pub mod machine;
 pub mod observers;
 pub mod plant;
 pub mod plausibility;

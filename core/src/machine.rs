@@ -1,0 +1,9 @@
+//! The physical plant as data: components of a library of kinds, the plant emulator
+//! built from them, and the elementary actions (seed 003, part II) derived from them
+//! with their per-action monitor.
+//!
+//! - [`actions`]: elementary actions N = (initial state, command, final state, T, ΔT).
+//! - [`monitor`]: the per-action monitor (checks a-d of seed 003, III.1).
+
+pub mod actions;
+pub mod monitor;

@@ -1,0 +1,1 @@
+//! Elementary actions (placeholder, written on branch action-monitor).

@@ -1,0 +1,1 @@
+//! Per-action monitor (placeholder, written on branch action-monitor).
