@@ -6,4 +6,14 @@
 //! - [`monitor`]: the per-action monitor (checks a-d of seed 003, III.1).
 
 pub mod actions;
+pub mod derive;
+pub mod description;
+pub mod emulator;
+pub mod kinds;
 pub mod monitor;
+pub mod scene;
+
+pub use crate::emulator::{Hazard, HazardKind, Place};
+pub use description::{ComponentDef, Components, DangerDef};
+pub use emulator::ComponentPlant;
+pub use scene::{Scene, SceneElement, Shape};

@@ -191,14 +191,18 @@ fn output_phrase(plant: &Plant, id: &str) -> String {
 
 /// A hazard of the emulated plant, in words.
 pub fn hazard(h: &Hazard) -> AlarmText {
-    let what = match h.kind {
-        HazardKind::Sheared => "sheared at the",
-        HazardKind::Dropped => "fell off the",
-        HazardKind::Collision => "collided on the",
-        HazardKind::PushedAgainstStopped => "pushed against a stopped surface",
+    let item = |what: &str| format!("Item {} damaged: {what} {}", h.box_id, h.place);
+    let message = match h.kind {
+        HazardKind::Sheared => item("sheared at the"),
+        HazardKind::Dropped => item("fell off the"),
+        HazardKind::Collision => item("collided on the"),
+        HazardKind::PushedAgainstStopped => item("pushed against a stopped surface"),
+        HazardKind::EndStop => format!("{} driven into the end of its travel", h.place),
+        HazardKind::OpposedDrives => format!("{} driven both ways at once", h.place),
+        HazardKind::Declared => format!("Dangerous state: {}", h.place),
     };
     AlarmText {
-        message: format!("Item {} damaged: {what} {}", h.box_id, h.place),
+        message,
         detail: format!("{:?}; actuators {}", h.kind, h.elements.join(", ")),
         ..AlarmText::default()
     }

@@ -146,6 +146,12 @@ registry! {
     EMULATOR_UNKNOWN_PART = "V0705", "no such part in the layout";
     EXERCISE_DUPLICATE = "V0706", "a plant-fault exercise declared twice";
     EXERCISE_ANSWER = "V0707", "a plant-fault exercise without an answer, or one that names no plant signal";
+    COMPONENTS_INVALID = "V0740", "an invalid value in a plant's components file";
+    COMPONENTS_UNKNOWN_SIGNAL = "V0741", "a component names a signal the plant does not declare";
+    COMPONENTS_EXPRESSION = "V0742", "a component's drive or danger expression that does not resolve";
+    COMPONENTS_DUPLICATE = "V0743", "a component declared twice, or a sensor read from two components";
+    NO_PHYSICAL_MODEL = "V0744", "a plant folder with neither `components.ron` nor `layout.ron`";
+    FAULT_UNKNOWN_COMPONENT = "V0745", "an emulator fault names a component the plant does not have";
     // V08xx: tasks (formerly V0301..V0307, V0310)
     TASK_ID_INVALID = "V0801", "invalid task id";
     TASK_DUPLICATE = "V0802", "a task declared twice";

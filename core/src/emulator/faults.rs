@@ -51,6 +51,16 @@ pub enum FaultKind {
     TableBlockedAtC5,
     /// The table stops wherever it is.
     TableBlockedBetween,
+    /// The component cannot move (a seized axis, a jammed mechanism; on the sorting
+    /// station's layout, the turntable id blocks the table where it is).
+    Blocked(String),
+    /// The component moves at `percent` of its speed (on a layout, a conveyor id).
+    Slowed {
+        /// Component id.
+        component: String,
+        /// Remaining speed, percent.
+        percent: u8,
+    },
     /// The surface driven by `actuator` runs at `percent` of its speed.
     ConveyorSlowed {
         /// Actuator id of the conveyor or rollers.
@@ -65,7 +75,8 @@ impl FaultKind {
     /// The fault as data, for a console that tells it in its own words: `fault`
     /// (`stuck-at-0`, `stuck-at-1`, `spurious-rise`, `spurious-fall`, `actuator-off`,
     /// `actuator-on`, `table-at-loading`, `table-at-unloading`, `table-between`,
-    /// `slowed`), `signal` where one is named, `ms` or `percent` where they apply.
+    /// `slowed`, `blocked`), `signal` (a signal or, for `blocked` and a component's
+    /// `slowed`, a component id) where one is named, `ms` or `percent` where they apply.
     pub fn fields(&self) -> std::collections::BTreeMap<String, String> {
         let (tag, signal, n) = match self {
             Self::SensorStuckAt0(s) => ("stuck-at-0", s.as_str(), None),
@@ -81,6 +92,12 @@ impl FaultKind {
             Self::TableBlockedAtC4 => ("table-at-loading", "", None),
             Self::TableBlockedAtC5 => ("table-at-unloading", "", None),
             Self::TableBlockedBetween => ("table-between", "", None),
+            Self::Blocked(c) => ("blocked", c.as_str(), None),
+            Self::Slowed { component, percent } => (
+                "slowed",
+                component.as_str(),
+                Some(("percent", u64::from(*percent))),
+            ),
             Self::ConveyorSlowed { actuator, percent } => (
                 "slowed",
                 actuator.as_str(),
@@ -115,13 +132,17 @@ pub struct FaultSpec {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Effect {
     /// Force layout sensor `.0` to `.1`.
-    Sensor(u8, bool),
+    Sensor(u32, bool),
     /// Force actuator role `.0` to `.1`.
-    Actuator(u8, bool),
+    Actuator(u32, bool),
     /// Table blocked: 0 at loading, 1 at unloading, 2 anywhere.
     Table(u8),
     /// Drive role `.0` slowed to `.1` percent.
-    Slow(u8, u8),
+    Slow(u32, u8),
+    /// Component `.0` of a components plant blocked.
+    Block(u32),
+    /// Component `.0` of a components plant slowed to `.1` percent.
+    SlowComponent(u32, u8),
 }
 
 /// State of a scheduled fault.
@@ -154,11 +175,14 @@ pub(crate) struct Overrides {
 }
 
 impl Scheduled {
-    /// Resolves ids with `sensor_index` / `actuator_role` and parses a condition.
+    /// Resolves ids with `sensor_index` / `actuator_role`, the faults of a component
+    /// as a whole with `component` (`None`: the plant has no such component), and
+    /// parses a condition.
     pub(crate) fn new(
         spec: FaultSpec,
-        sensor_index: impl Fn(&str) -> Option<u8>,
-        actuator_role: impl Fn(&str) -> Option<u8>,
+        sensor_index: impl Fn(&str) -> Option<u32>,
+        actuator_role: impl Fn(&str) -> Option<u32>,
+        component: impl Fn(&FaultKind) -> Option<Effect>,
         symbols: &Symbols,
     ) -> Result<Self, Problem> {
         let unknown = |what: &str, id: &str| {
@@ -170,6 +194,19 @@ impl Scheduled {
         };
         let sensor = |id: &str| sensor_index(id).ok_or_else(|| unknown("sensor", id));
         let actuator = |id: &str| actuator_role(id).ok_or_else(|| unknown("actuator", id));
+        let whole = |k: &FaultKind, id: &str| {
+            component(k).ok_or_else(|| {
+                Problem::error(
+                    codes::FAULT_UNKNOWN_COMPONENT.id,
+                    if id.is_empty() {
+                        format!("fault {k:?} needs the sorting station's turntable")
+                    } else {
+                        format!("fault names unknown component `{id}`")
+                    },
+                    None,
+                )
+            })
+        };
         let (effect, length) = match &spec.fault {
             FaultKind::SensorStuckAt0(s) => (Effect::Sensor(sensor(s)?, false), spec.duration_ms),
             FaultKind::SensorStuckAt1(s) => (Effect::Sensor(sensor(s)?, true), spec.duration_ms),
@@ -187,9 +224,12 @@ impl Scheduled {
             FaultKind::ActuatorStuckOn(a) => {
                 (Effect::Actuator(actuator(a)?, true), spec.duration_ms)
             }
-            FaultKind::TableBlockedAtC4 => (Effect::Table(0), spec.duration_ms),
-            FaultKind::TableBlockedAtC5 => (Effect::Table(1), spec.duration_ms),
-            FaultKind::TableBlockedBetween => (Effect::Table(2), spec.duration_ms),
+            k @ (FaultKind::TableBlockedAtC4
+            | FaultKind::TableBlockedAtC5
+            | FaultKind::TableBlockedBetween) => (whole(k, "")?, spec.duration_ms),
+            k @ (FaultKind::Blocked(c) | FaultKind::Slowed { component: c, .. }) => {
+                (whole(k, c)?, spec.duration_ms)
+            }
             FaultKind::ConveyorSlowed {
                 actuator: a,
                 percent,
@@ -261,6 +301,8 @@ impl Scheduled {
                     *s = (*s).min(p);
                 }
             }
+            // A components plant applies these itself (`machine::emulator`).
+            Effect::Block(_) | Effect::SlowComponent(..) => {}
         }
     }
 }

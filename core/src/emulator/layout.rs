@@ -458,7 +458,7 @@ impl Layout {
 const MAX_STEP_MS: u64 = 1_000;
 
 /// Line and column (1-based) of the first occurrence of each `"…"` string.
-fn quoted_positions(text: &str) -> BTreeMap<String, (usize, usize)> {
+pub(crate) fn quoted_positions(text: &str) -> BTreeMap<String, (usize, usize)> {
     let mut map = BTreeMap::new();
     for (ln, line) in text.lines().enumerate() {
         let mut rest = line;

@@ -41,12 +41,13 @@
 //!   it passes the table edge by more than 2 mm while the table turns.
 
 mod dynamics;
-mod faults;
+pub(crate) mod faults;
 mod layout;
 mod model;
 mod training;
 
 pub use faults::{FaultKind, FaultSpec, Trigger};
+pub(crate) use layout::quoted_positions;
 pub use layout::{
     ArrivalPlan, Beam, BoxDims, BoxSize, Conveyor, Elevator, Layout, Point, SensorDef, SensorKind,
     Side, SizeMix, Source, Turntable,
@@ -336,11 +337,24 @@ impl Emulator {
                 .sensors
                 .iter()
                 .position(|s| s.id == id)
-                .map(|i| i as u8)
+                .map(|i| i as u32)
         };
         let roles = self.actuators();
-        let role = |id: &str| roles.iter().position(|a| a == id).map(|i| i as u8);
-        let s = Scheduled::new(fault, sensor, role, &self.symbols)?;
+        let role = |id: &str| roles.iter().position(|a| a == id).map(|i| i as u32);
+        // The layout's components: the turntable (blocked where it stands) and the
+        // conveyors (slowed by their drive).
+        let component = |k: &FaultKind| match k {
+            FaultKind::TableBlockedAtC4 => Some(faults::Effect::Table(0)),
+            FaultKind::TableBlockedAtC5 => Some(faults::Effect::Table(1)),
+            FaultKind::TableBlockedBetween => Some(faults::Effect::Table(2)),
+            FaultKind::Blocked(c) if *c == layout.table.id => Some(faults::Effect::Table(2)),
+            FaultKind::Slowed { component, percent } => {
+                let c = layout.conveyors.iter().find(|c| c.id == *component)?;
+                Some(faults::Effect::Slow(role(&c.actuator)?, *percent))
+            }
+            _ => None,
+        };
+        let s = Scheduled::new(fault, sensor, role, component, &self.symbols)?;
         self.has_conditions |= s.condition.is_some();
         self.faults.push(s);
         Ok(())

@@ -137,6 +137,12 @@ pub enum HazardKind {
     Collision,
     /// A box across two surfaces was pushed by one against the other, stopped or reversed.
     PushedAgainstStopped,
+    /// A mechanism was driven into the end of its travel where that is a crash.
+    EndStop,
+    /// A mechanism was driven both ways at once.
+    OpposedDrives,
+    /// A state the plant's expert declared dangerous (`dangers` in `components.ron`).
+    Declared,
 }
 
 /// Where a hazard happened, by the layout ids of the parts involved.
@@ -161,6 +167,18 @@ pub enum Place {
         part: String,
         /// True at its end, false at its start.
         end: bool,
+    },
+    /// On a component as a whole (a mechanism).
+    Component {
+        /// The component.
+        part: String,
+    },
+    /// A declared dangerous state of a component.
+    Danger {
+        /// The component.
+        part: String,
+        /// The danger's id.
+        danger: String,
     },
     /// Across two parts.
     Between {
@@ -191,6 +209,15 @@ impl Place {
             Self::Off { part, end } => {
                 put("place_kind", if *end { "end" } else { "start" }.into());
                 put("part", part.clone());
+            }
+            Self::Component { part } => {
+                put("place_kind", "component".into());
+                put("part", part.clone());
+            }
+            Self::Danger { part, danger } => {
+                put("place_kind", "danger".into());
+                put("part", part.clone());
+                put("danger", danger.clone());
             }
             Self::Between { part, other } => {
                 put("place_kind", "between".into());

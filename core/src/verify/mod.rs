@@ -234,6 +234,9 @@ pub fn hazard_name(k: HazardKind) -> &'static str {
         HazardKind::Dropped => "dropped",
         HazardKind::Collision => "collision",
         HazardKind::PushedAgainstStopped => "pushed_against_stopped",
+        HazardKind::EndStop => "end_stop",
+        HazardKind::OpposedDrives => "opposed_drives",
+        HazardKind::Declared => "declared",
     }
 }
 

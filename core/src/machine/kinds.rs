@@ -1,0 +1,126 @@
+//! The library of component kinds: the one place that lists them.
+//!
+//! A kind is a file under `kinds/` with its parameters (deserialised from
+//! `components.ron`) and its live state (built against the plant's signals). Adding a
+//! kind is that file and one variant in each enum below; nothing else in the code
+//! knows the kinds.
+
+pub mod axis;
+
+use super::scene::SceneElement;
+use crate::diag::Problem;
+use crate::frame::Frame;
+use crate::symbols::{Space, Symbols};
+use crate::synthetic::SplitMix64;
+use serde::{Deserialize, Serialize};
+
+/// A component's kind and its parameters, as written in `components.ron`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub enum KindDef {
+    /// One degree of freedom driven by outputs and read by position sensors: a
+    /// cylinder, a lift, a stopper, a drill head, a rotary table, a valve, a breaker.
+    Axis(axis::AxisDef),
+}
+
+impl KindDef {
+    /// The kind's name in messages and on the synoptic.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Self::Axis(_) => "axis",
+        }
+    }
+
+    /// The problems of its values alone, as messages.
+    pub(crate) fn check(&self) -> Vec<String> {
+        match self {
+            Self::Axis(a) => a.check(),
+        }
+    }
+
+    /// Every plant signal it names, with the space the signal must be in.
+    pub(crate) fn signals(&self) -> Vec<(&str, Space)> {
+        match self {
+            Self::Axis(a) => a.signals(),
+        }
+    }
+
+    /// Every logic expression it holds (checked against the plant).
+    pub(crate) fn expressions(&self) -> Vec<&str> {
+        match self {
+            Self::Axis(a) => a.expressions(),
+        }
+    }
+
+    /// Its live state at rest, resolved against the plant's symbols.
+    pub(crate) fn build(&self, id: &str, symbols: &Symbols) -> Result<Live, Problem> {
+        match self {
+            Self::Axis(a) => Ok(Live::Axis(axis::Axis::new(id, a, symbols)?)),
+        }
+    }
+}
+
+/// What one internal step gives a component and takes from it.
+pub(crate) struct StepCtx<'a> {
+    /// The step, ms.
+    pub dt: u64,
+    /// The plant's signals: outputs as applied (faults included), sensors as last read.
+    pub frame: &'a Frame,
+    /// The emulator's random stream (speed variations).
+    pub rng: &'a mut SplitMix64,
+    /// Hazards found in this step: kind and the actuators involved.
+    pub hazards: Vec<(super::HazardKind, Vec<String>)>,
+}
+
+/// Faults acting on a component as a whole.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct ComponentFaults {
+    /// It cannot move.
+    pub blocked: bool,
+    /// Its speed, percent of nominal.
+    pub speed_percent: u8,
+}
+
+/// A component's live state.
+#[derive(Clone, Debug)]
+pub(crate) enum Live {
+    /// See [`axis::Axis`].
+    Axis(axis::Axis),
+}
+
+impl Live {
+    /// Advances one internal step.
+    pub(crate) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
+        match self {
+            Self::Axis(a) => a.step(ctx, faults),
+        }
+    }
+
+    /// Writes its sensors (by plant input index) before sensor faults apply.
+    pub(crate) fn sense(&self, sensors: &mut crate::bits::Bits) {
+        match self {
+            Self::Axis(a) => a.sense(sensors),
+        }
+    }
+
+    /// Its position along its travel, in its unit (dangers are zones of it).
+    pub(crate) fn position(&self) -> f64 {
+        match self {
+            Self::Axis(a) => a.position(),
+        }
+    }
+
+    /// What the synoptic draws of it.
+    pub(crate) fn scene(&self, id: &str, name: &str) -> SceneElement {
+        match self {
+            Self::Axis(a) => a.scene(id, name),
+        }
+    }
+
+    /// Puts it at `position` (a technician moving it by hand, live-mode
+    /// initialisation), clamped to its travel.
+    pub(crate) fn set_position(&mut self, position: f64) {
+        match self {
+            Self::Axis(a) => a.set_position(position),
+        }
+    }
+}

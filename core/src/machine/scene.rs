@@ -1,0 +1,65 @@
+//! What the synoptic draws of a plant described as components: one element per
+//! component, with its kind's shape and its state. The console has one painter per
+//! shape and no drawing code per plant.
+
+use serde::Serialize;
+
+/// The plant as the synoptic draws it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Scene {
+    /// The components, in the order of `components.ron`.
+    pub elements: Vec<SceneElement>,
+}
+
+/// One component.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneElement {
+    /// Its id.
+    pub id: String,
+    /// Its display name.
+    pub name: String,
+    /// What to draw.
+    pub shape: Shape,
+}
+
+/// The shapes of the kinds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub enum Shape {
+    /// An axis: its travel, where it is, its sensors' windows and its drives.
+    Axis {
+        /// The unit (`mm`, `deg`).
+        unit: String,
+        /// Start of the travel.
+        min: f64,
+        /// End of the travel.
+        max: f64,
+        /// The position now.
+        position: f64,
+        /// -1, 0 or 1: the way it moves (0 when blocked or at rest).
+        direction: i8,
+        /// The sensors along it.
+        sensors: Vec<SceneSensor>,
+        /// Its drives.
+        drives: Vec<SceneDrive>,
+    },
+}
+
+/// A position sensor's window; the painter reads its value from the frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneSensor {
+    /// The plant input.
+    pub signal: String,
+    /// Start of its window.
+    pub from: f64,
+    /// End of its window.
+    pub to: f64,
+}
+
+/// A drive, for the legend.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneDrive {
+    /// Its condition over the outputs.
+    pub when: String,
+    /// Units per second, signed.
+    pub speed: f64,
+}
