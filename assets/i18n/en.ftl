@@ -585,3 +585,7 @@ syn-hazard-sheared = Sheared
 syn-hazard-dropped = Dropped
 syn-hazard-collision = Collision
 syn-hazard-pushedagainststopped = PushedAgainstStopped
+syn-hazard-endstop = driven into its end stop
+syn-hazard-opposeddrives = driven both ways at once
+syn-hazard-declared = dangerous state
+syn-predicted-component = predicted: %kind%

@@ -616,3 +616,7 @@ syn-hazard-sheared = cisaillée
 syn-hazard-dropped = tombée
 syn-hazard-collision = heurtée
 syn-hazard-pushedagainststopped = poussée contre un arrêt
+syn-hazard-endstop = entraîné contre sa butée
+syn-hazard-opposeddrives = entraîné dans les deux sens à la fois
+syn-hazard-declared = état dangereux
+syn-predicted-component = prévu : %kind%

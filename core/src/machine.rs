@@ -17,3 +17,5 @@ pub use crate::emulator::{Hazard, HazardKind, Place};
 pub use description::{ComponentDef, Components, DangerDef};
 pub use emulator::ComponentPlant;
 pub use scene::{Scene, SceneElement, Shape};
+pub mod physical;
+pub use physical::{Description, Physical};

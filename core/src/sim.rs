@@ -14,9 +14,10 @@ use crate::bundle::PlantBundle;
 use crate::control::{CompiledProgram, ErrorLibrary, ProgramRuntime};
 use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
-use crate::emulator::{ArrivalPlan, BoxView, Emulator, FaultSpec, Hazard, Layout};
+use crate::emulator::{ArrivalPlan, BoxView, FaultSpec, Hazard, Layout};
 use crate::engine::{Commanded, Control as _, Engine, Event, FilterMode};
 use crate::explain::{self, Explanation, Highlight, Item, Mark};
+use crate::machine::{Description, Physical, Scene};
 use crate::symbols::Space;
 use crate::time::Millis;
 use serde::{Deserialize, Serialize};
@@ -343,6 +344,8 @@ pub struct PlantSnapshot {
     pub boxes: Vec<BoxView>,
     /// Turntable angle.
     pub table_angle_mdeg: i32,
+    /// A plant of components as drawn.
+    pub scene: Option<Scene>,
 }
 
 /// The state the plant would have reached without the filter (explanation level 1).
@@ -355,6 +358,9 @@ pub struct ProjectedPlant {
     pub boxes: Vec<BoxView>,
     /// Turntable angle at that time.
     pub table_angle_mdeg: i32,
+    /// A plant of components at that time.
+    #[serde(skip)]
+    pub scene: Option<Scene>,
     /// Hazards predicted within the horizon.
     pub hazards: Vec<Hazard>,
 }
@@ -381,12 +387,13 @@ impl Default for Options {
 pub struct Simulation {
     /// Plant, observers, constraints.
     pub bundle: PlantBundle,
-    /// The geometry.
-    pub layout: Layout,
+    /// The sorting layout's geometry, when the plant is described by one (a plant of
+    /// components carries its own in the emulator's scene).
+    pub layout: Option<Layout>,
     /// Observers, filter, recorder.
     pub engine: Engine,
-    /// The plant.
-    pub emulator: Emulator,
+    /// The plant's emulator.
+    pub emulator: Physical,
     /// The control program.
     pub program: ProgramRuntime,
     /// The program as it was before its last scan (for the explanations).
@@ -560,7 +567,8 @@ impl Simulation {
         seed: u64,
         options: Options,
     ) -> Result<Self, Vec<Problem>> {
-        let layout = Layout::load(&bundle.dir.join("layout.ron"))?;
+        let description = Description::load(&bundle.dir)?;
+        let layout = description.layout().cloned();
         let tasks = match &bundle.tasks {
             Some(set) => Some(TaskMonitors {
                 monitor: crate::tasks::Monitor::new(set, Millis::ZERO),
@@ -569,7 +577,7 @@ impl Simulation {
             }),
             None => None,
         };
-        let emulator = Emulator::new(&layout, &bundle.plant, seed).map_err(|p| vec![p])?;
+        let emulator = Physical::new(&description, &bundle.plant, seed).map_err(|p| vec![p])?;
         let engine = Engine::new(&bundle, FilterMode::Enforce, options.history_cycles);
         let program = ProgramRuntime::new(Arc::new(program));
         Ok(Self {
@@ -664,11 +672,21 @@ impl Simulation {
             _ => program.stop.clone(),
         };
         match button {
-            Some(b) => self.program.press(&b).map_err(|e| e.to_string()),
+            Some(b) => self.press(&b),
             None => Err(format!(
                 "the program `{}` names no {role} button (`{role}: Some(\"…\")` in its file)",
                 program.name
             )),
+        }
+    }
+
+    /// Presses `button`: the program's panel button of that name, else the machine's
+    /// push button on that plant input.
+    fn press(&mut self, button: &str) -> Result<(), String> {
+        match self.program.press(button) {
+            Ok(()) => Ok(()),
+            Err(_) if self.emulator.press(button) => Ok(()),
+            Err(e) => Err(e.to_string()),
         }
     }
 
@@ -1001,7 +1019,7 @@ impl Simulation {
             // Stop always works: while tripped, the program stops too and does not
             // restart at the reset.
             OperatorAction::Stop => self.press_role("stop"),
-            OperatorAction::Press(b) => self.program.press(b).map_err(|e| e.to_string()),
+            OperatorAction::Press(b) => self.press(b),
             OperatorAction::Switch(s, v) => {
                 self.program.set_switch(s, *v).map_err(|e| e.to_string())
             }
@@ -1439,11 +1457,13 @@ impl Simulation {
             time: now,
             boxes: Vec::new(),
             table_angle_mdeg: 0,
+            scene: None,
         });
         snapshot.time = now;
         snapshot.boxes.clear();
         snapshot.boxes.extend_from_slice(self.emulator.boxes());
         snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
+        snapshot.scene = self.emulator.scene();
         self.snapshots.push_back(snapshot);
     }
 
@@ -1626,7 +1646,7 @@ impl Simulation {
         }
     }
 
-    fn explain_trip(&mut self, index: usize, emulator: Emulator, program: ProgramRuntime) {
+    fn explain_trip(&mut self, index: usize, emulator: Physical, program: ProgramRuntime) {
         if let Some((ex, projected)) = self.explanation(index, emulator, program, &self.program) {
             self.projections.insert(index, projected);
             self.explanations.insert(index, ex);
@@ -1640,7 +1660,7 @@ impl Simulation {
     pub fn explanation(
         &self,
         index: usize,
-        emulator: Emulator,
+        emulator: Physical,
         before: ProgramRuntime,
         after: &ProgramRuntime,
     ) -> Option<(Explanation, ProjectedPlant)> {
@@ -1666,13 +1686,13 @@ impl Simulation {
     /// and of the program (just after its tripping scan) forward without the filter, for
     /// the projection horizon: the erroneous command is applied, then the program keeps
     /// scanning.
-    fn project(&self, mut emu: Emulator, mut program: ProgramRuntime) -> ProjectedPlant {
+    fn project(&self, mut emu: Physical, mut program: ProgramRuntime) -> ProjectedPlant {
         let start = emu.now();
         let known = emu.hazards().len();
         let mut frame = self.engine.frame().clone();
         let mut outputs = self.engine.commanded().clone();
         let end = start + self.projection;
-        let mut first_hazard_picture: Option<(Millis, Vec<BoxView>, i32)> = None;
+        let mut first_hazard_picture: Option<(Millis, Vec<BoxView>, i32, Option<Scene>)> = None;
         let mut first = true;
         while emu.now() < end {
             if !first {
@@ -1698,18 +1718,29 @@ impl Simulation {
                     self.engine.hold_on(&mut o);
                     show.step(self.cycle, &o);
                 }
-                first_hazard_picture =
-                    Some((show.now(), show.boxes().to_vec(), show.table_angle_mdeg()));
+                first_hazard_picture = Some((
+                    show.now(),
+                    show.boxes().to_vec(),
+                    show.table_angle_mdeg(),
+                    show.scene(),
+                ));
                 break;
             }
         }
         let hazards = emu.hazards()[known..].to_vec();
-        let (at, boxes, angle) = first_hazard_picture
-            .unwrap_or_else(|| (emu.now(), emu.boxes().to_vec(), emu.table_angle_mdeg()));
+        let (at, boxes, angle, scene) = first_hazard_picture.unwrap_or_else(|| {
+            (
+                emu.now(),
+                emu.boxes().to_vec(),
+                emu.table_angle_mdeg(),
+                emu.scene(),
+            )
+        });
         ProjectedPlant {
             at_ms: at.0,
             boxes,
             table_angle_mdeg: angle,
+            scene,
             hazards,
         }
     }
@@ -1813,6 +1844,7 @@ pub fn explain_live_projected(
         at_ms: shift(emu.now().0),
         boxes: emu.boxes().to_vec(),
         table_angle_mdeg: emu.table_angle_mdeg(),
+        scene: None,
         hazards: emu.hazards()[known..]
             .iter()
             .map(|h| Hazard {

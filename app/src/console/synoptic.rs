@@ -45,12 +45,16 @@ pub struct Placed {
 
 /// The synoptic's tags: key (message `syn-<key>`) and English text (`%kind%` and
 /// `%box%` are filled in by the synoptic).
-pub const TAGS: [(&str, &str); 18] = [
+pub const TAGS: [(&str, &str); 22] = [
     ("predicted", "predicted: %kind% box %box%"),
     ("hazard-sheared", "Sheared"),
     ("hazard-dropped", "Dropped"),
     ("hazard-collision", "Collision"),
     ("hazard-pushedagainststopped", "PushedAgainstStopped"),
+    ("hazard-endstop", "driven into its end stop"),
+    ("hazard-opposeddrives", "driven both ways at once"),
+    ("hazard-declared", "dangerous state"),
+    ("predicted-component", "predicted: %kind%"),
     ("elevator-left", "Left elevator"),
     ("elevator-right", "Right elevator"),
     ("held-on", "held ON"),
@@ -142,6 +146,10 @@ pub struct Geometry {
     pub bounds: ([f32; 2], [f32; 2]),
     /// Table actuators: (+u, -u, rotation).
     pub table_actuators: [String; 3],
+    /// Whether there is a turntable (a sorting layout) to draw.
+    pub has_table: bool,
+    /// The axes of a plant of components ([`scene`]).
+    pub axes: Vec<scene::AxisGeom>,
     /// The schematic strip under the layout: the signals `layout.ron` does not place
     /// (a safety contactor, mirror contacts, panel buttons), by their plant element
     /// (`element` in `plant.ron`, "" for none) with the label's world position; their
@@ -310,6 +318,8 @@ impl Geometry {
                 t.minus_actuator.clone(),
                 t.rotate_actuator.clone(),
             ],
+            has_table: true,
+            axes: Vec::new(),
             schematic,
         }
     }
@@ -408,6 +418,8 @@ pub struct Picture<'a> {
     pub ghost: Option<(&'a [BoxView], i32, &'a [Hazard])>,
     /// Banner (trip, replay) drawn at the top of the synoptic.
     pub banner: Option<(String, Color32)>,
+    /// Level 1 on a plant of components: the projected picture.
+    pub ghost_scene: Option<&'a vigie_core::machine::Scene>,
 }
 
 /// World → screen transform.
@@ -542,8 +554,11 @@ pub fn synoptic_ui(
     paint_conveyors(&cv, geom, t_s);
     paint_elevators(&cv, geom, view);
     paint_schematic_labels(&cv, geom, view);
-    paint_table(&cv, geom, table_angle_mdeg, (pal.equipment, edge), true);
-    paint_table_motion(&cv, geom, table_angle_mdeg, t_s);
+    if geom.has_table {
+        paint_table(&cv, geom, table_angle_mdeg, (pal.equipment, edge), true);
+        paint_table_motion(&cv, geom, table_angle_mdeg, t_s);
+    }
+    scene::paint_axes(&cv, geom, pic.ghost_scene);
     paint_boxes(&cv, pic.boxes);
     // Predicted-hazard labels, drawn last so that no equipment hides them.
     let predicted_labels = match pic.ghost {
@@ -795,13 +810,15 @@ fn paint_ghosts(
 ) -> Vec<(Pos2, String)> {
     let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
     let mut predicted_labels = Vec::new();
-    paint_table(
-        cv,
-        geom,
-        angle,
-        (pal.ghost.gamma_multiply(0.12), Stroke::new(1.5, pal.ghost)),
-        false,
-    );
+    if geom.has_table {
+        paint_table(
+            cv,
+            geom,
+            angle,
+            (pal.ghost.gamma_multiply(0.12), Stroke::new(1.5, pal.ghost)),
+            false,
+        );
+    }
     for b in boxes {
         if matches!(b.state, BoxState::Delivered(_)) {
             continue;
@@ -814,7 +831,12 @@ fn paint_ghosts(
         ));
     }
     for h in hazards {
-        if let Some(b) = boxes.iter().find(|b| b.id == h.box_id) {
+        if let Some((p, label)) = scene::hazard_label(geom, view, h, xf) {
+            let s = Stroke::new(3.0, pal.trip);
+            painter.line_segment([p - vec2(16.0, 16.0), p + vec2(16.0, 16.0)], s);
+            painter.line_segment([p - vec2(16.0, -16.0), p + vec2(16.0, -16.0)], s);
+            predicted_labels.push((p, label));
+        } else if let Some(b) = boxes.iter().find(|b| b.id == h.box_id) {
             let p = xf.p([b.x_mm, b.y_mm]);
             let r = 16.0;
             let s = Stroke::new(3.0, pal.trip);
@@ -1214,6 +1236,8 @@ pub fn overbar_label(ui: &mut egui::Ui, text: &str, size: f32, color: Color32) -
     }
     resp
 }
+
+pub mod scene;
 
 #[cfg(test)]
 mod tests {

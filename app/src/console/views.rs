@@ -679,6 +679,8 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     let mut forced = BTreeSet::new();
     let mut boxes = sim.emulator.boxes();
     let mut angle = sim.emulator.table_angle_mdeg();
+    let live_scene = sim.emulator.scene();
+    let mut scene = live_scene.as_ref();
     let mut time_ms = sim.now().0;
     let mut banner = None;
     let replay_rec = c.replay.and_then(|t| sim.engine.history.at(Millis(t)));
@@ -714,6 +716,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
         if let Some(s) = snaps.get(i) {
             boxes = &s.boxes;
             angle = s.table_angle_mdeg;
+            scene = s.scene.as_ref().or(scene);
             time_ms = s.time.0;
         }
     }
@@ -725,6 +728,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     };
     let mut highlights: &[vigie_core::explain::Highlight] = &live_marks;
     let mut ghost = None;
+    let mut ghost_scene = None;
     if let Some((l, t, ex)) = &level {
         let lv = ex.levels()[*l];
         for (k, v) in &lv.state {
@@ -735,6 +739,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
             && let Some(p) = sim.projections.get(t)
         {
             ghost = Some((p.boxes.as_slice(), p.table_angle_mdeg, p.hazards.as_slice()));
+            ghost_scene = p.scene.as_ref();
         }
         banner = Some(level_banner(c, *l, ex));
     }
@@ -752,7 +757,11 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     } else if banner.is_none() && sim.engine.is_tripped() {
         banner = Some(trip_banner(c));
     }
-    let geom = Geometry::new(&sim.layout, plant, angle);
+    let geom = match (&sim.layout, scene) {
+        (Some(layout), _) => Geometry::new(layout, plant, angle),
+        (None, Some(scene)) => Geometry::from_scene(scene, plant),
+        (None, None) => Geometry::from_scene(&vigie_core::machine::Scene::default(), plant),
+    };
     let pic = Picture {
         boxes,
         values: &values,
@@ -761,6 +770,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
         highlights,
         ghost,
         banner,
+        ghost_scene,
     };
     let resp = synoptic::synoptic_ui(ui, &mut c.view, &geom, angle, &pic, &c.palette, plant);
     c.synoptic_rect = Some(resp.rect);

@@ -597,11 +597,17 @@ fn declare_others(
             panel_aux.push(aux);
         }
     }
+    // A start or stop button is the program's own panel button, or a push button of
+    // the machine's panel wired to a plant input (the emulator's `Button` presses it).
+    let wired = |b: &str| matches!(symbols.lookup(b), Some((Space::Input, _)));
     for (what, button) in [("start", &program.start), ("stop", &program.stop)] {
-        if let Some(b) = button.as_ref().filter(|b| !program.panel.contains(b)) {
+        if let Some(b) = button
+            .as_ref()
+            .filter(|b| !program.panel.contains(b) && !wired(b))
+        {
             problems.push(Problem::error(
                 codes::PROGRAM_BUTTON_NOT_ON_PANEL.id,
-                format!("`{what}`: `{b}` is not one of the panel's buttons"),
+                format!("`{what}`: `{b}` is neither a panel button nor a plant input"),
                 Some(origin.location(origin.find_quoted(b, 0))),
             ));
         }

@@ -146,7 +146,8 @@ fn control_validation_errors() {
 }
 
 /// The console's Start and Stop press the buttons the program names (no button name
-/// in the code): a name that is not one of the panel's is an error at its place.
+/// in the code): a name that is neither one of the panel's nor a plant input (a
+/// machine's push button) is an error at its place; an output is no button.
 #[test]
 fn start_and_stop_name_panel_buttons() {
     let text = "Program(name: \"x\", panel: [\"GO\"],\n  start: Some(\"GO\"),\n  stop: Some(\"HALT\"),\n  charts: [Chart(name: \"g\", steps: [Step(id: \"S0\", initial: true)], transitions: [])])";
@@ -159,9 +160,14 @@ fn start_and_stop_name_panel_buttons() {
     assert!(
         msgs[0].contains(":3:")
             && msgs[0].contains("V0915")
-            && msgs[0].contains("`stop`: `HALT` is not one of the panel's buttons"),
+            && msgs[0].contains("`stop`: `HALT` is neither a panel button nor a plant input"),
         "{msgs:#?}"
     );
+    let wired = text.replace("Some(\"HALT\")", "Some(\"C0\")");
+    assert!(compile(&wired).is_ok(), "a plant input is a button");
+    let output = text.replace("Some(\"HALT\")", "Some(\"A0\")");
+    let msgs = compile(&output).unwrap_err();
+    assert!(msgs[0].to_string().contains("`A0` is neither"), "{msgs:#?}");
 }
 
 #[test]

@@ -48,7 +48,7 @@ struct ExercisesFile {
 pub fn load_faults(
     path: &Path,
     plant: &Plant,
-    emulator: Option<&super::Emulator>,
+    emulator: Option<&crate::machine::Physical>,
 ) -> Result<Vec<NamedFault>, Vec<Problem>> {
     let Some((text, faults)) = read::<Vec<NamedFault>>(path)? else {
         return Ok(Vec::new());
@@ -84,7 +84,7 @@ pub fn load_faults(
 pub fn load_exercises(
     path: &Path,
     plant: &Plant,
-    emulator: Option<&super::Emulator>,
+    emulator: Option<&crate::machine::Physical>,
 ) -> Result<Vec<PlantExercise>, Vec<Problem>> {
     let Some((text, file)) = read::<ExercisesFile>(path)? else {
         return Ok(Vec::new());
@@ -153,7 +153,7 @@ fn read<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<(String, T
 }
 
 /// Why `emulator` refuses to schedule `spec` (on a copy), if it does.
-fn refused(emulator: Option<&super::Emulator>, spec: &FaultSpec) -> Option<Problem> {
+fn refused(emulator: Option<&crate::machine::Physical>, spec: &FaultSpec) -> Option<Problem> {
     emulator?.clone().try_schedule_fault(spec.clone()).err()
 }
 
@@ -262,7 +262,9 @@ mod tests {
     fn a_fault_the_emulator_refuses_is_a_load_problem() {
         let bundle = crate::test_support::station();
         let layout = crate::emulator::Layout::load(&station_dir().join("layout.ron")).unwrap();
-        let emu = super::super::Emulator::new(&layout, &bundle.plant, 1).unwrap();
+        let emu = crate::machine::Physical::Layout(Box::new(
+            super::super::Emulator::new(&layout, &bundle.plant, 1).unwrap(),
+        ));
         let path = write(
             "refused-exercises.ron",
             r#"(exercises: [

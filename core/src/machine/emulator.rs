@@ -396,6 +396,16 @@ impl ComponentPlant {
         }
     }
 
+    /// The operator presses the panel button wired to input `signal`; false when no
+    /// button component closes it.
+    pub fn press(&mut self, signal: &str) -> bool {
+        let pressed = self.live.iter_mut().any(|c| c.press(signal));
+        if pressed {
+            self.compute_sensors();
+        }
+        pressed
+    }
+
     /// Component `id`'s position in its unit.
     pub fn position(&self, id: &str) -> Option<f64> {
         let k = self.names.iter().position(|(c, _)| c == id)?;
@@ -420,9 +430,8 @@ impl ComponentPlant {
             .live
             .iter()
             .zip(&self.names)
-            .flat_map(|(c, (id, _))| match c {
-                Live::Axis(a) => super::derive::axis_actions(&a.geometry(id)),
-            })
+            .filter_map(|(c, (id, _))| c.axis_geometry(id))
+            .flat_map(|g| super::derive::axis_actions(&g))
             .collect();
         out.sort_by(|a, b| a.id.cmp(&b.id));
         out

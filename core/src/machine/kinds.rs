@@ -6,6 +6,7 @@
 //! knows the kinds.
 
 pub mod axis;
+pub mod button;
 
 use super::scene::SceneElement;
 use crate::diag::Problem;
@@ -20,6 +21,8 @@ pub enum KindDef {
     /// One degree of freedom driven by outputs and read by position sensors: a
     /// cylinder, a lift, a stopper, a drill head, a rotary table, a valve, a breaker.
     Axis(axis::AxisDef),
+    /// A push button of the operator's panel on a plant input.
+    Button(button::ButtonDef),
 }
 
 impl KindDef {
@@ -27,6 +30,7 @@ impl KindDef {
     pub fn label(&self) -> &'static str {
         match self {
             Self::Axis(_) => "axis",
+            Self::Button(_) => "button",
         }
     }
 
@@ -34,6 +38,7 @@ impl KindDef {
     pub(crate) fn check(&self) -> Vec<String> {
         match self {
             Self::Axis(a) => a.check(),
+            Self::Button(b) => b.check(),
         }
     }
 
@@ -41,6 +46,7 @@ impl KindDef {
     pub(crate) fn signals(&self) -> Vec<(&str, Space)> {
         match self {
             Self::Axis(a) => a.signals(),
+            Self::Button(b) => b.signals(),
         }
     }
 
@@ -48,6 +54,7 @@ impl KindDef {
     pub(crate) fn expressions(&self) -> Vec<&str> {
         match self {
             Self::Axis(a) => a.expressions(),
+            Self::Button(_) => Vec::new(),
         }
     }
 
@@ -55,6 +62,7 @@ impl KindDef {
     pub(crate) fn build(&self, id: &str, symbols: &Symbols) -> Result<Live, Problem> {
         match self {
             Self::Axis(a) => Ok(Live::Axis(axis::Axis::new(id, a, symbols)?)),
+            Self::Button(b) => Ok(Live::Button(button::Button::new(id, b, symbols)?)),
         }
     }
 }
@@ -85,6 +93,8 @@ pub(crate) struct ComponentFaults {
 pub(crate) enum Live {
     /// See [`axis::Axis`].
     Axis(axis::Axis),
+    /// See [`button::Button`].
+    Button(button::Button),
 }
 
 impl Live {
@@ -92,6 +102,7 @@ impl Live {
     pub(crate) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
         match self {
             Self::Axis(a) => a.step(ctx, faults),
+            Self::Button(b) => b.step(ctx),
         }
     }
 
@@ -99,6 +110,7 @@ impl Live {
     pub(crate) fn sense(&self, sensors: &mut crate::bits::Bits) {
         match self {
             Self::Axis(a) => a.sense(sensors),
+            Self::Button(b) => b.sense(sensors),
         }
     }
 
@@ -106,6 +118,7 @@ impl Live {
     pub(crate) fn position(&self) -> f64 {
         match self {
             Self::Axis(a) => a.position(),
+            Self::Button(b) => f64::from(u8::from(b.pressed())),
         }
     }
 
@@ -113,6 +126,7 @@ impl Live {
     pub(crate) fn scene(&self, id: &str, name: &str) -> SceneElement {
         match self {
             Self::Axis(a) => a.scene(id, name),
+            Self::Button(b) => b.scene(id, name),
         }
     }
 
@@ -121,6 +135,23 @@ impl Live {
     pub(crate) fn set_position(&mut self, position: f64) {
         match self {
             Self::Axis(a) => a.set_position(position),
+            Self::Button(_) => {}
+        }
+    }
+
+    /// The operator presses the button on `signal`; false when this is not it.
+    pub(crate) fn press(&mut self, signal: &str) -> bool {
+        match self {
+            Self::Button(b) => b.press(signal),
+            Self::Axis(_) => false,
+        }
+    }
+
+    /// What the elementary actions are derived from (axes only).
+    pub(crate) fn axis_geometry(&self, id: &str) -> Option<super::derive::AxisGeometry> {
+        match self {
+            Self::Axis(a) => Some(a.geometry(id)),
+            Self::Button(_) => None,
         }
     }
 }

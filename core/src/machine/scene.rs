@@ -5,7 +5,7 @@
 use serde::Serialize;
 
 /// The plant as the synoptic draws it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Scene {
     /// The components, in the order of `components.ron`.
     pub elements: Vec<SceneElement>,
@@ -41,6 +41,13 @@ pub enum Shape {
         sensors: Vec<SceneSensor>,
         /// Its drives.
         drives: Vec<SceneDrive>,
+    },
+    /// A panel push button.
+    Button {
+        /// The plant input it closes.
+        signal: String,
+        /// Held down now.
+        pressed: bool,
     },
 }
 

@@ -116,7 +116,7 @@ impl Simulation {
             && let Some((ex, projected)) = explain_live_projected(
                 &self.engine,
                 &self.bundle,
-                Some(&self.layout),
+                self.layout.as_ref(),
                 index,
                 self.projection,
                 self.cycle,
@@ -142,16 +142,16 @@ impl Simulation {
         if !changed {
             return;
         }
-        let Some(record) = self.engine.history.last() else {
+        let (Some(record), Some(layout)) = (self.engine.history.last(), &self.layout) else {
             return;
         };
         if let Ok(emu) = explain::emulator_from_observation(
-            &self.layout,
+            layout,
             &self.bundle.plant,
             record,
             &self.engine.observers,
         ) {
-            self.emulator = emu;
+            self.emulator = crate::machine::Physical::Layout(Box::new(emu));
         }
     }
 }

@@ -1,0 +1,246 @@
+//! The synoptic of a plant described as components: its geometry comes from the
+//! emulator's [`Scene`], one painter per shape, no drawing code per plant.
+//!
+//! An axis is drawn as a vertical guide, its travel's start at the top (a drill head
+//! descends, a lift rises to its top), the carriage where it stands, each position
+//! sensor's lamp left of the guide at its window, and the outputs of its drives right
+//! of it. The signals no component places go to the schematic strip below.
+
+use super::{Canvas, Geometry, SensorGeom, View, Xf, place_schematic};
+use egui::{Align2, FontId, Pos2, Rect, Shape as EShape, Stroke, vec2};
+use std::collections::BTreeMap;
+use vigie_core::emulator::{Hazard, Place};
+use vigie_core::machine::{Scene, Shape};
+use vigie_core::plant::Plant;
+
+/// Drawn length of an axis's travel, world units.
+const GUIDE: f32 = 2400.0;
+/// Distance between two axes, world units.
+const PITCH: f32 = 2200.0;
+
+/// A drawn axis.
+#[derive(Clone, Debug)]
+pub struct AxisGeom {
+    /// Component id.
+    pub id: String,
+    /// Display name.
+    pub name: String,
+    /// Top of the guide (the travel's start), world.
+    pub top: [f32; 2],
+    /// Start and end of the travel, in the component's unit.
+    pub range: (f64, f64),
+    /// The position, in the unit.
+    pub position: f64,
+    /// The way it moves.
+    pub direction: i8,
+    /// The unit.
+    pub unit: String,
+}
+
+impl AxisGeom {
+    /// World point of `position` on the guide.
+    fn at(&self, position: f64) -> [f32; 2] {
+        let span = (self.range.1 - self.range.0).max(1e-9);
+        #[allow(clippy::cast_possible_truncation)]
+        let k = ((position - self.range.0) / span).clamp(0.0, 1.0) as f32;
+        [self.top[0], self.top[1] - GUIDE * k]
+    }
+}
+
+impl Geometry {
+    /// Places every component of `scene`, and every other signal of `plant` in the
+    /// schematic strip.
+    pub fn from_scene(scene: &Scene, plant: &Plant) -> Self {
+        let mut sensors = Vec::new();
+        let mut actuators = BTreeMap::new();
+        let mut axes = Vec::new();
+        #[allow(clippy::cast_precision_loss)]
+        for (k, e) in scene.elements.iter().enumerate() {
+            let x = PITCH * k as f32;
+            match &e.shape {
+                Shape::Axis {
+                    unit,
+                    min,
+                    max,
+                    position,
+                    direction,
+                    sensors: windows,
+                    drives,
+                } => {
+                    let a = AxisGeom {
+                        id: e.id.clone(),
+                        name: e.name.clone(),
+                        top: [x, 0.0],
+                        range: (*min, *max),
+                        position: *position,
+                        direction: *direction,
+                        unit: unit.clone(),
+                    };
+                    for w in windows {
+                        let mid = a.at((w.from + w.to) / 2.0);
+                        sensors.push(SensorGeom {
+                            id: w.signal.clone(),
+                            lamp: [x - 520.0, mid[1]],
+                            beam: Some(([x - 420.0, mid[1]], [x - 90.0, mid[1]])),
+                            high: false,
+                        });
+                    }
+                    let mut row = 0.0;
+                    for d in drives {
+                        for out in output_names(&d.when, plant) {
+                            actuators.entry(out).or_insert_with(|| {
+                                row += 1.0;
+                                [x + 560.0, -GUIDE * 0.15 - 380.0 * (row - 1.0)]
+                            });
+                        }
+                    }
+                    axes.push(a);
+                }
+                // A panel button's input goes to the schematic strip, under its
+                // element (`plant.ron`), with the other panel signals.
+                Shape::Button { .. } => {}
+            }
+        }
+        #[allow(clippy::cast_precision_loss)]
+        let width = PITCH * scene.elements.len().max(2) as f32;
+        let mut min = [-900.0, -GUIDE - 500.0];
+        let mut max = [width - PITCH + 1100.0, 600.0];
+        let schematic = place_schematic(plant, &mut sensors, &mut actuators, (&mut min, &mut max));
+        Self {
+            conveyors: Vec::new(),
+            table_center: [0.0, 0.0],
+            table_size: [0.0, 0.0],
+            sensors,
+            actuators,
+            elevators: Vec::new(),
+            bounds: (min, max),
+            table_actuators: Default::default(),
+            has_table: false,
+            axes,
+            schematic,
+        }
+    }
+}
+
+/// The plant outputs an expression names, in order.
+fn output_names(expr: &str, plant: &Plant) -> Vec<String> {
+    let mut out = Vec::new();
+    for s in &plant.outputs {
+        let named = expr
+            .split(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .any(|w| w == s.id);
+        if named {
+            out.push(s.id.clone());
+        }
+    }
+    out
+}
+
+/// The carriage of an axis at `position`, on screen.
+fn carriage(xf: &Xf, a: &AxisGeom, position: f64) -> Rect {
+    let c = xf.p(a.at(position));
+    Rect::from_center_size(c, vec2(300.0, 140.0) * xf.scale)
+}
+
+/// Paints every axis: its guide, its name, its carriage (and the projected one, at
+/// level 1) and the way it moves.
+pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, ghost: Option<&Scene>) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    let edge = Stroke::new(1.0, pal.equipment_edge);
+    for a in &geom.axes {
+        let guide = Rect::from_two_pos(
+            xf.p([a.top[0] - 60.0, a.top[1]]),
+            xf.p([a.top[0] + 60.0, a.top[1] - GUIDE]),
+        );
+        painter.rect(
+            guide,
+            2.0,
+            pal.equipment.gamma_multiply(0.9),
+            edge,
+            egui::StrokeKind::Middle,
+        );
+        painter.text(
+            xf.p([a.top[0], a.top[1] + 260.0]),
+            Align2::CENTER_BOTTOM,
+            &a.name,
+            FontId::proportional(13.0),
+            pal.text,
+        );
+        let r = carriage(xf, a, a.position);
+        painter.rect(
+            r,
+            3.0,
+            pal.equipment,
+            Stroke::new(1.5, pal.equipment_edge),
+            egui::StrokeKind::Middle,
+        );
+        painter.text(
+            r.center(),
+            Align2::CENTER_CENTER,
+            format!("{:.1} {}", a.position, a.unit),
+            FontId::monospace(10.0),
+            pal.text,
+        );
+        if a.direction != 0 {
+            let y = if a.direction > 0 {
+                r.bottom() + 10.0
+            } else {
+                r.top() - 10.0
+            };
+            let tip = Pos2::new(r.center().x, y + f32::from(a.direction) * 10.0);
+            painter.add(EShape::convex_polygon(
+                vec![
+                    Pos2::new(r.center().x - 8.0, y),
+                    Pos2::new(r.center().x + 8.0, y),
+                    tip,
+                ],
+                pal.running,
+                Stroke::NONE,
+            ));
+        }
+        if let Some(p) = ghost.and_then(|s| projected(s, &a.id)) {
+            let g = carriage(xf, a, p);
+            painter.rect(
+                g,
+                3.0,
+                pal.ghost.gamma_multiply(0.15),
+                Stroke::new(2.0, pal.ghost),
+                egui::StrokeKind::Middle,
+            );
+        }
+    }
+}
+
+/// The position of component `id` in a projected scene.
+fn projected(scene: &Scene, id: &str) -> Option<f64> {
+    scene
+        .elements
+        .iter()
+        .find(|e| e.id == id)
+        .and_then(|e| match &e.shape {
+            Shape::Axis { position, .. } => Some(*position),
+            Shape::Button { .. } => None,
+        })
+}
+
+/// Where to mark a predicted hazard of a component, and its label.
+pub(super) fn hazard_label(
+    geom: &Geometry,
+    view: &View,
+    h: &Hazard,
+    xf: &Xf,
+) -> Option<(Pos2, String)> {
+    let part = match &h.at {
+        Place::Component { part } | Place::Danger { part, .. } => part,
+        _ => return None,
+    };
+    let a = geom.axes.iter().find(|a| &a.id == part)?;
+    let p = carriage(xf, a, a.position).right_center() + vec2(12.0, 0.0);
+    let kind = view.word(&format!("hazard-{:?}", h.kind).to_lowercase());
+    let kind = if matches!(h.at, Place::Danger { .. }) {
+        format!("{kind}: {}", h.place)
+    } else {
+        kind.to_string()
+    };
+    Some((p, view.word("predicted-component").replace("%kind%", &kind)))
+}

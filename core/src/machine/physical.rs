@@ -1,0 +1,252 @@
+//! The physical plant a simulation runs: a plant folder's `components.ron` (the
+//! plant as components of the library) or, for the sorting station's geometry,
+//! `layout.ron` (its conveyors, roller turntable and boxes).
+//!
+//! Everything that closes the loop (the simulation, the projection of level 1, the
+//! campaigns, the console) holds a [`Physical`] and asks it the same questions; what
+//! only a layout has (boxes, the table's angle, arrivals) answers empty for a plant
+//! of components.
+
+use super::description::Components;
+use super::emulator::ComponentPlant;
+use super::scene::Scene;
+use crate::bits::Bits;
+use crate::diag::{Location, Problem, codes};
+use crate::emulator::{ArrivalPlan, BoxStats, BoxView, Emulator, FaultSpec, Hazard, Layout};
+use crate::plant::Plant;
+use crate::time::Millis;
+use std::path::Path;
+
+/// The file of a plant folder that describes its components.
+pub const COMPONENTS_FILE: &str = "components.ron";
+/// The file of a plant folder that describes a sorting layout.
+pub const LAYOUT_FILE: &str = "layout.ron";
+
+/// A plant folder's physical description, loaded.
+#[derive(Clone, Debug)]
+pub enum Description {
+    /// `components.ron`.
+    Components(Components),
+    /// `layout.ron`.
+    Layout(Layout),
+}
+
+impl Description {
+    /// Loads the physical description of the plant folder `dir`: `components.ron`
+    /// when there is one, else `layout.ron`; V0744 when there is neither.
+    pub fn load(dir: &Path) -> Result<Self, Vec<Problem>> {
+        let components = dir.join(COMPONENTS_FILE);
+        if components.exists() {
+            return Components::load(&components).map(Self::Components);
+        }
+        let layout = dir.join(LAYOUT_FILE);
+        if layout.exists() {
+            return Layout::load(&layout).map(Self::Layout);
+        }
+        Err(vec![Problem::error(
+            codes::NO_PHYSICAL_MODEL.id,
+            format!(
+                "no physical model: add {COMPONENTS_FILE} (the plant as components) or \
+                 {LAYOUT_FILE} to {}",
+                dir.display()
+            ),
+            Some(Location::new(dir, 1, 1)),
+        )])
+    }
+
+    /// The layout, when the plant is described by one.
+    pub fn layout(&self) -> Option<&Layout> {
+        match self {
+            Self::Layout(l) => Some(l),
+            Self::Components(_) => None,
+        }
+    }
+
+    /// The problems of its signals against the plant.
+    pub fn check_signals(&self, plant: &Plant) -> Vec<Problem> {
+        match self {
+            Self::Components(c) => c.check_signals(plant),
+            Self::Layout(l) => l.check_signals(plant),
+        }
+    }
+}
+
+/// The running emulator of either description.
+#[derive(Clone, Debug)]
+pub enum Physical {
+    /// A plant of components.
+    Components(ComponentPlant),
+    /// The sorting layout's emulator.
+    Layout(Box<Emulator>),
+}
+
+impl Physical {
+    /// Builds the emulator of a description at time 0.
+    pub fn new(desc: &Description, plant: &Plant, seed: u64) -> Result<Self, Problem> {
+        Ok(match desc {
+            Description::Components(c) => Self::Components(ComponentPlant::new(c, plant, seed)?),
+            Description::Layout(l) => Self::Layout(Box::new(Emulator::new(l, plant, seed)?)),
+        })
+    }
+
+    /// Runs `dt` with the PLC's outputs.
+    pub fn step(&mut self, dt: Millis, outputs: &Bits) {
+        match self {
+            Self::Components(c) => c.step(dt, outputs),
+            Self::Layout(e) => e.step(dt, outputs),
+        }
+    }
+
+    /// The sensors, by plant input index, faults applied.
+    pub fn sensors(&self) -> &Bits {
+        match self {
+            Self::Components(c) => c.sensors(),
+            Self::Layout(e) => e.sensors(),
+        }
+    }
+
+    /// Simulated time.
+    pub fn now(&self) -> Millis {
+        match self {
+            Self::Components(c) => c.now(),
+            Self::Layout(e) => e.now(),
+        }
+    }
+
+    /// Every hazard so far, in time order.
+    pub fn hazards(&self) -> &[Hazard] {
+        match self {
+            Self::Components(c) => c.hazards(),
+            Self::Layout(e) => e.hazards(),
+        }
+    }
+
+    /// Item counts (none on a plant of components without items).
+    pub fn stats(&self) -> BoxStats {
+        match self {
+            Self::Components(_) => BoxStats::default(),
+            Self::Layout(e) => e.stats(),
+        }
+    }
+
+    /// Items in transit, fallen, and delivered during the last second.
+    pub fn boxes(&self) -> &[BoxView] {
+        match self {
+            Self::Components(_) => &[],
+            Self::Layout(e) => e.boxes(),
+        }
+    }
+
+    /// The turntable's angle (millidegrees) on a layout; 0 otherwise.
+    pub fn table_angle_mdeg(&self) -> i32 {
+        match self {
+            Self::Components(_) => 0,
+            Self::Layout(e) => e.table_angle_mdeg(),
+        }
+    }
+
+    /// What the synoptic draws of a plant of components.
+    pub fn scene(&self) -> Option<Scene> {
+        match self {
+            Self::Components(c) => Some(c.scene()),
+            Self::Layout(_) => None,
+        }
+    }
+
+    /// Schedules a fault or says why it cannot be.
+    pub fn try_schedule_fault(&mut self, fault: FaultSpec) -> Result<(), Problem> {
+        match self {
+            Self::Components(c) => c.try_schedule_fault(fault),
+            Self::Layout(e) => e.try_schedule_fault(fault),
+        }
+    }
+
+    /// Schedules a fault; one that cannot be is kept in [`Self::fault_problems`].
+    pub fn schedule_fault(&mut self, fault: FaultSpec) {
+        match self {
+            Self::Components(c) => c.schedule_fault(fault),
+            Self::Layout(e) => e.schedule_fault(fault),
+        }
+    }
+
+    /// Faults that could not be scheduled.
+    pub fn fault_problems(&self) -> &[Problem] {
+        match self {
+            Self::Components(c) => c.fault_problems(),
+            Self::Layout(e) => e.fault_problems(),
+        }
+    }
+
+    /// The faults active or still to come.
+    pub fn faults_in_force(&self) -> usize {
+        match self {
+            Self::Components(c) => c.faults_in_force(),
+            Self::Layout(e) => e.faults_in_force(),
+        }
+    }
+
+    /// A technician's repair: every fault active or to come ends now.
+    pub fn repair_faults(&mut self) -> usize {
+        match self {
+            Self::Components(c) => c.repair_faults(),
+            Self::Layout(e) => e.repair_faults(),
+        }
+    }
+
+    /// The actuators a fault may weld or kill.
+    pub fn actuators(&self) -> Vec<String> {
+        match self {
+            Self::Components(c) => c.actuators(),
+            Self::Layout(e) => e.actuators(),
+        }
+    }
+
+    /// The operator takes every item off the plant; how many.
+    pub fn remove_items(&mut self) -> u32 {
+        match self {
+            Self::Components(_) => 0,
+            Self::Layout(e) => e.remove_items(),
+        }
+    }
+
+    /// Replaces the arrival plan of a layout's source (a plant of components has no
+    /// source: nothing to do).
+    pub fn set_arrivals(&mut self, plan: ArrivalPlan) {
+        if let Self::Layout(e) = self {
+            e.set_arrivals(plan);
+        }
+    }
+
+    /// The operator presses the plant's panel button on input `signal` (a plant of
+    /// components' `Button`); false when the plant has none.
+    pub fn press(&mut self, signal: &str) -> bool {
+        match self {
+            Self::Components(c) => c.press(signal),
+            Self::Layout(_) => false,
+        }
+    }
+
+    /// The layout's emulator, for what only it can do (placing boxes, its angle).
+    pub fn as_layout(&self) -> Option<&Emulator> {
+        match self {
+            Self::Layout(e) => Some(e),
+            Self::Components(_) => None,
+        }
+    }
+
+    /// The layout's emulator, mutably.
+    pub fn as_layout_mut(&mut self) -> Option<&mut Emulator> {
+        match self {
+            Self::Layout(e) => Some(e),
+            Self::Components(_) => None,
+        }
+    }
+
+    /// The plant of components, for what only it can do.
+    pub fn as_components(&self) -> Option<&ComponentPlant> {
+        match self {
+            Self::Components(c) => Some(c),
+            Self::Layout(_) => None,
+        }
+    }
+}
