@@ -2,8 +2,11 @@
 //! built from them, and the elementary actions (seed 003, part II) derived from them
 //! with their per-action monitor.
 //!
-//! - [`actions`]: elementary actions N = (initial state, command, final state, T, ΔT).
-//! - [`monitor`]: the per-action monitor (checks a-d of seed 003, III.1).
+//! - [`actions`]: elementary actions N = (initial state, command, final state, T, ΔT):
+//!   the `actions.ron` file and its checks, the decomposition rules R1-R3, the timing
+//!   feasibility check (T_D < ΔT_min, (II.4)) and the learning of T and ΔT (annex B).
+//! - [`monitor`]: the per-action monitor (checks a-d of seed 003, III.1), with the
+//!   localisation messages of its detections.
 
 pub mod actions;
 pub mod derive;

@@ -18,6 +18,7 @@
 //! | V08xx | tasks (`tasks.ron`) |
 //! | V09xx | control programs and the control-error library |
 //! | V10xx | the compiled filter |
+//! | V11xx | the machine's elementary actions (`actions.ron`) and their monitor |
 //!
 //! Loaders write `Problem::error(codes::TRACE_EMPTY.id, …)`; no other source file
 //! spells a `V` code (a test checks it). [`explain`] returns the page of a code.
@@ -181,6 +182,16 @@ registry! {
     LIBRARY_VARIANT_INVALID = "V0921", "a control-error variant that cannot be built";
     // V10xx: the compiled filter (formerly V0601)
     DTREE_SUPPORT_TOO_LARGE = "V1001", "constraints reading more than 64 variables cannot be compiled";
+    // V11xx: the machine's elementary actions (seed 003, part II)
+    MACHINE_ACTION_ID_INVALID = "V1101", "invalid elementary action id";
+    MACHINE_ACTION_DUPLICATE = "V1102", "an elementary action declared twice";
+    MACHINE_ACTION_TIMING = "V1103", "an elementary action with ΔT = 0 or T not greater than ΔT";
+    MACHINE_ACTION_EXPRESSION = "V1104", "an elementary action expression that does not parse or is not a level at t";
+    MACHINE_ACTION_UNKNOWN_SIGNAL = "V1105", "an elementary action names an unknown signal";
+    MACHINE_ACTION_WRONG_SPACE = "V1106", "an action state reading an output, or a command reading an input";
+    MACHINE_ACTION_NOT_ELEMENTARY = "V1107", "an action the decomposition rules cannot make elementary";
+    MACHINE_ACTIONS_MERGED = "V1108", "actions merged into one with several final states: safety is reduced";
+    MACHINE_CYCLE_TOO_LONG = "V1109", "the monitor's cycle too long for an action's timing (T_D < ΔT_min, (II.4))";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";
