@@ -32,6 +32,14 @@ explain-X101 = Sans le filtre, { $after_ms } ms plus tard : la caisse { $box } {
     [Collision] heurterait une autre caisse au niveau
    *[other] serait poussée contre une surface arrêtée au niveau
 } de : { $place } ({ $elements }).
+explain-X104 = Sans le filtre, { $after_ms } ms plus tard : { $place_kind ->
+    [danger] { $place }.
+   *[other] { $place } { $kind ->
+        [EndStop] serait entraîné contre la butée de sa course
+        [OpposedDrives] serait entraîné dans les deux sens à la fois
+       *[other] serait dans un état dangereux
+    } ({ $elements }).
+}
 explain-X102 = Sans le filtre, aucun dommage n'est prévu dans les { $horizon_ms } ms qui suivent : l'arrêt a empêché une situation interdite.
 explain-X103 = Mode surveillance : la machine continuant, aucun dommage n'est prévu dans les { $horizon_ms } ms ; la violation reste une situation que les contraintes interdisent.
 

@@ -419,6 +419,8 @@ pub struct Simulation {
     live_now: Option<Millis>,
     /// The diagnosers, when enabled ([`Simulation::enable_diagnosers`]).
     pub diagnosers: Option<crate::pop::Diagnosers>,
+    /// The elementary-action monitor (seed 003), on a plant that has actions.
+    pub action_monitor: Option<actions::ActionMonitoring>,
     /// Per diagnoser partition: its fault descriptions and what to check (its sensor or
     /// actuators), from `diagnosers.ron`, for the hypothesis's hardware items.
     partitions: BTreeMap<String, PartitionInfo>,
@@ -485,6 +487,10 @@ pub struct RunReport {
     pub cycles: u64,
     /// Certain diagnoses of the diagnosers (empty when they are off).
     pub diagnoses: Vec<crate::pop::Diagnosis>,
+    /// The elementary-action monitor's events, completions included (none on a plant
+    /// without actions).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub actions: Vec<crate::machine::monitor::ActionEvent>,
 }
 
 /// A trip in the run report.
@@ -580,7 +586,7 @@ impl Simulation {
         let emulator = Physical::new(&description, &bundle.plant, seed).map_err(|p| vec![p])?;
         let engine = Engine::new(&bundle, FilterMode::Enforce, options.history_cycles);
         let program = ProgramRuntime::new(Arc::new(program));
-        Ok(Self {
+        let mut sim = Self {
             program_before: program.clone(),
             program,
             bundle,
@@ -602,13 +608,16 @@ impl Simulation {
             tasks,
             live_now: None,
             diagnosers: None,
+            action_monitor: None,
             partitions: BTreeMap::new(),
             diag_seen: 0,
             degraded: Vec::new(),
             manual: None,
             bypasses: BTreeMap::new(),
             answers: BTreeMap::new(),
-        })
+        };
+        sim.enable_action_monitor()?;
+        Ok(sim)
     }
 
     /// Loads `diagnosers.ron` of the plant and runs its diagnosers after the filter, with
@@ -1416,6 +1425,7 @@ impl Simulation {
         };
         self.diagnosis_events(now);
         self.plausibility_events(now);
+        self.step_actions(now);
         let tripped = self.record_events(now);
         // By hand, the program did not run: no explanation from it (the alarm and the
         // next-step panel still say why).
@@ -1784,6 +1794,7 @@ impl Simulation {
                 .as_ref()
                 .map(|d| d.diagnoses.clone())
                 .unwrap_or_default(),
+            actions: self.action_events().to_vec(),
         }
     }
 }
@@ -1885,26 +1896,30 @@ fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundl
     }
     for h in &p.hazards {
         let after = h.time_ms.saturating_sub(ex.time_ms);
-        level.items.push(Item {
-            code: codes::X_HAZARD_PREDICTED.id,
-            fields: [
-                ("kind".to_string(), format!("{:?}", h.kind)),
-                ("place".to_string(), h.place.clone()),
-                ("box".to_string(), h.box_id.to_string()),
-                ("after_ms".to_string(), after.to_string()),
-                ("elements".to_string(), h.elements.join(",")),
-            ]
-            .into_iter()
-            .chain(h.at.fields())
-            .collect(),
-            text: format!(
-                "Without the filter, {after} ms later: box {} {} at the {} ({}).",
-                h.box_id,
-                hazard_verb(h),
-                h.place,
-                h.elements.join(", ")
-            ),
-        });
+        if h.box_id == 0 {
+            level.items.push(component_hazard_item(h, after));
+        } else {
+            level.items.push(Item {
+                code: codes::X_HAZARD_PREDICTED.id,
+                fields: [
+                    ("kind".to_string(), format!("{:?}", h.kind)),
+                    ("place".to_string(), h.place.clone()),
+                    ("box".to_string(), h.box_id.to_string()),
+                    ("after_ms".to_string(), after.to_string()),
+                    ("elements".to_string(), h.elements.join(",")),
+                ]
+                .into_iter()
+                .chain(h.at.fields())
+                .collect(),
+                text: format!(
+                    "Without the filter, {after} ms later: box {} {} at the {} ({}).",
+                    h.box_id,
+                    hazard_verb(h),
+                    h.place,
+                    h.elements.join(", ")
+                ),
+            });
+        }
         for e in &h.elements {
             if bundle.plant.signal(e).is_some() {
                 let hl = Highlight {
@@ -1916,6 +1931,37 @@ fn fill_projection(ex: &mut Explanation, p: &ProjectedPlant, bundle: &PlantBundl
                 }
             }
         }
+    }
+}
+
+/// X104: a mechanism's hazard (no item involved) predicted by the projection.
+fn component_hazard_item(h: &Hazard, after: u64) -> Item {
+    let what = match h.kind {
+        crate::emulator::HazardKind::EndStop => "driven into the end of its travel",
+        crate::emulator::HazardKind::OpposedDrives => "driven both ways at once",
+        _ => "in a dangerous state",
+    };
+    let text = if matches!(h.at, crate::emulator::Place::Danger { .. }) {
+        format!("Without the filter, {after} ms later: {}.", h.place)
+    } else {
+        format!(
+            "Without the filter, {after} ms later: {} {what} ({}).",
+            h.place,
+            h.elements.join(", ")
+        )
+    };
+    Item {
+        code: codes::X_COMPONENT_HAZARD_PREDICTED.id,
+        fields: [
+            ("kind".to_string(), format!("{:?}", h.kind)),
+            ("place".to_string(), h.place.clone()),
+            ("after_ms".to_string(), after.to_string()),
+            ("elements".to_string(), h.elements.join(",")),
+        ]
+        .into_iter()
+        .chain(h.at.fields())
+        .collect(),
+        text,
     }
 }
 
@@ -1933,6 +1979,7 @@ fn hazard_verb(h: &Hazard) -> String {
     }
 }
 
+pub mod actions;
 pub mod diagnosis;
 mod observed;
 pub mod scenario;

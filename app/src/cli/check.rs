@@ -30,6 +30,112 @@ struct Report<'a> {
     /// sizes); absent when the check found a context without any.
     fallback: Option<vigie_core::filter::FallbackReport>,
     problems: &'a [Problem],
+    /// The physical plant (`components.ron` or `layout.ron`) and its elementary
+    /// actions; absent for a plant described by its signals only.
+    physical: Option<Physical>,
+}
+
+/// What `check` found of the physical plant.
+#[derive(serde::Serialize)]
+struct Physical {
+    /// `components.ron` or `layout.ron`.
+    file: &'static str,
+    /// Its components (a layout counts its conveyors and turntable).
+    components: Vec<String>,
+    /// The elementary actions the monitor watches: declared (`actions.ron`) or derived.
+    actions: Vec<vigie_core::machine::actions::ElementaryAction>,
+    /// `actions.ron` or `components`.
+    actions_from: &'static str,
+}
+
+/// Loads the physical description of `dir` when it has one, checks its signals and its
+/// declared actions against the components; its problems join `problems`.
+fn physical(
+    dir: &Path,
+    bundle: &vigie_core::bundle::PlantBundle,
+    problems: &mut Vec<Problem>,
+) -> Option<Physical> {
+    use vigie_core::machine::{Description, physical};
+    use vigie_core::sim::actions::{ACTIONS_FILE, compare_with_components};
+    let has = |f: &str| dir.join(f).exists();
+    if !has(physical::COMPONENTS_FILE) && !has(physical::LAYOUT_FILE) {
+        return None;
+    }
+    let desc = match Description::load(dir) {
+        Ok(d) => d,
+        Err(p) => {
+            problems.extend(p);
+            return None;
+        }
+    };
+    let found = desc.check_signals(&bundle.plant);
+    let broken = found.iter().any(Problem::is_error);
+    problems.extend(found);
+    let (file, components) = match &desc {
+        Description::Components(c) => (
+            physical::COMPONENTS_FILE,
+            c.components
+                .iter()
+                .map(|c| format!("{} ({})", c.id, c.kind.label()))
+                .collect(),
+        ),
+        Description::Layout(l) => (
+            physical::LAYOUT_FILE,
+            l.conveyors
+                .iter()
+                .map(|c| format!("{} (conveyor)", c.id))
+                .chain([format!("{} (turntable)", l.table.id)])
+                .collect(),
+        ),
+    };
+    let mut report = Physical {
+        file,
+        components,
+        actions: Vec::new(),
+        actions_from: "components",
+    };
+    let derived = match (&desc, broken) {
+        (Description::Components(c), false) => {
+            vigie_core::machine::ComponentPlant::new(c, &bundle.plant, 0)
+                .map(|p| p.derived_actions())
+                .unwrap_or_default()
+        }
+        _ => Vec::new(),
+    };
+    let path = dir.join(ACTIONS_FILE);
+    if path.exists() {
+        let text = vigie_core::diag::read_text(&path);
+        match (vigie_core::machine::actions::load_actions(&path), text) {
+            (Ok(actions), Ok(text)) => {
+                problems.extend(vigie_core::machine::actions::check_actions(
+                    &actions,
+                    &bundle.symbols,
+                    Some((&path, &text)),
+                ));
+                if !derived.is_empty() {
+                    problems.extend(compare_with_components(&actions, &derived, &path, &text));
+                }
+                report.actions = actions;
+                report.actions_from = ACTIONS_FILE;
+            }
+            (Err(p), _) => problems.extend(p),
+            (_, Err(p)) => problems.push(p),
+        }
+    } else {
+        report.actions = derived
+            .into_iter()
+            .map(|d| vigie_core::machine::actions::ElementaryAction {
+                id: d.id,
+                component: d.component,
+                initial: d.initial,
+                command: d.command,
+                final_state: d.final_state,
+                t_ms: d.t_ms,
+                dt_ms: d.dt_ms,
+            })
+            .collect();
+    }
+    Some(report)
 }
 
 pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
@@ -45,6 +151,8 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
             return Ok(ExitCode::FAILURE);
         }
     };
+    let mut problems = problems;
+    let physical = physical(dir, &bundle, &mut problems);
     let symbols = &bundle.symbols;
     let rows: Vec<ConstraintRow<'_>> = bundle
         .constraints
@@ -83,6 +191,7 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
         unprotected: bundle.unprotected().is_some(),
         fallback: bundle.fallback.clone(),
         problems: &problems,
+        physical,
     };
     let mut out = std::io::stdout().lock();
     if json {
@@ -95,6 +204,33 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// The physical plant's section: its components and the elementary actions watched.
+fn write_physical(out: &mut std::io::StdoutLock<'_>, p: &Physical) -> anyhow::Result<()> {
+    writeln!(
+        out,
+        "physical plant ({}): {}",
+        p.file,
+        p.components.join(", ")
+    )?;
+    if !p.actions.is_empty() {
+        writeln!(
+            out,
+            "elementary actions ({}): {}",
+            p.actions_from,
+            p.actions.len()
+        )?;
+        for a in &p.actions {
+            writeln!(
+                out,
+                "  {:<18} {:<6} --{:<6}--> {:<6} T {:>6} ms  ±{:>5} ms",
+                a.id, a.initial, a.command, a.final_state, a.t_ms, a.dt_ms
+            )?;
+        }
+    }
+    writeln!(out)?;
+    Ok(())
 }
 
 /// The check's text report: the unprotected warning first, the constraints, property
@@ -171,6 +307,9 @@ fn write_text(
     }
     if let Some(f) = &report.fallback {
         write_fallback(out, f)?;
+    }
+    if let Some(p) = &report.physical {
+        write_physical(out, p)?;
     }
     let fallback_proved = report.fallback.as_ref().is_some_and(|f| f.proved());
     if problems.is_empty() && fallback_proved {

@@ -153,6 +153,7 @@ registry! {
     COMPONENTS_DUPLICATE = "V0743", "a component declared twice, or a sensor read from two components";
     NO_PHYSICAL_MODEL = "V0744", "a plant folder with neither `components.ron` nor `layout.ron`";
     FAULT_UNKNOWN_COMPONENT = "V0745", "an emulator fault names a component the plant does not have";
+    ACTION_NOT_ALLOWED = "V0746", "a declared elementary action the components do not allow, or a window outside theirs";
     // V08xx: tasks (formerly V0301..V0307, V0310)
     TASK_ID_INVALID = "V0801", "invalid task id";
     TASK_DUPLICATE = "V0802", "a task declared twice";
@@ -203,6 +204,7 @@ registry! {
     X_HAZARD_PREDICTED = "X101", "without the filter, a hazard is predicted";
     X_NO_DAMAGE_PREDICTED = "X102", "without the filter, no damage is predicted";
     X_NO_DAMAGE_PREDICTED_MONITOR = "X103", "monitor mode: no damage is predicted as the plant runs on";
+    X_COMPONENT_HAZARD_PREDICTED = "X104", "without the filter, a component's hazard is predicted";
     X_CONSTRAINT_BECAME_TRUE = "X201", "a constraint became true";
     X_HELD_ON = "X202", "the filter held an actuator ON";
     X_FORCED_OFF = "X203", "the filter forced an actuator OFF";
