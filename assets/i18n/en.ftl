@@ -366,6 +366,8 @@ fault-table-at-loading = Table blocked at the loading position
 fault-table-at-unloading = Table blocked at the unloading position
 fault-table-between = Table blocked between the positions
 fault-slowed = { $signal } slowed to { $percent } %{ $description }
+fault-blocked = { $component } blocked
+fault-component-slowed = { $component } slowed to { $percent } %
 
 ## Maintenance
 maint-program = Control program: { $name }, version { $version }

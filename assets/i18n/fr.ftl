@@ -384,6 +384,8 @@ fault-table-at-loading = Table bloquée en position de chargement
 fault-table-at-unloading = Table bloquée en position de déchargement
 fault-table-between = Table bloquée entre les positions
 fault-slowed = { $signal } ralenti à { $percent } %{ $description }
+fault-blocked = { $component } bloqué
+fault-component-slowed = { $component } ralenti à { $percent } %
 
 ## Maintenance
 maint-program = Programme : { $name }, version { $version }

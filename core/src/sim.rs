@@ -421,6 +421,8 @@ pub struct Simulation {
     pub diagnosers: Option<crate::pop::Diagnosers>,
     /// The elementary-action monitor (seed 003), on a plant that has actions.
     pub action_monitor: Option<actions::ActionMonitoring>,
+    /// Why the action monitor stopped the plant (until the operator's Reset).
+    action_stop: Option<String>,
     /// Per diagnoser partition: its fault descriptions and what to check (its sensor or
     /// actuators), from `diagnosers.ron`, for the hypothesis's hardware items.
     partitions: BTreeMap<String, PartitionInfo>,
@@ -609,6 +611,7 @@ impl Simulation {
             live_now: None,
             diagnosers: None,
             action_monitor: None,
+            action_stop: None,
             partitions: BTreeMap::new(),
             diag_seen: 0,
             degraded: Vec::new(),
@@ -703,6 +706,9 @@ impl Simulation {
     pub fn plant_state(&self) -> PlantState {
         if self.engine.is_tripped() {
             return PlantState::Tripped;
+        }
+        if self.action_stop.is_some() {
+            return PlantState::Stopped;
         }
         if self.manual.is_some() {
             return PlantState::Manual;
@@ -1019,6 +1025,11 @@ impl Simulation {
                     Err(format!("{id} is not bypassed"))
                 }
             }
+            OperatorAction::Start if self.action_stop.is_some() => Err(format!(
+                "refused: the action monitor stopped the plant ({}); repair, then Reset, \
+                 then Start",
+                self.action_stop.as_deref().unwrap_or_default()
+            )),
             OperatorAction::Start if self.engine.is_tripped() => Err(format!(
                 "refused: the safety filter has stopped the plant ({}); Reset first, then \
                  Start",
@@ -1036,6 +1047,7 @@ impl Simulation {
                 self.engine.set_mode(*mode);
                 Ok(())
             }
+            OperatorAction::Reset if self.action_stop.is_some() => self.reset_action_stop(),
             OperatorAction::Reset => self.engine.reset().map_err(|e| e.to_string()),
             OperatorAction::Repair if self.is_live() => {
                 Err("refused on a live link: repair the machine itself".to_string())
@@ -1075,6 +1087,10 @@ impl Simulation {
                 self.engine.set_hold(true);
                 Ok(())
             }
+            OperatorAction::Resume if self.action_stop.is_some() => Err(format!(
+                "refused: the action monitor stopped the plant ({}); repair, then Reset",
+                self.action_stop.as_deref().unwrap_or_default()
+            )),
             OperatorAction::Resume => {
                 self.engine.set_hold(false);
                 Ok(())

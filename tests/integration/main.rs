@@ -14,6 +14,7 @@ mod export_st;
 mod filter_trace;
 mod fuzz_loaders;
 mod live;
+mod plants;
 mod transients;
 
 #[path = "../../core/src/test_support/paper.rs"]

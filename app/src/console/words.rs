@@ -356,6 +356,7 @@ fn fault_of(
             ("description", (&description).into()),
             ("ms", get("ms").into()),
             ("percent", get("percent").into()),
+            ("component", get("component").into()),
         ],
     )
 }

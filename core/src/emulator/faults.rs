@@ -75,8 +75,8 @@ impl FaultKind {
     /// The fault as data, for a console that tells it in its own words: `fault`
     /// (`stuck-at-0`, `stuck-at-1`, `spurious-rise`, `spurious-fall`, `actuator-off`,
     /// `actuator-on`, `table-at-loading`, `table-at-unloading`, `table-between`,
-    /// `slowed`, `blocked`), `signal` (a signal or, for `blocked` and a component's
-    /// `slowed`, a component id) where one is named, `ms` or `percent` where they apply.
+    /// `slowed`, and for a component as a whole `blocked`, `component-slowed`),
+    /// `signal` or `component` where one is named, `ms` or `percent` where they apply.
     pub fn fields(&self) -> std::collections::BTreeMap<String, String> {
         let (tag, signal, n) = match self {
             Self::SensorStuckAt0(s) => ("stuck-at-0", s.as_str(), None),
@@ -94,7 +94,7 @@ impl FaultKind {
             Self::TableBlockedBetween => ("table-between", "", None),
             Self::Blocked(c) => ("blocked", c.as_str(), None),
             Self::Slowed { component, percent } => (
-                "slowed",
+                "component-slowed",
                 component.as_str(),
                 Some(("percent", u64::from(*percent))),
             ),
@@ -106,8 +106,10 @@ impl FaultKind {
         };
         let mut f = std::collections::BTreeMap::new();
         f.insert("fault".to_string(), tag.to_string());
+        let whole = matches!(self, Self::Blocked(_) | Self::Slowed { .. });
         if !signal.is_empty() {
-            f.insert("signal".to_string(), signal.to_string());
+            let key = if whole { "component" } else { "signal" };
+            f.insert(key.to_string(), signal.to_string());
         }
         if let Some((k, v)) = n {
             f.insert(k.to_string(), v.to_string());

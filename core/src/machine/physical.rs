@@ -28,7 +28,7 @@ pub enum Description {
     /// `components.ron`.
     Components(Components),
     /// `layout.ron`.
-    Layout(Layout),
+    Layout(Box<Layout>),
 }
 
 impl Description {
@@ -41,7 +41,7 @@ impl Description {
         }
         let layout = dir.join(LAYOUT_FILE);
         if layout.exists() {
-            return Layout::load(&layout).map(Self::Layout);
+            return Layout::load(&layout).map(|l| Self::Layout(Box::new(l)));
         }
         Err(vec![Problem::error(
             codes::NO_PHYSICAL_MODEL.id,
@@ -75,7 +75,7 @@ impl Description {
 #[derive(Clone, Debug)]
 pub enum Physical {
     /// A plant of components.
-    Components(ComponentPlant),
+    Components(Box<ComponentPlant>),
     /// The sorting layout's emulator.
     Layout(Box<Emulator>),
 }
@@ -84,7 +84,9 @@ impl Physical {
     /// Builds the emulator of a description at time 0.
     pub fn new(desc: &Description, plant: &Plant, seed: u64) -> Result<Self, Problem> {
         Ok(match desc {
-            Description::Components(c) => Self::Components(ComponentPlant::new(c, plant, seed)?),
+            Description::Components(c) => {
+                Self::Components(Box::new(ComponentPlant::new(c, plant, seed)?))
+            }
             Description::Layout(l) => Self::Layout(Box::new(Emulator::new(l, plant, seed)?)),
         })
     }

@@ -3,9 +3,14 @@
 //! cycle on the frame the filter leaves (the outputs as applied, the inputs read).
 //!
 //! A detection (early, late, unexpected final state) raises an alarm with the
-//! localisation of Fig. III.3 and a journal entry; every event, completions included,
-//! is kept for the run's report, so that a campaign can compare the sequence of
-//! actions with the plant's expected cycle.
+//! localisation of Fig. III.3 and a journal entry, and, with the filter enforcing,
+//! stops the plant in the fallback from the next cycle (seed 003, III.1: "the monitor
+//! runs an emergency procedure that puts the system in a safe state"): a dead position
+//! sensor is only seen as an action that does not end, and the only timely reaction
+//! is to stop. The stop holds until the operator's Reset, which restarts the program
+//! from its initial steps (the mechanism is then brought back by hand). Every event,
+//! completions included, is kept for the run's report, so that a campaign can compare
+//! the sequence of actions with the plant's expected cycle.
 
 use super::{Simulation, fields};
 use crate::alarms::{AlarmKind, AlarmText};
@@ -160,6 +165,7 @@ impl Simulation {
             }
             m.events.push(e);
         }
+        let stops = self.engine.mode() == crate::engine::FilterMode::Enforce && !self.is_live();
         for (e, a) in found {
             let text = action_alarm(&e, &a);
             let key = format!("action:{}:{}", e.action, e.kind.as_str());
@@ -170,7 +176,47 @@ impl Simulation {
                 "alarm-action",
                 text.fields.clone(),
             );
+            if stops && self.action_stop.is_none() {
+                self.engine.set_hold(true);
+                self.action_stop = Some(text.message.clone());
+                self.log(
+                    "action_stop",
+                    format!(
+                        "the action monitor stopped the plant in its fallback: {}; repair, \
+                         then Reset (the program restarts from its initial steps)",
+                        text.message
+                    ),
+                );
+            }
         }
+    }
+
+    /// The operator's Reset of the action monitor's stop: the filter's own trip is
+    /// reset too when there is one (refused while the constraints still forbid the
+    /// commands), the program restarts from its initial steps and the monitor forgets
+    /// its running actions.
+    pub(super) fn reset_action_stop(&mut self) -> Result<(), String> {
+        if self.engine.is_tripped() {
+            self.engine.reset().map_err(|e| e.to_string())?;
+        }
+        self.action_stop = None;
+        self.engine.set_hold(false);
+        self.restart_program(self.program.program().clone());
+        if let Some(m) = self.action_monitor.as_mut() {
+            m.monitor.reset();
+        }
+        self.log(
+            "action_stop",
+            "operator reset of the action monitor's stop: the program restarts from its \
+             initial steps"
+                .into(),
+        );
+        Ok(())
+    }
+
+    /// Why the action monitor holds the plant stopped, if it does.
+    pub fn action_stop(&self) -> Option<&str> {
+        self.action_stop.as_deref()
     }
 
     /// The monitor's events so far (none without a monitor).
