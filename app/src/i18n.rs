@@ -360,6 +360,10 @@ impl I18n {
     /// does not name a part in this language.
     pub fn place(&self, fields: &std::collections::BTreeMap<String, String>) -> Option<String> {
         let kind = fields.get("place_kind")?;
+        // A declared danger of a plant of components is told by its own text.
+        if kind == "danger" {
+            return self.plant(&format!("danger-{}", fields.get("danger")?));
+        }
         let name = |key: &str| self.plant(&format!("part-{}", fields.get(key)?));
         let mut args: Vec<(&str, Arg<'_>)> = Vec::new();
         let part = name("part")?;

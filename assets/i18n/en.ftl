@@ -117,6 +117,7 @@ manual-jog-hover = ON while held
 ## Status line
 status-removed = , { $n } taken off
 status-boxes = { $scenario } — boxes: { $created } created, { $left } left, { $right } right, { $damaged } damaged{ $removed }
+status-actions = { $scenario } — elementary actions: { $done } completed, { $faults } faults
 
 ## Synoptic banners
 banner-level = Level { $level } — trip { $ids } at { $time }
@@ -138,6 +139,7 @@ level-3 = 3 Advanced
 level-4 = 4 Hypothesis
 expl-title = Explanation
 expl-no-trip = No trip: the plant runs within its safety constraints.
+expl-action-stop = Stopped by the elementary-action monitor (no constraint tripped): { $why }. The alarm's detail names what to check; repair, then Reset: the program restarts from its initial steps.
 expl-violation-at = Violation at { $time } (monitor mode: the plant was not stopped)
 expl-trip-at = Trip at { $time }
 expl-as-written = as written: { $id } = { $notation }
@@ -502,6 +504,7 @@ place-against = { $part } (against item { $other_item })
 place-end = end of the { $part }
 place-start = start of the { $part }
 place-between = between the { $part } and the { $other }
+place-component = { $part }
 
 ## Status line
 status-reinit-emptied = Re-initialised: the plant emptied, the program at its initial steps; press Start

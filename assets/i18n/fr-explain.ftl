@@ -126,11 +126,21 @@ alarm-diagnosis-ambiguous = { $stop ->
    *[other] Diagnostic : { $component } est en défaut, sans pouvoir trancher entre { $fault } : { $partition } (un entraînement) peut être en cause ; le filtre ne fait que signaler, le système n'est pas arrêté
 }
 alarm-diagnosis-other = Diagnostic : { $fault } sur { $partition } ({ $component })
-alarm-hazard = Caisse { $item } endommagée : { $kind ->
-    [Sheared] cisaillée au niveau de : { $place }
-    [Dropped] tombée de : { $place }
-    [Collision] heurt au niveau de : { $place }
-   *[other] poussée contre une surface arrêtée : { $place }
+alarm-hazard = { $kind ->
+    [EndStop] { $place } : entraîné contre la butée de sa course
+    [OpposedDrives] { $place } : entraîné dans les deux sens à la fois
+    [Declared] État dangereux : { $place }
+   *[other] Caisse { $item } endommagée : { $kind ->
+        [Sheared] cisaillée au niveau de : { $place }
+        [Dropped] tombée de : { $place }
+        [Collision] heurt au niveau de : { $place }
+       *[other] poussée contre une surface arrêtée : { $place }
+    }
+}
+alarm-action = Action { $action } ({ $initial } → { $final } sous { $command }) : { $kind ->
+    [early] état final atteint après { $elapsed_ms } ms, avant T_MIN = { $t_min_ms } ms
+    [late] état final non atteint à T_MAX = { $t_max_ms } ms
+   *[other] état final apparu sans action validée
 }
 alarm-task = { $subject } : { $code ->
     [T001] arrêtée trop longtemps, elle ne peut plus finir à temps

@@ -124,6 +124,7 @@ status-removed = , { $n ->
    *[other] { $n } retirées
 }
 status-boxes = { $scenario } — caisses : { $created } créées, { $left } à gauche, { $right } à droite, { $damaged } endommagées{ $removed }
+status-actions = { $scenario } — actions élémentaires : { $done } terminées, { $faults } défauts
 
 ## Bandeaux du synoptique
 banner-level = Niveau { $level } — arrêt sécurité { $ids } à { $time }
@@ -145,6 +146,7 @@ level-3 = 3 Avancé
 level-4 = 4 Hypothèse
 expl-title = Explication
 expl-no-trip = Aucun arrêt sécurité : la machine fonctionne dans ses contraintes de sécurité.
+expl-action-stop = Arrêt par la surveillance des actions élémentaires (aucune contrainte déclenchée) : { $why }. Le détail de l'alarme dit quoi vérifier ; réparer, puis Réarmer : le programme repart de ses étapes initiales.
 expl-violation-at = Violation à { $time } (mode surveillance : la machine n'a pas été arrêtée)
 expl-trip-at = Arrêt sécurité à { $time }
 expl-as-written = tel qu'écrit : { $id } = { $notation }
@@ -530,6 +532,7 @@ place-against = { $part }, contre la caisse { $other_item }
 place-end = { $part } (extrémité aval)
 place-start = { $part } (extrémité amont)
 place-between = jonction { $part } / { $other }
+place-component = { $part }
 
 ## Ligne d'état
 status-reinit-emptied = Réinitialisée : la machine vidée, le programme à ses étapes initiales ; appuyez sur Départ cycle

@@ -2153,3 +2153,61 @@ fn an_actuator_stuck_on_is_told_as_hardware_first_on_the_console() {
     h.get_by_label_contains("Check A4's contactor on the machine");
     assert!(h.query_by_label_contains("in the program").is_none());
 }
+
+/// Issue 16: the console opens on a plant described as components (no `layout.ron`):
+/// the synoptic draws the drill head from its scene, the status line counts elementary
+/// actions, the console's Start presses the machine's DY button, and a stuck sensor
+/// stops the plant with the action monitor's words in the explanation panel.
+#[test]
+fn the_console_runs_a_plant_of_components() {
+    let dir = root().join("layouts/drilling-station");
+    let mut o = ConsoleOptions::new(&dir);
+    o.scenario = Some(dir.join("scenarios/reference.ron"));
+    o.data_dir = Some(temp_dir("drilling"));
+    let mut h = harness(o);
+    h.run_steps(2);
+    assert!(h.state().sim.layout.is_none());
+    assert!(h.query_all_by_label("Synoptic").count() >= 1);
+    h.query_by_label_contains("elementary actions: 0 completed, 0 faults")
+        .expect("the status line counts actions, not boxes");
+    h.state_mut().apply(Command::SetSpeed(100.0));
+    for _ in 0..300 {
+        h.step();
+        if h.state().sim.now().0 > 4000 {
+            break;
+        }
+    }
+    h.state_mut().apply(Command::Pause);
+    h.run_steps(2);
+    let done = h.state().sim.action_events();
+    assert_eq!(
+        done.iter().map(|e| e.action.as_str()).collect::<Vec<_>>(),
+        ["N1"],
+        "the scenario's Start pressed DY and the head reached b1"
+    );
+    h.query_by_label_contains("elementary actions: 1 completed, 0 faults")
+        .expect("status line");
+
+    let mut o = ConsoleOptions::new(&dir);
+    o.scenario = Some(dir.join("scenarios/b2-stuck-on.ron"));
+    o.data_dir = Some(temp_dir("drilling-stuck"));
+    let mut h = harness(o);
+    h.state_mut().apply(Command::SetSpeed(100.0));
+    for _ in 0..120 {
+        h.step();
+        if h.state().sim.now().0 > 1000 {
+            break;
+        }
+    }
+    h.state_mut().apply(Command::Pause);
+    h.run_steps(2);
+    h.get_by_label("STOPPED");
+    h.query_by_label_contains("Stopped by the elementary-action monitor")
+        .expect("the explanation says who stopped the plant");
+    assert!(
+        h.query_all_by_label_contains("Action N2 (b1 -> b2 under DPV): unexpected final state")
+            .count()
+            >= 1,
+        "the alarm names the action"
+    );
+}

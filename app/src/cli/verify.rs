@@ -48,8 +48,8 @@ fn ns_per(iters: u32, mut f: impl FnMut(u32) -> bool) -> f64 {
 pub(crate) fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     let dir = args.plant.plant.as_path();
     let (bundle, _) = super::load_bundle(dir)?;
-    let layout = Layout::load(&dir.join("layout.ron"))
-        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let layout =
+        verify::layout_of(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let opts = Options {
         max_boxes: args.max_boxes,
         necessity_boxes: args.necessity,

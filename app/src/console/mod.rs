@@ -561,7 +561,7 @@ impl Console {
         let ((variants, answers), library) = training_library(&plant_dir, &sim);
         let trends = trends::TrendView::new(&sim.bundle.symbols);
         let i18n = I18n::new(opts.lang, Some(&plant_dir)).map_err(|e| e.to_string())?;
-        let view = synoptic_view(&i18n, &sim.bundle.plant);
+        let view = synoptic_view(&i18n, &sim);
         let journal = Self::open_journal(opts, &sim, &source, &i18n);
         if opts.start {
             let _ = sim.act(&OperatorAction::Start);
@@ -1365,7 +1365,7 @@ impl Console {
     /// Switches the console's language (descriptions and synoptic words too), keeping the status.
     fn set_language(&mut self, lang: Lang, now: u64) {
         self.i18n.set_lang(lang);
-        let view = synoptic_view(&self.i18n, &self.sim.bundle.plant);
+        let view = synoptic_view(&self.i18n, &self.sim);
         self.view.descriptions = view.descriptions;
         self.view.words = view.words;
         self.view.elements = view.elements;
@@ -1656,7 +1656,11 @@ impl Console {
 /// The synoptic's tags in the language shown.
 /// The synoptic's texts in the language shown: the signals' descriptions, its tags and
 /// the plant's element names (the schematic strip's blocks); zoom and pan at rest.
-fn synoptic_view(i18n: &I18n, plant: &vigie_core::plant::Plant) -> synoptic::View {
+fn synoptic_view(i18n: &I18n, sim: &vigie_core::sim::Simulation) -> synoptic::View {
+    let plant = &sim.bundle.plant;
+    // A plant of components names its components by id (`part-<id>` in the plant
+    // folder's texts, else the name `components.ron` gives).
+    let components = sim.emulator.scene().map(|s| s.elements).unwrap_or_default();
     synoptic::View {
         descriptions: i18n.signal_descriptions(plant),
         words: synoptic_words(i18n),
@@ -1666,6 +1670,24 @@ fn synoptic_view(i18n: &I18n, plant: &vigie_core::plant::Plant) -> synoptic::Vie
             .chain(&plant.outputs)
             .filter(|s| !s.element.is_empty())
             .map(|s| (s.element.clone(), words::element(i18n, &s.element)))
+            .collect(),
+        parts: components
+            .into_iter()
+            .map(|e| {
+                let name = i18n.plant(&format!("part-{}", e.id)).unwrap_or(e.name);
+                (e.id, name)
+            })
+            .collect(),
+        dangers: sim
+            .emulator
+            .as_components()
+            .map(|c| c.dangers())
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(id, text)| {
+                let t = i18n.plant(&format!("danger-{id}")).unwrap_or(text);
+                (id, t)
+            })
             .collect(),
         ..synoptic::View::default()
     }

@@ -26,6 +26,10 @@ pub struct View {
     /// The plant's element names in the language shown (`element-<name>`), for the
     /// schematic strip's labels; an element without one shows the plant's own.
     pub elements: std::collections::BTreeMap<String, String>,
+    /// A plant of components' component names in the language shown, by id.
+    pub parts: std::collections::BTreeMap<String, String>,
+    /// Its declared dangers' texts in the language shown, by id.
+    pub dangers: std::collections::BTreeMap<String, String>,
     /// Where the last frame put each sensor's name and each explanation tag, by the
     /// element it belongs to (screen points): what the tests check against the
     /// geometry.
@@ -92,6 +96,8 @@ impl Default for View {
             descriptions: std::collections::BTreeMap::new(),
             words: std::collections::BTreeMap::new(),
             elements: std::collections::BTreeMap::new(),
+            parts: std::collections::BTreeMap::new(),
+            dangers: std::collections::BTreeMap::new(),
             placed: Placed::default(),
         }
     }
@@ -558,11 +564,11 @@ pub fn synoptic_ui(
         paint_table(&cv, geom, table_angle_mdeg, (pal.equipment, edge), true);
         paint_table_motion(&cv, geom, table_angle_mdeg, t_s);
     }
-    scene::paint_axes(&cv, geom, pic.ghost_scene);
+    scene::paint_axes(&cv, geom, view, pic.ghost_scene);
     paint_boxes(&cv, pic.boxes);
     // Predicted-hazard labels, drawn last so that no equipment hides them.
     let predicted_labels = match pic.ghost {
-        Some(ghost) => paint_ghosts(&cv, geom, view, ghost),
+        Some(ghost) => paint_ghosts(&cv, geom, view, ghost, pic.ghost_scene),
         None => Vec::new(),
     };
     paint_sensors(&cv, geom);
@@ -807,6 +813,7 @@ fn paint_ghosts(
     geom: &Geometry,
     view: &View,
     (boxes, angle, hazards): (&[BoxView], i32, &[Hazard]),
+    ghost_scene: Option<&vigie_core::machine::Scene>,
 ) -> Vec<(Pos2, String)> {
     let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
     let mut predicted_labels = Vec::new();
@@ -831,7 +838,7 @@ fn paint_ghosts(
         ));
     }
     for h in hazards {
-        if let Some((p, label)) = scene::hazard_label(geom, view, h, xf) {
+        if let Some((p, label)) = scene::hazard_label(geom, view, h, xf, ghost_scene) {
             let s = Stroke::new(3.0, pal.trip);
             painter.line_segment([p - vec2(16.0, 16.0), p + vec2(16.0, 16.0)], s);
             painter.line_segment([p - vec2(16.0, -16.0), p + vec2(16.0, -16.0)], s);
@@ -1107,11 +1114,14 @@ fn paint_predicted_labels(cv: &Canvas<'_>, geom: &Geometry, predicted_labels: &[
             lamps.iter().all(|l| !r.contains(*l))
                 && rect.contains_rect(Rect::from_min_size(*at, size))
         };
-        let at = candidates
-            .iter()
-            .copied()
-            .find(clear)
-            .unwrap_or(candidates[0]);
+        // None clear (a narrow synoptic): the first, kept inside the synoptic.
+        let at = candidates.iter().copied().find(clear).unwrap_or_else(|| {
+            let c = candidates[0];
+            pos2(
+                c.x.min(rect.right() - size.x - 4.0).max(rect.left() + 4.0),
+                c.y.min(rect.bottom() - size.y - 4.0).max(rect.top() + 4.0),
+            )
+        });
         let anchor = pos2(
             p.x.clamp(at.x, at.x + size.x),
             if at.y > p.y { at.y } else { at.y + size.y },

@@ -30,13 +30,12 @@ pub(crate) fn start(c: &mut Console) {
         return;
     }
     let bundle = c.sim.bundle.clone();
-    let layout_path = c.plant_dir.join("layout.ron");
+    let plant_dir = c.plant_dir.clone();
     c.verification.started_s = c.wall_s;
     let spawned = std::thread::Builder::new()
         .name("vigie-verify".into())
         .spawn(move || {
-            let layout = vigie_core::emulator::Layout::load(&layout_path)
-                .map_err(|p| vigie_core::diag::render(&p))?;
+            let layout = verify::layout_of(&plant_dir).map_err(|p| vigie_core::diag::render(&p))?;
             verify::verify(
                 &bundle,
                 &layout,

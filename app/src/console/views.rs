@@ -643,6 +643,24 @@ fn status_ui(c: &Console, ui: &mut egui::Ui) {
         if super::link::status_ui(c, ui) {
             return;
         }
+        if c.sim.layout.is_none() {
+            // A plant of components: its elementary actions, not boxes.
+            let events = c.sim.action_events();
+            let faults = events.iter().filter(|e| e.is_fault()).count();
+            ui.label(c.i18n.ta(
+                "status-actions",
+                &[
+                    ("scenario", (&c.source.title(&c.i18n)).into()),
+                    ("done", (events.len() - faults).into()),
+                    ("faults", faults.into()),
+                ],
+            ));
+            ui.separator();
+            if !c.status.is_empty() {
+                ui.label(RichText::new(&c.status).strong());
+            }
+            return;
+        }
         let s = c.sim.emulator.stats();
         let removed = if s.removed > 0 {
             c.i18n.ta("status-removed", &[("n", s.removed.into())])
@@ -902,6 +920,14 @@ fn explanation_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     next_step_ui(c, ui);
     ui.heading(c.i18n.t("expl-title"));
     let Some(trip) = c.latest_trip() else {
+        if let Some(why) = c.sim.action_stop() {
+            // Stopped by the elementary-action monitor (seed 003), not by a constraint.
+            ui.label(
+                RichText::new(c.i18n.ta("expl-action-stop", &[("why", why.into())]))
+                    .color(c.palette.trip),
+            );
+            return;
+        }
         ui.label(RichText::new(c.i18n.t("expl-no-trip")).color(c.palette.text_dim));
         return;
     };

@@ -406,6 +406,14 @@ impl ComponentPlant {
         pressed
     }
 
+    /// The declared dangers: id and text.
+    pub fn dangers(&self) -> Vec<(String, String)> {
+        self.dangers
+            .iter()
+            .map(|d| (d.id.clone(), d.text.clone()))
+            .collect()
+    }
+
     /// Component `id`'s position in its unit.
     pub fn position(&self, id: &str) -> Option<f64> {
         let k = self.names.iter().position(|(c, _)| c == id)?;

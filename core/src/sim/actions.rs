@@ -169,7 +169,8 @@ impl Simulation {
         for (e, a) in found {
             let text = action_alarm(&e, &a);
             let key = format!("action:{}:{}", e.action, e.kind.as_str());
-            self.alarms.raise(now, &key, AlarmKind::Task, text.clone());
+            self.alarms
+                .raise(now, &key, AlarmKind::Diagnosis, text.clone());
             self.log_coded(
                 "actions",
                 text.detail.clone(),

@@ -227,6 +227,22 @@ pub struct VerifyReport {
     pub constraints: Vec<ConstraintRole>,
 }
 
+/// The layout `vigie verify` builds its abstract model from: the plant folder's
+/// `layout.ron`. A plant described as components (`components.ron`) is not yet
+/// supported (V0501, saying so), nor one without a physical model (V0744).
+pub fn layout_of(dir: &std::path::Path) -> Result<Layout, Vec<Problem>> {
+    match crate::machine::Description::load(dir)? {
+        crate::machine::Description::Layout(l) => Ok(*l),
+        crate::machine::Description::Components(c) => Err(vec![Problem::error(
+            codes::VERIFY_UNSUPPORTED.id,
+            "the abstract model of `vigie verify` is built from a sorting layout \
+             (layout.ron); a plant described as components is not yet supported"
+                .to_string(),
+            Some(c.location_of(&c.name)),
+        )]),
+    }
+}
+
 /// Hazard name as the emulator serialises it.
 pub fn hazard_name(k: HazardKind) -> &'static str {
     match k {

@@ -48,3 +48,8 @@ task-N3 = N3, montée grande vitesse de b2 à b1 : remontée de débourrage, et 
 task-N4 = N4, perçage de b2 à la profondeur finale b3 en descente petite vitesse
 task-N5 = N5, montée grande vitesse de la profondeur finale b3 à b2
 task-N6 = N6, montée grande vitesse de b1 au retour en haut h
+
+# The components (components.ron) and the declared danger.
+part-head = tête de perçage
+part-start_button = bouton départ cycle
+danger-fast_into_part = le foret entre dans la pièce en grande vitesse

@@ -54,9 +54,9 @@ impl Geometry {
         let mut sensors = Vec::new();
         let mut actuators = BTreeMap::new();
         let mut axes = Vec::new();
-        #[allow(clippy::cast_precision_loss)]
-        for (k, e) in scene.elements.iter().enumerate() {
-            let x = PITCH * k as f32;
+        for e in &scene.elements {
+            #[allow(clippy::cast_precision_loss)]
+            let x = PITCH * axes.len() as f32;
             match &e.shape {
                 Shape::Axis {
                     unit,
@@ -80,8 +80,8 @@ impl Geometry {
                         let mid = a.at((w.from + w.to) / 2.0);
                         sensors.push(SensorGeom {
                             id: w.signal.clone(),
-                            lamp: [x - 520.0, mid[1]],
-                            beam: Some(([x - 420.0, mid[1]], [x - 90.0, mid[1]])),
+                            lamp: [x - 700.0, mid[1]],
+                            beam: Some(([x - 600.0, mid[1]], [x - 90.0, mid[1]])),
                             high: false,
                         });
                     }
@@ -90,7 +90,7 @@ impl Geometry {
                         for out in output_names(&d.when, plant) {
                             actuators.entry(out).or_insert_with(|| {
                                 row += 1.0;
-                                [x + 560.0, -GUIDE * 0.15 - 380.0 * (row - 1.0)]
+                                [x + 900.0, -GUIDE * 0.15 - 380.0 * (row - 1.0)]
                             });
                         }
                     }
@@ -102,9 +102,9 @@ impl Geometry {
             }
         }
         #[allow(clippy::cast_precision_loss)]
-        let width = PITCH * scene.elements.len().max(2) as f32;
-        let mut min = [-900.0, -GUIDE - 500.0];
-        let mut max = [width - PITCH + 1100.0, 600.0];
+        let width = PITCH * axes.len().max(2) as f32;
+        let mut min = [-1100.0, -GUIDE - 500.0];
+        let mut max = [width - PITCH + 1400.0, 600.0];
         let schematic = place_schematic(plant, &mut sensors, &mut actuators, (&mut min, &mut max));
         Self {
             conveyors: Vec::new(),
@@ -139,12 +139,12 @@ fn output_names(expr: &str, plant: &Plant) -> Vec<String> {
 /// The carriage of an axis at `position`, on screen.
 fn carriage(xf: &Xf, a: &AxisGeom, position: f64) -> Rect {
     let c = xf.p(a.at(position));
-    Rect::from_center_size(c, vec2(300.0, 140.0) * xf.scale)
+    Rect::from_center_size(c, vec2(360.0, 160.0) * xf.scale)
 }
 
 /// Paints every axis: its guide, its name, its carriage (and the projected one, at
 /// level 1) and the way it moves.
-pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, ghost: Option<&Scene>) {
+pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: Option<&Scene>) {
     let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
     let edge = Stroke::new(1.0, pal.equipment_edge);
     for a in &geom.axes {
@@ -159,10 +159,11 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, ghost: Option<&Scene>
             edge,
             egui::StrokeKind::Middle,
         );
+        // The name under the guide: the level banner takes the synoptic's top.
         painter.text(
-            xf.p([a.top[0], a.top[1] + 260.0]),
-            Align2::CENTER_BOTTOM,
-            &a.name,
+            xf.p([a.top[0], a.top[1] - GUIDE - 120.0]),
+            Align2::CENTER_TOP,
+            view.parts.get(&a.id).unwrap_or(&a.name),
             FontId::proportional(13.0),
             pal.text,
         );
@@ -229,18 +230,22 @@ pub(super) fn hazard_label(
     view: &View,
     h: &Hazard,
     xf: &Xf,
+    ghost: Option<&Scene>,
 ) -> Option<(Pos2, String)> {
     let part = match &h.at {
         Place::Component { part } | Place::Danger { part, .. } => part,
         _ => return None,
     };
     let a = geom.axes.iter().find(|a| &a.id == part)?;
-    let p = carriage(xf, a, a.position).right_center() + vec2(12.0, 0.0);
+    // At the projected carriage, where the hazard happens.
+    let at = ghost.and_then(|s| projected(s, part)).unwrap_or(a.position);
+    let p = carriage(xf, a, at).center();
     let kind = view.word(&format!("hazard-{:?}", h.kind).to_lowercase());
-    let kind = if matches!(h.at, Place::Danger { .. }) {
-        format!("{kind}: {}", h.place)
-    } else {
-        kind.to_string()
+    let kind = match &h.at {
+        Place::Danger { danger, .. } => {
+            format!("{kind}: {}", view.dangers.get(danger).unwrap_or(&h.place))
+        }
+        _ => kind.to_string(),
     };
     Some((p, view.word("predicted-component").replace("%kind%", &kind)))
 }
