@@ -593,4 +593,6 @@ syn-hazard-pushedagainststopped = PushedAgainstStopped
 syn-hazard-endstop = driven into its end stop
 syn-hazard-opposeddrives = driven both ways at once
 syn-hazard-declared = dangerous state
+syn-hazard-overflow = overflow
+syn-hazard-dryrun = pump running dry
 syn-predicted-component = predicted: %kind%

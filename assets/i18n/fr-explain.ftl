@@ -37,6 +37,8 @@ explain-X104 = Sans le filtre, { $after_ms } ms plus tard : { $place_kind ->
    *[other] { $place } { $kind ->
         [EndStop] serait entraîné contre la butée de sa course
         [OpposedDrives] serait entraîné dans les deux sens à la fois
+        [Overflow] déborderait
+        [DryRun] ferait tourner une pompe à sec
        *[other] serait dans un état dangereux
     } ({ $elements }).
 }
@@ -130,6 +132,8 @@ alarm-hazard = { $kind ->
     [EndStop] { $place } : entraîné contre la butée de sa course
     [OpposedDrives] { $place } : entraîné dans les deux sens à la fois
     [Declared] État dangereux : { $place }
+    [Overflow] { $place } déborde
+    [DryRun] { $place } : une pompe tourne à sec
    *[other] Caisse { $item } endommagée : { $kind ->
         [Sheared] cisaillée au niveau de : { $place }
         [Dropped] tombée de : { $place }

@@ -624,4 +624,6 @@ syn-hazard-pushedagainststopped = poussée contre un arrêt
 syn-hazard-endstop = entraîné contre sa butée
 syn-hazard-opposeddrives = entraîné dans les deux sens à la fois
 syn-hazard-declared = état dangereux
+syn-hazard-overflow = débordement
+syn-hazard-dryrun = pompe à sec
 syn-predicted-component = prévu : %kind%

@@ -1955,6 +1955,8 @@ fn component_hazard_item(h: &Hazard, after: u64) -> Item {
     let what = match h.kind {
         crate::emulator::HazardKind::EndStop => "driven into the end of its travel",
         crate::emulator::HazardKind::OpposedDrives => "driven both ways at once",
+        crate::emulator::HazardKind::Overflow => "overflowing",
+        crate::emulator::HazardKind::DryRun => "with a pump running dry",
         _ => "in a dangerous state",
     };
     let text = if matches!(h.at, crate::emulator::Place::Danger { .. }) {

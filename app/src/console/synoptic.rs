@@ -49,7 +49,7 @@ pub struct Placed {
 
 /// The synoptic's tags: key (message `syn-<key>`) and English text (`%kind%` and
 /// `%box%` are filled in by the synoptic).
-pub const TAGS: [(&str, &str); 22] = [
+pub const TAGS: [(&str, &str); 24] = [
     ("predicted", "predicted: %kind% box %box%"),
     ("hazard-sheared", "Sheared"),
     ("hazard-dropped", "Dropped"),
@@ -58,6 +58,8 @@ pub const TAGS: [(&str, &str); 22] = [
     ("hazard-endstop", "driven into its end stop"),
     ("hazard-opposeddrives", "driven both ways at once"),
     ("hazard-declared", "dangerous state"),
+    ("hazard-overflow", "overflow"),
+    ("hazard-dryrun", "pump running dry"),
     ("predicted-component", "predicted: %kind%"),
     ("elevator-left", "Left elevator"),
     ("elevator-right", "Right elevator"),

@@ -200,6 +200,8 @@ pub fn hazard(h: &Hazard) -> AlarmText {
         HazardKind::EndStop => format!("{} driven into the end of its travel", h.place),
         HazardKind::OpposedDrives => format!("{} driven both ways at once", h.place),
         HazardKind::Declared => format!("Dangerous state: {}", h.place),
+        HazardKind::Overflow => format!("{} overflows", h.place),
+        HazardKind::DryRun => format!("{}: a pump runs dry", h.place),
     };
     AlarmText {
         message,

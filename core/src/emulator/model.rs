@@ -143,6 +143,10 @@ pub enum HazardKind {
     OpposedDrives,
     /// A state the plant's expert declared dangerous (`dangers` in `components.ron`).
     Declared,
+    /// A tank filled past its capacity: it spills.
+    Overflow,
+    /// A pump drawing from an empty tank: it runs dry.
+    DryRun,
 }
 
 /// Where a hazard happened, by the layout ids of the parts involved.

@@ -7,6 +7,7 @@
 
 pub mod axis;
 pub mod button;
+pub mod tank;
 
 use super::scene::SceneElement;
 use crate::diag::Problem;
@@ -23,6 +24,8 @@ pub enum KindDef {
     Axis(axis::AxisDef),
     /// A push button of the operator's panel on a plant input.
     Button(button::ButtonDef),
+    /// A level filled and emptied by flows: a vessel with its pumps and valves.
+    Tank(tank::TankDef),
 }
 
 impl KindDef {
@@ -31,6 +34,7 @@ impl KindDef {
         match self {
             Self::Axis(_) => "axis",
             Self::Button(_) => "button",
+            Self::Tank(_) => "tank",
         }
     }
 
@@ -39,6 +43,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => a.check(),
             Self::Button(b) => b.check(),
+            Self::Tank(t) => t.check(),
         }
     }
 
@@ -47,6 +52,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => a.signals(),
             Self::Button(b) => b.signals(),
+            Self::Tank(t) => t.signals(),
         }
     }
 
@@ -55,6 +61,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => a.expressions(),
             Self::Button(_) => Vec::new(),
+            Self::Tank(t) => t.expressions(),
         }
     }
 
@@ -63,6 +70,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => Ok(Live::Axis(axis::Axis::new(id, a, symbols)?)),
             Self::Button(b) => Ok(Live::Button(button::Button::new(id, b, symbols)?)),
+            Self::Tank(t) => Ok(Live::Tank(tank::Tank::new(id, t, symbols)?)),
         }
     }
 }
@@ -95,6 +103,8 @@ pub(crate) enum Live {
     Axis(axis::Axis),
     /// See [`button::Button`].
     Button(button::Button),
+    /// See [`tank::Tank`].
+    Tank(tank::Tank),
 }
 
 impl Live {
@@ -103,6 +113,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.step(ctx, faults),
             Self::Button(b) => b.step(ctx),
+            Self::Tank(t) => t.step(ctx, faults),
         }
     }
 
@@ -111,14 +122,17 @@ impl Live {
         match self {
             Self::Axis(a) => a.sense(sensors),
             Self::Button(b) => b.sense(sensors),
+            Self::Tank(t) => t.sense(sensors),
         }
     }
 
-    /// Its position along its travel, in its unit (dangers are zones of it).
+    /// Its position along its travel (a tank: its level), in its unit (dangers are
+    /// zones of it).
     pub(crate) fn position(&self) -> f64 {
         match self {
             Self::Axis(a) => a.position(),
             Self::Button(b) => f64::from(u8::from(b.pressed())),
+            Self::Tank(t) => t.level(),
         }
     }
 
@@ -127,6 +141,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.scene(id, name),
             Self::Button(b) => b.scene(id, name),
+            Self::Tank(t) => t.scene(id, name),
         }
     }
 
@@ -136,6 +151,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.set_position(position),
             Self::Button(_) => {}
+            Self::Tank(t) => t.set_level(position),
         }
     }
 
@@ -143,7 +159,7 @@ impl Live {
     pub(crate) fn press(&mut self, signal: &str) -> bool {
         match self {
             Self::Button(b) => b.press(signal),
-            Self::Axis(_) => false,
+            Self::Axis(_) | Self::Tank(_) => false,
         }
     }
 
@@ -151,6 +167,7 @@ impl Live {
     pub(crate) fn axis_geometry(&self, id: &str) -> Option<super::derive::AxisGeometry> {
         match self {
             Self::Axis(a) => Some(a.geometry(id)),
+            Self::Tank(t) => Some(t.geometry(id)),
             Self::Button(_) => None,
         }
     }

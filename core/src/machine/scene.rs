@@ -42,6 +42,22 @@ pub enum Shape {
         /// Its drives.
         drives: Vec<SceneDrive>,
     },
+    /// A tank: its capacity, its level, its level sensors' windows, its flows and
+    /// which of them run.
+    Tank {
+        /// The unit (`l`).
+        unit: String,
+        /// Full.
+        capacity: f64,
+        /// The level now.
+        level: f64,
+        /// The level sensors.
+        sensors: Vec<SceneSensor>,
+        /// The flows (`speed`: their rate, units/s, + fills).
+        flows: Vec<SceneDrive>,
+        /// Which flow runs now, by index.
+        running: Vec<bool>,
+    },
     /// A panel push button.
     Button {
         /// The plant input it closes.

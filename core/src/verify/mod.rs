@@ -253,6 +253,8 @@ pub fn hazard_name(k: HazardKind) -> &'static str {
         HazardKind::EndStop => "end_stop",
         HazardKind::OpposedDrives => "opposed_drives",
         HazardKind::Declared => "declared",
+        HazardKind::Overflow => "overflow",
+        HazardKind::DryRun => "dry_run",
     }
 }
 

@@ -35,6 +35,9 @@ pub struct AxisGeom {
     pub direction: i8,
     /// The unit.
     pub unit: String,
+    /// A vessel (a tank: its level from the bottom) rather than a carriage on a guide
+    /// (its travel's start at the top).
+    pub vessel: bool,
 }
 
 impl AxisGeom {
@@ -43,6 +46,7 @@ impl AxisGeom {
         let span = (self.range.1 - self.range.0).max(1e-9);
         #[allow(clippy::cast_possible_truncation)]
         let k = ((position - self.range.0) / span).clamp(0.0, 1.0) as f32;
+        let k = if self.vessel { 1.0 - k } else { k };
         [self.top[0], self.top[1] - GUIDE * k]
     }
 }
@@ -75,25 +79,30 @@ impl Geometry {
                         position: *position,
                         direction: *direction,
                         unit: unit.clone(),
+                        vessel: false,
                     };
-                    for w in windows {
-                        let mid = a.at((w.from + w.to) / 2.0);
-                        sensors.push(SensorGeom {
-                            id: w.signal.clone(),
-                            lamp: [x - 700.0, mid[1]],
-                            beam: Some(([x - 600.0, mid[1]], [x - 90.0, mid[1]])),
-                            high: false,
-                        });
-                    }
-                    let mut row = 0.0;
-                    for d in drives {
-                        for out in output_names(&d.when, plant) {
-                            actuators.entry(out).or_insert_with(|| {
-                                row += 1.0;
-                                [x + 900.0, -GUIDE * 0.15 - 380.0 * (row - 1.0)]
-                            });
-                        }
-                    }
+                    place_signals(&a, windows, drives, plant, &mut sensors, &mut actuators);
+                    axes.push(a);
+                }
+                Shape::Tank {
+                    unit,
+                    capacity,
+                    level,
+                    sensors: windows,
+                    flows,
+                    ..
+                } => {
+                    let a = AxisGeom {
+                        id: e.id.clone(),
+                        name: e.name.clone(),
+                        top: [x, 0.0],
+                        range: (0.0, *capacity),
+                        position: *level,
+                        direction: 0,
+                        unit: unit.clone(),
+                        vessel: true,
+                    };
+                    place_signals(&a, windows, flows, plant, &mut sensors, &mut actuators);
                     axes.push(a);
                 }
                 // A panel button's input goes to the schematic strip, under its
@@ -118,6 +127,38 @@ impl Geometry {
             has_table: false,
             axes,
             schematic,
+        }
+    }
+}
+
+/// Places an axis's or a tank's sensor lamps left of it at their windows, and the
+/// outputs of its drives or flows right of it.
+fn place_signals(
+    a: &AxisGeom,
+    windows: &[vigie_core::machine::scene::SceneSensor],
+    drives: &[vigie_core::machine::scene::SceneDrive],
+    plant: &Plant,
+    sensors: &mut Vec<SensorGeom>,
+    actuators: &mut BTreeMap<String, [f32; 2]>,
+) {
+    let x = a.top[0];
+    let half = if a.vessel { 420.0 } else { 90.0 };
+    for w in windows {
+        let mid = a.at((w.from + w.to) / 2.0);
+        sensors.push(SensorGeom {
+            id: w.signal.clone(),
+            lamp: [x - half - 610.0, mid[1]],
+            beam: Some(([x - half - 510.0, mid[1]], [x - half, mid[1]])),
+            high: false,
+        });
+    }
+    let mut row = 0.0;
+    for d in drives {
+        for out in output_names(&d.when, plant) {
+            actuators.entry(out).or_insert_with(|| {
+                row += 1.0;
+                [x + half + 810.0, -GUIDE * 0.15 - 380.0 * (row - 1.0)]
+            });
         }
     }
 }
@@ -148,6 +189,10 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
     let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
     let edge = Stroke::new(1.0, pal.equipment_edge);
     for a in &geom.axes {
+        if a.vessel {
+            paint_vessel(cv, view, a, ghost);
+            continue;
+        }
         let guide = Rect::from_two_pos(
             xf.p([a.top[0] - 60.0, a.top[1]]),
             xf.p([a.top[0] + 60.0, a.top[1] - GUIDE]),
@@ -212,6 +257,50 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
     }
 }
 
+/// A tank: the vessel, its liquid up to the level, the level in its unit, and the
+/// projected level at level 1 as a dashed line.
+fn paint_vessel(cv: &Canvas<'_>, view: &View, a: &AxisGeom, ghost: Option<&Scene>) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    let x = a.top[0];
+    let vessel = Rect::from_two_pos(
+        xf.p([x - 420.0, a.top[1]]),
+        xf.p([x + 420.0, a.top[1] - GUIDE]),
+    );
+    painter.rect(
+        vessel,
+        4.0,
+        pal.equipment.gamma_multiply(0.9),
+        Stroke::new(1.5, pal.equipment_edge),
+        egui::StrokeKind::Middle,
+    );
+    let surface = xf.p(a.at(a.position)).y;
+    let liquid = Rect::from_min_max(Pos2::new(vessel.left(), surface), vessel.right_bottom());
+    painter.rect_filled(liquid, 3.0, pal.running.gamma_multiply(0.45));
+    painter.text(
+        Pos2::new(vessel.center().x, (surface - 4.0).max(vessel.top() + 12.0)),
+        Align2::CENTER_BOTTOM,
+        format!("{:.1} {}", a.position, a.unit),
+        FontId::monospace(11.0),
+        pal.text,
+    );
+    painter.text(
+        xf.p([x, a.top[1] - GUIDE - 120.0]),
+        Align2::CENTER_TOP,
+        view.parts.get(&a.id).unwrap_or(&a.name),
+        FontId::proportional(13.0),
+        pal.text,
+    );
+    if let Some(p) = ghost.and_then(|s| projected(s, &a.id)) {
+        let y = xf.p(a.at(p)).y;
+        painter.add(EShape::dashed_line(
+            &[Pos2::new(vessel.left(), y), Pos2::new(vessel.right(), y)],
+            Stroke::new(2.0, pal.ghost),
+            6.0,
+            4.0,
+        ));
+    }
+}
+
 /// The position of component `id` in a projected scene.
 fn projected(scene: &Scene, id: &str) -> Option<f64> {
     scene
@@ -220,6 +309,7 @@ fn projected(scene: &Scene, id: &str) -> Option<f64> {
         .find(|e| e.id == id)
         .and_then(|e| match &e.shape {
             Shape::Axis { position, .. } => Some(*position),
+            Shape::Tank { level, .. } => Some(*level),
             Shape::Button { .. } => None,
         })
 }

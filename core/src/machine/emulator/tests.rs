@@ -197,3 +197,115 @@ fn the_derived_actions_are_the_papers_and_the_emulator_meets_them() {
         );
     }
 }
+
+/// A tank with a filling pump and valve, a draining pump, level and flow sensors.
+const TANK: &str = r#"Components(
+    name: "tank",
+    components: [
+        (id: "tank1", name: "Tank 1", kind: Tank((
+            capacity: 100.0, start: 5.0, overflow: Crash, dry_run: Crash,
+            flows: [
+                (when: "M1 . V1", rate: 25.0, sensor: Some("C1")),
+                (when: "M2", rate: -20.0, sensor: Some("C2")),
+            ],
+            sensors: [(signal: "b1", from: 0.0, to: 8.0), (signal: "h1", from: 92.0, to: 100.0)],
+        ))),
+    ],
+)"#;
+
+fn tank_plant() -> Plant {
+    let s = |id: &str| Signal::new(id, SignalKind::Sensor, id);
+    let a = |id: &str| Signal::new(id, SignalKind::Actuator, id);
+    Plant {
+        name: "tank".into(),
+        description: String::new(),
+        inputs: vec![s("b1"), s("h1"), s("C1"), s("C2")],
+        outputs: vec![a("M1"), a("V1"), a("M2")],
+    }
+}
+
+fn tank() -> ComponentPlant {
+    let c = Components::from_ron(TANK, Path::new("components.ron")).unwrap();
+    ComponentPlant::new(&c, &tank_plant(), 1).unwrap()
+}
+
+fn pumps(m1: bool, v1: bool, m2: bool) -> Bits {
+    let mut b = Bits::zeros(3);
+    b.set(0, m1);
+    b.set(1, v1);
+    b.set(2, m2);
+    b
+}
+
+#[test]
+fn a_tank_fills_and_empties_at_its_flows_rates_with_its_flow_sensors() {
+    let mut e = tank();
+    assert!(e.sensors().get(0) && !e.sensors().get(1), "starts low");
+    // A pump without its valve moves nothing, and its flow sensor stays off.
+    e.step(Millis(1000), &pumps(true, false, false));
+    assert_eq!(e.position("tank1"), Some(5.0));
+    assert!(!e.sensors().get(2));
+    // 25 l/s: from 5 l to 92 l (h1) in 3.48 s.
+    let t = until(&mut e, &pumps(true, true, false), 1, 5000).unwrap();
+    assert!((4470..=4490).contains(&t), "{t}");
+    assert!(e.sensors().get(2) && !e.sensors().get(3));
+    // Both flows: 5 l/s net.
+    e.step(Millis(1000), &pumps(true, true, true));
+    let l = e.position("tank1").unwrap();
+    assert!((96.9..97.4).contains(&l), "{l}");
+    assert!(e.sensors().get(2) && e.sensors().get(3));
+    let t0 = e.now().0;
+    let t = until(&mut e, &pumps(false, false, true), 0, 6000).unwrap();
+    assert!((4450..=4470).contains(&(t - t0)), "{}", t - t0);
+    assert!(e.hazards().is_empty(), "{:?}", e.hazards());
+}
+
+#[test]
+fn a_full_tank_spills_and_an_empty_one_runs_its_pump_dry() {
+    let mut e = tank();
+    e.step(Millis(5000), &pumps(true, true, false));
+    assert_eq!(e.position("tank1"), Some(100.0));
+    assert_eq!(e.hazards().len(), 1);
+    assert_eq!(e.hazards()[0].kind, HazardKind::Overflow);
+    assert_eq!(e.hazards()[0].elements, ["M1", "V1"]);
+    assert!(!e.sensors().get(2), "no flow into a full tank");
+    e.step(Millis(6000), &pumps(false, false, true));
+    assert_eq!(e.position("tank1"), Some(0.0));
+    assert_eq!(e.hazards()[1].kind, HazardKind::DryRun);
+    assert!(!e.sensors().get(3), "no flow out of an empty tank");
+    assert_eq!(e.hazards().len(), 2, "each reported once per onset");
+}
+
+#[test]
+fn a_blocked_pipe_stops_every_flow_and_its_sensors_say_so() {
+    let mut e = tank();
+    e.step(Millis(1000), &pumps(true, true, false));
+    e.try_schedule_fault(FaultSpec {
+        trigger: Trigger::At(0),
+        fault: FaultKind::Blocked("tank1".into()),
+        duration_ms: Some(2000),
+    })
+    .unwrap();
+    let level = e.position("tank1").unwrap();
+    e.step(Millis(1000), &pumps(true, true, false));
+    assert_eq!(e.position("tank1").unwrap(), level);
+    assert!(!e.sensors().get(2), "the flow sensor sees the blockage");
+    e.step(Millis(1500), &pumps(true, true, false));
+    assert!(
+        e.position("tank1").unwrap() > level,
+        "resumes when it clears"
+    );
+    assert!(e.sensors().get(2));
+}
+
+#[test]
+fn a_tanks_elementary_actions_are_derived_from_its_levels_and_flows() {
+    let a = tank().derived_actions();
+    let fill = a.iter().find(|x| x.id == "tank1.b1.M1 . V1.h1").unwrap();
+    // From anywhere in [0, 8] l to 92 l at 25 l/s: 3.36 s to 3.68 s.
+    assert_eq!((fill.t_ms, fill.dt_ms), (3520, 160));
+    assert!(
+        a.iter()
+            .any(|x| x.initial == "h1" && x.command == "M2" && x.final_state == "b1")
+    );
+}
