@@ -69,6 +69,29 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
             ran += 1;
         }
         assert!(ran >= 3, "{d}: {ran} short scenarios");
+        // The mutation campaign (the sorting station's, 490 mutants, has its own test).
+        if !dir.join("layout.ron").exists() {
+            let out = vigie(&[
+                "campaign",
+                "mutations",
+                "--plant",
+                d,
+                "--json",
+                "--threads",
+                "2",
+            ]);
+            assert!(out.status.success(), "campaign {d}: {}", text(&out));
+            let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            let (tripped, localised) = (
+                r["tripped"].as_u64().unwrap(),
+                r["localised"].as_u64().unwrap(),
+            );
+            assert!(r["mutants"].as_u64().unwrap() > 20, "{d}: {r}");
+            assert!(
+                tripped > 0 && localised * 10 >= tripped * 9,
+                "{d}: {localised}/{tripped}"
+            );
+        }
     }
 }
 

@@ -111,10 +111,19 @@ fn run(plant_dir: &Path, threads: Option<usize>, json: bool) -> anyhow::Result<E
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
         return Ok(ExitCode::SUCCESS);
     }
+    // Boxes arrive only on a sorting layout; a plant of components runs what one
+    // press of Start starts.
+    let items = if plant_dir
+        .join(vigie_core::machine::physical::LAYOUT_FILE)
+        .exists()
+    {
+        format!("{} boxes, ", config.arrivals.len())
+    } else {
+        String::new()
+    };
     writeln!(
         out,
-        "mutation campaign ({} boxes, up to {} s each, filter Enforce)",
-        config.arrivals.len(),
+        "mutation campaign ({items}up to {} s each, filter Enforce)",
         config.duration_ms / 1000
     )?;
     writeln!(out, "  mutants:    {}", report.mutants)?;
