@@ -344,8 +344,9 @@ pub struct PlantSnapshot {
     pub boxes: Vec<BoxView>,
     /// Turntable angle.
     pub table_angle_mdeg: i32,
-    /// A plant of components as drawn.
-    pub scene: Option<Scene>,
+    /// A plant of components: each component's position (an axis's, a tank's level)
+    /// in the order of its scene ([`Physical::scene_at`] draws them).
+    pub positions: Vec<f64>,
 }
 
 /// The state the plant would have reached without the filter (explanation level 1).
@@ -1483,13 +1484,16 @@ impl Simulation {
             time: now,
             boxes: Vec::new(),
             table_angle_mdeg: 0,
-            scene: None,
+            positions: Vec::new(),
         });
         snapshot.time = now;
         snapshot.boxes.clear();
         snapshot.boxes.extend_from_slice(self.emulator.boxes());
         snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
-        snapshot.scene = self.emulator.scene();
+        snapshot.positions.clear();
+        if let Some(c) = self.emulator.as_components() {
+            snapshot.positions.extend(c.positions());
+        }
         self.snapshots.push_back(snapshot);
     }
 

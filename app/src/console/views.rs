@@ -697,8 +697,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     let mut forced = BTreeSet::new();
     let mut boxes = sim.emulator.boxes();
     let mut angle = sim.emulator.table_angle_mdeg();
-    let live_scene = sim.emulator.scene();
-    let mut scene = live_scene.as_ref();
+    let mut live_scene = sim.emulator.scene();
     let mut time_ms = sim.now().0;
     let mut banner = None;
     let replay_rec = c.replay.and_then(|t| sim.engine.history.at(Millis(t)));
@@ -734,7 +733,9 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
         if let Some(s) = snaps.get(i) {
             boxes = &s.boxes;
             angle = s.table_angle_mdeg;
-            scene = s.scene.as_ref().or(scene);
+            if let Some(c) = sim.emulator.as_components() {
+                live_scene = Some(c.scene_at(&s.positions));
+            }
             time_ms = s.time.0;
         }
     }
@@ -775,7 +776,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     } else if banner.is_none() && sim.engine.is_tripped() {
         banner = Some(trip_banner(c));
     }
-    let geom = match (&sim.layout, scene) {
+    let geom = match (&sim.layout, live_scene.as_ref()) {
         (Some(layout), _) => Geometry::new(layout, plant, angle),
         (None, Some(scene)) => Geometry::from_scene(scene, plant),
         (None, None) => Geometry::from_scene(&vigie_core::machine::Scene::default(), plant),

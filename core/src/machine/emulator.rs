@@ -65,6 +65,11 @@ pub struct ComponentPlant {
     supply: Vec<(usize, Vec<usize>)>,
     /// Mirror contacts: the input and the output it mirrors.
     feedback: Vec<(usize, usize)>,
+    /// A drive, a flow or a danger reads a sensor or a past value: the frame and the
+    /// sensors are then updated at every internal step, not only once per period.
+    reads_inputs: bool,
+    /// The applied outputs must be recomputed (new commands, a fault changed).
+    outputs_dirty: bool,
 }
 
 impl ComponentPlant {
@@ -109,6 +114,17 @@ impl ComponentPlant {
                 active: false,
             });
         }
+        let reads_inputs = desc
+            .components
+            .iter()
+            .flat_map(|c| c.kind.expressions())
+            .chain(desc.dangers.iter().map(|d| d.when.as_str()))
+            .filter_map(|t| parse_str(t).ok()?.to_dnf(&symbols).ok())
+            .any(|dnf| {
+                dnf.iter()
+                    .flatten()
+                    .any(|l| l.var.space != Space::Output || l.var.prev)
+            });
         let n_out = plant.outputs.len();
         let mut commanded = Bits::zeros(n_out);
         for (i, s) in plant.outputs.iter().enumerate() {
@@ -145,6 +161,8 @@ impl ComponentPlant {
             output_force: vec![None; n_out],
             supply: plant.supplies(),
             feedback: plant.mirrors(),
+            reads_inputs,
+            outputs_dirty: true,
         };
         emu.apply_outputs();
         emu.compute_sensors();
@@ -153,11 +171,26 @@ impl ComponentPlant {
 
     /// Runs `dt` with the given PLC outputs (by plant output index), in fixed steps.
     pub fn step(&mut self, dt: Millis, outputs: &Bits) {
-        self.commanded.copy_from(outputs);
+        if !(self.reads_inputs || self.has_conditions) {
+            // Nothing reads a past value within the period: one shift per period.
+            self.frame.shift();
+        }
+        if self.commanded != *outputs {
+            self.commanded.copy_from(outputs);
+            self.outputs_dirty = true;
+        }
         self.carry += dt.0;
         while self.carry >= self.step_ms {
             self.carry -= self.step_ms;
             self.tick();
+            // At rest on constant outputs, with no fault to come: the remaining steps
+            // of the period would change nothing but the time.
+            let settled = self.faults.iter().all(|f| f.phase == Phase::Over);
+            if settled && self.live.iter().all(Live::idle) {
+                let k = self.carry / self.step_ms;
+                self.now += k * self.step_ms;
+                self.carry -= k * self.step_ms;
+            }
         }
         self.apply_outputs();
         self.compute_sensors();
@@ -168,8 +201,12 @@ impl ComponentPlant {
         if !self.faults.is_empty() {
             self.update_faults();
         }
-        self.frame.shift();
-        self.apply_outputs();
+        if self.reads_inputs || self.has_conditions {
+            self.frame.shift();
+        }
+        if self.outputs_dirty {
+            self.apply_outputs();
+        }
         let mut ctx = StepCtx {
             dt: self.step_ms,
             frame: &self.frame,
@@ -193,12 +230,17 @@ impl ComponentPlant {
             });
         }
         self.check_dangers();
-        self.compute_sensors();
+        // The sensors are read at the end of the period; a step needs them only when
+        // something reads them within it (a fault's condition, a drive on a sensor).
+        if self.has_conditions || self.reads_inputs {
+            self.compute_sensors();
+        }
     }
 
     /// The outputs as they reach the components: faults, then the supplies; the
     /// frame's inputs are the sensors as last read.
     fn apply_outputs(&mut self) {
+        self.outputs_dirty = false;
         let mut out = self.contactors();
         for (o, fed) in &self.supply {
             if !out.get(*o) {
@@ -267,6 +309,7 @@ impl ComponentPlant {
         }
         if changed {
             self.refresh_overrides();
+            self.outputs_dirty = true;
         }
     }
 
@@ -374,6 +417,8 @@ impl ComponentPlant {
             }
         }
         self.refresh_overrides();
+        self.outputs_dirty = true;
+        self.apply_outputs();
         self.compute_sensors();
         n
     }
@@ -404,6 +449,22 @@ impl ComponentPlant {
             self.compute_sensors();
         }
         pressed
+    }
+
+    /// Every component's position (a tank's level), in the order of the scene: what a
+    /// replay keeps of each cycle.
+    pub fn positions(&self) -> impl Iterator<Item = f64> + '_ {
+        self.live.iter().map(Live::position)
+    }
+
+    /// The scene with the components at `positions` (as [`Self::positions`] gave
+    /// them): a cycle of the replay drawn.
+    pub fn scene_at(&self, positions: &[f64]) -> Scene {
+        let mut copy = self.clone();
+        for (c, &p) in copy.live.iter_mut().zip(positions) {
+            c.set_position(p);
+        }
+        copy.scene()
     }
 
     /// The declared dangers: id and text.

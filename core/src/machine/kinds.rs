@@ -117,6 +117,17 @@ impl Live {
         }
     }
 
+    /// True when its last step changed nothing and the next, on the same outputs,
+    /// will not either (an axis no drive moves, a tank no flow runs, a button
+    /// released): the emulator then skips the rest of the period.
+    pub(crate) fn idle(&self) -> bool {
+        match self {
+            Self::Axis(a) => a.idle(),
+            Self::Button(b) => !b.pressed(),
+            Self::Tank(t) => t.idle(),
+        }
+    }
+
     /// Writes its sensors (by plant input index) before sensor faults apply.
     pub(crate) fn sense(&self, sensors: &mut crate::bits::Bits) {
         match self {

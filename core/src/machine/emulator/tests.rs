@@ -309,3 +309,31 @@ fn a_tanks_elementary_actions_are_derived_from_its_levels_and_flows() {
             .any(|x| x.initial == "h1" && x.command == "M2" && x.final_state == "b1")
     );
 }
+
+/// The emulator skips the rest of a period when every component is at rest, and
+/// steps once per period what nothing reads within it: the plant is the same as when
+/// it is stepped one millisecond at a time, on random commands, faults included.
+#[test]
+fn periods_and_single_steps_give_the_same_plant() {
+    let mut rng = crate::synthetic::SplitMix64::new(9);
+    for seed in 0..20 {
+        let (mut a, mut b) = (emulator(seed), emulator(seed));
+        let fault = FaultSpec {
+            trigger: Trigger::At(3000),
+            fault: FaultKind::Blocked("head".into()),
+            duration_ms: Some(700),
+        };
+        a.try_schedule_fault(fault.clone()).unwrap();
+        b.try_schedule_fault(fault).unwrap();
+        for _ in 0..600 {
+            let o = out(rng.chance(1, 3), rng.chance(1, 3), rng.chance(1, 4));
+            a.step(Millis(10), &o);
+            for _ in 0..10 {
+                b.step(Millis(1), &o);
+            }
+            assert_eq!(a.sensors(), b.sensors(), "seed {seed}");
+            assert_eq!(a.position("head"), b.position("head"), "seed {seed}");
+        }
+        assert_eq!(a.hazards(), b.hazards(), "seed {seed}");
+    }
+}

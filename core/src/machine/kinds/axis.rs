@@ -323,6 +323,10 @@ impl Axis {
         self.pos = clamped;
     }
 
+    pub(super) fn idle(&self) -> bool {
+        self.dir == 0 && !self.opposed
+    }
+
     pub(super) fn sense(&self, sensors: &mut crate::bits::Bits) {
         for &(i, _, from, to) in &self.windows {
             sensors.set(i, (from..=to).contains(&self.pos));

@@ -262,6 +262,10 @@ impl Tank {
         self.level = (self.level + net * ctx.dt as i64).clamp(0, self.capacity);
     }
 
+    pub(super) fn idle(&self) -> bool {
+        self.flows.iter().all(|f| !f.active)
+    }
+
     pub(super) fn sense(&self, sensors: &mut crate::bits::Bits) {
         for &(i, _, from, to) in &self.windows {
             sensors.set(i, (from..=to).contains(&self.level));
