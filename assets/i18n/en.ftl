@@ -76,6 +76,7 @@ reinit-disabled-hover = Only after a trip, on the emulator (on a live link the P
 logout = Log out
 login = Log in…
 login-hover = Operator role until a maintenance, trainer or administrator login
+plant-picker-hover = Open another plant folder (its reference program; the session starts over)
 
 ## Dialogs
 cancel = Cancel

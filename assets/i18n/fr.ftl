@@ -80,6 +80,7 @@ reinit-disabled-hover = Seulement après un arrêt sécurité, sur l'émulateur 
 logout = Se déconnecter
 login = Se connecter…
 login-hover = Rôle opérateur jusqu'à une connexion maintenance, formateur ou administrateur
+plant-picker-hover = Ouvrir un autre dossier d'installation (son programme de référence ; la session recommence)
 
 ## Dialogues
 cancel = Annuler

@@ -2211,3 +2211,28 @@ fn the_console_runs_a_plant_of_components() {
         "the alarm names the action"
     );
 }
+
+/// Issue 16: the plant picker lists the plant folders beside the one opened and
+/// reopens the console on the one picked, its reference program running, in the
+/// language shown.
+#[test]
+fn the_plant_picker_opens_another_plant_folder() {
+    let mut h = harness(options(Some(temp_dir("picker"))));
+    h.run_steps(2);
+    assert!(h.state().sim.layout.is_some());
+    let station = h.state().sim.bundle.plant.name.clone();
+    h.get_by_label(station.as_str()).click();
+    h.run_steps(2);
+    h.get_by_label("Drilling station").click();
+    h.run_steps(3);
+    assert_eq!(h.state().sim.bundle.plant.name, "Drilling station");
+    assert!(h.state().sim.layout.is_none(), "a plant of components");
+    h.query_by_label_contains("elementary actions: 0 completed")
+        .expect("the drilling station's status line");
+    // And back.
+    h.get_by_label("Drilling station").click();
+    h.run_steps(2);
+    h.get_by_label(station.as_str()).click();
+    h.run_steps(3);
+    assert!(h.state().sim.layout.is_some());
+}

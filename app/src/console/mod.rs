@@ -164,6 +164,9 @@ pub enum Command {
     Logout,
     /// Training: inject a fault of the fault library now.
     InjectFault(usize),
+    /// Open another plant folder (the plant picker): its reference program, the
+    /// console's language kept; the session starts over (logged out).
+    OpenPlant(PathBuf),
     /// Training and maintenance: compile the text on screen, re-run the scenario with
     /// it, score it and keep what ran ([`FixCheck`]).
     VerifyFix,
@@ -370,6 +373,12 @@ pub struct Console {
     pub sim: Simulation,
     pub(crate) source: Source,
     pub(crate) plant_dir: PathBuf,
+    /// The options the console opened with (the plant picker opens another plant
+    /// folder with them).
+    pub(crate) opened_with: ConsoleOptions,
+    /// The plant folders beside this one (`plant.ron` in a sibling folder): folder and
+    /// the plant's name, for the plant picker.
+    pub(crate) plants: Vec<(PathBuf, String)>,
     /// Open a printed document in the desktop's browser.
     pub(crate) open_files: bool,
     /// Palette.
@@ -571,7 +580,10 @@ impl Console {
         }
         let chrono_signals = plant_signals(&sim);
         let plant_exercise = source.plant_exercise.is_some();
+        let plants = sibling_plants(&plant_dir);
         let mut c = Self {
+            opened_with: opts.clone(),
+            plants,
             library,
             sim,
             source,
@@ -1092,6 +1104,7 @@ impl Console {
             Command::SubmitDiagnosis(component) => self.submit_diagnosis(&component),
             Command::ShowAnswer => self.finish_exercise(false),
             Command::InjectFault(i) => self.inject_fault(i, now),
+            Command::OpenPlant(dir) => self.open_plant(dir),
             Command::VerifyFix => self.verify(),
             Command::VerifyConstraints => verification::start(self),
             Command::ReplayCounterexample => verification::replay(self),
@@ -1656,6 +1669,60 @@ impl Console {
 /// The synoptic's tags in the language shown.
 /// The synoptic's texts in the language shown: the signals' descriptions, its tags and
 /// the plant's element names (the schematic strip's blocks); zoom and pan at rest.
+/// The plant folders beside `dir` (its parent's folders that hold a `plant.ron`),
+/// `dir` included, sorted, each with its plant's name (the folder's when the plant
+/// does not load).
+fn sibling_plants(dir: &Path) -> Vec<(PathBuf, String)> {
+    let parent = tidy(dir)
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let mut out: Vec<(PathBuf, String)> = std::fs::read_dir(&parent)
+        .into_iter()
+        .flatten()
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.join("plant.ron").exists())
+        .map(|p| {
+            let name = vigie_core::plant::Plant::load(&p.join("plant.ron")).map_or_else(
+                |_| {
+                    p.file_name()
+                        .unwrap_or_default()
+                        .to_string_lossy()
+                        .into_owned()
+                },
+                |plant| plant.name,
+            );
+            (p, name)
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+impl Console {
+    /// The plant picker: the console reopened on `dir` with its reference program, in
+    /// the language shown; a plant that does not open leaves this one as it is and
+    /// says why.
+    fn open_plant(&mut self, dir: PathBuf) {
+        let mut o = self.opened_with.clone();
+        o.plant_dir = dir;
+        o.scenario = None;
+        o.variant = None;
+        o.run_until_ms = None;
+        o.start = false;
+        o.lang = self.i18n.lang();
+        match Console::new(&o) {
+            Ok(mut c) => {
+                c.visuals_set = self.visuals_set;
+                c.opened_with = self.opened_with.clone();
+                *self = c;
+            }
+            Err(e) => self.status = format!("{}: {e}", o.plant_dir.display()),
+        }
+    }
+}
+
 fn synoptic_view(i18n: &I18n, sim: &vigie_core::sim::Simulation) -> synoptic::View {
     let plant = &sim.bundle.plant;
     // A plant of components names its components by id (`part-<id>` in the plant

@@ -148,6 +148,7 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
         }
         ui.label(RichText::new("VIGIE").strong().size(18.0));
         lang_switch_ui(c, ui, out);
+        plant_picker_ui(c, ui, out);
         ui.separator();
         // First, so that it is never pushed off a narrow screen.
         state_ui(c, ui);
@@ -187,6 +188,27 @@ fn toolbar_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
             }
         }
     });
+}
+
+/// The plant picker: the plant folders beside this one (none to pick from alone).
+fn plant_picker_ui(c: &Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
+    if c.plants.len() < 2 {
+        return;
+    }
+    let current = &c.sim.bundle.plant.name;
+    let r = egui::ComboBox::from_id_salt("plant-picker")
+        .selected_text(current)
+        .show_ui(ui, |ui| {
+            for (dir, name) in &c.plants {
+                if ui.selectable_label(name == current, name).clicked() && name != current {
+                    out.push(Command::OpenPlant(dir.clone()));
+                }
+            }
+        })
+        .response;
+    // Named by the plant shown, as a person reads it.
+    r.widget_info(|| egui::WidgetInfo::labeled(egui::Role::ComboBox, true, current));
+    r.on_hover_text(c.i18n.t("plant-picker-hover"));
 }
 
 /// The toolbar's simulation controls: run or pause, step, speed and the time.
