@@ -345,7 +345,7 @@ pub struct PlantSnapshot {
     /// Turntable angle.
     pub table_angle_mdeg: i32,
     /// A plant of components: each component's position (an axis's, a tank's level)
-    /// in the order of its scene ([`Physical::scene_at`] draws them).
+    /// in the order of its scene ([`crate::machine::ComponentPlant::scene_at`] draws them).
     pub positions: Vec<f64>,
 }
 
