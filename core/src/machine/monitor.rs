@@ -141,6 +141,9 @@ pub struct ActionEvent {
     pub started: Option<Millis>,
     /// Time since validation at this cycle, ms; `None` for `Unexpected`.
     pub elapsed_ms: Option<u64>,
+    /// The final state holds at this cycle (a `Late` is either a final state reached
+    /// after T_MAX, or none by T_MAX).
+    pub reached: bool,
 }
 
 impl ActionEvent {
@@ -171,14 +174,19 @@ impl ActionEvent {
                 action.t_min_ms()
             ),
             ActionEventKind::Late => {
-                let when = if elapsed > action.t_max_ms() {
-                    format!("reached only after {elapsed} ms")
+                let when = if self.reached {
+                    format!(
+                        "reached only after {elapsed} ms, past T_MAX = {} ms",
+                        action.t_max_ms()
+                    )
                 } else {
-                    "not reached".to_string()
+                    format!(
+                        "not reached after {elapsed} ms (T_MAX = {} ms)",
+                        action.t_max_ms()
+                    )
                 };
                 format!(
-                    "{head} {when} within T_MAX = {} ms of `{command}`: {sensors} stuck inactive, actuator blocked or slow, or the link PLC->actuator of `{command}` broken",
-                    action.t_max_ms()
+                    "{head} {when} under `{command}`: {sensors} stuck inactive, actuator blocked or slow, or the link PLC->actuator of `{command}` broken"
                 )
             }
             ActionEventKind::Unexpected => format!(
@@ -367,7 +375,9 @@ impl ActionMonitor {
                 (None, Run::Running(t0))
             };
             if let Some(kind) = kind {
-                events.push(event(a, now, kind, Some(t0)));
+                let mut e = event(a, now, kind, Some(t0));
+                e.reached = occupied[a.final_state];
+                events.push(e);
             }
             self.runs[i] = next;
         }
@@ -404,6 +414,7 @@ fn event(a: &Compiled, now: Millis, kind: ActionEventKind, started: Option<Milli
         kind,
         started,
         elapsed_ms: started.map(|t0| now.saturating_sub(t0).0),
+        reached: true,
     }
 }
 

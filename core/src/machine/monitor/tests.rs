@@ -139,6 +139,7 @@ fn c1_blocked_actuator_is_late_at_the_first_cycle_after_t_max() {
         brief(&events),
         [(6600, "N2", ActionEventKind::Late, Some(5700))]
     );
+    assert!(!events[0].reached, "a blocked head never reaches b2");
 }
 
 #[test]
@@ -188,6 +189,7 @@ fn a_final_state_reached_after_t_max_is_late() {
         brief(&events),
         [(6600, "N2", ActionEventKind::Late, Some(5700))]
     );
+    assert!(events[0].reached, "b2 is there, late");
 }
 
 #[test]
@@ -295,6 +297,7 @@ fn the_localisation_names_the_actions_signals() {
         kind,
         started: elapsed_ms.map(|_| Millis(0)),
         elapsed_ms,
+        reached: kind != ActionEventKind::Late,
     };
     let early = event(ActionEventKind::Early, Some(4000)).localisation(&a);
     assert_eq!(
@@ -304,10 +307,18 @@ fn the_localisation_names_the_actions_signals() {
     let late = event(ActionEventKind::Late, Some(5500)).localisation(&a);
     assert_eq!(
         late,
-        "N2 (head): final state `b2` not reached within T_MAX = 5500 ms of `DPV`: sensor b2 stuck inactive, actuator blocked or slow, or the link PLC->actuator of `DPV` broken"
+        "N2 (head): final state `b2` not reached after 5500 ms (T_MAX = 5500 ms) under `DPV`: sensor b2 stuck inactive, actuator blocked or slow, or the link PLC->actuator of `DPV` broken"
     );
-    let after = event(ActionEventKind::Late, Some(5700)).localisation(&a);
-    assert!(after.contains("reached only after 5700 ms"), "{after}");
+    // Seen late at a cycle past T_MAX, still absent: not reached (a blocked head).
+    let missing = event(ActionEventKind::Late, Some(5590)).localisation(&a);
+    assert!(missing.contains("not reached after 5590 ms"), "{missing}");
+    let mut after = event(ActionEventKind::Late, Some(5700));
+    after.reached = true;
+    let after = after.localisation(&a);
+    assert!(
+        after.contains("reached only after 5700 ms, past T_MAX"),
+        "{after}"
+    );
     let unexpected = event(ActionEventKind::Unexpected, None).localisation(&a);
     assert_eq!(
         unexpected,
