@@ -1540,15 +1540,26 @@ impl Simulation {
         if self.manual.is_some() {
             return;
         }
-        // The first scan sees every sensor that is on as a rising edge (nothing before
-        // it): task events start from the second cycle.
-        let Some(t) = self.tasks.as_mut().filter(|_| self.engine.cycles() > 1) else {
+        let Some(t) = self.tasks.as_mut() else {
             return;
         };
         // In degraded mode the tasks read the estimated sensors, as the program does.
-        match diagnosis::estimated_frame(&self.degraded, self.engine.frame()) {
-            None => t.events.step(&mut t.monitor, now, self.engine.frame()),
-            Some(f) => t.events.step(&mut t.monitor, now, &f),
+        let estimated = diagnosis::estimated_frame(&self.degraded, self.engine.frame());
+        if self.engine.cycles() <= 1 {
+            // The first scan's previous values are cold (a PLC's first scan): every
+            // sensor on would read as a rise. The sensors were in that state before the
+            // first scan; the outputs were off. The task events read that warm frame,
+            // so an order given in the first scan starts its task and a level the
+            // plant starts at ends none.
+            let mut warm = estimated.unwrap_or_else(|| self.engine.frame().clone());
+            let now_inputs = warm.now(Space::Input).clone();
+            *warm.prev_mut(Space::Input) = now_inputs;
+            t.events.step(&mut t.monitor, now, &warm);
+        } else {
+            match estimated {
+                None => t.events.step(&mut t.monitor, now, self.engine.frame()),
+                Some(f) => t.events.step(&mut t.monitor, now, &f),
+            }
         }
         t.events.publish(&t.monitor, self.engine.frame_mut());
         let new: Vec<crate::tasks::Alarm> = t.monitor.alarms[t.seen..].to_vec();

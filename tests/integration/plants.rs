@@ -313,3 +313,104 @@ fn every_drilling_fault_of_the_library_is_caught_without_damage() {
         assert!(harm.is_empty(), "{name}: {harm:?}");
     }
 }
+
+fn liquid() -> PathBuf {
+    repo().join("layouts/liquid-supply")
+}
+
+/// The liquid supply's scenario `name` with its fault moved to `fault_at_ms`.
+fn liquid_run(name: &str, edit: impl FnOnce(&mut Scenario)) -> Simulation {
+    let path = liquid().join("scenarios").join(name);
+    let mut s = Scenario::load(&path).unwrap();
+    edit(&mut s);
+    let mut sim = Simulation::from_scenario(&s, &path, Options::default()).unwrap();
+    sim.run_until(vigie_core::time::Millis(s.duration_ms));
+    sim
+}
+
+/// Every alarm and warning of the task monitors.
+fn task_alarms(sim: &Simulation) -> Vec<vigie_core::tasks::Alarm> {
+    sim.tasks.as_ref().unwrap().monitor.alarms.clone()
+}
+
+/// Seed 000, ch. 6.4, made physical: the drain of tank 1 blocked at 6 s while it empties
+/// (started at h1, 3.4 s after d). The stopwatch monitor says "empty tank 1" at
+/// 6 + (γ − α) = 9 s, where the watchdog (start + γ) would wait until 11.4 s; the
+/// elementary-action monitor, at T + ΔT, later still.
+#[test]
+fn the_liquid_supplys_blocked_drain_alarms_at_the_thesis_instant_from_the_emulator() {
+    let sim = liquid_run("thesis-blocked-drain.ron", |_| {});
+    let alarms = task_alarms(&sim);
+    assert_eq!(alarms.len(), 1, "{alarms:?}");
+    let a = &alarms[0];
+    assert_eq!(a.subject, "empty1");
+    assert_eq!(a.severity, vigie_core::tasks::Severity::Alarm);
+    // One 10 ms scan of detection at most.
+    assert!((9_000..=9_010).contains(&a.time.0), "{:?}", a.time);
+    let (start, watchdog) = (a.started.unwrap().0, a.watchdog.unwrap().0);
+    assert!((3_300..3_500).contains(&start), "{start}");
+    assert_eq!(watchdog, start + 8_000);
+    assert!(a.time.0 + 2_000 <= watchdog);
+    let late: Vec<_> = sim
+        .action_events()
+        .iter()
+        .filter(|e| e.is_fault())
+        .collect();
+    assert_eq!(late.len(), 1, "{late:?}");
+    assert_eq!(late[0].action, "empty1");
+    assert!(late[0].time.0 > a.time.0, "{late:?}");
+    assert!(sim.engine.trips.is_empty());
+}
+
+/// A fill ordered in the very first scan (a scenario's Start at 0) is timed: the first
+/// scan's edges are read against the sensors as they were before it, not as a cold
+/// start where every sensor on would rise. Blocked at 1 s, fill1 alarms at
+/// 1 + (γ − α) = 3 s; without the fault, nothing, not even a warning.
+#[test]
+fn a_task_ordered_in_the_first_scan_is_timed() {
+    let sim = liquid_run("thesis-blocked-drain.ron", |s| {
+        s.faults[0].trigger = vigie_core::emulator::Trigger::At(1_000);
+        s.duration_ms = 4_000;
+    });
+    let alarms = task_alarms(&sim);
+    assert!(
+        alarms
+            .iter()
+            .any(|a| a.subject == "fill1" && (3_000..=3_010).contains(&a.time.0)),
+        "{alarms:?}"
+    );
+    let sim = liquid_run("thesis-blocked-drain.ron", |s| s.faults.clear());
+    assert!(task_alarms(&sim).is_empty(), "{:?}", task_alarms(&sim));
+}
+
+/// Many fault-free batches over several seeds (each flow within ±2 % per start): every
+/// task of Table 6.1 ends inside its window, every elementary action completes, no
+/// trip, no hazard, no task alarm or warning.
+#[test]
+fn fault_free_liquid_batches_stay_inside_every_window() {
+    for seed in [1, 5, 9, 13] {
+        let sim = liquid_run("reference.ron", |s| {
+            s.seed = seed;
+            s.actions = (0..10)
+                .map(|k| TimedAction {
+                    at_ms: k * 11_000,
+                    action: OperatorAction::Start,
+                })
+                .collect();
+            s.duration_ms = 110_000;
+        });
+        assert!(
+            task_alarms(&sim).is_empty(),
+            "seed {seed}: {:?}",
+            task_alarms(&sim)
+        );
+        let events = sim.action_events();
+        assert_eq!(events.len(), 40, "seed {seed}: {events:?}");
+        assert!(
+            events.iter().all(|e| !e.is_fault()),
+            "seed {seed}: {events:?}"
+        );
+        assert!(sim.engine.trips.is_empty(), "seed {seed}");
+        assert!(sim.emulator.hazards().is_empty(), "seed {seed}");
+    }
+}

@@ -205,7 +205,7 @@ fn place_schematic(
         // steps apart: room for their tags (held ON, forced OFF) beside and under them.
         let lamps: Vec<&str> = signals.iter().filter(|s| s.1).map(|s| s.0).collect();
         let symbols: Vec<&str> = signals.iter().filter(|s| !s.1).map(|s| s.0).collect();
-        let mut row_y = y - STRIP_STEP * 1.2;
+        let mut row_y = y - STRIP_STEP * 0.8;
         for (k, id) in lamps.iter().enumerate() {
             #[allow(clippy::cast_precision_loss)]
             let at = [
@@ -234,7 +234,8 @@ fn place_schematic(
             max[0] = max[0].max(at[0] + 2.0 * STRIP_STEP);
             min[1] = min[1].min(at[1] - STRIP_STEP * 1.0);
         }
-        y = min[1] - STRIP_STEP * 0.3;
+        // A block's label nearer its own signals than the block above: a clear gap.
+        y = min[1] - STRIP_STEP * 0.8;
     }
     labels
 }

@@ -85,4 +85,6 @@ pub struct SceneDrive {
     pub when: String,
     /// Units per second, signed.
     pub speed: f64,
+    /// A sensor in series that sees it run (a tank line's flow sensor).
+    pub sensor: Option<String>,
 }

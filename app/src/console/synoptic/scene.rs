@@ -17,6 +17,10 @@ use vigie_core::plant::Plant;
 const GUIDE: f32 = 2400.0;
 /// Distance between two axes, world units.
 const PITCH: f32 = 2200.0;
+/// Distance between two vessels: their lines run right of them.
+const VESSEL_PITCH: f32 = 3600.0;
+/// Half the width of a drawn vessel.
+const VESSEL_HALF: f32 = 420.0;
 
 /// A drawn axis.
 #[derive(Clone, Debug)]
@@ -57,10 +61,19 @@ impl Geometry {
     pub fn from_scene(scene: &Scene, plant: &Plant) -> Self {
         let mut sensors = Vec::new();
         let mut actuators = BTreeMap::new();
-        let mut axes = Vec::new();
+        let mut axes: Vec<AxisGeom> = Vec::new();
+        // Each component's place from the previous one's: a vessel's lines need more
+        // room right of it than an axis's outputs.
+        let mut x = 0.0;
         for e in &scene.elements {
-            #[allow(clippy::cast_precision_loss)]
-            let x = PITCH * axes.len() as f32;
+            if let Some(last) = axes.last() {
+                let vessels = [last.vessel, matches!(e.shape, Shape::Tank { .. })];
+                x += match vessels {
+                    [false, false] => PITCH,
+                    [true, true] => VESSEL_PITCH,
+                    _ => (PITCH + VESSEL_PITCH) / 2.0,
+                };
+            }
             match &e.shape {
                 Shape::Axis {
                     unit,
@@ -110,10 +123,13 @@ impl Geometry {
                 Shape::Button { .. } => {}
             }
         }
-        #[allow(clippy::cast_precision_loss)]
-        let width = PITCH * axes.len().max(2) as f32;
+        let right = if axes.last().is_some_and(|a| a.vessel) {
+            VESSEL_PITCH - 900.0
+        } else {
+            1400.0
+        };
         let mut min = [-1100.0, -GUIDE - 500.0];
-        let mut max = [width - PITCH + 1400.0, 600.0];
+        let mut max = [x.max(PITCH) + right, 600.0];
         let schematic = place_schematic(plant, &mut sensors, &mut actuators, (&mut min, &mut max));
         Self {
             conveyors: Vec::new(),
@@ -142,7 +158,7 @@ fn place_signals(
     actuators: &mut BTreeMap<String, [f32; 2]>,
 ) {
     let x = a.top[0];
-    let half = if a.vessel { 420.0 } else { 90.0 };
+    let half = if a.vessel { VESSEL_HALF } else { 90.0 };
     for w in windows {
         let mid = a.at((w.from + w.to) / 2.0);
         sensors.push(SensorGeom {
@@ -152,12 +168,55 @@ fn place_signals(
             high: false,
         });
     }
+    if a.vessel {
+        place_lines(a, drives, plant, sensors, actuators);
+        return;
+    }
     let mut row = 0.0;
     for d in drives {
         for out in output_names(&d.when, plant) {
             actuators.entry(out).or_insert_with(|| {
                 row += 1.0;
                 [x + half + 810.0, -GUIDE * 0.15 - 380.0 * (row - 1.0)]
+            });
+        }
+    }
+}
+
+/// A vessel's flows as lines right of it: the inflows enter near its top, the outflows
+/// leave near its bottom. Each line is drawn as its flow sensor's beam (lit while the
+/// flow runs), the outputs that open it above the line, the sensor's lamp at its end.
+fn place_lines(
+    a: &AxisGeom,
+    flows: &[vigie_core::machine::scene::SceneDrive],
+    plant: &Plant,
+    sensors: &mut Vec<SensorGeom>,
+    actuators: &mut BTreeMap<String, [f32; 2]>,
+) {
+    let wall = a.top[0] + VESSEL_HALF;
+    let (mut ins, mut outs) = (0.0, 0.0);
+    for f in flows {
+        let y = if f.speed >= 0.0 {
+            ins += 1.0;
+            a.top[1] - 250.0 - 700.0 * (ins - 1.0)
+        } else {
+            outs += 1.0;
+            a.top[1] - GUIDE + 250.0 + 700.0 * (outs - 1.0)
+        };
+        let mut col = 0.0;
+        for out in output_names(&f.when, plant) {
+            actuators.entry(out).or_insert_with(|| {
+                col += 1.0;
+                [wall + 150.0 + 480.0 * col, y + 260.0]
+            });
+        }
+        let end = wall + 150.0 + 480.0 * col.max(2.0) + 450.0;
+        if let Some(id) = &f.sensor {
+            sensors.push(SensorGeom {
+                id: id.clone(),
+                lamp: [end, y],
+                beam: Some(([wall, y], [end - 100.0, y])),
+                high: false,
             });
         }
     }
@@ -263,8 +322,8 @@ fn paint_vessel(cv: &Canvas<'_>, view: &View, a: &AxisGeom, ghost: Option<&Scene
     let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
     let x = a.top[0];
     let vessel = Rect::from_two_pos(
-        xf.p([x - 420.0, a.top[1]]),
-        xf.p([x + 420.0, a.top[1] - GUIDE]),
+        xf.p([x - VESSEL_HALF, a.top[1]]),
+        xf.p([x + VESSEL_HALF, a.top[1] - GUIDE]),
     );
     painter.rect(
         vessel,

@@ -367,6 +367,7 @@ impl Axis {
                     .map(|d| SceneDrive {
                         when: d.when.clone(),
                         speed: d.speed as f64 * 1000.0 / MICRO,
+                        sensor: None,
                     })
                     .collect(),
             },

@@ -133,6 +133,8 @@ struct Flow {
     /// Millionths of the unit per ms.
     rate: i64,
     sensor: Option<usize>,
+    /// The flow sensor's signal, for the synoptic.
+    sensor_id: Option<String>,
     outputs: Vec<String>,
     /// Running now (after faults and the tank's bounds), and its drawn factor.
     running: bool,
@@ -189,6 +191,7 @@ impl Tank {
                 dnf: simplify(&dnf),
                 rate: micro(f.rate / 1000.0),
                 sensor: f.sensor.as_deref().map(input).transpose()?,
+                sensor_id: f.sensor.clone(),
                 outputs,
                 running: false,
                 active: false,
@@ -309,6 +312,7 @@ impl Tank {
                     .map(|fl| SceneDrive {
                         when: fl.when.clone(),
                         speed: fl.rate as f64 * 1000.0 / MICRO,
+                        sensor: fl.sensor_id.clone(),
                     })
                     .collect(),
                 running: self.flows.iter().map(|fl| fl.running).collect(),
