@@ -2016,6 +2016,7 @@ pub mod actions;
 pub mod diagnosis;
 mod observed;
 pub mod scenario;
+pub mod workload;
 
 pub use observed::ObservedCycle;
 

@@ -124,7 +124,7 @@ pub(crate) fn campaign(
     )?;
     writeln!(
         out,
-        "fault-free: {} simulated hours, {} boxes delivered, {} hazards, {} certain diagnoses (all false)",
+        "fault-free: {} simulated hours, {} produced (items delivered, or elementary actions completed on a plant of components), {} hazards, {} certain diagnoses (all false)",
         r.fault_free_hours,
         r.fault_free_delivered,
         r.fault_free_hazards,
@@ -255,7 +255,7 @@ pub(crate) fn transients(
     }
     writeln!(
         out,
-        "transient-fault campaign: {} seeds per case, filter Enforce, diagnosers on, plausibility stage {}; transients at one item every {} ms (+0..{} ms), actuator faults at the sustained period {} ms ({:.0} s wall)",
+        "transient-fault campaign: {} seeds per case, filter Enforce, diagnosers on, plausibility stage {}; transients during production of period {} ms (+0..{} ms: an item's arrival, or the production scenario's length), actuator faults at the sustained period {} ms ({:.0} s wall)",
         r.seeds,
         if r.plausibility { "on" } else { "off" },
         r.transient_period_ms.0,
@@ -294,7 +294,7 @@ pub(crate) fn transients(
     )?;
     writeln!(
         out,
-        "fault-free: {} simulated hours, {} items delivered, {} trips, {} hazards, {} certain diagnoses, {} sensor edges held as implausible",
+        "fault-free: {} simulated hours, {} produced (items delivered, or elementary actions completed), {} trips, {} hazards, {} certain diagnoses, {} sensor edges held as implausible",
         ff.hours, ff.delivered, ff.trips, ff.hazards, ff.diagnoses, ff.held_edges
     )?;
     for e in &ff.examples {

@@ -12,7 +12,7 @@
 //! | V02xx | observers (`observers.ron`) |
 //! | V03xx | traces (CSV) |
 //! | V04xx | scenarios |
-//! | V05xx | `vigie verify` (V0501, V0520), diagnosers and `vigie learn` (V0502..V0514) |
+//! | V05xx | `vigie verify` (V0501, V0520), diagnosers and `vigie learn` (V0502..V0514), the campaigns' production (V0515) |
 //! | V06xx | the gateway: I/O map (V0601..V0610), configuration (V0619..V0628) |
 //! | V07xx | the emulator: layout, faults, parts |
 //! | V08xx | tasks (`tasks.ron`) |
@@ -117,6 +117,7 @@ registry! {
     DIAGNOSER_ESTIMATE = "V0512", "an invalid diagnoser estimate";
     DIAGNOSER_REWRITE = "V0513", "the constraints cannot be rewritten with the diagnosers";
     LEARN_WRITE_IN_PLACE = "V0514", "`vigie learn` cannot write the learned bounds into `diagnosers.ron` in place";
+    CAMPAIGN_NO_PRODUCTION = "V0515", "a plant of components without a production scenario for the campaigns";
     SPIN_FAILED = "V0520", "`vigie verify --spin`: SPIN, gcc or pan could not run, or failed";
     // V06xx: the gateway's I/O map and configuration
     IO_MAP_UNREADABLE = "V0601", "the I/O map cannot be read";

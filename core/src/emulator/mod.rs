@@ -360,6 +360,11 @@ impl Emulator {
         Ok(())
     }
 
+    /// The layout's sensors, in the layout's order (the ids a transient may strike).
+    pub fn sensor_ids(&self) -> Vec<String> {
+        self.layout.sensors.iter().map(|s| s.id.clone()).collect()
+    }
+
     /// The actuators the emulator drives, by role (the ids a fault may name): the
     /// layout's drives, then the safety contactors that supply them.
     pub fn actuators(&self) -> Vec<String> {

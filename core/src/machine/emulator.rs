@@ -42,6 +42,8 @@ struct Danger {
 pub struct ComponentPlant {
     /// Id and display name of each component.
     names: Vec<(String, String)>,
+    /// The plant inputs the components measure, in plant order.
+    measured: Vec<String>,
     live: Vec<Live>,
     dangers: Vec<Danger>,
     symbols: Symbols,
@@ -85,6 +87,7 @@ impl ComponentPlant {
             return Err(p);
         }
         let symbols = plant.symbols();
+        let measured = measured(desc, plant);
         let mut live = Vec::new();
         for c in &desc.components {
             live.push(c.kind.build(&c.id, &symbols)?);
@@ -131,6 +134,7 @@ impl ComponentPlant {
             commanded.set(i, s.initial);
         }
         let mut emu = Self {
+            measured,
             names: desc
                 .components
                 .iter()
@@ -423,6 +427,12 @@ impl ComponentPlant {
         n
     }
 
+    /// The sensors the components drive (the ids a transient may strike), in plant
+    /// order; a panel button is not one.
+    pub fn sensor_ids(&self) -> Vec<String> {
+        self.measured.clone()
+    }
+
     /// The outputs that drive something (the ids a fault may weld or kill): every
     /// output of the plant.
     pub fn actuators(&self) -> Vec<String> {
@@ -509,3 +519,18 @@ impl ComponentPlant {
 
 #[cfg(test)]
 mod tests;
+
+/// The plant inputs the components of `desc` measure, in plant order.
+fn measured(desc: &Components, plant: &Plant) -> Vec<String> {
+    let named: std::collections::BTreeSet<&str> = desc
+        .components
+        .iter()
+        .flat_map(|c| c.kind.sensors())
+        .collect();
+    plant
+        .inputs
+        .iter()
+        .filter(|s| named.contains(s.id.as_str()))
+        .map(|s| s.id.clone())
+        .collect()
+}

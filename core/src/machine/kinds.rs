@@ -56,6 +56,20 @@ impl KindDef {
         }
     }
 
+    /// The plant inputs it measures: its sensors (a panel button is the operator's,
+    /// not a sensor: none).
+    pub(crate) fn sensors(&self) -> Vec<&str> {
+        match self {
+            Self::Button(_) => Vec::new(),
+            Self::Axis(_) | Self::Tank(_) => self
+                .signals()
+                .into_iter()
+                .filter(|(_, space)| *space == Space::Input)
+                .map(|(s, _)| s)
+                .collect(),
+        }
+    }
+
     /// Every logic expression it holds (checked against the plant).
     pub(crate) fn expressions(&self) -> Vec<&str> {
         match self {

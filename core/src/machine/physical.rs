@@ -195,6 +195,14 @@ impl Physical {
         }
     }
 
+    /// The sensors the plant drives (those a transient may strike).
+    pub fn sensor_ids(&self) -> Vec<String> {
+        match self {
+            Self::Components(c) => c.sensor_ids(),
+            Self::Layout(e) => e.sensor_ids(),
+        }
+    }
+
     /// The actuators a fault may weld or kill.
     pub fn actuators(&self) -> Vec<String> {
         match self {

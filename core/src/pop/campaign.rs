@@ -15,7 +15,8 @@ use crate::diag::Problem;
 use crate::diag::codes;
 use crate::emulator::{ArrivalPlan, FaultKind, FaultSpec, SizeMix, Trigger};
 use crate::expr::{Dnf, eval_dnf, parse_str};
-use crate::sim::{OperatorAction, Options, Simulation};
+use crate::sim::workload::Workload;
+use crate::sim::{Options, Simulation};
 use crate::time::Millis;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -248,7 +249,13 @@ pub fn library(file: &super::model::DiagnoserFile) -> Vec<Injection> {
 struct Shared {
     bundle: PlantBundle,
     program: Arc<CompiledProgram>,
+    /// What keeps the plant producing: boxes every 15 ± 2 s on a sorting layout, the
+    /// production scenario's actions on a plant of components.
+    workload: Workload,
 }
+
+/// The longest a campaign's run lasts: an injection's watch, or a fault-free hour.
+pub(crate) const HORIZON_MS: u64 = 2 * 3_600_000;
 
 fn simulation(shared: &Shared, seed: u64) -> Result<Simulation, Vec<Problem>> {
     let program = (*shared.program).clone();
@@ -262,13 +269,7 @@ fn simulation(shared: &Shared, seed: u64) -> Result<Simulation, Vec<Problem>> {
         },
     )?;
     sim.enable_diagnosers()?;
-    sim.emulator.set_arrivals(ArrivalPlan::Periodic {
-        period_ms: 15_000,
-        jitter_ms: 2_000,
-        mix: SizeMix::Alternate,
-        count: None,
-    });
-    let _ = sim.act(&OperatorAction::Start);
+    shared.workload.apply(&mut sim, HORIZON_MS);
     Ok(sim)
 }
 
@@ -504,10 +505,30 @@ pub(crate) fn load_reference(
     Ok((bundle, program, file))
 }
 
+/// The campaign's plant, program and workload (boxes every 15 ± 2 s on a sorting
+/// layout), and the diagnosers' file.
+fn load_shared(dir: &Path) -> Result<(Shared, super::model::DiagnoserFile), Vec<Problem>> {
+    let (bundle, program, file) = load_reference(dir)?;
+    let workload = Workload::of(
+        dir,
+        ArrivalPlan::Periodic {
+            period_ms: 15_000,
+            jitter_ms: 2_000,
+            mix: SizeMix::Alternate,
+            count: None,
+        },
+    )?;
+    let shared = Shared {
+        bundle,
+        program,
+        workload,
+    };
+    Ok((shared, file))
+}
+
 /// Runs the campaign on the plant in `dir`.
 pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
-    let (bundle, program, file) = load_reference(dir)?;
-    let shared = Shared { bundle, program };
+    let (shared, file) = load_shared(dir)?;
     let injections: Vec<Injection> = library(&file)
         .into_iter()
         .filter(|i| config.only.as_deref().is_none_or(|o| i.name.contains(o)))
@@ -577,13 +598,12 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
     > {
         let mut sim = simulation(&shared, 10_000 + h)?;
         sim.run_until(Millis(3_600_000));
-        let s = sim.emulator.stats();
         Ok((
             sim.diagnosers
                 .as_ref()
                 .map(|d| d.diagnoses.clone())
                 .unwrap_or_default(),
-            u64::from(s.delivered_left + s.delivered_right),
+            sim.produced(),
             sim.emulator.hazards().len(),
         ))
     });

@@ -19,11 +19,13 @@
 //! delivered again and the filter is not tripped at the end of the watch.
 
 use super::Diagnosis;
+use super::campaign::HORIZON_MS;
 use super::campaign::{jobs, mix, parallel};
 use crate::bundle::PlantBundle;
 use crate::control::CompiledProgram;
 use crate::diag::Problem;
 use crate::emulator::{ArrivalPlan, FaultKind, FaultSpec, SizeMix, Trigger};
+use crate::sim::workload::Workload;
 use crate::sim::{OperatorAction, Options, Simulation};
 use crate::time::Millis;
 use serde::Serialize;
@@ -282,12 +284,14 @@ struct Shared {
     sensors: Vec<String>,
     /// The actuators the emulator drives.
     actuators: Vec<String>,
+    /// What keeps the plant producing.
+    workload: Workload,
 }
 
 fn simulation(
     shared: &Shared,
     seed: u64,
-    plan: &ArrivalPlan,
+    work: &Workload,
     plausibility: bool,
     history_cycles: usize,
 ) -> Result<Simulation, Vec<Problem>> {
@@ -302,8 +306,7 @@ fn simulation(
     )?;
     sim.engine.set_plausibility(plausibility);
     sim.enable_diagnosers()?;
-    sim.emulator.set_arrivals(plan.clone());
-    let _ = sim.act(&OperatorAction::Start);
+    work.apply(&mut sim, HORIZON_MS);
     Ok(sim)
 }
 
@@ -478,9 +481,9 @@ fn try_reset(sim: &mut Simulation, ms: u64) {
     }
 }
 
+/// The items delivered, or the elementary actions completed on a plant of components.
 fn delivered(sim: &Simulation) -> u32 {
-    let s = sim.emulator.stats();
-    s.delivered_left + s.delivered_right
+    u32::try_from(sim.produced()).unwrap_or(u32::MAX)
 }
 
 fn judge(sim: &Simulation, expected: &BTreeSet<String>, at: u64, out: &mut Outcome) {
@@ -595,7 +598,7 @@ fn run_one(
     case: &Case,
     seed: u64,
     config: &Config,
-    plans: &(ArrivalPlan, ArrivalPlan),
+    plans: &(Workload, Workload),
 ) -> Result<Outcome, Vec<Problem>> {
     let mut draw = Draw(seed ^ mix(case.name.len() as u64 ^ 0x5EED));
     for b in case.name.bytes() {
@@ -687,7 +690,7 @@ fn run_one(
     record(&sim, config, &mut out);
     if out.restored == Some(false) {
         out.note = format!(
-            "{} not restored: {} items delivered in {} s after the reset at {reset_at} ms, filter {}",
+            "{} not restored: {} produced (items delivered or actions completed) in {} s after the reset at {reset_at} ms, filter {}",
             out.note,
             delivered(&sim) - before,
             config.recover_ms / 1000,
@@ -734,7 +737,12 @@ fn own_hazards(hazards: &[crate::emulator::Hazard], actuator: &str) -> usize {
         .count()
 }
 
+/// The period and jitter of the plant's production: the layout's arrivals, or the
+/// production scenario's length (no jitter) on a plant of components.
 fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {
+    if let Workload::Operator { period_ms, .. } = &shared.workload {
+        return Ok((*period_ms, 0));
+    }
     let layout = crate::emulator::Layout::load(&shared.bundle.dir.join("layout.ron"))?;
     Ok(match layout.source.arrivals {
         ArrivalPlan::Periodic {
@@ -750,8 +758,14 @@ fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {
 /// 500 ms down to 1 s), at which `minutes` of fault-free production with the filter and
 /// the diagnosers on give no trip, no hazard, no certain diagnosis and deliver every
 /// item but the last few (the queue does not grow).
+///
+/// A plant of components keeps its production scenario's period: its operator's
+/// actions are timed for it.
 fn sustained(shared: &Shared, minutes: u64, threads: usize) -> Result<u64, Vec<Problem>> {
     let (nominal, _) = layout_plan(shared)?;
+    if matches!(shared.workload, Workload::Operator { .. }) {
+        return Ok(nominal);
+    }
     let periods: Vec<u64> = (0..)
         .map(|k| nominal.saturating_sub(500 * k))
         .take_while(|&p| p >= 1_000)
@@ -764,7 +778,7 @@ fn sustained(shared: &Shared, minutes: u64, threads: usize) -> Result<u64, Vec<P
             mix: SizeMix::Alternate,
             count: None,
         };
-        let mut sim = simulation(shared, 77, &plan, true, 16)?;
+        let mut sim = simulation(shared, 77, &Workload::Arrivals(plan), true, 16)?;
         sim.run_until(Millis(duration));
         let diagnosed = sim
             .diagnosers
@@ -806,28 +820,38 @@ fn load(dir: &Path) -> Result<Shared, Vec<Problem>> {
             }
         }
     }
-    let layout = crate::emulator::Layout::load(&dir.join("layout.ron"))?;
-    let sensors: Vec<String> = layout.sensors.iter().map(|s| s.id.clone()).collect();
-    let actuators = crate::emulator::Emulator::new(&layout, &bundle.plant, 0)
-        .map_err(|p| vec![p])?
-        .actuators();
+    let physical =
+        crate::machine::Physical::new(&crate::machine::Description::load(dir)?, &bundle.plant, 0)
+            .map_err(|p| vec![p])?;
+    let (sensors, actuators) = (physical.sensor_ids(), physical.actuators());
+    // The layout's own arrivals are read by `layout_plan`; this plan is not used there.
+    let workload = Workload::of(
+        dir,
+        ArrivalPlan::Periodic {
+            period_ms: 15_000,
+            jitter_ms: 0,
+            mix: SizeMix::Alternate,
+            count: None,
+        },
+    )?;
     Ok(Shared {
         bundle,
         program,
         partitions,
         sensors,
         actuators,
+        workload,
     })
 }
 
 /// One fault-free hour of the plant under `plan`.
 fn fault_free_hour(
     shared: &Shared,
-    plan: &ArrivalPlan,
+    work: &Workload,
     config: &Config,
     h: u64,
 ) -> Result<FaultFree, Vec<Problem>> {
-    let mut sim = simulation(shared, 20_000 + h, plan, config.plausibility, 16)?;
+    let mut sim = simulation(shared, 20_000 + h, work, config.plausibility, 16)?;
     sim.run_until(Millis(3_600_000));
     let mut examples: Vec<String> = sim
         .journal()
@@ -876,20 +900,23 @@ pub fn run(dir: &Path, config: &Config) -> Result<Report, Vec<Problem>> {
     let shared = load(dir)?;
     let (period, jitter) = layout_plan(&shared)?;
     let sustained_ms = sustained(&shared, 20, config.threads)?;
-    let plans = (
-        ArrivalPlan::Periodic {
-            period_ms: period,
-            jitter_ms: jitter,
-            mix: SizeMix::Alternate,
-            count: None,
-        },
-        ArrivalPlan::Periodic {
-            period_ms: sustained_ms,
-            jitter_ms: 0,
-            mix: SizeMix::Alternate,
-            count: None,
-        },
-    );
+    let plans = match &shared.workload {
+        Workload::Operator { .. } => (shared.workload.clone(), shared.workload.clone()),
+        Workload::Arrivals(_) => (
+            Workload::Arrivals(ArrivalPlan::Periodic {
+                period_ms: period,
+                jitter_ms: jitter,
+                mix: SizeMix::Alternate,
+                count: None,
+            }),
+            Workload::Arrivals(ArrivalPlan::Periodic {
+                period_ms: sustained_ms,
+                jitter_ms: 0,
+                mix: SizeMix::Alternate,
+                count: None,
+            }),
+        ),
+    };
     let all: Vec<Case> = cases(&shared.sensors, &shared.actuators, &config.lengths_ms)
         .into_iter()
         .filter(|c| config.only.as_deref().is_none_or(|o| c.name.contains(o)))

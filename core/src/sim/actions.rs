@@ -220,6 +220,23 @@ impl Simulation {
         self.action_stop.as_deref()
     }
 
+    /// The plant's production so far: the items delivered on a sorting layout, the
+    /// elementary actions completed on a plant of components (what the campaigns count
+    /// to tell that production runs again after a fault).
+    pub fn produced(&self) -> u64 {
+        match &self.emulator {
+            crate::machine::Physical::Layout(_) => {
+                let s = self.emulator.stats();
+                u64::from(s.delivered_left + s.delivered_right)
+            }
+            crate::machine::Physical::Components(_) => self
+                .action_events()
+                .iter()
+                .filter(|e| e.kind == crate::machine::monitor::ActionEventKind::Completed)
+                .count() as u64,
+        }
+    }
+
     /// The monitor's events so far (none without a monitor).
     pub fn action_events(&self) -> &[ActionEvent] {
         self.action_monitor
