@@ -107,6 +107,26 @@ impl Workload {
     }
 }
 
+impl Simulation {
+    /// Repeats the operator's actions still pending (a scenario's, before its run) every
+    /// `period_ms` until `horizon_ms`: a short production scenario made long enough to
+    /// measure.
+    pub fn repeat_pending(&mut self, period_ms: u64, horizon_ms: u64) {
+        if period_ms == 0 {
+            return;
+        }
+        let once: Vec<TimedAction> = self.pending.iter().cloned().collect();
+        let mut k = 1;
+        while k * period_ms <= horizon_ms {
+            self.pending.extend(once.iter().map(|a| TimedAction {
+                at_ms: a.at_ms + k * period_ms,
+                action: a.action.clone(),
+            }));
+            k += 1;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
