@@ -119,6 +119,7 @@ manual-jog-hover = ON while held
 status-removed = , { $n } taken off
 status-boxes = { $scenario } — boxes: { $created } created, { $left } left, { $right } right, { $damaged } damaged{ $removed }
 status-actions = { $scenario } — elementary actions: { $done } completed, { $faults } faults
+status-items = items: { $placed } placed, { $out } out (delivered or taken)
 
 ## Synoptic banners
 banner-level = Level { $level } — trip { $ids } at { $time }

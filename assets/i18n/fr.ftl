@@ -126,6 +126,7 @@ status-removed = , { $n ->
 }
 status-boxes = { $scenario } — caisses : { $created } créées, { $left } à gauche, { $right } à droite, { $damaged } endommagées{ $removed }
 status-actions = { $scenario } — actions élémentaires : { $done } terminées, { $faults } défauts
+status-items = pièces : { $placed } posées, { $out } sorties (livrées ou prises)
 
 ## Bandeaux du synoptique
 banner-level = Niveau { $level } — arrêt sécurité { $ids } à { $time }

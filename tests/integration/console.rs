@@ -2236,3 +2236,35 @@ fn the_plant_picker_opens_another_plant_folder() {
     h.run_steps(3);
     assert!(h.state().sim.layout.is_some());
 }
+
+/// A plant with conveyors (seed 000's workshop) opens on its own folder: the synoptic
+/// draws the belt and the robot, the status line counts the items, and the thesis's
+/// scenario 1 raises the conveyor task's alarm in the console too.
+#[test]
+fn the_console_runs_a_plant_with_conveyors() {
+    let dir = root().join("layouts/workshop");
+    let mut o = ConsoleOptions::new(&dir);
+    o.scenario = Some(dir.join("scenarios/thesis-scenario-1.ron"));
+    o.data_dir = Some(temp_dir("workshop"));
+    let mut h = harness(o);
+    h.run_steps(2);
+    h.state_mut().apply(Command::SetSpeed(100.0));
+    for _ in 0..600 {
+        h.step();
+        if h.state().sim.now().0 > 6_500 {
+            break;
+        }
+    }
+    h.state_mut().apply(Command::Pause);
+    h.run_steps(2);
+    assert!(h.state().sim.now().0 > 6_500, "{:?}", h.state().sim.now());
+    h.query_by_label_contains("items: 2 placed, 1 out")
+        .expect("the status line counts the pallets");
+    let alarms = h.state().sim.alarms.all();
+    assert!(
+        alarms.iter().any(|a| a.kind == vigie_core::alarms::AlarmKind::Task
+            && a.message.contains("conveyor and pusher: stopped too long")
+            && (6_000..=6_020).contains(&a.raised.0)),
+        "{alarms:?}"
+    );
+}

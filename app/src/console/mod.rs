@@ -1756,6 +1756,17 @@ fn synoptic_view(i18n: &I18n, sim: &vigie_core::sim::Simulation) -> synoptic::Vi
                 (id, t)
             })
             .collect(),
+        items: sim
+            .emulator
+            .as_components()
+            .map(|c| c.item_classes())
+            .unwrap_or_default()
+            .into_iter()
+            .filter_map(|class| {
+                let t = i18n.plant(&format!("item-{class}"))?;
+                Some((class, t))
+            })
+            .collect(),
         ..synoptic::View::default()
     }
 }

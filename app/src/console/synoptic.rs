@@ -30,6 +30,8 @@ pub struct View {
     pub parts: std::collections::BTreeMap<String, String>,
     /// Its declared dangers' texts in the language shown, by id.
     pub dangers: std::collections::BTreeMap<String, String>,
+    /// Its item classes' names in the language shown (`item-<class>`), by class.
+    pub items: std::collections::BTreeMap<String, String>,
     /// Where the last frame put each sensor's name and each explanation tag, by the
     /// element it belongs to (screen points): what the tests check against the
     /// geometry.
@@ -100,6 +102,7 @@ impl Default for View {
             elements: std::collections::BTreeMap::new(),
             parts: std::collections::BTreeMap::new(),
             dangers: std::collections::BTreeMap::new(),
+            items: std::collections::BTreeMap::new(),
             placed: Placed::default(),
         }
     }
@@ -158,6 +161,8 @@ pub struct Geometry {
     pub has_table: bool,
     /// The axes of a plant of components ([`scene`]).
     pub axes: Vec<scene::AxisGeom>,
+    /// The conveyors of a plant of components, with their items ([`scene`]).
+    pub belts: Vec<scene::BeltGeom>,
     /// The schematic strip under the layout: the signals `layout.ron` does not place
     /// (a safety contactor, mirror contacts, panel buttons), by their plant element
     /// (`element` in `plant.ron`, "" for none) with the label's world position; their
@@ -329,6 +334,7 @@ impl Geometry {
             ],
             has_table: true,
             axes: Vec::new(),
+            belts: Vec::new(),
             schematic,
         }
     }
@@ -568,6 +574,7 @@ pub fn synoptic_ui(
         paint_table_motion(&cv, geom, table_angle_mdeg, t_s);
     }
     scene::paint_axes(&cv, geom, view, pic.ghost_scene);
+    scene::paint_belts(&cv, geom, view, t_s);
     paint_boxes(&cv, pic.boxes);
     // Predicted-hazard labels, drawn last so that no equipment hides them.
     let predicted_labels = match pic.ghost {

@@ -677,6 +677,16 @@ fn status_ui(c: &Console, ui: &mut egui::Ui) {
                     ("faults", faults.into()),
                 ],
             ));
+            if let Some(p) = c.sim.emulator.as_components().filter(|p| p.carries_items()) {
+                ui.separator();
+                ui.label(c.i18n.ta(
+                    "status-items",
+                    &[
+                        ("placed", p.items_in().into()),
+                        ("out", p.items_out().into()),
+                    ],
+                ));
+            }
             ui.separator();
             if !c.status.is_empty() {
                 ui.label(RichText::new(&c.status).strong());

@@ -79,7 +79,7 @@ pub(crate) fn axis_actions(axis: &AxisGeometry) -> Vec<DerivedAction> {
             let t = (fastest + slowest) / 2.0;
             let dt = (slowest - fastest) / 2.0;
             out.push(DerivedAction {
-                id: format!("{}.{initial}.{command}.{final_state}", axis.component),
+                id: action_id(&[&axis.component, initial, command, final_state]),
                 component: axis.component.clone(),
                 initial: initial.clone(),
                 command: command.clone(),
@@ -93,8 +93,35 @@ pub(crate) fn axis_actions(axis: &AxisGeometry) -> Vec<DerivedAction> {
     out
 }
 
+/// A derived action's id: its parts joined by `_`, every other character than a letter
+/// or a digit made `_` and runs of them one (an id is letters, digits and `_`: V1101).
+fn action_id(parts: &[&str]) -> String {
+    let mut id = String::new();
+    for c in parts.join("_").chars() {
+        let c = if c.is_alphanumeric() { c } else { '_' };
+        if !(c == '_' && id.ends_with('_')) {
+            id.push(c);
+        }
+    }
+    id.trim_matches('_').to_string()
+}
+
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn a_derived_actions_id_is_letters_digits_and_underscores() {
+        assert_eq!(
+            action_id(&["tank1", "b1", "M1 . V1", "h1"]),
+            "tank1_b1_M1_V1_h1"
+        );
+        assert_eq!(action_id(&["head", "h", "/Y1", "b1"]), "head_h_Y1_b1");
+        assert!(
+            crate::plant::is_valid_name(&action_id(&["a.b", "x", "A + /B*", "y"])),
+            "{}",
+            action_id(&["a.b", "x", "A + /B*", "y"])
+        );
+    }
     use super::*;
 
     fn head(variation_ppm: u32, tolerance_ms: u64) -> AxisGeometry {

@@ -157,6 +157,27 @@ impl Components {
                 ));
             }
         }
+        for c in &self.components {
+            let super::kinds::KindDef::Conveyor(v) = &c.kind else {
+                continue;
+            };
+            let Some(to) = v.target() else { continue };
+            let next = self.components.iter().find(|o| o.id == to);
+            if !matches!(
+                next.map(|n| &n.kind),
+                Some(super::kinds::KindDef::Conveyor(_))
+            ) || to == c.id
+            {
+                out.push(self.error(
+                    codes::COMPONENTS_INVALID.id,
+                    to,
+                    format!(
+                        "component `{}`: its exit leads to `{to}`, which is not another conveyor",
+                        c.id
+                    ),
+                ));
+            }
+        }
         for d in &self.dangers {
             if !seen.contains(d.component.as_str()) {
                 out.push(self.error(

@@ -44,6 +44,10 @@ pub struct ComponentPlant {
     names: Vec<(String, String)>,
     /// The plant inputs the components measure, in plant order.
     measured: Vec<String>,
+    /// The number of the last item a feeder placed.
+    next_item: u32,
+    /// Per component, the component its exit leads to (a conveyor's `To`).
+    targets: Vec<Option<usize>>,
     live: Vec<Live>,
     dangers: Vec<Danger>,
     symbols: Symbols,
@@ -135,6 +139,8 @@ impl ComponentPlant {
         }
         let mut emu = Self {
             measured,
+            next_item: 0,
+            targets: targets(desc),
             names: desc
                 .components
                 .iter()
@@ -216,12 +222,14 @@ impl ComponentPlant {
             frame: &self.frame,
             rng: &mut self.rng,
             hazards: Vec::new(),
+            next_item: &mut self.next_item,
         };
         let mut found = Vec::new();
         for (k, c) in self.live.iter_mut().enumerate() {
             c.step(&mut ctx, self.component_faults[k]);
             found.extend(ctx.hazards.drain(..).map(|h| (k, h)));
         }
+        self.hand_over();
         for (k, (kind, elements)) in found {
             let (id, name) = &self.names[k];
             self.hazards.push(Hazard {
@@ -238,6 +246,29 @@ impl ComponentPlant {
         // something reads them within it (a fault's condition, a drive on a sensor).
         if self.has_conditions || self.reads_inputs {
             self.compute_sensors();
+        }
+    }
+
+    /// Each item waiting at a conveyor's exit end passes to the next conveyor's entry
+    /// when it is free; else it waits.
+    fn hand_over(&mut self) {
+        for from in 0..self.live.len() {
+            let Some(to) = self.targets[from] else {
+                continue;
+            };
+            let Live::Conveyor(c) = &self.live[from] else {
+                continue;
+            };
+            let Some(item) = c.ready().cloned() else {
+                continue;
+            };
+            let taken = match &mut self.live[to] {
+                Live::Conveyor(next) => next.accept(&item),
+                _ => false,
+            };
+            if taken && let Live::Conveyor(c) = &mut self.live[from] {
+                c.hand_over();
+            }
         }
     }
 
@@ -427,6 +458,43 @@ impl ComponentPlant {
         n
     }
 
+    /// The items that left the plant done: delivered into a sink or taken at a
+    /// conveyor's exit end.
+    pub fn items_out(&self) -> u32 {
+        self.live
+            .iter()
+            .map(|c| match c {
+                Live::Conveyor(v) => v.out(),
+                _ => 0,
+            })
+            .sum()
+    }
+
+    /// The classes of items the feeders place, sorted.
+    pub fn item_classes(&self) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .live
+            .iter()
+            .flat_map(|c| match c {
+                Live::Conveyor(v) => v.classes(),
+                _ => Vec::new(),
+            })
+            .collect();
+        v.sort();
+        v.dedup();
+        v
+    }
+
+    /// The items the feeders placed so far.
+    pub fn items_in(&self) -> u32 {
+        self.next_item
+    }
+
+    /// The plant has conveyors (its production is items, not only moves).
+    pub fn carries_items(&self) -> bool {
+        self.live.iter().any(|c| matches!(c, Live::Conveyor(_)))
+    }
+
     /// The sensors the components drive (the ids a transient may strike), in plant
     /// order; a panel button is not one.
     pub fn sensor_ids(&self) -> Vec<String> {
@@ -518,6 +586,8 @@ impl ComponentPlant {
 }
 
 #[cfg(test)]
+mod conveyor_tests;
+#[cfg(test)]
 mod tests;
 
 /// The plant inputs the components of `desc` measure, in plant order.
@@ -532,5 +602,18 @@ fn measured(desc: &Components, plant: &Plant) -> Vec<String> {
         .iter()
         .filter(|s| named.contains(s.id.as_str()))
         .map(|s| s.id.clone())
+        .collect()
+}
+
+/// Per component of `desc`, the index of the component its exit leads to.
+fn targets(desc: &Components) -> Vec<Option<usize>> {
+    desc.components
+        .iter()
+        .map(|c| match &c.kind {
+            super::kinds::KindDef::Conveyor(v) => v
+                .target()
+                .and_then(|t| desc.components.iter().position(|o| o.id == t)),
+            _ => None,
+        })
         .collect()
 }

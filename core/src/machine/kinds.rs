@@ -7,6 +7,7 @@
 
 pub mod axis;
 pub mod button;
+pub mod conveyor;
 pub mod tank;
 
 use super::scene::SceneElement;
@@ -24,6 +25,8 @@ pub enum KindDef {
     Axis(axis::AxisDef),
     /// A push button of the operator's panel on a plant input.
     Button(button::ButtonDef),
+    /// A belt carrying items between a feeder, beams and its exit end.
+    Conveyor(conveyor::ConveyorDef),
     /// A level filled and emptied by flows: a vessel with its pumps and valves.
     Tank(tank::TankDef),
 }
@@ -34,6 +37,7 @@ impl KindDef {
         match self {
             Self::Axis(_) => "axis",
             Self::Button(_) => "button",
+            Self::Conveyor(_) => "conveyor",
             Self::Tank(_) => "tank",
         }
     }
@@ -43,6 +47,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => a.check(),
             Self::Button(b) => b.check(),
+            Self::Conveyor(c) => c.check(),
             Self::Tank(t) => t.check(),
         }
     }
@@ -52,6 +57,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => a.signals(),
             Self::Button(b) => b.signals(),
+            Self::Conveyor(c) => c.signals(),
             Self::Tank(t) => t.signals(),
         }
     }
@@ -61,7 +67,7 @@ impl KindDef {
     pub(crate) fn sensors(&self) -> Vec<&str> {
         match self {
             Self::Button(_) => Vec::new(),
-            Self::Axis(_) | Self::Tank(_) => self
+            Self::Axis(_) | Self::Conveyor(_) | Self::Tank(_) => self
                 .signals()
                 .into_iter()
                 .filter(|(_, space)| *space == Space::Input)
@@ -75,6 +81,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => a.expressions(),
             Self::Button(_) => Vec::new(),
+            Self::Conveyor(c) => c.expressions(),
             Self::Tank(t) => t.expressions(),
         }
     }
@@ -84,6 +91,7 @@ impl KindDef {
         match self {
             Self::Axis(a) => Ok(Live::Axis(axis::Axis::new(id, a, symbols)?)),
             Self::Button(b) => Ok(Live::Button(button::Button::new(id, b, symbols)?)),
+            Self::Conveyor(c) => Ok(Live::Conveyor(conveyor::Conveyor::new(id, c, symbols)?)),
             Self::Tank(t) => Ok(Live::Tank(tank::Tank::new(id, t, symbols)?)),
         }
     }
@@ -99,6 +107,8 @@ pub(crate) struct StepCtx<'a> {
     pub rng: &'a mut SplitMix64,
     /// Hazards found in this step: kind and the actuators involved.
     pub hazards: Vec<(super::HazardKind, Vec<String>)>,
+    /// The number of the last item a feeder placed.
+    pub next_item: &'a mut u32,
 }
 
 /// Faults acting on a component as a whole.
@@ -117,6 +127,8 @@ pub(crate) enum Live {
     Axis(axis::Axis),
     /// See [`button::Button`].
     Button(button::Button),
+    /// See [`conveyor::Conveyor`].
+    Conveyor(conveyor::Conveyor),
     /// See [`tank::Tank`].
     Tank(tank::Tank),
 }
@@ -127,6 +139,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.step(ctx, faults),
             Self::Button(b) => b.step(ctx),
+            Self::Conveyor(c) => c.step(ctx, faults),
             Self::Tank(t) => t.step(ctx, faults),
         }
     }
@@ -138,6 +151,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.idle(),
             Self::Button(b) => !b.pressed(),
+            Self::Conveyor(c) => c.idle(),
             Self::Tank(t) => t.idle(),
         }
     }
@@ -147,6 +161,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.sense(sensors),
             Self::Button(b) => b.sense(sensors),
+            Self::Conveyor(c) => c.sense(sensors),
             Self::Tank(t) => t.sense(sensors),
         }
     }
@@ -157,6 +172,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.position(),
             Self::Button(b) => f64::from(u8::from(b.pressed())),
+            Self::Conveyor(c) => c.position(),
             Self::Tank(t) => t.level(),
         }
     }
@@ -166,6 +182,7 @@ impl Live {
         match self {
             Self::Axis(a) => a.scene(id, name),
             Self::Button(b) => b.scene(id, name),
+            Self::Conveyor(c) => c.scene(id, name),
             Self::Tank(t) => t.scene(id, name),
         }
     }
@@ -175,7 +192,7 @@ impl Live {
     pub(crate) fn set_position(&mut self, position: f64) {
         match self {
             Self::Axis(a) => a.set_position(position),
-            Self::Button(_) => {}
+            Self::Button(_) | Self::Conveyor(_) => {}
             Self::Tank(t) => t.set_level(position),
         }
     }
@@ -184,7 +201,7 @@ impl Live {
     pub(crate) fn press(&mut self, signal: &str) -> bool {
         match self {
             Self::Button(b) => b.press(signal),
-            Self::Axis(_) | Self::Tank(_) => false,
+            Self::Axis(_) | Self::Conveyor(_) | Self::Tank(_) => false,
         }
     }
 
@@ -193,7 +210,7 @@ impl Live {
         match self {
             Self::Axis(a) => Some(a.geometry(id)),
             Self::Tank(t) => Some(t.geometry(id)),
-            Self::Button(_) => None,
+            Self::Button(_) | Self::Conveyor(_) => None,
         }
     }
 }

@@ -41,6 +41,8 @@ pub enum Shape {
         sensors: Vec<SceneSensor>,
         /// Its drives.
         drives: Vec<SceneDrive>,
+        /// Its motion sensor.
+        motion: Option<String>,
     },
     /// A tank: its capacity, its level, its level sensors' windows, its flows and
     /// which of them run.
@@ -57,6 +59,27 @@ pub enum Shape {
         flows: Vec<SceneDrive>,
         /// Which flow runs now, by index.
         running: Vec<bool>,
+    },
+    /// A conveyor: its belt, its items and its beams.
+    Conveyor {
+        /// The unit (`mm`).
+        unit: String,
+        /// The belt's length.
+        length: f64,
+        /// -1, 0 or 1: the way the belt really moves.
+        direction: i8,
+        /// The items on it, entry first.
+        items: Vec<SceneItem>,
+        /// The beams (`from` = `to`: the beam's place).
+        sensors: Vec<SceneSensor>,
+        /// Its drives.
+        drives: Vec<SceneDrive>,
+        /// Its exit end: `stop`, `drop`, `sink` or the next conveyor's id.
+        exit: String,
+        /// Its motion sensor.
+        motion: Option<String>,
+        /// Its feeder's condition.
+        feed: Option<String>,
     },
     /// A panel push button.
     Button {
@@ -87,4 +110,17 @@ pub struct SceneDrive {
     pub speed: f64,
     /// A sensor in series that sees it run (a tank line's flow sensor).
     pub sensor: Option<String>,
+}
+
+/// An item on a conveyor.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SceneItem {
+    /// Its number.
+    pub id: u32,
+    /// Its class.
+    pub class: String,
+    /// Its rear end from the entry.
+    pub rear: f64,
+    /// Its length.
+    pub length: f64,
 }

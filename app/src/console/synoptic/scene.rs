@@ -83,6 +83,7 @@ impl Geometry {
                     direction,
                     sensors: windows,
                     drives,
+                    motion,
                 } => {
                     let a = AxisGeom {
                         id: e.id.clone(),
@@ -95,6 +96,15 @@ impl Geometry {
                         vessel: false,
                     };
                     place_signals(&a, windows, drives, plant, &mut sensors, &mut actuators);
+                    if let Some(m) = motion {
+                        // The motion sensor under the drives' outputs.
+                        sensors.push(SensorGeom {
+                            id: m.clone(),
+                            lamp: [x + 900.0, -GUIDE * 0.15 - 380.0 * 3.0],
+                            beam: None,
+                            high: false,
+                        });
+                    }
                     axes.push(a);
                 }
                 Shape::Tank {
@@ -119,10 +129,12 @@ impl Geometry {
                     axes.push(a);
                 }
                 // A panel button's input goes to the schematic strip, under its
-                // element (`plant.ron`), with the other panel signals.
-                Shape::Button { .. } => {}
+                // element (`plant.ron`), with the other panel signals; conveyors are
+                // placed in rows above, below.
+                Shape::Button { .. } | Shape::Conveyor { .. } => {}
             }
         }
+        let belts = place_belts(scene, plant, &mut sensors, &mut actuators);
         let right = if axes.last().is_some_and(|a| a.vessel) {
             VESSEL_PITCH - 900.0
         } else {
@@ -130,6 +142,14 @@ impl Geometry {
         };
         let mut min = [-1100.0, -GUIDE - 500.0];
         let mut max = [x.max(PITCH) + right, 600.0];
+        if axes.is_empty() {
+            min[1] = -300.0;
+        }
+        for b in &belts {
+            max[0] = max[0].max(b.origin[0] + b.drawn + 900.0);
+            max[1] = max[1].max(b.origin[1] + 700.0);
+            min[1] = min[1].min(b.origin[1] - 900.0);
+        }
         let schematic = place_schematic(plant, &mut sensors, &mut actuators, (&mut min, &mut max));
         Self {
             conveyors: Vec::new(),
@@ -142,8 +162,266 @@ impl Geometry {
             table_actuators: Default::default(),
             has_table: false,
             axes,
+            belts,
             schematic,
         }
+    }
+}
+
+/// The drawn length of the longest conveyor, world units.
+const BELT: f32 = 3600.0;
+/// Distance between two rows of conveyors.
+const BELT_ROW: f32 = 1500.0;
+/// Half the drawn width of a belt.
+const BELT_HALF: f32 = 160.0;
+
+/// A drawn conveyor.
+#[derive(Clone, Debug)]
+pub struct BeltGeom {
+    /// Component id.
+    pub id: String,
+    /// Display name.
+    pub name: String,
+    /// The entry end of its centre line, world.
+    pub origin: [f32; 2],
+    /// Its drawn length, world.
+    pub drawn: f32,
+    /// World units per unit of length.
+    pub scale: f32,
+    /// -1, 0 or 1.
+    pub direction: i8,
+    /// The items: number, class, rear and length in the unit.
+    pub items: Vec<vigie_core::machine::scene::SceneItem>,
+    /// Its exit: `stop`, `drop`, `sink` or the next conveyor.
+    pub exit: String,
+}
+
+/// Places the conveyors in rows above the axes, each chain of conveyors (one's exit
+/// the next one's entry) end to end on its row, at one scale for all; their beams'
+/// lamps above them and their drives' outputs below their entry.
+fn place_belts(
+    scene: &Scene,
+    plant: &Plant,
+    sensors: &mut Vec<SensorGeom>,
+    actuators: &mut BTreeMap<String, [f32; 2]>,
+) -> Vec<BeltGeom> {
+    let belts: Vec<_> = scene
+        .elements
+        .iter()
+        .filter_map(|e| match &e.shape {
+            Shape::Conveyor {
+                length,
+                direction,
+                items,
+                sensors,
+                drives,
+                exit,
+                motion,
+                feed,
+                ..
+            } => Some((
+                e,
+                *length,
+                *direction,
+                items,
+                sensors,
+                drives,
+                exit,
+                (motion, feed),
+            )),
+            _ => None,
+        })
+        .collect();
+    let longest = belts.iter().map(|b| b.1).fold(0.0f64, f64::max);
+    if longest <= 0.0 {
+        return Vec::new();
+    }
+    #[allow(clippy::cast_possible_truncation)]
+    let scale = BELT / longest as f32;
+    let links: Vec<(&str, &str)> = belts
+        .iter()
+        .map(|b| (b.0.id.as_str(), b.6.as_str()))
+        .collect();
+    let order = chains(&links);
+    let mut out = Vec::new();
+    for (row, chain) in order.iter().enumerate() {
+        #[allow(clippy::cast_precision_loss)]
+        let y = 1300.0 + BELT_ROW * (order.len() - 1 - row) as f32;
+        let mut x = 0.0;
+        for &i in chain {
+            let (e, length, direction, items, beams, drives, exit, (motion, feed)) = &belts[i];
+            #[allow(clippy::cast_possible_truncation)]
+            let drawn = *length as f32 * scale;
+            for (k, b) in beams.iter().enumerate() {
+                #[allow(clippy::cast_possible_truncation)]
+                let bx = x + b.from as f32 * scale;
+                // Beams close together: their lamps alternate in height.
+                #[allow(clippy::cast_precision_loss)]
+                let up = 420.0 + 260.0 * (k % 2) as f32;
+                sensors.push(SensorGeom {
+                    id: b.signal.clone(),
+                    lamp: [bx, y + up],
+                    beam: Some(([bx, y + up - 100.0], [bx, y - BELT_HALF])),
+                    high: false,
+                });
+            }
+            let mut col = 0.0;
+            for d in drives.iter() {
+                for o in output_names(&d.when, plant) {
+                    actuators.entry(o).or_insert_with(|| {
+                        col += 1.0;
+                        [x + 250.0 + 480.0 * (col - 1.0), y - 480.0]
+                    });
+                }
+            }
+            // The feeder's outputs left of the entry (a pusher), the motion sensor
+            // under the exit end.
+            if let Some(f) = feed {
+                for (k, o) in output_names(f, plant).into_iter().enumerate() {
+                    #[allow(clippy::cast_precision_loss)]
+                    let at = [x - 450.0, y + 420.0 * k as f32];
+                    actuators.entry(o).or_insert(at);
+                }
+            }
+            if let Some(m) = motion {
+                sensors.push(SensorGeom {
+                    id: m.clone(),
+                    lamp: [x + drawn - 350.0, y - 480.0],
+                    beam: None,
+                    high: false,
+                });
+            }
+            out.push(BeltGeom {
+                id: e.id.clone(),
+                name: e.name.clone(),
+                origin: [x, y],
+                drawn,
+                scale,
+                direction: *direction,
+                items: (*items).clone(),
+                exit: (*exit).clone(),
+            });
+            x += drawn + 250.0;
+        }
+    }
+    out
+}
+
+/// The rows of conveyors, by index in `links` (id, exit): each chain from a conveyor
+/// no other one leads to, along the exits; a conveyor left (a loop) on a row of its
+/// own.
+fn chains(links: &[(&str, &str)]) -> Vec<Vec<usize>> {
+    let mut placed = vec![false; links.len()];
+    let mut rows = Vec::new();
+    for start in 0..links.len() {
+        if links.iter().any(|(_, exit)| *exit == links[start].0) {
+            continue;
+        }
+        let mut chain = Vec::new();
+        let mut k = Some(start);
+        while let Some(i) = k.filter(|&i| !placed[i]) {
+            placed[i] = true;
+            chain.push(i);
+            k = links.iter().position(|(id, _)| *id == links[i].1);
+        }
+        rows.push(chain);
+    }
+    for (i, p) in placed.iter().enumerate() {
+        if !p {
+            rows.push(vec![i]);
+        }
+    }
+    rows
+}
+
+/// Paints every conveyor: its belt, the way it moves, its items (number and class) and
+/// what its exit end leads to.
+pub(super) fn paint_belts(cv: &Canvas<'_>, geom: &Geometry, view: &View, t_s: f32) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    let edge = Stroke::new(1.0, pal.equipment_edge);
+    for b in &geom.belts {
+        let [x, y] = b.origin;
+        let body = Rect::from_two_pos(xf.p([x, y + BELT_HALF]), xf.p([x + b.drawn, y - BELT_HALF]));
+        painter.rect(
+            body,
+            2.0,
+            pal.equipment.gamma_multiply(0.9),
+            edge,
+            egui::StrokeKind::Middle,
+        );
+        if b.direction != 0 {
+            let (from, to) = if b.direction > 0 {
+                ([x, y], [x + b.drawn, y])
+            } else {
+                ([x + b.drawn, y], [x, y])
+            };
+            super::chevrons(
+                painter,
+                xf,
+                from,
+                to,
+                2.0 * BELT_HALF,
+                t_s * 300.0,
+                pal.running,
+            );
+        }
+        // The exit end: a wall for an end stop, an arrow into a sink, an open end.
+        let end = xf.p([x + b.drawn, y]);
+        let h = BELT_HALF * xf.scale;
+        match b.exit.as_str() {
+            "stop" => {
+                painter.line_segment(
+                    [end + vec2(0.0, -h * 1.4), end + vec2(0.0, h * 1.4)],
+                    Stroke::new(3.0, pal.equipment_edge),
+                );
+            }
+            "sink" => {
+                painter.text(
+                    end + vec2(6.0, 0.0),
+                    Align2::LEFT_CENTER,
+                    "⇲",
+                    FontId::proportional(16.0),
+                    pal.text,
+                );
+            }
+            _ => {}
+        }
+        for it in &b.items {
+            #[allow(clippy::cast_possible_truncation)]
+            let (rear, len) = (it.rear as f32 * b.scale, it.length as f32 * b.scale);
+            let r = Rect::from_two_pos(
+                xf.p([x + rear, y + BELT_HALF * 1.25]),
+                xf.p([x + rear + len, y - BELT_HALF * 1.25]),
+            );
+            painter.rect(
+                r,
+                2.0,
+                pal.box_small,
+                Stroke::new(1.0, pal.box_edge),
+                egui::StrokeKind::Middle,
+            );
+            // Its number, and its class when the item is wide enough on screen.
+            let class = view.items.get(&it.class).unwrap_or(&it.class);
+            let label = if r.width() > 9.0 * (class.chars().count() as f32 + 3.0) {
+                format!("{} {class}", it.id)
+            } else {
+                it.id.to_string()
+            };
+            painter.text(
+                r.center(),
+                Align2::CENTER_CENTER,
+                label,
+                FontId::proportional(10.0),
+                pal.text,
+            );
+        }
+        painter.text(
+            xf.p([x + b.drawn / 2.0, y - BELT_HALF - 120.0]),
+            Align2::CENTER_TOP,
+            view.parts.get(&b.id).unwrap_or(&b.name),
+            FontId::proportional(13.0),
+            pal.text,
+        );
     }
 }
 
@@ -369,7 +647,7 @@ fn projected(scene: &Scene, id: &str) -> Option<f64> {
         .and_then(|e| match &e.shape {
             Shape::Axis { position, .. } => Some(*position),
             Shape::Tank { level, .. } => Some(*level),
-            Shape::Button { .. } => None,
+            Shape::Button { .. } | Shape::Conveyor { .. } => None,
         })
 }
 
@@ -397,4 +675,16 @@ pub(super) fn hazard_label(
         _ => kind.to_string(),
     };
     Some((p, view.word("predicted-component").replace("%kind%", &kind)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::chains;
+
+    #[test]
+    fn conveyors_are_drawn_along_their_chains_and_a_loop_gets_its_own_row() {
+        // b1 leads to b2, b2 to an end stop; c leads to itself (a loop).
+        let links = [("b2", "stop"), ("b1", "b2"), ("c", "c"), ("d", "sink")];
+        assert_eq!(chains(&links), vec![vec![1, 0], vec![3], vec![2]]);
+    }
 }

@@ -184,7 +184,7 @@ fn a_slowed_head_takes_longer_and_a_seed_fixes_every_run() {
 fn the_derived_actions_are_the_papers_and_the_emulator_meets_them() {
     let e = emulator(0);
     let a = e.derived_actions();
-    let n1 = a.iter().find(|x| x.id == "head.h.DGV.b1").unwrap();
+    let n1 = a.iter().find(|x| x.id == "head_h_DGV_b1").unwrap();
     // Over many seeds, each h -> b1 lies in [T - ΔT, T + ΔT] (10 ms cycles).
     for seed in 0..50 {
         let mut e = emulator(seed);
@@ -301,7 +301,7 @@ fn a_blocked_pipe_stops_every_flow_and_its_sensors_say_so() {
 #[test]
 fn a_tanks_elementary_actions_are_derived_from_its_levels_and_flows() {
     let a = tank().derived_actions();
-    let fill = a.iter().find(|x| x.id == "tank1.b1.M1 . V1.h1").unwrap();
+    let fill = a.iter().find(|x| x.id == "tank1_b1_M1_V1_h1").unwrap();
     // From anywhere in [0, 8] l to 92 l at 25 l/s: 3.36 s to 3.68 s.
     assert_eq!((fill.t_ms, fill.dt_ms), (3520, 160));
     assert!(

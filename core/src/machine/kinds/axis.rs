@@ -104,6 +104,10 @@ pub struct AxisDef {
     /// response, the PLC's scan).
     #[serde(default)]
     pub tolerance_ms: u64,
+    /// A sensor on while the axis really moves (an encoder, a motion detector: the
+    /// thesis's logic sensor of an interruptible task).
+    #[serde(default)]
+    pub motion: Option<String>,
 }
 
 fn mm() -> String {
@@ -155,7 +159,9 @@ impl AxisDef {
     pub(super) fn signals(&self) -> Vec<(&str, Space)> {
         self.sensors
             .iter()
-            .map(|s| (s.signal.as_str(), Space::Input))
+            .map(|s| s.signal.as_str())
+            .chain(self.motion.as_deref())
+            .map(|s| (s, Space::Input))
             .collect()
     }
 
@@ -194,6 +200,10 @@ pub struct Axis {
     opposed: bool,
     at_end: bool,
     blocked: bool,
+    /// The motion sensor's input, and whether it moved in the last step.
+    motion: Option<usize>,
+    motion_id: Option<String>,
+    moved: bool,
 }
 
 fn micro(v: f64) -> i64 {
@@ -234,6 +244,19 @@ impl Axis {
             };
             windows.push((i as usize, w.signal.clone(), micro(w.from), micro(w.to)));
         }
+        let motion = match def.motion.as_deref() {
+            Some(m) => match symbols.lookup(m) {
+                Some((Space::Input, i)) => Some(i as usize),
+                _ => {
+                    return Err(Problem::error(
+                        codes::COMPONENTS_UNKNOWN_SIGNAL.id,
+                        format!("`{id}` names motion sensor `{m}`, not a plant input"),
+                        None,
+                    ));
+                }
+            },
+            None => None,
+        };
         Ok(Self {
             unit: def.unit.clone(),
             min: micro(def.min),
@@ -249,6 +272,9 @@ impl Axis {
             opposed: false,
             at_end: false,
             blocked: false,
+            motion,
+            motion_id: def.motion.clone(),
+            moved: false,
         })
     }
 
@@ -320,6 +346,7 @@ impl Axis {
                 .push((HazardKind::EndStop, outputs(&self.drives)));
         }
         self.at_end = into_end;
+        self.moved = clamped != self.pos;
         self.pos = clamped;
     }
 
@@ -330,6 +357,9 @@ impl Axis {
     pub(super) fn sense(&self, sensors: &mut crate::bits::Bits) {
         for &(i, _, from, to) in &self.windows {
             sensors.set(i, (from..=to).contains(&self.pos));
+        }
+        if let Some(i) = self.motion {
+            sensors.set(i, self.moved);
         }
     }
 
@@ -370,6 +400,7 @@ impl Axis {
                         sensor: None,
                     })
                     .collect(),
+                motion: self.motion_id.clone(),
             },
         }
     }
