@@ -2262,9 +2262,11 @@ fn the_console_runs_a_plant_with_conveyors() {
         .expect("the status line counts the pallets");
     let alarms = h.state().sim.alarms.all();
     assert!(
-        alarms.iter().any(|a| a.kind == vigie_core::alarms::AlarmKind::Task
-            && a.message.contains("conveyor and pusher: stopped too long")
-            && (6_000..=6_020).contains(&a.raised.0)),
+        alarms
+            .iter()
+            .any(|a| a.kind == vigie_core::alarms::AlarmKind::Task
+                && a.message.contains("conveyor and pusher: stopped too long")
+                && (6_000..=6_020).contains(&a.raised.0)),
         "{alarms:?}"
     );
 }
