@@ -37,7 +37,7 @@ use crate::control::{CompiledProgram, Driver, ErrorLibrary, Origin, Patch, Progr
 use crate::diag::Problem;
 use crate::emulator::{ArrivalPlan, BoxSize};
 use crate::explain::Item;
-use crate::sim::{OperatorAction, Options, Simulation};
+use crate::sim::{Options, Simulation};
 use crate::symbols::Space;
 use crate::time::Millis;
 use serde::Serialize;
@@ -376,23 +376,30 @@ pub fn accused(item: &Item) -> BTreeSet<String> {
         .unwrap_or_default()
 }
 
+impl Outcome {
+    /// A mutant's outcome before its run: no trip.
+    fn of(mutant: &Mutant) -> Self {
+        Self {
+            id: mutant.id.clone(),
+            description: mutant.description.clone(),
+            place: mutant.place.clone(),
+            names: mutant.names.iter().cloned().collect(),
+            operator: mutant.operator,
+            trip_ms: None,
+            constraints: Vec::new(),
+            first: None,
+            first_names: 0,
+            localised: false,
+            blamed: false,
+            driven: false,
+            why: String::new(),
+        }
+    }
+}
+
 /// Runs one mutant in the closed loop until its first trip or the end of the run.
 pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcome {
-    let mut outcome = Outcome {
-        id: mutant.id.clone(),
-        description: mutant.description.clone(),
-        place: mutant.place.clone(),
-        names: mutant.names.iter().cloned().collect(),
-        operator: mutant.operator,
-        trip_ms: None,
-        constraints: Vec::new(),
-        first: None,
-        first_names: 0,
-        localised: false,
-        blamed: false,
-        driven: false,
-        why: String::new(),
-    };
+    let mut outcome = Outcome::of(mutant);
     let compiled = match CompiledProgram::new(&mutant.program, &bundle.plant, &Origin::default()) {
         Ok(c) => c,
         Err(p) => {
@@ -417,9 +424,21 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
             return outcome;
         }
     };
-    sim.emulator
-        .set_arrivals(ArrivalPlan::List(config.arrivals.clone()));
-    let _ = sim.act(&OperatorAction::Start);
+    // The plant's production: the campaign's boxes on a sorting layout, the production
+    // scenario's actions repeated on a plant of components.
+    match crate::sim::workload::Workload::of(
+        &bundle.dir,
+        ArrivalPlan::List(config.arrivals.clone()),
+    ) {
+        Ok(w) => w.apply(&mut sim, config.duration_ms),
+        Err(p) => {
+            outcome.why = format!(
+                "no production: {}",
+                p.first().map(|p| p.message.clone()).unwrap_or_default()
+            );
+            return outcome;
+        }
+    }
     let end = Millis(config.duration_ms);
     let boxes = u32::try_from(config.arrivals.len()).unwrap_or(u32::MAX);
     while sim.now() < end && sim.engine.trips.is_empty() {
