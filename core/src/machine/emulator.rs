@@ -223,6 +223,7 @@ impl ComponentPlant {
             rng: &mut self.rng,
             hazards: Vec::new(),
             next_item: &mut self.next_item,
+            now: self.now,
         };
         let mut found = Vec::new();
         for (k, c) in self.live.iter_mut().enumerate() {
@@ -322,6 +323,9 @@ impl ComponentPlant {
     }
 
     fn compute_sensors(&mut self) {
+        // An input no component drives (the environment: a perturbation on a line)
+        // reads 0 unless a fault forces it, and returns to 0 when the fault ends.
+        self.sensors.clear();
         for c in &self.live {
             c.sense(&mut self.sensors);
         }
@@ -587,6 +591,8 @@ impl ComponentPlant {
 
 #[cfg(test)]
 mod conveyor_tests;
+#[cfg(test)]
+mod device_tests;
 #[cfg(test)]
 mod tests;
 

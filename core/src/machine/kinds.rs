@@ -8,6 +8,8 @@
 pub mod axis;
 pub mod button;
 pub mod conveyor;
+pub mod detector;
+pub mod link;
 pub mod tank;
 
 use super::scene::SceneElement;
@@ -27,6 +29,11 @@ pub enum KindDef {
     Button(button::ButtonDef),
     /// A belt carrying items between a feeder, beams and its exit end.
     Conveyor(conveyor::ConveyorDef),
+    /// An input on when a condition has held for a time: a protection relay, a smart
+    /// sensor with pre-confirmation, a debounced contact.
+    Detector(detector::DetectorDef),
+    /// A fieldbus variable: a consumer's copy of a signal, refreshed at poll instants.
+    Link(link::LinkDef),
     /// A level filled and emptied by flows: a vessel with its pumps and valves.
     Tank(tank::TankDef),
 }
@@ -38,6 +45,8 @@ impl KindDef {
             Self::Axis(_) => "axis",
             Self::Button(_) => "button",
             Self::Conveyor(_) => "conveyor",
+            Self::Detector(_) => "detector",
+            Self::Link(_) => "link",
             Self::Tank(_) => "tank",
         }
     }
@@ -48,6 +57,8 @@ impl KindDef {
             Self::Axis(a) => a.check(),
             Self::Button(b) => b.check(),
             Self::Conveyor(c) => c.check(),
+            Self::Detector(d) => d.check(),
+            Self::Link(l) => l.check(),
             Self::Tank(t) => t.check(),
         }
     }
@@ -58,6 +69,8 @@ impl KindDef {
             Self::Axis(a) => a.signals(),
             Self::Button(b) => b.signals(),
             Self::Conveyor(c) => c.signals(),
+            Self::Detector(d) => d.signals(),
+            Self::Link(l) => l.signals(),
             Self::Tank(t) => t.signals(),
         }
     }
@@ -67,7 +80,11 @@ impl KindDef {
     pub(crate) fn sensors(&self) -> Vec<&str> {
         match self {
             Self::Button(_) => Vec::new(),
-            Self::Axis(_) | Self::Conveyor(_) | Self::Tank(_) => self
+            Self::Axis(_)
+            | Self::Conveyor(_)
+            | Self::Detector(_)
+            | Self::Link(_)
+            | Self::Tank(_) => self
                 .signals()
                 .into_iter()
                 .filter(|(_, space)| *space == Space::Input)
@@ -82,6 +99,8 @@ impl KindDef {
             Self::Axis(a) => a.expressions(),
             Self::Button(_) => Vec::new(),
             Self::Conveyor(c) => c.expressions(),
+            Self::Detector(d) => d.expressions(),
+            Self::Link(l) => l.expressions(),
             Self::Tank(t) => t.expressions(),
         }
     }
@@ -92,6 +111,8 @@ impl KindDef {
             Self::Axis(a) => Ok(Live::Axis(axis::Axis::new(id, a, symbols)?)),
             Self::Button(b) => Ok(Live::Button(button::Button::new(id, b, symbols)?)),
             Self::Conveyor(c) => Ok(Live::Conveyor(conveyor::Conveyor::new(id, c, symbols)?)),
+            Self::Detector(d) => Ok(Live::Detector(detector::Detector::new(id, d, symbols)?)),
+            Self::Link(l) => Ok(Live::Link(link::Link::new(id, l, symbols)?)),
             Self::Tank(t) => Ok(Live::Tank(tank::Tank::new(id, t, symbols)?)),
         }
     }
@@ -109,6 +130,8 @@ pub(crate) struct StepCtx<'a> {
     pub hazards: Vec<(super::HazardKind, Vec<String>)>,
     /// The number of the last item a feeder placed.
     pub next_item: &'a mut u32,
+    /// The emulator's time at the end of this step, ms.
+    pub now: u64,
 }
 
 /// Faults acting on a component as a whole.
@@ -129,6 +152,10 @@ pub(crate) enum Live {
     Button(button::Button),
     /// See [`conveyor::Conveyor`].
     Conveyor(conveyor::Conveyor),
+    /// See [`detector::Detector`].
+    Detector(detector::Detector),
+    /// See [`link::Link`].
+    Link(link::Link),
     /// See [`tank::Tank`].
     Tank(tank::Tank),
 }
@@ -140,6 +167,8 @@ impl Live {
             Self::Axis(a) => a.step(ctx, faults),
             Self::Button(b) => b.step(ctx),
             Self::Conveyor(c) => c.step(ctx, faults),
+            Self::Detector(d) => d.step(ctx),
+            Self::Link(l) => l.step(ctx, faults),
             Self::Tank(t) => t.step(ctx, faults),
         }
     }
@@ -152,6 +181,8 @@ impl Live {
             Self::Axis(a) => a.idle(),
             Self::Button(b) => !b.pressed(),
             Self::Conveyor(c) => c.idle(),
+            Self::Detector(d) => d.idle(),
+            Self::Link(l) => l.idle(),
             Self::Tank(t) => t.idle(),
         }
     }
@@ -162,6 +193,8 @@ impl Live {
             Self::Axis(a) => a.sense(sensors),
             Self::Button(b) => b.sense(sensors),
             Self::Conveyor(c) => c.sense(sensors),
+            Self::Detector(d) => d.sense(sensors),
+            Self::Link(l) => l.sense(sensors),
             Self::Tank(t) => t.sense(sensors),
         }
     }
@@ -173,6 +206,7 @@ impl Live {
             Self::Axis(a) => a.position(),
             Self::Button(b) => f64::from(u8::from(b.pressed())),
             Self::Conveyor(c) => c.position(),
+            Self::Detector(_) | Self::Link(_) => 0.0,
             Self::Tank(t) => t.level(),
         }
     }
@@ -183,6 +217,8 @@ impl Live {
             Self::Axis(a) => a.scene(id, name),
             Self::Button(b) => b.scene(id, name),
             Self::Conveyor(c) => c.scene(id, name),
+            Self::Detector(d) => d.scene(id, name),
+            Self::Link(l) => l.scene(id, name),
             Self::Tank(t) => t.scene(id, name),
         }
     }
@@ -192,7 +228,7 @@ impl Live {
     pub(crate) fn set_position(&mut self, position: f64) {
         match self {
             Self::Axis(a) => a.set_position(position),
-            Self::Button(_) | Self::Conveyor(_) => {}
+            Self::Button(_) | Self::Conveyor(_) | Self::Detector(_) | Self::Link(_) => {}
             Self::Tank(t) => t.set_level(position),
         }
     }
@@ -201,7 +237,11 @@ impl Live {
     pub(crate) fn press(&mut self, signal: &str) -> bool {
         match self {
             Self::Button(b) => b.press(signal),
-            Self::Axis(_) | Self::Conveyor(_) | Self::Tank(_) => false,
+            Self::Axis(_)
+            | Self::Conveyor(_)
+            | Self::Detector(_)
+            | Self::Link(_)
+            | Self::Tank(_) => false,
         }
     }
 
@@ -210,7 +250,7 @@ impl Live {
         match self {
             Self::Axis(a) => Some(a.geometry(id)),
             Self::Tank(t) => Some(t.geometry(id)),
-            Self::Button(_) | Self::Conveyor(_) => None,
+            Self::Button(_) | Self::Conveyor(_) | Self::Detector(_) | Self::Link(_) => None,
         }
     }
 }

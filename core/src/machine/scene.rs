@@ -81,6 +81,12 @@ pub enum Shape {
         /// Its feeder's condition.
         feed: Option<String>,
     },
+    /// A device with no geometry (a relay, a bus variable): its signals, drawn in the
+    /// schematic strip.
+    Device {
+        /// The plant signals it reads or writes.
+        signals: Vec<String>,
+    },
     /// A panel push button.
     Button {
         /// The plant input it closes.
