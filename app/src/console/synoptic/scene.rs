@@ -131,7 +131,7 @@ impl Geometry {
                 // A panel button's input goes to the schematic strip, under its
                 // element (`plant.ron`), with the other panel signals; conveyors are
                 // placed in rows above, below.
-                Shape::Button { .. } | Shape::Conveyor { .. } => {}
+                Shape::Button { .. } | Shape::Conveyor { .. } | Shape::Device { .. } => {}
             }
         }
         let belts = place_belts(scene, plant, &mut sensors, &mut actuators);
@@ -647,7 +647,7 @@ fn projected(scene: &Scene, id: &str) -> Option<f64> {
         .and_then(|e| match &e.shape {
             Shape::Axis { position, .. } => Some(*position),
             Shape::Tank { level, .. } => Some(*level),
-            Shape::Button { .. } | Shape::Conveyor { .. } => None,
+            Shape::Button { .. } | Shape::Conveyor { .. } | Shape::Device { .. } => None,
         })
 }
 
