@@ -1458,7 +1458,7 @@ impl Simulation {
             let new: Vec<Hazard> = hazards[self.hazards_seen..].to_vec();
             self.hazards_seen = hazards.len();
             for h in new {
-                let text = format!("{:?} of box {} at {}", h.kind, h.box_id, h.place);
+                let text = h.summary();
                 let alarm = texts::hazard(&h);
                 let f = alarm.fields.clone();
                 self.alarms.raise(

@@ -164,7 +164,7 @@ pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) ->
             .emulator
             .hazards()
             .iter()
-            .map(|h| format!("{:?} of box {} at {} ms", h.kind, h.box_id, h.time_ms))
+            .map(|h| format!("{} ({} ms)", h.summary(), h.time_ms))
             .collect();
         FixOutcome::NotFixed { trips, hazards }
     }

@@ -250,6 +250,18 @@ pub struct Hazard {
     pub box_id: u32,
 }
 
+impl Hazard {
+    /// One line for the journal: the kind, the box for a hazard to a box, the place.
+    pub fn summary(&self) -> String {
+        match self.at {
+            Place::Component { .. } | Place::Danger { .. } => {
+                format!("{:?} at {}", self.kind, self.place)
+            }
+            _ => format!("{:?} of box {} at {}", self.kind, self.box_id, self.place),
+        }
+    }
+}
+
 /// Builds the parts of a layout (conveyors first, then the table) and joins their ends
 /// by geometry: ends closer than 1 mm are joined, the table's ends are computed at the
 /// loading and unloading angles.

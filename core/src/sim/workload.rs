@@ -50,16 +50,13 @@ impl Workload {
                 let s = Scenario::load(&path)?;
                 let mut actions = s.actions;
                 actions.sort_by_key(|a| a.at_ms);
-                if !actions
-                    .iter()
-                    .any(|a| matches!(a.action, OperatorAction::Start))
-                    || s.duration_ms == 0
-                {
+                // A plant that runs on its own (a protection system) may have no
+                // operator action at all.
+                if s.duration_ms == 0 {
                     return Err(vec![Problem::error(
                         codes::CAMPAIGN_NO_PRODUCTION.id,
-                        "the production scenario must press Start at least once and \
-                         last more than 0 ms: a campaign repeats its actions every its \
-                         length",
+                        "the production scenario must last more than 0 ms: a campaign \
+                         repeats its actions every its length",
                         Some(Location::new(&path, 1, 1)),
                     )]);
                 }
