@@ -1,6 +1,6 @@
 //! Every plant folder under `layouts/` goes through the tools that take any plant,
-//! with no plant-specific code path: `check`, every short scenario headless, and
-//! `export-st`. And the drilling station of seed 003, the first plant described as
+//! with no plant-specific code path: `check`, every short scenario headless,
+//! `export-st`, the mutation campaign and `bench`. And the drilling station of seed 003, the first plant described as
 //! components, behaves as its paper says: the fault-free cycle runs the elementary
 //! actions N1, N2, N3, N2, N4, N5, N3, N6 in the emulator, and each single fault of the
 //! library is caught by the monitor or the filter.
@@ -69,6 +69,15 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
             ran += 1;
         }
         assert!(ran >= 3, "{d}: {ran} short scenarios");
+        // The benchmark runs on every plant (figures, no goal asserted: a test does not
+        // time), with the plant's own production and trip when `bench.ron` names them.
+        let out = vigie(&["bench", "--plant", d, "--iterations", "200"]);
+        assert!(out.status.success(), "bench {d}: {}", text(&out));
+        assert!(
+            text(&out).contains("closed loop (emulator"),
+            "bench {d}: {}",
+            text(&out)
+        );
         // The mutation campaign (the sorting station's, 490 mutants, has its own test).
         if !dir.join("layout.ron").exists() {
             let out = vigie(&[

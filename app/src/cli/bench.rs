@@ -420,11 +420,17 @@ fn closed_loop(out: &mut impl std::io::Write, path: &Path) -> anyhow::Result<()>
     let sim_s = duration_ms as f64 / 1000.0;
     let what = match sim.emulator.as_layout() {
         Some(_) => format!("{} boxes", sim.emulator.stats().created),
-        None => format!(
-            "{} elementary actions completed, {} trips",
-            sim.produced(),
-            sim.engine.trips.len()
-        ),
+        None => {
+            let unit = match sim.emulator.as_components() {
+                Some(c) if c.carries_items() => "items out (delivered or taken)",
+                _ => "elementary actions completed",
+            };
+            format!(
+                "{} {unit}, {} trips",
+                sim.produced(),
+                sim.engine.trips.len()
+            )
+        }
     };
     writeln!(
         out,
