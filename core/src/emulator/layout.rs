@@ -464,6 +464,11 @@ pub(crate) fn quoted_positions(text: &str) -> BTreeMap<String, (usize, usize)> {
         let mut rest = line;
         let mut col = 0;
         while let Some(open) = rest.find('"') {
+            // A `//` before the next quote starts a comment: a name quoted there is
+            // not where the file declares it.
+            if rest.find("//").is_some_and(|c| c < open) {
+                break;
+            }
             let after = &rest[open + 1..];
             let Some(close) = after.find('"') else { break };
             let s = &after[..close];

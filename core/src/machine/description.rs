@@ -214,19 +214,24 @@ impl Components {
             for (signal, space) in c.kind.signals() {
                 match symbols.lookup(signal) {
                     Some((s, _)) if s == space => {}
-                    Some(_) | None => out.push(self.error(
-                        codes::COMPONENTS_UNKNOWN_SIGNAL.id,
-                        signal,
-                        format!(
-                            "component `{}` names {} `{signal}`, which the plant does not declare",
-                            c.id,
-                            if space == Space::Input {
-                                "sensor"
-                            } else {
-                                "actuator"
-                            }
-                        ),
-                    )),
+                    found => {
+                        let want = if space == Space::Input {
+                            "sensor"
+                        } else {
+                            "actuator"
+                        };
+                        let why = match found {
+                            Some((Space::Input, _)) => "which the plant declares as a sensor",
+                            Some((Space::Output, _)) => "which the plant declares as an actuator",
+                            Some(_) => "which is not a plant signal",
+                            None => "which the plant does not declare",
+                        };
+                        out.push(self.error(
+                            codes::COMPONENTS_UNKNOWN_SIGNAL.id,
+                            signal,
+                            format!("component `{}` names {want} `{signal}`, {why}", c.id),
+                        ));
+                    }
                 }
                 if space == Space::Input
                     && let Some(other) = written.insert(signal, &c.id)

@@ -74,3 +74,11 @@ fn bad_box_dimensions_are_reported_at_the_box() {
         )]
     );
 }
+
+#[test]
+fn a_name_quoted_in_a_comment_is_not_where_the_file_declares_it() {
+    let text = "// the bus `\"bus_d1\"` is slowed by a scenario\n(id: \"bus_d1\", s: \"a // b\")\n";
+    let map = super::quoted_positions(text);
+    assert_eq!(map.get("bus_d1"), Some(&(2, 7)));
+    assert_eq!(map.get("a // b"), Some(&(2, 20)), "{map:?}");
+}
