@@ -7,6 +7,7 @@
 //!   feasibility check (T_D < ΔT_min, (II.4)) and the learning of T and ΔT (annex B).
 //! - [`monitor`]: the per-action monitor (checks a-d of seed 003, III.1), with the
 //!   localisation messages of its detections.
+//! - [`safe_state`]: whether the outputs' safe values move a component into a hazard.
 
 pub mod actions;
 pub mod derive;
@@ -14,6 +15,7 @@ pub mod description;
 pub mod emulator;
 pub mod kinds;
 pub mod monitor;
+pub mod safe_state;
 pub mod scene;
 
 pub use crate::emulator::{Hazard, HazardKind, Place};

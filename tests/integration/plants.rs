@@ -627,3 +627,50 @@ fn the_substations_filter_holds_a_reclose_onto_a_known_fault() {
     assert_eq!(trip.constraints[0].id, "CSf2");
     assert!((579..=582).contains(&trip.time_ms), "{}", trip.time_ms);
 }
+
+/// A machine whose actuators move when their output is 0: the workshop's robot made
+/// spring-return (its return drive `/RB`) with a hard stop at home that crashes. The
+/// filter's fallback (every output at its safe value, 0) would swing it into that stop:
+/// `vigie check` fails with V0747, naming the robot and the line it is declared on; with
+/// RB safe at 1 (held where it is sent) it passes.
+#[test]
+fn a_safe_state_that_moves_a_component_into_a_hazard_fails_the_check() {
+    let tmp = TempDir::new("safe-state");
+    let dir = tmp.0.join("workshop");
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["plant.ron", "constraints.txt"] {
+        std::fs::copy(repo().join("layouts/workshop").join(f), dir.join(f)).unwrap();
+    }
+    let components = std::fs::read_to_string(repo().join("layouts/workshop/components.ron"))
+        .unwrap()
+        .replace(
+            "(when: \"RH\", speed: -500.0)",
+            "(when: \"/RB\", speed: -500.0)",
+        )
+        .replace(
+            "motion: Some(\"mr\"),",
+            "motion: Some(\"mr\"), end_stops: (min: Crash),",
+        );
+    std::fs::write(dir.join("components.ron"), components).unwrap();
+    let d = dir.to_str().unwrap();
+    let out = vigie(&["check", d]);
+    assert!(!out.status.success(), "{}", text(&out));
+    let t = text(&out);
+    assert!(
+        t.contains("V0747") && t.contains("`robot`") && t.contains("EndStop"),
+        "{t}"
+    );
+    assert!(
+        t.contains("components.ron:") && !t.contains("components.ron:1:1"),
+        "{t}"
+    );
+    let plant = std::fs::read_to_string(dir.join("plant.ron"))
+        .unwrap()
+        .replace(
+            "address: Some(Coil(2)), safe: Zero",
+            "address: Some(Coil(2)), safe: One",
+        );
+    std::fs::write(dir.join("plant.ron"), plant).unwrap();
+    let out = vigie(&["check", d]);
+    assert!(!text(&out).contains("V0747"), "{}", text(&out));
+}

@@ -71,6 +71,9 @@ fn physical(
     let found = desc.check_signals(&bundle.plant);
     let broken = found.iter().any(Problem::is_error);
     problems.extend(found);
+    if let (Description::Components(c), false) = (&desc, broken) {
+        problems.extend(vigie_core::machine::safe_state::check(c, &bundle.plant));
+    }
     let (file, components) = match &desc {
         Description::Components(c) => (
             physical::COMPONENTS_FILE,
