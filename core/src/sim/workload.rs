@@ -1,12 +1,13 @@
 //! What keeps a plant producing in a campaign, from its folder: boxes arriving on a
 //! sorting layout, or, on a plant described as components, the operator's actions of
 //! its production scenario (`scenarios/reference.ron`: the Start presses of a batch or
-//! of a work cycle) repeated every scenario length. No campaign knows a plant's
-//! buttons or cycle: they are the scenario's.
+//! of a work cycle) and its faults at fixed times (the environment a protection system
+//! answers: a perturbation on a line) repeated every scenario length. No campaign knows
+//! a plant's buttons or cycle: they are the scenario's.
 
 use super::{OperatorAction, Scenario, Simulation, TimedAction};
 use crate::diag::{Location, Problem, codes};
-use crate::emulator::ArrivalPlan;
+use crate::emulator::{ArrivalPlan, FaultSpec, Trigger};
 use crate::machine::Description;
 use std::path::Path;
 
@@ -15,10 +16,14 @@ use std::path::Path;
 pub enum Workload {
     /// Items arriving on the layout's source.
     Arrivals(ArrivalPlan),
-    /// The operator's actions of one period, repeated every `period_ms`.
+    /// The operator's actions and the environment's events of one period, repeated
+    /// every `period_ms`.
     Operator {
         /// The actions of one period, by time.
         actions: Vec<TimedAction>,
+        /// The production scenario's faults at fixed times (the environment: a
+        /// perturbation on a line), repeated with the actions.
+        events: Vec<FaultSpec>,
         /// The period (the production scenario's length).
         period_ms: u64,
     },
@@ -60,8 +65,14 @@ impl Workload {
                         Some(Location::new(&path, 1, 1)),
                     )]);
                 }
+                let events = s
+                    .faults
+                    .into_iter()
+                    .filter(|f| matches!(f.trigger, Trigger::At(_)))
+                    .collect();
                 Ok(Self::Operator {
                     actions,
+                    events,
                     period_ms: s.duration_ms,
                 })
             }
@@ -76,7 +87,11 @@ impl Workload {
                 sim.emulator.set_arrivals(plan.clone());
                 let _ = sim.act(&OperatorAction::Start);
             }
-            Self::Operator { actions, period_ms } => {
+            Self::Operator {
+                actions,
+                events,
+                period_ms,
+            } => {
                 let now = sim.now().0;
                 let mut k = 0;
                 loop {
@@ -88,6 +103,15 @@ impl Workload {
                         at_ms: base + a.at_ms,
                         action: a.action.clone(),
                     }));
+                    for e in events {
+                        if let Trigger::At(t) = e.trigger {
+                            // The scenario's own faults were checked when it loaded.
+                            let _ = sim.emulator.try_schedule_fault(FaultSpec {
+                                trigger: Trigger::At(base + t),
+                                ..e.clone()
+                            });
+                        }
+                    }
                     k += 1;
                 }
             }
@@ -137,7 +161,10 @@ mod tests {
     fn a_plant_of_components_repeats_its_production_scenario() {
         let dir = repo().join("layouts/liquid-supply");
         let w = Workload::of(&dir, ArrivalPlan::List(Vec::new())).unwrap();
-        let Workload::Operator { actions, period_ms } = &w else {
+        let Workload::Operator {
+            actions, period_ms, ..
+        } = &w
+        else {
             panic!("{w:?}");
         };
         let s = Scenario::load(&dir.join(PRODUCTION)).unwrap();
@@ -154,6 +181,35 @@ mod tests {
             expected.extend(s.actions.iter().map(|a| k * period_ms + a.at_ms));
         }
         assert_eq!(at, expected);
+    }
+
+    #[test]
+    fn the_production_scenarios_environment_is_repeated_with_its_actions() {
+        let dir = repo().join("layouts/substation");
+        let w = Workload::of(&dir, ArrivalPlan::List(Vec::new())).unwrap();
+        let s = Scenario::load(&dir.join(PRODUCTION)).unwrap();
+        let (bundle, _) = crate::bundle::PlantBundle::load(&dir).unwrap();
+        let program = crate::control::CompiledProgram::load(
+            &dir.join("programs/reference.ron"),
+            &bundle.plant,
+        )
+        .unwrap();
+        assert_eq!(s.duration_ms, 3_000);
+        // A fresh simulation, as a campaign's: the scenario's own faults not scheduled.
+        let mut sim2 = Simulation::new(bundle, program, 1, Default::default()).unwrap();
+        w.apply(&mut sim2, 3 * 3_000);
+        let pert1 = sim2.bundle.plant.input("pert1").unwrap();
+        let mut rises = Vec::new();
+        let mut last = false;
+        while sim2.now().0 < 9_000 {
+            sim2.cycle();
+            let v = sim2.emulator.sensors().get(pert1);
+            if v && !last {
+                rises.push(sim2.now().0);
+            }
+            last = v;
+        }
+        assert_eq!(rises, vec![40, 3_040, 6_040]);
     }
 
     #[test]

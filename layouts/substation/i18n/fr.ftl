@@ -36,7 +36,7 @@ off-ComFer1 = pas d'ordre : le disjoncteur reste comme il est
 off-ComOuv2 = pas d'ordre : le disjoncteur reste comme il est
 off-ComFer2 = pas d'ordre : le disjoncteur reste comme il est
 
-scenario-reference = Poste : pas de perturbation
+scenario-reference = Poste : production (perturbations toutes les 3 s, bus à 50 ms)
 scenario-case2-bus-50ms = Poste : cas 2, bus à 50 ms (pas de défaut double)
 scenario-case1-bus-100ms = Poste : cas 1, bus à 100 ms (défaut double sur [580, 680) ms)
 scenario-e01-reclose-onto-fault = Poste : E01, D2 réenclenche sur le défaut de D1
