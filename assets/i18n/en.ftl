@@ -39,6 +39,8 @@ state-unacknowledged = { $n } unacknowledged
 tab-synoptic = Synoptic
 tab-trends = Trends
 tab-trends-hover = The history of any signal over minutes to days
+synoptic-whole-plant = Whole plant
+synoptic-area-hover = One area of the plant at a time, readable; ⚠ marks the area of the trip
 
 ## Trends
 trends-1-min = 1 min

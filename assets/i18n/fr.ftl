@@ -43,6 +43,8 @@ state-unacknowledged = { $n ->
 tab-synoptic = Synoptique
 tab-trends = Courbes
 tab-trends-hover = L'historique de n'importe quel signal, sur des minutes ou des jours
+synoptic-whole-plant = Toute l'installation
+synoptic-area-hover = Une zone de l'installation à la fois, lisible ; ⚠ signale la zone de l'arrêt
 
 ## Courbes
 trends-1-min = 1 min

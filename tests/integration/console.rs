@@ -2270,3 +2270,60 @@ fn the_console_runs_a_plant_with_conveyors() {
         "{alarms:?}"
     );
 }
+
+/// A plant of many components in several stations (the production line): the synoptic
+/// offers one view per area besides the whole plant, flags the area of a trip, and an
+/// area's view draws its own signals only.
+#[test]
+fn a_large_plant_is_shown_area_by_area_and_the_trips_area_is_flagged() {
+    let dir = root().join("layouts/production-line");
+    let mut o = ConsoleOptions::new(&dir);
+    o.scenario = Some(dir.join("scenarios/e03-drill-fast-into-part.ron"));
+    o.data_dir = Some(temp_dir("production-line"));
+    let mut h = harness(o);
+    h.run_steps(2);
+    h.state_mut().apply(Command::SetSpeed(100.0));
+    for _ in 0..2_000 {
+        h.step();
+        if h.state().sim.engine.is_tripped() {
+            break;
+        }
+    }
+    h.state_mut().apply(Command::Pause);
+    h.run_steps(2);
+    assert!(
+        h.state().sim.engine.is_tripped(),
+        "{:?}",
+        h.state().sim.now()
+    );
+    let names = |h: &Harness<'_, Console>| -> Vec<String> {
+        h.state()
+            .view
+            .placed
+            .names
+            .iter()
+            .map(|(id, _)| id.clone())
+            .collect()
+    };
+    let whole = names(&h);
+    assert!(
+        whole.iter().any(|n| n == "TS_POS") && whole.iter().any(|n| n == "PS_DR_LOW"),
+        "{whole:?}"
+    );
+    // CSp22 is the drill's: its area is flagged, the others are not.
+    h.get_by_label("⚠ Processing").click();
+    h.run_steps(3);
+    assert!(h.query_by_label("⚠ Testing").is_none());
+    assert_eq!(h.state().view.area.as_deref(), Some("Processing"));
+    let area = names(&h);
+    assert!(area.iter().any(|n| n == "PS_DR_LOW"), "{area:?}");
+    assert!(!area.iter().any(|n| n == "TS_POS"), "{area:?}");
+    h.get_by_label("Testing").click();
+    h.run_steps(3);
+    let area = names(&h);
+    assert!(area.iter().any(|n| n == "TS_POS"), "{area:?}");
+    assert!(!area.iter().any(|n| n == "PS_DR_LOW"), "{area:?}");
+    h.get_by_label("Whole plant").click();
+    h.run_steps(3);
+    assert_eq!(h.state().view.area, None);
+}

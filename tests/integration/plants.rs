@@ -674,3 +674,38 @@ fn a_safe_state_that_moves_a_component_into_a_hazard_fails_the_check() {
     let out = vigie(&["check", d]);
     assert!(!text(&out).contains("V0747"), "{}", text(&out));
 }
+
+/// `vigie bench-line` writes its lines as plant folders a user could have written: a
+/// line of 12 stations (74 signals, above the emulator's old cap of 64) passes `check`,
+/// runs its production scenario without a trip and delivers, and the bench reports
+/// both sizes.
+#[test]
+fn the_generated_lines_of_bench_line_are_plants_like_any_other() {
+    let tmp = TempDir::new("bench-line");
+    let keep = tmp.0.join("lines");
+    let out = vigie(&[
+        "bench-line",
+        "--stations",
+        "2,12",
+        "--seconds",
+        "60",
+        "--keep",
+        keep.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    let t = text(&out);
+    assert!(t.contains("cost per component, 12 stations against 2"), "{t}");
+    let line = keep.join("line-12");
+    let out = vigie(&["check", line.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out));
+    let s = line.join("scenarios/production.ron");
+    let out = vigie(&["run", s.to_str().unwrap(), "--headless", "--no-timing"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["trips"].as_array().map(Vec::len), Some(0), "{report}");
+    assert_eq!(report["hazards"].as_array().map(Vec::len), Some(0), "{report}");
+    // Too short a run for a workpiece to cross the line is said, not measured.
+    let out = vigie(&["bench-line", "--stations", "12", "--seconds", "5"]);
+    assert!(!out.status.success());
+    assert!(text(&out).contains("delivered nothing in 5 s"), "{}", text(&out));
+}

@@ -2,6 +2,7 @@
 
 mod bench;
 mod bench_historian;
+mod bench_line;
 mod campaign;
 mod check;
 mod export_st;
@@ -258,6 +259,9 @@ pub(crate) enum Command {
         #[command(flatten)]
         args: bench_historian::Args,
     },
+    /// Measure the closed loop against the plant's size: generated lines of 1, 10 and
+    /// 100 stations (simulated / wall time, cost per component).
+    BenchLine(bench_line::Args),
     /// Measure the engines and print the figures.
     Bench {
         #[command(flatten)]
@@ -417,6 +421,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         },
         Command::Bench { plant, iterations } => bench::run(&plant.plant, iterations),
         Command::BenchHistorian { plant, args } => bench_historian::run(&plant.plant, &args),
+        Command::BenchLine(args) => bench_line::run(&args),
         Command::ExportSt { plant, out } => export_st::run(&plant.plant, out.as_deref()),
         Command::BenchConsole {
             plant,

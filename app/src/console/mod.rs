@@ -1382,6 +1382,9 @@ impl Console {
         self.view.descriptions = view.descriptions;
         self.view.words = view.words;
         self.view.elements = view.elements;
+        self.view.parts = view.parts;
+        self.view.dangers = view.dangers;
+        self.view.items = view.items;
         let status = std::mem::take(&mut self.status);
         self.say(
             Some(("operator", now)),

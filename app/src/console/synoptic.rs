@@ -18,6 +18,9 @@ pub struct View {
     pub zoom: f32,
     /// Pan, in points.
     pub pan: Vec2,
+    /// The area shown (an element of `plant.ron`, see [`scene::areas`]), or the whole
+    /// plant.
+    pub area: Option<String>,
     /// The signals' descriptions in the language shown (from the plant folder's
     /// `i18n/<lang>.ftl`, `signal-<id>`); a signal without one shows the plant's own.
     pub descriptions: std::collections::BTreeMap<String, String>,
@@ -97,6 +100,7 @@ impl Default for View {
         Self {
             zoom: 1.0,
             pan: Vec2::ZERO,
+            area: None,
             descriptions: std::collections::BTreeMap::new(),
             words: std::collections::BTreeMap::new(),
             elements: std::collections::BTreeMap::new(),

@@ -101,6 +101,9 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
                 {
                     c.trends.shown = true;
                 }
+                if !c.trends.shown {
+                    areas_ui(c, ui);
+                }
             });
             if c.trends.shown {
                 super::trends::trends_ui(c, ui, out);
@@ -108,6 +111,89 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
                 synoptic_panel_ui(c, ui);
             }
         });
+}
+
+/// A plant of many components in several areas: one button for the whole plant and
+/// one per area (ISA-101's unit displays), the area of a marked signal (a trip's
+/// constraint, a suspect sensor) flagged.
+fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
+    /// Fewer components than this: the whole plant is readable at once.
+    const MANY: usize = 8;
+    let Some(scene) = c.sim.emulator.scene() else {
+        return;
+    };
+    let plant = &c.sim.bundle.plant;
+    let areas = synoptic::scene::areas(&scene, plant);
+    if areas.len() < 2 || scene.elements.len() < MANY {
+        c.view.area = None;
+        return;
+    }
+    if c.view
+        .area
+        .as_ref()
+        .is_some_and(|a| !areas.iter().any(|(x, _)| x == a))
+    {
+        c.view.area = None;
+    }
+    // The signals of the trip (its constraints' literals) while the plant is stopped,
+    // and the suspect or estimated sensors.
+    let mut marked: BTreeSet<String> = BTreeSet::new();
+    if c.sim.engine.is_tripped()
+        && let Some(t) = c.sim.engine.trips.last()
+    {
+        for k in &t.constraints {
+            marked.extend(k.literals.iter().map(|l| l.name.clone()));
+        }
+    }
+    marked.extend(c.sim.live_marks().into_iter().map(|h| h.element));
+    let element_of = |id: &str| {
+        plant
+            .inputs
+            .iter()
+            .chain(&plant.outputs)
+            .find(|s| s.id == id)
+            .map(|s| s.element.as_str())
+    };
+    ui.separator();
+    let mut chosen = None;
+    if ui
+        .add(egui::Button::selectable(
+            c.view.area.is_none(),
+            c.i18n.t("synoptic-whole-plant"),
+        ))
+        .on_hover_text(c.i18n.t("synoptic-area-hover"))
+        .clicked()
+    {
+        chosen = Some(None);
+    }
+    for (area, _) in &areas {
+        let name = c.view.elements.get(area).unwrap_or(area);
+        let flagged = marked.iter().any(|m| element_of(m) == Some(area.as_str()));
+        let text = if flagged {
+            RichText::new(format!("⚠ {name}"))
+                .color(c.palette.trip)
+                .strong()
+        } else {
+            RichText::new(name.as_str())
+        };
+        if ui
+            .add(egui::Button::selectable(
+                c.view.area.as_ref() == Some(area),
+                text,
+            ))
+            .on_hover_text(c.i18n.t("synoptic-area-hover"))
+            .clicked()
+        {
+            chosen = Some(Some(area.clone()));
+        }
+    }
+    if let Some(a) = chosen
+        && a != c.view.area
+    {
+        c.view.area = a;
+        c.view.zoom = 1.0;
+        c.view.pan = egui::Vec2::ZERO;
+    }
 }
 
 /// The red banner under the toolbar while no safety constraint protects the plant
@@ -808,11 +894,7 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     } else if banner.is_none() && sim.engine.is_tripped() {
         banner = Some(trip_banner(c));
     }
-    let geom = match (&sim.layout, live_scene.as_ref()) {
-        (Some(layout), _) => Geometry::new(layout, plant, angle),
-        (None, Some(scene)) => Geometry::from_scene(scene, plant),
-        (None, None) => Geometry::from_scene(&vigie_core::machine::Scene::default(), plant),
-    };
+    let geom = geometry(c, live_scene.as_ref(), angle);
     let pic = Picture {
         boxes,
         values: &values,
@@ -825,6 +907,31 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     };
     let resp = synoptic::synoptic_ui(ui, &mut c.view, &geom, angle, &pic, &c.palette, plant);
     c.synoptic_rect = Some(resp.rect);
+}
+
+/// The synoptic's geometry: the station's layout, or the components of the area shown
+/// (the whole plant when none).
+fn geometry(c: &Console, scene: Option<&vigie_core::machine::Scene>, angle: i32) -> Geometry {
+    let plant = &c.sim.bundle.plant;
+    match (&c.sim.layout, scene) {
+        (Some(layout), _) => Geometry::new(layout, plant, angle),
+        (None, Some(scene)) => {
+            let areas = synoptic::scene::areas(scene, plant);
+            match c
+                .view
+                .area
+                .as_ref()
+                .and_then(|a| areas.iter().find(|x| &x.0 == a))
+            {
+                Some((area, ids)) => {
+                    let (scene, part) = synoptic::scene::area_view(scene, plant, area, ids);
+                    Geometry::from_scene(&scene, &part)
+                }
+                None => Geometry::from_scene(scene, plant),
+            }
+        }
+        (None, None) => Geometry::from_scene(&vigie_core::machine::Scene::default(), plant),
+    }
 }
 
 /// The banner of an explanation level: the level, the constraints and the time.

@@ -10,7 +10,7 @@ use super::{Canvas, Geometry, SensorGeom, View, Xf, place_schematic};
 use egui::{Align2, FontId, Pos2, Rect, Shape as EShape, Stroke, vec2};
 use std::collections::BTreeMap;
 use vigie_core::emulator::{Hazard, Place};
-use vigie_core::machine::{Scene, Shape};
+use vigie_core::machine::{Scene, SceneElement, Shape};
 use vigie_core::plant::Plant;
 
 /// Drawn length of an axis's travel, world units.
@@ -147,7 +147,7 @@ impl Geometry {
         }
         for b in &belts {
             max[0] = max[0].max(b.origin[0] + b.drawn + 900.0);
-            max[1] = max[1].max(b.origin[1] + 700.0);
+            max[1] = max[1].max(b.origin[1] + 700.0).max(b.top);
             min[1] = min[1].min(b.origin[1] - 900.0);
         }
         let schematic = place_schematic(plant, &mut sensors, &mut actuators, (&mut min, &mut max));
@@ -172,6 +172,8 @@ impl Geometry {
 const BELT: f32 = 3600.0;
 /// Distance between two rows of conveyors.
 const BELT_ROW: f32 = 1500.0;
+/// Beams' lamps closer than this along a belt go on different levels.
+const BEAM_ROOM: f32 = 700.0;
 /// Half the drawn width of a belt.
 const BELT_HALF: f32 = 160.0;
 
@@ -194,6 +196,43 @@ pub struct BeltGeom {
     pub items: Vec<vigie_core::machine::scene::SceneItem>,
     /// Its exit: `stop`, `drop`, `sink` or the next conveyor.
     pub exit: String,
+    /// The top of its highest beam lamp, world.
+    pub top: f32,
+}
+
+/// Places a belt's beams' lamps above it, the belt's entry at `at`. Beams close together
+/// (a test place's height, colour and metal sensors): their lamps stacked, each on the
+/// lowest level no close lamp takes. Returns the top of the highest lamp.
+fn place_beams(
+    beams: &[vigie_core::machine::scene::SceneSensor],
+    [x, y]: [f32; 2],
+    scale: f32,
+    sensors: &mut Vec<SensorGeom>,
+) -> f32 {
+    let mut taken: Vec<(f32, usize)> = Vec::new();
+    let mut top = y;
+    for b in beams {
+        #[allow(clippy::cast_possible_truncation)]
+        let bx = x + b.from as f32 * scale;
+        let level = (0..)
+            .find(|l| {
+                !taken
+                    .iter()
+                    .any(|(tx, tl)| tl == l && (tx - bx).abs() < BEAM_ROOM)
+            })
+            .unwrap_or(0);
+        taken.push((bx, level));
+        #[allow(clippy::cast_precision_loss)]
+        let up = 420.0 + 260.0 * level as f32;
+        sensors.push(SensorGeom {
+            id: b.signal.clone(),
+            lamp: [bx, y + up],
+            beam: Some(([bx, y + up - 100.0], [bx, y - BELT_HALF])),
+            high: false,
+        });
+        top = top.max(y + up + 300.0);
+    }
+    top
 }
 
 /// Places the conveyors in rows above the axes, each chain of conveyors (one's exit
@@ -252,25 +291,13 @@ fn place_belts(
             let (e, length, direction, items, beams, drives, exit, (motion, feed)) = &belts[i];
             #[allow(clippy::cast_possible_truncation)]
             let drawn = *length as f32 * scale;
-            for (k, b) in beams.iter().enumerate() {
-                #[allow(clippy::cast_possible_truncation)]
-                let bx = x + b.from as f32 * scale;
-                // Beams close together: their lamps alternate in height.
-                #[allow(clippy::cast_precision_loss)]
-                let up = 420.0 + 260.0 * (k % 2) as f32;
-                sensors.push(SensorGeom {
-                    id: b.signal.clone(),
-                    lamp: [bx, y + up],
-                    beam: Some(([bx, y + up - 100.0], [bx, y - BELT_HALF])),
-                    high: false,
-                });
-            }
+            let top = place_beams(beams, [x, y], scale, sensors);
             let mut col = 0.0;
             for d in drives.iter() {
                 for o in output_names(&d.when, plant) {
                     actuators.entry(o).or_insert_with(|| {
                         col += 1.0;
-                        [x + 250.0 + 480.0 * (col - 1.0), y - 480.0]
+                        [x + 250.0 + 900.0 * (col - 1.0), y - 480.0]
                     });
                 }
             }
@@ -300,6 +327,7 @@ fn place_belts(
                 direction: *direction,
                 items: (*items).clone(),
                 exit: (*exit).clone(),
+                top,
             });
             x += drawn + 250.0;
         }
@@ -498,6 +526,108 @@ fn place_lines(
             });
         }
     }
+}
+
+/// The signals a component names: its sensors, the outputs of its drives and feeder,
+/// its motion sensor, its button, a device's signals.
+fn component_signals(e: &SceneElement, plant: &Plant) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    let mut exprs: Vec<&str> = Vec::new();
+    match &e.shape {
+        Shape::Axis {
+            sensors,
+            drives,
+            motion,
+            ..
+        } => {
+            out.extend(sensors.iter().map(|s| s.signal.clone()));
+            out.extend(motion.iter().cloned());
+            exprs.extend(drives.iter().map(|d| d.when.as_str()));
+        }
+        Shape::Tank { sensors, flows, .. } => {
+            out.extend(sensors.iter().map(|s| s.signal.clone()));
+            out.extend(flows.iter().filter_map(|d| d.sensor.clone()));
+            exprs.extend(flows.iter().map(|d| d.when.as_str()));
+        }
+        Shape::Conveyor {
+            sensors,
+            drives,
+            motion,
+            feed,
+            ..
+        } => {
+            out.extend(sensors.iter().map(|s| s.signal.clone()));
+            out.extend(motion.iter().cloned());
+            exprs.extend(drives.iter().map(|d| d.when.as_str()));
+            exprs.extend(feed.iter().map(String::as_str));
+        }
+        Shape::Device { signals } => out.extend(signals.iter().cloned()),
+        Shape::Button { signal, .. } => out.push(signal.clone()),
+    }
+    for x in exprs {
+        out.extend(output_names(x, plant));
+    }
+    out
+}
+
+/// The areas of a plant of components, the units of ISA-101's display hierarchy: a
+/// component belongs to the element (`plant.ron`) most of its signals belong to (the
+/// first of them on a tie); the areas in the order of their first component, each with
+/// its components' ids. A component naming no signal of the plant is in no area.
+pub fn areas(scene: &Scene, plant: &Plant) -> Vec<(String, Vec<String>)> {
+    let element: BTreeMap<&str, &str> = plant
+        .inputs
+        .iter()
+        .chain(&plant.outputs)
+        .map(|s| (s.id.as_str(), s.element.as_str()))
+        .collect();
+    let mut out: Vec<(String, Vec<String>)> = Vec::new();
+    for e in &scene.elements {
+        let mut votes: Vec<(&str, usize)> = Vec::new();
+        for s in component_signals(e, plant) {
+            if let Some(el) = element.get(s.as_str()) {
+                match votes.iter_mut().find(|v| v.0 == *el) {
+                    Some(v) => v.1 += 1,
+                    None => votes.push((el, 1)),
+                }
+            }
+        }
+        // The first of the most voted: `max_by_key` keeps the last maximum.
+        let Some(best) = votes.iter().rev().max_by_key(|v| v.1).map(|v| v.0) else {
+            continue;
+        };
+        match out.iter_mut().find(|a| a.0 == best) {
+            Some(a) => a.1.push(e.id.clone()),
+            None => out.push((best.to_string(), vec![e.id.clone()])),
+        }
+    }
+    out
+}
+
+/// The part of `scene` and `plant` an area shows: its components, and the plant's
+/// signals of that element (the schematic strip of the area).
+pub fn area_view(scene: &Scene, plant: &Plant, area: &str, ids: &[String]) -> (Scene, Plant) {
+    let scene = Scene {
+        elements: scene
+            .elements
+            .iter()
+            .filter(|e| ids.contains(&e.id))
+            .cloned()
+            .collect(),
+    };
+    let placed: std::collections::BTreeSet<String> = scene
+        .elements
+        .iter()
+        .flat_map(|e| component_signals(e, plant))
+        .collect();
+    let keep = |s: &vigie_core::plant::Signal| s.element == area || placed.contains(&s.id);
+    let plant = Plant {
+        name: plant.name.clone(),
+        description: plant.description.clone(),
+        inputs: plant.inputs.iter().filter(|s| keep(s)).cloned().collect(),
+        outputs: plant.outputs.iter().filter(|s| keep(s)).cloned().collect(),
+    };
+    (scene, plant)
 }
 
 /// The plant outputs an expression names, in order.
