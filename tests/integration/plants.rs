@@ -69,6 +69,15 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
             ran += 1;
         }
         assert!(ran >= 3, "{d}: {ran} short scenarios");
+        // `vigie verify`: the station on its layout model (its own tests), a plant of
+        // components one sub-plant at a time; every shipped plant's constraints hold.
+        let out = vigie(&["verify", d]);
+        assert!(out.status.success(), "verify {d}: {}", text(&out));
+        assert!(
+            text(&out).contains("SAFETY: proved"),
+            "verify {d}: {}",
+            text(&out)
+        );
         // The benchmark runs on every plant (figures, no goal asserted: a test does not
         // time), with the plant's own production and trip when `bench.ron` names them.
         let out = vigie(&["bench", "--plant", d, "--iterations", "200"]);
@@ -694,7 +703,10 @@ fn the_generated_lines_of_bench_line_are_plants_like_any_other() {
     ]);
     assert!(out.status.success(), "{}", text(&out));
     let t = text(&out);
-    assert!(t.contains("cost per component, 12 stations against 2"), "{t}");
+    assert!(
+        t.contains("cost per component, 12 stations against 2"),
+        "{t}"
+    );
     let line = keep.join("line-12");
     let out = vigie(&["check", line.to_str().unwrap()]);
     assert!(out.status.success(), "{}", text(&out));
@@ -702,10 +714,107 @@ fn the_generated_lines_of_bench_line_are_plants_like_any_other() {
     let out = vigie(&["run", s.to_str().unwrap(), "--headless", "--no-timing"]);
     assert!(out.status.success(), "{}", text(&out));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    assert_eq!(report["trips"].as_array().map(Vec::len), Some(0), "{report}");
-    assert_eq!(report["hazards"].as_array().map(Vec::len), Some(0), "{report}");
+    assert_eq!(
+        report["trips"].as_array().map(Vec::len),
+        Some(0),
+        "{report}"
+    );
+    assert_eq!(
+        report["hazards"].as_array().map(Vec::len),
+        Some(0),
+        "{report}"
+    );
     // Too short a run for a workpiece to cross the line is said, not measured.
     let out = vigie(&["bench-line", "--stations", "12", "--seconds", "5"]);
     assert!(!out.status.success());
-    assert!(text(&out).contains("delivered nothing in 5 s"), "{}", text(&out));
+    assert!(
+        text(&out).contains("delivered nothing in 5 s"),
+        "{}",
+        text(&out)
+    );
+}
+
+/// `vigie verify` on a plant of components finds what a constraint set misses, with a
+/// shortest trace: the production line's CSp22 without its observer lets the drill
+/// enter the workpiece fast from below the approach window (the gap the verification
+/// found in the shipped line), a clamp without CSp25 is driven both ways, and the
+/// drilling station without CSd3 runs the bit into the part; a danger only the
+/// environment makes (the substation's double fault) is reported as such and not
+/// counted against the constraints.
+#[test]
+fn verify_finds_the_hazards_a_components_constraint_set_misses() {
+    let tmp = TempDir::new("verify-components");
+    let copy = |plant: &str| -> PathBuf {
+        let dst = tmp.0.join(plant);
+        copy_dir(&repo().join("layouts").join(plant), &dst);
+        dst
+    };
+    let edit = |dir: &Path, from: &str, to: &str| {
+        let f = dir.join("constraints.txt");
+        let t = std::fs::read_to_string(&f).unwrap();
+        assert!(t.contains(from), "{from}");
+        std::fs::write(&f, t.replace(from, to)).unwrap();
+    };
+    let line = copy("production-line");
+    edit(&line, "PS_DR_LOW + PS_BELOW)", "PS_DR_LOW)");
+    let out = vigie(&["verify", line.to_str().unwrap()]);
+    let t = text(&out);
+    assert!(!out.status.success(), "{t}");
+    assert!(t.contains("VIOLATED: danger `drill_fast_into_part`"), "{t}");
+    assert!(t.contains("SAFETY: VIOLATED"), "{t}");
+    // The trace ends below the approach window with the fast descent applied.
+    assert!(
+        t.contains("at (31, 32) mm") && t.contains("applied[PS_DR_FAST]"),
+        "{t}"
+    );
+    edit(&line, "CSp25 = PS_CL_FWD . PS_CL_BWD", "");
+    let out = vigie(&["verify", line.to_str().unwrap(), "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let clamp = r["parts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["component"] == "ps_clamp")
+        .unwrap();
+    assert_eq!(
+        clamp["with_filter"][0]["hazard"], "OpposedDrives",
+        "{clamp}"
+    );
+    let drill = copy("drilling-station");
+    let f = drill.join("constraints.txt");
+    let t = std::fs::read_to_string(&f).unwrap();
+    let kept: String = t
+        .lines()
+        .filter(|l| !l.starts_with("CSd3"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_ne!(kept, t);
+    std::fs::write(&f, kept).unwrap();
+    let out = vigie(&["verify", drill.to_str().unwrap()]);
+    assert!(!out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("VIOLATED: danger `fast_into_part`"),
+        "{}",
+        text(&out)
+    );
+    let out = vigie(&["verify", "layouts/substation"]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("ENVIRONMENT: danger `double_fault`"),
+        "{}",
+        text(&out)
+    );
+}
+
+fn copy_dir(src: &Path, dst: &Path) {
+    std::fs::create_dir_all(dst).unwrap();
+    for e in std::fs::read_dir(src).unwrap() {
+        let e = e.unwrap();
+        let to = dst.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &to);
+        } else {
+            std::fs::copy(e.path(), &to).unwrap();
+        }
+    }
 }

@@ -35,6 +35,7 @@
 //! the invariants of `invariants.txt`, and which constraints are necessary. Traces are
 //! shortest (breadth-first search) and replayable in the emulator ([`replay`]).
 
+pub mod components;
 pub mod model;
 pub mod promela;
 pub mod scenario;
