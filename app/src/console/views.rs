@@ -80,7 +80,8 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
                 maintenance_ui(c, ui, out);
                 return;
             }
-            ui.horizontal(|ui| {
+            // Wrapped: a plant's areas (in French, long names) may not fit in one row.
+            ui.horizontal_wrapped(|ui| {
                 ui.add_space(6.0);
                 if ui
                     .add(egui::Button::selectable(
@@ -117,17 +118,14 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
 /// one per area (ISA-101's unit displays), the area of a marked signal (a trip's
 /// constraint, a suspect sensor) flagged.
 fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
-    /// Fewer components than this: the whole plant is readable at once.
-    const MANY: usize = 8;
     let Some(scene) = c.sim.emulator.scene() else {
         return;
     };
     let plant = &c.sim.bundle.plant;
-    let areas = synoptic::scene::areas(&scene, plant);
-    if areas.len() < 2 || scene.elements.len() < MANY {
+    let Some(areas) = synoptic::scene::shown_areas(&scene, plant) else {
         c.view.area = None;
         return;
-    }
+    };
     if c.view
         .area
         .as_ref()
@@ -916,7 +914,9 @@ fn geometry(c: &Console, scene: Option<&vigie_core::machine::Scene>, angle: i32)
     match (&c.sim.layout, scene) {
         (Some(layout), _) => Geometry::new(layout, plant, angle),
         (None, Some(scene)) => {
-            let areas = synoptic::scene::areas(scene, plant);
+            let Some(areas) = synoptic::scene::shown_areas(scene, plant) else {
+                return Geometry::from_scene(scene, plant);
+            };
             match c
                 .view
                 .area
@@ -927,7 +927,7 @@ fn geometry(c: &Console, scene: Option<&vigie_core::machine::Scene>, angle: i32)
                     let (scene, part) = synoptic::scene::area_view(scene, plant, area, ids);
                     Geometry::from_scene(&scene, &part)
                 }
-                None => Geometry::from_scene(scene, plant),
+                None => Geometry::overview(scene, plant, &areas),
             }
         }
         (None, None) => Geometry::from_scene(&vigie_core::machine::Scene::default(), plant),

@@ -570,6 +570,131 @@ fn component_signals(e: &SceneElement, plant: &Plant) -> Vec<String> {
     out
 }
 
+/// Fewer components than this: the whole plant is readable at once, drawn as one.
+const MANY: usize = 8;
+
+/// The areas the console offers, when the plant has [`MANY`] components or more in two
+/// areas or more; `None`: the plant is drawn as one.
+pub fn shown_areas(scene: &Scene, plant: &Plant) -> Option<Vec<(String, Vec<String>)>> {
+    let areas = areas(scene, plant);
+    (areas.len() >= 2 && scene.elements.len() >= MANY).then_some(areas)
+}
+
+/// Room between two areas' blocks in the overview, world units.
+const AREA_GAP: f32 = 1200.0;
+
+impl Geometry {
+    /// Moves everything by `d`.
+    fn translate(&mut self, d: [f32; 2]) {
+        let mv = |p: &mut [f32; 2]| {
+            p[0] += d[0];
+            p[1] += d[1];
+        };
+        for s in &mut self.sensors {
+            mv(&mut s.lamp);
+            if let Some((a, b)) = &mut s.beam {
+                mv(a);
+                mv(b);
+            }
+        }
+        self.actuators.values_mut().for_each(mv);
+        for a in &mut self.axes {
+            mv(&mut a.top);
+        }
+        for b in &mut self.belts {
+            mv(&mut b.origin);
+        }
+        for (_, p) in &mut self.schematic {
+            mv(p);
+        }
+        mv(&mut self.bounds.0);
+        mv(&mut self.bounds.1);
+    }
+
+    /// The whole plant of many components (ISA-101's area overview): each area drawn
+    /// as its own view draws it, the blocks in rows, each titled with its area; the
+    /// signals of no area in a last block.
+    pub fn overview(scene: &Scene, plant: &Plant, areas: &[(String, Vec<String>)]) -> Self {
+        let mut blocks: Vec<(String, Self)> = areas
+            .iter()
+            .map(|(area, ids)| {
+                let (s, p) = area_view(scene, plant, area, ids);
+                (area.clone(), Self::from_scene(&s, &p))
+            })
+            .collect();
+        let placed: std::collections::BTreeSet<&str> = blocks
+            .iter()
+            .flat_map(|(_, g)| {
+                g.sensors
+                    .iter()
+                    .map(|s| s.id.as_str())
+                    .chain(g.actuators.keys().map(String::as_str))
+            })
+            .collect();
+        let rest = Plant {
+            name: plant.name.clone(),
+            description: plant.description.clone(),
+            inputs: plant
+                .inputs
+                .iter()
+                .filter(|s| !placed.contains(s.id.as_str()))
+                .cloned()
+                .collect(),
+            outputs: plant
+                .outputs
+                .iter()
+                .filter(|s| !placed.contains(s.id.as_str()))
+                .cloned()
+                .collect(),
+        };
+        if !(rest.inputs.is_empty() && rest.outputs.is_empty()) {
+            blocks.push((String::new(), Self::from_scene(&Scene::default(), &rest)));
+        }
+        // Rows of about the square root of the blocks' count, in the plant's order.
+        #[allow(
+            clippy::cast_precision_loss,
+            clippy::cast_possible_truncation,
+            clippy::cast_sign_loss
+        )]
+        let per_row = ((blocks.len() as f32).sqrt().ceil() as usize).max(1);
+        let mut out: Option<Self> = None;
+        let (mut x, mut top, mut row_h) = (0.0f32, 0.0f32, 0.0f32);
+        for (k, (area, mut g)) in blocks.into_iter().enumerate() {
+            if k > 0 && k % per_row == 0 {
+                x = 0.0;
+                top -= row_h + AREA_GAP;
+                row_h = 0.0;
+            }
+            let (min, max) = g.bounds;
+            g.translate([x - min[0], top - max[1]]);
+            if !area.is_empty() && !g.schematic.iter().any(|(e, _)| *e == area) {
+                // The area's title above its block.
+                let at = [g.bounds.0[0], g.bounds.1[1] + 450.0];
+                g.schematic.push((area, at));
+                g.bounds.1[1] += 900.0;
+            }
+            x += max[0] - min[0] + AREA_GAP;
+            row_h = row_h.max(g.bounds.1[1] - g.bounds.0[1]);
+            out = Some(match out {
+                None => g,
+                Some(mut acc) => {
+                    acc.sensors.extend(g.sensors);
+                    acc.actuators.extend(g.actuators);
+                    acc.axes.extend(g.axes);
+                    acc.belts.extend(g.belts);
+                    acc.schematic.extend(g.schematic);
+                    for i in 0..2 {
+                        acc.bounds.0[i] = acc.bounds.0[i].min(g.bounds.0[i]);
+                        acc.bounds.1[i] = acc.bounds.1[i].max(g.bounds.1[i]);
+                    }
+                    acc
+                }
+            });
+        }
+        out.unwrap_or_else(|| Self::from_scene(scene, plant))
+    }
+}
+
 /// The areas of a plant of components, the units of ISA-101's display hierarchy: a
 /// component belongs to the element (`plant.ron`) most of its signals belong to (the
 /// first of them on a tie); the areas in the order of their first component, each with
