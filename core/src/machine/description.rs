@@ -178,6 +178,29 @@ impl Components {
                 ));
             }
         }
+        for c in &self.components {
+            let super::kinds::KindDef::Conveyor(v) = &c.kind else {
+                continue;
+            };
+            let Some(from) = v.carries_from() else {
+                continue;
+            };
+            let src = self.components.iter().find(|o| o.id == from);
+            let takes = matches!(
+                src.map(|n| &n.kind),
+                Some(super::kinds::KindDef::Conveyor(s)) if s.take.is_some()
+            );
+            if !takes || from == c.id {
+                out.push(self.error(
+                    codes::COMPONENTS_INVALID.id,
+                    from,
+                    format!(
+                        "component `{}`: its feeder carries from `{from}`, which is not another conveyor with a `take`",
+                        c.id
+                    ),
+                ));
+            }
+        }
         for d in &self.dangers {
             if !seen.contains(d.component.as_str()) {
                 out.push(self.error(

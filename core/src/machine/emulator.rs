@@ -48,6 +48,8 @@ pub struct ComponentPlant {
     next_item: u32,
     /// Per component, the component its exit leads to (a conveyor's `To`).
     targets: Vec<Option<usize>>,
+    /// Per component, the items its taker carries to a feeder (`feed.from`).
+    carried: Vec<std::collections::VecDeque<super::kinds::conveyor::Item>>,
     live: Vec<Live>,
     dangers: Vec<Danger>,
     symbols: Symbols,
@@ -141,6 +143,7 @@ impl ComponentPlant {
             measured,
             next_item: 0,
             targets: targets(desc),
+            carried: vec![std::collections::VecDeque::new(); live.len()],
             names: desc
                 .components
                 .iter()
@@ -174,6 +177,7 @@ impl ComponentPlant {
             reads_inputs,
             outputs_dirty: true,
         };
+        link_carries(desc, &mut emu.live);
         emu.apply_outputs();
         emu.compute_sensors();
         Ok(emu)
@@ -224,9 +228,12 @@ impl ComponentPlant {
             hazards: Vec::new(),
             next_item: &mut self.next_item,
             now: self.now,
+            carried: &mut self.carried,
+            index: 0,
         };
         let mut found = Vec::new();
         for (k, c) in self.live.iter_mut().enumerate() {
+            ctx.index = k;
             c.step(&mut ctx, self.component_faults[k]);
             found.extend(ctx.hazards.drain(..).map(|h| (k, h)));
         }
@@ -609,6 +616,25 @@ fn measured(desc: &Components, plant: &Plant) -> Vec<String> {
         .filter(|s| named.contains(s.id.as_str()))
         .map(|s| s.id.clone())
         .collect()
+}
+
+/// Links the feeders that place what another conveyor's taker picked (`feed.from`).
+fn link_carries(desc: &Components, live: &mut [Live]) {
+    let from: Vec<Option<usize>> = desc
+        .components
+        .iter()
+        .map(|c| match &c.kind {
+            super::kinds::KindDef::Conveyor(v) => v
+                .carries_from()
+                .and_then(|f| desc.components.iter().position(|o| o.id == f)),
+            _ => None,
+        })
+        .collect();
+    for (k, c) in live.iter_mut().enumerate() {
+        if let Live::Conveyor(v) = c {
+            v.link_carry(from[k], from.contains(&Some(k)));
+        }
+    }
 }
 
 /// Per component of `desc`, the index of the component its exit leads to.

@@ -132,6 +132,11 @@ pub(crate) struct StepCtx<'a> {
     pub next_item: &'a mut u32,
     /// The emulator's time at the end of this step, ms.
     pub now: u64,
+    /// The items each component's taker carries (by component index), to the feeder
+    /// that places them (`feed.from`).
+    pub carried: &'a mut [std::collections::VecDeque<conveyor::Item>],
+    /// The index of the component stepping.
+    pub index: usize,
 }
 
 /// Faults acting on a component as a whole.
@@ -145,6 +150,9 @@ pub(crate) struct ComponentFaults {
 
 /// A component's live state.
 #[derive(Clone, Debug)]
+// A plant holds one of each component, in a Vec built once: the variants' sizes do
+// not matter, and boxing would add an indirection to every internal step.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum Live {
     /// See [`axis::Axis`].
     Axis(axis::Axis),

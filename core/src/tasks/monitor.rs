@@ -583,6 +583,16 @@ impl Monitor {
         let t = t.max(self.now);
         self.detect(t, false);
         self.now = t;
+        // The frame adapter's tick (no event) every cycle: "" is the least key, so the
+        // first key tells whether it routes anything, without comparing strings.
+        if event.is_empty()
+            && !self
+                .routes
+                .first_key_value()
+                .is_some_and(|(k, _)| k.is_empty())
+        {
+            return &self.alarms[before..];
+        }
         let routes = self.routes.get(event).cloned().unwrap_or_default();
         for r in routes {
             match r {

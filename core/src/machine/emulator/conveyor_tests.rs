@@ -279,3 +279,64 @@ proptest::proptest! {
         }
     }
 }
+
+/// A gripper carries the item it takes off belt 2's end to belt 3's entry (`feed.from`):
+/// the very item, class and number kept, is put down; a carried item is not counted out;
+/// placing with nothing held places nothing.
+#[test]
+fn a_carried_item_keeps_its_class_and_is_counted_once() {
+    let text = LINE.replace(
+        "            take: Some(\"R\"),\n        ))),",
+        "            take: Some(\"R\"),\n        ))),\n        (id: \"belt3\", name: \"Belt 3\", kind: Conveyor((\n            length: 600.0,\n            drives: [(when: \"C2\", speed: 300.0)],\n            feed: Some((when: \"B1\", from: Some(\"belt2\"))),\n            exit: Sink,\n        ))),",
+    );
+    assert_ne!(text, LINE);
+    let mut e = line(&text);
+    let items = |e: &ComponentPlant, id: &str| -> Vec<(u32, String)> {
+        e.scene()
+            .elements
+            .iter()
+            .filter(|x| x.id == id)
+            .flat_map(|x| match &x.shape {
+                crate::machine::Shape::Conveyor { items, .. } => {
+                    items.iter().map(|i| (i.id, i.class.clone())).collect()
+                }
+                _ => Vec::new(),
+            })
+            .collect()
+    };
+    // Two items: "low" then "high".
+    for _ in 0..2 {
+        run(&mut e, &out(&["P"]), 20);
+        run(&mut e, &out(&["C1"]), 600);
+    }
+    assert!(until(&mut e, &out(&["C1", "C2"]), "b2", true, 20_000).is_some());
+    run(&mut e, &out(&["R"]), 20);
+    assert_eq!(e.items_out(), 0, "carried, not out");
+    assert!(items(&e, "belt3").is_empty());
+    run(&mut e, &out(&[]), 20);
+    run(&mut e, &out(&["B1"]), 20);
+    assert_eq!(items(&e, "belt3"), vec![(1, "low".to_string())]);
+    // Nothing held: a second place puts nothing down, and nothing is hurt.
+    run(&mut e, &out(&[]), 20);
+    run(&mut e, &out(&["B1"]), 20);
+    assert_eq!(items(&e, "belt3").len(), 1);
+    assert!(e.hazards().is_empty(), "{:?}", e.hazards());
+    // Belt 3 delivers it into its sink: counted once.
+    run(&mut e, &out(&["C2"]), 4_000);
+    assert_eq!(e.items_out(), 1);
+}
+
+/// A feeder carrying from a conveyor that takes nothing is refused with its location.
+#[test]
+fn a_feeder_carrying_from_a_conveyor_without_a_taker_is_refused() {
+    let text = LINE.replace(
+        "            feed: Some((when: \"P\", items: [",
+        "            feed: Some((when: \"P\", from: Some(\"belt1\"), items: [",
+    );
+    let p = Components::from_ron(&text, Path::new("components.ron")).unwrap_err();
+    assert!(p.iter().all(|p| p.location.is_some()), "{p:?}");
+    assert!(
+        p.iter().any(|p| p.message.contains("carries from `belt1`")),
+        "{p:?}"
+    );
+}

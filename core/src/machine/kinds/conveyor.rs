@@ -62,7 +62,14 @@ pub struct FeedDef {
     /// On each rise of this expression, an item is placed at the entry.
     pub when: String,
     /// The items it places, in turn.
+    #[serde(default)]
     pub items: Vec<ItemClass>,
+    /// The conveyor whose taker carries the item placed (a gripper that picked it off
+    /// that belt's end puts it here, class and number kept): on a rise, the item it
+    /// took first and has not placed yet, or nothing when it holds none. The items that
+    /// conveyor's taker picks are then carried, not counted out.
+    #[serde(default)]
+    pub from: Option<String>,
 }
 
 /// A presence beam across the belt.
@@ -150,8 +157,11 @@ impl ConveyorDef {
             }
         }
         if let Some(f) = &self.feed {
-            if f.items.is_empty() {
-                out.push(format!("feed `{}` places no item class", f.when));
+            if f.items.is_empty() && f.from.is_none() {
+                out.push(format!(
+                    "feed `{}` places no item class and carries from no conveyor (`from`)",
+                    f.when
+                ));
             }
             for c in &f.items {
                 if !c.length.is_finite() || c.length <= 0.0 || c.length > self.length {
@@ -187,6 +197,11 @@ impl ConveyorDef {
             .chain(self.feed.as_ref().map(|f| f.when.as_str()))
             .chain(self.take.as_deref())
             .collect()
+    }
+
+    /// The conveyor whose taken items its feeder places, if any.
+    pub(crate) fn carries_from(&self) -> Option<&str> {
+        self.feed.as_ref().and_then(|f| f.from.as_deref())
     }
 
     /// The conveyor its exit leads to, if any.
@@ -251,6 +266,10 @@ pub struct Conveyor {
     feed: Option<(Rise, Vec<ItemClass>)>,
     next_class: usize,
     take: Option<Rise>,
+    /// The component whose taken items its feeder places (`feed.from`), by index.
+    feed_from: Option<usize>,
+    /// Some conveyor's feeder places what its taker picks: the items are carried.
+    carried: bool,
     exit: Exit,
     variation_ppm: i64,
     /// The items, by rear end (the entry first).
@@ -355,6 +374,8 @@ impl Conveyor {
             feed,
             next_class: 0,
             take,
+            feed_from: None,
+            carried: false,
             exit: def.exit.clone(),
             variation_ppm: i64::from(def.variation_ppm),
             items: Vec::new(),
@@ -423,24 +444,34 @@ impl Conveyor {
         if let Some((rise, classes)) = self.feed.as_mut()
             && rise.rose(ctx.frame)
         {
-            let class = &classes[self.next_class % classes.len()];
-            self.next_class += 1;
-            let length = micro(class.length);
-            if self.items.iter().all(|i| i.rear > length) {
-                *ctx.next_item += 1;
-                self.items.insert(
-                    0,
-                    Item {
-                        id: *ctx.next_item,
+            // A carried item (kept whole), else the next class of its list.
+            let item = match self.feed_from {
+                Some(src) => ctx.carried[src].pop_front(),
+                None => {
+                    let class = &classes[self.next_class % classes.len()];
+                    self.next_class += 1;
+                    // Numbered when placed (below): a collision places nothing.
+                    Some(Item {
+                        id: 0,
                         class: class.class.clone(),
                         tags: class.tags.clone(),
-                        length,
+                        length: micro(class.length),
                         rear: 0,
-                    },
-                );
-            } else {
-                ctx.hazards
-                    .push((HazardKind::Collision, rise.outputs.clone()));
+                    })
+                }
+            };
+            if let Some(mut item) = item {
+                if self.items.iter().all(|i| i.rear > item.length) {
+                    item.rear = 0;
+                    if item.id == 0 {
+                        *ctx.next_item += 1;
+                        item.id = *ctx.next_item;
+                    }
+                    self.items.insert(0, item);
+                } else {
+                    ctx.hazards
+                        .push((HazardKind::Collision, rise.outputs.clone()));
+                }
             }
         }
         if let Some(rise) = self.take.as_mut()
@@ -448,8 +479,11 @@ impl Conveyor {
             && let Some(last) = self.items.last()
             && last.rear + last.length / 2 + last.length >= self.length
         {
-            self.items.pop();
-            self.taken += 1;
+            let item = self.items.pop();
+            match item {
+                Some(item) if self.carried => ctx.carried[ctx.index].push_back(item),
+                _ => self.taken += 1,
+            }
         }
         let dir = speed.signum();
         if dir != self.dir {
@@ -626,6 +660,13 @@ impl Conveyor {
     #[cfg(test)]
     pub(crate) fn items(&self) -> &[Item] {
         &self.items
+    }
+
+    /// Links its feeder to the conveyor it carries from (`from`, by index), and tells
+    /// it whether another conveyor's feeder places what its taker picks.
+    pub(crate) fn link_carry(&mut self, from: Option<usize>, carried: bool) {
+        self.feed_from = from;
+        self.carried = carried;
     }
 
     /// The classes its feeder places.
