@@ -122,7 +122,7 @@ pub struct SubReport {
     pub states: usize,
     /// Transitions.
     pub transitions: u64,
-    /// The search stopped at [`MAX_STATES`].
+    /// The search stopped at its limit of states (two million).
     pub truncated: bool,
     /// Hazards reachable without the filter (each with a shortest trace).
     pub without_filter: Vec<Reached>,

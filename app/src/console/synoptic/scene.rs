@@ -573,7 +573,7 @@ fn component_signals(e: &SceneElement, plant: &Plant) -> Vec<String> {
 /// Fewer components than this: the whole plant is readable at once, drawn as one.
 const MANY: usize = 8;
 
-/// The areas the console offers, when the plant has [`MANY`] components or more in two
+/// The areas the console offers, when the plant has 8 components or more in two
 /// areas or more; `None`: the plant is drawn as one.
 pub fn shown_areas(scene: &Scene, plant: &Plant) -> Option<Vec<(String, Vec<String>)>> {
     let areas = areas(scene, plant);
