@@ -353,37 +353,21 @@ fn line(
     desc: &Components,
     bundle: &PlantBundle,
 ) -> Result<Option<Line>, Problem> {
-    let mut l = match kind {
-        KindDef::Axis(a) => Line {
-            motion: Motion::Axis,
-            unit: a.unit.clone(),
-            points: vec![micro(a.min), micro(a.max), micro(a.start)],
-            windows: Vec::new(),
-            moving: a.motion.as_deref().map(|m| input(bundle, m)).transpose()?,
-            movers: Vec::new(),
-            low: a.end_stops.min,
-            high: a.end_stops.max,
-            variation_ppm: i64::from(a.variation_ppm),
-            start: 0,
-            dangers: Vec::new(),
-        },
-        KindDef::Tank(t) => Line {
-            motion: Motion::Tank,
-            unit: t.unit.clone(),
-            points: vec![0, micro(t.capacity), micro(t.start)],
-            windows: Vec::new(),
-            moving: None,
-            movers: Vec::new(),
-            low: t.dry_run,
-            high: t.overflow,
-            variation_ppm: i64::from(t.variation_ppm),
-            start: 0,
-            dangers: Vec::new(),
-        },
-        _ => return Ok(None),
-    };
-    let (windows, movers): (&Vec<_>, Vec<MoverText<'_>>) = match kind {
+    let (mut l, windows, movers): (Line, &Vec<_>, Vec<MoverText<'_>>) = match kind {
         KindDef::Axis(a) => (
+            Line {
+                motion: Motion::Axis,
+                unit: a.unit.clone(),
+                points: vec![micro(a.min), micro(a.max), micro(a.start)],
+                windows: Vec::new(),
+                moving: a.motion.as_deref().map(|m| input(bundle, m)).transpose()?,
+                movers: Vec::new(),
+                low: a.end_stops.min,
+                high: a.end_stops.max,
+                variation_ppm: i64::from(a.variation_ppm),
+                start: 0,
+                dangers: Vec::new(),
+            },
             &a.sensors,
             a.drives
                 .iter()
@@ -391,6 +375,19 @@ fn line(
                 .collect(),
         ),
         KindDef::Tank(t) => (
+            Line {
+                motion: Motion::Tank,
+                unit: t.unit.clone(),
+                points: vec![0, micro(t.capacity), micro(t.start)],
+                windows: Vec::new(),
+                moving: None,
+                movers: Vec::new(),
+                low: t.dry_run,
+                high: t.overflow,
+                variation_ppm: i64::from(t.variation_ppm),
+                start: 0,
+                dangers: Vec::new(),
+            },
             &t.sensors,
             t.flows
                 .iter()
@@ -599,9 +596,11 @@ impl Sub<'_> {
                         commanded: self.names(Space::Output, &commanded),
                         applied: self.names(Space::Output, &applied),
                     };
-                    let (v, mut hazards, running) = self.line.speed(z, &frame);
+                    let (v, moving, running) = self.line.speed(z, &frame);
                     for next in self.line.next(z, v) {
                         transitions += 1;
+                        // The cycle's hazards, and the dangers of this successor's zone.
+                        let mut hazards = moving.clone();
                         for (id, from, to, when) in &self.line.dangers {
                             let inside = self.line.within(next, *from, *to);
                             if inside && eval_dnf(when, &frame) {
@@ -643,7 +642,6 @@ impl Sub<'_> {
                         parent.push(Some((si, step.clone())));
                         queue.push_back(id);
                     }
-                    hazards.clear();
                 }
             }
         }
