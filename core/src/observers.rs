@@ -47,6 +47,22 @@ pub enum Rule {
     },
 }
 
+impl Rule {
+    /// Its expressions as written: set and reset, or up, down and clear.
+    pub fn expressions(&self) -> Vec<&str> {
+        match self {
+            Self::Memory { set, reset } => vec![set, reset],
+            Self::Counter {
+                up, down, clear, ..
+            } => {
+                let mut v = vec![up.as_str(), down.as_str()];
+                v.extend(clear.as_deref());
+                v
+            }
+        }
+    }
+}
+
 /// One observer as written.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -24,7 +24,7 @@ use crate::bundle::PlantBundle;
 use crate::constraints::ConstraintSet;
 use crate::filter::{Filter, SpecError};
 use crate::frame::Frame;
-use crate::observers::{Observers, Rule};
+use crate::observers::Observers;
 use crate::symbols::{Space, Symbols};
 
 /// The inputs each observer reads, directly or through other observers.
@@ -34,17 +34,7 @@ pub fn observer_inputs(observers: &Observers, symbols: &Symbols) -> Vec<Bits> {
     let mut inputs = vec![Bits::zeros(n_in); n_obs];
     let mut uses = vec![Vec::new(); n_obs];
     for (o, def) in observers.defs.iter().enumerate() {
-        let texts: Vec<&str> = match &def.rule {
-            Rule::Memory { set, reset } => vec![set, reset],
-            Rule::Counter {
-                up, down, clear, ..
-            } => {
-                let mut v = vec![up.as_str(), down.as_str()];
-                v.extend(clear.as_deref());
-                v
-            }
-        };
-        for text in texts {
+        for text in def.rule.expressions() {
             for name in identifiers(text) {
                 match symbols.lookup(name) {
                     Some((Space::Input, i)) => {

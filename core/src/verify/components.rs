@@ -728,7 +728,7 @@ fn scope(l: &Line, bundle: &PlantBundle) -> Result<Scope, Problem> {
     let mut relevant_obs: BTreeSet<u32> = BTreeSet::new();
     for (k, o) in bundle.observers.defs.iter().enumerate() {
         let (mut r, mut p) = (BTreeSet::new(), BTreeSet::new());
-        for t in observer_texts(o) {
+        for t in o.rule.expressions() {
             let d = compile(t, bundle)?;
             reads(&d, &mut r);
             reads_prev(&d, &mut p);
@@ -868,19 +868,6 @@ pub fn verify_components(
             "the operator may reset the filter at any cycle (the latch is abstracted away)".into(),
         ],
     })
-}
-
-fn observer_texts(o: &crate::observers::ObserverDef) -> Vec<&str> {
-    match &o.rule {
-        crate::observers::Rule::Memory { set, reset } => vec![set, reset],
-        crate::observers::Rule::Counter {
-            up, down, clear, ..
-        } => {
-            let mut v = vec![up.as_str(), down.as_str()];
-            v.extend(clear.as_deref());
-            v
-        }
-    }
 }
 
 #[cfg(test)]

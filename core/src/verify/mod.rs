@@ -492,17 +492,7 @@ fn prev_reads(bundle: &PlantBundle, feedback: &[(usize, usize)]) -> (u64, u64, u
         .map(|c| c.dnf.clone())
         .collect();
     for d in &bundle.observers.defs {
-        let texts: Vec<&String> = match &d.rule {
-            crate::observers::Rule::Memory { set, reset } => vec![set, reset],
-            crate::observers::Rule::Counter {
-                up, down, clear, ..
-            } => {
-                let mut v = vec![up, down];
-                v.extend(clear.as_ref());
-                v
-            }
-        };
-        for t in texts {
+        for t in d.rule.expressions() {
             match expr::parse_str(t).and_then(|e| e.to_dnf(&bundle.symbols)) {
                 Ok(dnf) => dnfs.push(dnf),
                 // Unreadable rule: keep every previous value.
