@@ -1730,8 +1730,13 @@ fn synoptic_view(i18n: &I18n, sim: &vigie_core::sim::Simulation) -> synoptic::Vi
     let plant = &sim.bundle.plant;
     // A plant of components names its components by id (`part-<id>` in the plant
     // folder's texts, else the name `components.ron` gives).
-    let components = sim.emulator.scene().map(|s| s.elements).unwrap_or_default();
+    let scene = sim.emulator.scene();
+    let areas = scene
+        .as_ref()
+        .and_then(|s| synoptic::scene::shown_areas(s, plant));
+    let components = scene.map(|s| s.elements).unwrap_or_default();
     synoptic::View {
+        areas,
         descriptions: i18n.signal_descriptions(plant),
         words: synoptic_words(i18n),
         elements: plant

@@ -21,6 +21,9 @@ pub struct View {
     /// The area shown (an element of `plant.ron`, see [`scene::areas`]), or the whole
     /// plant.
     pub area: Option<String>,
+    /// The plant's areas with their components' ids, when it is shown area by area
+    /// ([`scene::shown_areas`]); they depend on the plant only, so they are found once.
+    pub areas: Option<Vec<(String, Vec<String>)>>,
     /// The signals' descriptions in the language shown (from the plant folder's
     /// `i18n/<lang>.ftl`, `signal-<id>`); a signal without one shows the plant's own.
     pub descriptions: std::collections::BTreeMap<String, String>,
@@ -101,6 +104,7 @@ impl Default for View {
             zoom: 1.0,
             pan: Vec2::ZERO,
             area: None,
+            areas: None,
             descriptions: std::collections::BTreeMap::new(),
             words: std::collections::BTreeMap::new(),
             elements: std::collections::BTreeMap::new(),

@@ -118,21 +118,10 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
 /// one per area (ISA-101's unit displays), the area of a marked signal (a trip's
 /// constraint, a suspect sensor) flagged.
 fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
-    let Some(scene) = c.sim.emulator.scene() else {
+    let Some(areas) = &c.view.areas else {
         return;
     };
     let plant = &c.sim.bundle.plant;
-    let Some(areas) = synoptic::scene::shown_areas(&scene, plant) else {
-        c.view.area = None;
-        return;
-    };
-    if c.view
-        .area
-        .as_ref()
-        .is_some_and(|a| !areas.iter().any(|(x, _)| x == a))
-    {
-        c.view.area = None;
-    }
     // The signals of the trip (its constraints' literals) while the plant is stopped,
     // and the suspect or estimated sensors.
     let mut marked: BTreeSet<String> = BTreeSet::new();
@@ -164,7 +153,7 @@ fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
     {
         chosen = Some(None);
     }
-    for (area, _) in &areas {
+    for (area, _) in areas {
         let name = c.view.elements.get(area).unwrap_or(area);
         let flagged = marked.iter().any(|m| element_of(m) == Some(area.as_str()));
         let text = if flagged {
@@ -914,7 +903,7 @@ fn geometry(c: &Console, scene: Option<&vigie_core::machine::Scene>, angle: i32)
     match (&c.sim.layout, scene) {
         (Some(layout), _) => Geometry::new(layout, plant, angle),
         (None, Some(scene)) => {
-            let Some(areas) = synoptic::scene::shown_areas(scene, plant) else {
+            let Some(areas) = &c.view.areas else {
                 return Geometry::from_scene(scene, plant);
             };
             match c
@@ -927,7 +916,7 @@ fn geometry(c: &Console, scene: Option<&vigie_core::machine::Scene>, angle: i32)
                     let (scene, part) = synoptic::scene::area_view(scene, plant, area, ids);
                     Geometry::from_scene(&scene, &part)
                 }
-                None => Geometry::overview(scene, plant, &areas),
+                None => Geometry::overview(scene, plant, areas),
             }
         }
         (None, None) => Geometry::from_scene(&vigie_core::machine::Scene::default(), plant),
