@@ -32,10 +32,11 @@ pub(crate) fn paper_station_in(dir: &std::path::Path) -> std::path::PathBuf {
 /// The journal of the historian in `dir` (`vigie.sqlite`), one JSON object per line
 /// (`wall_ms`, `sim_ms`, `kind`, `text`), oldest first; empty when there is none.
 pub(crate) fn historian_journal(dir: &std::path::Path) -> String {
-    if !dir.join(vigie_app::historian::FILE).exists() {
+    // Read only: a reader that opened it read-write could race the writer's own start.
+    let Some(store) = vigie_app::historian::Store::open_read_only(dir).expect("historian opens")
+    else {
         return String::new();
-    }
-    let store = vigie_app::historian::Store::open_in(dir).expect("historian opens");
+    };
     store
         .journal(0, "", usize::MAX >> 1)
         .expect("journal reads")

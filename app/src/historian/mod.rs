@@ -309,6 +309,45 @@ impl Store {
         Ok(store)
     }
 
+    /// Opens `dir/vigie.sqlite` to read it beside the process that writes it: read
+    /// only, so it never creates, migrates or switches the file's journal mode under
+    /// the writer (a reader that did raced the gateway's own start). `None` while the
+    /// file does not exist or its writer has not created the schema yet.
+    pub fn open_read_only(dir: &Path) -> Result<Option<Self>, HistorianError> {
+        let path = dir.join(FILE);
+        if !path.exists() {
+            return Ok(None);
+        }
+        let flags = rusqlite::OpenFlags::SQLITE_OPEN_READ_ONLY
+            | rusqlite::OpenFlags::SQLITE_OPEN_NO_MUTEX
+            | rusqlite::OpenFlags::SQLITE_OPEN_URI;
+        let conn = Connection::open_with_flags(&path, flags).map_err(|e| HistorianError::Open {
+            path: path.clone(),
+            source: Box::new(e),
+        })?;
+        let store = Self { conn, path };
+        store
+            .conn
+            .busy_timeout(std::time::Duration::from_secs(10))
+            .map_err(|e| store.sql(e))?;
+        let version: i64 = store
+            .conn
+            .query_row("PRAGMA user_version", [], |r| r.get(0))
+            .map_err(|e| store.sql(e))?;
+        match version {
+            0 => Ok(None),
+            SCHEMA_VERSION => Ok(Some(store)),
+            v if v > SCHEMA_VERSION => Err(HistorianError::Newer {
+                path: store.path.clone(),
+                found: v,
+            }),
+            v => Err(HistorianError::Open {
+                path: store.path.clone(),
+                source: format!("schema version {v}: open it once read-write to migrate it").into(),
+            }),
+        }
+    }
+
     fn sql(&self, source: rusqlite::Error) -> HistorianError {
         HistorianError::Sql {
             path: self.path.clone(),

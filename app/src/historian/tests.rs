@@ -64,6 +64,28 @@ fn journal_is_durable_and_shared_by_two_connections() {
     assert_eq!(sync, 2, "synchronous = FULL");
 }
 
+/// A reader beside the writer neither creates the file nor its schema, sees the
+/// writer's committed rows, and cannot write.
+#[test]
+fn a_read_only_reader_waits_for_the_writers_schema_and_never_writes() {
+    let d = Dir::new("read-only");
+    assert!(Store::open_read_only(&d.0).unwrap().is_none());
+    assert!(!d.0.join(FILE).exists(), "the reader created the file");
+    std::fs::create_dir_all(&d.0).unwrap();
+    std::fs::write(d.0.join(FILE), b"").unwrap();
+    // An empty file, as the writer's open leaves it for a moment: no schema yet.
+    assert!(Store::open_read_only(&d.0).unwrap().is_none());
+    std::fs::remove_file(d.0.join(FILE)).unwrap();
+    let mut w = Store::open_in(&d.0).unwrap();
+    let s = w.begin_session("gateway", "station", 1).unwrap();
+    let mut r = Store::open_read_only(&d.0)
+        .unwrap()
+        .expect("the schema is there");
+    w.append_journal(s, &[row(10, "listening", "x")]).unwrap();
+    assert_eq!(r.journal(0, "", 10).unwrap().len(), 1);
+    assert!(r.begin_session("console", "station", 2).is_err());
+}
+
 /// A file of schema version 1 (journal rows without message code nor fields) opens:
 /// its rows keep their text, and new rows keep their code and fields.
 #[test]

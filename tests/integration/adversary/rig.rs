@@ -247,6 +247,12 @@ impl GatewayProc {
         for l in self.log.lock().unwrap().iter() {
             out.push_str(&format!("  {l}\n"));
         }
+        // When nobody reads its output, its status is all there is to say.
+        match self.child.try_wait() {
+            Ok(None) => out.push_str("the gateway is running\n"),
+            Ok(Some(status)) => out.push_str(&format!("the gateway has exited: {status}\n")),
+            Err(e) => out.push_str(&format!("the gateway's status is unknown: {e}\n")),
+        }
         out
     }
 }
