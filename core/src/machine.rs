@@ -7,11 +7,14 @@
 //!   feasibility check (T_D < ΔT_min, (II.4)) and the learning of T and ΔT (annex B).
 //! - [`monitor`]: the per-action monitor (checks a-d of seed 003, III.1), with the
 //!   localisation messages of its detections.
+//! - [`diagnosers`]: the decentralized diagnosers' component models derived from the
+//!   axes (`vigie diagnose derive`).
 //! - [`safe_state`]: whether the outputs' safe values move a component into a hazard.
 
 pub mod actions;
 pub mod derive;
 pub mod description;
+pub mod diagnosers;
 pub mod emulator;
 pub mod kinds;
 pub mod monitor;

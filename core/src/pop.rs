@@ -127,7 +127,16 @@ pub struct FaultReport {
     /// hypothesis agree on everything but an actuator edge only the fault side allows
     /// (a controller that waits for the faulty sensor leaves the decision ambiguous).
     pub needs_controller: Vec<String>,
+    /// The twin plant grew past [`MAX_TWIN_PAIRS`] pairs of states before it decided:
+    /// `diagnosable` is false and unproved either way (the fault campaign measures
+    /// it). Absent from the report when false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub undecided: bool,
 }
+
+/// The twin plant's size at which the report stops deciding a fault (a derived model
+/// of a three-speed drill head would need hundreds of millions of pairs).
+pub const MAX_TWIN_PAIRS: usize = 30_000;
 
 /// Counts of the generated model, per component.
 #[derive(Clone, Debug, Serialize)]
@@ -184,6 +193,7 @@ pub fn report(compiled: &Compiled) -> Report {
                 continue;
             };
             let (diagnosable, max_edges, witness, needs_controller) = twin(c, f, &p.faults);
+            let undecided = witness.as_deref().is_some_and(|w| w.starts_with(UNDECIDED));
             faults.push(FaultReport {
                 component: c.id.clone(),
                 fault: fname.clone(),
@@ -192,6 +202,7 @@ pub fn report(compiled: &Compiled) -> Report {
                 max_edges,
                 witness,
                 needs_controller,
+                undecided,
             });
         }
     }
@@ -232,6 +243,18 @@ fn closure_of(
     out
 }
 
+/// The answer of a twin plant that grew past [`MAX_TWIN_PAIRS`].
+fn undecided(c: &Component) -> (bool, Option<usize>, Option<String>, Vec<String>) {
+    let w = format!(
+        "{UNDECIDED} {MAX_TWIN_PAIRS} pairs of states (a model of {} states): `vigie campaign diagnoser` measures it",
+        c.g.len()
+    );
+    (false, None, Some(w), Vec::new())
+}
+
+/// How the witness of an undecided fault begins.
+const UNDECIDED: &str = "not decided: the twin plant grew past";
+
 fn twin(
     c: &Component,
     f: usize,
@@ -263,6 +286,9 @@ fn twin(
         }
     }
     while let Some((qa, qb)) = work.pop() {
+        if idx.len() > MAX_TWIN_PAIRS {
+            return undecided(c);
+        }
         let from = idx[&(qa, qb)];
         let ca = closure_of(c, &[qa], false, &|m| mine(m));
         let cb = closure_of(c, &[qb], true, &|m| other(m));

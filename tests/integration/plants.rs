@@ -87,6 +87,7 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
             "bench {d}: {}",
             text(&out)
         );
+        diagnosers(dir);
         // The mutation campaign (the sorting station's, 490 mutants, has its own test).
         if !dir.join("layout.ron").exists() {
             let out = vigie(&[
@@ -111,6 +112,66 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
             assert!(localised * 2 >= tripped, "{d}: {localised}/{tripped}");
         }
     }
+}
+
+/// `diagnose derive`, `diagnose report` and the diagnoser campaign (reduced) on a plant.
+fn diagnosers(dir: &Path) {
+    let d = dir.to_str().unwrap();
+    // The diagnosers: the station's written by hand, every other plant's derived
+    // from its components, and the shipped file is what `derive` writes today.
+    if !dir.join("layout.ron").exists() {
+        let out = vigie(&["diagnose", "derive", "--plant", d, "--stdout"]);
+        assert!(out.status.success(), "derive {d}: {}", text(&out));
+        let shipped = std::fs::read_to_string(dir.join("diagnosers.ron")).unwrap();
+        assert!(
+            shipped == String::from_utf8_lossy(&out.stdout),
+            "{d}/diagnosers.ron is not what `vigie diagnose derive` writes: derive it again"
+        );
+    }
+    let out = vigie(&["diagnose", "report", "--plant", d]);
+    assert!(out.status.success(), "diagnose report {d}: {}", text(&out));
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let models = r["components"].as_array().unwrap().len();
+    // The diagnoser campaign, reduced: one seed of each injection of the drives
+    // (the stuck drive outputs), and a fault-free hour
+    // of the plant's production. No certain diagnosis may name a wrong partition
+    // or come before the fault.
+    let out = vigie(&[
+        "campaign",
+        "diagnoser",
+        "--plant",
+        d,
+        "--seeds",
+        "1",
+        "--hours",
+        "1",
+        "--only",
+        "stuck o",
+        "--json",
+        "--threads",
+        "2",
+    ]);
+    assert!(
+        out.status.success(),
+        "campaign diagnoser {d}: {}",
+        text(&out)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = r["rows"].as_array().unwrap();
+    assert!(
+        rows.len() >= models.min(1),
+        "{d}: {models} models, {} rows",
+        rows.len()
+    );
+    for row in rows {
+        assert_eq!(row["wrong"], 0, "{d}: {row}");
+        assert_eq!(row["early"], 0, "{d}: {row}");
+    }
+    assert_eq!(
+        r["false_diagnoses"].as_array().unwrap().len(),
+        0,
+        "{d}: {r}"
+    );
 }
 
 /// A plant folder that describes only its signals runs the signal tools, and a

@@ -66,6 +66,71 @@ pub(crate) fn learn(
 }
 
 /// Prints the diagnosability report (JSON).
+/// The first line of a `diagnosers.ron` that `vigie diagnose derive` wrote (and may
+/// write again).
+pub(crate) const DERIVED: &str =
+    "// Derived from components.ron by `vigie diagnose derive`: derive again after";
+
+/// `vigie diagnose derive`: the diagnosers of a plant of components, from its axes.
+pub(crate) fn derive(dir: &Path, stdout: bool) -> anyhow::Result<ExitCode> {
+    let path = dir.join("components.ron");
+    let desc = vigie_core::machine::Components::load(&path)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let (bundle, _) = vigie_core::bundle::PlantBundle::load(dir)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let d = vigie_core::machine::diagnosers::derive(&desc, &bundle.symbols);
+    let text = derived_text(&d);
+    if stdout {
+        write!(std::io::stdout().lock(), "{text}")?;
+    } else {
+        let out = dir.join("diagnosers.ron");
+        if let Ok(old) = std::fs::read_to_string(&out)
+            && !old.starts_with(DERIVED)
+        {
+            anyhow::bail!(
+                "{} was not written by `vigie diagnose derive`: it is left alone (print the derived models with --stdout)",
+                out.display()
+            );
+        }
+        std::fs::write(&out, &text)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", out.display()))?;
+    }
+    let mut err = std::io::stderr().lock();
+    for c in &d.file.components {
+        writeln!(
+            err,
+            "{}: {} states, {} expected evolutions, {} intervals, {} faults",
+            c.id,
+            c.states.len(),
+            c.expected.len(),
+            c.intervals.len(),
+            c.faults.len()
+        )?;
+    }
+    for (id, why) in &d.skipped {
+        writeln!(err, "{id}: no model ({why})")?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The file `derive` writes: a header, the components without a model, the models.
+pub(crate) fn derived_text(d: &vigie_core::machine::diagnosers::Derived) -> String {
+    let mut text = format!(
+        "{DERIVED}\n// editing components.ron, or take this file over by deleting these lines\n// (then `derive` leaves it alone). Learn the intervals with `vigie diagnose learn`.\n"
+    );
+    for (id, why) in &d.skipped {
+        text.push_str(&format!("// {id}: no model ({why})\n"));
+    }
+    // One state, evolution, interval or fault per line: a model of hundreds of states
+    // stays a file one reads and diffs.
+    let cfg = ron::ser::PrettyConfig::new()
+        .struct_names(true)
+        .depth_limit(4);
+    text.push_str(&ron::ser::to_string_pretty(&d.file, cfg).unwrap_or_default());
+    text.push('\n');
+    text
+}
+
 pub(crate) fn report(dir: &Path) -> anyhow::Result<ExitCode> {
     let (db, _) =
         pop::load(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;

@@ -308,6 +308,15 @@ pub(crate) enum DiagnoseCmd {
         #[arg(long)]
         dry_run: bool,
     },
+    /// Derive the diagnosers of a plant of components from its axes into
+    /// `diagnosers.ron` (a file written by hand is never replaced).
+    Derive {
+        #[command(flatten)]
+        plant: PlantOpt,
+        /// Print the file instead of writing it.
+        #[arg(long)]
+        stdout: bool,
+    },
     /// Print the diagnosability report (JSON).
     Report {
         #[command(flatten)]
@@ -416,6 +425,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
                 alpha,
                 dry_run,
             } => learn::learn(&plant.plant, &traces, alpha, dry_run),
+            DiagnoseCmd::Derive { plant, stdout } => learn::derive(&plant.plant, stdout),
             DiagnoseCmd::Report { plant } => learn::report(&plant.plant),
             DiagnoseCmd::Bench { plant } => learn::bench(&plant.plant),
         },

@@ -38,7 +38,55 @@ pub enum KindDef {
     Tank(tank::TankDef),
 }
 
+/// A component as a travel between two ends, driven by outputs and read by windows:
+/// what the derived diagnosers model ([`super::diagnosers`]).
+#[derive(Clone, Debug)]
+pub struct Travel {
+    /// The unit, for texts.
+    pub unit: String,
+    /// Start and end of the travel.
+    pub min: f64,
+    /// End of the travel.
+    pub max: f64,
+    /// Position at the start.
+    pub start: f64,
+    /// Drives: condition over outputs, signed speed in units/s (the fastest active
+    /// drive moves it; opposed drives hold it).
+    pub drives: Vec<(String, f64)>,
+    /// Sensor windows: signal, from, to.
+    pub windows: Vec<(String, f64, f64)>,
+    /// Each move's speed varies within this many millionths.
+    pub variation_ppm: u32,
+    /// The sensors' response and the PLC's scan, ms.
+    pub tolerance_ms: u64,
+}
+
 impl KindDef {
+    /// The component as a travel, for the kinds that are one (an axis).
+    pub fn travel(&self) -> Option<Travel> {
+        match self {
+            Self::Axis(a) => Some(Travel {
+                unit: a.unit.clone(),
+                min: a.min,
+                max: a.max,
+                start: a.start,
+                drives: a.drives.iter().map(|d| (d.when.clone(), d.speed)).collect(),
+                windows: a
+                    .sensors
+                    .iter()
+                    .map(|w| (w.signal.clone(), w.from, w.to))
+                    .collect(),
+                variation_ppm: a.variation_ppm,
+                tolerance_ms: a.tolerance_ms,
+            }),
+            Self::Button(_)
+            | Self::Conveyor(_)
+            | Self::Detector(_)
+            | Self::Link(_)
+            | Self::Tank(_) => None,
+        }
+    }
+
     /// The kind's name in messages and on the synoptic.
     pub fn label(&self) -> &'static str {
         match self {

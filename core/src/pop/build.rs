@@ -771,11 +771,10 @@ impl Automaton<'_> {
     fn hold_with(&self, y: usize, orders: bool) -> Option<u64> {
         let (signals, intervals) = (self.signals, self.intervals);
         let mut hold = Some(0u64);
-        for e in self
-            .evs
-            .iter()
-            .filter(|e| e.from == y && (orders || signals[e.sig].var.space == Space::Input))
-        {
+        for e in self.evs.iter().filter(|e| {
+            e.from == y
+                && ((orders && !self.c.timed_orders) || signals[e.sig].var.space == Space::Input)
+        }) {
             let bound = (signals[e.sig].var.space == Space::Input)
                 .then(|| e.window.and_then(|k| intervals[k].hi))
                 .flatten();

@@ -120,6 +120,14 @@ pub struct ComponentDef {
     /// blocked plant still shows their edges where the expected evolutions foresee them.
     #[serde(default)]
     pub independent: Vec<String>,
+    /// The orders a moving state expects come within its sensor edge's window (a
+    /// derived axis model: the controller may stop the axis anywhere, but only before
+    /// the axis shows its next edge). A copy that lost its clock (a sensor fault hid
+    /// an edge) then waits for the plant's next sensor edge no longer than that
+    /// window, whatever orders may also leave the state; by default an order that
+    /// may leave a state lets the copy wait for ever.
+    #[serde(default)]
+    pub timed_orders: bool,
     /// Faults the diagnoser campaign injects for this component besides the generated
     /// ones (the four sensor faults of each sensor partition, both stuck faults of each
     /// actuator a partition lists): mechanical faults of the emulator, or a sensor
