@@ -53,6 +53,8 @@ pub struct Placed {
     pub tags: Vec<(String, Rect)>,
     /// Element → its symbol's rectangle (lamp or actuator).
     pub symbols: Vec<(String, Rect)>,
+    /// The overview's area blocks on screen, by area ([`Geometry::frames`]).
+    pub frames: Vec<(String, Rect)>,
 }
 
 /// The synoptic's tags: key (message `syn-<key>`) and English text (`%kind%` and
@@ -147,7 +149,7 @@ pub struct ConveyorGeom {
 }
 
 /// The pure layout of the synoptic: world positions of every element.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Geometry {
     /// Conveyors.
     pub conveyors: Vec<ConveyorGeom>,
@@ -176,6 +178,11 @@ pub struct Geometry {
     /// (`element` in `plant.ron`, "" for none) with the label's world position; their
     /// lamps and symbols are in `sensors` and `actuators` like the placed ones.
     pub schematic: Vec<(String, [f32; 2])>,
+    /// The overview's area blocks (ISA-101's level 2 over many areas), each with its
+    /// world bounds (min, max); empty for any other view. An overview is drawn compact:
+    /// symbols and lamps without their signal names (the tooltip gives them), each
+    /// block framed and titled, a click on a block opens its area.
+    pub frames: Vec<(String, [f32; 2], [f32; 2])>,
 }
 
 /// Spacing of the schematic strip's symbols and rows, world mm (room for a name such
@@ -344,6 +351,7 @@ impl Geometry {
             axes: Vec::new(),
             belts: Vec::new(),
             schematic,
+            frames: Vec::new(),
         }
     }
 
@@ -443,6 +451,8 @@ pub struct Picture<'a> {
     pub banner: Option<(String, Color32)>,
     /// Level 1 on a plant of components: the projected picture.
     pub ghost_scene: Option<&'a vigie_core::machine::Scene>,
+    /// The overview's areas to flag (a trip's signals, a suspect sensor in them).
+    pub flagged: &'a BTreeSet<String>,
 }
 
 /// World → screen transform.
@@ -568,12 +578,26 @@ pub fn synoptic_ui(
         pal,
         values: pic.values,
         rect,
-        lamp_r: (55.0 * xf.scale).clamp(5.0, 14.0),
+        lamp_r: if geom.frames.is_empty() {
+            (55.0 * xf.scale).clamp(5.0, 14.0)
+        } else {
+            compact_lamp(geom, &xf)
+        },
+        compact: !geom.frames.is_empty(),
+        claimed: std::cell::RefCell::new(Vec::new()),
     };
     let edge = Stroke::new(1.0, pal.equipment_edge);
     #[allow(clippy::cast_precision_loss)]
     let t_s = pic.time_ms as f32 / 1000.0;
 
+    let symbols = symbol_rects(&cv, geom);
+    if cv.compact {
+        // An overview's names go where no lamp or symbol is, or not at all.
+        cv.claimed
+            .borrow_mut()
+            .extend(symbols.iter().map(|(_, r)| *r));
+    }
+    let frames = paint_frames(&cv, geom, view, pic.flagged);
     paint_conveyors(&cv, geom, t_s);
     paint_elevators(&cv, geom, view);
     paint_schematic_labels(&cv, geom, view);
@@ -591,8 +615,11 @@ pub fn synoptic_ui(
     };
     paint_sensors(&cv, geom);
     paint_actuators(&cv, geom, pic.forced);
-    let symbols = symbol_rects(&cv, geom);
-    let names = paint_sensor_names(&cv, geom, &symbols);
+    let names = if cv.compact {
+        Vec::new()
+    } else {
+        paint_sensor_names(&cv, geom, &symbols)
+    };
     let taken: Vec<Rect> = symbols.iter().chain(&names).map(|(_, r)| *r).collect();
     let tags = paint_marks(&cv, geom, view, pic.highlights, &taken);
     repaint_ringed_names(&cv, pic.highlights, &names);
@@ -600,6 +627,7 @@ pub fn synoptic_ui(
         names,
         tags,
         symbols,
+        frames,
     };
     if let Some((text, col)) = &pic.banner {
         badge(
@@ -617,6 +645,31 @@ pub fn synoptic_ui(
     response
 }
 
+/// The lamps' radius in an overview: as in any view, but small enough that no two
+/// symbols (a lamp's square of `2 r + 2`, an actuator's of `2.4 r`) cover each other
+/// however small the blocks are drawn (stacked beams, a cylinder's outputs).
+fn compact_lamp(geom: &Geometry, xf: &Xf) -> f32 {
+    let centres: Vec<Pos2> = geom
+        .sensors
+        .iter()
+        .map(|s| xf.p(s.lamp))
+        .chain(geom.actuators.values().map(|a| xf.p(*a)))
+        .collect();
+    // The smallest Chebyshev distance between two symbols: squares of that side do
+    // not overlap.
+    let mut near = f32::MAX;
+    for (i, a) in centres.iter().enumerate() {
+        for b in &centres[i + 1..] {
+            near = near.min((a.x - b.x).abs().max((a.y - b.y).abs()));
+        }
+    }
+    (55.0 * xf.scale)
+        .clamp(5.0, 14.0)
+        .min(near / 2.4)
+        .min((near - 2.0) / 2.0)
+        .max(1.5)
+}
+
 /// What the synoptic's painters share: the clipped painter, the transform, the palette,
 /// the signal values, the synoptic's area and the lamps' radius.
 struct Canvas<'a> {
@@ -626,6 +679,10 @@ struct Canvas<'a> {
     values: &'a BTreeMap<String, bool>,
     rect: Rect,
     lamp_r: f32,
+    /// An overview: symbols without their signal names ([`Geometry::frames`]).
+    compact: bool,
+    /// The rectangles of the names painted so far ([`Canvas::label`]).
+    claimed: std::cell::RefCell<Vec<Rect>>,
 }
 
 impl Canvas<'_> {
@@ -633,6 +690,99 @@ impl Canvas<'_> {
     fn val(&self, id: &str) -> bool {
         self.values.get(id).copied().unwrap_or(false)
     }
+
+    /// Paints a name (a component's, an area's) unless it would cross a name painted
+    /// before it: the first painted wins, the other one is left to the tooltip and to
+    /// the area's own view. Returns its rectangle when painted.
+    fn label(
+        &self,
+        at: Pos2,
+        align: Align2,
+        text: &str,
+        font: FontId,
+        color: Color32,
+    ) -> Option<Rect> {
+        let galley = self.painter.layout_no_wrap(text.to_string(), font, color);
+        let r = align.anchor_size(at, galley.size());
+        let mut claimed = self.claimed.borrow_mut();
+        if claimed.iter().any(|c| c.intersects(r)) {
+            return None;
+        }
+        claimed.push(r.expand(2.0));
+        self.painter.galley(r.min, galley, color);
+        Some(r)
+    }
+}
+
+/// A component's name under its symbol: in the area's own view, not in the overview
+/// (where the block's title says the area and the lamps crowd).
+fn component_name(cv: &Canvas<'_>, at: Pos2, text: &str) {
+    if !cv.compact {
+        cv.label(
+            at,
+            Align2::CENTER_TOP,
+            text,
+            FontId::proportional(13.0),
+            cv.pal.text,
+        );
+    }
+}
+
+/// The overview's area blocks: a frame round each, its title at its top left, both in
+/// the trip's colour when the area is flagged; returns them on screen.
+fn paint_frames(
+    cv: &Canvas<'_>,
+    geom: &Geometry,
+    view: &View,
+    flagged: &BTreeSet<String>,
+) -> Vec<(String, Rect)> {
+    let mut out = Vec::new();
+    for (area, lo, hi) in &geom.frames {
+        // Lamps keep a legible size however small the block: room for them.
+        let r = Rect::from_two_pos(cv.xf.p(*lo), cv.xf.p(*hi)).expand(cv.lamp_r);
+        let (stroke, fg) = if flagged.contains(area) {
+            (Stroke::new(2.5, cv.pal.trip), cv.pal.trip)
+        } else {
+            (
+                Stroke::new(1.0, cv.pal.equipment_edge.gamma_multiply(0.5)),
+                cv.pal.text,
+            )
+        };
+        cv.painter.rect(
+            r,
+            6.0,
+            cv.pal.equipment.gamma_multiply(0.12),
+            stroke,
+            egui::StrokeKind::Middle,
+        );
+        let name = if area.is_empty() {
+            view.word("other-signals").to_string()
+        } else if flagged.contains(area) {
+            format!("⚠ {}", view.elements.get(area).unwrap_or(area))
+        } else {
+            view.elements.get(area).unwrap_or(area).clone()
+        };
+        // Always written, on one line cut to the block's width (`Poste de
+        // manipulation` over a narrow station): the names and lamps give way to it.
+        let mut job = egui::text::LayoutJob::single_section(
+            name,
+            egui::TextFormat::simple(FontId::proportional(15.0), fg),
+        );
+        job.wrap = egui::text::TextWrapping {
+            max_width: (r.width() - 12.0).max(20.0),
+            max_rows: 1,
+            break_anywhere: true,
+            overflow_character: Some('…'),
+        };
+        let galley = cv.painter.layout_job(job);
+        let at = r.left_top() + vec2(8.0, 4.0);
+        cv.claimed
+            .borrow_mut()
+            .push(Rect::from_min_size(at, galley.size()).expand(2.0));
+        cv.painter.galley(at, galley, fg);
+        out.push((area.clone(), r));
+    }
+    out
 }
 
 /// Zooms with the wheel around the pointer, pans with a drag, resets on a double click.
@@ -719,12 +869,16 @@ fn paint_elevators(cv: &Canvas<'_>, geom: &Geometry, view: &View) {
 /// The schematic strip's labels: each element's name in the language shown.
 fn paint_schematic_labels(cv: &Canvas<'_>, geom: &Geometry, view: &View) {
     for (element, at) in &geom.schematic {
+        // An overview's block is titled already.
+        if geom.frames.iter().any(|(a, ..)| a == element) {
+            continue;
+        }
         let name = if element.is_empty() {
             view.word("other-signals")
         } else {
             view.elements.get(element).unwrap_or(element)
         };
-        cv.painter.text(
+        cv.label(
             cv.xf.p(*at),
             Align2::LEFT_BOTTOM,
             name,
@@ -927,12 +1081,15 @@ fn symbol_rects(cv: &Canvas<'_>, geom: &Geometry) -> Vec<(String, Rect)> {
 
 /// An actuator symbol's rectangle at `p`: a square, widened to its id (`KM0`).
 fn actuator_rect(cv: &Canvas<'_>, id: &str, p: Pos2) -> Rect {
+    let side = cv.lamp_r * 2.4;
+    if cv.compact {
+        return Rect::from_center_size(p, Vec2::splat(side));
+    }
     let text = cv
         .painter
         .layout_no_wrap(id.to_string(), FontId::proportional(11.0), cv.pal.text)
         .size()
         .x;
-    let side = cv.lamp_r * 2.4;
     Rect::from_center_size(p, vec2(side.max(text + 4.0), side))
 }
 
@@ -955,7 +1112,8 @@ fn paint_sensor_names(
         .zip(&galleys)
         .map(|(s, g)| (xf.p(s.lamp), g.size()))
         .collect();
-    let obstacles: Vec<Rect> = symbols.iter().map(|(_, r)| *r).collect();
+    let mut obstacles: Vec<Rect> = symbols.iter().map(|(_, r)| *r).collect();
+    obstacles.extend(cv.claimed.borrow().iter().copied());
     let centres: Vec<Pos2> = symbols.iter().map(|(_, r)| r.center()).collect();
     let rects = super::placement::place(&labels, &centres, &obstacles, cv.rect, lamp_r + 3.0);
     let mut out = Vec::new();
@@ -993,6 +1151,9 @@ fn paint_actuators(cv: &Canvas<'_>, geom: &Geometry, forced: &BTreeSet<String>) 
         } else {
             pal.text
         };
+        if cv.compact {
+            continue;
+        }
         painter.text(
             r.center(),
             Align2::CENTER_CENTER,

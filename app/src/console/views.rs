@@ -114,17 +114,14 @@ pub(crate) fn root_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>
         });
 }
 
-/// A plant of many components in several areas: one button for the whole plant and
-/// one per area (ISA-101's unit displays), the area of a marked signal (a trip's
-/// constraint, a suspect sensor) flagged.
-fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
-    let Some(areas) = &c.view.areas else {
-        return;
-    };
+/// The areas to flag: those of the trip's signals (its constraints' literals) while the
+/// plant is stopped, and of the suspect or estimated sensors.
+fn flagged_areas(c: &Console) -> BTreeSet<String> {
     let plant = &c.sim.bundle.plant;
-    // The signals of the trip (its constraints' literals) while the plant is stopped,
-    // and the suspect or estimated sensors.
     let mut marked: BTreeSet<String> = BTreeSet::new();
+    if c.view.areas.is_none() {
+        return marked;
+    }
     if c.sim.engine.is_tripped()
         && let Some(t) = c.sim.engine.trips.last()
     {
@@ -133,14 +130,23 @@ fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
         }
     }
     marked.extend(c.sim.live_marks().into_iter().map(|h| h.element));
-    let element_of = |id: &str| {
-        plant
-            .inputs
-            .iter()
-            .chain(&plant.outputs)
-            .find(|s| s.id == id)
-            .map(|s| s.element.as_str())
+    plant
+        .inputs
+        .iter()
+        .chain(&plant.outputs)
+        .filter(|s| marked.contains(&s.id))
+        .map(|s| s.element.clone())
+        .collect()
+}
+
+/// A plant of many components in several areas: one button for the whole plant and
+/// one per area (ISA-101's unit displays), the area of a marked signal (a trip's
+/// constraint, a suspect sensor) flagged.
+fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
+    let Some(areas) = &c.view.areas else {
+        return;
     };
+    let flagged = flagged_areas(c);
     ui.separator();
     let mut chosen = None;
     if ui
@@ -155,8 +161,7 @@ fn areas_ui(c: &mut Console, ui: &mut egui::Ui) {
     }
     for (area, _) in areas {
         let name = c.view.elements.get(area).unwrap_or(area);
-        let flagged = marked.iter().any(|m| element_of(m) == Some(area.as_str()));
-        let text = if flagged {
+        let text = if flagged.contains(area) {
             RichText::new(format!("⚠ {name}"))
                 .color(c.palette.trip)
                 .strong()
@@ -882,7 +887,9 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
         banner = Some(trip_banner(c));
     }
     let geom = geometry(c, live_scene.as_ref(), angle);
+    let flagged = flagged_areas(c);
     let pic = Picture {
+        flagged: &flagged,
         boxes,
         values: &values,
         forced: &forced,
@@ -894,6 +901,20 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     };
     let resp = synoptic::synoptic_ui(ui, &mut c.view, &geom, angle, &pic, &c.palette, plant);
     c.synoptic_rect = Some(resp.rect);
+    open_clicked_area(c, &resp);
+}
+
+/// The overview: a click on an area's block opens it.
+fn open_clicked_area(c: &mut Console, resp: &egui::Response) {
+    if resp.clicked()
+        && let Some(p) = resp.interact_pointer_pos()
+        && let Some((area, _)) = c.view.placed.frames.iter().find(|(_, r)| r.contains(p))
+        && !area.is_empty()
+    {
+        c.view.area = Some(area.clone());
+        c.view.zoom = 1.0;
+        c.view.pan = egui::Vec2::ZERO;
+    }
 }
 
 /// The synoptic's geometry: the station's layout, or the components of the area shown

@@ -152,18 +152,13 @@ impl Geometry {
         }
         let schematic = place_schematic(plant, &mut sensors, &mut actuators, (&mut min, &mut max));
         Self {
-            conveyors: Vec::new(),
-            table_center: [0.0, 0.0],
-            table_size: [0.0, 0.0],
             sensors,
             actuators,
-            elevators: Vec::new(),
             bounds: (min, max),
-            table_actuators: Default::default(),
-            has_table: false,
             axes,
             belts,
             schematic,
+            ..Self::default()
         }
     }
 }
@@ -443,12 +438,10 @@ pub(super) fn paint_belts(cv: &Canvas<'_>, geom: &Geometry, view: &View, t_s: f3
                 pal.text,
             );
         }
-        painter.text(
+        super::component_name(
+            cv,
             xf.p([x + b.drawn / 2.0, y - BELT_HALF - 120.0]),
-            Align2::CENTER_TOP,
             view.parts.get(&b.id).unwrap_or(&b.name),
-            FontId::proportional(13.0),
-            pal.text,
         );
     }
 }
@@ -581,7 +574,7 @@ pub fn shown_areas(scene: &Scene, plant: &Plant) -> Option<Vec<(String, Vec<Stri
 }
 
 /// Room between two areas' blocks in the overview, world units.
-const AREA_GAP: f32 = 1200.0;
+const AREA_GAP: f32 = 1600.0;
 
 impl Geometry {
     /// Moves everything by `d`.
@@ -667,12 +660,14 @@ impl Geometry {
             }
             let (min, max) = g.bounds;
             g.translate([x - min[0], top - max[1]]);
-            if !area.is_empty() && !g.schematic.iter().any(|(e, _)| *e == area) {
-                // The area's title above its block.
-                let at = [g.bounds.0[0], g.bounds.1[1] + 450.0];
-                g.schematic.push((area, at));
-                g.bounds.1[1] += 900.0;
+            // Room for the block's title above it; the signals of no area are framed
+            // under their own label.
+            g.bounds.1[1] += 1200.0;
+            let (lo, hi) = g.bounds;
+            if area.is_empty() {
+                g.schematic.retain(|(e, _)| !e.is_empty());
             }
+            g.frames.push((area, lo, hi));
             x += max[0] - min[0] + AREA_GAP;
             row_h = row_h.max(g.bounds.1[1] - g.bounds.0[1]);
             out = Some(match out {
@@ -683,6 +678,7 @@ impl Geometry {
                     acc.axes.extend(g.axes);
                     acc.belts.extend(g.belts);
                     acc.schematic.extend(g.schematic);
+                    acc.frames.extend(g.frames);
                     for i in 0..2 {
                         acc.bounds.0[i] = acc.bounds.0[i].min(g.bounds.0[i]);
                         acc.bounds.1[i] = acc.bounds.1[i].max(g.bounds.1[i]);
@@ -797,12 +793,10 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
             egui::StrokeKind::Middle,
         );
         // The name under the guide: the level banner takes the synoptic's top.
-        painter.text(
+        super::component_name(
+            cv,
             xf.p([a.top[0], a.top[1] - GUIDE - 120.0]),
-            Align2::CENTER_TOP,
             view.parts.get(&a.id).unwrap_or(&a.name),
-            FontId::proportional(13.0),
-            pal.text,
         );
         let r = carriage(xf, a, a.position);
         painter.rect(
@@ -812,13 +806,9 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
             Stroke::new(1.5, pal.equipment_edge),
             egui::StrokeKind::Middle,
         );
-        painter.text(
-            r.center(),
-            Align2::CENTER_CENTER,
-            format!("{:.1} {}", a.position, a.unit),
-            FontId::monospace(10.0),
-            pal.text,
-        );
+        if !cv.compact {
+            paint_position(cv, r, &format!("{:.1} {}", a.position, a.unit));
+        }
         if a.direction != 0 {
             let y = if a.direction > 0 {
                 r.bottom() + 10.0
@@ -849,6 +839,34 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
     }
 }
 
+/// An axis's position: in its carriage when it fits there, else beside it, right of
+/// the guide (the robot's narrow carriage), where no name is.
+fn paint_position(cv: &Canvas<'_>, carriage: Rect, text: &str) {
+    let font = FontId::monospace(10.0);
+    let width = cv
+        .painter
+        .layout_no_wrap(text.to_string(), font.clone(), cv.pal.text)
+        .size()
+        .x;
+    if width + 4.0 <= carriage.width() {
+        cv.painter.text(
+            carriage.center(),
+            Align2::CENTER_CENTER,
+            text,
+            font,
+            cv.pal.text,
+        );
+    } else {
+        cv.label(
+            carriage.right_center() + vec2(4.0, 0.0),
+            Align2::LEFT_CENTER,
+            text,
+            font,
+            cv.pal.text,
+        );
+    }
+}
+
 /// A tank: the vessel, its liquid up to the level, the level in its unit, and the
 /// projected level at level 1 as a dashed line.
 fn paint_vessel(cv: &Canvas<'_>, view: &View, a: &AxisGeom, ghost: Option<&Scene>) {
@@ -868,19 +886,19 @@ fn paint_vessel(cv: &Canvas<'_>, view: &View, a: &AxisGeom, ghost: Option<&Scene
     let surface = xf.p(a.at(a.position)).y;
     let liquid = Rect::from_min_max(Pos2::new(vessel.left(), surface), vessel.right_bottom());
     painter.rect_filled(liquid, 3.0, pal.running.gamma_multiply(0.45));
-    painter.text(
-        Pos2::new(vessel.center().x, (surface - 4.0).max(vessel.top() + 12.0)),
-        Align2::CENTER_BOTTOM,
-        format!("{:.1} {}", a.position, a.unit),
-        FontId::monospace(11.0),
-        pal.text,
-    );
-    painter.text(
+    if !cv.compact {
+        painter.text(
+            Pos2::new(vessel.center().x, (surface - 4.0).max(vessel.top() + 12.0)),
+            Align2::CENTER_BOTTOM,
+            format!("{:.1} {}", a.position, a.unit),
+            FontId::monospace(11.0),
+            pal.text,
+        );
+    }
+    super::component_name(
+        cv,
         xf.p([x, a.top[1] - GUIDE - 120.0]),
-        Align2::CENTER_TOP,
         view.parts.get(&a.id).unwrap_or(&a.name),
-        FontId::proportional(13.0),
-        pal.text,
     );
     if let Some(p) = ghost.and_then(|s| projected(s, &a.id)) {
         let y = xf.p(a.at(p)).y;
