@@ -48,6 +48,8 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
         let d = dir.to_str().unwrap();
         let out = vigie(&["check", d]);
         assert!(out.status.success(), "check {d}: {}", text(&out));
+        // Every shipped feeder's entry is seen whole by its beams.
+        assert!(!text(&out).contains("V0748"), "check {d}: {}", text(&out));
         let st = tmp.0.join("filter.st");
         let out = vigie(&["export-st", d, "-o", st.to_str().unwrap()]);
         assert!(out.status.success(), "export-st {d}: {}", text(&out));
@@ -500,6 +502,36 @@ fn workshop_run(name: &str) -> Simulation {
     let mut sim = Simulation::from_scenario(&s, &path, Options::default()).unwrap();
     sim.run_until(vigie_core::time::Millis(s.duration_ms));
     sim
+}
+
+/// An operator in manual mode pushes a second pallet while the first one's rear is at
+/// 150 mm, past the middle of the entry but inside the 200 mm the second one needs: the
+/// entry beam sees it and the filter refuses the push, on both plants with a pusher
+/// (with the beam at 100 mm, the pallets collided with the filter on).
+#[test]
+fn a_second_push_onto_a_pallet_still_in_the_entry_is_refused() {
+    for (plant, constraint) in [("workshop", "CSw1"), ("single-conveyor", "CSc1")] {
+        let path = repo()
+            .join("layouts")
+            .join(plant)
+            .join("scenarios/manual-push-onto-pallet.ron");
+        let s = Scenario::load(&path).unwrap();
+        let mut sim = Simulation::from_scenario(&s, &path, Options::default()).unwrap();
+        sim.run_until(vigie_core::time::Millis(s.duration_ms));
+        assert!(
+            sim.emulator.hazards().is_empty(),
+            "{plant}: {:?}",
+            sim.emulator.hazards()
+        );
+        let refused: Vec<_> = sim
+            .journal()
+            .iter()
+            .filter(|e| e.code == "journal-manual-refused")
+            .collect();
+        assert_eq!(refused.len(), 1, "{plant}: {refused:?}");
+        assert_eq!(refused[0].time_ms, 600, "{plant}");
+        assert_eq!(refused[0].fields["constraints"], constraint, "{plant}");
+    }
 }
 
 /// Seed 000, ch. 4.4, scenario 1 made physical: the conveyor jammed as the second

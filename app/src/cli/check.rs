@@ -73,6 +73,7 @@ fn physical(
     problems.extend(found);
     if let (Description::Components(c), false) = (&desc, broken) {
         problems.extend(vigie_core::machine::safe_state::check(c, &bundle.plant));
+        problems.extend(c.warnings());
     }
     let (file, components) = match &desc {
         Description::Components(c) => (

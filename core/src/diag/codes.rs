@@ -156,6 +156,7 @@ registry! {
     FAULT_UNKNOWN_COMPONENT = "V0745", "an emulator fault names a component the plant does not have";
     ACTION_NOT_ALLOWED = "V0746", "a declared elementary action the components do not allow, or a window outside theirs";
     SAFE_STATE_HAZARD = "V0747", "the plant's safe state drives a component into a hazard";
+    ENTRY_UNSEEN = "V0748", "a conveyor's feeder can place an item onto one its entry beams do not see";
     // V08xx: tasks (formerly V0301..V0307, V0310)
     TASK_ID_INVALID = "V0801", "invalid task id";
     TASK_DUPLICATE = "V0802", "a task declared twice";

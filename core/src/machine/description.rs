@@ -226,6 +226,40 @@ impl Components {
         out
     }
 
+    /// The warnings about what the machine lets its constraints see: a conveyor whose
+    /// feeder can place an item onto one its entry beams do not see (V0748), so that no
+    /// constraint over those beams forbids that collision.
+    pub fn warnings(&self) -> Vec<Problem> {
+        // Every length an item may have anywhere: items pass from belt to belt.
+        let lengths: Vec<f64> = self
+            .components
+            .iter()
+            .filter_map(|c| match &c.kind {
+                KindDef::Conveyor(v) => v.feed.as_ref(),
+                _ => None,
+            })
+            .flat_map(|f| f.items.iter().map(|i| i.length))
+            .collect();
+        let mut out = Vec::new();
+        for c in &self.components {
+            let KindDef::Conveyor(v) = &c.kind else {
+                continue;
+            };
+            if let Some((from, to, e, n)) = v.unseen_entry(&lengths) {
+                out.push(Problem::warning(
+                    codes::ENTRY_UNSEEN.id,
+                    format!(
+                        "conveyor `{}`: an item of {e} {u} whose rear is between {from} and {to} {u} still occupies the entry where the feeder places the next one ({n} {u}), and no entry beam sees it: no constraint over the beams can forbid that collision; put a beam at {n} {u} from the entry",
+                        c.id,
+                        u = v.unit
+                    ),
+                    Some(self.location_of(&c.id)),
+                ));
+            }
+        }
+        out
+    }
+
     /// The checks against the plant: every signal named exists and is of the right
     /// kind (drives read outputs, sensors write inputs), every expression parses and
     /// names the plant's signals only, and no input is written by two components.
@@ -333,6 +367,85 @@ mod tests {
         ))),
     ],
 )"#;
+
+    /// A belt with a feeder placing `items` (lengths) and beams (`at`, `sees`).
+    fn belt(items: &[f64], beams: &[(f64, Option<&str>)]) -> Components {
+        let items: Vec<String> = items
+            .iter()
+            .enumerate()
+            .map(|(k, l)| format!("(class: \"c{k}\", length: {l:?})"))
+            .collect();
+        let beams: Vec<String> = beams
+            .iter()
+            .enumerate()
+            .map(|(k, (at, sees))| {
+                let sees = sees.map_or("None".to_string(), |t| format!("Some(\"{t}\")"));
+                format!("(signal: \"b{k}\", at: {at:?}, sees: {sees})")
+            })
+            .collect();
+        let text = format!(
+            r#"Components(name: "t", components: [
+    (id: "belt", name: "Belt", kind: Conveyor((
+        length: 1000.0,
+        drives: [(when: "Y", speed: 100.0)],
+        sensors: [{}],
+        feed: Some((when: "Y", items: [{}])),
+    ))),
+])"#,
+            beams.join(", "),
+            items.join(", ")
+        );
+        Components::from_ron(&text, Path::new("c.ron")).unwrap()
+    }
+
+    /// The rear positions of the first unseen entry, or `None`.
+    fn unseen(c: &Components) -> Option<(f64, f64)> {
+        let w = c.warnings();
+        assert!(w.len() <= 1, "{w:?}");
+        w.first().map(|p| {
+            assert_eq!(p.code, codes::ENTRY_UNSEEN.id);
+            assert!(!p.is_error());
+            let at = p.location.as_ref().unwrap();
+            assert_eq!((at.line, at.column), (2, 11), "{p:?}");
+            let m = &p.message;
+            let inner = &m[m.find("is between ").unwrap() + 11..];
+            let (a, b) = inner.split_once(" and ").unwrap();
+            let b = &b[..b.find(' ').unwrap()];
+            (a.parse().unwrap(), b.parse().unwrap())
+        })
+    }
+
+    #[test]
+    fn an_entry_beam_short_of_the_items_length_leaves_an_unseen_entry() {
+        // The workshop's first beam: at 100 mm for pallets of 200 mm.
+        assert_eq!(
+            unseen(&belt(&[200.0], &[(100.0, None)])),
+            Some((100.0, 200.0))
+        );
+        // At the pallet's length it sees every pallet a new one would hit.
+        assert_eq!(unseen(&belt(&[200.0], &[(200.0, None)])), None);
+        // Past it, a pallet just placed is not seen until it reaches the beam.
+        assert_eq!(unseen(&belt(&[200.0], &[(250.0, None)])), Some((0.0, 50.0)));
+        // Two beams whose windows join: [-100, 100] and [100, 300].
+        let two = belt(&[200.0], &[(100.0, None), (300.0, None)]);
+        assert_eq!(unseen(&two), None);
+        // A beam for tall items only sees nothing of the others.
+        assert_eq!(
+            unseen(&belt(&[200.0], &[(200.0, Some("tall"))])),
+            Some((0.0, 200.0))
+        );
+        // Mixed lengths: a beam at 60 sees a 40 mm item only from rear 20.
+        assert_eq!(
+            unseen(&belt(&[40.0, 60.0], &[(60.0, None)])),
+            Some((0.0, 20.0))
+        );
+        assert_eq!(
+            unseen(&belt(&[40.0, 60.0], &[(40.0, None), (60.0, None)])),
+            None
+        );
+        // No beam at all.
+        assert_eq!(unseen(&belt(&[200.0], &[])), Some((0.0, 200.0)));
+    }
 
     #[test]
     fn a_monostable_cylinder_loads_and_names_the_plants_signals() {

@@ -204,6 +204,49 @@ impl ConveyorDef {
         self.feed.as_ref().and_then(|f| f.from.as_deref())
     }
 
+    /// Where an item on the belt still occupies the entry (the feeder would place the
+    /// next one onto it) without any entry beam seeing it: for each item length `e`
+    /// that may lie on the belt and each length `n` the feeder may place, the rear
+    /// positions in `[0, n]` (the emulator's collision: a rear at or before the new
+    /// item's length) that no beam reading every class covers (`[at - e, at]`). The
+    /// first such stretch of rear positions, as (from, to, e, n), or `None` when the beams see every
+    /// item a new one would hit (a beam at the items' length, or several). No feeder,
+    /// no gap.
+    pub(crate) fn unseen_entry(&self, lengths: &[f64]) -> Option<(f64, f64, f64, f64)> {
+        let feed = self.feed.as_ref()?;
+        let placed: Vec<f64> = if feed.items.is_empty() {
+            lengths.to_vec()
+        } else {
+            feed.items.iter().map(|c| c.length).collect()
+        };
+        for &e in lengths {
+            let mut covers: Vec<(f64, f64)> = self
+                .sensors
+                .iter()
+                .filter(|b| b.sees.is_none())
+                .map(|b| (b.at - e, b.at))
+                .collect();
+            covers.sort_by(|a, b| a.0.total_cmp(&b.0));
+            for &n in &placed {
+                // Sweep [0, n]: `seen` is the end of the covered prefix [0, seen].
+                let mut seen: Option<f64> = None;
+                let mut next = n;
+                for &(lo, hi) in &covers {
+                    if lo > seen.unwrap_or(0.0) {
+                        next = next.min(lo);
+                        break;
+                    }
+                    seen = Some(seen.map_or(hi, |s| s.max(hi)));
+                }
+                match seen {
+                    Some(s) if s >= n => {}
+                    s => return Some((s.unwrap_or(0.0), next, e, n)),
+                }
+            }
+        }
+        None
+    }
+
     /// The conveyor its exit leads to, if any.
     pub(crate) fn target(&self) -> Option<&str> {
         match &self.exit {
