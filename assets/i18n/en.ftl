@@ -490,6 +490,9 @@ syn-inferred-box = inferred box
 syn-estimated = estimated
 syn-no-address = no fieldbus address
 syn-other-signals = Other signals
+syn-switch-closed = closed
+syn-switch-open = open
+syn-switch-moving = operating
 
 ## Texts built from the plant's data (French only: English is the core's record)
 words-constraint-violated = constraint { $id } violated

@@ -517,6 +517,9 @@ syn-inferred-box = caisse déduite
 syn-estimated = estimé
 syn-no-address = pas d'adresse sur le bus
 syn-other-signals = Autres signaux
+syn-switch-closed = fermé
+syn-switch-open = ouvert
+syn-switch-moving = en manœuvre
 
 ## Textes construits à partir des données de l'installation
 words-constraint-violated = contrainte { $id } violée

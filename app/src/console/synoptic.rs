@@ -59,7 +59,7 @@ pub struct Placed {
 
 /// The synoptic's tags: key (message `syn-<key>`) and English text (`%kind%` and
 /// `%box%` are filled in by the synoptic).
-pub const TAGS: [(&str, &str); 24] = [
+pub const TAGS: [(&str, &str); 27] = [
     ("predicted", "predicted: %kind% box %box%"),
     ("hazard-sheared", "Sheared"),
     ("hazard-dropped", "Dropped"),
@@ -84,6 +84,9 @@ pub const TAGS: [(&str, &str); 24] = [
     ("estimated", "estimated"),
     ("no-address", "no fieldbus address"),
     ("other-signals", "Other signals"),
+    ("switch-closed", "closed"),
+    ("switch-open", "open"),
+    ("switch-moving", "operating"),
 ];
 
 impl View {
@@ -708,7 +711,7 @@ impl Canvas<'_> {
         if claimed.iter().any(|c| c.intersects(r)) {
             return None;
         }
-        claimed.push(r.expand(2.0));
+        claimed.push(r);
         self.painter.galley(r.min, galley, color);
         Some(r)
     }
@@ -1113,7 +1116,8 @@ fn paint_sensor_names(
         .map(|(s, g)| (xf.p(s.lamp), g.size()))
         .collect();
     let mut obstacles: Vec<Rect> = symbols.iter().map(|(_, r)| *r).collect();
-    obstacles.extend(cv.claimed.borrow().iter().copied());
+    // A name's galley is taller than its glyphs: a name may touch another's box.
+    obstacles.extend(cv.claimed.borrow().iter().map(|r| r.shrink(3.0)));
     let centres: Vec<Pos2> = symbols.iter().map(|(_, r)| r.center()).collect();
     let rects = super::placement::place(&labels, &centres, &obstacles, cv.rect, lamp_r + 3.0);
     let mut out = Vec::new();

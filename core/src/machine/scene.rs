@@ -27,6 +27,8 @@ pub struct SceneElement {
 pub enum Shape {
     /// An axis: its travel, where it is, its sensors' windows and its drives.
     Axis {
+        /// How it is drawn.
+        symbol: crate::machine::kinds::axis::AxisSymbol,
         /// The unit (`mm`, `deg`).
         unit: String,
         /// Start of the travel.

@@ -7,9 +7,10 @@
 //! of it. The signals no component places go to the schematic strip below.
 
 use super::{Canvas, Geometry, SensorGeom, View, Xf, place_schematic};
-use egui::{Align2, FontId, Pos2, Rect, Shape as EShape, Stroke, vec2};
+use egui::{Align2, FontId, Pos2, Rect, Shape as EShape, Stroke, Vec2, vec2};
 use std::collections::BTreeMap;
 use vigie_core::emulator::{Hazard, Place};
+use vigie_core::machine::kinds::axis::AxisSymbol;
 use vigie_core::machine::{Scene, SceneElement, Shape};
 use vigie_core::plant::Plant;
 
@@ -42,6 +43,8 @@ pub struct AxisGeom {
     /// A vessel (a tank: its level from the bottom) rather than a carriage on a guide
     /// (its travel's start at the top).
     pub vessel: bool,
+    /// A switching device (a breaker): drawn as the one-line diagram's square.
+    pub switch: bool,
 }
 
 impl AxisGeom {
@@ -76,6 +79,7 @@ impl Geometry {
             }
             match &e.shape {
                 Shape::Axis {
+                    symbol,
                     unit,
                     min,
                     max,
@@ -94,6 +98,7 @@ impl Geometry {
                         direction: *direction,
                         unit: unit.clone(),
                         vessel: false,
+                        switch: *symbol == AxisSymbol::Switch,
                     };
                     place_signals(&a, windows, drives, plant, &mut sensors, &mut actuators);
                     if let Some(m) = motion {
@@ -124,6 +129,7 @@ impl Geometry {
                         direction: 0,
                         unit: unit.clone(),
                         vessel: true,
+                        switch: false,
                     };
                     place_signals(&a, windows, flows, plant, &mut sensors, &mut actuators);
                     axes.push(a);
@@ -781,6 +787,10 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
             paint_vessel(cv, view, a, ghost);
             continue;
         }
+        if a.switch {
+            paint_switch(cv, view, a, ghost);
+            continue;
+        }
         let guide = Rect::from_two_pos(
             xf.p([a.top[0] - 60.0, a.top[1]]),
             xf.p([a.top[0] + 60.0, a.top[1] - GUIDE]),
@@ -865,6 +875,73 @@ fn paint_position(cv: &Canvas<'_>, carriage: Rect, text: &str) {
             cv.pal.text,
         );
     }
+}
+
+/// A switching device (a breaker, a recloser): its line through the one-line diagram's
+/// square, filled when closed (at the end of its travel), hollow when open, dashed on
+/// the way, its state beside it; at level 1 the projected state's square is ringed.
+fn paint_switch(cv: &Canvas<'_>, view: &View, a: &AxisGeom, ghost: Option<&Scene>) {
+    let (painter, xf, pal) = (cv.painter, &cv.xf, cv.pal);
+    let x = a.top[0];
+    let (top, bottom) = (xf.p([x, a.top[1]]), xf.p([x, a.top[1] - GUIDE]));
+    let line = Stroke::new(2.0, pal.equipment_edge);
+    let side = (240.0 * xf.scale).clamp(14.0, 36.0);
+    let r = Rect::from_center_size(
+        Pos2::new(top.x, (top.y + bottom.y) / 2.0),
+        Vec2::splat(side),
+    );
+    painter.line_segment([top, r.center_top()], line);
+    painter.line_segment([r.center_bottom(), bottom], line);
+    let state = |p: f64| {
+        let span = (a.range.1 - a.range.0).max(1e-9);
+        let k = (p - a.range.0) / span;
+        if k >= 1.0 - 1e-9 {
+            "switch-closed"
+        } else if k <= 1e-9 {
+            "switch-open"
+        } else {
+            "switch-moving"
+        }
+    };
+    let now = state(a.position);
+    match now {
+        "switch-closed" => painter.rect(r, 2.0, pal.equipment_edge, line, egui::StrokeKind::Middle),
+        "switch-open" => painter.rect(r, 2.0, pal.floor, line, egui::StrokeKind::Middle),
+        _ => {
+            let c = [
+                r.left_top(),
+                r.right_top(),
+                r.right_bottom(),
+                r.left_bottom(),
+                r.left_top(),
+            ];
+            painter.add(EShape::dashed_line(&c, line, 4.0, 3.0))
+        }
+    };
+    if let Some(p) = ghost.and_then(|s| projected(s, &a.id))
+        && state(p) != now
+    {
+        painter.rect_stroke(
+            r.expand(5.0),
+            3.0,
+            Stroke::new(2.0, pal.ghost),
+            egui::StrokeKind::Middle,
+        );
+    }
+    if !cv.compact {
+        cv.label(
+            r.right_center() + vec2(8.0, 0.0),
+            Align2::LEFT_CENTER,
+            view.word(now),
+            FontId::proportional(12.0),
+            pal.text,
+        );
+    }
+    super::component_name(
+        cv,
+        xf.p([x, a.top[1] - GUIDE - 120.0]),
+        view.parts.get(&a.id).unwrap_or(&a.name),
+    );
 }
 
 /// A tank: the vessel, its liquid up to the level, the level in its unit, and the
@@ -953,6 +1030,31 @@ pub(super) fn hazard_label(
 #[cfg(test)]
 mod tests {
     use super::chains;
+    use crate::console::synoptic::Geometry;
+    use vigie_core::bundle::PlantBundle;
+    use vigie_core::machine::{ComponentPlant, Description};
+
+    /// The substation's breakers say `symbol: Switch`: the synoptic draws them as
+    /// switching devices, its other axes (none) and every other plant's as carriages.
+    #[test]
+    fn a_breaker_is_drawn_as_a_switch_and_an_axis_as_a_carriage() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts");
+        for (plant, switches) in [("substation", 2), ("drilling-station", 0), ("workshop", 0)] {
+            let dir = root.join(plant);
+            let (bundle, _) = PlantBundle::load(&dir).unwrap();
+            let Ok(Description::Components(desc)) = Description::load(&dir) else {
+                panic!("{plant}: no components");
+            };
+            let emu = ComponentPlant::new(&desc, &bundle.plant, 1).unwrap();
+            let g = Geometry::from_scene(&emu.scene(), &bundle.plant);
+            assert!(!g.axes.is_empty(), "{plant}");
+            assert_eq!(
+                g.axes.iter().filter(|a| a.switch).count(),
+                switches,
+                "{plant}"
+            );
+        }
+    }
 
     #[test]
     fn conveyors_are_drawn_along_their_chains_and_a_loop_gets_its_own_row() {

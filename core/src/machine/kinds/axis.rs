@@ -108,6 +108,24 @@ pub struct AxisDef {
     /// thesis's logic sensor of an interruptible task).
     #[serde(default)]
     pub motion: Option<String>,
+    /// How the synoptic draws it: a carriage on its guide (the default), or a
+    /// switching device.
+    #[serde(default)]
+    pub symbol: AxisSymbol,
+}
+
+/// How the synoptic draws an axis: one symbol per kind of device, not per plant.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AxisSymbol {
+    /// A carriage on its guide with its position written: a cylinder, a lift, a drill
+    /// head, a robot's or a gantry's axis.
+    #[default]
+    Carriage,
+    /// A two-position switching device on its line (a circuit breaker, a recloser, a
+    /// contactor, an on-off valve): closed at `max`, open at `min`; drawn as the
+    /// one-line diagram's square, filled when closed, hollow when open, dashed on the
+    /// way, with its state written.
+    Switch,
 }
 
 fn mm() -> String {
@@ -204,6 +222,7 @@ pub struct Axis {
     motion: Option<usize>,
     motion_id: Option<String>,
     moved: bool,
+    symbol: AxisSymbol,
 }
 
 fn micro(v: f64) -> i64 {
@@ -275,6 +294,7 @@ impl Axis {
             motion,
             motion_id: def.motion.clone(),
             moved: false,
+            symbol: def.symbol,
         })
     }
 
@@ -377,6 +397,7 @@ impl Axis {
             id: id.to_string(),
             name: name.to_string(),
             shape: Shape::Axis {
+                symbol: self.symbol,
                 unit: self.unit.clone(),
                 min: f(self.min),
                 max: f(self.max),
