@@ -534,6 +534,37 @@ fn a_second_push_onto_a_pallet_still_in_the_entry_is_refused() {
     }
 }
 
+/// The robot's contactor RB welds at 9 s with the robot at home: it leaves unordered
+/// and the diagnosers derived from its axis name the drive, certain, as it reaches R
+/// at 11.0 s (two seconds of travel), with no hazard and no trip.
+#[test]
+fn the_workshops_welded_robot_contactor_is_diagnosed_from_the_derived_models() {
+    let sim = workshop_run("robot-drive-welded.ron");
+    let d: Vec<_> = sim
+        .report(1)
+        .diagnoses
+        .iter()
+        .map(|d| {
+            (
+                d.time_ms,
+                d.component.clone(),
+                d.fault.clone(),
+                d.partition.clone(),
+                d.certainty == vigie_core::pop::Certainty::Certain,
+            )
+        })
+        .collect();
+    let want = (
+        11_000,
+        "robot".into(),
+        "robot_motion".into(),
+        "robot_drive".into(),
+        true,
+    );
+    assert_eq!(d, [want], "{d:?}");
+    assert!(sim.engine.trips.is_empty() && sim.emulator.hazards().is_empty());
+}
+
 /// Seed 000, ch. 4.4, scenario 1 made physical: the conveyor jammed as the second
 /// pallet is pushed at 4 s. The stopwatch monitor alarms for the conveyor task at
 /// 4 + (γ − α) = 6 s (one 10 ms scan of reading the order and one of detection), the
