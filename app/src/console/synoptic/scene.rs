@@ -820,17 +820,29 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
             paint_position(cv, r, &format!("{:.1} {}", a.position, a.unit));
         }
         if a.direction != 0 {
-            let y = if a.direction > 0 {
-                r.bottom() + 10.0
+            let d = f32::from(a.direction);
+            let (x, mut y) = if a.direction > 0 {
+                (r.center().x, r.bottom() + 10.0)
             } else {
-                r.top() - 10.0
+                (r.center().x, r.top() - 10.0)
             };
-            let tip = Pos2::new(r.center().x, y + f32::from(a.direction) * 10.0);
+            // Driven against the end of its guide: the arrow on the carriage's other
+            // side, pointing into it, not over the component's name under the guide.
+            if !guide
+                .expand2(vec2(0.0, 2.0))
+                .contains(Pos2::new(x, y + d * 10.0))
+            {
+                y = if a.direction > 0 {
+                    r.top() - 12.0
+                } else {
+                    r.bottom() + 12.0
+                };
+            }
             painter.add(EShape::convex_polygon(
                 vec![
-                    Pos2::new(r.center().x - 8.0, y),
-                    Pos2::new(r.center().x + 8.0, y),
-                    tip,
+                    Pos2::new(x - 8.0, y),
+                    Pos2::new(x + 8.0, y),
+                    Pos2::new(x, y + d * 10.0),
                 ],
                 pal.running,
                 Stroke::NONE,
