@@ -1118,6 +1118,15 @@ fn paint_sensor_names(
     let mut obstacles: Vec<Rect> = symbols.iter().map(|(_, r)| *r).collect();
     // A name's galley is taller than its glyphs: a name may touch another's box.
     obstacles.extend(cv.claimed.borrow().iter().map(|r| r.shrink(3.0)));
+    // On a plant of components, the lines from the lamps to their axis or belt (the
+    // windows' leaders) too: a name across its own leader reads badly. (The station's
+    // layout has its beams across the belts, under the boxes, and keeps its places.)
+    if !geom.has_table {
+        obstacles.extend(geom.sensors.iter().filter_map(|s| {
+            s.beam
+                .map(|(a, b)| Rect::from_two_pos(xf.p(a), xf.p(b)).expand(1.0))
+        }));
+    }
     let centres: Vec<Pos2> = symbols.iter().map(|(_, r)| r.center()).collect();
     let rects = super::placement::place(&labels, &centres, &obstacles, cv.rect, lamp_r + 3.0);
     let mut out = Vec::new();
