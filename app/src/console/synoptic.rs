@@ -588,12 +588,25 @@ pub fn synoptic_ui(
         },
         compact: !geom.frames.is_empty(),
         claimed: std::cell::RefCell::new(Vec::new()),
+        symbols: std::cell::RefCell::new(Vec::new()),
     };
     let edge = Stroke::new(1.0, pal.equipment_edge);
     #[allow(clippy::cast_precision_loss)]
     let t_s = pic.time_ms as f32 / 1000.0;
 
     let symbols = symbol_rects(&cv, geom);
+    cv.symbols
+        .borrow_mut()
+        .extend(symbols.iter().map(|(_, r)| *r));
+    if !geom.has_table {
+        // The lines from the lamps to their axis or belt, for what goes beside them.
+        cv.symbols
+            .borrow_mut()
+            .extend(geom.sensors.iter().filter_map(|s| {
+                s.beam
+                    .map(|(a, b)| Rect::from_two_pos(xf.p(a), xf.p(b)).expand(1.0))
+            }));
+    }
     if cv.compact {
         // An overview's names go where no lamp or symbol is, or not at all.
         cv.claimed
@@ -686,6 +699,9 @@ struct Canvas<'a> {
     compact: bool,
     /// The rectangles of the names painted so far ([`Canvas::label`]).
     claimed: std::cell::RefCell<Vec<Rect>>,
+    /// The lamps' and actuators' symbols on screen, and on a plant of components the
+    /// lines from the lamps to their axis or belt.
+    symbols: std::cell::RefCell<Vec<Rect>>,
 }
 
 impl Canvas<'_> {

@@ -878,15 +878,35 @@ fn paint_position(cv: &Canvas<'_>, carriage: Rect, text: &str) {
             font,
             cv.pal.text,
         );
-    } else {
-        cv.label(
-            carriage.right_center() + vec2(4.0, 0.0),
-            Align2::LEFT_CENTER,
-            text,
-            font,
-            cv.pal.text,
-        );
+        return;
     }
+    // Beside it, right then left, then under or over it on the guide, where no name,
+    // no symbol and no lamp's line is (the drill head's outputs sit right of its
+    // guide, its windows' lines left); else over it.
+    let galley = cv
+        .painter
+        .layout_no_wrap(text.to_string(), font, cv.pal.text);
+    let size = galley.size();
+    // A clear gap: a readout against a badge reads as one word (`98.3 mm MGV`).
+    let free = |r: &Rect| {
+        let r = r.expand(4.0);
+        cv.claimed.borrow().iter().all(|c| !c.intersects(r))
+            && cv.symbols.borrow().iter().all(|s| !s.intersects(r))
+    };
+    let beside = [
+        Align2::LEFT_CENTER.anchor_size(carriage.right_center() + vec2(4.0, 0.0), size),
+        Align2::RIGHT_CENTER.anchor_size(carriage.left_center() - vec2(4.0, 0.0), size),
+        Align2::CENTER_TOP.anchor_size(carriage.center_bottom() + vec2(0.0, 3.0), size),
+        Align2::CENTER_BOTTOM.anchor_size(carriage.center_top() - vec2(0.0, 3.0), size),
+    ];
+    let at = beside
+        .into_iter()
+        .find(free)
+        .unwrap_or_else(|| Rect::from_center_size(carriage.center(), size));
+    // Over the guide (below or above the carriage): a plate of the floor's colour.
+    cv.painter.rect_filled(at.expand(1.0), 2.0, cv.pal.floor);
+    cv.claimed.borrow_mut().push(at);
+    cv.painter.galley(at.min, galley, cv.pal.text);
 }
 
 /// A switching device (a breaker, a recloser): its line through the one-line diagram's
