@@ -599,7 +599,9 @@ pub fn synoptic_ui(
         .borrow_mut()
         .extend(symbols.iter().map(|(_, r)| *r));
     if !geom.has_table {
-        // The lines from the lamps to their axis or belt, for what goes beside them.
+        // The lines from the lamps to their axis or belt (the windows' leaders): a name
+        // or a readout across them reads badly. (The station's layout has its beams
+        // across the belts, under the boxes, and keeps its places.)
         cv.symbols
             .borrow_mut()
             .extend(geom.sensors.iter().filter_map(|s| {
@@ -1131,18 +1133,10 @@ fn paint_sensor_names(
         .zip(&galleys)
         .map(|(s, g)| (xf.p(s.lamp), g.size()))
         .collect();
-    let mut obstacles: Vec<Rect> = symbols.iter().map(|(_, r)| *r).collect();
+    // The symbols and, on a plant of components, the lamps' lines ([`Canvas::symbols`]).
+    let mut obstacles: Vec<Rect> = cv.symbols.borrow().clone();
     // A name's galley is taller than its glyphs: a name may touch another's box.
     obstacles.extend(cv.claimed.borrow().iter().map(|r| r.shrink(3.0)));
-    // On a plant of components, the lines from the lamps to their axis or belt (the
-    // windows' leaders) too: a name across its own leader reads badly. (The station's
-    // layout has its beams across the belts, under the boxes, and keeps its places.)
-    if !geom.has_table {
-        obstacles.extend(geom.sensors.iter().filter_map(|s| {
-            s.beam
-                .map(|(a, b)| Rect::from_two_pos(xf.p(a), xf.p(b)).expand(1.0))
-        }));
-    }
     let centres: Vec<Pos2> = symbols.iter().map(|(_, r)| r.center()).collect();
     let rects = super::placement::place(&labels, &centres, &obstacles, cv.rect, lamp_r + 3.0);
     let mut out = Vec::new();

@@ -803,11 +803,7 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
             egui::StrokeKind::Middle,
         );
         // The name under the guide: the level banner takes the synoptic's top.
-        super::component_name(
-            cv,
-            xf.p([a.top[0], a.top[1] - GUIDE - 120.0]),
-            view.parts.get(&a.id).unwrap_or(&a.name),
-        );
+        axis_name(cv, view, a);
         let r = carriage(xf, a, a.position);
         painter.rect(
             r,
@@ -859,6 +855,15 @@ pub(super) fn paint_axes(cv: &Canvas<'_>, geom: &Geometry, view: &View, ghost: O
             );
         }
     }
+}
+
+/// An axis's, a switch's or a tank's name under its guide, in the language shown.
+fn axis_name(cv: &Canvas<'_>, view: &View, a: &AxisGeom) {
+    super::component_name(
+        cv,
+        cv.xf.p([a.top[0], a.top[1] - GUIDE - 120.0]),
+        view.parts.get(&a.id).unwrap_or(&a.name),
+    );
 }
 
 /// An axis's position: in its carriage when it fits there, else beside it, right of
@@ -969,11 +974,7 @@ fn paint_switch(cv: &Canvas<'_>, view: &View, a: &AxisGeom, ghost: Option<&Scene
             pal.text,
         );
     }
-    super::component_name(
-        cv,
-        xf.p([x, a.top[1] - GUIDE - 120.0]),
-        view.parts.get(&a.id).unwrap_or(&a.name),
-    );
+    axis_name(cv, view, a);
 }
 
 /// A tank: the vessel, its liquid up to the level, the level in its unit, and the
@@ -1004,11 +1005,7 @@ fn paint_vessel(cv: &Canvas<'_>, view: &View, a: &AxisGeom, ghost: Option<&Scene
             pal.text,
         );
     }
-    super::component_name(
-        cv,
-        xf.p([x, a.top[1] - GUIDE - 120.0]),
-        view.parts.get(&a.id).unwrap_or(&a.name),
-    );
+    axis_name(cv, view, a);
     if let Some(p) = ghost.and_then(|s| projected(s, &a.id)) {
         let y = xf.p(a.at(p)).y;
         painter.add(EShape::dashed_line(
