@@ -72,13 +72,17 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
         }
         assert!(ran >= 3, "{d}: {ran} short scenarios");
         // `vigie verify`: the station on its layout model (its own tests), a plant of
-        // components one sub-plant at a time; every shipped plant's constraints hold.
+        // components one sub-plant at a time; no shipped plant's constraints are
+        // violated (a sub-plant too large to finish says so: not proved, not safe).
         let out = vigie(&["verify", d]);
         assert!(out.status.success(), "verify {d}: {}", text(&out));
+        let t = text(&out);
         assert!(
-            text(&out).contains("SAFETY: proved"),
-            "verify {d}: {}",
-            text(&out)
+            t.contains("SAFETY: proved")
+                || t.contains(
+                    "SAFETY: no hazard reachable in the components verified; some were not verified"
+                ),
+            "verify {d}: {t}"
         );
         // The benchmark runs on every plant (figures, no goal asserted: a test does not
         // time), with the plant's own production and trip when `bench.ron` names them.
@@ -930,6 +934,78 @@ fn verify_finds_the_hazards_a_components_constraint_set_misses() {
     );
 }
 
+/// `vigie verify` checks a conveyor's feeder with the belt's items and the axes the
+/// feeder reads: the gap found by hand in the shipped workshop (entry beam `a` at
+/// 100 mm for 200 mm pallets, so CSw1 let a second push land on a pallet whose rear
+/// was between 100 and 200 mm) is found with a shortest trace; at 200 mm it is
+/// proved. On the production line the ejector's constraint CSp10 is proved with the
+/// ejector and the belt together, and is found missing when it is removed; the
+/// gantry's feeder onto the processing belt is too large to finish and is reported as
+/// not proved, never as safe.
+#[test]
+fn verify_finds_a_feeder_pushing_onto_an_item_its_entry_beam_does_not_see() {
+    let tmp = TempDir::new("verify-belts");
+    let ws = tmp.0.join("workshop");
+    copy_dir(&repo().join("layouts/workshop"), &ws);
+    let out = vigie(&["verify", ws.to_str().unwrap()]);
+    let t = text(&out);
+    assert!(out.status.success(), "{t}");
+    assert!(t.contains("conveyor: collision at the entry"), "{t}");
+    let f = ws.join("components.ron");
+    let c = std::fs::read_to_string(&f).unwrap();
+    let moved = c.replace("(signal: \"a\", at: 200.0)", "(signal: \"a\", at: 100.0)");
+    assert_ne!(moved, c);
+    std::fs::write(&f, moved).unwrap();
+    let out = vigie(&["verify", ws.to_str().unwrap(), "--json"]);
+    assert!(!out.status.success());
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let conveyor = r["parts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["component"] == "conveyor")
+        .unwrap();
+    let reached = &conveyor["with_filter"][0];
+    assert_eq!(reached["hazard"], "Collision", "{conveyor}");
+    // The last cycle pushes while the pallet's rear is past the beam, within its length.
+    let trace = reached["trace"].as_array().unwrap();
+    let last = trace.last().unwrap();
+    assert_eq!(last["applied"], serde_json::json!(["P"]), "{last}");
+    assert!(
+        last["zone"].as_str().unwrap().contains("(100, 200) mm"),
+        "{last}"
+    );
+    assert!(!last["inputs"].as_array().unwrap().contains(&"a".into()));
+    let line = tmp.0.join("production-line");
+    copy_dir(&repo().join("layouts/production-line"), &line);
+    let out = vigie(&["verify", line.to_str().unwrap()]);
+    let t = text(&out);
+    assert!(out.status.success(), "{t}");
+    let part = |t: &str, id: &str| -> String {
+        let from = t
+            .find(&format!("\n{id} "))
+            .unwrap_or_else(|| panic!("{id}: {t}"));
+        t[from + 1..].lines().take(3).collect::<Vec<_>>().join("\n")
+    };
+    let ds = part(&t, "ds_belt");
+    assert!(
+        ds.contains("(with ds_ejector)") && ds.contains("SAFE"),
+        "{ds}"
+    );
+    let ps = part(&t, "ps_belt");
+    assert!(ps.contains("(with hs_x, hs_z, hs_grip)"), "{ps}");
+    assert!(ps.contains("NOT PROVED") && !ps.contains(": SAFE"), "{ps}");
+    assert!(t.contains("some were not verified"), "{t}");
+    let f = line.join("constraints.txt");
+    let c = std::fs::read_to_string(&f).unwrap();
+    std::fs::write(&f, c.replace("CSp10 = DS_EJ_FWD . DS_IN", "")).unwrap();
+    let out = vigie(&["verify", line.to_str().unwrap()]);
+    let t = text(&out);
+    assert!(!out.status.success(), "{t}");
+    let ds = part(&t, "ds_belt");
+    assert!(ds.contains("VIOLATED: collision at the entry"), "{ds}");
+}
+
 fn copy_dir(src: &Path, dst: &Path) {
     std::fs::create_dir_all(dst).unwrap();
     for e in std::fs::read_dir(src).unwrap() {
@@ -970,7 +1046,7 @@ fn random_control_through_the_filter_never_reaches_a_hazard_verify_proved_away()
         let verified: BTreeSet<&str> = report
             .parts
             .iter()
-            .filter(|p| p.skipped.is_none())
+            .filter(|p| p.skipped.is_none() && !p.truncated)
             .map(|p| p.component.as_str())
             .collect();
         let environment: BTreeSet<String> = report

@@ -138,12 +138,15 @@ fn run_components(
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
     let secs = t0.elapsed().as_secs_f64();
     let unsafe_parts = report.unsafe_parts();
-    let skipped = report.parts.iter().any(|p| p.skipped.is_some());
+    let skipped = report
+        .parts
+        .iter()
+        .any(|p| p.skipped.is_some() || p.truncated);
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         println!(
-            "plant: {}\nabstraction: one component at a time, its travel cut into zones at its sensors' and dangers' edges, any control, 10 ms cycles ({secs:.2} s)",
+            "plant: {}\nabstraction: one component at a time (a conveyor with the axes its feeder and taker read), its travel cut into zones at its sensors' and dangers' edges, any control, 10 ms cycles ({secs:.2} s)",
             report.plant
         );
         println!("assumptions: {}", report.assumptions.join("; "));
@@ -152,7 +155,7 @@ fn run_components(
         }
         if !report.not_modelled.is_empty() {
             println!(
-                "not modelled (conveyors with items, detectors, links): {}",
+                "not modelled (detectors, links): {}",
                 report.not_modelled.join(", ")
             );
         }
@@ -177,8 +180,13 @@ fn run_components(
 /// One sub-plant's lines of `vigie verify`.
 fn print_part(p: &verify::components::SubReport) {
     let hazards: Vec<String> = p.hazards.iter().map(ToString::to_string).collect();
+    let with = if p.with.is_empty() {
+        String::new()
+    } else {
+        format!(" (with {})", p.with.join(", "))
+    };
     println!(
-        "{}: {} | guarded by {} | free inputs [{}] | outputs [{}]",
+        "{}{with}: {} | guarded by {} | free inputs [{}] | outputs [{}]",
         p.component,
         hazards.join(", "),
         if p.constraints.is_empty() {
@@ -200,7 +208,9 @@ fn print_part(p: &verify::components::SubReport) {
         .collect();
     println!(
         "  without the filter: {}",
-        if real.is_empty() {
+        if real.is_empty() && p.without_filter_truncated {
+            "no hazard found before the search stopped at its limit".to_string()
+        } else if real.is_empty() {
             "no hazard reachable".to_string()
         } else {
             real.join(", ")
@@ -218,10 +228,12 @@ fn print_part(p: &verify::components::SubReport) {
                 .filter(|r| !p.uncontrollable.contains(&r.hazard))
                 .map(|r| r.hazard.to_string())
                 .collect();
-            if v.is_empty() {
-                "SAFE".to_string()
-            } else {
+            if !v.is_empty() {
                 format!("VIOLATED: {}", v.join(", "))
+            } else if p.truncated {
+                "NOT PROVED (the search stopped at its limit)".to_string()
+            } else {
+                "SAFE".to_string()
             }
         }
     );
