@@ -32,6 +32,10 @@ pub(crate) struct VerifyArgs {
     /// Write counterexamples here (trace CSV replayed in the emulator, Promela model).
     #[arg(long)]
     pub(crate) out: Option<std::path::PathBuf>,
+    /// On a plant of components: stop each sub-plant's search after this many
+    /// transitions (it is then reported as not proved).
+    #[arg(long, default_value_t = verify::components::MAX_TRANSITIONS)]
+    pub(crate) max_transitions: u64,
 }
 
 fn ns_per(iters: u32, mut f: impl FnMut(u32) -> bool) -> f64 {
@@ -134,7 +138,7 @@ fn run_components(
     desc: &vigie_core::machine::description::Components,
 ) -> anyhow::Result<ExitCode> {
     let t0 = Instant::now();
-    let report = verify::components::verify_components(bundle, desc)
+    let report = verify::components::verify_components_within(bundle, desc, args.max_transitions)
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
     let secs = t0.elapsed().as_secs_f64();
     let unsafe_parts = report.unsafe_parts();

@@ -54,6 +54,9 @@ use std::collections::BTreeSet;
 
 /// Millionths of the unit per unit.
 const MICRO: f64 = 1e6;
+/// A sub-plant's search stops after this many transitions and says so (about 3 s):
+/// `vigie verify --max-transitions` sets another limit.
+pub const MAX_TRANSITIONS: u64 = 2_000_000;
 /// The PLC cycle of the model, ms.
 const CYCLE_MS: i64 = 10;
 /// Above this many free inputs and outputs together a sub-plant is not explored (2^n
@@ -235,6 +238,53 @@ struct Scope {
     named: BTreeSet<(Space, u32)>,
     /// Which free outputs only the constraints read, and only as `o` at t.
     dominated: Vec<bool>,
+    /// The free inputs only the constraints read, in one sense at t, with the value
+    /// that violates less (taken out of `free_in`).
+    fixed_in: Vec<(usize, bool)>,
+}
+
+/// The one sense in which the constraints read a variable: `Some(true)` as `v` only,
+/// `Some(false)` as `/v` only, at t; `None` when both, at t-1, or never.
+fn sense(set: &ConstraintSet, space: Space, i: u32) -> Option<bool> {
+    let mut sense: Option<bool> = None;
+    for l in set.constraints.iter().flat_map(|k| &k.dnf).flatten() {
+        if l.var.space == space && l.var.index == i {
+            if l.var.prev || sense.is_some_and(|s| s != l.positive) {
+                return None;
+            }
+            sense = Some(l.positive);
+        }
+    }
+    sense
+}
+
+/// What the search may hold instead of choosing, among the variables nothing but the
+/// constraints reads (`effect`: what the components and observers read, and every
+/// value read at t-1): the free outputs read as `o` only (0 does all 1 does but
+/// violate), and the free inputs read in one sense only, taken out of `free_in` with
+/// the value that violates less.
+fn held(
+    set: &ConstraintSet,
+    effect: &BTreeSet<(Space, u32)>,
+    free_out: &[usize],
+    free_in: &mut Vec<usize>,
+) -> (Vec<bool>, Vec<(usize, bool)>) {
+    let dominated = free_out
+        .iter()
+        .map(|&o| {
+            let o = o as u32;
+            !effect.contains(&(Space::Output, o)) && sense(set, Space::Output, o) == Some(true)
+        })
+        .collect();
+    let mut fixed_in = Vec::new();
+    free_in.retain(|&i| match sense(set, Space::Input, i as u32) {
+        Some(positive) if !effect.contains(&(Space::Input, i as u32)) => {
+            fixed_in.push((i, !positive));
+            false
+        }
+        _ => true,
+    });
+    (dominated, fixed_in)
 }
 
 /// A sub-plant's scope: its own signals; the observers and constraints that read them
@@ -312,23 +362,7 @@ fn scope(parts: &Parts, bundle: &PlantBundle) -> Result<Scope, Problem> {
         }
     }
     effect.extend(prev.iter().copied());
-    let dominated = free_out
-        .iter()
-        .map(|&o| {
-            let o = o as u32;
-            !effect.contains(&(Space::Output, o))
-                && set
-                    .constraints
-                    .iter()
-                    .flat_map(|k| &k.dnf)
-                    .flatten()
-                    .all(|l| {
-                        l.var.space != Space::Output
-                            || l.var.index != o
-                            || (l.positive && !l.var.prev)
-                    })
-        })
-        .collect();
+    let (dominated, fixed_in) = held(&set, &effect, &free_out, &mut free_in);
     Ok(Scope {
         set,
         free_in,
@@ -337,6 +371,7 @@ fn scope(parts: &Parts, bundle: &PlantBundle) -> Result<Scope, Problem> {
         prev,
         named,
         dominated,
+        fixed_in,
     })
 }
 
@@ -394,7 +429,7 @@ fn verify_part(
     mut sub_parts: Parts,
     hazards: Vec<SubHazard>,
     bundle: &PlantBundle,
-    sizes: [usize; 4],
+    (sizes, limit): ([usize; 4], u64),
 ) -> Result<SubReport, Problem> {
     let Scope {
         set,
@@ -404,6 +439,7 @@ fn verify_part(
         prev,
         named,
         dominated,
+        fixed_in,
     } = scope(&sub_parts, bundle)?;
     let mut beams = 0;
     if let Some((_, b)) = &mut sub_parts.belt {
@@ -414,6 +450,7 @@ fn verify_part(
             .collect();
         beams = b.read.iter().filter(|r| **r).count();
     }
+    let fixed: Vec<usize> = fixed_in.iter().map(|f| f.0).collect();
     let name = |s: Space, v: &[usize]| -> Vec<String> {
         v.iter()
             .map(|&k| bundle.symbols.name(s, k as u32).to_string())
@@ -430,6 +467,7 @@ fn verify_part(
         hazards: hazards.clone(),
         free_inputs: name(Space::Input, &free_in)
             .into_iter()
+            .chain(name(Space::Input, &fixed))
             .chain(name(Space::Aux, &aux))
             .collect(),
         free_outputs: name(Space::Output, &free_out),
@@ -459,10 +497,12 @@ fn verify_part(
         free_out,
         dominated,
         terms: set.constraints.iter().flat_map(|k| k.dnf.clone()).collect(),
+        fixed_in,
         filter: None,
         prev: prev.iter().map(|&(sp, k)| (sp, k as usize)).collect(),
         safe_only: true,
         sizes,
+        limit,
     };
     let only = |found: Vec<Reached>| -> Vec<Reached> {
         found
@@ -487,10 +527,21 @@ fn verify_part(
     Ok(report)
 }
 
-/// Verifies every sub-plant of a plant of components.
+/// Verifies every sub-plant of a plant of components, each search stopped after
+/// [`MAX_TRANSITIONS`].
 pub fn verify_components(
     bundle: &PlantBundle,
     desc: &Components,
+) -> Result<ComponentsReport, Problem> {
+    verify_components_within(bundle, desc, MAX_TRANSITIONS)
+}
+
+/// Verifies every sub-plant of a plant of components, each search stopped after
+/// `limit` transitions (the sub-plant is then reported as truncated).
+pub fn verify_components_within(
+    bundle: &PlantBundle,
+    desc: &Components,
+    limit: u64,
 ) -> Result<ComponentsReport, Problem> {
     let sizes = [
         bundle.plant.inputs.len(),
@@ -510,7 +561,7 @@ pub fn verify_components(
         if hazards.is_empty() {
             continue;
         }
-        parts.push(verify_part(c, sub_parts, hazards, bundle, sizes)?);
+        parts.push(verify_part(c, sub_parts, hazards, bundle, (sizes, limit))?);
     }
     Ok(ComponentsReport {
         plant: desc.name.clone(),
@@ -525,4 +576,47 @@ pub fn verify_components(
             "the operator may reset the filter at any cycle (the latch is abstracted away)".into(),
         ],
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Outputs `o`, `p`, `q` and inputs `i`, `j`, `k`, `m`.
+    fn set(text: &str) -> ConstraintSet {
+        let mut s = crate::symbols::Symbols::new();
+        for n in ["o", "p", "q"] {
+            s.declare(n, Space::Output).unwrap();
+        }
+        for n in ["i", "j", "k", "m"] {
+            s.declare(n, Space::Input).unwrap();
+        }
+        let (set, problems) = ConstraintSet::parse(text, std::path::Path::new("t"), &s);
+        assert!(problems.is_empty(), "{problems:?}");
+        set
+    }
+
+    #[test]
+    fn only_variables_the_constraints_alone_read_in_one_sense_are_held() {
+        let set = set("C1 = o . /i . j\nC2 = p . /i\nC3 = q . RE(k)\nC4 = o . m\nC5 = p . /m\n");
+        assert_eq!(sense(&set, Space::Output, 0), Some(true));
+        // /i in both: held at 1; j read as j: held at 0; k at t-1 and m both ways: free.
+        assert_eq!(sense(&set, Space::Input, 0), Some(false));
+        assert_eq!(sense(&set, Space::Input, 1), Some(true));
+        assert_eq!(sense(&set, Space::Input, 2), None);
+        assert_eq!(sense(&set, Space::Input, 3), None);
+        let mut free_in = vec![0, 1, 2, 3];
+        let none = BTreeSet::new();
+        let (dominated, fixed) = held(&set, &none, &[0, 1, 2], &mut free_in);
+        assert_eq!(dominated, [true, true, true]);
+        assert_eq!(fixed, [(0, true), (1, false)]);
+        assert_eq!(free_in, [2, 3]);
+        // What a drive or an observer reads has an effect: it is chosen, not held.
+        let effect = BTreeSet::from([(Space::Output, 1), (Space::Input, 0)]);
+        let mut free_in = vec![0, 1, 2, 3];
+        let (dominated, fixed) = held(&set, &effect, &[0, 1, 2], &mut free_in);
+        assert_eq!(dominated, [true, false, true]);
+        assert_eq!(fixed, [(1, false)]);
+        assert_eq!(free_in, [0, 2, 3]);
+    }
 }

@@ -17,8 +17,6 @@ use std::collections::{HashMap, VecDeque};
 
 /// Above this many states a search stops and says so.
 const MAX_STATES: usize = 2_000_000;
-/// Above this many transitions a search stops and says so (about 3 s).
-const MAX_TRANSITIONS: u64 = 2_000_000;
 
 /// The components of a sub-plant: lines (axes, tanks), each with its id, and at most
 /// one belt.
@@ -79,12 +77,19 @@ pub(super) struct Sub<'a> {
     pub(super) dominated: Vec<bool>,
     /// The terms of the constraints that guard it.
     pub(super) terms: Vec<Vec<Literal>>,
+    /// The inputs only the constraints read, always in the same sense (`/i` only, or
+    /// `i` only, never at t-1), each with the value that violates less: held there,
+    /// since the other value only forbids more; the fallback a violation brings in the
+    /// other values is searched for directly ([`Sub::fallbacks`]).
+    pub(super) fixed_in: Vec<(usize, bool)>,
     pub(super) filter: Option<Filter>,
     /// The variables something reads at t-1: only they are kept in a state.
     pub(super) prev: Vec<(Space, usize)>,
     /// Every output at its safe value every cycle, instead of any vector.
     pub(super) safe_only: bool,
     pub(super) sizes: [usize; 4],
+    /// The search stops after this many transitions.
+    pub(super) limit: u64,
 }
 
 /// The successors' search state: what is found and numbered so far.
@@ -95,6 +100,8 @@ struct Graph {
     found: Vec<Reached>,
     queue: VecDeque<u32>,
     transitions: u64,
+    /// The search stops after this many transitions.
+    limit: u64,
     truncated: bool,
 }
 
@@ -103,7 +110,7 @@ impl Graph {
     /// successor state when there is none.
     fn add(&mut self, si: u32, step: &TraceStep, hazards: &[SubHazard], next: State) {
         self.transitions += 1;
-        if self.transitions >= MAX_TRANSITIONS && !self.truncated {
+        if self.transitions >= self.limit && !self.truncated {
             self.truncated = true;
             self.queue.clear();
         }
@@ -189,6 +196,9 @@ impl Sub<'_> {
         for &i in &self.free_in {
             frame.now[0].set(i, bits.next().unwrap_or(false));
         }
+        for &(i, v) in &self.fixed_in {
+            frame.now[0].set(i, v);
+        }
         for &i in &self.aux {
             frame.now[Space::Aux as usize].set(i, bits.next().unwrap_or(false));
         }
@@ -252,6 +262,31 @@ impl Sub<'_> {
             }
         }
         None
+    }
+
+    /// The fallbacks a violation brings with the held inputs at their other values:
+    /// for each of their combinations but the held one where some vector violates, the
+    /// inputs, that vector and the fallback of that context. The frame's inputs are
+    /// left changed.
+    fn fallbacks(&self, frame: &mut Frame) -> Vec<(Bits, Bits, Bits)> {
+        let mut out = Vec::new();
+        let Some(f) = &self.filter else {
+            return out;
+        };
+        for a in 1..(1u32 << self.fixed_in.len()) {
+            for (k, &(i, v)) in self.fixed_in.iter().enumerate() {
+                frame.now[0].set(i, v != (a >> k & 1 == 1));
+            }
+            if let Some(commanded) = self.violation(frame) {
+                let applied = match f.fallback(frame) {
+                    Ok(b) => b,
+                    // No fallback: the engine stops everything.
+                    Err(_) => Bits::zeros(self.sizes[1]),
+                };
+                out.push((frame.now[0].clone(), commanded, applied));
+            }
+        }
+        out
     }
 
     /// Commands `commanded`, then the filter: the frame's outputs are the applied ones.
@@ -372,6 +407,7 @@ impl Sub<'_> {
             found: Vec::new(),
             queue: VecDeque::from([0u32]),
             transitions: 0,
+            limit: self.limit,
             truncated: false,
         };
         let mut frame = Frame::new(self.sizes);
@@ -394,16 +430,24 @@ impl Sub<'_> {
                 if !self.safe_only && self.filter.is_some() && self.dominated.contains(&true) {
                     commands.extend(self.violation(&mut frame));
                 }
+                let mut outcomes: Vec<(Bits, Bits, Bits)> = Vec::new();
                 for commanded in commands {
                     self.apply(&commanded, &mut frame, fallback.as_ref(), &mut viol);
-                    let applied = frame.now[1].clone();
+                    outcomes.push((inputs.clone(), commanded, frame.now[1].clone()));
+                }
+                if !self.safe_only && self.filter.is_some() {
+                    outcomes.extend(self.fallbacks(&mut frame));
+                    frame.now[0].copy_from(&inputs);
+                }
+                for (ins, commanded, applied) in outcomes {
                     if applied_seen.contains(&applied) {
                         continue;
                     }
                     applied_seen.push(applied.clone());
+                    frame.now[1].copy_from(&applied);
                     let step = TraceStep {
                         zone: self.parts.text(&s),
-                        inputs: self.names(Space::Input, &inputs),
+                        inputs: self.names(Space::Input, &ins),
                         commanded: self.names(Space::Output, &commanded),
                         applied: self.names(Space::Output, &applied),
                     };
