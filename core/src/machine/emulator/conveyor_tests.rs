@@ -313,10 +313,21 @@ fn a_carried_item_keeps_its_class_and_is_counted_once() {
     run(&mut e, &out(&["R"]), 20);
     assert_eq!(e.items_out(), 0, "carried, not out");
     assert!(items(&e, "belt3").is_empty());
+    // The second item reaches the end; closing the gripper again while it holds the
+    // first takes nothing (a gripper holds one).
+    assert!(until(&mut e, &out(&["C1", "C2"]), "b2", true, 20_000).is_some());
+    run(&mut e, &out(&[]), 20);
+    run(&mut e, &out(&["R"]), 20);
+    assert_eq!(
+        items(&e, "belt2").len(),
+        1,
+        "the second item stays on belt 2"
+    );
     run(&mut e, &out(&[]), 20);
     run(&mut e, &out(&["B1"]), 20);
     assert_eq!(items(&e, "belt3"), vec![(1, "low".to_string())]);
-    // Nothing held: a second place puts nothing down, and nothing is hurt.
+    // Nothing held: a second place puts nothing down, and nothing is hurt (belt 2's
+    // item stays there: the taker did not rise since).
     run(&mut e, &out(&[]), 20);
     run(&mut e, &out(&["B1"]), 20);
     assert_eq!(items(&e, "belt3").len(), 1);

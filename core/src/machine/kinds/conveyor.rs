@@ -23,7 +23,9 @@
 //! output, or its extended sensor) the next item of `feed.items` (in turn) is placed at
 //! the entry; an entry still occupied is a collision (a hazard) and nothing is placed.
 //! On each rise of `take`, the item at the exit end (its front within half its length
-//! of the end) is taken away (counted, as the robot carries it off). A beam at `at` is
+//! of the end) is taken away (counted, as the robot carries it off); a taker whose
+//! items another belt's feeder places (`feed.from`, a gripper) holds one at a time: a
+//! rise while it holds one takes nothing (it regrips the one it holds). A beam at `at` is
 //! on while an item covers it (with `sees`, only items of a class with that tag: a
 //! high beam sees tall items only); a motion sensor (`motion`) is on while the belt
 //! really moves (not blocked by a fault, not stopped).
@@ -517,8 +519,12 @@ impl Conveyor {
                 }
             }
         }
+        // A taker that carries (a gripper) holds one item: closing again while it holds
+        // one regrips it and takes nothing more off the belt.
+        let full = self.carried && !ctx.carried[ctx.index].is_empty();
         if let Some(rise) = self.take.as_mut()
             && rise.rose(ctx.frame)
+            && !full
             && let Some(last) = self.items.last()
             && last.rear + last.length / 2 + last.length >= self.length
         {

@@ -87,7 +87,7 @@ pub(super) type Tracked = Option<(u8, u16)>;
 pub(super) struct Items {
     pub(super) item: Tracked,
     pub(super) ahead: bool,
-    /// Items the carrier holds for its feeder: 0, 1, or 2 for two or more.
+    /// Items the carrier holds for its feeder: 0 or 1 (a gripper holds one).
     pub(super) carried: u8,
 }
 
@@ -385,11 +385,6 @@ impl Belt {
         if carrier && now.carried == 0 {
             return vec![stay];
         }
-        // Two or more held: one fewer, or still two or more.
-        let left: &[u8] = match (carrier, now.carried) {
-            (false, _) | (true, 1) => &[0],
-            _ => &[1, 2],
-        };
         let mut out = Vec::new();
         for &p in &feed.places {
             let hit = [now.item, stay.item]
@@ -400,13 +395,11 @@ impl Belt {
                 hazards.push((now.clone(), Some(SubHazard::Collision)));
                 continue;
             }
-            for &carried in left {
-                out.push(Items {
-                    item: Some((p as u8, self.zone(0))),
-                    ahead: stay.item.is_some() || stay.ahead,
-                    carried,
-                });
-            }
+            out.push(Items {
+                item: Some((p as u8, self.zone(0))),
+                ahead: stay.item.is_some() || stay.ahead,
+                carried: 0,
+            });
         }
         out
     }
@@ -473,12 +466,14 @@ impl Belt {
             } else {
                 vec![stay]
             };
-            // The carrier picks one off the other belt's end (if one is there).
+            // The carrier, holding nothing, picks one off the other belt's end (if one
+            // is there); holding one, it takes nothing more.
             if carrier && ends.load_rise {
                 let loaded: Vec<Items> = branches
                     .iter()
+                    .filter(|b| b.carried == 0)
                     .map(|b| Items {
-                        carried: (b.carried + 1).min(2),
+                        carried: 1,
                         ..b.clone()
                     })
                     .collect();
@@ -518,7 +513,7 @@ impl Belt {
             s.push_str(" (more ahead)");
         }
         if self.feed.as_ref().is_some_and(|f| f.load.is_some()) {
-            let held = ["nothing", "one", "two or more"][usize::from(items.carried.min(2))];
+            let held = if items.carried == 0 { "nothing" } else { "one" };
             s.push_str(&format!(", the carrier holds {held}"));
         }
         s

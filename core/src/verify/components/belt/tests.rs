@@ -223,6 +223,8 @@ fn a_carrier_places_only_what_it_picked() {
         ..empty.clone()
     };
     assert_eq!(out, vec![(empty.clone(), None), (one.clone(), None)]);
+    // Holding one, a second pick takes nothing more.
+    assert_eq!(b.next(&one, 0, load), vec![(one.clone(), None)]);
     // Holding one: it is placed, and then it holds nothing.
     let out = b.next(&one, 0, FEED);
     assert_eq!(out, vec![(at(&b, 0, false), None)]);
