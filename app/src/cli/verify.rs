@@ -142,7 +142,7 @@ fn run_components(
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
     let secs = t0.elapsed().as_secs_f64();
     let unsafe_parts = report.unsafe_parts();
-    let skipped = report
+    let unverified = report
         .parts
         .iter()
         .any(|p| p.skipped.is_some() || p.truncated);
@@ -165,7 +165,7 @@ fn run_components(
         }
         println!(
             "SAFETY: {}",
-            if unsafe_parts.is_empty() && !skipped {
+            if unsafe_parts.is_empty() && !unverified {
                 "proved for every modelled component (no hazard reachable with the filter)"
             } else if unsafe_parts.is_empty() {
                 "no hazard reachable in the components verified; some were not verified"

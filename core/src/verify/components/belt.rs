@@ -22,7 +22,7 @@
 //!   is within half its length of the end. An item ahead may fall off a drop whenever
 //!   the belt runs forward.
 
-use super::line::{Cuts, Mover, fastest, micro};
+use super::line::{Cuts, Mover, fastest, micro, opposable};
 use super::{SubHazard, compile, input};
 use crate::bundle::PlantBundle;
 use crate::diag::Problem;
@@ -267,9 +267,7 @@ impl Belt {
     /// The hazards it can have.
     pub(super) fn hazards(&self) -> Vec<SubHazard> {
         let mut out = Vec::new();
-        let up = self.movers.iter().any(|m| m.speed > 0);
-        let down = self.movers.iter().any(|m| m.speed < 0);
-        if up && down {
+        if opposable(&self.movers) {
             out.push(SubHazard::OpposedDrives);
         }
         if self.feed.is_some() {

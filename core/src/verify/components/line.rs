@@ -65,6 +65,11 @@ pub(super) fn fastest(movers: &[Mover], frame: &Frame) -> (i64, bool) {
     if up && down { (0, true) } else { (best, false) }
 }
 
+/// Whether drives of both directions exist: they can be driven against each other.
+pub(super) fn opposable(movers: &[Mover]) -> bool {
+    movers.iter().any(|m| m.speed > 0) && movers.iter().any(|m| m.speed < 0)
+}
+
 /// Zones over sorted cut points: zone `2i` is point `i`, zone `2i+1` the open interval
 /// between points `i` and `i+1`. Every sensor window and danger is constant on a zone.
 #[derive(Clone, Debug, Default)]
@@ -211,6 +216,38 @@ impl Line {
         self.points
             .reach(z, v, self.variation_ppm, (0, self.zones() - 1), false)
     }
+
+    /// The hazards it can have.
+    pub(super) fn hazards(&self) -> Vec<SubHazard> {
+        let mut out = Vec::new();
+        match self.motion {
+            Motion::Axis => {
+                if opposable(&self.movers) {
+                    out.push(SubHazard::OpposedDrives);
+                }
+                if self.low == EndStop::Crash {
+                    out.push(SubHazard::EndStop("min".into()));
+                }
+                if self.high == EndStop::Crash {
+                    out.push(SubHazard::EndStop("max".into()));
+                }
+            }
+            Motion::Tank => {
+                if self.high == EndStop::Crash {
+                    out.push(SubHazard::Overflow);
+                }
+                if self.low == EndStop::Crash {
+                    out.push(SubHazard::DryRun);
+                }
+            }
+        }
+        out.extend(
+            self.dangers
+                .iter()
+                .map(|d| SubHazard::Declared(d.0.clone())),
+        );
+        out
+    }
 }
 
 /// A drive's or a flow's text: condition, speed, flow sensor.
@@ -291,43 +328,6 @@ pub(super) fn line(
     l.points.0.dedup();
     l.start = l.zone_of(start);
     Ok(Some(l))
-}
-
-/// The hazards a line can have.
-impl Line {
-    /// The hazards it can have.
-    pub(super) fn hazards(&self) -> Vec<SubHazard> {
-        let mut out = Vec::new();
-        match self.motion {
-            Motion::Axis => {
-                let up = self.movers.iter().any(|m| m.speed > 0);
-                let down = self.movers.iter().any(|m| m.speed < 0);
-                if up && down {
-                    out.push(SubHazard::OpposedDrives);
-                }
-                if self.low == EndStop::Crash {
-                    out.push(SubHazard::EndStop("min".into()));
-                }
-                if self.high == EndStop::Crash {
-                    out.push(SubHazard::EndStop("max".into()));
-                }
-            }
-            Motion::Tank => {
-                if self.high == EndStop::Crash {
-                    out.push(SubHazard::Overflow);
-                }
-                if self.low == EndStop::Crash {
-                    out.push(SubHazard::DryRun);
-                }
-            }
-        }
-        out.extend(
-            self.dangers
-                .iter()
-                .map(|d| SubHazard::Declared(d.0.clone())),
-        );
-        out
-    }
 }
 
 #[cfg(test)]

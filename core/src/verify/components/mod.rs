@@ -140,7 +140,8 @@ pub struct SubReport {
     pub states: usize,
     /// Transitions.
     pub transitions: u64,
-    /// The search stopped at its limit of states (two million).
+    /// The search with the filter stopped at its limit of states or transitions: a
+    /// hazard it did not find may still be reachable.
     pub truncated: bool,
     /// Hazards reachable without the filter (each with a shortest trace).
     pub without_filter: Vec<Reached>,
@@ -162,7 +163,7 @@ pub struct ComponentsReport {
     pub plant: String,
     /// The sub-plants, in the order of `components.ron`.
     pub parts: Vec<SubReport>,
-    /// Components of kinds the model does not cover (conveyors, detectors, links).
+    /// Components of kinds the model does not cover (detectors, links).
     pub not_modelled: Vec<String>,
     /// The abstraction's assumptions, stated in every report.
     pub assumptions: Vec<String>,
@@ -318,9 +319,9 @@ fn scope(parts: &Parts, bundle: &PlantBundle) -> Result<Scope, Problem> {
         reads_prev(d, &mut prev);
     }
     own.extend(named.iter().filter(|v| v.0 == Space::Output).copied());
-    // What the components and the observers read: an output read there has an effect.
+    // What the components and the observers read (and, below, every value read at
+    // t-1): a variable read there has an effect.
     let mut effect = named.clone();
-    effect.extend(prev.iter().copied());
     let mut relevant_obs: BTreeSet<u32> = BTreeSet::new();
     for (k, o) in bundle.observers.defs.iter().enumerate() {
         let (mut r, mut p) = (BTreeSet::new(), BTreeSet::new());

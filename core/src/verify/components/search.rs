@@ -266,9 +266,9 @@ impl Sub<'_> {
 
     /// The fallbacks a violation brings with the held inputs at their other values:
     /// for each of their combinations but the held one where some vector violates, the
-    /// inputs, that vector and the fallback of that context. The frame's inputs are
+    /// inputs, that vector and what the filter applies for it. The frame's inputs are
     /// left changed.
-    fn fallbacks(&self, frame: &mut Frame) -> Vec<(Bits, Bits, Bits)> {
+    fn fallbacks(&self, frame: &mut Frame, viol: &mut Vec<usize>) -> Vec<(Bits, Bits, Bits)> {
         let mut out = Vec::new();
         let Some(f) = &self.filter else {
             return out;
@@ -278,12 +278,9 @@ impl Sub<'_> {
                 frame.now[0].set(i, v != (a >> k & 1 == 1));
             }
             if let Some(commanded) = self.violation(frame) {
-                let applied = match f.fallback(frame) {
-                    Ok(b) => b,
-                    // No fallback: the engine stops everything.
-                    Err(_) => Bits::zeros(self.sizes[1]),
-                };
-                out.push((frame.now[0].clone(), commanded, applied));
+                let fallback = f.fallback(frame);
+                self.apply(&commanded, frame, Some(&fallback), viol);
+                out.push((frame.now[0].clone(), commanded, frame.now[1].clone()));
             }
         }
         out
@@ -436,7 +433,7 @@ impl Sub<'_> {
                     outcomes.push((inputs.clone(), commanded, frame.now[1].clone()));
                 }
                 if !self.safe_only && self.filter.is_some() {
-                    outcomes.extend(self.fallbacks(&mut frame));
+                    outcomes.extend(self.fallbacks(&mut frame, &mut viol));
                     frame.now[0].copy_from(&inputs);
                 }
                 for (ins, commanded, applied) in outcomes {
