@@ -16,6 +16,7 @@ pub mod derive;
 pub mod description;
 pub mod diagnosers;
 pub mod emulator;
+pub mod items;
 pub mod kinds;
 pub mod monitor;
 pub mod safe_state;

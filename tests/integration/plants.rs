@@ -1094,11 +1094,14 @@ fn random_control_through_the_filter_never_reaches_a_hazard_verify_proved_away()
                     .hazards()
                     .iter()
                     .filter(|h| match &h.at {
-                        Place::Component { part } => verified.contains(part.as_str()),
+                        Place::Component { part }
+                        | Place::Against { part, .. }
+                        | Place::Off { part, .. }
+                        | Place::Between { part, .. }
+                        | Place::Edge { part } => verified.contains(part.as_str()),
                         Place::Danger { part, danger } => {
                             verified.contains(part.as_str()) && !environment.contains(danger)
                         }
-                        _ => false,
                     })
                     .collect();
                 if with_filter {

@@ -145,6 +145,9 @@ pub(crate) enum Effect {
     Block(u32),
     /// Component `.0` of a components plant slowed to `.1` percent.
     SlowComponent(u32, u8),
+    /// Component `.0` of a components plant cannot leave its position `.1` (by index)
+    /// once there.
+    StuckAt(u32, u32),
 }
 
 /// State of a scheduled fault.
@@ -304,7 +307,7 @@ impl Scheduled {
                 }
             }
             // A components plant applies these itself (`machine::emulator`).
-            Effect::Block(_) | Effect::SlowComponent(..) => {}
+            Effect::Block(_) | Effect::SlowComponent(..) | Effect::StuckAt(..) => {}
         }
     }
 }

@@ -45,6 +45,9 @@ pub struct Components {
     /// dangereux"), beyond the hazards every kind knows.
     #[serde(default)]
     pub dangers: Vec<DangerDef>,
+    /// The constants of the items' physics on conveyors and turntables.
+    #[serde(default)]
+    pub items: super::items::ItemsDef,
     /// The file it was loaded from, for messages.
     #[serde(skip)]
     pub file: PathBuf,
@@ -127,6 +130,63 @@ impl Components {
         Problem::error(code, message, Some(self.location_of(quoted)))
     }
 
+    /// Where the conveyors' exits and the turntables' positions lead: to conveyors
+    /// (an exit to a turntable, one whose positions join that exit).
+    fn check_links(&self) -> Vec<Problem> {
+        let mut out = Vec::new();
+        for c in &self.components {
+            let super::kinds::KindDef::Conveyor(v) = &c.kind else {
+                continue;
+            };
+            let Some(to) = v.target() else { continue };
+            let next = self.components.iter().find(|o| o.id == to);
+            let joins_it = |t: &super::kinds::turntable::TurntableDef| {
+                t.positions
+                    .iter()
+                    .flat_map(|p| &p.joins)
+                    .any(|j| j.to == c.id && j.at == super::kinds::turntable::End::End)
+            };
+            let fits = match next.map(|n| &n.kind) {
+                Some(super::kinds::KindDef::Conveyor(_)) => true,
+                Some(super::kinds::KindDef::Turntable(t)) => joins_it(t),
+                _ => false,
+            };
+            if !fits || to == c.id {
+                out.push(self.error(
+                    codes::COMPONENTS_INVALID.id,
+                    to,
+                    format!(
+                        "component `{}`: its exit leads to `{to}`, which is not another \
+                         conveyor nor a turntable with a position joining this exit",
+                        c.id
+                    ),
+                ));
+            }
+        }
+        for c in &self.components {
+            let super::kinds::KindDef::Turntable(t) = &c.kind else {
+                continue;
+            };
+            for to in t.joined() {
+                let ok = self
+                    .components
+                    .iter()
+                    .any(|o| o.id == to && matches!(o.kind, super::kinds::KindDef::Conveyor(_)));
+                if !ok {
+                    out.push(self.error(
+                        codes::COMPONENTS_INVALID.id,
+                        to,
+                        format!(
+                            "component `{}`: a position joins `{to}`, which is not a conveyor",
+                            c.id
+                        ),
+                    ));
+                }
+            }
+        }
+        out
+    }
+
     /// The checks that need no plant: unique ids, the step, each kind's own values.
     pub fn check(&self) -> Vec<Problem> {
         let mut out = Vec::new();
@@ -157,26 +217,9 @@ impl Components {
                 ));
             }
         }
-        for c in &self.components {
-            let super::kinds::KindDef::Conveyor(v) = &c.kind else {
-                continue;
-            };
-            let Some(to) = v.target() else { continue };
-            let next = self.components.iter().find(|o| o.id == to);
-            if !matches!(
-                next.map(|n| &n.kind),
-                Some(super::kinds::KindDef::Conveyor(_))
-            ) || to == c.id
-            {
-                out.push(self.error(
-                    codes::COMPONENTS_INVALID.id,
-                    to,
-                    format!(
-                        "component `{}`: its exit leads to `{to}`, which is not another conveyor",
-                        c.id
-                    ),
-                ));
-            }
+        out.extend(self.check_links());
+        for message in self.items.check() {
+            out.push(self.error(codes::COMPONENTS_INVALID.id, "items", message));
         }
         for c in &self.components {
             let super::kinds::KindDef::Conveyor(v) = &c.kind else {

@@ -12,8 +12,10 @@
 //! reads its contactor as it is.
 
 use super::description::Components;
+use super::items::{Items, Requests};
 use super::kinds::{ComponentFaults, Live, StepCtx};
 use super::scene::Scene;
+use super::scene::SceneItem;
 use crate::bits::Bits;
 use crate::diag::{Problem, codes};
 use crate::emulator::faults::{Effect, Phase, Scheduled};
@@ -44,12 +46,12 @@ pub struct ComponentPlant {
     names: Vec<(String, String)>,
     /// The plant inputs the components measure, in plant order.
     measured: Vec<String>,
-    /// The number of the last item a feeder placed.
-    next_item: u32,
-    /// Per component, the component its exit leads to (a conveyor's `To`).
-    targets: Vec<Option<usize>>,
-    /// Per component, the items its taker carries to a feeder (`feed.from`).
-    carried: Vec<std::collections::VecDeque<super::kinds::conveyor::Item>>,
+    /// The items on the conveyors and turntables.
+    items: Items,
+    /// Per component, its surface among the items' (conveyors, turntables).
+    surface_of: Vec<Option<usize>>,
+    /// The outputs without power (their safety contactor open).
+    unpowered: Bits,
     live: Vec<Live>,
     dangers: Vec<Danger>,
     symbols: Symbols,
@@ -139,11 +141,12 @@ impl ComponentPlant {
         for (i, s) in plant.outputs.iter().enumerate() {
             commanded.set(i, s.initial);
         }
+        let (items, surface_of) = build_items(desc, &mut live, seed);
         let mut emu = Self {
             measured,
-            next_item: 0,
-            targets: targets(desc),
-            carried: vec![std::collections::VecDeque::new(); live.len()],
+            items,
+            surface_of,
+            unpowered: Bits::zeros(n_out),
             names: desc
                 .components
                 .iter()
@@ -152,7 +155,8 @@ impl ComponentPlant {
             component_faults: vec![
                 ComponentFaults {
                     blocked: false,
-                    speed_percent: 100
+                    speed_percent: 100,
+                    stuck_at: None,
                 };
                 live.len()
             ],
@@ -177,7 +181,6 @@ impl ComponentPlant {
             reads_inputs,
             outputs_dirty: true,
         };
-        link_carries(desc, &mut emu.live);
         emu.apply_outputs();
         emu.compute_sensors();
         Ok(emu)
@@ -200,8 +203,11 @@ impl ComponentPlant {
             // At rest on constant outputs, with no fault to come: the remaining steps
             // of the period would change nothing but the time.
             let settled = self.faults.iter().all(|f| f.phase == Phase::Over);
-            if settled && self.live.iter().all(Live::idle) {
-                let k = self.carry / self.step_ms;
+            let k = self.carry / self.step_ms;
+            if settled
+                && self.live.iter().all(Live::idle)
+                && self.items.idle(self.now + k * self.step_ms)
+            {
                 self.now += k * self.step_ms;
                 self.carry -= k * self.step_ms;
             }
@@ -226,18 +232,14 @@ impl ComponentPlant {
             frame: &self.frame,
             rng: &mut self.rng,
             hazards: Vec::new(),
-            next_item: &mut self.next_item,
             now: self.now,
-            carried: &mut self.carried,
-            index: 0,
+            unpowered: &self.unpowered,
         };
         let mut found = Vec::new();
         for (k, c) in self.live.iter_mut().enumerate() {
-            ctx.index = k;
             c.step(&mut ctx, self.component_faults[k]);
             found.extend(ctx.hazards.drain(..).map(|h| (k, h)));
         }
-        self.hand_over();
         for (k, (kind, elements)) in found {
             let (id, name) = &self.names[k];
             self.hazards.push(Hazard {
@@ -249,6 +251,9 @@ impl ComponentPlant {
                 box_id: 0,
             });
         }
+        if !self.items.surfaces.is_empty() {
+            self.step_items();
+        }
         self.check_dangers();
         // The sensors are read at the end of the period; a step needs them only when
         // something reads them within it (a fault's condition, a drive on a sensor).
@@ -257,27 +262,24 @@ impl ComponentPlant {
         }
     }
 
-    /// Each item waiting at a conveyor's exit end passes to the next conveyor's entry
-    /// when it is free; else it waits.
-    fn hand_over(&mut self) {
-        for from in 0..self.live.len() {
-            let Some(to) = self.targets[from] else {
-                continue;
-            };
-            let Live::Conveyor(c) = &self.live[from] else {
-                continue;
-            };
-            let Some(item) = c.ready().cloned() else {
-                continue;
-            };
-            let taken = match &mut self.live[to] {
-                Live::Conveyor(next) => next.accept(&item),
-                _ => false,
-            };
-            if taken && let Live::Conveyor(c) = &mut self.live[from] {
-                c.hand_over();
-            }
+    /// The items move on the surfaces as their components ask.
+    fn step_items(&mut self) {
+        let mut requests = Vec::with_capacity(self.items.surfaces.len());
+        for s in 0..self.items.surfaces.len() {
+            let k = self.items.surfaces[s].component;
+            requests.push(match &self.live[k] {
+                Live::Conveyor(c) => c.requests,
+                Live::Turntable(t) => {
+                    self.items.set_docked(s, t.docked);
+                    Requests {
+                        velocity: t.roller_speed() * self.step_ms as i64,
+                        ..Requests::default()
+                    }
+                }
+                _ => Requests::default(),
+            });
         }
+        self.items.step(self.now, &requests, &mut self.hazards);
     }
 
     /// The outputs as they reach the components: faults, then the supplies; the
@@ -285,6 +287,14 @@ impl ComponentPlant {
     fn apply_outputs(&mut self) {
         self.outputs_dirty = false;
         let mut out = self.contactors();
+        self.unpowered.clear();
+        for (o, fed) in &self.supply {
+            if !out.get(*o) {
+                for &f in fed {
+                    self.unpowered.set(f, true);
+                }
+            }
+        }
         for (o, fed) in &self.supply {
             if !out.get(*o) {
                 for &f in fed {
@@ -309,7 +319,10 @@ impl ComponentPlant {
 
     fn check_dangers(&mut self) {
         for d in &mut self.dangers {
-            let p = self.live[d.component].position();
+            let p = match (&self.live[d.component], self.surface_of[d.component]) {
+                (Live::Conveyor(_), Some(s)) => self.items.front(s),
+                (c, _) => c.position(),
+            };
             let on = p >= d.from && p <= d.to && eval_dnf(&d.when, &self.frame);
             if on && !d.active {
                 let (id, _) = &self.names[d.component];
@@ -336,6 +349,7 @@ impl ComponentPlant {
         for c in &self.live {
             c.sense(&mut self.sensors);
         }
+        self.items.sense(&mut self.sensors);
         let closed = self.contactors();
         for &(input, output) in &self.feedback {
             self.sensors.set(input, closed.get(output));
@@ -366,6 +380,7 @@ impl ComponentPlant {
             *c = ComponentFaults {
                 blocked: false,
                 speed_percent: 100,
+                stuck_at: None,
             };
         }
         for f in &self.faults {
@@ -380,7 +395,20 @@ impl ComponentPlant {
                     let c = &mut self.component_faults[k as usize];
                     c.speed_percent = c.speed_percent.min(p);
                 }
-                Effect::Table(_) | Effect::Slow(..) => {}
+                Effect::StuckAt(k, p) => {
+                    self.component_faults[k as usize].stuck_at = Some(p as usize);
+                }
+                Effect::Slow(o, p) => {
+                    // The surfaces a drive output moves.
+                    let name = &self.symbols.names(Space::Output)[o as usize];
+                    for f in &self.items.surfaces {
+                        if f.actuators.contains(name) {
+                            let c = &mut self.component_faults[f.component];
+                            c.speed_percent = c.speed_percent.min(p);
+                        }
+                    }
+                }
+                Effect::Table(_) => {}
             }
         }
     }
@@ -410,9 +438,19 @@ impl ComponentPlant {
             }
         };
         let names = &self.names;
+        // The sorting station's table faults name its turntable's positions: the first
+        // turntable, its first (loading) and second (unloading) positions.
+        let table = self
+            .live
+            .iter()
+            .position(|c| matches!(c, Live::Turntable(_)))
+            .map(|k| k as u32);
         let component = |k: &FaultKind| {
             let find = |c: &str| names.iter().position(|(id, _)| id == c).map(|k| k as u32);
             match k {
+                FaultKind::TableBlockedAtC4 => table.map(|t| Effect::StuckAt(t, 0)),
+                FaultKind::TableBlockedAtC5 => table.map(|t| Effect::StuckAt(t, 1)),
+                FaultKind::TableBlockedBetween => table.map(Effect::Block),
                 FaultKind::Blocked(c) => find(c).map(Effect::Block),
                 FaultKind::Slowed { component, percent } => {
                     find(component).map(|k| Effect::SlowComponent(k, *percent))
@@ -472,38 +510,71 @@ impl ComponentPlant {
     /// The items that left the plant done: delivered into a sink or taken at a
     /// conveyor's exit end.
     pub fn items_out(&self) -> u32 {
-        self.live
-            .iter()
-            .map(|c| match c {
-                Live::Conveyor(v) => v.out(),
-                _ => 0,
-            })
-            .sum()
+        self.items.delivered.iter().sum::<u32>() + self.items.taken.iter().sum::<u32>()
     }
 
-    /// The classes of items the feeders place, sorted.
+    /// The classes of items the feeders and sources place, sorted.
     pub fn item_classes(&self) -> Vec<String> {
         let mut v: Vec<String> = self
-            .live
+            .items
+            .feed_classes
             .iter()
-            .flat_map(|c| match c {
-                Live::Conveyor(v) => v.classes(),
-                _ => Vec::new(),
-            })
+            .flatten()
+            .chain(self.items.sources.iter().flat_map(|s| &s.classes))
+            .map(|c| c.class.clone())
             .collect();
         v.sort();
         v.dedup();
         v
     }
 
-    /// The items the feeders placed so far.
+    /// The items the feeders and sources placed so far.
     pub fn items_in(&self) -> u32 {
-        self.next_item
+        self.items.created()
+    }
+
+    /// Items damaged so far, and items that fell off.
+    pub fn items_damaged(&self) -> (u32, u32) {
+        (self.items.damaged, self.items.fallen)
+    }
+
+    /// Per sink or taker (by component id, sorted), the items that left there.
+    pub fn items_out_by_exit(&self) -> Vec<(String, u32)> {
+        let mut v: Vec<(String, u32)> = self
+            .items
+            .surfaces
+            .iter()
+            .enumerate()
+            .map(|(s, f)| (f.id.clone(), self.items.delivered[s] + self.items.taken[s]))
+            .filter(|(_, n)| *n > 0)
+            .collect();
+        v.sort();
+        v
     }
 
     /// The plant has conveyors (its production is items, not only moves).
     pub fn carries_items(&self) -> bool {
-        self.live.iter().any(|c| matches!(c, Live::Conveyor(_)))
+        !self.items.surfaces.is_empty()
+    }
+
+    /// The operator takes every item off the plant by hand; how many.
+    pub fn remove_items(&mut self) -> u32 {
+        let n = self.items.clear();
+        self.compute_sensors();
+        n
+    }
+
+    /// Replaces the arrivals of the plant's first source: periodic, or a list of
+    /// (time, index of the class in the source's list); false when it has none.
+    pub fn set_arrivals(&mut self, plan: super::items::Plan) -> bool {
+        let now = self.now;
+        match self.items.sources.first_mut() {
+            Some(s) => {
+                s.set_plan(plan, now);
+                true
+            }
+            None => false,
+        }
     }
 
     /// The sensors the components drive (the ids a transient may strike), in plant
@@ -520,14 +591,35 @@ impl ComponentPlant {
 
     /// What the synoptic draws.
     pub fn scene(&self) -> Scene {
-        Scene {
-            elements: self
-                .live
-                .iter()
-                .zip(&self.names)
-                .map(|(c, (id, name))| c.scene(id, name))
-                .collect(),
+        let mut elements: Vec<_> = self
+            .live
+            .iter()
+            .zip(&self.names)
+            .map(|(c, (id, name))| c.scene(id, name))
+            .collect();
+        for (k, e) in elements.iter_mut().enumerate() {
+            let Some(s) = self.surface_of[k] else {
+                continue;
+            };
+            let on: Vec<SceneItem> = self
+                .items
+                .on(s)
+                .into_iter()
+                .map(|b| SceneItem {
+                    id: b.id,
+                    class: b.class.clone(),
+                    rear: (b.c - b.half) as f64 / 1e6,
+                    length: (2 * b.half) as f64 / 1e6,
+                })
+                .collect();
+            match &mut e.shape {
+                super::Shape::Conveyor { items, .. } | super::Shape::Turntable { items, .. } => {
+                    *items = on;
+                }
+                _ => {}
+            }
         }
+        Scene { elements }
     }
 
     /// The operator presses the panel button wired to input `signal`; false when no
@@ -543,7 +635,16 @@ impl ComponentPlant {
     /// Every component's position (a tank's level), in the order of the scene: what a
     /// replay keeps of each cycle.
     pub fn positions(&self) -> impl Iterator<Item = f64> + '_ {
-        self.live.iter().map(Live::position)
+        (0..self.live.len()).map(|k| self.position_of(k))
+    }
+
+    /// Component `k`'s position: a conveyor's is the front of its item nearest the
+    /// exit end (0 when empty).
+    fn position_of(&self, k: usize) -> f64 {
+        match (&self.live[k], self.surface_of[k]) {
+            (Live::Conveyor(_), Some(s)) => self.items.front(s),
+            (c, _) => c.position(),
+        }
     }
 
     /// The scene with the components at `positions` (as [`Self::positions`] gave
@@ -567,7 +668,7 @@ impl ComponentPlant {
     /// Component `id`'s position in its unit.
     pub fn position(&self, id: &str) -> Option<f64> {
         let k = self.names.iter().position(|(c, _)| c == id)?;
-        Some(self.live[k].position())
+        Some(self.position_of(k))
     }
 
     /// Moves component `id` to `position` by hand (a technician, a live-mode
@@ -618,34 +719,105 @@ fn measured(desc: &Components, plant: &Plant) -> Vec<String> {
         .collect()
 }
 
-/// Links the feeders that place what another conveyor's taker picked (`feed.from`).
-fn link_carries(desc: &Components, live: &mut [Live]) {
-    let from: Vec<Option<usize>> = desc
-        .components
-        .iter()
-        .map(|c| match &c.kind {
-            super::kinds::KindDef::Conveyor(v) => v
-                .carries_from()
-                .and_then(|f| desc.components.iter().position(|o| o.id == f)),
-            _ => None,
-        })
-        .collect();
-    for (k, c) in live.iter_mut().enumerate() {
-        if let Live::Conveyor(v) = c {
-            v.link_carry(from[k], from.contains(&Some(k)));
+/// The items' surfaces of `desc` (its conveyors and turntables, in order), their
+/// joins, feeders and sources; per component, its surface.
+fn build_items(desc: &Components, live: &mut [Live], seed: u64) -> (Items, Vec<Option<usize>>) {
+    use super::items::{Dock, Link, Open, Plan, Source};
+    use super::kinds::KindDef;
+    let mut surfaces = Vec::new();
+    let mut surface_of = vec![None; live.len()];
+    for (k, c) in live.iter().enumerate() {
+        let (id, name) = (&desc.components[k].id, &desc.components[k].name);
+        let s = match c {
+            Live::Conveyor(v) => v.surface(k, id, name),
+            Live::Turntable(t) => t.surface(k, id, name),
+            _ => continue,
+        };
+        surface_of[k] = Some(surfaces.len());
+        surfaces.push(s);
+    }
+    let by_id = |id: &str| {
+        let k = desc.components.iter().position(|c| c.id == id)?;
+        surface_of[k]
+    };
+    let mut docks = Vec::new();
+    let mut feed_classes = vec![Vec::new(); surfaces.len()];
+    let mut feed_outputs = vec![Vec::new(); surfaces.len()];
+    let mut carries = vec![false; surfaces.len()];
+    let mut sources = Vec::new();
+    let mut tables = 0u64;
+    for (k, c) in desc.components.iter().enumerate() {
+        let Some(s) = surface_of[k] else { continue };
+        match &c.kind {
+            KindDef::Conveyor(v) => {
+                if let Some(t) = v.target().and_then(by_id)
+                    && surfaces[t].rotation.is_none()
+                {
+                    surfaces[s].fixed[1] = Some(Link { surface: t, end: 0 });
+                    surfaces[t].fixed[0] = Some(Link { surface: s, end: 1 });
+                }
+                if let Live::Conveyor(live) = &mut live[k] {
+                    feed_classes[s] = live.feed_classes();
+                    feed_outputs[s] = live.feed_outputs();
+                    live.feed_from = v.carries_from().and_then(by_id);
+                    if let Some(f) = live.feed_from {
+                        carries[f] = true;
+                    }
+                }
+                if let Some(src) = &v.source {
+                    let n = sources.len() as u64;
+                    sources.push(Source::new(
+                        s,
+                        src.items
+                            .iter()
+                            .map(super::kinds::conveyor::class)
+                            .collect(),
+                        Plan::Periodic(src.arrivals.clone()),
+                        seed ^ n.wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                    ));
+                }
+            }
+            KindDef::Turntable(t) => {
+                if let Live::Turntable(live) = &mut live[k] {
+                    // The first turntable draws from the stream the sorting
+                    // station's emulator gave its table.
+                    live.seed(
+                        seed ^ 0x5EED_7AB1_E000_0001 ^ tables.wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                    );
+                    tables += 1;
+                }
+                for (p, pos) in t.positions.iter().enumerate() {
+                    for j in &pos.joins {
+                        let Some(to) = by_id(&j.to) else { continue };
+                        let to = Link {
+                            surface: to,
+                            end: j.at.index(),
+                        };
+                        surfaces[to.surface].table_side[to.end] = true;
+                        if to.end == 0 {
+                            surfaces[to.surface].open[0] = Open::Drop;
+                        }
+                        docks.push(Dock {
+                            table: s,
+                            position: p,
+                            table_end: j.end.index(),
+                            to,
+                        });
+                    }
+                }
+            }
+            _ => {}
         }
     }
-}
-
-/// Per component of `desc`, the index of the component its exit leads to.
-fn targets(desc: &Components) -> Vec<Option<usize>> {
-    desc.components
-        .iter()
-        .map(|c| match &c.kind {
-            super::kinds::KindDef::Conveyor(v) => v
-                .target()
-                .and_then(|t| desc.components.iter().position(|o| o.id == t)),
-            _ => None,
-        })
-        .collect()
+    // A conveyor's entry another conveyor's exit leads to is joined, not a stop.
+    let mut items = Items::new(surfaces, docks, &desc.items, feed_classes);
+    items.carries = carries;
+    items.feed_outputs = feed_outputs;
+    items.sources = sources;
+    for (k, c) in live.iter().enumerate() {
+        if let (Live::Turntable(t), Some(s)) = (c, surface_of[k]) {
+            items.set_docked(s, t.docked);
+        }
+    }
+    (items, surface_of)
 }

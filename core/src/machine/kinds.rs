@@ -11,6 +11,7 @@ pub mod conveyor;
 pub mod detector;
 pub mod link;
 pub mod tank;
+pub mod turntable;
 
 use super::scene::SceneElement;
 use crate::diag::Problem;
@@ -36,6 +37,8 @@ pub enum KindDef {
     Link(link::LinkDef),
     /// A level filled and emptied by flows: a vessel with its pumps and valves.
     Tank(tank::TankDef),
+    /// A roller surface on a rotary table with positions joining it to conveyors.
+    Turntable(turntable::TurntableDef),
 }
 
 /// A component as a travel between two ends, driven by outputs and read by windows:
@@ -83,7 +86,8 @@ impl KindDef {
             | Self::Conveyor(_)
             | Self::Detector(_)
             | Self::Link(_)
-            | Self::Tank(_) => None,
+            | Self::Tank(_)
+            | Self::Turntable(_) => None,
         }
     }
 
@@ -96,6 +100,7 @@ impl KindDef {
             Self::Detector(_) => "detector",
             Self::Link(_) => "link",
             Self::Tank(_) => "tank",
+            Self::Turntable(_) => "turntable",
         }
     }
 
@@ -108,6 +113,7 @@ impl KindDef {
             Self::Detector(d) => d.check(),
             Self::Link(l) => l.check(),
             Self::Tank(t) => t.check(),
+            Self::Turntable(t) => t.check(),
         }
     }
 
@@ -120,6 +126,7 @@ impl KindDef {
             Self::Detector(d) => d.signals(),
             Self::Link(l) => l.signals(),
             Self::Tank(t) => t.signals(),
+            Self::Turntable(t) => t.signals(),
         }
     }
 
@@ -132,7 +139,8 @@ impl KindDef {
             | Self::Conveyor(_)
             | Self::Detector(_)
             | Self::Link(_)
-            | Self::Tank(_) => self
+            | Self::Tank(_)
+            | Self::Turntable(_) => self
                 .signals()
                 .into_iter()
                 .filter(|(_, space)| *space == Space::Input)
@@ -150,6 +158,7 @@ impl KindDef {
             Self::Detector(d) => d.expressions(),
             Self::Link(l) => l.expressions(),
             Self::Tank(t) => t.expressions(),
+            Self::Turntable(t) => t.expressions(),
         }
     }
 
@@ -162,6 +171,7 @@ impl KindDef {
             Self::Detector(d) => Ok(Live::Detector(detector::Detector::new(id, d, symbols)?)),
             Self::Link(l) => Ok(Live::Link(link::Link::new(id, l, symbols)?)),
             Self::Tank(t) => Ok(Live::Tank(tank::Tank::new(id, t, symbols)?)),
+            Self::Turntable(t) => Ok(Live::Turntable(turntable::Turntable::new(id, t, symbols)?)),
         }
     }
 }
@@ -176,15 +186,10 @@ pub(crate) struct StepCtx<'a> {
     pub rng: &'a mut SplitMix64,
     /// Hazards found in this step: kind and the actuators involved.
     pub hazards: Vec<(super::HazardKind, Vec<String>)>,
-    /// The number of the last item a feeder placed.
-    pub next_item: &'a mut u32,
     /// The emulator's time at the end of this step, ms.
     pub now: u64,
-    /// The items each component's taker carries (by component index), to the feeder
-    /// that places them (`feed.from`).
-    pub carried: &'a mut [std::collections::VecDeque<conveyor::Item>],
-    /// The index of the component stepping.
-    pub index: usize,
+    /// The outputs without power (their safety contactor open), by plant index.
+    pub unpowered: &'a crate::bits::Bits,
 }
 
 /// Faults acting on a component as a whole.
@@ -194,6 +199,8 @@ pub(crate) struct ComponentFaults {
     pub blocked: bool,
     /// Its speed, percent of nominal.
     pub speed_percent: u8,
+    /// It cannot leave this position (by index) once there.
+    pub stuck_at: Option<usize>,
 }
 
 /// A component's live state.
@@ -214,6 +221,8 @@ pub(crate) enum Live {
     Link(link::Link),
     /// See [`tank::Tank`].
     Tank(tank::Tank),
+    /// See [`turntable::Turntable`].
+    Turntable(turntable::Turntable),
 }
 
 impl Live {
@@ -226,6 +235,7 @@ impl Live {
             Self::Detector(d) => d.step(ctx),
             Self::Link(l) => l.step(ctx, faults),
             Self::Tank(t) => t.step(ctx, faults),
+            Self::Turntable(t) => t.step(ctx, faults),
         }
     }
 
@@ -240,6 +250,7 @@ impl Live {
             Self::Detector(d) => d.idle(),
             Self::Link(l) => l.idle(),
             Self::Tank(t) => t.idle(),
+            Self::Turntable(t) => t.idle(),
         }
     }
 
@@ -252,6 +263,7 @@ impl Live {
             Self::Detector(d) => d.sense(sensors),
             Self::Link(l) => l.sense(sensors),
             Self::Tank(t) => t.sense(sensors),
+            Self::Turntable(t) => t.sense(sensors),
         }
     }
 
@@ -261,9 +273,10 @@ impl Live {
         match self {
             Self::Axis(a) => a.position(),
             Self::Button(b) => f64::from(u8::from(b.pressed())),
-            Self::Conveyor(c) => c.position(),
-            Self::Detector(_) | Self::Link(_) => 0.0,
+            // A conveyor's: the front of its item nearest the exit (the plant's items).
+            Self::Conveyor(_) | Self::Detector(_) | Self::Link(_) => 0.0,
             Self::Tank(t) => t.level(),
+            Self::Turntable(t) => t.position(),
         }
     }
 
@@ -276,6 +289,7 @@ impl Live {
             Self::Detector(d) => d.scene(id, name),
             Self::Link(l) => l.scene(id, name),
             Self::Tank(t) => t.scene(id, name),
+            Self::Turntable(t) => t.scene(id, name),
         }
     }
 
@@ -286,6 +300,7 @@ impl Live {
             Self::Axis(a) => a.set_position(position),
             Self::Button(_) | Self::Conveyor(_) | Self::Detector(_) | Self::Link(_) => {}
             Self::Tank(t) => t.set_level(position),
+            Self::Turntable(t) => t.set_position(position),
         }
     }
 
@@ -297,7 +312,8 @@ impl Live {
             | Self::Conveyor(_)
             | Self::Detector(_)
             | Self::Link(_)
-            | Self::Tank(_) => false,
+            | Self::Tank(_)
+            | Self::Turntable(_) => false,
         }
     }
 
@@ -306,7 +322,11 @@ impl Live {
         match self {
             Self::Axis(a) => Some(a.geometry(id)),
             Self::Tank(t) => Some(t.geometry(id)),
-            Self::Button(_) | Self::Conveyor(_) | Self::Detector(_) | Self::Link(_) => None,
+            Self::Button(_)
+            | Self::Conveyor(_)
+            | Self::Detector(_)
+            | Self::Link(_)
+            | Self::Turntable(_) => None,
         }
     }
 }

@@ -214,16 +214,43 @@ impl Physical {
     /// The operator takes every item off the plant; how many.
     pub fn remove_items(&mut self) -> u32 {
         match self {
-            Self::Components(_) => 0,
+            Self::Components(c) => c.remove_items(),
             Self::Layout(e) => e.remove_items(),
         }
     }
 
-    /// Replaces the arrival plan of a layout's source (a plant of components has no
-    /// source: nothing to do).
+    /// Replaces the arrival plan of the plant's source (a plant of components: its
+    /// first conveyor with a `source`, `Small` and `Large` naming the source's first
+    /// and second classes; nothing to do when it has none).
     pub fn set_arrivals(&mut self, plan: ArrivalPlan) {
-        if let Self::Layout(e) = self {
-            e.set_arrivals(plan);
+        use super::items::{ArrivalsDef, Mix, Plan};
+        use crate::emulator::{BoxSize, SizeMix};
+        match self {
+            Self::Layout(e) => e.set_arrivals(plan),
+            Self::Components(c) => {
+                let class = |s: BoxSize| usize::from(s == BoxSize::Large);
+                let plan = match plan {
+                    ArrivalPlan::Off => Plan::Off,
+                    ArrivalPlan::List(l) => {
+                        Plan::List(l.into_iter().map(|(t, s)| (t, class(s))).collect())
+                    }
+                    ArrivalPlan::Periodic {
+                        period_ms,
+                        jitter_ms,
+                        mix,
+                        count,
+                    } => Plan::Periodic(ArrivalsDef {
+                        period_ms,
+                        jitter_ms,
+                        count,
+                        mix: match mix {
+                            SizeMix::Alternate => Mix::InTurn,
+                            SizeMix::RandomLarge(p) => Mix::SecondPercent(p),
+                        },
+                    }),
+                };
+                c.set_arrivals(plan);
+            }
         }
     }
 

@@ -83,6 +83,31 @@ pub enum Shape {
         /// Its feeder's condition.
         feed: Option<String>,
     },
+    /// A turntable: its angle and positions, and its rollers with their items.
+    Turntable {
+        /// The unit of the angle (`deg`).
+        unit: String,
+        /// The angle now.
+        angle: f64,
+        /// The positions' angles.
+        positions: Vec<f64>,
+        /// The position it stands at, by index.
+        docked: Option<usize>,
+        /// The angle sensors' windows.
+        sensors: Vec<SceneSensor>,
+        /// What turns it: each position's condition, with the speed towards it.
+        turns: Vec<SceneDrive>,
+        /// The rollers' length.
+        length: f64,
+        /// -1, 0 or 1: the way the rollers move.
+        direction: i8,
+        /// The items on the rollers, from their start.
+        items: Vec<SceneItem>,
+        /// The beams along the rollers.
+        beams: Vec<SceneSensor>,
+        /// The rollers' drives.
+        rollers: Vec<SceneDrive>,
+    },
     /// A device with no geometry (a relay, a bus variable): its signals, drawn in the
     /// schematic strip.
     Device {

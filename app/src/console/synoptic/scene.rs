@@ -11,6 +11,7 @@ use egui::{Align2, FontId, Pos2, Rect, Shape as EShape, Stroke, Vec2, vec2};
 use std::collections::BTreeMap;
 use vigie_core::emulator::{Hazard, Place};
 use vigie_core::machine::kinds::axis::AxisSymbol;
+use vigie_core::machine::scene::{SceneDrive, SceneItem, SceneSensor};
 use vigie_core::machine::{Scene, SceneElement, Shape};
 use vigie_core::plant::Plant;
 
@@ -65,8 +66,7 @@ impl Geometry {
         let mut sensors = Vec::new();
         let mut actuators = BTreeMap::new();
         let mut axes: Vec<AxisGeom> = Vec::new();
-        // Each component's place from the previous one's: a vessel's lines need more
-        // room right of it than an axis's outputs.
+        // Each from the previous one: a vessel's lines need more room than an axis's.
         let mut x = 0.0;
         for e in &scene.elements {
             if let Some(last) = axes.last() {
@@ -112,31 +112,11 @@ impl Geometry {
                     }
                     axes.push(a);
                 }
-                Shape::Tank {
-                    unit,
-                    capacity,
-                    level,
-                    sensors: windows,
-                    flows,
-                    ..
-                } => {
-                    let a = AxisGeom {
-                        id: e.id.clone(),
-                        name: e.name.clone(),
-                        top: [x, 0.0],
-                        range: (0.0, *capacity),
-                        position: *level,
-                        direction: 0,
-                        unit: unit.clone(),
-                        vessel: true,
-                        switch: false,
-                    };
-                    place_signals(&a, windows, flows, plant, &mut sensors, &mut actuators);
-                    axes.push(a);
+                // A turntable turns as an axis (its rollers are a belt of the rows);
+                // buttons go to the schematic strip; conveyors to rows (below).
+                Shape::Turntable { .. } | Shape::Tank { .. } => {
+                    axes.push(drawn_axis(e, x, plant, &mut sensors, &mut actuators));
                 }
-                // A panel button's input goes to the schematic strip, under its
-                // element (`plant.ron`), with the other panel signals; conveyors are
-                // placed in rows above, below.
                 Shape::Button { .. } | Shape::Conveyor { .. } | Shape::Device { .. } => {}
             }
         }
@@ -236,42 +216,123 @@ fn place_beams(
     top
 }
 
-/// Places the conveyors in rows above the axes, each chain of conveyors (one's exit
-/// the next one's entry) end to end on its row, at one scale for all; their beams'
-/// lamps above them and their drives' outputs below their entry.
+/// A turntable's rotation as an axis over its positions, with its angle windows and
+/// the outputs that turn it; a tank as a vessel over its capacity, with its level
+/// windows and its flows.
+fn drawn_axis(
+    e: &SceneElement,
+    x: f32,
+    plant: &Plant,
+    sensors: &mut Vec<SensorGeom>,
+    actuators: &mut BTreeMap<String, [f32; 2]>,
+) -> AxisGeom {
+    let (unit, angle, positions, windows, turns) = match &e.shape {
+        Shape::Turntable {
+            unit,
+            angle,
+            positions,
+            sensors,
+            turns,
+            ..
+        } => (
+            unit.clone(),
+            *angle,
+            positions.as_slice(),
+            sensors.as_slice(),
+            turns.as_slice(),
+        ),
+        _ => (String::new(), 0.0, &[][..], &[][..], &[][..]),
+    };
+    let lo = positions.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = positions.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let a = AxisGeom {
+        id: e.id.clone(),
+        name: e.name.clone(),
+        top: [x, 0.0],
+        range: if hi > lo { (lo, hi) } else { (0.0, 1.0) },
+        position: angle,
+        direction: 0,
+        unit,
+        vessel: false,
+        switch: false,
+    };
+    place_signals(&a, windows, turns, plant, sensors, actuators);
+    a
+}
+
+/// A belt of the rows: a conveyor, or a turntable's rollers (after the conveyor
+/// whose exit leads to it).
+type BeltOf<'a> = (
+    &'a SceneElement,
+    f64,
+    i8,
+    &'a Vec<SceneItem>,
+    &'a Vec<SceneSensor>,
+    &'a Vec<SceneDrive>,
+    &'a String,
+    (&'a Option<String>, &'a Option<String>),
+);
+
+fn belt_of(e: &SceneElement) -> Option<BeltOf<'_>> {
+    match &e.shape {
+        Shape::Conveyor {
+            length,
+            direction,
+            items,
+            sensors,
+            drives,
+            exit,
+            motion,
+            feed,
+            ..
+        } => Some((
+            e,
+            *length,
+            *direction,
+            items,
+            sensors,
+            drives,
+            exit,
+            (motion, feed),
+        )),
+        // A turntable's rollers, after the conveyor whose exit leads to it.
+        Shape::Turntable {
+            length,
+            direction,
+            items,
+            beams,
+            rollers,
+            ..
+        } => Some((
+            e,
+            *length,
+            *direction,
+            items,
+            beams,
+            rollers,
+            &NO_EXIT,
+            (&NOTHING, &NOTHING),
+        )),
+        _ => None,
+    }
+}
+
+/// A turntable's rollers lead nowhere fixed.
+static NO_EXIT: String = String::new();
+/// No motion sensor, no feeder.
+static NOTHING: Option<String> = None;
+
+/// Places the conveyors (and the turntables' rollers) in rows above the axes, each
+/// chain of conveyors (one's exit the next one's entry) end to end on its row, at one
+/// scale for all; their beams' lamps above them and their drives' outputs below their
+/// entry.
 fn place_belts(
     scene: &Scene,
     plant: &Plant,
     sensors: &mut Vec<SensorGeom>,
     actuators: &mut BTreeMap<String, [f32; 2]>,
 ) -> Vec<BeltGeom> {
-    let belts: Vec<_> = scene
-        .elements
-        .iter()
-        .filter_map(|e| match &e.shape {
-            Shape::Conveyor {
-                length,
-                direction,
-                items,
-                sensors,
-                drives,
-                exit,
-                motion,
-                feed,
-                ..
-            } => Some((
-                e,
-                *length,
-                *direction,
-                items,
-                sensors,
-                drives,
-                exit,
-                (motion, feed),
-            )),
-            _ => None,
-        })
-        .collect();
+    let belts: Vec<_> = scene.elements.iter().filter_map(belt_of).collect();
     let longest = belts.iter().map(|b| b.1).fold(0.0f64, f64::max);
     if longest <= 0.0 {
         return Vec::new();
@@ -559,6 +620,16 @@ fn component_signals(e: &SceneElement, plant: &Plant) -> Vec<String> {
             out.extend(motion.iter().cloned());
             exprs.extend(drives.iter().map(|d| d.when.as_str()));
             exprs.extend(feed.iter().map(String::as_str));
+        }
+        Shape::Turntable {
+            sensors,
+            turns,
+            beams,
+            rollers,
+            ..
+        } => {
+            out.extend(sensors.iter().chain(beams).map(|s| s.signal.clone()));
+            exprs.extend(turns.iter().chain(rollers).map(|d| d.when.as_str()));
         }
         Shape::Device { signals } => out.extend(signals.iter().cloned()),
         Shape::Button { signal, .. } => out.push(signal.clone()),
@@ -1026,6 +1097,7 @@ fn projected(scene: &Scene, id: &str) -> Option<f64> {
         .and_then(|e| match &e.shape {
             Shape::Axis { position, .. } => Some(*position),
             Shape::Tank { level, .. } => Some(*level),
+            Shape::Turntable { angle, .. } => Some(*angle),
             Shape::Button { .. } | Shape::Conveyor { .. } | Shape::Device { .. } => None,
         })
 }

@@ -12,16 +12,18 @@
 //! The belt moves at the speed of its active drives (as an axis's drives: the fastest
 //! of one direction; both directions at once hold it and are a hazard). Each item has
 //! a class (its length and its tags: a height, a colour, a material, anything a sensor
-//! may discriminate) and lies on `[rear, rear + length]` from the entry. Items move with
-//! the belt and queue: an item stops against the one ahead of it (an accumulating
-//! conveyor). At the exit end an item stops (`Stop`, an end stop or a stopper), falls
-//! off (`Drop`: a hazard, once its middle passes the end), leaves into a sink (`Sink`:
-//! delivered), or passes to the entry of another conveyor (`To(id)`: when that entry is
-//! free; else it waits at the end). Driven backwards, items stop at the entry.
+//! may discriminate). The items themselves are the plant's, shared by every conveyor
+//! and turntable ([`crate::machine::items`]): they move with the belt, queue (an
+//! accumulating conveyor) or collide (`accumulating: false`), overhang the joint onto
+//! the next conveyor (`To(id)`) and pass onto it when their centre crosses it. At the
+//! exit end an item stops (`Stop`, an end stop or a stopper), falls off (`Drop`: a
+//! hazard, once its middle passes the end) or leaves into a sink (`Sink`: delivered).
+//! Driven backwards, items stop at the entry (unless a turntable joins it there).
 //!
 //! On each rise of `feed.when` (an expression over the plant's signals: the pusher's
 //! output, or its extended sensor) the next item of `feed.items` (in turn) is placed at
 //! the entry; an entry still occupied is a collision (a hazard) and nothing is placed.
+//! A `source` places arrivals on its own schedule, each waiting until the entry is free.
 //! On each rise of `take`, the item at the exit end (its front within half its length
 //! of the end) is taken away (counted, as the robot carries it off); a taker whose
 //! items another belt's feeder places (`feed.from`, a gripper) holds one at a time: a
@@ -38,7 +40,8 @@ use super::{ComponentFaults, StepCtx};
 use crate::diag::{Problem, codes};
 use crate::expr::{Dnf, eval_dnf, parse_str, simplify};
 use crate::machine::HazardKind;
-use crate::machine::scene::{SceneDrive, SceneElement, SceneItem, SceneSensor, Shape};
+use crate::machine::items::{Class, Surface};
+use crate::machine::scene::{SceneDrive, SceneElement, SceneSensor, Shape};
 use crate::symbols::{Space, Symbols};
 use serde::{Deserialize, Serialize};
 
@@ -130,6 +133,29 @@ pub struct ConveyorDef {
     /// Each run's speed varies within this many millionths of nominal.
     #[serde(default)]
     pub variation_ppm: u32,
+    /// Items queue against each other without harm (pallets on an accumulating
+    /// conveyor). When false, a driven item held by another not moving away as fast
+    /// is a collision (boxes on a belt).
+    #[serde(default = "yes")]
+    pub accumulating: bool,
+    /// Items arriving at the entry on their own (an upstream line, an operator): the
+    /// classes, and when.
+    #[serde(default)]
+    pub source: Option<SourceDef>,
+}
+
+/// Arrivals at a conveyor's entry: each waits until the entry is free.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SourceDef {
+    /// The classes that arrive.
+    pub items: Vec<ItemClass>,
+    /// When (a scenario may replace it).
+    pub arrivals: crate::machine::items::ArrivalsDef,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn mm() -> String {
@@ -172,6 +198,22 @@ impl ConveyorDef {
                         c.class, c.length, self.length
                     ));
                 }
+            }
+        }
+        if let Some(src) = &self.source {
+            if src.items.is_empty() {
+                out.push("its source has no item class".to_string());
+            }
+            for c in &src.items {
+                if !c.length.is_finite() || c.length <= 0.0 || c.length > self.length {
+                    out.push(format!(
+                        "source class `{}` has length {}: positive and at most the belt's {}",
+                        c.class, c.length, self.length
+                    ));
+                }
+            }
+            if src.arrivals.period_ms == 0 {
+                out.push("its source's period_ms must be at least 1".to_string());
             }
         }
         if self.variation_ppm >= 500_000 {
@@ -258,21 +300,6 @@ impl ConveyorDef {
     }
 }
 
-/// An item on a belt.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Item {
-    /// Its number, from 1, in the order the plant's feeders placed them.
-    pub id: u32,
-    /// Its class.
-    pub class: String,
-    /// Its tags.
-    pub tags: Vec<String>,
-    /// Its length, millionths.
-    pub length: i64,
-    /// Its rear end from the entry, millionths.
-    pub rear: i64,
-}
-
 #[derive(Clone, Debug)]
 struct Drive {
     when: String,
@@ -283,14 +310,22 @@ struct Drive {
 
 /// A compiled expression watched for its rises.
 #[derive(Clone, Debug)]
-struct Rise {
+pub(crate) struct Rise {
     dnf: Dnf,
-    outputs: Vec<String>,
+    pub(crate) outputs: Vec<String>,
     last: bool,
 }
 
 impl Rise {
-    fn rose(&mut self, frame: &crate::frame::Frame) -> bool {
+    pub(crate) fn new(dnf: Dnf, outputs: Vec<String>) -> Self {
+        Self {
+            dnf,
+            outputs,
+            last: false,
+        }
+    }
+
+    pub(crate) fn rose(&mut self, frame: &crate::frame::Frame) -> bool {
         let now = eval_dnf(&self.dnf, frame);
         let rose = now && !self.last;
         self.last = now;
@@ -298,65 +333,28 @@ impl Rise {
     }
 }
 
-/// A conveyor's live state.
+/// The drives of a surface (a belt, a turntable's rollers): the fastest active drive
+/// of one direction moves it; both directions at once hold it and are a hazard.
 #[derive(Clone, Debug)]
-pub struct Conveyor {
-    unit: String,
-    length: i64,
+pub(crate) struct Drives {
     drives: Vec<Drive>,
-    beams: Vec<(usize, String, i64, Option<String>)>,
-    motion: Option<usize>,
-    motion_id: Option<String>,
-    feed_when: Option<String>,
-    feed: Option<(Rise, Vec<ItemClass>)>,
-    next_class: usize,
-    take: Option<Rise>,
-    /// The component whose taken items its feeder places (`feed.from`), by index.
-    feed_from: Option<usize>,
-    /// Some conveyor's feeder places what its taker picks: the items are carried.
-    carried: bool,
-    exit: Exit,
     variation_ppm: i64,
-    /// The items, by rear end (the entry first).
-    items: Vec<Item>,
     dir: i64,
     factor_ppm: i64,
-    moving: bool,
+    /// Millionths per ms, signed, faults applied.
+    pub(crate) speed: i64,
     opposed: bool,
-    blocked: bool,
-    /// Items delivered into its sink, taken at its exit end, dropped.
-    pub(crate) delivered: u32,
-    pub(crate) taken: u32,
 }
 
-fn micro(v: f64) -> i64 {
-    (v * MICRO).round() as i64
-}
-
-fn compile(
-    id: &str,
-    what: &str,
-    text: &str,
-    symbols: &Symbols,
-) -> Result<(Dnf, Vec<String>), Problem> {
-    let bad = |m: String| Problem::error(codes::COMPONENTS_EXPRESSION.id, m, None);
-    let expr =
-        parse_str(text).map_err(|e| bad(format!("`{id}`: {what} `{text}`: {}", e.message)))?;
-    let outputs = expr
-        .leaves()
-        .into_iter()
-        .map(|(n, _, _)| n.to_string())
-        .collect();
-    let dnf = expr
-        .to_dnf(symbols)
-        .map_err(|e| bad(format!("`{id}`: {what} `{text}`: {}", e.message)))?;
-    Ok((simplify(&dnf), outputs))
-}
-
-impl Conveyor {
-    pub(super) fn new(id: &str, def: &ConveyorDef, symbols: &Symbols) -> Result<Self, Problem> {
+impl Drives {
+    pub(crate) fn new(
+        id: &str,
+        defs: &[DriveDef],
+        variation_ppm: u32,
+        symbols: &Symbols,
+    ) -> Result<Self, Problem> {
         let mut drives = Vec::new();
-        for d in &def.drives {
+        for d in defs {
             let (dnf, outputs) = compile(id, "drive", &d.when, symbols)?;
             drives.push(Drive {
                 when: d.when.clone(),
@@ -365,72 +363,13 @@ impl Conveyor {
                 outputs,
             });
         }
-        let input = |s: &str| match symbols.lookup(s) {
-            Some((Space::Input, i)) => Ok(i as usize),
-            _ => Err(Problem::error(
-                codes::COMPONENTS_UNKNOWN_SIGNAL.id,
-                format!("`{id}` names sensor `{s}`, not a plant input"),
-                None,
-            )),
-        };
-        let mut beams = Vec::new();
-        for b in &def.sensors {
-            beams.push((
-                input(&b.signal)?,
-                b.signal.clone(),
-                micro(b.at),
-                b.sees.clone(),
-            ));
-        }
-        let motion = def.motion.as_deref().map(input).transpose()?;
-        let feed = match &def.feed {
-            Some(f) => {
-                let (dnf, outputs) = compile(id, "feed", &f.when, symbols)?;
-                Some((
-                    Rise {
-                        dnf,
-                        outputs,
-                        last: false,
-                    },
-                    f.items.clone(),
-                ))
-            }
-            None => None,
-        };
-        let take = match &def.take {
-            Some(t) => {
-                let (dnf, outputs) = compile(id, "take", t, symbols)?;
-                Some(Rise {
-                    dnf,
-                    outputs,
-                    last: false,
-                })
-            }
-            None => None,
-        };
         Ok(Self {
-            unit: def.unit.clone(),
-            length: micro(def.length),
             drives,
-            beams,
-            motion,
-            motion_id: def.motion.clone(),
-            feed_when: def.feed.as_ref().map(|f| f.when.clone()),
-            feed,
-            next_class: 0,
-            take,
-            feed_from: None,
-            carried: false,
-            exit: def.exit.clone(),
-            variation_ppm: i64::from(def.variation_ppm),
-            items: Vec::new(),
+            variation_ppm: i64::from(variation_ppm),
             dir: 0,
             factor_ppm: 1_000_000,
-            moving: false,
+            speed: 0,
             opposed: false,
-            blocked: false,
-            delivered: 0,
-            taken: 0,
         })
     }
 
@@ -457,83 +396,13 @@ impl Conveyor {
         }
     }
 
-    /// The entry is free for an item of `length`: no item lies on `[0, length]`.
-    fn entry_free(&self, length: i64) -> bool {
-        self.items.iter().all(|i| i.rear > length)
-    }
-
-    /// Takes `item` at the entry if it is free; false otherwise.
-    pub(crate) fn accept(&mut self, item: &Item) -> bool {
-        if !self.entry_free(item.length) {
-            return false;
-        }
-        self.items.insert(
-            0,
-            Item {
-                rear: 0,
-                ..item.clone()
-            },
-        );
-        true
-    }
-
-    /// One step.
-    pub(super) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
+    /// One step: the speed asked, its variation for a new run, the faults.
+    pub(crate) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
         let (speed, opposed, outputs) = self.asked(ctx.frame);
         if opposed && !self.opposed {
-            ctx.hazards
-                .push((HazardKind::OpposedDrives, outputs.clone()));
+            ctx.hazards.push((HazardKind::OpposedDrives, outputs));
         }
         self.opposed = opposed;
-        self.blocked = faults.blocked;
-        if let Some((rise, classes)) = self.feed.as_mut()
-            && rise.rose(ctx.frame)
-        {
-            // A carried item (kept whole), else the next class of its list.
-            let item = match self.feed_from {
-                Some(src) => ctx.carried[src].pop_front(),
-                None => {
-                    let class = &classes[self.next_class % classes.len()];
-                    self.next_class += 1;
-                    // Numbered when placed (below): a collision places nothing.
-                    Some(Item {
-                        id: 0,
-                        class: class.class.clone(),
-                        tags: class.tags.clone(),
-                        length: micro(class.length),
-                        rear: 0,
-                    })
-                }
-            };
-            if let Some(mut item) = item {
-                if self.items.iter().all(|i| i.rear > item.length) {
-                    item.rear = 0;
-                    if item.id == 0 {
-                        *ctx.next_item += 1;
-                        item.id = *ctx.next_item;
-                    }
-                    self.items.insert(0, item);
-                } else {
-                    ctx.hazards
-                        .push((HazardKind::Collision, rise.outputs.clone()));
-                }
-            }
-        }
-        // A taker that carries (a gripper) holds one item: closing again while it holds
-        // one regrips it and takes nothing more off the belt.
-        let full = self.carried && !ctx.carried[ctx.index].is_empty();
-        if let Some(rise) = self.take.as_mut()
-            && rise.rose(ctx.frame)
-            && !full
-            && let Some(last) = self.items.last()
-            && last.rear + last.length / 2 + last.length >= self.length
-        {
-            let item = self.items.pop();
-            match item {
-                Some(item) if self.carried => ctx.carried[ctx.index].push_back(item),
-                _ => self.taken += 1,
-            }
-        }
         let dir = speed.signum();
         if dir != self.dir {
             self.dir = dir;
@@ -544,116 +413,235 @@ impl Conveyor {
                 1_000_000
             };
         }
-        let v = if faults.blocked {
+        self.speed = if faults.blocked {
             0
         } else {
             speed * self.factor_ppm / 1_000_000 * i64::from(faults.speed_percent) / 100
         };
-        self.moving = v != 0;
-        self.carry(v * ctx.dt as i64, ctx, &outputs);
     }
 
-    /// Moves the items by `d` (millionths, signed): each stops against the one ahead,
-    /// at an end stop, or leaves at the exit end (dropped, delivered).
-    fn carry(&mut self, d: i64, ctx: &mut StepCtx<'_>, outputs: &[String]) {
-        if d > 0 {
-            // From the exit end back: each item stops against the one ahead.
-            let mut limit = i64::MAX;
-            let mut k = self.items.len();
-            while k > 0 {
-                k -= 1;
-                let it = &mut self.items[k];
-                let mut rear = it.rear + d;
-                if limit != i64::MAX {
-                    rear = rear.min(limit - it.length);
-                }
-                it.rear = rear.max(it.rear);
-                let front = it.rear + it.length;
-                let gone = match &self.exit {
-                    // Waits at the end until the next conveyor takes it (`ready`).
-                    Exit::Stop | Exit::To(_) => {
-                        if front > self.length {
-                            it.rear = self.length - it.length;
-                        }
-                        false
-                    }
-                    Exit::Drop => {
-                        let middle = it.rear + it.length / 2;
-                        if middle > self.length {
-                            ctx.hazards.push((HazardKind::Dropped, outputs.to_vec()));
-                            true
-                        } else {
-                            false
-                        }
-                    }
-                    Exit::Sink => {
-                        let middle = it.rear + it.length / 2;
-                        if middle > self.length {
-                            self.delivered += 1;
-                            true
-                        } else {
-                            false
-                        }
-                    }
-                };
-                if gone {
-                    self.items.remove(k);
-                } else {
-                    limit = self.items[k].rear;
-                }
+    /// Every output its drives read, sorted.
+    pub(crate) fn outputs(&self) -> Vec<String> {
+        let mut v: Vec<String> = self
+            .drives
+            .iter()
+            .flat_map(|d| d.outputs.iter().cloned())
+            .collect();
+        v.sort();
+        v.dedup();
+        v
+    }
+
+    pub(crate) fn idle(&self) -> bool {
+        self.dir == 0 && !self.opposed
+    }
+
+    pub(crate) fn scene(&self) -> Vec<SceneDrive> {
+        self.drives
+            .iter()
+            .map(|d| SceneDrive {
+                when: d.when.clone(),
+                speed: d.speed as f64 * 1000.0 / MICRO,
+                sensor: None,
+            })
+            .collect()
+    }
+}
+
+/// A conveyor's live state: its drives and what its feeder and taker ask. Its items
+/// are the plant's ([`crate::machine::items`]).
+#[derive(Clone, Debug)]
+pub struct Conveyor {
+    unit: String,
+    length: i64,
+    drives: Drives,
+    beams: Vec<(usize, String, i64, Option<String>)>,
+    motion: Option<usize>,
+    motion_id: Option<String>,
+    feed_when: Option<String>,
+    feed: Option<(Rise, Vec<ItemClass>)>,
+    next_class: usize,
+    take: Option<Rise>,
+    /// The surface whose taken items its feeder places (`feed.from`), by surface.
+    pub(crate) feed_from: Option<usize>,
+    exit: Exit,
+    accumulating: bool,
+    moving: bool,
+    /// What this step asks of the items.
+    pub(crate) requests: crate::machine::items::Requests,
+}
+
+pub(crate) fn micro(v: f64) -> i64 {
+    (v * MICRO).round() as i64
+}
+
+pub(crate) fn compile(
+    id: &str,
+    what: &str,
+    text: &str,
+    symbols: &Symbols,
+) -> Result<(Dnf, Vec<String>), Problem> {
+    let bad = |m: String| Problem::error(codes::COMPONENTS_EXPRESSION.id, m, None);
+    let expr =
+        parse_str(text).map_err(|e| bad(format!("`{id}`: {what} `{text}`: {}", e.message)))?;
+    let outputs = expr
+        .leaves()
+        .into_iter()
+        .map(|(n, _, _)| n.to_string())
+        .collect();
+    let dnf = expr
+        .to_dnf(symbols)
+        .map_err(|e| bad(format!("`{id}`: {what} `{text}`: {}", e.message)))?;
+    Ok((simplify(&dnf), outputs))
+}
+
+/// A plant input by name, or the error naming the component.
+pub(crate) fn input(id: &str, s: &str, symbols: &Symbols) -> Result<usize, Problem> {
+    match symbols.lookup(s) {
+        Some((Space::Input, i)) => Ok(i as usize),
+        _ => Err(Problem::error(
+            codes::COMPONENTS_UNKNOWN_SIGNAL.id,
+            format!("`{id}` names sensor `{s}`, not a plant input"),
+            None,
+        )),
+    }
+}
+
+impl Conveyor {
+    pub(super) fn new(id: &str, def: &ConveyorDef, symbols: &Symbols) -> Result<Self, Problem> {
+        let drives = Drives::new(id, &def.drives, def.variation_ppm, symbols)?;
+        let mut beams = Vec::new();
+        for b in &def.sensors {
+            beams.push((
+                input(id, &b.signal, symbols)?,
+                b.signal.clone(),
+                micro(b.at),
+                b.sees.clone(),
+            ));
+        }
+        let motion = def
+            .motion
+            .as_deref()
+            .map(|m| input(id, m, symbols))
+            .transpose()?;
+        let feed = match &def.feed {
+            Some(f) => {
+                let (dnf, outputs) = compile(id, "feed", &f.when, symbols)?;
+                Some((Rise::new(dnf, outputs), f.items.clone()))
             }
-        } else if d < 0 {
-            let mut limit = i64::MIN;
-            for it in &mut self.items {
-                let mut rear = (it.rear + d).max(0);
-                if limit != i64::MIN {
-                    rear = rear.max(limit);
-                }
-                it.rear = rear.min(it.rear);
-                limit = it.rear + it.length;
+            None => None,
+        };
+        let take = match &def.take {
+            Some(t) => {
+                let (dnf, outputs) = compile(id, "take", t, symbols)?;
+                Some(Rise::new(dnf, outputs))
             }
+            None => None,
+        };
+        Ok(Self {
+            unit: def.unit.clone(),
+            length: micro(def.length),
+            drives,
+            beams,
+            motion,
+            motion_id: def.motion.clone(),
+            feed_when: def.feed.as_ref().map(|f| f.when.clone()),
+            feed,
+            next_class: 0,
+            take,
+            feed_from: None,
+            exit: def.exit.clone(),
+            accumulating: def.accumulating,
+            moving: false,
+            requests: crate::machine::items::Requests::default(),
+        })
+    }
+
+    /// One step: the belt's speed, and the feeder's and the taker's rises.
+    pub(super) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
+        self.drives.step(ctx, faults);
+        let mut req = crate::machine::items::Requests {
+            velocity: self.drives.speed * ctx.dt as i64,
+            ..Default::default()
+        };
+        if let Some((rise, classes)) = self.feed.as_mut()
+            && rise.rose(ctx.frame)
+        {
+            match self.feed_from {
+                Some(src) => req.feed_carried = Some(src),
+                None if !classes.is_empty() => {
+                    req.feed = Some(self.next_class % classes.len());
+                    self.next_class += 1;
+                }
+                None => {}
+            }
+        }
+        if let Some(rise) = self.take.as_mut() {
+            req.take = rise.rose(ctx.frame);
+        }
+        self.moving = req.velocity != 0;
+        self.requests = req;
+    }
+
+    /// The surface its items lie on, as the plant's items see it.
+    pub(crate) fn surface(&self, component: usize, id: &str, name: &str) -> Surface {
+        use crate::machine::items::{Beam, Open};
+        Surface {
+            component,
+            id: id.to_string(),
+            name: name.to_string(),
+            len: self.length,
+            beams: self
+                .beams
+                .iter()
+                .map(|(i, _, at, sees)| Beam {
+                    input: *i,
+                    at: *at,
+                    sees: sees.clone(),
+                })
+                .collect(),
+            open: [
+                Open::Stop,
+                match self.exit {
+                    Exit::Stop => Open::Stop,
+                    Exit::Sink => Open::Sink,
+                    Exit::Drop | Exit::To(_) => Open::Drop,
+                },
+            ],
+            fixed: [None, None],
+            table_side: [false, false],
+            accumulating: self.accumulating,
+            actuators: self.drives.outputs(),
+            rotation: None,
         }
     }
 
-    /// The item waiting at the exit end for the next conveyor, if any.
-    pub(crate) fn ready(&self) -> Option<&Item> {
-        match (&self.exit, self.items.last()) {
-            (Exit::To(_), Some(i)) if i.rear + i.length >= self.length => Some(i),
-            _ => None,
-        }
+    /// The outputs its feeder's condition reads.
+    pub(crate) fn feed_outputs(&self) -> Vec<String> {
+        self.feed
+            .as_ref()
+            .map(|(r, _)| r.outputs.clone())
+            .unwrap_or_default()
     }
 
-    /// The next conveyor took the item waiting at the exit end.
-    pub(crate) fn hand_over(&mut self) {
-        self.items.pop();
+    /// The classes its feeder places, as the items place them.
+    pub(crate) fn feed_classes(&self) -> Vec<Class> {
+        self.feed
+            .as_ref()
+            .map(|(_, c)| c.iter().map(class).collect())
+            .unwrap_or_default()
     }
 
     /// At rest: the feeder and the taker act on rises of their expressions, which
     /// change only with the outputs or a sensor another component moves.
     pub(super) fn idle(&self) -> bool {
-        self.dir == 0 && !self.opposed
+        self.drives.idle()
     }
 
     pub(super) fn sense(&self, sensors: &mut crate::bits::Bits) {
-        for (i, _, at, sees) in &self.beams {
-            let on = self.items.iter().any(|it| {
-                it.rear <= *at
-                    && *at <= it.rear + it.length
-                    && sees.as_ref().is_none_or(|t| it.tags.contains(t))
-            });
-            sensors.set(*i, on);
-        }
         if let Some(i) = self.motion {
             sensors.set(i, self.moving);
         }
-    }
-
-    /// The front of the item nearest the exit end (0 when empty): a conveyor's
-    /// position for dangers.
-    pub(super) fn position(&self) -> f64 {
-        self.items
-            .last()
-            .map_or(0.0, |i| (i.rear + i.length) as f64 / MICRO)
     }
 
     pub(super) fn scene(&self, id: &str, name: &str) -> SceneElement {
@@ -664,17 +652,13 @@ impl Conveyor {
             shape: Shape::Conveyor {
                 unit: self.unit.clone(),
                 length: f(self.length),
-                direction: if self.moving { self.dir as i8 } else { 0 },
-                items: self
-                    .items
-                    .iter()
-                    .map(|i| SceneItem {
-                        id: i.id,
-                        class: i.class.clone(),
-                        rear: f(i.rear),
-                        length: f(i.length),
-                    })
-                    .collect(),
+                direction: if self.moving {
+                    self.drives.speed.signum() as i8
+                } else {
+                    0
+                },
+                // The plant fills them from its items.
+                items: Vec::new(),
                 sensors: self
                     .beams
                     .iter()
@@ -684,15 +668,7 @@ impl Conveyor {
                         to: f(*at),
                     })
                     .collect(),
-                drives: self
-                    .drives
-                    .iter()
-                    .map(|d| SceneDrive {
-                        when: d.when.clone(),
-                        speed: d.speed as f64 * 1000.0 / MICRO,
-                        sensor: None,
-                    })
-                    .collect(),
+                drives: self.drives.scene(),
                 exit: match &self.exit {
                     Exit::Stop => "stop".into(),
                     Exit::Drop => "drop".into(),
@@ -704,30 +680,13 @@ impl Conveyor {
             },
         }
     }
+}
 
-    /// The items on it, entry first.
-    #[cfg(test)]
-    pub(crate) fn items(&self) -> &[Item] {
-        &self.items
-    }
-
-    /// Links its feeder to the conveyor it carries from (`from`, by index), and tells
-    /// it whether another conveyor's feeder places what its taker picks.
-    pub(crate) fn link_carry(&mut self, from: Option<usize>, carried: bool) {
-        self.feed_from = from;
-        self.carried = carried;
-    }
-
-    /// The classes its feeder places.
-    pub(crate) fn classes(&self) -> Vec<String> {
-        self.feed
-            .as_ref()
-            .map(|(_, c)| c.iter().map(|c| c.class.clone()).collect())
-            .unwrap_or_default()
-    }
-
-    /// The items that left it done: into its sink, or taken at its exit end.
-    pub(crate) fn out(&self) -> u32 {
-        self.delivered + self.taken
+/// An item class as the plant's items place it.
+pub(crate) fn class(c: &ItemClass) -> Class {
+    Class {
+        class: c.class.clone(),
+        tags: c.tags.clone(),
+        length: micro(c.length),
     }
 }
