@@ -119,7 +119,7 @@ manual-jog-hover = ON while held
 
 ## Status line
 status-removed = , { $n } taken off
-status-boxes = { $scenario } — boxes: { $created } created, { $left } left, { $right } right, { $damaged } damaged{ $removed }
+status-boxes = { $scenario } — boxes: { $created } created, { $delivered } delivered, { $damaged } damaged{ $removed }
 status-actions = { $scenario } — elementary actions: { $done } completed, { $faults } faults
 status-items = items: { $placed } placed, { $out } out (delivered or taken)
 
@@ -368,9 +368,7 @@ fault-spurious-rise = { $signal }: spurious pulse of { $ms } ms{ $description }
 fault-spurious-fall = { $signal }: dropout of { $ms } ms{ $description }
 fault-actuator-off = { $signal } stuck OFF{ $description }
 fault-actuator-on = { $signal } stuck ON (welded contactor){ $description }
-fault-table-at-loading = Table blocked at the loading position
-fault-table-at-unloading = Table blocked at the unloading position
-fault-table-between = Table blocked between the positions
+fault-stuck-at-position = { $component } stuck at { $position }
 fault-slowed = { $signal } slowed to { $percent } %{ $description }
 fault-blocked = { $component } blocked
 fault-component-slowed = { $component } slowed to { $percent } %

@@ -126,7 +126,7 @@ status-removed = , { $n ->
     [one] { $n } retirée
    *[other] { $n } retirées
 }
-status-boxes = { $scenario } — caisses : { $created } créées, { $left } à gauche, { $right } à droite, { $damaged } endommagées{ $removed }
+status-boxes = { $scenario } — caisses : { $created } créées, { $delivered } livrées, { $damaged } endommagées{ $removed }
 status-actions = { $scenario } — actions élémentaires : { $done } terminées, { $faults } défauts
 status-items = pièces : { $placed } posées, { $out } sorties (livrées ou prises)
 
@@ -386,9 +386,7 @@ fault-spurious-rise = { $signal } : impulsion parasite de { $ms } ms{ $descripti
 fault-spurious-fall = { $signal } : coupure de { $ms } ms{ $description }
 fault-actuator-off = { $signal } bloqué À L'ARRÊT{ $description }
 fault-actuator-on = { $signal } bloqué EN MARCHE (contacteur soudé){ $description }
-fault-table-at-loading = Table bloquée en position de chargement
-fault-table-at-unloading = Table bloquée en position de déchargement
-fault-table-between = Table bloquée entre les positions
+fault-stuck-at-position = { $component } bloqué en { $position }
 fault-slowed = { $signal } ralenti à { $percent } %{ $description }
 fault-blocked = { $component } bloqué
 fault-component-slowed = { $component } ralenti à { $percent } %

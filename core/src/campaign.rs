@@ -444,7 +444,7 @@ pub fn run_one(bundle: &PlantBundle, mutant: &Mutant, config: &Config) -> Outcom
     while sim.now() < end && sim.engine.trips.is_empty() {
         sim.cycle();
         let stats = sim.emulator.stats();
-        if stats.delivered_left + stats.delivered_right + stats.damaged >= boxes {
+        if stats.delivered_total() + stats.damaged >= boxes {
             break;
         }
     }

@@ -701,7 +701,7 @@ pub fn closed_loop(
         hazards: sim.emulator.hazards().len(),
         delivered: {
             let s = sim.emulator.stats();
-            s.delivered_left + s.delivered_right
+            s.delivered_total()
         },
         trips: sim.engine.trips.len(),
     };

@@ -944,9 +944,9 @@ fn a_refused_reset_after_a_phantom_box_is_cleared_by_the_reinitialisation() {
         .sim
         .run_until(vigie_core::time::Millis(t + 60_000));
     let s = h.state().sim.emulator.stats();
-    let delivered = |s: vigie_core::emulator::BoxStats| s.delivered_left + s.delivered_right;
+    let delivered = |s: &vigie_core::emulator::BoxStats| s.delivered_total();
     assert!(
-        delivered(s) >= delivered(before) + 5,
+        delivered(&s) >= delivered(&before) + 5,
         "{before:?} then {s:?}"
     );
     assert!(h.state().sim.emulator.hazards().is_empty());

@@ -96,7 +96,7 @@ fn reduced_fault_campaign_diagnoses_the_right_partition_and_never_a_false_one() 
 fn c4_stuck_at_0_at_rest_goes_on_in_degraded_mode_without_hazard() {
     let (_, mut sim) = pop::closed_loop(&station(), 11, 40_000, None).unwrap();
     let before = sim.emulator.stats();
-    let delivered_before = before.delivered_left + before.delivered_right;
+    let delivered_before = before.delivered_total();
     // Wait until the table rests at C4 with A4 off, then C4 dies.
     let c4 = sim.bundle.plant.input("C4").unwrap();
     let a4 = sim.bundle.plant.output("A4").unwrap();
@@ -144,7 +144,7 @@ fn c4_stuck_at_0_at_rest_goes_on_in_degraded_mode_without_hazard() {
         sim.emulator.hazards()
     );
     let after = sim.emulator.stats();
-    let delivered = after.delivered_left + after.delivered_right - delivered_before;
+    let delivered = after.delivered_total() - delivered_before;
     // A box every 15 s for 10 minutes: production goes on (degraded).
     assert!(
         delivered >= 30,

@@ -150,7 +150,7 @@ pub fn verify_fix(scenario: &Scenario, path: &Path, program: CompiledProgram) ->
         .flat_map(|t| t.constraints.iter().map(|c| c.id.clone()))
         .collect();
     let stats = sim.emulator.stats();
-    let delivered = stats.delivered_left + stats.delivered_right;
+    let delivered = stats.delivered_total();
     if trips.is_empty() && sim.emulator.hazards().is_empty() {
         if delivered == 0 {
             return FixOutcome::NothingDelivered;

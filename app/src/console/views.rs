@@ -782,8 +782,7 @@ fn status_ui(c: &Console, ui: &mut egui::Ui) {
             &[
                 ("scenario", (&c.source.title(&c.i18n)).into()),
                 ("created", s.created.into()),
-                ("left", s.delivered_left.into()),
-                ("right", s.delivered_right.into()),
+                ("delivered", s.delivered_total().into()),
                 ("damaged", s.damaged.into()),
                 ("removed", (&removed).into()),
             ],

@@ -357,6 +357,7 @@ fn fault_of(
             ("ms", get("ms").into()),
             ("percent", get("percent").into()),
             ("component", get("component").into()),
+            ("position", get("position").into()),
         ],
     )
 }

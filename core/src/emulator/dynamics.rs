@@ -2,7 +2,7 @@
 //! arrivals and sensors. No allocation in the steady state.
 
 use super::model::{Body, END, Link, START, TablePos};
-use super::{BoxState, Emulator, Hazard, HazardKind, Place, Side};
+use super::{BoxState, Emulator, Hazard, HazardKind, Place};
 use crate::symbols::Space;
 
 /// Velocity factor from the axis of a part, across its end `e`, into the axis of the
@@ -359,9 +359,12 @@ impl Emulator {
                 body.c = if q.end == START { over } else { lq - over };
                 i += 1;
             } else if let Some(side) = end.sink {
-                match side {
-                    Side::Left => self.stats.delivered_left += 1,
-                    Side::Right => self.stats.delivered_right += 1,
+                let exit = &self.parts[b.part as usize].id;
+                match self.stats.delivered.get_mut(exit) {
+                    Some(n) => *n += 1,
+                    None => {
+                        self.stats.delivered.insert(exit.clone(), 1);
+                    }
                 }
                 let v = self.view(&b, BoxState::Delivered(side));
                 self.done.push((v, self.now));

@@ -11,6 +11,14 @@ use crate::frame::Frame;
 use crate::symbols::Symbols;
 use serde::{Deserialize, Serialize};
 
+/// A position along a component's travel, in its unit (a finite number).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Position(pub f64);
+
+// Positions are finite (checked where they are used): equality is reflexive.
+impl Eq for Position {}
+
 /// When a fault starts.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Trigger {
@@ -45,12 +53,14 @@ pub enum FaultKind {
     ActuatorStuckOff(String),
     /// The actuator acts even when not commanded.
     ActuatorStuckOn(String),
-    /// The table cannot leave the loading angle.
-    TableBlockedAtC4,
-    /// The table cannot leave the unloading angle.
-    TableBlockedAtC5,
-    /// The table stops wherever it is.
-    TableBlockedBetween,
+    /// The component cannot leave `position` (in its unit) once it is there: a
+    /// turntable jammed at a position, a cylinder seized at an end.
+    StuckAt {
+        /// Component id.
+        component: String,
+        /// The position, in the component's unit.
+        position: Position,
+    },
     /// The component cannot move (a seized axis, a jammed mechanism; on the sorting
     /// station's layout, the turntable id blocks the table where it is).
     Blocked(String),
@@ -74,7 +84,7 @@ pub enum FaultKind {
 impl FaultKind {
     /// The fault as data, for a console that tells it in its own words: `fault`
     /// (`stuck-at-0`, `stuck-at-1`, `spurious-rise`, `spurious-fall`, `actuator-off`,
-    /// `actuator-on`, `table-at-loading`, `table-at-unloading`, `table-between`,
+    /// `actuator-on`, `stuck-at-position` (with `position`),
     /// `slowed`, and for a component as a whole `blocked`, `component-slowed`),
     /// `signal` or `component` where one is named, `ms` or `percent` where they apply.
     pub fn fields(&self) -> std::collections::BTreeMap<String, String> {
@@ -89,9 +99,7 @@ impl FaultKind {
             }
             Self::ActuatorStuckOff(a) => ("actuator-off", a.as_str(), None),
             Self::ActuatorStuckOn(a) => ("actuator-on", a.as_str(), None),
-            Self::TableBlockedAtC4 => ("table-at-loading", "", None),
-            Self::TableBlockedAtC5 => ("table-at-unloading", "", None),
-            Self::TableBlockedBetween => ("table-between", "", None),
+            Self::StuckAt { component, .. } => ("stuck-at-position", component.as_str(), None),
             Self::Blocked(c) => ("blocked", c.as_str(), None),
             Self::Slowed { component, percent } => (
                 "component-slowed",
@@ -106,13 +114,19 @@ impl FaultKind {
         };
         let mut f = std::collections::BTreeMap::new();
         f.insert("fault".to_string(), tag.to_string());
-        let whole = matches!(self, Self::Blocked(_) | Self::Slowed { .. });
+        let whole = matches!(
+            self,
+            Self::Blocked(_) | Self::Slowed { .. } | Self::StuckAt { .. }
+        );
         if !signal.is_empty() {
             let key = if whole { "component" } else { "signal" };
             f.insert(key.to_string(), signal.to_string());
         }
         if let Some((k, v)) = n {
             f.insert(k.to_string(), v.to_string());
+        }
+        if let Self::StuckAt { position, .. } = self {
+            f.insert("position".to_string(), position.0.to_string());
         }
         f
     }
@@ -145,9 +159,9 @@ pub(crate) enum Effect {
     Block(u32),
     /// Component `.0` of a components plant slowed to `.1` percent.
     SlowComponent(u32, u8),
-    /// Component `.0` of a components plant cannot leave its position `.1` (by index)
-    /// once there.
-    StuckAt(u32, u32),
+    /// Component `.0` of a components plant cannot leave its position `.1`
+    /// (millionths of its unit) once there.
+    StuckAt(u32, i64),
 }
 
 /// State of a scheduled fault.
@@ -203,10 +217,13 @@ impl Scheduled {
             component(k).ok_or_else(|| {
                 Problem::error(
                     codes::FAULT_UNKNOWN_COMPONENT.id,
-                    if id.is_empty() {
-                        format!("fault {k:?} needs the sorting station's turntable")
-                    } else {
-                        format!("fault names unknown component `{id}`")
+                    match k {
+                        FaultKind::StuckAt { position, .. } => format!(
+                            "fault names unknown component `{id}`, or one that cannot \
+                             stop at {}",
+                            position.0
+                        ),
+                        _ => format!("fault names unknown component `{id}`"),
                     },
                     None,
                 )
@@ -229,12 +246,9 @@ impl Scheduled {
             FaultKind::ActuatorStuckOn(a) => {
                 (Effect::Actuator(actuator(a)?, true), spec.duration_ms)
             }
-            k @ (FaultKind::TableBlockedAtC4
-            | FaultKind::TableBlockedAtC5
-            | FaultKind::TableBlockedBetween) => (whole(k, "")?, spec.duration_ms),
-            k @ (FaultKind::Blocked(c) | FaultKind::Slowed { component: c, .. }) => {
-                (whole(k, c)?, spec.duration_ms)
-            }
+            k @ (FaultKind::Blocked(c)
+            | FaultKind::Slowed { component: c, .. }
+            | FaultKind::StuckAt { component: c, .. }) => (whole(k, c)?, spec.duration_ms),
             FaultKind::ConveyorSlowed {
                 actuator: a,
                 percent,

@@ -46,7 +46,7 @@ mod layout;
 mod model;
 mod training;
 
-pub use faults::{FaultKind, FaultSpec, Trigger};
+pub use faults::{FaultKind, FaultSpec, Position, Trigger};
 pub(crate) use layout::quoted_positions;
 pub use layout::{
     ArrivalPlan, Beam, BoxDims, BoxSize, Conveyor, Elevator, Layout, Point, SensorDef, SensorKind,
@@ -313,7 +313,7 @@ impl Emulator {
 
     /// Box counts.
     pub fn stats(&self) -> BoxStats {
-        self.stats
+        self.stats.clone()
     }
 
     /// Table angle, millidegrees.
@@ -344,9 +344,19 @@ impl Emulator {
         // The layout's components: the turntable (blocked where it stands) and the
         // conveyors (slowed by their drive).
         let component = |k: &FaultKind| match k {
-            FaultKind::TableBlockedAtC4 => Some(faults::Effect::Table(0)),
-            FaultKind::TableBlockedAtC5 => Some(faults::Effect::Table(1)),
-            FaultKind::TableBlockedBetween => Some(faults::Effect::Table(2)),
+            FaultKind::StuckAt {
+                component,
+                position,
+            } if *component == layout.table.id => {
+                let mdeg = (position.0 * 1000.0).round();
+                if mdeg == f64::from(layout.table.loading_mdeg) {
+                    Some(faults::Effect::Table(0))
+                } else if mdeg == f64::from(layout.table.unloading_mdeg) {
+                    Some(faults::Effect::Table(1))
+                } else {
+                    None
+                }
+            }
             FaultKind::Blocked(c) if *c == layout.table.id => Some(faults::Effect::Table(2)),
             FaultKind::Slowed { component, percent } => {
                 let c = layout.conveyors.iter().find(|c| c.id == *component)?;

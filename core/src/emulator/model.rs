@@ -109,20 +109,31 @@ pub struct BoxView {
     pub state: BoxState,
 }
 
-/// Counts of boxes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+/// Counts of items.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct BoxStats {
-    /// Boxes put on the line (arrivals and `place_box`).
+    /// Items put on the line (arrivals, feeders and `place_box`).
     pub created: u32,
-    /// Delivered to the left elevator.
-    pub delivered_left: u32,
-    /// Delivered to the right elevator.
-    pub delivered_right: u32,
+    /// Items out, by exit: the conveyor whose end leads into the sink, or whose taker
+    /// took them.
+    pub delivered: std::collections::BTreeMap<String, u32>,
     /// Boxes damaged by at least one hazard.
     pub damaged: u32,
     /// Boxes taken off the plant by hand (the operator emptying it before a
     /// re-initialisation), fallen ones included.
     pub removed: u32,
+}
+
+impl BoxStats {
+    /// Items out, all exits together.
+    pub fn delivered_total(&self) -> u32 {
+        self.delivered.values().sum()
+    }
+
+    /// Items out at exit `id`.
+    pub fn delivered_at(&self, id: &str) -> u32 {
+        self.delivered.get(id).copied().unwrap_or(0)
+    }
 }
 
 /// The dangerous states the emulator detects.

@@ -1,6 +1,7 @@
 //! Emulator tests: geometry and timing against the paper, hazards, faults, determinism.
 
 use super::*;
+use crate::emulator::Position;
 use std::path::{Path, PathBuf};
 
 fn dir() -> PathBuf {
@@ -143,7 +144,7 @@ fn drive_one(e: &mut Emulator, side: Side, max_ms: u64) -> Vec<String> {
             }
         }
         prev = now;
-        if e.stats().delivered_left + e.stats().delivered_right > 0 {
+        if e.stats().delivered_total() > 0 {
             break;
         }
     }
@@ -168,7 +169,7 @@ fn a_box_goes_right_without_hazard() {
         assert_eq!(order_of(&rises, &ids), ids, "{rises:?}");
         assert_eq!(rises.contains(&"C2".to_string()), size == BoxSize::Large);
         assert!(e.hazards().is_empty(), "{:?}", e.hazards());
-        assert_eq!(e.stats().delivered_right, 1);
+        assert_eq!(e.stats().delivered_at("right_exit"), 1);
         assert_eq!(e.boxes()[0].state, BoxState::Delivered(Side::Right));
     }
 }
@@ -181,7 +182,7 @@ fn a_box_goes_left_without_hazard() {
     let ids = ["C0", "C1", "C3", "C6", "C5", "C8", "C10"];
     assert_eq!(order_of(&rises, &ids), ids, "{rises:?}");
     assert!(e.hazards().is_empty(), "{:?}", e.hazards());
-    assert_eq!(e.stats().delivered_left, 1);
+    assert_eq!(e.stats().delivered_at("left_exit"), 1);
 }
 
 fn kinds(e: &Emulator) -> Vec<HazardKind> {
@@ -374,12 +375,26 @@ fn actuator_faults_change_the_plant() {
 #[test]
 fn table_faults_block_the_rotation() {
     let mut e = emu(1);
-    e.schedule_fault(fault(Trigger::At(0), FaultKind::TableBlockedAtC4, None));
+    e.schedule_fault(fault(
+        Trigger::At(0),
+        FaultKind::StuckAt {
+            component: "table".into(),
+            position: Position(0.0),
+        },
+        None,
+    ));
     e.step(Millis(4000), &outs(&["A4"]));
     assert!(sensor(&e, "C4") && !sensor(&e, "C5"));
 
     let mut e = emu(1);
-    e.schedule_fault(fault(Trigger::At(3500), FaultKind::TableBlockedAtC5, None));
+    e.schedule_fault(fault(
+        Trigger::At(3500),
+        FaultKind::StuckAt {
+            component: "table".into(),
+            position: Position(90.0),
+        },
+        None,
+    ));
     e.step(Millis(3500), &outs(&["A4"]));
     e.step(Millis(4000), &outs(&[]));
     assert!(sensor(&e, "C5") && !sensor(&e, "C4"));
@@ -387,7 +402,7 @@ fn table_faults_block_the_rotation() {
     let mut e = emu(1);
     e.schedule_fault(fault(
         Trigger::At(1000),
-        FaultKind::TableBlockedBetween,
+        FaultKind::Blocked("table".into()),
         Some(2000),
     ));
     e.step(Millis(2900), &outs(&["A4"]));
@@ -444,12 +459,12 @@ fn bad_faults_are_reported_not_panicked() {
     ));
     e.schedule_fault(fault(
         Trigger::When("C3 . ".into()),
-        FaultKind::TableBlockedAtC4,
+        FaultKind::Blocked("table".into()),
         None,
     ));
     e.schedule_fault(fault(
         Trigger::When("C3 . X7".into()),
-        FaultKind::TableBlockedAtC4,
+        FaultKind::Blocked("table".into()),
         None,
     ));
     assert_eq!(e.fault_problems().len(), 3);

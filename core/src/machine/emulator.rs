@@ -395,9 +395,7 @@ impl ComponentPlant {
                     let c = &mut self.component_faults[k as usize];
                     c.speed_percent = c.speed_percent.min(p);
                 }
-                Effect::StuckAt(k, p) => {
-                    self.component_faults[k as usize].stuck_at = Some(p as usize);
-                }
+                Effect::StuckAt(k, p) => self.component_faults[k as usize].stuck_at = Some(p),
                 Effect::Slow(o, p) => {
                     // The surfaces a drive output moves.
                     let name = &self.symbols.names(Space::Output)[o as usize];
@@ -438,19 +436,20 @@ impl ComponentPlant {
             }
         };
         let names = &self.names;
-        // The sorting station's table faults name its turntable's positions: the first
-        // turntable, its first (loading) and second (unloading) positions.
-        let table = self
-            .live
-            .iter()
-            .position(|c| matches!(c, Live::Turntable(_)))
-            .map(|k| k as u32);
+        let live = &self.live;
         let component = |k: &FaultKind| {
             let find = |c: &str| names.iter().position(|(id, _)| id == c).map(|k| k as u32);
             match k {
-                FaultKind::TableBlockedAtC4 => table.map(|t| Effect::StuckAt(t, 0)),
-                FaultKind::TableBlockedAtC5 => table.map(|t| Effect::StuckAt(t, 1)),
-                FaultKind::TableBlockedBetween => table.map(Effect::Block),
+                // What stops at a position: an axis, a turntable.
+                FaultKind::StuckAt {
+                    component,
+                    position,
+                } => find(component)
+                    .filter(|&k| {
+                        matches!(live[k as usize], Live::Axis(_) | Live::Turntable(_))
+                            && position.0.is_finite()
+                    })
+                    .map(|k| Effect::StuckAt(k, (position.0 * 1e6).round() as i64)),
                 FaultKind::Blocked(c) => find(c).map(Effect::Block),
                 FaultKind::Slowed { component, percent } => {
                     find(component).map(|k| Effect::SlowComponent(k, *percent))
@@ -555,6 +554,11 @@ impl ComponentPlant {
     /// The plant has conveyors (its production is items, not only moves).
     pub fn carries_items(&self) -> bool {
         !self.items.surfaces.is_empty()
+    }
+
+    /// Items the operator took off the plant by hand so far.
+    pub fn items_removed(&self) -> u32 {
+        self.items.removed
     }
 
     /// The operator takes every item off the plant by hand; how many.

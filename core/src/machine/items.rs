@@ -328,6 +328,10 @@ pub(crate) struct Items {
     pub(crate) taken: Vec<u32>,
     pub(crate) damaged: u32,
     pub(crate) fallen: u32,
+    /// Taken off by hand (an operator emptying the plant), fallen ones included.
+    pub(crate) removed: u32,
+    /// Fallen and still lying where they fell.
+    lying: u32,
 }
 
 fn micro(v: f64) -> i64 {
@@ -381,6 +385,8 @@ impl Items {
             taken: vec![0; n],
             damaged: 0,
             fallen: 0,
+            removed: 0,
+            lying: 0,
         };
         items.update_links();
         items
@@ -753,6 +759,7 @@ impl Items {
                     self.report(now, i, HazardKind::Dropped, (place, at), el, hazards);
                 }
                 self.fallen += 1;
+                self.lying += 1;
                 self.bodies.remove(i);
             }
         }
@@ -954,11 +961,16 @@ impl Items {
             .map_or(0.0, |f| f as f64 / 1e6)
     }
 
-    /// Takes every item off the plant (an operator emptying it); returns how many.
+    /// Takes every item off the plant, those that fell included (an operator
+    /// emptying it); returns how many.
     pub(crate) fn clear(&mut self) -> u32 {
-        let n = self.bodies.len() + self.carried.iter().map(VecDeque::len).sum::<usize>();
+        let n = self.bodies.len()
+            + self.carried.iter().map(VecDeque::len).sum::<usize>()
+            + self.lying as usize;
+        self.lying = 0;
         self.bodies.clear();
         self.carried.iter_mut().for_each(VecDeque::clear);
+        self.removed += n as u32;
         n as u32
     }
 }

@@ -199,8 +199,8 @@ pub(crate) struct ComponentFaults {
     pub blocked: bool,
     /// Its speed, percent of nominal.
     pub speed_percent: u8,
-    /// It cannot leave this position (by index) once there.
-    pub stuck_at: Option<usize>,
+    /// It cannot leave this position (millionths of its unit) once there.
+    pub stuck_at: Option<i64>,
 }
 
 /// A component's live state.

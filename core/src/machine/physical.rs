@@ -126,7 +126,12 @@ impl Physical {
     /// Item counts (none on a plant of components without items).
     pub fn stats(&self) -> BoxStats {
         match self {
-            Self::Components(_) => BoxStats::default(),
+            Self::Components(c) => BoxStats {
+                created: c.items_in(),
+                delivered: c.items_out_by_exit().into_iter().collect(),
+                damaged: c.items_damaged().0,
+                removed: c.items_removed(),
+            },
             Self::Layout(e) => e.stats(),
         }
     }

@@ -1579,7 +1579,13 @@ mod tests {
             &station_dir(),
             5,
             120_000,
-            Some((crate::emulator::FaultKind::TableBlockedAtC4, 60_000)),
+            Some((
+                crate::emulator::FaultKind::StuckAt {
+                    component: "table".into(),
+                    position: crate::emulator::Position(0.0),
+                },
+                60_000,
+            )),
         )
         .unwrap();
         let table: Vec<_> = out

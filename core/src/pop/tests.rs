@@ -165,8 +165,8 @@ fn malformed_file_gives_file_line_and_column() {
     let line = |text: &str, what: &str| text.lines().position(|l| l.contains(what)).unwrap() + 1;
     for (from, to, says) in [
         (
-            "fault: TableBlockedAtC5, expected: [\"P\"]",
-            "fault: TableBlockedAtC5, expected: [\"Q\"]",
+            "fault: StuckAt(component: \"table\", position: 90.0), expected: [\"P\"]",
+            "fault: StuckAt(component: \"table\", position: 90.0), expected: [\"Q\"]",
             "injection `table blocked at C5` expects `Q`, not a partition of `table`",
         ),
         (
@@ -393,7 +393,7 @@ fn a_pause_suspends_the_conveyor_models_and_they_resume_without_a_false_diagnosi
             d.diagnoses
         );
         paused += 1;
-        assert!(sim.emulator.stats().delivered_left + sim.emulator.stats().delivered_right > 5);
+        assert!(sim.emulator.stats().delivered_total() > 5);
     }
     assert_eq!(paused, 4);
 }
@@ -522,9 +522,7 @@ fn after_the_repair_the_operators_reset_ends_the_degraded_mode() {
             .all(|a| a.cleared.is_some())
     );
     assert!(sim.journal().iter().any(|e| e.kind == "diagnosers_reset"));
-    let delivered = |sim: &crate::sim::Simulation| {
-        sim.emulator.stats().delivered_left + sim.emulator.stats().delivered_right
-    };
+    let delivered = |sim: &crate::sim::Simulation| sim.emulator.stats().delivered_total();
     let before = delivered(&sim);
     let reset_at = sim.now().0;
     sim.run_until(crate::Millis(at + 370_000));

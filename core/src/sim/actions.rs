@@ -228,7 +228,7 @@ impl Simulation {
         match &self.emulator {
             crate::machine::Physical::Layout(_) => {
                 let s = self.emulator.stats();
-                u64::from(s.delivered_left + s.delivered_right)
+                u64::from(s.delivered_total())
             }
             crate::machine::Physical::Components(c) if c.carries_items() => {
                 u64::from(c.items_out())

@@ -82,14 +82,10 @@ fn reference_program_runs_an_hour_without_trip_or_hazard() {
         sim.emulator.hazards().first()
     );
     assert!(stats.created >= 200, "{stats:?}");
-    assert_eq!(
-        stats.delivered_left + stats.delivered_right,
-        stats.created,
-        "{stats:?}"
-    );
+    assert_eq!(stats.delivered_total(), stats.created, "{stats:?}");
     assert_eq!(stats.damaged, 0);
     assert!(
-        stats.delivered_left > 0 && stats.delivered_right > 0,
+        stats.delivered_at("left_exit") > 0 && stats.delivered_at("right_exit") > 0,
         "{stats:?}"
     );
 }
@@ -117,8 +113,7 @@ fn every_error_variant_is_caught_by_its_constraint() {
         busy_shift(),
         120_000,
     ));
-    let delivered =
-        |s: &Simulation| s.emulator.stats().delivered_left + s.emulator.stats().delivered_right;
+    let delivered = |s: &Simulation| s.emulator.stats().delivered_total();
     let mut failures = Vec::new();
     for v in &lib.variants {
         let id = &v.def.id;
@@ -185,7 +180,7 @@ fn reference_program_copes_with_a_busy_shift() {
         sim.emulator.hazards().first()
     );
     let stats = sim.emulator.stats();
-    assert_eq!(stats.delivered_left + stats.delivered_right, 6, "{stats:?}");
+    assert_eq!(stats.delivered_total(), 6, "{stats:?}");
 }
 
 #[test]
@@ -368,10 +363,7 @@ fn task_monitors_accept_operator_pauses_over_an_hour() {
         report.task_alarms.first()
     );
     assert!(report.trips.is_empty() && report.hazards.is_empty());
-    assert_eq!(
-        report.boxes.delivered_left + report.boxes.delivered_right,
-        report.boxes.created
-    );
+    assert_eq!(report.boxes.delivered_total(), report.boxes.created);
 }
 
 /// Issue 19: the task monitors raise no alarm in normal production, whatever the start
@@ -403,10 +395,7 @@ fn task_monitors_raise_no_alarm_in_normal_production_whatever_the_start_and_rate
                     report.trips.is_empty() && report.hazards.is_empty(),
                     "{case}"
                 );
-                assert!(
-                    report.boxes.delivered_left + report.boxes.delivered_right > 15,
-                    "{case}"
-                );
+                assert!(report.boxes.delivered_total() > 15, "{case}");
             }
         }
     }

@@ -1133,7 +1133,19 @@ pub fn replay(
     Ok(Replay {
         hazards: emu.hazards().to_vec(),
         csv,
-        delivered: (st.delivered_left, st.delivered_right),
+        delivered: {
+            let at = |side: crate::emulator::Side| {
+                layout
+                    .elevators
+                    .iter()
+                    .find(|e| e.side == side)
+                    .map_or(0, |e| st.delivered_at(&e.conveyor))
+            };
+            (
+                at(crate::emulator::Side::Left),
+                at(crate::emulator::Side::Right),
+            )
+        },
     })
 }
 

@@ -151,10 +151,22 @@ fn faults_act_on_signals_and_on_the_component() {
         .try_schedule_fault(spec(FaultKind::Blocked("lift".into())))
         .unwrap_err();
     assert_eq!(err.code, codes::FAULT_UNKNOWN_COMPONENT.id);
+    // Only a component with positions can be stuck at one: the head can.
     let err = e
-        .try_schedule_fault(spec(FaultKind::TableBlockedAtC4))
+        .try_schedule_fault(spec(FaultKind::StuckAt {
+            component: "lift".into(),
+            position: crate::emulator::Position(0.0),
+        }))
         .unwrap_err();
     assert_eq!(err.code, codes::FAULT_UNKNOWN_COMPONENT.id);
+    assert!(err.message.contains("cannot stop at 0"), "{err:?}");
+    e.try_schedule_fault(spec(FaultKind::StuckAt {
+        component: "head".into(),
+        position: crate::emulator::Position(p),
+    }))
+    .unwrap();
+    e.step(Millis(500), &out(true, false, false));
+    assert_eq!(e.position("head").unwrap(), p, "stuck where it is");
 }
 
 #[test]

@@ -75,36 +75,8 @@ fn same(s: &Scenario, path: &Path, until_ms: u64) -> (u64, Vec<crate::emulator::
         .cloned()
         .partition(|h| h.kind == crate::emulator::HazardKind::OpposedDrives);
     assert_eq!(old.emulator.hazards(), others.as_slice(), "{scenario}");
-    let (o, n) = (
-        old.emulator.as_layout().expect("layout"),
-        new.emulator.as_components(),
-    );
-    let n = n.expect("components");
-    assert_eq!(o.stats().created, n.items_in(), "{scenario}");
-    assert_eq!(
-        o.stats().delivered_left + o.stats().delivered_right,
-        n.items_out(),
-        "{scenario}"
-    );
-    assert_eq!(
-        (
-            o.stats().damaged,
-            o.stats().delivered_left,
-            o.stats().delivered_right
-        ),
-        (
-            n.items_damaged().0,
-            n.items_out_by_exit()
-                .iter()
-                .find(|(id, _)| id == "left_exit")
-                .map_or(0, |e| e.1),
-            n.items_out_by_exit()
-                .iter()
-                .find(|(id, _)| id == "right_exit")
-                .map_or(0, |e| e.1),
-        ),
-        "{scenario}"
-    );
+    assert_eq!(old.emulator.stats(), new.emulator.stats(), "{scenario}");
+    assert!(new.emulator.as_components().is_some());
     (cycles, opposed)
 }
 

@@ -348,7 +348,7 @@ impl Axis {
                 1_000_000
             };
         }
-        let v = if faults.blocked {
+        let v = if faults.blocked || faults.stuck_at == Some(self.pos) {
             0
         } else {
             speed * self.factor_ppm / 1_000_000 * i64::from(faults.speed_percent) / 100

@@ -292,10 +292,7 @@ impl Turntable {
             Some((at, outputs)) if at != self.angle => {
                 let dir = (at - self.angle).signum();
                 let unpowered = outputs.iter().any(|&o| ctx.unpowered.get(o));
-                let stuck = faults
-                    .stuck_at
-                    .and_then(|p| self.positions.get(p))
-                    .is_some_and(|(at, _, _)| *at == self.angle);
+                let stuck = faults.stuck_at == Some(self.angle);
                 if !(faults.blocked || unpowered || stuck) {
                     if dir != self.rot_dir {
                         let base = if dir > 0 { self.speed } else { self.back_speed };
