@@ -80,6 +80,11 @@ pub struct ComponentPlant {
     reads_inputs: bool,
     /// The applied outputs must be recomputed (new commands, a fault changed).
     outputs_dirty: bool,
+    /// The surfaces' requests of a step (kept to reuse its allocation).
+    requests: Vec<Requests>,
+    /// Quiet steps may be taken at once: nothing reads a sensor within a period and
+    /// no declared danger watches a conveyor's position.
+    quiet_allowed: bool,
 }
 
 impl ComponentPlant {
@@ -100,31 +105,7 @@ impl ComponentPlant {
         for c in &desc.components {
             live.push(c.kind.build(&c.id, &symbols)?);
         }
-        let mut dangers = Vec::new();
-        for d in &desc.dangers {
-            let when = parse_str(&d.when)
-                .and_then(|e| e.to_dnf(&symbols))
-                .map_err(|e| {
-                    desc.error(
-                        codes::COMPONENTS_EXPRESSION.id,
-                        &d.when,
-                        format!("danger `{}`: {}", d.id, e.message),
-                    )
-                })?;
-            dangers.push(Danger {
-                id: d.id.clone(),
-                text: d.text.clone(),
-                component: desc
-                    .components
-                    .iter()
-                    .position(|c| c.id == d.component)
-                    .unwrap_or(0),
-                from: d.from,
-                to: d.to,
-                when: simplify(&when),
-                active: false,
-            });
-        }
+        let dangers = compile_dangers(desc, &symbols)?;
         let reads_inputs = desc
             .components
             .iter()
@@ -142,6 +123,8 @@ impl ComponentPlant {
             commanded.set(i, s.initial);
         }
         let (items, surface_of) = build_items(desc, &mut live, seed);
+        let quiet_allowed =
+            !reads_inputs && dangers.iter().all(|d| surface_of[d.component].is_none());
         let mut emu = Self {
             measured,
             items,
@@ -178,6 +161,8 @@ impl ComponentPlant {
             output_force: vec![None; n_out],
             supply: plant.supplies(),
             feedback: plant.mirrors(),
+            quiet_allowed,
+            requests: Vec::new(),
             reads_inputs,
             outputs_dirty: true,
         };
@@ -210,6 +195,15 @@ impl ComponentPlant {
             {
                 self.now += k * self.step_ms;
                 self.carry -= k * self.step_ms;
+            } else if k > 0 && settled && self.quiet_allowed && self.live.iter().all(Live::steady) {
+                // Only items moving straight on running belts: the steps until one
+                // could reach an end, a joint or an arrival are taken at once.
+                let q = self.items.quiet_steps(self.now, self.step_ms, k);
+                if q > 0 {
+                    self.items.advance(q);
+                    self.now += q * self.step_ms;
+                    self.carry -= q * self.step_ms;
+                }
             }
         }
         self.apply_outputs();
@@ -264,7 +258,8 @@ impl ComponentPlant {
 
     /// The items move on the surfaces as their components ask.
     fn step_items(&mut self) {
-        let mut requests = Vec::with_capacity(self.items.surfaces.len());
+        let mut requests = std::mem::take(&mut self.requests);
+        requests.clear();
         for s in 0..self.items.surfaces.len() {
             let k = self.items.surfaces[s].component;
             requests.push(match &self.live[k] {
@@ -280,6 +275,7 @@ impl ComponentPlant {
             });
         }
         self.items.step(self.now, &requests, &mut self.hazards);
+        self.requests = requests;
     }
 
     /// The outputs as they reach the components: faults, then the supplies; the
@@ -707,6 +703,36 @@ mod conveyor_tests;
 mod device_tests;
 #[cfg(test)]
 mod tests;
+
+/// The declared dangers of `desc`, compiled against the plant's symbols.
+fn compile_dangers(desc: &Components, symbols: &Symbols) -> Result<Vec<Danger>, Problem> {
+    let mut dangers = Vec::new();
+    for d in &desc.dangers {
+        let when = parse_str(&d.when)
+            .and_then(|e| e.to_dnf(symbols))
+            .map_err(|e| {
+                desc.error(
+                    codes::COMPONENTS_EXPRESSION.id,
+                    &d.when,
+                    format!("danger `{}`: {}", d.id, e.message),
+                )
+            })?;
+        dangers.push(Danger {
+            id: d.id.clone(),
+            text: d.text.clone(),
+            component: desc
+                .components
+                .iter()
+                .position(|c| c.id == d.component)
+                .unwrap_or(0),
+            from: d.from,
+            to: d.to,
+            when: simplify(&when),
+            active: false,
+        });
+    }
+    Ok(dangers)
+}
 
 /// The plant inputs the components of `desc` measure, in plant order.
 fn measured(desc: &Components, plant: &Plant) -> Vec<String> {

@@ -192,6 +192,17 @@ pub(crate) struct StepCtx<'a> {
     pub unpowered: &'a crate::bits::Bits,
 }
 
+/// A new run's speed factor, millionths of nominal: drawn within `± variation_ppm`
+/// from the emulator's stream when the run moves (`dir` not 0), else nominal.
+pub(crate) fn run_factor(dir: i64, variation_ppm: i64, rng: &mut SplitMix64) -> i64 {
+    if dir != 0 && variation_ppm > 0 {
+        let span = 2 * variation_ppm as u64 + 1;
+        1_000_000 - variation_ppm + rng.below(span) as i64
+    } else {
+        1_000_000
+    }
+}
+
 /// Faults acting on a component as a whole.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct ComponentFaults {
@@ -251,6 +262,17 @@ impl Live {
             Self::Link(l) => l.idle(),
             Self::Tank(t) => t.idle(),
             Self::Turntable(t) => t.idle(),
+        }
+    }
+
+    /// Its next steps, on the same outputs, change nothing but its surface's items
+    /// (which move straight on a running belt): an idle component, a conveyor, a
+    /// turntable whose table does not turn.
+    pub(crate) fn steady(&self) -> bool {
+        match self {
+            Self::Conveyor(_) => true,
+            Self::Turntable(t) => t.steady(),
+            _ => self.idle(),
         }
     }
 

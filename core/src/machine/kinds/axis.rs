@@ -341,12 +341,7 @@ impl Axis {
         let dir = speed.signum();
         if dir != self.dir {
             self.dir = dir;
-            self.factor_ppm = if dir != 0 && self.variation_ppm > 0 {
-                let span = 2 * self.variation_ppm as u64 + 1;
-                1_000_000 - self.variation_ppm + ctx.rng.below(span) as i64
-            } else {
-                1_000_000
-            };
+            self.factor_ppm = super::run_factor(dir, self.variation_ppm, ctx.rng);
         }
         let v = if faults.blocked || faults.stuck_at == Some(self.pos) {
             0

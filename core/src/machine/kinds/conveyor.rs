@@ -373,13 +373,13 @@ impl Drives {
         })
     }
 
-    fn asked(&self, frame: &crate::frame::Frame) -> (i64, bool, Vec<String>) {
+    /// The speed asked (the fastest active drive of one direction) and whether both
+    /// directions are asked at once (the speed is then 0).
+    fn asked(&self, frame: &crate::frame::Frame) -> (i64, bool) {
         let mut best = 0i64;
         let (mut up, mut down) = (false, false);
-        let mut outputs = Vec::new();
         for d in &self.drives {
             if eval_dnf(&d.dnf, frame) {
-                outputs.extend(d.outputs.iter().cloned());
                 up |= d.speed > 0;
                 down |= d.speed < 0;
                 if d.speed.abs() > best.abs() {
@@ -387,31 +387,34 @@ impl Drives {
                 }
             }
         }
+        if up && down { (0, true) } else { (best, false) }
+    }
+
+    /// The outputs of the active drives, sorted (a hazard's report).
+    fn active_outputs(&self, frame: &crate::frame::Frame) -> Vec<String> {
+        let mut outputs: Vec<String> = self
+            .drives
+            .iter()
+            .filter(|d| eval_dnf(&d.dnf, frame))
+            .flat_map(|d| d.outputs.iter().cloned())
+            .collect();
         outputs.sort();
         outputs.dedup();
-        if up && down {
-            (0, true, outputs)
-        } else {
-            (best, false, outputs)
-        }
+        outputs
     }
 
     /// One step: the speed asked, its variation for a new run, the faults.
     pub(crate) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
-        let (speed, opposed, outputs) = self.asked(ctx.frame);
+        let (speed, opposed) = self.asked(ctx.frame);
         if opposed && !self.opposed {
+            let outputs = self.active_outputs(ctx.frame);
             ctx.hazards.push((HazardKind::OpposedDrives, outputs));
         }
         self.opposed = opposed;
         let dir = speed.signum();
         if dir != self.dir {
             self.dir = dir;
-            self.factor_ppm = if dir != 0 && self.variation_ppm > 0 {
-                let span = 2 * self.variation_ppm as u64 + 1;
-                1_000_000 - self.variation_ppm + ctx.rng.below(span) as i64
-            } else {
-                1_000_000
-            };
+            self.factor_ppm = super::run_factor(dir, self.variation_ppm, ctx.rng);
         }
         self.speed = if faults.blocked {
             0
@@ -455,7 +458,7 @@ pub struct Conveyor {
     unit: String,
     length: i64,
     drives: Drives,
-    beams: Vec<(usize, String, i64, Option<String>)>,
+    beams: Vec<CompiledBeam>,
     motion: Option<usize>,
     motion_id: Option<String>,
     feed_when: Option<String>,
@@ -495,6 +498,39 @@ pub(crate) fn compile(
     Ok((simplify(&dnf), outputs))
 }
 
+/// A beam compiled: its plant input, its signal, its place (millionths), its tag.
+pub(crate) type CompiledBeam = (usize, String, i64, Option<String>);
+
+/// The beams of component `id`, against the plant's inputs.
+pub(crate) fn compile_beams(
+    id: &str,
+    defs: &[BeamDef],
+    symbols: &Symbols,
+) -> Result<Vec<CompiledBeam>, Problem> {
+    defs.iter()
+        .map(|b| {
+            Ok((
+                input(id, &b.signal, symbols)?,
+                b.signal.clone(),
+                micro(b.at),
+                b.sees.clone(),
+            ))
+        })
+        .collect()
+}
+
+/// The beams as the plant's items read them.
+pub(crate) fn surface_beams(beams: &[CompiledBeam]) -> Vec<crate::machine::items::Beam> {
+    beams
+        .iter()
+        .map(|(i, _, at, sees)| crate::machine::items::Beam {
+            input: *i,
+            at: *at,
+            sees: sees.clone(),
+        })
+        .collect()
+}
+
 /// A plant input by name, or the error naming the component.
 pub(crate) fn input(id: &str, s: &str, symbols: &Symbols) -> Result<usize, Problem> {
     match symbols.lookup(s) {
@@ -510,15 +546,7 @@ pub(crate) fn input(id: &str, s: &str, symbols: &Symbols) -> Result<usize, Probl
 impl Conveyor {
     pub(super) fn new(id: &str, def: &ConveyorDef, symbols: &Symbols) -> Result<Self, Problem> {
         let drives = Drives::new(id, &def.drives, def.variation_ppm, symbols)?;
-        let mut beams = Vec::new();
-        for b in &def.sensors {
-            beams.push((
-                input(id, &b.signal, symbols)?,
-                b.signal.clone(),
-                micro(b.at),
-                b.sees.clone(),
-            ));
-        }
+        let beams = compile_beams(id, &def.sensors, symbols)?;
         let motion = def
             .motion
             .as_deref()
@@ -585,21 +613,13 @@ impl Conveyor {
 
     /// The surface its items lie on, as the plant's items see it.
     pub(crate) fn surface(&self, component: usize, id: &str, name: &str) -> Surface {
-        use crate::machine::items::{Beam, Open};
+        use crate::machine::items::Open;
         Surface {
             component,
             id: id.to_string(),
             name: name.to_string(),
             len: self.length,
-            beams: self
-                .beams
-                .iter()
-                .map(|(i, _, at, sees)| Beam {
-                    input: *i,
-                    at: *at,
-                    sees: sees.clone(),
-                })
-                .collect(),
+            beams: surface_beams(&self.beams),
             open: [
                 Open::Stop,
                 match self.exit {

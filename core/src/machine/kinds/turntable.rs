@@ -20,11 +20,13 @@
 //! blocks the rotation; one that slows it slows the rollers.
 
 use super::axis::{DriveDef, WindowDef};
-use super::conveyor::{BeamDef, Drives, compile, input, micro};
+use super::conveyor::{
+    BeamDef, CompiledBeam, Drives, compile, compile_beams, input, micro, surface_beams,
+};
 use super::{ComponentFaults, StepCtx};
 use crate::diag::Problem;
 use crate::expr::{Dnf, eval_dnf};
-use crate::machine::items::{Beam, END, Open, START, Surface};
+use crate::machine::items::{END, Open, START, Surface};
 use crate::machine::scene::{SceneDrive, SceneElement, SceneSensor, Shape};
 use crate::symbols::{Space, Symbols};
 use crate::synthetic::SplitMix64;
@@ -197,7 +199,7 @@ pub struct Turntable {
     windows: Vec<(usize, String, i64, i64)>,
     rollers: Drives,
     length: i64,
-    beams: Vec<(usize, String, i64, Option<String>)>,
+    beams: Vec<CompiledBeam>,
     rng: SplitMix64,
     angle: i64,
     rot_dir: i64,
@@ -233,15 +235,7 @@ impl Turntable {
                 micro(w.to),
             ));
         }
-        let mut beams = Vec::new();
-        for b in &def.beams {
-            beams.push((
-                input(id, &b.signal, symbols)?,
-                b.signal.clone(),
-                micro(b.at),
-                b.sees.clone(),
-            ));
-        }
+        let beams = compile_beams(id, &def.beams, symbols)?;
         let speed = micro(def.speed / 1000.0);
         let mut t = Self {
             unit: def.unit.clone(),
@@ -333,15 +327,7 @@ impl Turntable {
             id: id.to_string(),
             name: name.to_string(),
             len: self.length,
-            beams: self
-                .beams
-                .iter()
-                .map(|(i, _, at, sees)| Beam {
-                    input: *i,
-                    at: *at,
-                    sees: sees.clone(),
-                })
-                .collect(),
+            beams: surface_beams(&self.beams),
             open: [Open::Drop, Open::Drop],
             fixed: [None, None],
             table_side: [true, true],
@@ -358,6 +344,11 @@ impl Turntable {
                 v
             }),
         }
+    }
+
+    /// The table does not turn (its rollers may run).
+    pub(super) fn steady(&self) -> bool {
+        !self.moving
     }
 
     pub(super) fn idle(&self) -> bool {
