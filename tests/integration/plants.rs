@@ -976,6 +976,34 @@ fn verify_finds_a_feeder_pushing_onto_an_item_its_entry_beam_does_not_see() {
         "{last}"
     );
     assert!(!last["inputs"].as_array().unwrap().contains(&"a".into()));
+    // A belt whose items come from a source (arrivals, no feeder) and whose end leads
+    // nowhere: the verifier searches the arrivals, and finds the drop without the
+    // filter (a belt with no items could drop nothing).
+    let c = std::fs::read_to_string(&f).unwrap();
+    let sourced = c
+        .replace(
+            "feed: Some((when: \"P\", items: [(class: \"pallet\", length: 200.0)])),",
+            "source: Some((items: [(class: \"pallet\", length: 200.0)], arrivals: (period_ms: 4000))),",
+        )
+        .replace("exit: Stop,", "exit: Drop,");
+    assert_eq!(sourced.matches("source: Some").count(), 1, "{sourced}");
+    assert!(sourced.contains("exit: Drop,"));
+    std::fs::write(&f, sourced).unwrap();
+    let out = vigie(&["verify", ws.to_str().unwrap(), "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let conveyor = r["parts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["component"] == "conveyor")
+        .unwrap();
+    let without: Vec<_> = conveyor["without_filter"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|h| h["hazard"].as_str().unwrap().to_string())
+        .collect();
+    assert!(without.contains(&"Dropped".to_string()), "{conveyor}");
     let line = tmp.0.join("production-line");
     copy_dir(&repo().join("layouts/production-line"), &line);
     let out = vigie(&["verify", line.to_str().unwrap()]);

@@ -160,6 +160,26 @@ fn cuts(length: i64, beams: &[(usize, i64, Option<String>)], classes: &[Class]) 
     Cuts(points)
 }
 
+/// The item classes conveyor `def` places: its feeder's and its source's.
+fn placed_by(def: &ConveyorDef) -> Vec<&ItemClass> {
+    def.feed
+        .iter()
+        .flat_map(|f| &f.items)
+        .chain(def.source.iter().flat_map(|s| &s.items))
+        .collect()
+}
+
+/// Every item class the plant's feeders and sources place.
+fn placed(desc: &Components) -> Vec<&ItemClass> {
+    desc.components
+        .iter()
+        .flat_map(|c| match &c.kind {
+            KindDef::Conveyor(cv) => placed_by(cv),
+            _ => Vec::new(),
+        })
+        .collect()
+}
+
 impl Belt {
     /// The conveyor `id` abstracted.
     pub(super) fn build(
@@ -168,10 +188,13 @@ impl Belt {
         desc: &Components,
         bundle: &PlantBundle,
     ) -> Result<Self, Problem> {
-        let upstream = desc.components.iter().any(|c| match &c.kind {
-            KindDef::Conveyor(other) => other.target() == Some(id),
-            _ => false,
-        });
+        // Items arrive at the entry from a belt upstream, or from its own source
+        // (which waits for a free entry: a subset of what an upstream belt may do).
+        let upstream = def.source.is_some()
+            || desc.components.iter().any(|c| match &c.kind {
+                KindDef::Conveyor(other) => other.target() == Some(id),
+                _ => false,
+            });
         let seen: BTreeSet<&str> = def
             .sensors
             .iter()
@@ -192,15 +215,11 @@ impl Belt {
                 .map(|t| compile(t, bundle))
                 .transpose()?,
         };
-        let own: Vec<&ItemClass> = def.feed.iter().flat_map(|f| &f.items).collect();
+        let own = placed_by(def);
         // What it may hold: what it places, or what any feeder of the plant places when
         // items come from another belt.
         let classes = if upstream || carried || own.is_empty() {
-            let all = desc.components.iter().filter_map(|c| match &c.kind {
-                KindDef::Conveyor(cv) => cv.feed.as_ref(),
-                _ => None,
-            });
-            merge(all.flat_map(|f| &f.items), &seen)
+            merge(placed(desc).into_iter(), &seen)
         } else {
             merge(own.iter().copied(), &seen)
         };

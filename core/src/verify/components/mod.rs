@@ -573,6 +573,7 @@ pub fn verify_components_within(
             "the control commands any vector of the outputs its drives, dangers and constraints name, every cycle; the other outputs are 0".into(),
             "a component moves at most as far as its fastest drive goes in one 10 ms cycle, and may move as slowly as it likes".into(),
             "on a conveyor the item nearest the entry is followed; the others ahead of it may cover any beam past it, and hold it anywhere".into(),
+            "an item across a joint is not pushed against a stopped next surface (PushedAgainstStopped between conveyors is not searched; turntables are not modelled)".into(),
             "no fault: the plant's components, sensors and contactors are healthy".into(),
             "the operator may reset the filter at any cycle (the latch is abstracted away)".into(),
         ],
