@@ -507,7 +507,8 @@ pub(super) fn paint_belts(cv: &Canvas<'_>, geom: &Geometry, view: &View, t_s: f3
         }
         super::component_name(
             cv,
-            xf.p([x + b.drawn / 2.0, y - BELT_HALF - 120.0]),
+            // Under the row of its drives' outputs (which start under its entry).
+            xf.p([x + b.drawn / 2.0, y - 800.0]),
             view.parts.get(&b.id).unwrap_or(&b.name),
         );
     }
