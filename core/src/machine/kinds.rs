@@ -192,6 +192,27 @@ pub(crate) struct StepCtx<'a> {
     pub unpowered: &'a crate::bits::Bits,
 }
 
+/// The problem of a variation of `variation_ppm` of a `what` (speed, rate): 50 % or
+/// more.
+pub(crate) fn check_variation(variation_ppm: u32, what: &str) -> Option<String> {
+    (variation_ppm >= 500_000)
+        .then(|| format!("variation_ppm {variation_ppm} is 50 % or more of the {what}"))
+}
+
+/// The problems of beams placed along a surface of `length` (`surface`: belt, rollers).
+pub(crate) fn check_beams(beams: &[conveyor::BeamDef], length: f64, surface: &str) -> Vec<String> {
+    beams
+        .iter()
+        .filter(|b| !b.at.is_finite() || b.at < 0.0 || b.at > length)
+        .map(|b| {
+            format!(
+                "beam `{}` at {} is off the {surface} [0, {length}]",
+                b.signal, b.at
+            )
+        })
+        .collect()
+}
+
 /// A new run's speed factor, millionths of nominal: drawn within `± variation_ppm`
 /// from the emulator's stream when the run moves (`dir` not 0), else nominal.
 pub(crate) fn run_factor(dir: i64, variation_ppm: i64, rng: &mut SplitMix64) -> i64 {

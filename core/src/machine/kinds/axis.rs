@@ -165,12 +165,7 @@ impl AxisDef {
                 ));
             }
         }
-        if self.variation_ppm >= 500_000 {
-            out.push(format!(
-                "variation_ppm {} is 50 % or more of the speed",
-                self.variation_ppm
-            ));
-        }
+        out.extend(super::check_variation(self.variation_ppm, "speed"));
         out
     }
 

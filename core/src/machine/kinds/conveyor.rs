@@ -176,14 +176,7 @@ impl ConveyorDef {
                 ));
             }
         }
-        for s in &self.sensors {
-            if !s.at.is_finite() || s.at < 0.0 || s.at > self.length {
-                out.push(format!(
-                    "beam `{}` at {} is off the belt [0, {}]",
-                    s.signal, s.at, self.length
-                ));
-            }
-        }
+        out.extend(super::check_beams(&self.sensors, self.length, "belt"));
         if let Some(f) = &self.feed {
             if f.items.is_empty() && f.from.is_none() {
                 out.push(format!(
@@ -216,12 +209,7 @@ impl ConveyorDef {
                 out.push("its source's period_ms must be at least 1".to_string());
             }
         }
-        if self.variation_ppm >= 500_000 {
-            out.push(format!(
-                "variation_ppm {} is 50 % or more of the speed",
-                self.variation_ppm
-            ));
-        }
+        out.extend(super::check_variation(self.variation_ppm, "speed"));
         out
     }
 

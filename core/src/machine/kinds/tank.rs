@@ -102,12 +102,7 @@ impl TankDef {
                 ));
             }
         }
-        if self.variation_ppm >= 500_000 {
-            out.push(format!(
-                "variation_ppm {} is 50 % or more of the rate",
-                self.variation_ppm
-            ));
-        }
+        out.extend(super::check_variation(self.variation_ppm, "rate"));
         out
     }
 

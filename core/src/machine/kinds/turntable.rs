@@ -142,20 +142,8 @@ impl TurntableDef {
                 self.length
             ));
         }
-        for b in &self.beams {
-            if !b.at.is_finite() || b.at < 0.0 || b.at > self.length {
-                out.push(format!(
-                    "beam `{}` at {} is off the rollers [0, {}]",
-                    b.signal, b.at, self.length
-                ));
-            }
-        }
-        if self.variation_ppm >= 500_000 {
-            out.push(format!(
-                "variation_ppm {} is 50 % or more of the speed",
-                self.variation_ppm
-            ));
-        }
+        out.extend(super::check_beams(&self.beams, self.length, "rollers"));
+        out.extend(super::check_variation(self.variation_ppm, "speed"));
         out
     }
 
