@@ -794,9 +794,12 @@ mod plant_tests {
     /// is told with it (not with layout.ron's English name).
     #[test]
     fn a_damaged_items_place_in_french() {
-        use vigie_core::emulator::{Layout, Place};
+        use vigie_core::emulator::Place;
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
-        let layout = Layout::load(&dir.join("layout.ron")).unwrap();
+        let layout = vigie_core::machine::Description::load(&dir)
+            .unwrap()
+            .layout()
+            .unwrap();
         let fr = I18n::new(Lang::Fr, Some(&dir)).unwrap();
         for id in layout
             .conveyors

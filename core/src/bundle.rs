@@ -39,8 +39,9 @@ pub struct PlantBundle {
 
 /// The files of a plant folder its loaders may read (besides `programs/*.ron`), each
 /// checked against [`crate::diag::MAX_FILE_BYTES`] before anything is read.
-pub const FOLDER_FILES: [&str; 10] = [
+pub const FOLDER_FILES: [&str; 11] = [
     "plant.ron",
+    "components.ron",
     "observers.ron",
     "constraints.txt",
     "invariants.txt",

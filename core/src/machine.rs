@@ -21,9 +21,10 @@ pub mod kinds;
 pub mod monitor;
 pub mod safe_state;
 pub mod scene;
+mod topview;
 
 pub use crate::emulator::{Hazard, HazardKind, Place};
-pub use description::{ComponentDef, Components, DangerDef};
+pub use description::{ComponentDef, Components, DangerDef, Placement};
 pub use emulator::ComponentPlant;
 pub use scene::{Scene, SceneElement, Shape};
 pub mod physical;

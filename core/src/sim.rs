@@ -577,7 +577,7 @@ impl Simulation {
         options: Options,
     ) -> Result<Self, Vec<Problem>> {
         let description = Description::load(&bundle.dir)?;
-        let layout = description.layout().cloned();
+        let layout = description.layout();
         let tasks = match &bundle.tasks {
             Some(set) => Some(TaskMonitors {
                 monitor: crate::tasks::Monitor::new(set, Millis::ZERO),
@@ -1488,7 +1488,7 @@ impl Simulation {
         });
         snapshot.time = now;
         snapshot.boxes.clear();
-        snapshot.boxes.extend_from_slice(self.emulator.boxes());
+        snapshot.boxes.extend(self.emulator.boxes());
         snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
         snapshot.positions.clear();
         if let Some(c) = self.emulator.as_components() {
@@ -1761,7 +1761,7 @@ impl Simulation {
                 }
                 first_hazard_picture = Some((
                     show.now(),
-                    show.boxes().to_vec(),
+                    show.boxes(),
                     show.table_angle_mdeg(),
                     show.scene(),
                 ));
@@ -1769,14 +1769,8 @@ impl Simulation {
             }
         }
         let hazards = emu.hazards()[known..].to_vec();
-        let (at, boxes, angle, scene) = first_hazard_picture.unwrap_or_else(|| {
-            (
-                emu.now(),
-                emu.boxes().to_vec(),
-                emu.table_angle_mdeg(),
-                emu.scene(),
-            )
-        });
+        let (at, boxes, angle, scene) = first_hazard_picture
+            .unwrap_or_else(|| (emu.now(), emu.boxes(), emu.table_angle_mdeg(), emu.scene()));
         ProjectedPlant {
             at_ms: at.0,
             boxes,

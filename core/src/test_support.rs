@@ -11,6 +11,19 @@ pub(crate) fn station_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
 }
 
+/// The station's first layout file, written for the emulator the components replaced:
+/// a fixture of that emulator's tests and of the identity tests.
+pub(crate) fn station_layout_file() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src/emulator/layout/sorting-station.ron")
+}
+
+/// The station's turntable cell, derived from its `components.ron`.
+pub(crate) fn station_layout() -> crate::emulator::Layout {
+    let desc = crate::machine::Components::load(&station_dir().join("components.ron"))
+        .expect("the station's components load");
+    crate::emulator::Layout::from_components(&desc).expect("the station is a turntable cell")
+}
+
 mod paper;
 
 /// A copy of the station's folder (programs and scenarios included) in a fresh

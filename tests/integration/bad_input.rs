@@ -265,8 +265,8 @@ fn a_50_mib_file_is_refused_quickly_by_check_and_learn() {
     let d = path_str(&dir).to_string();
     for name in [
         "constraints.txt",
+        "components.ron",
         "diagnosers.ron",
-        "layout.ron",
         "plant.ron",
     ] {
         let path = dir.join(name);

@@ -283,10 +283,27 @@ fn fuzz_scenario_file() {
 
 #[test]
 fn fuzz_layout_file() {
+    // A legacy `layout.ron` (the station's first one, kept as a fixture).
     let file = Path::new("layout.ron");
+    let fixture = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../core/src/emulator/layout/sorting-station.ron");
     runner()
-        .run(&input(station_file("layout.ron")), |text| {
+        .run(&input(std::fs::read_to_string(fixture).unwrap()), |text| {
             if let Err(problems) = vigie_core::emulator::Layout::from_ron(&text, file) {
+                prop_assert!(!problems.is_empty());
+                check_problems(&problems, file, true)?;
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn fuzz_components_file() {
+    let file = Path::new("components.ron");
+    runner()
+        .run(&input(station_file("components.ron")), |text| {
+            if let Err(problems) = vigie_core::machine::Components::from_ron(&text, file) {
                 prop_assert!(!problems.is_empty());
                 check_problems(&problems, file, true)?;
             }

@@ -1459,7 +1459,10 @@ mod tests {
     fn station() -> (Layout, Plant) {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
         (
-            Layout::load(&dir.join("layout.ron")).unwrap(),
+            vigie_core::machine::Description::load(&dir)
+                .unwrap()
+                .layout()
+                .unwrap(),
             Plant::load(&dir.join("plant.ron")).unwrap(),
         )
     }

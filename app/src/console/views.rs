@@ -804,7 +804,8 @@ fn synoptic_panel_ui(c: &mut Console, ui: &mut egui::Ui) {
     let plant = &sim.bundle.plant;
     let mut values: BTreeMap<String, bool> = BTreeMap::new();
     let mut forced = BTreeSet::new();
-    let mut boxes = sim.emulator.boxes();
+    let live_boxes = sim.emulator.boxes();
+    let mut boxes: &[vigie_core::emulator::BoxView] = &live_boxes;
     let mut angle = sim.emulator.table_angle_mdeg();
     let mut live_scene = sim.emulator.scene();
     let mut time_ms = sim.now().0;

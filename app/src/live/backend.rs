@@ -1,6 +1,6 @@
 //! What a Modbus server can serve: anything that reads inputs and takes outputs.
 
-use vigie_core::emulator::Emulator;
+use vigie_core::machine::Physical;
 use vigie_core::{Bits, Millis};
 
 /// A plant behind a server: the emulator, or an in-memory image in tests.
@@ -12,7 +12,7 @@ pub(crate) trait IoBackend: Send {
 }
 
 /// The built-in emulator as a backend.
-pub(crate) struct EmulatorBackend(pub(crate) Emulator);
+pub(crate) struct EmulatorBackend(pub(crate) Physical);
 
 impl IoBackend for EmulatorBackend {
     fn write_outputs(&mut self, dt: Millis, outputs: &Bits) {

@@ -671,7 +671,9 @@ pub(crate) async fn monitor(
         side: Arc::clone(&io.side),
         beat: io.heartbeat.clone(),
         liveness,
-        layout: vigie_core::emulator::Layout::load(&bundle.dir.join("layout.ron")).ok(),
+        layout: vigie_core::machine::Description::load(&bundle.dir)
+            .ok()
+            .and_then(|d| d.layout()),
         engine: with_estimates(
             {
                 // The PLC drives the safety devices; the monitor writes nothing.

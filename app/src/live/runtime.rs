@@ -356,10 +356,10 @@ async fn emulator(
         .server
         .clone()
         .context("emulator mode needs a server section")?;
-    let layout_path = config.plant.join("layout.ron");
-    let layout = vigie_core::emulator::Layout::load(&layout_path)
+    // The plant folder's physical description, whatever it is: any plant is served.
+    let description = vigie_core::machine::Description::load(&config.plant)
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
-    let emulator = vigie_core::emulator::Emulator::new(&layout, &bundle.plant, config.seed)
+    let emulator = vigie_core::machine::Physical::new(&description, &bundle.plant, config.seed)
         .map_err(|p| anyhow::anyhow!("{p}"))?;
     serve_backend(
         &config,

@@ -122,7 +122,7 @@ fn a_50_mib_file_in_the_folder_refuses_it_naming_the_file() {
         "plant.ron",
         "observers.ron",
         "invariants.txt",
-        "layout.ron",
+        "components.ron",
         "diagnosers.ron",
         "tasks.ron",
         "programs/reference.ron",

@@ -244,7 +244,24 @@ pub struct Layout {
     /// messages only.
     #[serde(skip)]
     pub positions: BTreeMap<String, (usize, usize)>,
+    /// The components it was derived from ([`Layout::from_components`]): what an
+    /// emulator of the cell runs (none for a `layout.ron`).
+    #[serde(skip)]
+    pub derived_from: DerivedFrom,
 }
+
+/// The plant of components a cell was derived from. Not part of the cell's value: two
+/// equal cells are equal whatever they came from.
+#[derive(Clone, Debug, Default)]
+pub struct DerivedFrom(pub Option<std::sync::Arc<crate::machine::Components>>);
+
+impl PartialEq for DerivedFrom {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl Eq for DerivedFrom {}
 
 impl Layout {
     /// Loads a layout file.
@@ -480,6 +497,8 @@ pub(crate) fn quoted_positions(text: &str) -> BTreeMap<String, (usize, usize)> {
     }
     map
 }
+
+mod derive;
 
 #[cfg(test)]
 mod tests;

@@ -22,7 +22,7 @@ fn load_plant() -> Plant {
 }
 
 fn layout() -> Layout {
-    Layout::load(&dir().join("layout.ron")).expect("layout")
+    Layout::load(&crate::test_support::station_layout_file()).expect("layout")
 }
 
 /// An emulator with no arrivals.
@@ -529,7 +529,7 @@ fn same_seed_same_run_other_seed_other_arrivals() {
 
 #[test]
 fn ron_errors_carry_line_and_column() {
-    let text = std::fs::read_to_string(dir().join("layout.ron")).expect("read");
+    let text = std::fs::read_to_string(crate::test_support::station_layout_file()).expect("read");
     let broken = text.replacen("step_ms: 1,", "step_ms: 1,\n    bogus: 3,", 1);
     let err = Layout::from_ron(&broken, Path::new("layout.ron")).expect_err("unknown field");
     let loc = err[0].location.clone().expect("location");
@@ -545,7 +545,7 @@ fn ron_errors_carry_line_and_column() {
 
 #[test]
 fn unknown_signal_or_part_is_a_clear_problem() {
-    let text = std::fs::read_to_string(dir().join("layout.ron")).expect("read");
+    let text = std::fs::read_to_string(crate::test_support::station_layout_file()).expect("read");
     let broken = text.replace("actuator: \"A1\"", "actuator: \"A9\"");
     let l = Layout::from_ron(&broken, Path::new("layout.ron")).expect("parses");
     let p = Emulator::new(&l, &plant(), 1).expect_err("unknown A9");
@@ -658,7 +658,7 @@ fn supplies_freeze_the_table_stop_the_drives_and_can_fail() {
     let path = dir.join("plant.ron");
     let text = std::fs::read_to_string(&path).unwrap();
     let p = Plant::from_ron(&text.replacen("\nPlant(", "\n(", 1), &path).expect("plant");
-    let l = Layout::load(&dir.join("layout.ron")).expect("layout");
+    let l = Layout::load(&crate::test_support::station_layout_file()).expect("layout");
     let on = |names: &[&str]| {
         let mut b = Bits::zeros(p.outputs.len());
         for a in names {

@@ -261,7 +261,7 @@ mod tests {
     #[test]
     fn a_fault_the_emulator_refuses_is_a_load_problem() {
         let bundle = crate::test_support::station();
-        let layout = crate::emulator::Layout::load(&station_dir().join("layout.ron")).unwrap();
+        let layout = crate::test_support::station_layout();
         let emu = crate::machine::Physical::Layout(Box::new(
             super::super::Emulator::new(&layout, &bundle.plant, 1).unwrap(),
         ));

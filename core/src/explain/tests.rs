@@ -566,11 +566,34 @@ fn observed_emulator(
     bundle: &PlantBundle,
     inputs: &[&str],
     observers: &[&str],
-) -> (crate::emulator::Emulator, crate::history::CycleRecord) {
-    let layout = crate::emulator::Layout::load(&bundle.dir.join("layout.ron")).expect("layout");
+) -> (crate::machine::Physical, crate::history::CycleRecord) {
+    let layout = crate::machine::Description::load(&bundle.dir)
+        .expect("components")
+        .layout()
+        .expect("a turntable cell");
     let rec = observation(bundle, inputs, observers);
     let emu = emulator_from_observation(&layout, &bundle.plant, &rec, &bundle.observers)
         .expect("emulator");
+    assert!(emu.as_components().is_some(), "the station's components");
+    // The station's first emulator, from its layout file, estimates the same plant.
+    let first = crate::emulator::Layout::load(&crate::test_support::station_layout_file())
+        .expect("the layout fixture");
+    let old = emulator_from_observation(&first, &bundle.plant, &rec, &bundle.observers)
+        .expect("emulator");
+    assert!(old.as_layout().is_some());
+    assert_eq!(old.sensors(), emu.sensors(), "{inputs:?} {observers:?}");
+    // The same boxes, numbered in the order each layout lists its sensors.
+    let places = |p: &crate::machine::Physical| {
+        let mut v: Vec<_> = p
+            .boxes()
+            .into_iter()
+            .map(|b| (b.x_mm.to_bits(), b.y_mm.to_bits(), b.size, b.angle_mdeg))
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    assert_eq!(places(&old), places(&emu), "{inputs:?} {observers:?}");
+    assert_eq!(old.table_angle_mdeg(), emu.table_angle_mdeg());
     (emu, rec)
 }
 

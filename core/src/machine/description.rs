@@ -71,6 +71,41 @@ pub struct ComponentDef {
     pub name: String,
     /// What it is.
     pub kind: KindDef,
+    /// Where it stands on the floor (a top view), when the engineer gives it: the
+    /// synoptic then draws the plant to scale, and a plant whose conveyors and
+    /// turntable are all placed gets the console's top view.
+    #[serde(default)]
+    pub at: Option<Placement>,
+}
+
+/// A component's place on the floor, world millimetres, top view (x to the right, y
+/// upwards): a conveyor's entry end (its belt runs along `heading`), a turntable's
+/// centre (its rollers' axis points along `heading` at angle 0).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Placement {
+    /// Abscissa, mm.
+    pub x: f64,
+    /// Ordinate, mm.
+    pub y: f64,
+    /// Direction of its axis, degrees counter-clockwise from +x.
+    #[serde(default)]
+    pub heading: f64,
+    /// Width across its axis, mm.
+    pub width: f64,
+}
+
+impl Placement {
+    /// What is wrong with it, if anything.
+    pub(crate) fn check(&self) -> Option<String> {
+        let finite = [self.x, self.y, self.heading, self.width]
+            .iter()
+            .all(|v| v.is_finite() && v.abs() <= 1e9);
+        if !finite {
+            return Some("its placement must be finite numbers within 1e9 mm".to_string());
+        }
+        (self.width <= 0.0).then(|| format!("its placed width {} must be positive", self.width))
+    }
 }
 
 /// A dangerous state: while `when` (over the plant's signals, outputs as applied)
@@ -116,6 +151,14 @@ impl Components {
         } else {
             Err(problems)
         }
+    }
+
+    /// The arrivals of the first conveyor with a source, if any.
+    pub fn first_source(&self) -> Option<&super::items::ArrivalsDef> {
+        self.components.iter().find_map(|c| match &c.kind {
+            KindDef::Conveyor(v) => v.source.as_ref().map(|s| &s.arrivals),
+            _ => None,
+        })
     }
 
     /// Where `quoted` first appears in the file (the start of the file when it does
@@ -209,7 +252,12 @@ impl Components {
                     format!("component `{}` is declared twice", c.id),
                 ));
             }
-            for message in c.kind.check() {
+            for message in c
+                .kind
+                .check()
+                .into_iter()
+                .chain(c.at.and_then(|a| a.check()))
+            {
                 out.push(self.error(
                     codes::COMPONENTS_INVALID.id,
                     &c.id,

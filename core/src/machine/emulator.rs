@@ -85,6 +85,8 @@ pub struct ComponentPlant {
     /// Quiet steps may be taken at once: nothing reads a sensor within a period and
     /// no declared danger watches a conveyor's position.
     quiet_allowed: bool,
+    /// Where the placed surfaces stand on the floor, for the top view.
+    top: Option<super::topview::TopView>,
 }
 
 impl ComponentPlant {
@@ -163,6 +165,7 @@ impl ComponentPlant {
             feedback: plant.mirrors(),
             quiet_allowed,
             requests: Vec::new(),
+            top: super::topview::TopView::new(desc),
             reads_inputs,
             outputs_dirty: true,
         };
@@ -461,8 +464,9 @@ impl ComponentPlant {
             &self.symbols,
         )?;
         self.has_conditions |= s.condition.is_some();
+        // It takes effect at the next internal step, as every fault due then: a pulse
+        // of one PLC cycle injected between two cycles is seen by the next one.
         self.faults.push(s);
-        self.update_faults();
         Ok(())
     }
 
@@ -545,6 +549,42 @@ impl ComponentPlant {
             .collect();
         v.sort();
         v
+    }
+
+    /// The items on the placed surfaces as the top view draws them (none when no
+    /// surface is placed), and those lying where they fell.
+    pub fn boxes(&self) -> Vec<crate::emulator::BoxView> {
+        self.top
+            .as_ref()
+            .map(|t| t.boxes(&self.items, |k| self.live[k].position()))
+            .unwrap_or_default()
+    }
+
+    /// The angle of the first placed turntable on the floor, millidegrees from +x (0
+    /// when there is none).
+    pub fn table_angle_mdeg(&self) -> i32 {
+        self.top.as_ref().map_or(0, |t| {
+            t.table_angle_mdeg(&self.items, |k| self.live[k].position())
+        })
+    }
+
+    /// Puts an item of the `class`-th class of the plant's first source (`Small` and
+    /// `Large` are its first and second) with its centre at `centre` on conveyor or
+    /// turntable `id` (from its start, in its unit): a live-mode estimate of the plant
+    /// from its sensors. Returns the item's number, or why it was refused.
+    pub fn place_item(&mut self, id: &str, centre: f64, class: usize) -> Result<u32, String> {
+        let k = self
+            .names
+            .iter()
+            .position(|(c, _)| c == id)
+            .ok_or_else(|| format!("no component `{id}`"))?;
+        let s = self.surface_of[k].ok_or_else(|| format!("`{id}` carries no item"))?;
+        let n = self
+            .items
+            .place(s, (centre * 1e6).round() as i64, class)
+            .ok_or_else(|| format!("the plant has no source with a class {class}"))?;
+        self.compute_sensors();
+        Ok(n)
     }
 
     /// The plant has conveyors (its production is items, not only moves).

@@ -330,8 +330,9 @@ pub(crate) struct Items {
     pub(crate) fallen: u32,
     /// Taken off by hand (an operator emptying the plant), fallen ones included.
     pub(crate) removed: u32,
-    /// Fallen and still lying where they fell.
-    lying: u32,
+    /// Fallen and still lying where they fell (their surface and centre as they
+    /// fell, past its end).
+    pub(crate) lying: Vec<Body>,
 }
 
 fn micro(v: f64) -> i64 {
@@ -386,7 +387,7 @@ impl Items {
             damaged: 0,
             fallen: 0,
             removed: 0,
-            lying: 0,
+            lying: Vec::new(),
         };
         items.update_links();
         items
@@ -629,6 +630,21 @@ impl Items {
         }
     }
 
+    /// Puts an item of the `class`-th class of the first source with its centre at
+    /// `centre` (millionths from the start of surface `s`): a live-mode estimate, a
+    /// technician's hand. Returns its number; `None` when there is no such class.
+    pub(crate) fn place(&mut self, s: usize, centre: i64, class: usize) -> Option<u32> {
+        let c = self.sources.first()?.classes.get(class)?.clone();
+        let mut b = self.body(&c);
+        b.id = self.next_id;
+        self.next_id += 1;
+        b.surface = s;
+        b.c = centre;
+        let id = b.id;
+        self.bodies.push(b);
+        Some(id)
+    }
+
     /// Centre of an item on `sj` at `cj`, in the axis of surface `p`, with the
     /// velocity factor.
     #[inline]
@@ -799,8 +815,8 @@ impl Items {
                     self.report(now, i, HazardKind::Dropped, (place, at), el, hazards);
                 }
                 self.fallen += 1;
-                self.lying += 1;
-                self.bodies.remove(i);
+                let b = self.bodies.remove(i);
+                self.lying.push(b);
             }
         }
     }
@@ -1006,8 +1022,8 @@ impl Items {
     pub(crate) fn clear(&mut self) -> u32 {
         let n = self.bodies.len()
             + self.carried.iter().map(VecDeque::len).sum::<usize>()
-            + self.lying as usize;
-        self.lying = 0;
+            + self.lying.len();
+        self.lying.clear();
         self.bodies.clear();
         self.carried.iter_mut().for_each(VecDeque::clear);
         self.removed += n as u32;

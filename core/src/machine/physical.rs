@@ -54,11 +54,13 @@ impl Description {
         )])
     }
 
-    /// The layout, when the plant is described by one.
-    pub fn layout(&self) -> Option<&Layout> {
+    /// The layout of its turntable cell: the one of `layout.ron`, or the one a plant
+    /// of components derives when its conveyors and turntable are placed on the floor
+    /// as the sorting station's are ([`Layout::from_components`]).
+    pub fn layout(&self) -> Option<Layout> {
         match self {
-            Self::Layout(l) => Some(l),
-            Self::Components(_) => None,
+            Self::Layout(l) => Some((**l).clone()),
+            Self::Components(c) => Layout::from_components(c),
         }
     }
 
@@ -88,6 +90,15 @@ impl Physical {
                 Self::Components(Box::new(ComponentPlant::new(c, plant, seed)?))
             }
             Description::Layout(l) => Self::Layout(Box::new(Emulator::new(l, plant, seed)?)),
+        })
+    }
+
+    /// The emulator of a turntable cell: the components it was derived from, or the
+    /// station's first emulator for a legacy `layout.ron`.
+    pub fn of_cell(layout: &Layout, plant: &Plant, seed: u64) -> Result<Self, Problem> {
+        Ok(match &layout.derived_from.0 {
+            Some(c) => Self::Components(Box::new(ComponentPlant::new(c, plant, seed)?)),
+            None => Self::Layout(Box::new(Emulator::new(layout, plant, seed)?)),
         })
     }
 
@@ -137,17 +148,18 @@ impl Physical {
     }
 
     /// Items in transit, fallen, and delivered during the last second.
-    pub fn boxes(&self) -> &[BoxView] {
+    /// (a plant of components: on its placed surfaces only).
+    pub fn boxes(&self) -> Vec<BoxView> {
         match self {
-            Self::Components(_) => &[],
-            Self::Layout(e) => e.boxes(),
+            Self::Components(c) => c.boxes(),
+            Self::Layout(e) => e.boxes().to_vec(),
         }
     }
 
-    /// The turntable's angle (millidegrees) on a layout; 0 otherwise.
+    /// The turntable's angle (millidegrees) on the floor; 0 without one.
     pub fn table_angle_mdeg(&self) -> i32 {
         match self {
-            Self::Components(_) => 0,
+            Self::Components(c) => c.table_angle_mdeg(),
             Self::Layout(e) => e.table_angle_mdeg(),
         }
     }

@@ -737,21 +737,28 @@ fn own_hazards(hazards: &[crate::emulator::Hazard], actuator: &str) -> usize {
         .count()
 }
 
-/// The period and jitter of the plant's production: the layout's arrivals, or the
-/// production scenario's length (no jitter) on a plant of components.
+/// The period and jitter of the plant's production: its source's arrivals (a
+/// layout's or a plant of components' first source), or the production scenario's
+/// length (no jitter).
 fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {
     if let Workload::Operator { period_ms, .. } = &shared.workload {
         return Ok((*period_ms, 0));
     }
-    let layout = crate::emulator::Layout::load(&shared.bundle.dir.join("layout.ron"))?;
-    Ok(match layout.source.arrivals {
-        ArrivalPlan::Periodic {
-            period_ms,
-            jitter_ms,
-            ..
-        } => (period_ms, jitter_ms),
-        _ => (15_000, 0),
-    })
+    Ok(
+        match crate::machine::Description::load(&shared.bundle.dir)? {
+            crate::machine::Description::Layout(l) => match l.source.arrivals {
+                ArrivalPlan::Periodic {
+                    period_ms,
+                    jitter_ms,
+                    ..
+                } => (period_ms, jitter_ms),
+                _ => (15_000, 0),
+            },
+            crate::machine::Description::Components(c) => c
+                .first_source()
+                .map_or((15_000, 0), |a| (a.period_ms, a.jitter_ms)),
+        },
+    )
 }
 
 /// The shortest arrival period, among the layout's own and shorter ones (a step of

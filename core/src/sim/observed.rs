@@ -151,7 +151,7 @@ impl Simulation {
             record,
             &self.engine.observers,
         ) {
-            self.emulator = crate::machine::Physical::Layout(Box::new(emu));
+            self.emulator = emu;
         }
     }
 }

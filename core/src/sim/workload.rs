@@ -33,14 +33,19 @@ pub enum Workload {
 pub const PRODUCTION: &str = "scenarios/reference.ron";
 
 impl Workload {
-    /// The production of the plant in `dir`: `arrivals` on a sorting layout (the
-    /// campaign's own plan), the production scenario's actions on a plant of
-    /// components.
+    /// The production of the plant in `dir`: `arrivals` (the campaign's own plan) on a
+    /// sorting layout or on a plant of components fed by a source without a
+    /// production scenario, the production scenario's actions on any other.
     pub fn of(dir: &Path, arrivals: ArrivalPlan) -> Result<Self, Vec<Problem>> {
         match Description::load(dir)? {
             Description::Layout(_) => Ok(Self::Arrivals(arrivals)),
-            Description::Components(_) => {
+            Description::Components(c) => {
                 let path = dir.join(PRODUCTION);
+                // A line fed by its own source (the sorting station's boxes) produces
+                // from the arrivals, the campaign's own plan.
+                if !path.exists() && c.first_source().is_some() {
+                    return Ok(Self::Arrivals(arrivals));
+                }
                 if !path.exists() {
                     return Err(vec![Problem::error(
                         codes::CAMPAIGN_NO_PRODUCTION.id,

@@ -29,9 +29,14 @@ pub(crate) fn strip_device_monitoring(dir: &Path) {
             || l.contains("\"KM0\"")
             || l.contains("\"YV0\"")
             || l.starts_with("CSk")
-            || l.contains("push_tolerance_mm:")
+            || l.contains("push_tolerance:")
     };
-    for file in ["plant.ron", "constraints.txt", "io-map.ron", "layout.ron"] {
+    for file in [
+        "plant.ron",
+        "constraints.txt",
+        "io-map.ron",
+        "components.ron",
+    ] {
         let path = dir.join(file);
         let text = std::fs::read_to_string(&path).expect("read a station file");
         let kept: Vec<&str> = text.lines().filter(|l| !edm(l.trim_start())).collect();

@@ -45,7 +45,7 @@ use crate::bundle::PlantBundle;
 use crate::constraints::ConstraintSet;
 use crate::diag::Problem;
 use crate::diag::codes;
-use crate::emulator::{ArrivalPlan, BoxSize, Emulator, Hazard, HazardKind, Layout};
+use crate::emulator::{ArrivalPlan, BoxSize, Hazard, HazardKind, Layout};
 use crate::expr;
 use crate::filter::Filter;
 use crate::frame::Frame;
@@ -228,19 +228,25 @@ pub struct VerifyReport {
     pub constraints: Vec<ConstraintRole>,
 }
 
-/// The layout `vigie verify` builds its abstract model from: the plant folder's
-/// `layout.ron`. A plant described as components (`components.ron`) is not yet
-/// supported (V0501, saying so), nor one without a physical model (V0744).
+/// The turntable cell `vigie verify` builds its abstract model of the station's kind
+/// from: a legacy `layout.ron`, or the cell a placed `components.ron` derives. Any
+/// other plant of components is searched by [`components`] (V0501 here, saying so);
+/// a folder without a physical model is V0744.
 pub fn layout_of(dir: &std::path::Path) -> Result<Layout, Vec<Problem>> {
     match crate::machine::Description::load(dir)? {
         crate::machine::Description::Layout(l) => Ok(*l),
-        crate::machine::Description::Components(c) => Err(vec![Problem::error(
-            codes::VERIFY_UNSUPPORTED.id,
-            "the abstract model of `vigie verify` is built from a sorting layout \
-             (layout.ron); a plant described as components is not yet supported"
-                .to_string(),
-            Some(c.location_of(&c.name)),
-        )]),
+        crate::machine::Description::Components(c) => {
+            Layout::from_components(&c).ok_or_else(|| {
+                vec![Problem::error(
+                    codes::VERIFY_UNSUPPORTED.id,
+                    "this plant of components is not a turntable cell placed on the floor: \
+             its abstract model is searched per sub-plant (`vigie verify` on the \
+             command line)"
+                        .to_string(),
+                    Some(c.location_of(&c.name)),
+                )]
+            })
+        }
     }
 }
 
@@ -1090,7 +1096,7 @@ pub fn replay(
     cycle_ms: u64,
 ) -> Result<Replay, Problem> {
     let plant = &bundle.plant;
-    let mut emu = Emulator::new(layout, plant, 1)?;
+    let mut emu = crate::machine::Physical::of_cell(layout, plant, 1)?;
     let arrivals: Vec<(u64, BoxSize)> = trace
         .steps
         .iter()

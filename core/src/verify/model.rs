@@ -243,6 +243,8 @@ fn place_sensors(
             }
         }
     }
+    // In the plant's order, whatever order the layout lists its sensors in.
+    unmodelled.sort_by_key(|id| plant.input(id));
     SensorPlaces {
         probes_mm,
         angles,

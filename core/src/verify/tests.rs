@@ -6,7 +6,7 @@ use std::path::Path;
 fn station() -> (PlantBundle, Layout) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station");
     let (b, _) = PlantBundle::load(&dir).expect("bundle");
-    let l = Layout::load(&dir.join("layout.ron")).expect("layout");
+    let l = crate::test_support::station_layout();
     (b, l)
 }
 
@@ -22,7 +22,7 @@ fn patched(tag: &str, patches: &[(&str, &str, &str)]) -> (Scratch, PlantBundle, 
         "observers.ron",
         "constraints.txt",
         "invariants.txt",
-        "layout.ron",
+        "components.ron",
     ] {
         let mut text = std::fs::read_to_string(src.join(f)).expect("read station file");
         for (file, from, to) in patches {
@@ -35,7 +35,10 @@ fn patched(tag: &str, patches: &[(&str, &str, &str)]) -> (Scratch, PlantBundle, 
     }
     let (b, problems) = PlantBundle::load(&dir).expect("patched bundle");
     assert!(!problems.iter().any(Problem::is_error), "{problems:?}");
-    let l = Layout::load(&dir.join("layout.ron")).expect("patched layout");
+    let l = crate::machine::Description::load(&dir)
+        .expect("patched components")
+        .layout()
+        .expect("a turntable cell");
     (Scratch(dir), b, l)
 }
 
@@ -405,7 +408,10 @@ fn device_monitoring_costs_the_verifier_nothing() {
     let (b, l) = station();
     let dir = crate::test_support::paper_station("verify-paper");
     let (sb, _) = PlantBundle::load(&dir).unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
-    let sl = Layout::load(&dir.join("layout.ron")).expect("layout");
+    let sl = crate::machine::Description::load(&dir)
+        .expect("components")
+        .layout()
+        .expect("a turntable cell");
     assert_eq!(
         Model::new(&b, &l, 1).expect("model").prev_mask.1 & 0x7f,
         Model::new(&sb, &sl, 1).expect("model").prev_mask.1,

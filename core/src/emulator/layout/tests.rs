@@ -1,7 +1,7 @@
 use super::*;
 
 fn station_text() -> String {
-    std::fs::read_to_string(crate::test_support::station_dir().join("layout.ron")).unwrap()
+    std::fs::read_to_string(crate::test_support::station_layout_file()).unwrap()
 }
 
 /// `line:col` just after the first occurrence of `needle` in `text`.
@@ -81,4 +81,49 @@ fn a_name_quoted_in_a_comment_is_not_where_the_file_declares_it() {
     let map = super::quoted_positions(text);
     assert_eq!(map.get("bus_d1"), Some(&(2, 7)));
     assert_eq!(map.get("a // b"), Some(&(2, 20)), "{map:?}");
+}
+
+/// The station's `components.ron`, placed on the floor, derives the very layout its
+/// first emulator ran: every part, sensor, speed and angle (the sensors listed in the
+/// components' order, and the high beam between the two classes' heights where the
+/// layout gave it as 250 mm: both see the tall class only).
+#[test]
+fn the_station_components_derive_its_layout() {
+    let fixture = Layout::load(&crate::test_support::station_layout_file()).unwrap();
+    let mut derived = crate::test_support::station_layout();
+    assert_eq!(derived.high_beam_mm, 260);
+    assert!(
+        (fixture.source.small.height_mm..fixture.source.large.height_mm)
+            .contains(&derived.high_beam_mm)
+    );
+    derived.high_beam_mm = fixture.high_beam_mm;
+    derived
+        .sensors
+        .sort_by_key(|s| fixture.sensors.iter().position(|f| f.id == s.id));
+    derived.file.clone_from(&fixture.file);
+    derived.positions.clone_from(&fixture.positions);
+    assert_eq!(derived, fixture);
+}
+
+/// A plant that is not a turntable cell derives none: the drilling station (an axis),
+/// the station with a third table position or without placements.
+#[test]
+fn only_a_placed_turntable_cell_derives_a_layout() {
+    use crate::machine::Components;
+    let dir = crate::test_support::station_dir();
+    let text = std::fs::read_to_string(dir.join("components.ron")).unwrap();
+    let load = |t: &str| Components::from_ron(t, Path::new("components.ron")).unwrap();
+    assert!(Layout::from_components(&load(&text)).is_some());
+    let unplaced = text.replacen("at: Some((x: 1200.0, y: 0.0, width: 450.0)), ", "", 1);
+    assert_ne!(unplaced, text);
+    assert!(Layout::from_components(&load(&unplaced)).is_none());
+    let third = text.replacen(
+        "(at: 90.0, when: \"A4\"",
+        "(at: 180.0, when: \"A4*A5\", joins: []),\n(at: 90.0, when: \"A4\"",
+        1,
+    );
+    assert_ne!(third, text);
+    assert!(Layout::from_components(&load(&third)).is_none());
+    let drilling = Components::load(&dir.join("../drilling-station/components.ron")).unwrap();
+    assert!(Layout::from_components(&drilling).is_none());
 }

@@ -11,9 +11,19 @@ fn station() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/sorting-station")
 }
 
-fn components() -> Components {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/machine/items/sorting-station.ron");
-    Components::load(&path).expect("the station as components loads")
+/// The station's first emulator, run from the layout file it was written for (kept as
+/// a fixture): what the components must reproduce.
+fn layout_emulator(s: &Scenario, plant: &crate::plant::Plant) -> Physical {
+    let layout = crate::emulator::Layout::load(&crate::test_support::station_layout_file())
+        .expect("the station's layout fixture loads");
+    let mut e = crate::emulator::Emulator::new(&layout, plant, s.seed).expect("builds");
+    if let Some(plan) = &s.arrivals {
+        e.set_arrivals(plan.clone());
+    }
+    for f in &s.faults {
+        e.try_schedule_fault(f.clone()).expect("the fault applies");
+    }
+    Physical::Layout(Box::new(e))
 }
 
 /// The scenario run twice, on the layout's emulator and on the components; the
@@ -36,21 +46,14 @@ fn same(s: &Scenario, path: &Path, until_ms: u64) -> (u64, Vec<crate::emulator::
         explain: false,
     };
     let mut old = Simulation::from_scenario(s, path, options()).expect("starts");
-    let mut new = Simulation::from_scenario(s, path, options()).expect("starts");
+    let new = Simulation::from_scenario(s, path, options()).expect("starts");
+    let mut new = new;
     let plant = new.bundle.plant.clone();
-    let mut c = ComponentPlant::new(&components(), &plant, s.seed).expect("builds");
-    if let Some(plan) = &s.arrivals {
-        let mut p = Physical::Components(Box::new(c));
-        p.set_arrivals(plan.clone());
-        let Physical::Components(b) = p else {
-            unreachable!()
-        };
-        c = *b;
-    }
-    for f in &s.faults {
-        c.try_schedule_fault(f.clone()).expect("the fault applies");
-    }
-    new.emulator = Physical::Components(Box::new(c));
+    assert!(
+        new.emulator.as_components().is_some(),
+        "the folder runs on components"
+    );
+    old.emulator = layout_emulator(s, &plant);
     let mut cycles = 0;
     while old.now() < Millis(until_ms) {
         old.cycle();
@@ -313,4 +316,71 @@ fn arrivals_wait_for_a_free_entry_and_stop_at_their_count() {
     assert_eq!(e.items_in(), 2, "the second came once the first left");
     drive(&mut e, &["F"], 20_000);
     assert!(e.items_in() <= 3, "three at most");
+}
+
+/// A transient injected between two PLC cycles (an operator's or a campaign's, not a
+/// scenario's) takes effect at the next internal step on both emulators: a pulse of
+/// C8 as long as one cycle, with the table empty, is read by the next cycle and held
+/// by the plausibility rules on both (the components once made it active at once and
+/// over before any cycle read it).
+#[test]
+fn a_pulse_injected_between_two_cycles_is_read_as_the_layout_read_it() {
+    use crate::emulator::{ArrivalPlan, FaultKind, FaultSpec, SizeMix, Trigger};
+    use crate::sim::OperatorAction;
+    let run = |first_emulator: bool| {
+        let path = station().join("scenarios/reference-hour.ron");
+        let s = Scenario::load(&path).expect("scenario");
+        let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("sim");
+        if first_emulator {
+            let plant = sim.bundle.plant.clone();
+            sim.emulator = layout_emulator(&s, &plant);
+        }
+        sim.emulator.set_arrivals(ArrivalPlan::Periodic {
+            period_ms: 8_000,
+            jitter_ms: 1_000,
+            mix: SizeMix::Alternate,
+            count: None,
+        });
+        sim.act(&OperatorAction::Start).expect("start");
+        sim.run_until(Millis(20_000));
+        let input = |id: &str| sim.bundle.plant.input(id).expect("input");
+        let (c4, c6, c8) = (input("C4"), input("C6"), input("C8"));
+        let mut empty_since = None;
+        for _ in 0..10_000 {
+            if sim.emulator.sensors().get(c4) && !sim.emulator.sensors().get(c6) {
+                let t = *empty_since.get_or_insert(sim.now().0);
+                if sim.now().0 >= t + 300 {
+                    break;
+                }
+            } else {
+                empty_since = None;
+            }
+            sim.cycle();
+        }
+        assert!(empty_since.is_some(), "the table is empty at C4 for 300 ms");
+        let at = sim.now().0;
+        sim.inject(FaultSpec {
+            trigger: Trigger::At(at),
+            fault: FaultKind::SpuriousRise {
+                sensor: "C8".into(),
+                pulse_ms: 10,
+            },
+            duration_ms: None,
+        })
+        .expect("inject");
+        let mut read = Vec::new();
+        for _ in 0..4 {
+            read.push(sim.emulator.sensors().get(c8));
+            sim.cycle();
+        }
+        let held = sim
+            .journal()
+            .iter()
+            .any(|j| j.kind == "plausibility" && j.text.contains("C8 suspect"));
+        (at, read, held)
+    };
+    let (components, first) = (run(false), run(true));
+    assert_eq!(components, first);
+    assert_eq!(components.1, [false, true, false, false]);
+    assert!(components.2, "the pulse is held as implausible");
 }

@@ -58,6 +58,29 @@ pub struct ItemClass {
     /// What sensors may discriminate (`tall`, `metal`, `red`).
     #[serde(default)]
     pub tags: Vec<String>,
+    /// Its width across the belt, mm, for a top view (its length when absent).
+    #[serde(default)]
+    pub width: Option<f64>,
+    /// Its height, mm, for the record (a high beam's class is its tag).
+    #[serde(default)]
+    pub height: Option<f64>,
+}
+
+impl ItemClass {
+    /// What is wrong with its width or height, if anything.
+    fn check_dims(&self) -> Option<String> {
+        [("width", self.width), ("height", self.height)]
+            .into_iter()
+            .find_map(|(what, v)| {
+                v.filter(|v| !v.is_finite() || *v <= 0.0 || *v > 1e9)
+                    .map(|v| {
+                        format!(
+                            "item class `{}` has {what} {v}: positive, within 1e9",
+                            self.class
+                        )
+                    })
+            })
+    }
 }
 
 /// The feeder at the entry.
@@ -192,6 +215,7 @@ impl ConveyorDef {
                     ));
                 }
             }
+            out.extend(f.items.iter().filter_map(ItemClass::check_dims));
         }
         if let Some(src) = &self.source {
             if src.items.is_empty() {
@@ -205,6 +229,7 @@ impl ConveyorDef {
                     ));
                 }
             }
+            out.extend(src.items.iter().filter_map(ItemClass::check_dims));
             if src.arrivals.period_ms == 0 {
                 out.push("its source's period_ms must be at least 1".to_string());
             }

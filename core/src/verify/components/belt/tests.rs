@@ -184,6 +184,8 @@ fn classes_a_belt_cannot_tell_apart_are_one() {
         class: class.into(),
         length,
         tags: tags.iter().map(|t| t.to_string()).collect(),
+        width: None,
+        height: None,
     };
     let all = [
         k("metal", 40.0, &["metal", "tall"]),

@@ -1,0 +1,132 @@
+//! Where the items are on the floor: the top view of a plant whose conveyors and
+//! turntables are placed (`at` in `components.ron`), for the synoptic and for the
+//! pictures an explanation keeps.
+
+use super::description::{Components, Placement};
+use super::items::{Body, Items};
+use super::kinds::KindDef;
+use crate::emulator::{BoxSize, BoxState, BoxView};
+use std::collections::BTreeMap;
+
+/// The placements and the item classes' widths.
+#[derive(Clone, Debug)]
+pub(crate) struct TopView {
+    /// Per component, its placement.
+    at: Vec<Option<Placement>>,
+    /// Per class: its width (mm) and its size for the drawing (the first class of a
+    /// source or feeder is `Small`, any other `Large`).
+    classes: BTreeMap<String, (i64, BoxSize)>,
+}
+
+#[allow(clippy::cast_possible_truncation)]
+fn round(v: f64) -> i64 {
+    v.round() as i64
+}
+
+impl TopView {
+    /// The top view of `desc`, or `None` when none of its surfaces is placed.
+    pub(crate) fn new(desc: &Components) -> Option<Self> {
+        let placed = desc.components.iter().any(|c| {
+            c.at.is_some() && matches!(c.kind, KindDef::Conveyor(_) | KindDef::Turntable(_))
+        });
+        if !placed {
+            return None;
+        }
+        let mut classes = BTreeMap::new();
+        for c in &desc.components {
+            let KindDef::Conveyor(v) = &c.kind else {
+                continue;
+            };
+            let lists = v
+                .source
+                .iter()
+                .map(|s| &s.items)
+                .chain(v.feed.iter().map(|f| &f.items));
+            for list in lists {
+                for (i, k) in list.iter().enumerate() {
+                    let size = if i == 0 {
+                        BoxSize::Small
+                    } else {
+                        BoxSize::Large
+                    };
+                    classes
+                        .entry(k.class.clone())
+                        .or_insert((round(k.width.unwrap_or(k.length)), size));
+                }
+            }
+        }
+        Some(Self {
+            at: desc.components.iter().map(|c| c.at).collect(),
+            classes,
+        })
+    }
+
+    /// The items on placed surfaces, and those lying where they fell; `angle(k)` is
+    /// component `k`'s position (a turntable's angle, degrees).
+    pub(crate) fn boxes(&self, items: &Items, angle: impl Fn(usize) -> f64) -> Vec<BoxView> {
+        let lying = items.lying.iter().map(|b| (b, BoxState::Fallen));
+        let mut out: Vec<BoxView> = items
+            .bodies
+            .iter()
+            .map(|b| (b, BoxState::Transit))
+            .chain(lying)
+            .filter_map(|(b, state)| self.view(items, b, state, &angle))
+            .collect();
+        out.sort_by_key(|b| b.id);
+        out
+    }
+
+    /// The turntable angle of the first placed turntable, millidegrees from +x.
+    #[allow(clippy::cast_possible_truncation)]
+    pub(crate) fn table_angle_mdeg(&self, items: &Items, angle: impl Fn(usize) -> f64) -> i32 {
+        items
+            .surfaces
+            .iter()
+            .find(|s| s.rotation.is_some() && self.at[s.component].is_some())
+            .map_or(0, |s| {
+                let at = self.at[s.component].unwrap_or(Placement {
+                    x: 0.0,
+                    y: 0.0,
+                    heading: 0.0,
+                    width: 1.0,
+                });
+                ((at.heading + angle(s.component)) * 1000.0).round() as i32
+            })
+    }
+
+    #[allow(clippy::cast_possible_truncation, clippy::cast_precision_loss)]
+    fn view(
+        &self,
+        items: &Items,
+        b: &Body,
+        state: BoxState,
+        angle: &impl Fn(usize) -> f64,
+    ) -> Option<BoxView> {
+        let surface = &items.surfaces[b.surface];
+        let at = self.at[surface.component]?;
+        let c = b.c as f64 / 1e6;
+        let (heading, along) = if surface.rotation.is_some() {
+            let len = surface.len as f64 / 1e6;
+            (at.heading + angle(surface.component), c - len / 2.0)
+        } else {
+            (at.heading, c)
+        };
+        let h = heading.to_radians();
+        let (width, size) = self
+            .classes
+            .get(&b.class)
+            .copied()
+            .unwrap_or((2 * b.half / 1_000_000, BoxSize::Small));
+        Some(BoxView {
+            id: b.id,
+            size,
+            length_mm: round(2.0 * b.half as f64 / 1e6),
+            width_mm: width,
+            x_mm: (at.x + along * h.cos()) as f32,
+            y_mm: (at.y + along * h.sin()) as f32,
+            angle_mdeg: (heading * 1000.0).round() as i32,
+            damaged: b.damaged,
+            state,
+        })
+    }
+}
