@@ -1488,7 +1488,7 @@ impl Simulation {
         });
         snapshot.time = now;
         snapshot.boxes.clear();
-        snapshot.boxes.extend(self.emulator.boxes());
+        self.emulator.boxes_into(&mut snapshot.boxes);
         snapshot.table_angle_mdeg = self.emulator.table_angle_mdeg();
         snapshot.positions.clear();
         if let Some(c) = self.emulator.as_components() {

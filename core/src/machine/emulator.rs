@@ -87,6 +87,10 @@ pub struct ComponentPlant {
     quiet_allowed: bool,
     /// Where the placed surfaces stand on the floor, for the top view.
     top: Option<super::topview::TopView>,
+    /// The frame changed since the components' last step ([`StepCtx::fresh`]).
+    fresh: bool,
+    /// The contactors as they are, computed into this (no allocation per period).
+    closed: Bits,
 }
 
 impl ComponentPlant {
@@ -166,6 +170,8 @@ impl ComponentPlant {
             quiet_allowed,
             requests: Vec::new(),
             top: super::topview::TopView::new(desc),
+            fresh: true,
+            closed: Bits::zeros(n_out),
             reads_inputs,
             outputs_dirty: true,
         };
@@ -179,6 +185,7 @@ impl ComponentPlant {
         if !(self.reads_inputs || self.has_conditions) {
             // Nothing reads a past value within the period: one shift per period.
             self.frame.shift();
+            self.fresh = true;
         }
         if self.commanded != *outputs {
             self.commanded.copy_from(outputs);
@@ -198,12 +205,29 @@ impl ComponentPlant {
             {
                 self.now += k * self.step_ms;
                 self.carry -= k * self.step_ms;
-            } else if k > 0 && settled && self.quiet_allowed && self.live.iter().all(Live::steady) {
-                // Only items moving straight on running belts: the steps until one
-                // could reach an end, a joint or an arrival are taken at once.
-                let q = self.items.quiet_steps(self.now, self.step_ms, k);
+            } else if k > 0 && settled && self.quiet_allowed {
+                // Only items moving straight on running belts and tables turning on:
+                // the steps until an item could reach an end, a joint or an arrival,
+                // and a table its position, are taken at once.
+                let dt = self.step_ms;
+                let q = self
+                    .live
+                    .iter()
+                    .map(|c| c.quiet_steps(dt, k))
+                    .min()
+                    .unwrap_or(k);
+                let q = if q > 0 {
+                    let (live, surfaces) = (&self.live, &self.items.surfaces);
+                    let turning = |s: usize| !live[surfaces[s].component].steady();
+                    self.items.quiet_steps(self.now, dt, q, turning)
+                } else {
+                    0
+                };
                 if q > 0 {
                     self.items.advance(q);
+                    for c in &mut self.live {
+                        c.advance(dt, q);
+                    }
                     self.now += q * self.step_ms;
                     self.carry -= q * self.step_ms;
                 }
@@ -220,9 +244,11 @@ impl ComponentPlant {
         }
         if self.reads_inputs || self.has_conditions {
             self.frame.shift();
+            self.fresh = true;
         }
         if self.outputs_dirty {
             self.apply_outputs();
+            self.fresh = true;
         }
         let mut ctx = StepCtx {
             dt: self.step_ms,
@@ -231,11 +257,15 @@ impl ComponentPlant {
             hazards: Vec::new(),
             now: self.now,
             unpowered: &self.unpowered,
+            fresh: self.fresh,
         };
+        self.fresh = false;
         let mut found = Vec::new();
         for (k, c) in self.live.iter_mut().enumerate() {
             c.step(&mut ctx, self.component_faults[k]);
-            found.extend(ctx.hazards.drain(..).map(|h| (k, h)));
+            if !ctx.hazards.is_empty() {
+                found.extend(ctx.hazards.drain(..).map(|h| (k, h)));
+            }
         }
         for (k, (kind, elements)) in found {
             let (id, name) = &self.names[k];
@@ -285,7 +315,8 @@ impl ComponentPlant {
     /// frame's inputs are the sensors as last read.
     fn apply_outputs(&mut self) {
         self.outputs_dirty = false;
-        let mut out = self.contactors();
+        let mut out = std::mem::take(&mut self.closed);
+        self.contactors_into(&mut out);
         self.unpowered.clear();
         for (o, fed) in &self.supply {
             if !out.get(*o) {
@@ -303,17 +334,18 @@ impl ComponentPlant {
         }
         self.frame.now_mut(Space::Output).copy_from(&out);
         self.frame.now_mut(Space::Input).copy_from(&self.sensors);
+        self.fresh = true;
+        self.closed = out;
     }
 
     /// Each output's contactor as it is: commanded, unless a fault welds or kills it.
-    fn contactors(&self) -> Bits {
-        let mut out = self.commanded.clone();
+    fn contactors_into(&self, out: &mut Bits) {
+        out.clone_from(&self.commanded);
         for (i, f) in self.output_force.iter().enumerate() {
             if let Some(v) = f {
                 out.set(i, *v);
             }
         }
-        out
     }
 
     fn check_dangers(&mut self) {
@@ -349,9 +381,13 @@ impl ComponentPlant {
             c.sense(&mut self.sensors);
         }
         self.items.sense(&mut self.sensors);
-        let closed = self.contactors();
-        for &(input, output) in &self.feedback {
-            self.sensors.set(input, closed.get(output));
+        if !self.feedback.is_empty() {
+            let mut closed = std::mem::take(&mut self.closed);
+            self.contactors_into(&mut closed);
+            for &(input, output) in &self.feedback {
+                self.sensors.set(input, closed.get(output));
+            }
+            self.closed = closed;
         }
         for (i, f) in self.sensor_force.iter().enumerate() {
             if let Some(v) = f {
@@ -359,6 +395,7 @@ impl ComponentPlant {
             }
         }
         self.frame.now_mut(Space::Input).copy_from(&self.sensors);
+        self.fresh = true;
     }
 
     fn update_faults(&mut self) {
@@ -554,10 +591,16 @@ impl ComponentPlant {
     /// The items on the placed surfaces as the top view draws them (none when no
     /// surface is placed), and those lying where they fell.
     pub fn boxes(&self) -> Vec<crate::emulator::BoxView> {
-        self.top
-            .as_ref()
-            .map(|t| t.boxes(&self.items, |k| self.live[k].position()))
-            .unwrap_or_default()
+        let mut out = Vec::new();
+        self.boxes_into(&mut out);
+        out
+    }
+
+    /// [`Self::boxes`] appended to `out`.
+    pub fn boxes_into(&self, out: &mut Vec<crate::emulator::BoxView>) {
+        if let Some(t) = &self.top {
+            t.boxes_into(&self.items, |k| self.live[k].position(), out);
+        }
     }
 
     /// The angle of the first placed turntable on the floor, millidegrees from +x (0

@@ -445,11 +445,38 @@ impl Items {
     /// spare (it can reach neither an end, a joint nor an item of another surface;
     /// items of one surface move together), no arrival waits and none is due. 0 when
     /// that is not the case.
-    pub(crate) fn quiet_steps(&self, now: u64, step_ms: u64, max: u64) -> u64 {
-        if self.sources.iter().any(|s| !s.pending.is_empty()) {
-            return 0;
-        }
+    pub(crate) fn quiet_steps(
+        &self,
+        now: u64,
+        step_ms: u64,
+        max: u64,
+        turning: impl Fn(usize) -> bool,
+    ) -> u64 {
         let mut k = max;
+        for src in &self.sources {
+            // An arrival waits for its entry: the steps before the items there could
+            // leave it room (none while they stand).
+            let Some(c) = src.pending.front().and_then(|&i| src.classes.get(i)) else {
+                continue;
+            };
+            let v = self.vel[src.surface];
+            if v > 0 {
+                let need = c.length + self.gap;
+                let rear = self
+                    .bodies
+                    .iter()
+                    .filter(|b| b.surface == src.surface)
+                    .map(|b| b.c - b.half)
+                    .min()
+                    .unwrap_or(need);
+                if rear >= need {
+                    return 0;
+                }
+                k = k.min(u64::try_from((need - rear - 1) / v).unwrap_or(0));
+            } else if v < 0 {
+                return 0;
+            }
+        }
         for s in &self.sources {
             if let Some((at, _)) = s.next {
                 // The arrival is taken in the step whose time reaches `at`.
@@ -458,16 +485,64 @@ impl Items {
             }
         }
         for b in &self.bodies {
-            let room = (b.c - b.half).min(self.surfaces[b.surface].len - b.c - b.half);
-            if room <= 0 {
-                return 0;
-            }
-            let v = self.vel[b.surface].abs();
-            if v > 0 {
-                k = k.min(u64::try_from((room - 1) / v).unwrap_or(0));
+            match self.quiet_body(b, &turning) {
+                Some(q) => k = k.min(q),
+                None => return 0,
             }
         }
         k
+    }
+
+    /// How many steps item `b` may take straight (`None`: not one). On a stopped
+    /// surface, any while it does not overhang it (an arrival waiting at a stopped
+    /// entry). Moving, those before it reaches an end of its surface; or, when it
+    /// overhangs an end already, those before its centre crosses that end, provided
+    /// the end is open (a sink, a drop: nothing happens before the centre passes) or
+    /// joined to a surface that moves it the same way at the same speed, neither of
+    /// them a turning table (nothing slides, pushes or shears).
+    fn quiet_body(&self, b: &Body, turning: &impl Fn(usize) -> bool) -> Option<u64> {
+        let s = b.surface;
+        let len = self.surfaces[s].len;
+        let v = self.vel[s];
+        let (rear, front) = (b.c - b.half, len - b.c - b.half);
+        if v == 0 {
+            return (rear >= 0 && front >= 0).then_some(u64::MAX);
+        }
+        for (e, room) in [(START, rear), (END, front)] {
+            if room > 0 {
+                continue;
+            }
+            let along = if e == END { v } else { -v };
+            let table_side = self.surfaces[s].table_side[e];
+            let joined = match self.links[s][e] {
+                // Docked to a table that stands, or between conveyors.
+                Some(l) => {
+                    self.vel[l.surface] * factor(e, l.end) == v
+                        && !turning(s)
+                        && !turning(l.surface)
+                }
+                // A turntable's edge, or a conveyor's end a turntable turns beyond,
+                // with nothing docked: the shear is checked step by step.
+                None => {
+                    !table_side && room < 0 && self.surfaces[s].open[e] != Open::Stop && along > 0
+                }
+            };
+            if !joined {
+                return None;
+            }
+        }
+        let steps = |d: i64| u64::try_from((d - 1) / v.abs()).unwrap_or(0);
+        Some(if v > 0 {
+            if front > 0 {
+                steps(front)
+            } else {
+                steps(len - b.c)
+            }
+        } else if rear > 0 {
+            steps(rear)
+        } else {
+            steps(b.c)
+        })
     }
 
     /// Takes `k` quiet steps at once ([`Self::quiet_steps`]): the same positions as

@@ -190,6 +190,9 @@ pub(crate) struct StepCtx<'a> {
     pub now: u64,
     /// The outputs without power (their safety contactor open), by plant index.
     pub unpowered: &'a crate::bits::Bits,
+    /// The frame changed since the previous step (new outputs, a shift, sensors read
+    /// again): an expression over it evaluated then still holds its value when not.
+    pub fresh: bool,
 }
 
 /// The problem of a variation of `variation_ppm` of a `what` (speed, rate): 50 % or
@@ -294,6 +297,25 @@ impl Live {
             Self::Conveyor(_) => true,
             Self::Turntable(t) => t.steady(),
             _ => self.idle(),
+        }
+    }
+
+    /// How many of the next `max` steps of `dt` ms it may take at once on the same
+    /// outputs ([`Self::advance`]): any when steady (an idle component, a conveyor,
+    /// a standing turntable), a turning turntable's before it reaches its position,
+    /// none for anything else that moves.
+    pub(crate) fn quiet_steps(&self, dt: u64, max: u64) -> u64 {
+        match self {
+            Self::Turntable(t) => t.quiet_steps(dt, max),
+            c if c.steady() => max,
+            _ => 0,
+        }
+    }
+
+    /// Takes `k` quiet steps of `dt` ms at once: the state `k` single steps give.
+    pub(crate) fn advance(&mut self, dt: u64, k: u64) {
+        if let Self::Turntable(t) = self {
+            t.advance(dt, k);
         }
     }
 

@@ -156,6 +156,14 @@ impl Physical {
         }
     }
 
+    /// [`Self::boxes`] appended to `out` (no allocation on a plant of components).
+    pub fn boxes_into(&self, out: &mut Vec<BoxView>) {
+        match self {
+            Self::Components(c) => c.boxes_into(out),
+            Self::Layout(e) => out.extend_from_slice(e.boxes()),
+        }
+    }
+
     /// The turntable's angle (millidegrees) on the floor; 0 without one.
     pub fn table_angle_mdeg(&self) -> i32 {
         match self {

@@ -13,6 +13,9 @@ use std::collections::BTreeMap;
 pub(crate) struct TopView {
     /// Per component, its placement.
     at: Vec<Option<Placement>>,
+    /// Per component, the cosine and sine of its heading (a turntable's are of its
+    /// angle, computed when it is drawn).
+    axis: Vec<(f64, f64)>,
     /// Per class: its width (mm) and its size for the drawing (the first class of a
     /// source or feeder is `Small`, any other `Large`).
     classes: BTreeMap<String, (i64, BoxSize)>,
@@ -56,6 +59,16 @@ impl TopView {
             }
         }
         Some(Self {
+            axis: desc
+                .components
+                .iter()
+                .map(|c| {
+                    c.at.map_or((1.0, 0.0), |a| {
+                        let h = a.heading.to_radians();
+                        (h.cos(), h.sin())
+                    })
+                })
+                .collect(),
             at: desc.components.iter().map(|c| c.at).collect(),
             classes,
         })
@@ -63,17 +76,24 @@ impl TopView {
 
     /// The items on placed surfaces, and those lying where they fell; `angle(k)` is
     /// component `k`'s position (a turntable's angle, degrees).
-    pub(crate) fn boxes(&self, items: &Items, angle: impl Fn(usize) -> f64) -> Vec<BoxView> {
+    /// Appended to `out` (what a snapshot of every cycle keeps, without allocating).
+    pub(crate) fn boxes_into(
+        &self,
+        items: &Items,
+        angle: impl Fn(usize) -> f64,
+        out: &mut Vec<BoxView>,
+    ) {
+        let from = out.len();
         let lying = items.lying.iter().map(|b| (b, BoxState::Fallen));
-        let mut out: Vec<BoxView> = items
-            .bodies
-            .iter()
-            .map(|b| (b, BoxState::Transit))
-            .chain(lying)
-            .filter_map(|(b, state)| self.view(items, b, state, &angle))
-            .collect();
-        out.sort_by_key(|b| b.id);
-        out
+        out.extend(
+            items
+                .bodies
+                .iter()
+                .map(|b| (b, BoxState::Transit))
+                .chain(lying)
+                .filter_map(|(b, state)| self.view(items, b, state, &angle)),
+        );
+        out[from..].sort_by_key(|b| b.id);
     }
 
     /// The turntable angle of the first placed turntable, millidegrees from +x.
@@ -105,13 +125,14 @@ impl TopView {
         let surface = &items.surfaces[b.surface];
         let at = self.at[surface.component]?;
         let c = b.c as f64 / 1e6;
-        let (heading, along) = if surface.rotation.is_some() {
+        let (heading, along, (cos, sin)) = if surface.rotation.is_some() {
             let len = surface.len as f64 / 1e6;
-            (at.heading + angle(surface.component), c - len / 2.0)
+            let heading = at.heading + angle(surface.component);
+            let h = heading.to_radians();
+            (heading, c - len / 2.0, (h.cos(), h.sin()))
         } else {
-            (at.heading, c)
+            (at.heading, c, self.axis[surface.component])
         };
-        let h = heading.to_radians();
         let (width, size) = self
             .classes
             .get(&b.class)
@@ -122,8 +143,8 @@ impl TopView {
             size,
             length_mm: round(2.0 * b.half as f64 / 1e6),
             width_mm: width,
-            x_mm: (at.x + along * h.cos()) as f32,
-            y_mm: (at.y + along * h.sin()) as f32,
+            x_mm: (at.x + along * cos) as f32,
+            y_mm: (at.y + along * sin) as f32,
             angle_mdeg: (heading * 1000.0).round() as i32,
             damaged: b.damaged,
             state,

@@ -357,6 +357,11 @@ pub(crate) struct Drives {
     /// Millionths per ms, signed, faults applied.
     pub(crate) speed: i64,
     opposed: bool,
+    /// What the drives asked at the last fresh frame (speed, both directions).
+    asked: Option<(i64, bool)>,
+    /// The faults of the last step (blocked, speed percent): with the same asked
+    /// speed, the same speed.
+    last_faults: Option<(bool, u8)>,
 }
 
 impl Drives {
@@ -383,6 +388,8 @@ impl Drives {
             factor_ppm: 1_000_000,
             speed: 0,
             opposed: false,
+            asked: None,
+            last_faults: None,
         })
     }
 
@@ -418,7 +425,20 @@ impl Drives {
 
     /// One step: the speed asked, its variation for a new run, the faults.
     pub(crate) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
-        let (speed, opposed) = self.asked(ctx.frame);
+        let same_faults = self.last_faults == Some((faults.blocked, faults.speed_percent));
+        if !ctx.fresh && same_faults && self.asked.is_some() {
+            // The same outputs and faults: the same speed as the last step.
+            return;
+        }
+        self.last_faults = Some((faults.blocked, faults.speed_percent));
+        let (speed, opposed) = match self.asked {
+            Some(a) if !ctx.fresh => a,
+            _ => {
+                let a = self.asked(ctx.frame);
+                self.asked = Some(a);
+                a
+            }
+        };
         if opposed && !self.opposed {
             let outputs = self.active_outputs(ctx.frame);
             ctx.hazards.push((HazardKind::OpposedDrives, outputs));

@@ -193,6 +193,10 @@ pub struct Turntable {
     rot_dir: i64,
     rot_speed: i64,
     moving: bool,
+    /// The position it turns to, while it turns.
+    target: Option<i64>,
+    /// The position its outputs asked at the last fresh frame (`None`: not read yet).
+    asked: Option<Option<usize>>,
     /// The position it stands at, by index.
     pub(crate) docked: Option<usize>,
 }
@@ -242,6 +246,8 @@ impl Turntable {
             rot_dir: 0,
             rot_speed: speed,
             moving: false,
+            target: None,
+            asked: None,
             docked: None,
         };
         t.dock();
@@ -263,12 +269,18 @@ impl Turntable {
 
     /// One step: the rotation, then the rollers.
     pub(super) fn step(&mut self, ctx: &mut StepCtx<'_>, faults: ComponentFaults) {
-        let target = self
-            .positions
-            .iter()
-            .zip(&self.reads)
-            .find(|((_, dnf, _), _)| eval_dnf(dnf, ctx.frame))
-            .map(|((at, _, _), reads)| (*at, reads));
+        let asked = match self.asked {
+            Some(a) if !ctx.fresh => a,
+            _ => {
+                let a = self
+                    .positions
+                    .iter()
+                    .position(|(_, dnf, _)| eval_dnf(dnf, ctx.frame));
+                self.asked = Some(a);
+                a
+            }
+        };
+        let target = asked.map(|p| (self.positions[p].0, &self.reads[p]));
         let old = self.angle;
         match target {
             Some((at, outputs)) if at != self.angle => {
@@ -294,6 +306,7 @@ impl Turntable {
             _ => self.rot_dir = 0,
         }
         self.moving = self.angle != old;
+        self.target = target.map(|(at, _)| at).filter(|_| self.moving);
         self.dock();
         let rollers = ComponentFaults {
             blocked: false,
@@ -337,6 +350,29 @@ impl Turntable {
     /// The table does not turn (its rollers may run).
     pub(super) fn steady(&self) -> bool {
         !self.moving
+    }
+
+    /// How many of the next `max` steps of `dt` ms it may take at once on the same
+    /// outputs: any while it stands, while it turns those before it reaches its
+    /// position (it turns on, not docking).
+    pub(super) fn quiet_steps(&self, dt: u64, max: u64) -> u64 {
+        match (self.moving, self.target) {
+            (false, _) => max,
+            (true, Some(at)) => {
+                let d = (self.rot_speed * dt as i64).max(1);
+                let steps = ((at - self.angle).abs() + d - 1) / d;
+                max.min(u64::try_from(steps - 1).unwrap_or(0))
+            }
+            (true, None) => 0,
+        }
+    }
+
+    /// Takes `k` quiet steps of `dt` ms at once ([`Self::quiet_steps`]).
+    pub(super) fn advance(&mut self, dt: u64, k: u64) {
+        if self.moving {
+            self.angle += self.rot_dir * self.rot_speed * (dt * k) as i64;
+            self.dock();
+        }
     }
 
     pub(super) fn idle(&self) -> bool {
