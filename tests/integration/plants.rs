@@ -1149,3 +1149,33 @@ fn random_control_through_the_filter_never_reaches_a_hazard_verify_proved_away()
     }
     assert!(checked >= 5, "{checked} plants of components");
 }
+
+/// `vigie check` says whether a plant placed on the floor is a turntable cell (top view,
+/// `vigie verify`'s cell model) or why it is drawn as a schematic: a placement left
+/// out is never a silent fallback.
+#[test]
+fn check_says_why_a_placed_plant_is_drawn_as_a_schematic() {
+    let dir = crate::bad_input::station_copy("check-floor");
+    let d = dir.to_str().unwrap();
+    let out = vigie(&["check", d]);
+    assert!(
+        text(&out).contains("placed on the floor: a turntable cell"),
+        "{}",
+        text(&out)
+    );
+    let path = dir.join("components.ron");
+    let ron = std::fs::read_to_string(&path).unwrap();
+    let unplaced = ron.replacen("at: Some((x: 1200.0, y: 0.0, width: 450.0)), ", "", 1);
+    assert_ne!(unplaced, ron);
+    std::fs::write(&path, unplaced).unwrap();
+    let out = vigie(&["check", d]);
+    assert!(
+        text(&out).contains(
+            "placed on the floor: drawn as a schematic, not a turntable cell: conveyor \
+             `intermediate` is not placed (`at`)"
+        ),
+        "{}",
+        text(&out)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

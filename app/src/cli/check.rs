@@ -46,6 +46,9 @@ struct Physical {
     actions: Vec<vigie_core::machine::actions::ElementaryAction>,
     /// `actions.ron` or `components`.
     actions_from: &'static str,
+    /// For a plant of components placed on the floor: the turntable cell it derives
+    /// (top view, `vigie verify`'s cell model), or why it is drawn as a schematic.
+    floor: Option<String>,
 }
 
 /// Loads the physical description of `dir` when it has one, checks its signals and its
@@ -92,11 +95,23 @@ fn physical(
                 .collect(),
         ),
     };
+    let floor = match &desc {
+        Description::Components(c) if c.components.iter().any(|k| k.at.is_some()) => {
+            Some(match vigie_core::emulator::Layout::cell_of(c) {
+                Ok(_) => "a turntable cell: the console draws its top view and `vigie verify` \
+                          searches the cell's model"
+                    .to_string(),
+                Err(why) => format!("drawn as a schematic, not a turntable cell: {why}"),
+            })
+        }
+        _ => None,
+    };
     let mut report = Physical {
         file,
         components,
         actions: Vec::new(),
         actions_from: "components",
+        floor,
     };
     let derived = match (&desc, broken) {
         (Description::Components(c), false) => {
@@ -218,6 +233,9 @@ fn write_physical(out: &mut std::io::StdoutLock<'_>, p: &Physical) -> anyhow::Re
         p.file,
         p.components.join(", ")
     )?;
+    if let Some(floor) = &p.floor {
+        writeln!(out, "placed on the floor: {floor}")?;
+    }
     if !p.actions.is_empty() {
         writeln!(
             out,

@@ -47,6 +47,12 @@ fn output_of(when: &str) -> Option<&str> {
 impl Layout {
     /// The cell of `desc`, or `None` when it is not one (see the module's text).
     pub fn from_components(desc: &Components) -> Option<Self> {
+        Self::cell_of(desc).ok()
+    }
+
+    /// The cell of `desc`, or why it is not one (what `vigie check` says of a plant
+    /// placed on the floor that is drawn as a schematic).
+    pub fn cell_of(desc: &Components) -> Result<Self, String> {
         let mut conveyors = Vec::new();
         let mut sensors = Vec::new();
         let mut table = None;
@@ -55,23 +61,18 @@ impl Layout {
         for c in &desc.components {
             match &c.kind {
                 KindDef::Conveyor(v) => {
-                    let at = c.at?;
-                    conveyors.push(conveyor(c, v, at)?);
-                    sensors.extend(v.sensors.iter().map(|s| SensorDef {
-                        id: s.signal.clone(),
-                        kind: SensorKind::Presence {
-                            part: c.id.clone(),
-                            at_mm: round(s.at),
-                            beam: if s.sees.is_some() {
-                                Beam::High
-                            } else {
-                                Beam::Low
-                            },
-                        },
-                    }));
+                    let at =
+                        c.at.ok_or_else(|| format!("conveyor `{}` is not placed (`at`)", c.id))?;
+                    conveyors.push(conveyor(c, v, at).ok_or_else(|| {
+                        format!(
+                            "conveyor `{}` has not one forward drive on one output",
+                            c.id
+                        )
+                    })?);
+                    sensors.extend(conveyor_sensors(c, v));
                     if let Some(src) = &v.source {
                         if source.is_some() {
-                            return None;
+                            return Err(format!("conveyor `{}` is a second source", c.id));
                         }
                         source = Some((c.id.clone(), src));
                     }
@@ -80,33 +81,43 @@ impl Layout {
                     }
                 }
                 KindDef::Turntable(t) if table.is_none() => {
-                    table = Some(turntable(c, t, c.at?)?);
-                    sensors.extend(t.sensors.iter().map(|w| SensorDef {
-                        id: w.signal.clone(),
-                        kind: SensorKind::Angle {
-                            min_mdeg: milli(w.from),
-                            max_mdeg: milli(w.to),
-                        },
-                    }));
-                    sensors.extend(t.beams.iter().map(|b| SensorDef {
-                        id: b.signal.clone(),
-                        kind: SensorKind::Presence {
-                            part: c.id.clone(),
-                            at_mm: round(b.at - t.length / 2.0),
-                            beam: Beam::Low,
-                        },
-                    }));
+                    let at =
+                        c.at.ok_or_else(|| format!("turntable `{}` is not placed (`at`)", c.id))?;
+                    table = Some(turntable(c, t, at).ok_or_else(|| {
+                        format!(
+                            "turntable `{}` is not a cell's: two positions (the second while \
+                             one output holds, the first while it does not), heading 0, \
+                             rollers driven both ways at one speed",
+                            c.id
+                        )
+                    })?);
+                    sensors.extend(table_sensors(c, t));
                 }
                 KindDef::Button(_) | KindDef::Detector(_) => {}
-                _ => return None,
+                KindDef::Turntable(_) => {
+                    return Err(format!(
+                        "turntable `{}` is a second one: a cell has one",
+                        c.id
+                    ));
+                }
+                k => {
+                    return Err(format!(
+                        "{} `{}` is not part of a turntable cell",
+                        k.label(),
+                        c.id
+                    ));
+                }
             }
         }
-        let (table, plus_exit) = table?;
-        let (on, src) = source?;
-        let source = cell_source(desc, on, src)?;
+        let (table, plus_exit) = table.ok_or("there is no turntable")?;
+        let (on, src) = source.ok_or("no conveyor has a source")?;
+        let source = cell_source(desc, on, src).ok_or(
+            "the source must place two classes, the second the only one the high beams see",
+        )?;
         let high_beam_mm = (source.small.height_mm + source.large.height_mm) / 2;
-        let elevators = elevators(desc, &sinks, plus_exit.as_deref())?;
-        Some(Self {
+        let elevators = elevators(desc, &sinks, plus_exit.as_deref())
+            .ok_or("a cell has two placed conveyors ending in a sink")?;
+        Ok(Self {
             name: desc.name.clone(),
             step_ms: desc.step_ms,
             straddle_margin_mm: round(desc.items.straddle_margin),
@@ -123,6 +134,46 @@ impl Layout {
             derived_from: super::DerivedFrom(Some(std::sync::Arc::new(desc.clone()))),
         })
     }
+}
+
+/// A conveyor's beams as the layout's presence sensors (a beam that sees a tag is a
+/// high beam).
+fn conveyor_sensors<'a>(
+    c: &'a ComponentDef,
+    v: &'a ConveyorDef,
+) -> impl Iterator<Item = SensorDef> + 'a {
+    v.sensors.iter().map(|s| SensorDef {
+        id: s.signal.clone(),
+        kind: SensorKind::Presence {
+            part: c.id.clone(),
+            at_mm: round(s.at),
+            beam: if s.sees.is_some() {
+                Beam::High
+            } else {
+                Beam::Low
+            },
+        },
+    })
+}
+
+/// A turntable's angle windows and its beams (along `u`, from the table's centre).
+fn table_sensors(c: &ComponentDef, t: &TurntableDef) -> Vec<SensorDef> {
+    let windows = t.sensors.iter().map(|w| SensorDef {
+        id: w.signal.clone(),
+        kind: SensorKind::Angle {
+            min_mdeg: milli(w.from),
+            max_mdeg: milli(w.to),
+        },
+    });
+    let beams = t.beams.iter().map(|b| SensorDef {
+        id: b.signal.clone(),
+        kind: SensorKind::Presence {
+            part: c.id.clone(),
+            at_mm: round(b.at - t.length / 2.0),
+            beam: Beam::Low,
+        },
+    });
+    windows.chain(beams).collect()
 }
 
 /// The source of two classes (the second the one the high beams see), its arrivals

@@ -126,4 +126,23 @@ fn only_a_placed_turntable_cell_derives_a_layout() {
     assert!(Layout::from_components(&load(&third)).is_none());
     let drilling = Components::load(&dir.join("../drilling-station/components.ron")).unwrap();
     assert!(Layout::from_components(&drilling).is_none());
+    // Each says why.
+    let why = |c: &Components| Layout::cell_of(c).err().unwrap_or_default();
+    assert_eq!(
+        why(&load(&unplaced)),
+        "conveyor `intermediate` is not placed (`at`)"
+    );
+    assert!(why(&load(&third)).starts_with("turntable `table` is not a cell's: two positions"));
+    assert!(
+        why(&drilling).contains("is not part of a turntable cell"),
+        "{}",
+        why(&drilling)
+    );
+    let one_class = text.replacen(
+        "(class: \"large\", length: 380.0, width: Some(380.0), height: Some(320.0), tags: [\"tall\"]),",
+        "",
+        1,
+    );
+    assert_ne!(one_class, text);
+    assert!(why(&load(&one_class)).starts_with("the source must place two classes"));
 }
