@@ -120,6 +120,21 @@ fn every_plant_folder_checks_runs_its_scenarios_and_exports_st() {
     }
 }
 
+/// `vigie verify --json` on the plant in `dir`: the report's part of `component`, and
+/// whether the command succeeded.
+fn verified_part(dir: &Path, component: &str) -> (serde_json::Value, bool) {
+    let out = vigie(&["verify", dir.to_str().unwrap(), "--json"]);
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let part = r["parts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["component"] == component)
+        .unwrap_or_else(|| panic!("no part `{component}` in {r}"))
+        .clone();
+    (part, out.status.success())
+}
+
 /// `diagnose derive`, `diagnose report` and the diagnoser campaign (reduced) on a plant.
 fn diagnosers(dir: &Path) {
     let d = dir.to_str().unwrap();
@@ -896,14 +911,7 @@ fn verify_finds_the_hazards_a_components_constraint_set_misses() {
         "{t}"
     );
     edit(&line, "CSp25 = PS_CL_FWD . PS_CL_BWD", "");
-    let out = vigie(&["verify", line.to_str().unwrap(), "--json"]);
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let clamp = r["parts"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|p| p["component"] == "ps_clamp")
-        .unwrap();
+    let (clamp, _) = verified_part(&line, "ps_clamp");
     assert_eq!(
         clamp["with_filter"][0]["hazard"], "OpposedDrives",
         "{clamp}"
@@ -956,15 +964,8 @@ fn verify_finds_a_feeder_pushing_onto_an_item_its_entry_beam_does_not_see() {
     let moved = c.replace("(signal: \"a\", at: 200.0)", "(signal: \"a\", at: 100.0)");
     assert_ne!(moved, c);
     std::fs::write(&f, moved).unwrap();
-    let out = vigie(&["verify", ws.to_str().unwrap(), "--json"]);
-    assert!(!out.status.success());
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let conveyor = r["parts"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|p| p["component"] == "conveyor")
-        .unwrap();
+    let (conveyor, success) = verified_part(&ws, "conveyor");
+    assert!(!success);
     let reached = &conveyor["with_filter"][0];
     assert_eq!(reached["hazard"], "Collision", "{conveyor}");
     // The last cycle pushes while the pallet's rear is past the beam, within its length.
@@ -989,14 +990,7 @@ fn verify_finds_a_feeder_pushing_onto_an_item_its_entry_beam_does_not_see() {
     assert_eq!(sourced.matches("source: Some").count(), 1, "{sourced}");
     assert!(sourced.contains("exit: Drop,"));
     std::fs::write(&f, sourced).unwrap();
-    let out = vigie(&["verify", ws.to_str().unwrap(), "--json"]);
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let conveyor = r["parts"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|p| p["component"] == "conveyor")
-        .unwrap();
+    let (conveyor, _) = verified_part(&ws, "conveyor");
     let without: Vec<_> = conveyor["without_filter"]
         .as_array()
         .unwrap()

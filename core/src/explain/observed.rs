@@ -23,67 +23,39 @@
 //! emulator); a legacy `layout.ron` on the station's first emulator.
 
 use crate::diag::Problem;
-use crate::emulator::{ArrivalPlan, Beam, BoxSize, Emulator, Layout, SensorKind};
+use crate::emulator::{ArrivalPlan, Beam, BoxSize, Layout, SensorKind};
 use crate::expr::LeafKind;
 use crate::history::CycleRecord;
-use crate::machine::{ComponentPlant, Physical};
+use crate::machine::Physical;
 use crate::observers::{Observers, Rule};
 use crate::plant::Plant;
 
-/// The emulator being initialised: the cell's components, or a legacy layout's.
-enum Target {
-    Components(Box<ComponentPlant>),
-    Layout(Box<Emulator>),
+/// Turns the table of the cell's emulator to `mdeg` (the cell's table is placed at
+/// heading 0).
+fn set_angle(emu: &mut Physical, layout: &Layout, mdeg: i32) {
+    match emu {
+        Physical::Components(c) => {
+            c.set_position(&layout.table.id, f64::from(mdeg) / 1000.0);
+        }
+        Physical::Layout(e) => e.set_table_angle_mdeg(mdeg),
+    }
 }
 
-impl Target {
-    fn new(layout: &Layout, plant: &Plant) -> Result<Self, Problem> {
-        let mut t = match &layout.derived_from.0 {
-            Some(c) => Self::Components(Box::new(ComponentPlant::new(c, plant, 0)?)),
-            None => Self::Layout(Box::new(Emulator::new(layout, plant, 0)?)),
-        };
-        if let Self::Layout(e) = &mut t {
-            e.set_arrivals(ArrivalPlan::List(Vec::new()));
+/// Puts a box with its centre at `centre` mm along `part` (the table: `u`).
+fn place_box(emu: &mut Physical, layout: &Layout, part: &str, centre: i64, size: BoxSize) -> bool {
+    match emu {
+        Physical::Components(c) => {
+            let along = if part == layout.table.id {
+                centre + layout.table.half_length_mm
+            } else {
+                centre
+            };
+            #[allow(clippy::cast_precision_loss)]
+            let along = along as f64;
+            c.place_item(part, along, usize::from(size == BoxSize::Large))
+                .is_ok()
         }
-        Ok(t)
-    }
-
-    /// Turns the table to `mdeg` (the cell's table is placed at heading 0).
-    fn set_angle(&mut self, layout: &Layout, mdeg: i32) {
-        match self {
-            Self::Components(c) => {
-                c.set_position(&layout.table.id, f64::from(mdeg) / 1000.0);
-            }
-            Self::Layout(e) => e.set_table_angle_mdeg(mdeg),
-        }
-    }
-
-    /// Puts a box with its centre at `centre` mm along `part` (the table: `u`).
-    fn place(&mut self, layout: &Layout, part: &str, centre: i64, size: BoxSize) -> bool {
-        match self {
-            Self::Components(c) => {
-                let along = if part == layout.table.id {
-                    centre + layout.table.half_length_mm
-                } else {
-                    centre
-                };
-                #[allow(clippy::cast_precision_loss)]
-                let along = along as f64;
-                c.place_item(part, along, usize::from(size == BoxSize::Large))
-                    .is_ok()
-            }
-            Self::Layout(e) => e.try_place_box(part, centre, size).is_ok(),
-        }
-    }
-
-    fn into_physical(self) -> Physical {
-        match self {
-            Self::Components(mut c) => {
-                c.set_arrivals(crate::machine::items::Plan::List(Vec::new()));
-                Physical::Components(c)
-            }
-            Self::Layout(e) => Physical::Layout(e),
-        }
+        Physical::Layout(e) => e.try_place_box(part, centre, size).is_ok(),
     }
 }
 
@@ -201,18 +173,19 @@ pub fn emulator_from_observation(
     record: &CycleRecord,
     observers: &Observers,
 ) -> Result<Physical, Problem> {
-    let mut emu = Target::new(layout, plant)?;
+    let mut emu = Physical::of_cell(layout, plant, 0)?;
+    emu.set_arrivals(ArrivalPlan::List(Vec::new()));
     let angle = observed_angle(layout, plant, record);
-    emu.set_angle(layout, angle);
+    set_angle(&mut emu, layout, angle);
     let mut placed: Vec<Placed> = Vec::new();
     let place =
-        |emu: &mut Target, part: &str, centre: i64, size: BoxSize, placed: &mut Vec<Placed>| {
+        |emu: &mut Physical, part: &str, centre: i64, size: BoxSize, placed: &mut Vec<Placed>| {
             let half = layout.dims(size).length_mm / 2;
             let Some((lo, hi)) = part_range(layout, part) else {
                 return;
             };
             let centre = centre.clamp(lo + half, (hi - half - 1).max(lo + half));
-            if emu.place(layout, part, centre, size) {
+            if place_box(emu, layout, part, centre, size) {
                 placed.push(Placed {
                     part: part.to_string(),
                     centre,
@@ -275,7 +248,7 @@ pub fn emulator_from_observation(
         let half = layout.dims(size).length_mm / 2;
         place(&mut emu, part, at + half - 10, size, &mut placed);
     }
-    Ok(emu.into_physical())
+    Ok(emu)
 }
 
 /// A high beam ON with no low beam ON at the same place (a fault): no box for it.

@@ -228,8 +228,8 @@ impl ComponentPlant {
                     for c in &mut self.live {
                         c.advance(dt, q);
                     }
-                    self.now += q * self.step_ms;
-                    self.carry -= q * self.step_ms;
+                    self.now += q * dt;
+                    self.carry -= q * dt;
                 }
             }
         }
@@ -248,7 +248,6 @@ impl ComponentPlant {
         }
         if self.outputs_dirty {
             self.apply_outputs();
-            self.fresh = true;
         }
         let mut ctx = StepCtx {
             dt: self.step_ms,

@@ -441,10 +441,10 @@ impl Items {
     }
 
     /// How many of the next `max` steps (each `step_ms`, from `now`) can be taken at
-    /// once with the same velocities: every item lies inside its surface with room to
-    /// spare (it can reach neither an end, a joint nor an item of another surface;
-    /// items of one surface move together), no arrival waits and none is due. 0 when
-    /// that is not the case.
+    /// once with the same velocities: those before an arrival is due or a waiting one
+    /// could find its entry free, and before any item reaches an end or a joint, or
+    /// its centre crosses one ([`Self::quiet_body`]); items of one surface move
+    /// together. 0 when none can.
     pub(crate) fn quiet_steps(
         &self,
         now: u64,
@@ -454,6 +454,11 @@ impl Items {
     ) -> u64 {
         let mut k = max;
         for src in &self.sources {
+            if let Some((at, _)) = src.next {
+                // The arrival is taken in the step whose time reaches `at`.
+                let before = at.saturating_sub(now) / step_ms.max(1);
+                k = k.min(before.saturating_sub(1));
+            }
             // An arrival waits for its entry: the steps before the items there could
             // leave it room (none while they stand).
             let Some(c) = src.pending.front().and_then(|&i| src.classes.get(i)) else {
@@ -475,13 +480,6 @@ impl Items {
                 k = k.min(u64::try_from((need - rear - 1) / v).unwrap_or(0));
             } else if v < 0 {
                 return 0;
-            }
-        }
-        for s in &self.sources {
-            if let Some((at, _)) = s.next {
-                // The arrival is taken in the step whose time reaches `at`.
-                let before = at.saturating_sub(now) / step_ms.max(1);
-                k = k.min(before.saturating_sub(1));
             }
         }
         for b in &self.bodies {

@@ -102,15 +102,10 @@ impl TopView {
         items
             .surfaces
             .iter()
-            .find(|s| s.rotation.is_some() && self.at[s.component].is_some())
-            .map_or(0, |s| {
-                let at = self.at[s.component].unwrap_or(Placement {
-                    x: 0.0,
-                    y: 0.0,
-                    heading: 0.0,
-                    width: 1.0,
-                });
-                ((at.heading + angle(s.component)) * 1000.0).round() as i32
+            .filter(|s| s.rotation.is_some())
+            .find_map(|s| Some((self.at[s.component]?, s.component)))
+            .map_or(0, |(at, k)| {
+                ((at.heading + angle(k)) * 1000.0).round() as i32
             })
     }
 
