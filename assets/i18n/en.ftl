@@ -216,6 +216,8 @@ journal-exports-under = Exports go under { $path }
 ## message id, and shows an entry in the language shown)
 say-session = console opened on { $scenario }
 say-login = { $user } logged in ({ $role })
+login-wrong = unknown user or wrong password
+say-login-locked = Login locked for { $s } s after { $n } failed attempts
 say-login-refused = Login refused: { $error }
 say-logout = { $user } logged out
 say-logged-out = Logged out: operator role
@@ -256,6 +258,12 @@ say-verified = verification: { $safe ->
     [true] permissive
    *[other] NOT permissive
 }
+say-verified-parts = verification of { $parts } components: { $verdict ->
+    [safe] SAFE
+    [unproved] no hazard found, some components NOT PROVED
+   *[other] NOT SAFE
+}
+say-no-replay-of-parts = this plant is verified per component: its traces are in `vigie verify`, not replayed on the synoptic
 say-verify-failed = verification failed: { $error }
 say-no-verification = no verification result to replay
 say-no-counterexample = no counterexample: the set is safe on the model
@@ -443,7 +451,7 @@ score-not-fixed = Not fixed yet.
 ## Constraint set verification
 verif-title = Constraint set verification
 verif-run = Verify constraints
-verif-run-hover = Explore the abstract plant model with the most permissive control and the filter in the loop (at most 2 boxes): hazards, deliveries, invariants. Necessity of each constraint: `vigie verify --necessity`
+verif-run-hover = Explore the abstract model of the plant with any control and the filter in the loop: a turntable cell whole (at most 2 boxes: hazards, deliveries, invariants), any other plant one component at a time. Necessity of each constraint: `vigie verify --necessity`
 verif-exploring = exploring… { $s } s
 verif-not-yet = Not verified yet.
 verif-states = { $states } reachable states, { $transitions } transitions ({ $s } s)
@@ -462,6 +470,25 @@ verif-delivery-some = Permissiveness { $side }: delivery in { $n } steps; some s
 verif-invariants = Invariants
 verif-proved = proved
 verif-refuted = REFUTED
+verif-parts = { $parts } components verified one at a time, each with the inputs it does not write free ({ $s } s)
+verif-parts-verdict = { $verdict ->
+    [safe] Safety: proved for every modelled component
+    [unproved] Safety: no hazard found, but some components were not verified to the end
+   *[other] Safety: VIOLATED on some component
+}
+verif-part-safe = safe with the filter
+verif-part-violated = VIOLATED with the filter: { $hazards }
+verif-part-truncated = NOT PROVED: the search stopped at its limit
+verif-part-skipped = NOT VERIFIED: { $why }
+verif-part-environment = by the environment alone: { $hazards }
+verif-part-unguarded = no constraint
+verif-part-guarded = Guarded by { $by }
+verif-not-modelled = Not modelled (detectors, links): { $names }
+verif-assumptions = Assumptions of the model
+verif-sub-end-stop = end stop at { $end }
+verif-sub-declared = danger `{ $id }`
+verif-sub-collision = collision at the entry
+verif-sub-dropped = item fallen off the end
 verif-necessity-hint = Necessity of each constraint: `vigie verify --necessity` (one exploration per constraint).
 verif-necessity = Necessity of each constraint
 verif-necessary = necessary: without it { $hazard }

@@ -229,6 +229,8 @@ journal-exports-under = Les exports vont dans { $path }
 ## message, et montre une entrée dans la langue affichée)
 say-session = console ouverte sur { $scenario }
 say-login = { $user } connecté ({ $role })
+login-wrong = utilisateur inconnu ou mot de passe erroné
+say-login-locked = Connexion bloquée pendant { $s } s après { $n } échecs
 say-login-refused = Connexion refusée : { $error }
 say-logout = { $user } déconnecté
 say-logged-out = Déconnecté : rôle opérateur
@@ -274,6 +276,12 @@ say-verified = vérification : { $safe ->
     [true] permissif
    *[other] PAS permissif
 }
+say-verified-parts = vérification de { $parts } composants : { $verdict ->
+    [safe] SÛR
+    [unproved] aucun danger trouvé, certains composants NON PROUVÉS
+   *[other] PAS SÛR
+}
+say-no-replay-of-parts = cette machine est vérifiée composant par composant : ses traces sont dans `vigie verify`, elles ne se rejouent pas sur le synoptique
 say-verify-failed = la vérification a échoué : { $error }
 say-no-verification = aucun résultat de vérification à rejouer
 say-no-counterexample = pas de contre-exemple : le jeu est sûr sur le modèle
@@ -470,7 +478,7 @@ score-not-fixed = Pas encore corrigé.
 ## Vérification du jeu de contraintes
 verif-title = Vérification du jeu de contraintes
 verif-run = Vérifier les contraintes
-verif-run-hover = Explorer le modèle abstrait de la machine avec la commande la plus permissive et le filtre dans la boucle (2 caisses au plus) : dangers, livraisons, invariants. Nécessité de chaque contrainte : `vigie verify --necessity`
+verif-run-hover = Explorer le modèle abstrait de la machine avec toute commande et le filtre dans la boucle : une cellule à table tournante en entier (2 caisses au plus : dangers, livraisons, invariants), toute autre machine composant par composant. Nécessité de chaque contrainte : `vigie verify --necessity`
 verif-exploring = exploration… { $s } s
 verif-not-yet = Pas encore vérifié.
 verif-states = { $states } états atteignables, { $transitions } transitions ({ $s } s)
@@ -489,6 +497,25 @@ verif-delivery-some = Permissivité { $side } : livraison en { $n } pas ; certai
 verif-invariants = Invariants
 verif-proved = prouvé
 verif-refuted = RÉFUTÉ
+verif-parts = { $parts } composants vérifiés un à un, chacun avec libres les entrées qu'il n'écrit pas ({ $s } s)
+verif-parts-verdict = { $verdict ->
+    [safe] Sécurité : prouvée pour chaque composant modélisé
+    [unproved] Sécurité : aucun danger trouvé, mais certains composants n'ont pas été vérifiés jusqu'au bout
+   *[other] Sécurité : VIOLÉE sur un composant
+}
+verif-part-safe = sûr avec le filtre
+verif-part-violated = VIOLÉ avec le filtre : { $hazards }
+verif-part-truncated = NON PROUVÉ : la recherche s'est arrêtée à sa limite
+verif-part-skipped = NON VÉRIFIÉ : { $why }
+verif-part-environment = par l'environnement seul : { $hazards }
+verif-part-unguarded = aucune contrainte
+verif-part-guarded = Gardé par { $by }
+verif-not-modelled = Non modélisés (détecteurs, liaisons) : { $names }
+verif-assumptions = Hypothèses du modèle
+verif-sub-end-stop = butée en { $end }
+verif-sub-declared = danger `{ $id }`
+verif-sub-collision = collision à l'entrée
+verif-sub-dropped = pièce tombée en bout
 verif-necessity-hint = Nécessité de chaque contrainte : `vigie verify --necessity` (une exploration par contrainte).
 verif-necessity = Nécessité de chaque contrainte
 verif-necessary = nécessaire : sans elle { $hazard }

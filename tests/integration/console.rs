@@ -837,6 +837,107 @@ fn maintenance_verifies_the_constraint_set() {
     );
 }
 
+/// Runs frames until the verification's verdict is on screen (at most 15 minutes).
+fn wait_for_verdict(h: &mut Harness<'static, Console>) {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(900);
+    while h.query_by_label_contains("Safety:").is_none() {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the verification did not finish in 15 minutes: {}",
+            h.state().status
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        h.step();
+    }
+    h.run_steps(2);
+}
+
+/// Logs in the maintenance account of [`data_with_accounts`].
+fn log_in_as_maintenance(h: &mut Harness<'static, Console>) {
+    h.state_mut().apply(Command::Login {
+        name: "marie".into(),
+        password: "correct horse".into(),
+    });
+    h.run_steps(2);
+    assert!(!h.get_by_label("Maintenance").accesskit_node().is_disabled());
+}
+
+/// Issue 16: Maintenance's "Verify constraints" on a plant of components that is not a
+/// turntable cell (seed 000's workshop) searches it per component, as `vigie verify`
+/// does, instead of refusing it; with a constraint taken out of a copy, the part it
+/// guarded is shown violated, and there is no trace to replay on the synoptic.
+#[test]
+fn maintenance_verifies_a_plant_of_components_per_component() {
+    let dir = root().join("layouts/workshop");
+    let mut o = ConsoleOptions::new(&dir);
+    o.data_dir = Some(data_with_accounts("verify-parts"));
+    let mut h = harness(o);
+    h.run_steps(2);
+    log_in_as_maintenance(&mut h);
+    h.state_mut().apply(Command::SetMode(Mode::Maintenance));
+    h.run_steps(2);
+    h.get_by_label("Not verified yet.");
+    h.get_by_label("Verify constraints").click();
+    wait_for_verdict(&mut h);
+    h.get_by_label("Safety: proved for every modelled component");
+    h.get_by_label_contains("2 components verified one at a time");
+    assert_eq!(
+        h.query_all_by_label("safe with the filter").count(),
+        2,
+        "the conveyor and the robot"
+    );
+    h.get_by_label("conveyor");
+    h.get_by_label("robot");
+    assert!(
+        h.state()
+            .status
+            .starts_with("verification of 2 components: SAFE"),
+        "{}",
+        h.state().status
+    );
+
+    // The same plant without CSw2 (the robot driven both ways at once).
+    let copy = temp_dir("verify-parts-weak").join("workshop");
+    crate::paper::copy_dir(&dir, &copy);
+    let constraints = std::fs::read_to_string(copy.join("constraints.txt")).unwrap();
+    let weakened: String = constraints
+        .lines()
+        .filter(|l| !l.starts_with("CSw2 "))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_ne!(weakened.lines().count(), constraints.lines().count());
+    std::fs::write(copy.join("constraints.txt"), weakened).unwrap();
+    let mut o = ConsoleOptions::new(&copy);
+    o.data_dir = Some(data_with_accounts("verify-parts-weak-data"));
+    let mut h = harness(o);
+    h.run_steps(2);
+    log_in_as_maintenance(&mut h);
+    h.state_mut().apply(Command::SetMode(Mode::Maintenance));
+    h.run_steps(2);
+    h.get_by_label("Not verified yet.");
+    h.get_by_label("Verify constraints").click();
+    wait_for_verdict(&mut h);
+    h.get_by_label("Safety: VIOLATED on some component");
+    h.get_by_label("VIOLATED with the filter: driven both ways at once");
+    assert!(
+        h.state()
+            .status
+            .starts_with("verification of 2 components: NOT SAFE"),
+        "{}",
+        h.state().status
+    );
+    h.state_mut().apply(Command::ReplayCounterexample);
+    h.run_steps(2);
+    assert_eq!(h.state().mode, Mode::Maintenance, "nothing replayed");
+    assert!(
+        h.state()
+            .status
+            .starts_with("this plant is verified per component"),
+        "{}",
+        h.state().status
+    );
+}
+
 /// Issue 17: a dead intermediate belt under a pushed box (`scenarios/a1-dead-belt.ron`,
 /// on the paper's station) leaves the feed in doubt between the dead belt and a dead beam; after 4 s it stops
 /// the plant on the safe side. The operator reads that no fault is certain, the
@@ -1543,6 +1644,19 @@ fn a_bypass_needs_maintenance_shows_a_banner_and_is_journaled() {
 /// is refused while logins are locked, and the lock is journaled.
 #[test]
 fn five_failed_logins_lock_the_login() {
+    let (data, mut h) = console_with_accounts("lockout-fr");
+    h.run_steps(1);
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.state_mut().apply(Command::Login {
+        name: "nobody".into(),
+        password: "whatever1".into(),
+    });
+    assert_eq!(
+        h.state().status,
+        "Connexion refusée : utilisateur inconnu ou mot de passe erroné"
+    );
+    let _ = std::fs::remove_dir_all(&data);
     let (data, mut h) = console_with_accounts("lockout");
     h.run_steps(1);
     let login = |password: &str| Command::Login {
@@ -1564,6 +1678,16 @@ fn five_failed_logins_lock_the_login() {
         h.state().status
     );
     assert_eq!(h.state().role, vigie_core::access::Role::Operator);
+    // In French, both refusals are French (the reason was the English error text).
+    h.state_mut()
+        .apply(Command::SetLanguage(vigie_app::i18n::Lang::Fr));
+    h.state_mut().apply(login("correct horse"));
+    assert!(
+        h.state().status.starts_with("Connexion bloquée pendant ")
+            && h.state().status.ends_with(" s après 5 échecs"),
+        "{}",
+        h.state().status
+    );
     journal_with(&data, &["\"login_locked\"", "logins locked for 60 s"]);
     let _ = std::fs::remove_dir_all(&data);
 }

@@ -889,7 +889,7 @@ fn verify_finds_the_hazards_a_components_constraint_set_misses() {
     let tmp = TempDir::new("verify-components");
     let copy = |plant: &str| -> PathBuf {
         let dst = tmp.0.join(plant);
-        copy_dir(&repo().join("layouts").join(plant), &dst);
+        crate::paper::copy_dir(&repo().join("layouts").join(plant), &dst);
         dst
     };
     let edit = |dir: &Path, from: &str, to: &str| {
@@ -954,7 +954,7 @@ fn verify_finds_the_hazards_a_components_constraint_set_misses() {
 fn verify_finds_a_feeder_pushing_onto_an_item_its_entry_beam_does_not_see() {
     let tmp = TempDir::new("verify-belts");
     let ws = tmp.0.join("workshop");
-    copy_dir(&repo().join("layouts/workshop"), &ws);
+    crate::paper::copy_dir(&repo().join("layouts/workshop"), &ws);
     let out = vigie(&["verify", ws.to_str().unwrap()]);
     let t = text(&out);
     assert!(out.status.success(), "{t}");
@@ -999,7 +999,7 @@ fn verify_finds_a_feeder_pushing_onto_an_item_its_entry_beam_does_not_see() {
         .collect();
     assert!(without.contains(&"Dropped".to_string()), "{conveyor}");
     let line = tmp.0.join("production-line");
-    copy_dir(&repo().join("layouts/production-line"), &line);
+    crate::paper::copy_dir(&repo().join("layouts/production-line"), &line);
     let out = vigie(&["verify", line.to_str().unwrap()]);
     let t = text(&out);
     assert!(out.status.success(), "{t}");
@@ -1026,19 +1026,6 @@ fn verify_finds_a_feeder_pushing_onto_an_item_its_entry_beam_does_not_see() {
     assert!(!out.status.success(), "{t}");
     let ds = part(&t, "ds_belt");
     assert!(ds.contains("VIOLATED: collision at the entry"), "{ds}");
-}
-
-fn copy_dir(src: &Path, dst: &Path) {
-    std::fs::create_dir_all(dst).unwrap();
-    for e in std::fs::read_dir(src).unwrap() {
-        let e = e.unwrap();
-        let to = dst.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &to);
-        } else {
-            std::fs::copy(e.path(), &to).unwrap();
-        }
-    }
 }
 
 /// What `vigie verify` proves, the real emulator confirms: on every plant of components,

@@ -52,17 +52,14 @@ fn ns_per(iters: u32, mut f: impl FnMut(u32) -> bool) -> f64 {
 pub(crate) fn run(args: &VerifyArgs) -> anyhow::Result<ExitCode> {
     let dir = args.plant.plant.as_path();
     let (bundle, _) = super::load_bundle(dir)?;
-    let description = vigie_core::machine::Description::load(dir)
-        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     // A turntable cell (the station's kind) has its own abstract model; any other
     // plant of components is searched per sub-plant.
-    if let (None, vigie_core::machine::Description::Components(desc)) =
-        (description.layout(), &description)
+    let layout = match verify::subject_of(dir)
+        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?
     {
-        return run_components(args, &bundle, desc);
-    }
-    let layout =
-        verify::layout_of(dir).map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+        verify::Subject::Cell(layout) => *layout,
+        verify::Subject::Parts(desc) => return run_components(args, &bundle, &desc),
+    };
     let opts = Options {
         max_boxes: args.max_boxes,
         necessity_boxes: args.necessity,

@@ -926,9 +926,14 @@ impl Console {
     fn log_in(&mut self, name: &str, password: &str, now: u64) {
         if let Some(since) = self.failed_logins.1 {
             if since.elapsed() < LOGIN_LOCK {
-                self.status = format!(
-                    "Login locked for {} s after {MAX_FAILED_LOGINS} failed attempts",
-                    LOGIN_LOCK.saturating_sub(since.elapsed()).as_secs().max(1)
+                let left = LOGIN_LOCK.saturating_sub(since.elapsed()).as_secs().max(1);
+                self.say(
+                    None,
+                    "say-login-locked",
+                    &[
+                        ("s", left.to_string()),
+                        ("n", MAX_FAILED_LOGINS.to_string()),
+                    ],
                 );
                 return;
             }
@@ -951,7 +956,12 @@ impl Console {
                 );
             }
             Err(e) => {
-                self.say(None, "say-login-refused", &[("error", e.to_string())]);
+                // One message for both causes, in the console's language.
+                let error = match &e {
+                    users::UsersError::Refused => self.i18n.t("login-wrong"),
+                    other => other.to_string(),
+                };
+                self.say(None, "say-login-refused", &[("error", error)]);
                 self.journal.push(
                     now,
                     "login_refused",

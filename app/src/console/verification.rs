@@ -1,20 +1,33 @@
 //! Maintenance: verification of the loaded constraint set (`vigie verify` in the
-//! console). The exploration runs on a worker thread; the panel shows safety,
-//! permissiveness, the invariants and which constraints are necessary, and replays the
-//! shortest counterexample on the synoptic (filter enforcing).
+//! console). The exploration runs on a worker thread. For a turntable cell the panel
+//! shows safety, permissiveness, the invariants and which constraints are necessary,
+//! and replays the shortest counterexample on the synoptic (filter enforcing); for any
+//! other plant of components it shows each sub-plant's verdict, as `vigie verify` does.
 
 use super::{Command, Console, Mode, Source};
 use egui::RichText;
 use std::thread::JoinHandle;
-use vigie_core::verify::{self, Options, VerifyReport};
+use vigie_core::verify::components::{ComponentsReport, SubHazard, SubReport};
+use vigie_core::verify::{self, Options, Subject, VerifyReport};
+
+/// What a verification found, after the plant's kind of model.
+pub(crate) enum Verdict {
+    /// The turntable cell's whole model.
+    Cell(Box<VerifyReport>),
+    /// Each sub-plant of a plant of components.
+    Parts(ComponentsReport),
+}
 
 /// Verification state of the console.
 #[derive(Default)]
 pub(crate) struct Verification {
-    job: Option<JoinHandle<Result<VerifyReport, String>>>,
+    job: Option<JoinHandle<Result<Verdict, String>>>,
     started_s: f64,
     /// Last result and its wall-clock duration.
-    pub(crate) result: Option<(Result<VerifyReport, String>, f64)>,
+    pub(crate) result: Option<(Result<Verdict, String>, f64)>,
+    /// A result has just arrived: the side panel scrolls to it once, since the
+    /// alarms above may have pushed it out of view while the search ran.
+    reveal: bool,
 }
 
 impl Verification {
@@ -29,22 +42,32 @@ pub(crate) fn start(c: &mut Console) {
     if c.verification.running() {
         return;
     }
-    let bundle = c.sim.bundle.clone();
+    // The plant folder's own constraint set, as `vigie verify` reads it: the running
+    // bundle may carry the diagnosers' rewriting (estimates, stops, their observers),
+    // which is not the set the designer wrote and would not give the command's figures.
     let plant_dir = c.plant_dir.clone();
     c.verification.started_s = c.wall_s;
     let spawned = std::thread::Builder::new()
         .name("vigie-verify".into())
         .spawn(move || {
-            let layout = verify::layout_of(&plant_dir).map_err(|p| vigie_core::diag::render(&p))?;
-            verify::verify(
-                &bundle,
-                &layout,
-                &Options {
-                    max_boxes: 2,
-                    necessity_boxes: None,
-                },
-            )
-            .map_err(|p| vigie_core::diag::render(&[p]))
+            let render = |p: vigie_core::diag::Problem| vigie_core::diag::render(&[p]);
+            let (bundle, _) = vigie_core::bundle::PlantBundle::load(&plant_dir)
+                .map_err(|p| vigie_core::diag::render(&p))?;
+            match verify::subject_of(&plant_dir).map_err(|p| vigie_core::diag::render(&p))? {
+                Subject::Cell(layout) => verify::verify(
+                    &bundle,
+                    &layout,
+                    &Options {
+                        max_boxes: 2,
+                        necessity_boxes: None,
+                    },
+                )
+                .map(|r| Verdict::Cell(Box::new(r)))
+                .map_err(render),
+                Subject::Parts(desc) => verify::components::verify_components(&bundle, &desc)
+                    .map(Verdict::Parts)
+                    .map_err(render),
+            }
         });
     match spawned {
         Ok(job) => {
@@ -77,7 +100,7 @@ pub(crate) fn poll(c: &mut Console, ctx: &egui::Context) {
     let secs = c.wall_s - c.verification.started_s;
     let at = Some(("maintenance", c.now().0));
     match &result {
-        Ok(r) => c.say(
+        Ok(Verdict::Cell(r)) => c.say(
             at,
             "say-verified",
             &[
@@ -86,16 +109,35 @@ pub(crate) fn poll(c: &mut Console, ctx: &egui::Context) {
                 ("permissive", r.permissive.to_string()),
             ],
         ),
+        Ok(Verdict::Parts(r)) => {
+            let (safe, unproved) = parts_verdict(r);
+            c.say(
+                at,
+                "say-verified-parts",
+                &[
+                    ("verdict", parts_verdict_word(safe, unproved).to_string()),
+                    ("parts", r.parts.len().to_string()),
+                ],
+            );
+        }
         Err(e) => c.say(at, "say-verify-failed", &[("error", e.clone())]),
     }
     c.verification.result = Some((result, secs));
+    c.verification.reveal = true;
 }
 
 /// Replays the shortest hazard trace on the synoptic.
 pub(crate) fn replay(c: &mut Console) {
-    let Some((Ok(report), _)) = &c.verification.result else {
-        c.say(None, "say-no-verification", &[]);
-        return;
+    let report = match &c.verification.result {
+        Some((Ok(Verdict::Cell(report)), _)) => report,
+        Some((Ok(Verdict::Parts(_)), _)) => {
+            c.say(None, "say-no-replay-of-parts", &[]);
+            return;
+        }
+        _ => {
+            c.say(None, "say-no-verification", &[]);
+            return;
+        }
     };
     let Some((kind, trace)) = &report.full.hazard else {
         c.say(None, "say-no-counterexample", &[]);
@@ -147,7 +189,10 @@ pub(crate) fn replay(c: &mut Console) {
 /// The verification section of the maintenance side panel.
 pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command>) {
     let pal = c.palette.clone();
-    ui.heading(c.i18n.t("verif-title"));
+    let heading = ui.heading(c.i18n.t("verif-title"));
+    if std::mem::take(&mut c.verification.reveal) {
+        heading.scroll_to_me(Some(egui::Align::Min));
+    }
     ui.horizontal(|ui| {
         let running = c.verification.running();
         if ui
@@ -168,7 +213,11 @@ pub(crate) fn panel_ui(c: &mut Console, ui: &mut egui::Ui, out: &mut Vec<Command
         return;
     };
     let r = match result {
-        Ok(r) => r,
+        Ok(Verdict::Cell(r)) => r,
+        Ok(Verdict::Parts(r)) => {
+            parts_ui(&c.i18n, ui, r, *secs, &pal);
+            return;
+        }
         Err(e) => {
             ui.label(RichText::new(e).color(pal.trip));
             return;
@@ -292,4 +341,130 @@ fn deliveries_ui(i18n: &crate::i18n::I18n, ui: &mut egui::Ui, r: &VerifyReport) 
         };
         ui.label(text);
     }
+}
+
+/// Whether no modelled sub-plant reaches a hazard with the filter (the environment's
+/// own hazards aside), and whether some sub-plant was not verified or not to the end.
+fn parts_verdict(r: &ComponentsReport) -> (bool, bool) {
+    let safe = r.unsafe_parts().is_empty();
+    let unproved = r.parts.iter().any(|p| p.skipped.is_some() || p.truncated);
+    (safe, unproved)
+}
+
+/// The word `say-verified-parts` selects on.
+fn parts_verdict_word(safe: bool, unproved: bool) -> &'static str {
+    match (safe, unproved) {
+        (false, _) => "violated",
+        (true, true) => "unproved",
+        (true, false) => "safe",
+    }
+}
+
+/// A sub-plant's hazard in the console's language.
+fn sub_hazard_text(i18n: &crate::i18n::I18n, h: &SubHazard) -> String {
+    match h {
+        SubHazard::EndStop(end) => i18n.ta("verif-sub-end-stop", &[("end", end.into())]),
+        SubHazard::OpposedDrives => i18n.t("syn-hazard-opposeddrives"),
+        SubHazard::Overflow => i18n.t("syn-hazard-overflow"),
+        SubHazard::DryRun => i18n.t("syn-hazard-dryrun"),
+        SubHazard::Declared(id) => i18n.ta("verif-sub-declared", &[("id", id.into())]),
+        SubHazard::Collision => i18n.t("verif-sub-collision"),
+        SubHazard::Dropped => i18n.t("verif-sub-dropped"),
+    }
+}
+
+/// One sub-plant's verdict with the filter, and whether it is a failure.
+fn part_verdict(i18n: &crate::i18n::I18n, p: &SubReport) -> (String, bool) {
+    let hazards = |v: &mut dyn Iterator<Item = &SubHazard>| -> String {
+        v.map(|h| sub_hazard_text(i18n, h))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if let Some(why) = &p.skipped {
+        return (i18n.ta("verif-part-skipped", &[("why", why.into())]), true);
+    }
+    let violated = hazards(
+        &mut p
+            .with_filter
+            .iter()
+            .map(|r| &r.hazard)
+            .filter(|h| !p.uncontrollable.contains(h)),
+    );
+    let mut text = if !violated.is_empty() {
+        i18n.ta("verif-part-violated", &[("hazards", (&violated).into())])
+    } else if p.truncated {
+        i18n.t("verif-part-truncated")
+    } else {
+        i18n.t("verif-part-safe")
+    };
+    if !p.uncontrollable.is_empty() {
+        let env = hazards(&mut p.uncontrollable.iter());
+        text.push_str("; ");
+        text.push_str(&i18n.ta("verif-part-environment", &[("hazards", (&env).into())]));
+    }
+    (text, !violated.is_empty() || p.truncated)
+}
+
+/// The verdicts of a plant of components, one row per sub-plant.
+fn parts_ui(
+    i18n: &crate::i18n::I18n,
+    ui: &mut egui::Ui,
+    r: &ComponentsReport,
+    secs: f64,
+    pal: &crate::theme::Palette,
+) {
+    let (safe, unproved) = parts_verdict(r);
+    ui.label(i18n.ta(
+        "verif-parts",
+        &[
+            ("parts", r.parts.len().into()),
+            ("s", (&format!("{secs:.1}")).into()),
+        ],
+    ));
+    let verdict = RichText::new(i18n.ta(
+        "verif-parts-verdict",
+        &[("verdict", parts_verdict_word(safe, unproved).into())],
+    ))
+    .strong();
+    ui.label(if safe && !unproved {
+        verdict
+    } else {
+        verdict.color(pal.trip)
+    });
+    // One line per sub-plant, wrapped to the panel: a long reason must not widen it.
+    for p in &r.parts {
+        let name = if p.with.is_empty() {
+            p.component.clone()
+        } else {
+            format!("{} (+ {})", p.component, p.with.join(", "))
+        };
+        let (text, bad) = part_verdict(i18n, p);
+        let guarded = if p.constraints.is_empty() {
+            i18n.t("verif-part-unguarded")
+        } else {
+            p.constraints.join(" ")
+        };
+        ui.horizontal_wrapped(|ui| {
+            ui.label(RichText::new(name).monospace());
+            let row = ui.label(if bad {
+                RichText::new(text).color(pal.trip)
+            } else {
+                RichText::new(text)
+            });
+            row.on_hover_text(i18n.ta("verif-part-guarded", &[("by", (&guarded).into())]));
+        });
+    }
+    if !r.not_modelled.is_empty() {
+        ui.label(i18n.ta(
+            "verif-not-modelled",
+            &[("names", (&r.not_modelled.join(", ")).into())],
+        ));
+    }
+    egui::CollapsingHeader::new(i18n.t("verif-assumptions"))
+        .default_open(false)
+        .show(ui, |ui| {
+            for a in &r.assumptions {
+                ui.label(format!("• {a}"));
+            }
+        });
 }

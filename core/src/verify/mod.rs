@@ -228,25 +228,41 @@ pub struct VerifyReport {
     pub constraints: Vec<ConstraintRole>,
 }
 
-/// The turntable cell `vigie verify` builds its abstract model of the station's kind
-/// from: a legacy `layout.ron`, or the cell a placed `components.ron` derives. Any
-/// other plant of components is searched by [`components`] (V0501 here, saying so);
-/// a folder without a physical model is V0744.
+/// What `vigie verify` searches for a plant folder.
+#[derive(Clone, Debug)]
+pub enum Subject {
+    /// A turntable cell of the station's kind, searched whole by [`verify`]: a legacy
+    /// `layout.ron`, or the cell a placed `components.ron` derives.
+    Cell(Box<Layout>),
+    /// Any other plant of components, searched per sub-plant by [`components`].
+    Parts(Box<crate::machine::description::Components>),
+}
+
+/// The verification subject of a plant folder (a folder without a physical model is
+/// V0744).
+pub fn subject_of(dir: &std::path::Path) -> Result<Subject, Vec<Problem>> {
+    Ok(match crate::machine::Description::load(dir)? {
+        crate::machine::Description::Layout(l) => Subject::Cell(l),
+        crate::machine::Description::Components(c) => match Layout::from_components(&c) {
+            Some(cell) => Subject::Cell(Box::new(cell)),
+            None => Subject::Parts(Box::new(c)),
+        },
+    })
+}
+
+/// The turntable cell of a plant folder (see [`subject_of`]); a plant of components
+/// that is not one is V0501, saying that it is searched per sub-plant.
 pub fn layout_of(dir: &std::path::Path) -> Result<Layout, Vec<Problem>> {
-    match crate::machine::Description::load(dir)? {
-        crate::machine::Description::Layout(l) => Ok(*l),
-        crate::machine::Description::Components(c) => {
-            Layout::from_components(&c).ok_or_else(|| {
-                vec![Problem::error(
-                    codes::VERIFY_UNSUPPORTED.id,
-                    "this plant of components is not a turntable cell placed on the floor: \
+    match subject_of(dir)? {
+        Subject::Cell(l) => Ok(*l),
+        Subject::Parts(c) => Err(vec![Problem::error(
+            codes::VERIFY_UNSUPPORTED.id,
+            "this plant of components is not a turntable cell placed on the floor: \
              its abstract model is searched per sub-plant (`vigie verify` on the \
              command line)"
-                        .to_string(),
-                    Some(c.location_of(&c.name)),
-                )]
-            })
-        }
+                .to_string(),
+            Some(c.location_of(&c.name)),
+        )]),
     }
 }
 
