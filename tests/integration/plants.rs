@@ -1160,3 +1160,61 @@ fn check_says_why_a_placed_plant_is_drawn_as_a_schematic() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 16: a legacy plant folder that still holds a `layout.ron` (the station's
+/// first emulator's format; here the station's own, kept as a fixture) instead of a
+/// `components.ron` is read as the components it describes: `vigie check` says which
+/// file it read, a scenario gives the same report as the station's folder, byte for
+/// byte, and `vigie verify` the same verdicts.
+#[test]
+fn a_legacy_layout_folder_runs_on_the_components_as_the_station_does() {
+    let tmp = crate::live::TempDir::new("legacy-layout");
+    let legacy = tmp.0.join("sorting-station");
+    crate::paper::copy_dir(&repo().join("layouts/sorting-station"), &legacy);
+    std::fs::remove_file(legacy.join("components.ron")).unwrap();
+    std::fs::copy(
+        repo().join("core/src/emulator/layout/sorting-station.ron"),
+        legacy.join("layout.ron"),
+    )
+    .unwrap();
+    let station = repo().join("layouts/sorting-station");
+
+    let check = vigie(&["check", legacy.to_str().unwrap()]);
+    assert!(check.status.success(), "{}", text(&check));
+    assert!(text(&check).contains("layout.ron"), "{}", text(&check));
+    assert!(
+        text(&check).contains("table (turntable)"),
+        "read as components: {}",
+        text(&check)
+    );
+
+    let report = |dir: &Path| {
+        let scenario = dir.join("scenarios/cs10-paper.ron");
+        let out = vigie(&["run", scenario.to_str().unwrap(), "--headless"]);
+        assert!(out.status.success(), "{}", text(&out));
+        // Everything but the wall-clock time the run took.
+        String::from_utf8_lossy(&out.stdout)
+            .replace(dir.to_str().unwrap(), "<plant>")
+            .lines()
+            .filter(|l| !l.contains("\"wall_ms\""))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    let (ours, theirs) = (report(&legacy), report(&station));
+    assert!(ours.contains("\"cycles\": 4000"), "{ours}");
+    assert_eq!(ours, theirs);
+
+    let verdicts = |dir: &Path| {
+        let out = vigie(&["verify", dir.to_str().unwrap(), "--json"]);
+        let v: serde_json::Value =
+            serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{e}: {}", text(&out)));
+        (
+            v["safe"].clone(),
+            v["permissive"].clone(),
+            v["full"]["states"].clone(),
+        )
+    };
+    let (ours, theirs) = (verdicts(&legacy), verdicts(&station));
+    assert_eq!(ours.0, serde_json::Value::Bool(true));
+    assert_eq!(ours, theirs);
+}

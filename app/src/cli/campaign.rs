@@ -111,12 +111,12 @@ fn run(plant_dir: &Path, threads: Option<usize>, json: bool) -> anyhow::Result<E
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
         return Ok(ExitCode::SUCCESS);
     }
-    // Boxes arrive only on a sorting layout; a plant of components runs what one
-    // press of Start starts.
-    let items = if plant_dir
-        .join(vigie_core::machine::physical::LAYOUT_FILE)
-        .exists()
-    {
+    // Items arrive on a plant fed by a source (the station's boxes); any other runs
+    // what one press of Start starts.
+    let fed =
+        vigie_core::sim::workload::Workload::of(plant_dir, vigie_core::emulator::ArrivalPlan::Off)
+            .is_ok_and(|w| matches!(w, vigie_core::sim::workload::Workload::Arrivals(_)));
+    let items = if fed {
         format!("{} boxes, ", config.arrivals.len())
     } else {
         String::new()

@@ -78,23 +78,19 @@ fn physical(
         problems.extend(vigie_core::machine::safe_state::check(c, &bundle.plant));
         problems.extend(c.warnings());
     }
-    let (file, components) = match &desc {
-        Description::Components(c) => (
-            physical::COMPONENTS_FILE,
-            c.components
-                .iter()
-                .map(|c| format!("{} ({})", c.id, c.kind.label()))
-                .collect(),
-        ),
-        Description::Layout(l) => (
-            physical::LAYOUT_FILE,
-            l.conveyors
-                .iter()
-                .map(|c| format!("{} (conveyor)", c.id))
-                .chain([format!("{} (turntable)", l.table.id)])
-                .collect(),
-        ),
+    let Description::Components(c) = &desc;
+    // A legacy layout.ron is read as the components it describes: the report names
+    // the file it came from.
+    let file = if c.file.file_name() == Some(std::ffi::OsStr::new(physical::LAYOUT_FILE)) {
+        physical::LAYOUT_FILE
+    } else {
+        physical::COMPONENTS_FILE
     };
+    let components = c
+        .components
+        .iter()
+        .map(|c| format!("{} ({})", c.id, c.kind.label()))
+        .collect();
     let floor = match &desc {
         Description::Components(c) if c.components.iter().any(|k| k.at.is_some()) => {
             Some(match vigie_core::emulator::Layout::cell_of(c) {

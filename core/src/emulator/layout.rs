@@ -498,6 +498,7 @@ pub(crate) fn quoted_positions(text: &str) -> BTreeMap<String, (usize, usize)> {
     map
 }
 
+mod convert;
 mod derive;
 
 #[cfg(test)]

@@ -153,6 +153,34 @@ impl Components {
         }
     }
 
+    /// A description built in memory (a legacy layout read as components), checked as
+    /// a file would be; `file` and `positions` (first line and column of each quoted
+    /// string) locate its messages.
+    pub(crate) fn assembled(
+        name: String,
+        step_ms: u64,
+        components: Vec<ComponentDef>,
+        items: super::items::ItemsDef,
+        file: &Path,
+        positions: BTreeMap<String, (usize, usize)>,
+    ) -> Result<Self, Vec<Problem>> {
+        let c = Components {
+            name,
+            step_ms,
+            components,
+            dangers: Vec::new(),
+            items,
+            file: file.to_path_buf(),
+            positions,
+        };
+        let problems = c.check();
+        if problems.is_empty() {
+            Ok(c)
+        } else {
+            Err(problems)
+        }
+    }
+
     /// The arrivals of the first conveyor with a source, if any.
     pub fn first_source(&self) -> Option<&super::items::ArrivalsDef> {
         self.components.iter().find_map(|c| match &c.kind {

@@ -1,6 +1,6 @@
 //! The physical plant a simulation runs: a plant folder's `components.ron` (the
-//! plant as components of the library) or, for the sorting station's geometry,
-//! `layout.ron` (its conveyors, roller turntable and boxes).
+//! plant as components of the library), or a legacy `layout.ron` (the station's
+//! first emulator's format), read as the components it describes.
 //!
 //! Everything that closes the loop (the simulation, the projection of level 1, the
 //! campaigns, the console) holds a [`Physical`] and asks it the same questions; what
@@ -25,15 +25,15 @@ pub const LAYOUT_FILE: &str = "layout.ron";
 /// A plant folder's physical description, loaded.
 #[derive(Clone, Debug)]
 pub enum Description {
-    /// `components.ron`.
+    /// `components.ron`, or a legacy `layout.ron` read as components
+    /// ([`Layout::to_components`]; its `file` is then the layout file).
     Components(Components),
-    /// `layout.ron`.
-    Layout(Box<Layout>),
 }
 
 impl Description {
     /// Loads the physical description of the plant folder `dir`: `components.ron`
-    /// when there is one, else `layout.ron`; V0744 when there is neither.
+    /// when there is one, else `layout.ron` read as components; V0744 when there is
+    /// neither.
     pub fn load(dir: &Path) -> Result<Self, Vec<Problem>> {
         let components = dir.join(COMPONENTS_FILE);
         if components.exists() {
@@ -41,7 +41,7 @@ impl Description {
         }
         let layout = dir.join(LAYOUT_FILE);
         if layout.exists() {
-            return Layout::load(&layout).map(|l| Self::Layout(Box::new(l)));
+            return Layout::load(&layout)?.to_components().map(Self::Components);
         }
         Err(vec![Problem::error(
             codes::NO_PHYSICAL_MODEL.id,
@@ -54,12 +54,11 @@ impl Description {
         )])
     }
 
-    /// The layout of its turntable cell: the one of `layout.ron`, or the one a plant
-    /// of components derives when its conveyors and turntable are placed on the floor
-    /// as the sorting station's are ([`Layout::from_components`]).
+    /// The layout of its turntable cell: the one a plant of components derives when
+    /// its conveyors and turntable are placed on the floor as the sorting station's
+    /// are ([`Layout::from_components`]).
     pub fn layout(&self) -> Option<Layout> {
         match self {
-            Self::Layout(l) => Some((**l).clone()),
             Self::Components(c) => Layout::from_components(c),
         }
     }
@@ -68,7 +67,6 @@ impl Description {
     pub fn check_signals(&self, plant: &Plant) -> Vec<Problem> {
         match self {
             Self::Components(c) => c.check_signals(plant),
-            Self::Layout(l) => l.check_signals(plant),
         }
     }
 }
@@ -89,17 +87,26 @@ impl Physical {
             Description::Components(c) => {
                 Self::Components(Box::new(ComponentPlant::new(c, plant, seed)?))
             }
-            Description::Layout(l) => Self::Layout(Box::new(Emulator::new(l, plant, seed)?)),
         })
     }
 
-    /// The emulator of a turntable cell: the components it was derived from, or the
-    /// station's first emulator for a legacy `layout.ron`.
+    /// The emulator of a turntable cell: the components it was derived from, or
+    /// those a layout read from a file describes ([`Layout::to_components`]).
     pub fn of_cell(layout: &Layout, plant: &Plant, seed: u64) -> Result<Self, Problem> {
-        Ok(match &layout.derived_from.0 {
-            Some(c) => Self::Components(Box::new(ComponentPlant::new(c, plant, seed)?)),
-            None => Self::Layout(Box::new(Emulator::new(layout, plant, seed)?)),
-        })
+        let c = match &layout.derived_from.0 {
+            Some(c) => (**c).clone(),
+            None => layout.to_components().map_err(|mut p| p.remove(0))?,
+        };
+        Ok(Self::Components(Box::new(ComponentPlant::new(
+            &c, plant, seed,
+        )?)))
+    }
+
+    /// The station's first emulator, run from a layout: the reference the identity
+    /// tests compare the components with, cycle by cycle. Every plant folder runs on
+    /// its components ([`Physical::new`]).
+    pub fn first_emulator(layout: &Layout, plant: &Plant, seed: u64) -> Result<Self, Problem> {
+        Ok(Self::Layout(Box::new(Emulator::new(layout, plant, seed)?)))
     }
 
     /// Runs `dt` with the PLC's outputs.

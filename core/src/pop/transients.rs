@@ -746,14 +746,6 @@ fn layout_plan(shared: &Shared) -> Result<(u64, u64), Vec<Problem>> {
     }
     Ok(
         match crate::machine::Description::load(&shared.bundle.dir)? {
-            crate::machine::Description::Layout(l) => match l.source.arrivals {
-                ArrivalPlan::Periodic {
-                    period_ms,
-                    jitter_ms,
-                    ..
-                } => (period_ms, jitter_ms),
-                _ => (15_000, 0),
-            },
             crate::machine::Description::Components(c) => c
                 .first_source()
                 .map_or((15_000, 0), |a| (a.period_ms, a.jitter_ms)),

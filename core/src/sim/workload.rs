@@ -38,7 +38,6 @@ impl Workload {
     /// production scenario, the production scenario's actions on any other.
     pub fn of(dir: &Path, arrivals: ArrivalPlan) -> Result<Self, Vec<Problem>> {
         match Description::load(dir)? {
-            Description::Layout(_) => Ok(Self::Arrivals(arrivals)),
             Description::Components(c) => {
                 let path = dir.join(PRODUCTION);
                 // A line fed by its own source (the sorting station's boxes) produces

@@ -242,7 +242,6 @@ pub enum Subject {
 /// V0744).
 pub fn subject_of(dir: &std::path::Path) -> Result<Subject, Vec<Problem>> {
     Ok(match crate::machine::Description::load(dir)? {
-        crate::machine::Description::Layout(l) => Subject::Cell(l),
         crate::machine::Description::Components(c) => match Layout::from_components(&c) {
             Some(cell) => Subject::Cell(Box::new(cell)),
             None => Subject::Parts(Box::new(c)),

@@ -146,3 +146,68 @@ fn only_a_placed_turntable_cell_derives_a_layout() {
     assert_ne!(one_class, text);
     assert!(why(&load(&one_class)).starts_with("the source must place two classes"));
 }
+
+/// A legacy layout read as components (`Layout::to_components`) derives the layout
+/// back, field by field (the same two asides as above), and passes every check of a
+/// components file.
+#[test]
+fn a_layout_read_as_components_derives_itself_back() {
+    let fixture = Layout::load(&crate::test_support::station_layout_file()).unwrap();
+    let converted = fixture
+        .to_components()
+        .expect("the station's layout converts");
+    let mut back = Layout::from_components(&converted).expect("a turntable cell");
+    assert!(
+        (fixture.source.small.height_mm..fixture.source.large.height_mm)
+            .contains(&back.high_beam_mm)
+    );
+    back.high_beam_mm = fixture.high_beam_mm;
+    back.sensors
+        .sort_by_key(|s| fixture.sensors.iter().position(|f| f.id == s.id));
+    back.positions.clone_from(&fixture.positions);
+    assert_eq!(back, fixture);
+    // Its messages point into the layout file, where the layout's own do.
+    assert_eq!(
+        converted.location_of("C3"),
+        fixture.location_of("C3").expect("located")
+    );
+}
+
+/// What the layout said by geometry: a conveyor whose end meets nothing drops its
+/// items; an explicit arrival list has no place in a description and is refused with
+/// where it is written.
+#[test]
+fn a_layout_read_as_components_keeps_its_geometry_and_refuses_an_arrival_list() {
+    use crate::machine::kinds::KindDef;
+    use crate::machine::kinds::conveyor::Exit;
+    let text = station_text();
+    // The entry conveyor moved 100 mm up: its end meets nothing any more.
+    let moved = text.replacen(
+        "start: (x: 0, y: 0), end: (x: 1200, y: 0)",
+        "start: (x: 0, y: 100), end: (x: 1200, y: 100)",
+        1,
+    );
+    assert_ne!(moved, text, "the fixture's entry conveyor");
+    let layout = Layout::from_ron(&moved, Path::new("layout.ron")).expect("loads");
+    let c = layout.to_components().expect("converts");
+    let exit = |id: &str| {
+        c.components
+            .iter()
+            .find(|k| k.id == id)
+            .and_then(|k| match &k.kind {
+                KindDef::Conveyor(v) => Some(v.exit.clone()),
+                _ => None,
+            })
+    };
+    assert_eq!(exit("entry"), Some(Exit::Drop));
+    assert_eq!(exit("intermediate"), Some(Exit::To("table".into())));
+    assert_eq!(exit("left_exit"), Some(Exit::Sink));
+    let mut layout = Layout::from_ron(&text, Path::new("layout.ron")).expect("loads");
+    layout.source.arrivals = ArrivalPlan::List(vec![(0, BoxSize::Small)]);
+    let p = layout.to_components().expect_err("a list is refused");
+    assert!(
+        p[0].to_string().contains("move it to the scenarios"),
+        "{}",
+        p[0]
+    );
+}

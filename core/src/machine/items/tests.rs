@@ -16,14 +16,32 @@ fn station() -> PathBuf {
 fn layout_emulator(s: &Scenario, plant: &crate::plant::Plant) -> Physical {
     let layout = crate::emulator::Layout::load(&crate::test_support::station_layout_file())
         .expect("the station's layout fixture loads");
-    let mut e = crate::emulator::Emulator::new(&layout, plant, s.seed).expect("builds");
+    let mut e = Physical::first_emulator(&layout, plant, s.seed).expect("builds");
     if let Some(plan) = &s.arrivals {
         e.set_arrivals(plan.clone());
     }
     for f in &s.faults {
         e.try_schedule_fault(f.clone()).expect("the fault applies");
     }
-    Physical::Layout(Box::new(e))
+    e
+}
+
+/// The layout fixture read as components ([`crate::emulator::Layout::to_components`],
+/// what a legacy `layout.ron` folder runs on), set up as [`layout_emulator`] sets up
+/// the first emulator.
+fn converted_emulator(s: &Scenario, plant: &crate::plant::Plant) -> Physical {
+    let layout = crate::emulator::Layout::load(&crate::test_support::station_layout_file())
+        .expect("the station's layout fixture loads");
+    let c = layout.to_components().expect("converts");
+    let mut e =
+        Physical::new(&crate::machine::Description::Components(c), plant, s.seed).expect("builds");
+    if let Some(plan) = &s.arrivals {
+        e.set_arrivals(plan.clone());
+    }
+    for f in &s.faults {
+        e.try_schedule_fault(f.clone()).expect("the fault applies");
+    }
+    e
 }
 
 /// The scenario run twice, on the layout's emulator and on the components; the
@@ -40,6 +58,17 @@ fn same_run(scenario: &str, until_ms: u64) -> u64 {
 /// components report one hazard the layout did not know, both directions of a drive
 /// at once (the rollers' A2 and A3): those are returned, the others compared.
 fn same(s: &Scenario, path: &Path, until_ms: u64) -> (u64, Vec<crate::emulator::Hazard>) {
+    same_as(s, path, until_ms, false)
+}
+
+/// [`same`], the components being the station folder's (`converted` false) or the
+/// layout fixture read as components (true).
+fn same_as(
+    s: &Scenario,
+    path: &Path,
+    until_ms: u64,
+    converted: bool,
+) -> (u64, Vec<crate::emulator::Hazard>) {
     let scenario = &s.name;
     let options = || Options {
         history_cycles: 10,
@@ -54,6 +83,9 @@ fn same(s: &Scenario, path: &Path, until_ms: u64) -> (u64, Vec<crate::emulator::
         "the folder runs on components"
     );
     old.emulator = layout_emulator(s, &plant);
+    if converted {
+        new.emulator = converted_emulator(s, &plant);
+    }
     let mut cycles = 0;
     while old.now() < Millis(until_ms) {
         old.cycle();
@@ -102,6 +134,28 @@ fn the_station_as_components_runs_every_scenario_of_the_station_as_its_layout_di
         let path = station().join("scenarios").join(n);
         let s = Scenario::load(&path).expect("scenario");
         same_run(n, s.duration_ms);
+    }
+}
+
+/// A legacy `layout.ron` folder runs on the components emulator, read through
+/// `Layout::to_components`: the station's layout file, so read, runs every scenario of
+/// the station (the reference hour's first ten minutes) as the first emulator did,
+/// sensors every cycle, hazards and counts.
+#[test]
+fn the_station_layout_read_as_components_runs_every_scenario_as_its_emulator_did() {
+    let mut names: Vec<String> = std::fs::read_dir(station().join("scenarios"))
+        .expect("scenarios")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".ron"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 8, "{names:?}");
+    for n in &names {
+        let path = station().join("scenarios").join(n);
+        let s = Scenario::load(&path).expect("scenario");
+        let (cycles, opposed) = same_as(&s, &path, s.duration_ms.min(600_000), true);
+        assert!(cycles > 100, "{n}");
+        assert!(opposed.is_empty(), "{n}: {opposed:?}");
     }
 }
 
