@@ -862,15 +862,12 @@ fn log_in_as_maintenance(h: &mut Harness<'static, Console>) {
     assert!(!h.get_by_label("Maintenance").accesskit_node().is_disabled());
 }
 
-/// Issue 16: Maintenance's "Verify constraints" on a plant of components that is not a
-/// turntable cell (seed 000's workshop) searches it per component, as `vigie verify`
-/// does, instead of refusing it; with a constraint taken out of a copy, the part it
-/// guarded is shown violated, and there is no trace to replay on the synoptic.
-#[test]
-fn maintenance_verifies_a_plant_of_components_per_component() {
-    let dir = root().join("layouts/workshop");
-    let mut o = ConsoleOptions::new(&dir);
-    o.data_dir = Some(data_with_accounts("verify-parts"));
+/// The console on the plant `dir`, a maintenance technician logged in (accounts in the
+/// data folder `data`), who opens Maintenance, clicks "Verify constraints" and waits
+/// for the verdict.
+fn verified_in_maintenance(dir: &std::path::Path, data: &str) -> Harness<'static, Console> {
+    let mut o = ConsoleOptions::new(dir);
+    o.data_dir = Some(data_with_accounts(data));
     let mut h = harness(o);
     h.run_steps(2);
     log_in_as_maintenance(&mut h);
@@ -879,6 +876,17 @@ fn maintenance_verifies_a_plant_of_components_per_component() {
     h.get_by_label("Not verified yet.");
     h.get_by_label("Verify constraints").click();
     wait_for_verdict(&mut h);
+    h
+}
+
+/// Issue 16: Maintenance's "Verify constraints" on a plant of components that is not a
+/// turntable cell (seed 000's workshop) searches it per component, as `vigie verify`
+/// does, instead of refusing it; with a constraint taken out of a copy, the part it
+/// guarded is shown violated, and there is no trace to replay on the synoptic.
+#[test]
+fn maintenance_verifies_a_plant_of_components_per_component() {
+    let dir = root().join("layouts/workshop");
+    let mut h = verified_in_maintenance(&dir, "verify-parts");
     h.get_by_label("Safety: proved for every modelled component");
     h.get_by_label_contains("2 components verified one at a time");
     assert_eq!(
@@ -907,16 +915,7 @@ fn maintenance_verifies_a_plant_of_components_per_component() {
         .collect();
     assert_ne!(weakened.lines().count(), constraints.lines().count());
     std::fs::write(copy.join("constraints.txt"), weakened).unwrap();
-    let mut o = ConsoleOptions::new(&copy);
-    o.data_dir = Some(data_with_accounts("verify-parts-weak-data"));
-    let mut h = harness(o);
-    h.run_steps(2);
-    log_in_as_maintenance(&mut h);
-    h.state_mut().apply(Command::SetMode(Mode::Maintenance));
-    h.run_steps(2);
-    h.get_by_label("Not verified yet.");
-    h.get_by_label("Verify constraints").click();
-    wait_for_verdict(&mut h);
+    let mut h = verified_in_maintenance(&copy, "verify-parts-weak-data");
     h.get_by_label("Safety: VIOLATED on some component");
     h.get_by_label("VIOLATED with the filter: driven both ways at once");
     assert!(

@@ -121,16 +121,22 @@ fn the_station_as_components_runs_the_reference_hour_as_its_layout_did() {
     assert!(cycles > 360_000);
 }
 
-#[test]
-fn the_station_as_components_runs_every_scenario_of_the_station_as_its_layout_did() {
+/// The station's scenario files, sorted by name.
+fn scenario_names() -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(station().join("scenarios"))
         .expect("scenarios")
         .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".ron") && n != "reference-hour.ron")
+        .filter(|n| n.ends_with(".ron"))
         .collect();
     names.sort();
-    assert!(names.len() >= 7, "{names:?}");
-    for n in &names {
+    assert!(names.len() >= 8, "{names:?}");
+    names
+}
+
+#[test]
+fn the_station_as_components_runs_every_scenario_of_the_station_as_its_layout_did() {
+    let names = scenario_names();
+    for n in names.iter().filter(|n| *n != "reference-hour.ron") {
         let path = station().join("scenarios").join(n);
         let s = Scenario::load(&path).expect("scenario");
         same_run(n, s.duration_ms);
@@ -143,14 +149,7 @@ fn the_station_as_components_runs_every_scenario_of_the_station_as_its_layout_di
 /// sensors every cycle, hazards and counts.
 #[test]
 fn the_station_layout_read_as_components_runs_every_scenario_as_its_emulator_did() {
-    let mut names: Vec<String> = std::fs::read_dir(station().join("scenarios"))
-        .expect("scenarios")
-        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".ron"))
-        .collect();
-    names.sort();
-    assert!(names.len() >= 8, "{names:?}");
-    for n in &names {
+    for n in &scenario_names() {
         let path = station().join("scenarios").join(n);
         let s = Scenario::load(&path).expect("scenario");
         let (cycles, opposed) = same_as(&s, &path, s.duration_ms.min(600_000), true);
