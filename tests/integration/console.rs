@@ -886,7 +886,7 @@ fn verified_in_maintenance(dir: &std::path::Path, data: &str) -> Harness<'static
 #[test]
 fn maintenance_verifies_a_plant_of_components_per_component() {
     let dir = root().join("layouts/workshop");
-    let mut h = verified_in_maintenance(&dir, "verify-parts");
+    let h = verified_in_maintenance(&dir, "verify-parts");
     h.get_by_label("Safety: proved for every modelled component");
     h.get_by_label_contains("2 components verified one at a time");
     assert_eq!(

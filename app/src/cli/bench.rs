@@ -418,20 +418,15 @@ fn closed_loop(out: &mut impl std::io::Write, path: &Path) -> anyhow::Result<()>
     let wall = start.elapsed();
     let cpu = thread_cpu().zip(cpu0).map(|(b, a)| b.saturating_sub(a));
     let sim_s = duration_ms as f64 / 1000.0;
-    let what = match sim.emulator.as_layout() {
-        Some(_) => format!("{} boxes", sim.emulator.stats().created),
-        None => {
-            let unit = match sim.emulator.as_components() {
-                Some(c) if c.carries_items() => "items out (delivered or taken)",
-                _ => "elementary actions completed",
-            };
-            format!(
-                "{} {unit}, {} trips",
-                sim.produced(),
-                sim.engine.trips.len()
-            )
-        }
+    let unit = match sim.emulator.as_components() {
+        Some(c) if c.carries_items() => "items out (delivered or taken)",
+        _ => "elementary actions completed",
     };
+    let what = format!(
+        "{} {unit}, {} trips",
+        sim.produced(),
+        sim.engine.trips.len()
+    );
     writeln!(
         out,
         "closed loop (emulator + reference program + filter + monitors), {sim_s:.0} simulated s ({repeats} x {}), {what}:",

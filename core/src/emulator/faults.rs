@@ -144,15 +144,13 @@ pub struct FaultSpec {
     pub duration_ms: Option<u64>,
 }
 
-/// A fault resolved against the layout: indices instead of ids.
+/// A fault resolved against the plant: indices instead of ids.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Effect {
     /// Force layout sensor `.0` to `.1`.
     Sensor(u32, bool),
     /// Force actuator role `.0` to `.1`.
     Actuator(u32, bool),
-    /// Table blocked: 0 at loading, 1 at unloading, 2 anywhere.
-    Table(u8),
     /// Drive role `.0` slowed to `.1` percent.
     Slow(u32, u8),
     /// Component `.0` of a components plant blocked.
@@ -180,17 +178,6 @@ pub(crate) struct Scheduled {
     pub(crate) condition: Option<Dnf>,
     pub(crate) length: Option<u64>,
     pub(crate) phase: Phase,
-}
-
-/// The combined effect of the active faults, recomputed when a fault starts or ends.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct Overrides {
-    pub(crate) sensor_on: u64,
-    pub(crate) sensor_off: u64,
-    pub(crate) act_on: u64,
-    pub(crate) act_off: u64,
-    /// Bit 0: blocked at loading, bit 1: at unloading, bit 2: anywhere.
-    pub(crate) table: u8,
 }
 
 impl Scheduled {
@@ -301,27 +288,6 @@ impl Scheduled {
                 true
             }
             _ => false,
-        }
-    }
-
-    /// Adds this fault's effect when active; `slow` is indexed by drive role.
-    pub(crate) fn apply(&self, o: &mut Overrides, slow: &mut [u8]) {
-        if !matches!(self.phase, Phase::Active { .. }) {
-            return;
-        }
-        match self.effect {
-            Effect::Sensor(i, true) => o.sensor_on |= 1 << i,
-            Effect::Sensor(i, false) => o.sensor_off |= 1 << i,
-            Effect::Actuator(i, true) => o.act_on |= 1 << i,
-            Effect::Actuator(i, false) => o.act_off |= 1 << i,
-            Effect::Table(k) => o.table |= 1 << k,
-            Effect::Slow(i, p) => {
-                if let Some(s) = slow.get_mut(i as usize) {
-                    *s = (*s).min(p);
-                }
-            }
-            // A components plant applies these itself (`machine::emulator`).
-            Effect::Block(_) | Effect::SlowComponent(..) | Effect::StuckAt(..) => {}
         }
     }
 }

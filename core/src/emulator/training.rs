@@ -262,9 +262,7 @@ mod tests {
     fn a_fault_the_emulator_refuses_is_a_load_problem() {
         let bundle = crate::test_support::station();
         let layout = crate::test_support::station_layout();
-        let emu = crate::machine::Physical::Layout(Box::new(
-            super::super::Emulator::new(&layout, &bundle.plant, 1).unwrap(),
-        ));
+        let emu = crate::machine::Physical::of_cell(&layout, &bundle.plant, 1).unwrap();
         let path = write(
             "refused-exercises.ron",
             r#"(exercises: [

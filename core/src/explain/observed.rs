@@ -19,8 +19,8 @@
 //! Counter observers (`2P`) add no box: the boxes they count cover their sensors.
 //! No box arrives afterwards (the arrival plan is empty): what comes next is unknown.
 //!
-//! A cell derived from placed components runs on those components (the plant's one
-//! emulator); a legacy `layout.ron` on the station's first emulator.
+//! The estimate runs on the cell's components: those it was derived from, or those a
+//! legacy `layout.ron` describes.
 
 use crate::diag::Problem;
 use crate::emulator::{ArrivalPlan, Beam, BoxSize, Layout, SensorKind};
@@ -33,30 +33,22 @@ use crate::plant::Plant;
 /// Turns the table of the cell's emulator to `mdeg` (the cell's table is placed at
 /// heading 0).
 fn set_angle(emu: &mut Physical, layout: &Layout, mdeg: i32) {
-    match emu {
-        Physical::Components(c) => {
-            c.set_position(&layout.table.id, f64::from(mdeg) / 1000.0);
-        }
-        Physical::Layout(e) => e.set_table_angle_mdeg(mdeg),
-    }
+    let Physical::Components(c) = emu;
+    c.set_position(&layout.table.id, f64::from(mdeg) / 1000.0);
 }
 
 /// Puts a box with its centre at `centre` mm along `part` (the table: `u`).
 fn place_box(emu: &mut Physical, layout: &Layout, part: &str, centre: i64, size: BoxSize) -> bool {
-    match emu {
-        Physical::Components(c) => {
-            let along = if part == layout.table.id {
-                centre + layout.table.half_length_mm
-            } else {
-                centre
-            };
-            #[allow(clippy::cast_precision_loss)]
-            let along = along as f64;
-            c.place_item(part, along, usize::from(size == BoxSize::Large))
-                .is_ok()
-        }
-        Physical::Layout(e) => e.try_place_box(part, centre, size).is_ok(),
-    }
+    let Physical::Components(c) = emu;
+    let along = if part == layout.table.id {
+        centre + layout.table.half_length_mm
+    } else {
+        centre
+    };
+    #[allow(clippy::cast_precision_loss)]
+    let along = along as f64;
+    c.place_item(part, along, usize::from(size == BoxSize::Large))
+        .is_ok()
 }
 
 /// A box placed so far: part id, centre (mm along the part, table: `u`), half length.

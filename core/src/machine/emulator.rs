@@ -441,7 +441,6 @@ impl ComponentPlant {
                         }
                     }
                 }
-                Effect::Table(_) => {}
             }
         }
     }
@@ -753,6 +752,12 @@ impl ComponentPlant {
         Some(self.position_of(k))
     }
 
+    /// Takes every internal step one at a time (the quiet steps' reference).
+    #[cfg(test)]
+    pub(crate) fn disable_quiet_steps(&mut self) {
+        self.quiet_allowed = false;
+    }
+
     /// Moves component `id` to `position` by hand (a technician, a live-mode
     /// initialisation); false when there is no such component.
     pub fn set_position(&mut self, id: &str, position: f64) -> bool {
@@ -783,6 +788,8 @@ impl ComponentPlant {
 mod conveyor_tests;
 #[cfg(test)]
 mod device_tests;
+#[cfg(test)]
+mod station_tests;
 #[cfg(test)]
 mod tests;
 

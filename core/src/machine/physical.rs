@@ -3,16 +3,15 @@
 //! first emulator's format), read as the components it describes.
 //!
 //! Everything that closes the loop (the simulation, the projection of level 1, the
-//! campaigns, the console) holds a [`Physical`] and asks it the same questions; what
-//! only a layout has (boxes, the table's angle, arrivals) answers empty for a plant
-//! of components.
+//! campaigns, the console) holds a [`Physical`] and asks it the same questions; what a
+//! plant does not have (items, a turntable, arrivals) answers empty.
 
 use super::description::Components;
 use super::emulator::ComponentPlant;
 use super::scene::Scene;
 use crate::bits::Bits;
 use crate::diag::{Location, Problem, codes};
-use crate::emulator::{ArrivalPlan, BoxStats, BoxView, Emulator, FaultSpec, Hazard, Layout};
+use crate::emulator::{ArrivalPlan, BoxStats, BoxView, FaultSpec, Hazard, Layout};
 use crate::plant::Plant;
 use crate::time::Millis;
 use std::path::Path;
@@ -71,13 +70,11 @@ impl Description {
     }
 }
 
-/// The running emulator of either description.
+/// The running emulator of a plant's description.
 #[derive(Clone, Debug)]
 pub enum Physical {
     /// A plant of components.
     Components(Box<ComponentPlant>),
-    /// The sorting layout's emulator.
-    Layout(Box<Emulator>),
 }
 
 impl Physical {
@@ -102,18 +99,10 @@ impl Physical {
         )?)))
     }
 
-    /// The station's first emulator, run from a layout: the reference the identity
-    /// tests compare the components with, cycle by cycle. Every plant folder runs on
-    /// its components ([`Physical::new`]).
-    pub fn first_emulator(layout: &Layout, plant: &Plant, seed: u64) -> Result<Self, Problem> {
-        Ok(Self::Layout(Box::new(Emulator::new(layout, plant, seed)?)))
-    }
-
     /// Runs `dt` with the PLC's outputs.
     pub fn step(&mut self, dt: Millis, outputs: &Bits) {
         match self {
             Self::Components(c) => c.step(dt, outputs),
-            Self::Layout(e) => e.step(dt, outputs),
         }
     }
 
@@ -121,7 +110,6 @@ impl Physical {
     pub fn sensors(&self) -> &Bits {
         match self {
             Self::Components(c) => c.sensors(),
-            Self::Layout(e) => e.sensors(),
         }
     }
 
@@ -129,7 +117,6 @@ impl Physical {
     pub fn now(&self) -> Millis {
         match self {
             Self::Components(c) => c.now(),
-            Self::Layout(e) => e.now(),
         }
     }
 
@@ -137,7 +124,6 @@ impl Physical {
     pub fn hazards(&self) -> &[Hazard] {
         match self {
             Self::Components(c) => c.hazards(),
-            Self::Layout(e) => e.hazards(),
         }
     }
 
@@ -150,7 +136,6 @@ impl Physical {
                 damaged: c.items_damaged().0,
                 removed: c.items_removed(),
             },
-            Self::Layout(e) => e.stats(),
         }
     }
 
@@ -159,7 +144,6 @@ impl Physical {
     pub fn boxes(&self) -> Vec<BoxView> {
         match self {
             Self::Components(c) => c.boxes(),
-            Self::Layout(e) => e.boxes().to_vec(),
         }
     }
 
@@ -167,7 +151,6 @@ impl Physical {
     pub fn boxes_into(&self, out: &mut Vec<BoxView>) {
         match self {
             Self::Components(c) => c.boxes_into(out),
-            Self::Layout(e) => out.extend_from_slice(e.boxes()),
         }
     }
 
@@ -175,7 +158,6 @@ impl Physical {
     pub fn table_angle_mdeg(&self) -> i32 {
         match self {
             Self::Components(c) => c.table_angle_mdeg(),
-            Self::Layout(e) => e.table_angle_mdeg(),
         }
     }
 
@@ -183,7 +165,6 @@ impl Physical {
     pub fn scene(&self) -> Option<Scene> {
         match self {
             Self::Components(c) => Some(c.scene()),
-            Self::Layout(_) => None,
         }
     }
 
@@ -191,7 +172,6 @@ impl Physical {
     pub fn try_schedule_fault(&mut self, fault: FaultSpec) -> Result<(), Problem> {
         match self {
             Self::Components(c) => c.try_schedule_fault(fault),
-            Self::Layout(e) => e.try_schedule_fault(fault),
         }
     }
 
@@ -199,7 +179,6 @@ impl Physical {
     pub fn schedule_fault(&mut self, fault: FaultSpec) {
         match self {
             Self::Components(c) => c.schedule_fault(fault),
-            Self::Layout(e) => e.schedule_fault(fault),
         }
     }
 
@@ -207,7 +186,6 @@ impl Physical {
     pub fn fault_problems(&self) -> &[Problem] {
         match self {
             Self::Components(c) => c.fault_problems(),
-            Self::Layout(e) => e.fault_problems(),
         }
     }
 
@@ -215,7 +193,6 @@ impl Physical {
     pub fn faults_in_force(&self) -> usize {
         match self {
             Self::Components(c) => c.faults_in_force(),
-            Self::Layout(e) => e.faults_in_force(),
         }
     }
 
@@ -223,7 +200,6 @@ impl Physical {
     pub fn repair_faults(&mut self) -> usize {
         match self {
             Self::Components(c) => c.repair_faults(),
-            Self::Layout(e) => e.repair_faults(),
         }
     }
 
@@ -231,7 +207,6 @@ impl Physical {
     pub fn sensor_ids(&self) -> Vec<String> {
         match self {
             Self::Components(c) => c.sensor_ids(),
-            Self::Layout(e) => e.sensor_ids(),
         }
     }
 
@@ -239,7 +214,6 @@ impl Physical {
     pub fn actuators(&self) -> Vec<String> {
         match self {
             Self::Components(c) => c.actuators(),
-            Self::Layout(e) => e.actuators(),
         }
     }
 
@@ -247,7 +221,6 @@ impl Physical {
     pub fn remove_items(&mut self) -> u32 {
         match self {
             Self::Components(c) => c.remove_items(),
-            Self::Layout(e) => e.remove_items(),
         }
     }
 
@@ -258,7 +231,6 @@ impl Physical {
         use super::items::{ArrivalsDef, Mix, Plan};
         use crate::emulator::{BoxSize, SizeMix};
         match self {
-            Self::Layout(e) => e.set_arrivals(plan),
             Self::Components(c) => {
                 let class = |s: BoxSize| usize::from(s == BoxSize::Large);
                 let plan = match plan {
@@ -291,23 +263,6 @@ impl Physical {
     pub fn press(&mut self, signal: &str) -> bool {
         match self {
             Self::Components(c) => c.press(signal),
-            Self::Layout(_) => false,
-        }
-    }
-
-    /// The layout's emulator, for what only it can do (placing boxes, its angle).
-    pub fn as_layout(&self) -> Option<&Emulator> {
-        match self {
-            Self::Layout(e) => Some(e),
-            Self::Components(_) => None,
-        }
-    }
-
-    /// The layout's emulator, mutably.
-    pub fn as_layout_mut(&mut self) -> Option<&mut Emulator> {
-        match self {
-            Self::Layout(e) => Some(e),
-            Self::Components(_) => None,
         }
     }
 
@@ -315,7 +270,6 @@ impl Physical {
     pub fn as_components(&self) -> Option<&ComponentPlant> {
         match self {
             Self::Components(c) => Some(c),
-            Self::Layout(_) => None,
         }
     }
 }

@@ -220,16 +220,12 @@ impl Simulation {
         self.action_stop.as_deref()
     }
 
-    /// The plant's production so far: the items delivered on a sorting layout or by a
-    /// plant's conveyors (into a sink, or taken at an exit end), the elementary actions
-    /// completed on a plant of components without items (what the campaigns count to
-    /// tell that production runs again after a fault).
+    /// The plant's production so far: the items out of a plant's conveyors (into a
+    /// sink, or taken at an exit end), the elementary actions completed on a plant
+    /// without items (what the campaigns count to tell that production runs again after
+    /// a fault).
     pub fn produced(&self) -> u64 {
         match &self.emulator {
-            crate::machine::Physical::Layout(_) => {
-                let s = self.emulator.stats();
-                u64::from(s.delivered_total())
-            }
             crate::machine::Physical::Components(c) if c.carries_items() => {
                 u64::from(c.items_out())
             }

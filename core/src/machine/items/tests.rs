@@ -278,62 +278,6 @@ fn the_station_as_components_runs_the_error_library_as_its_first_emulator_did() 
     );
 }
 
-/// The frozen figures, from the first emulator (kept until they are written).
-#[test]
-#[ignore = "writes first-emulator.ron from the first emulator"]
-fn freeze_the_first_emulators_figures() {
-    let mut all = Vec::new();
-    for case in scenario_cases().iter().chain(&error_cases()) {
-        let options = Options {
-            history_cycles: 10,
-            explain: false,
-        };
-        let mut sim =
-            Simulation::from_scenario(&case.scenario, &case.path, options).expect("starts");
-        let plant = sim.bundle.plant.clone();
-        let layout = crate::emulator::Layout::load(&crate::test_support::station_layout_file())
-            .expect("fixture");
-        let mut e = Physical::first_emulator(&layout, &plant, case.scenario.seed).expect("builds");
-        if let Some(plan) = &case.scenario.arrivals {
-            e.set_arrivals(plan.clone());
-        }
-        for f in &case.scenario.faults {
-            e.try_schedule_fault(f.clone()).expect("applies");
-        }
-        sim.emulator = e;
-        let n = sim.bundle.plant.inputs.len();
-        let (mut h, mut cycles, mut minute) = (0xcbf2_9ce4_8422_2325_u64, 0, 60_000);
-        let mut sensors_by_minute = Vec::new();
-        while sim.now() < Millis(case.until_ms) {
-            sim.cycle();
-            cycles += 1;
-            let b = sim.emulator.sensors();
-            for i in 0..n {
-                h = (h ^ u64::from(b.get(i))).wrapping_mul(0x0100_0000_01b3);
-            }
-            if sim.now().0 >= minute {
-                sensors_by_minute.push(format!("{h:016x}"));
-                minute += 60_000;
-            }
-        }
-        sensors_by_minute.push(format!("{h:016x}"));
-        use erased::Json as _;
-        all.push(Figures {
-            case: case.name.clone(),
-            cycles,
-            sensors_by_minute,
-            hazards: sim.emulator.hazards().iter().map(|h| h.json()).collect(),
-            stats: sim.emulator.stats().json(),
-        });
-    }
-    let text = ron::ser::to_string_pretty(&all, ron::ser::PrettyConfig::default()).unwrap();
-    std::fs::write(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("src/machine/items/first-emulator.ron"),
-        text,
-    )
-    .unwrap();
-}
-
 /// An indexing corner with three positions: the table at 0 deg takes an item from
 /// `feed`, turns to 180 deg and passes it to `out` (its rollers' end there); turning
 /// with the item over its edge shears it; its arrivals wait for a free entry.
