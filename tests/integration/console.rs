@@ -20,10 +20,15 @@ fn options(data_dir: Option<PathBuf>) -> ConsoleOptions {
 
 /// The console in English whatever the machine's locale (the language switch has its
 /// own test).
-fn harness(mut opts: ConsoleOptions) -> Harness<'static, Console> {
+fn harness(opts: ConsoleOptions) -> Harness<'static, Console> {
+    harness_sized(opts, egui::vec2(1600.0, 1000.0))
+}
+
+/// [`harness`] in a window of `size`.
+fn harness_sized(mut opts: ConsoleOptions, size: egui::Vec2) -> Harness<'static, Console> {
     opts.lang = vigie_app::i18n::Lang::En;
     Harness::builder()
-        .with_size(egui::vec2(1600.0, 1000.0))
+        .with_size(size)
         .with_step_dt(1.0 / 60.0)
         .build_eframe(move |cc| {
             let mut c = Console::new(&opts).expect("console opens");
@@ -2526,4 +2531,57 @@ fn a_large_plant_is_shown_area_by_area_and_the_trips_area_is_flagged() {
     h.get_by_label("Whole plant").click();
     h.run_steps(3);
     assert_eq!(h.state().view.area, None);
+}
+
+/// An area drawn too small for its names (the production line's sorting station beside
+/// the program in Maintenance, at 1280x720) keeps its symbols, none on another, and
+/// drops the names, which the tooltip gives: they were drawn over each other. The same
+/// area in Production keeps its names.
+#[test]
+fn an_area_too_small_for_its_names_is_drawn_with_its_symbols_only() {
+    let dir = root().join("layouts/production-line");
+    let mut o = ConsoleOptions::new(&dir);
+    o.scenario = Some(dir.join("scenarios/e03-drill-fast-into-part.ron"));
+    o.data_dir = None;
+    let mut h = harness_sized(o, egui::vec2(1280.0, 720.0));
+    h.run_steps(2);
+    h.get_by_label("Sorting").click();
+    h.run_steps(3);
+    assert_eq!(h.state().view.area.as_deref(), Some("Sorting"));
+    let names = |h: &Harness<'_, Console>| -> Vec<String> {
+        let placed = &h.state().view.placed;
+        placed.names.iter().map(|(id, _)| id.clone()).collect()
+    };
+    assert!(
+        names(&h).iter().any(|n| n == "SS_P1_RET"),
+        "{:?}",
+        names(&h)
+    );
+    h.state_mut().apply(Command::SetMode(Mode::Maintenance));
+    h.run_steps(3);
+    assert_eq!(
+        h.state().mode,
+        Mode::Maintenance,
+        "an exercise: anyone edits it"
+    );
+    let placed = h.state().view.placed.clone();
+    assert!(placed.names.is_empty(), "{:?}", placed.names);
+    assert!(
+        placed.symbols.iter().any(|(id, _)| id == "SS_P1_RET"),
+        "{:?}",
+        placed.symbols
+    );
+    for (i, (a, r)) in placed.symbols.iter().enumerate() {
+        for (b, q) in &placed.symbols[i + 1..] {
+            // Touching edges are allowed (stacked beams), covering is not.
+            let both = r.intersect(*q);
+            assert!(
+                both.width() <= 0.0 || both.height() <= 0.0,
+                "symbols {a} {r:?} and {b} {q:?} overlap"
+            );
+        }
+    }
+    h.state_mut().apply(Command::SetMode(Mode::Production));
+    h.run_steps(3);
+    assert!(names(&h).iter().any(|n| n == "SS_P1_RET"));
 }

@@ -575,18 +575,24 @@ pub fn synoptic_ui(
         scale: fit * view.zoom,
     };
     let painter = painter.with_clip_rect(rect);
+    // An overview, or a schematic drawn so small that its symbols would cover each
+    // other (an area in the maintenance view, beside the program): symbols without
+    // their names, which the tooltip gives. The top view keeps its short names.
+    let lamp = (55.0 * xf.scale).clamp(5.0, 14.0);
+    let compact =
+        !geom.frames.is_empty() || (!geom.has_table && nearest_symbols(geom, &xf) < 2.4 * lamp);
     let cv = Canvas {
         painter: &painter,
         xf,
         pal,
         values: pic.values,
         rect,
-        lamp_r: if geom.frames.is_empty() {
-            (55.0 * xf.scale).clamp(5.0, 14.0)
-        } else {
+        lamp_r: if compact {
             compact_lamp(geom, &xf)
+        } else {
+            lamp
         },
-        compact: !geom.frames.is_empty(),
+        compact,
         claimed: std::cell::RefCell::new(Vec::new()),
         symbols: std::cell::RefCell::new(Vec::new()),
     };
@@ -663,24 +669,29 @@ pub fn synoptic_ui(
     response
 }
 
-/// The lamps' radius in an overview: as in any view, but small enough that no two
-/// symbols (a lamp's square of `2 r + 2`, an actuator's of `2.4 r`) cover each other
-/// however small the blocks are drawn (stacked beams, a cylinder's outputs).
-fn compact_lamp(geom: &Geometry, xf: &Xf) -> f32 {
+/// The smallest Chebyshev distance between two symbols' centres (lamps and actuators),
+/// px: squares of that side do not overlap.
+fn nearest_symbols(geom: &Geometry, xf: &Xf) -> f32 {
     let centres: Vec<Pos2> = geom
         .sensors
         .iter()
         .map(|s| xf.p(s.lamp))
         .chain(geom.actuators.values().map(|a| xf.p(*a)))
         .collect();
-    // The smallest Chebyshev distance between two symbols: squares of that side do
-    // not overlap.
     let mut near = f32::MAX;
     for (i, a) in centres.iter().enumerate() {
         for b in &centres[i + 1..] {
             near = near.min((a.x - b.x).abs().max((a.y - b.y).abs()));
         }
     }
+    near
+}
+
+/// The lamps' radius in an overview: as in any view, but small enough that no two
+/// symbols (a lamp's square of `2 r + 2`, an actuator's of `2.4 r`) cover each other
+/// however small the blocks are drawn (stacked beams, a cylinder's outputs).
+fn compact_lamp(geom: &Geometry, xf: &Xf) -> f32 {
+    let near = nearest_symbols(geom, xf);
     (55.0 * xf.scale)
         .clamp(5.0, 14.0)
         .min(near / 2.4)
