@@ -161,14 +161,13 @@ struct Tables {
     /// Candidate symbols of each signal edge (`[falling, rising]`): the guarded ones
     /// first, then the unguarded one.
     by_edge: Vec<[Vec<usize>; 2]>,
-    /// Number of symbols.
-    nsym: usize,
-    /// The observable transitions of state `q` on symbol `s` are
-    /// `obs[obs_at[q * nsym + s]..obs_at[q * nsym + s + 1]]` (flat: one lookup, no
-    /// search, contiguous in memory).
+    /// The observable transitions of state `q` are `obs[obs_at[q]..obs_at[q + 1]]`,
+    /// sorted by symbol: found by a short search in the state's own list. (A dense
+    /// state × symbol index costs that product whatever the model observes: 205 MB for
+    /// the drilling station's derived head.)
     obs_at: Vec<u32>,
-    /// Target and window interval of each observable transition.
-    obs: Vec<(u32, u32)>,
+    /// Symbol, target and window interval of each observable transition.
+    obs: Vec<(u32, u32, u32)>,
     /// What the updates read of each state, packed.
     info: Vec<Info>,
 }
@@ -184,37 +183,61 @@ struct Info {
 }
 
 impl Tables {
-    /// Everything [`Tables::new`] reads of a component, as numbers: equal shapes give
-    /// equal tables.
-    fn shape(c: &Component) -> Vec<u64> {
-        let mut k: Vec<u64> = vec![
+    /// The observable transitions of state `q` on symbol `sym`: target and window.
+    fn observed(&self, q: usize, sym: usize) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let all = &self.obs[self.obs_at[q] as usize..self.obs_at[q + 1] as usize];
+        let sym = sym as u32;
+        let from = all.partition_point(|o| o.0 < sym);
+        all[from..]
+            .iter()
+            .take_while(move |o| o.0 == sym)
+            .map(|&(_, tq, w)| (tq, w))
+    }
+
+    /// Everything [`Tables::new`] reads of a component, as a stream of numbers: equal
+    /// shapes give equal tables. A stream, not a vector: a derived model's shape runs
+    /// to tens of millions of numbers, hashed and compared without being stored.
+    fn shape(c: &Component) -> impl Iterator<Item = u64> + '_ {
+        let head = [
             c.g.len() as u64,
             c.symbols.len() as u64,
             c.signals.len() as u64,
             c.intervals.len() as u64,
         ];
-        for s in &c.symbols {
-            k.push(s.edge.map_or(0, |(i, r)| 1 + 2 * i as u64 + u64::from(r)));
-            k.push(u64::from(s.guard.is_some()));
-            k.push(s.timeout.map_or(0, |t| 1 + t as u64));
-        }
-        for st in &c.g {
-            k.push(st.phase as u64);
-            k.push(st.mode.map_or(0, |m| 1 + m as u64));
-            k.push(st.deadline.map_or(0, |d| 1 + d as u64));
-            k.push(st.hold_ms.map_or(0, |h| 1 + h));
-            k.push(st.obs.len() as u64);
-            for &(s, t, w) in &st.obs {
-                k.extend([s as u64, t as u64, w.map_or(0, |w| 1 + w as u64)]);
-            }
-            k.push(st.silent.len() as u64);
-            k.extend(st.silent.iter().map(|&x| x as u64));
-            k.push(st.spawn.len() as u64);
-            for &(f, t) in &st.spawn {
-                k.extend([f as u64, t as u64]);
-            }
-        }
-        k
+        let symbols = c.symbols.iter().flat_map(|s| {
+            [
+                s.edge.map_or(0, |(i, r)| 1 + 2 * i as u64 + u64::from(r)),
+                u64::from(s.guard.is_some()),
+                s.timeout.map_or(0, |t| 1 + t as u64),
+            ]
+        });
+        let states = c.g.iter().flat_map(|st| {
+            [
+                st.phase as u64,
+                st.mode.map_or(0, |m| 1 + m as u64),
+                st.deadline.map_or(0, |d| 1 + d as u64),
+                st.hold_ms.map_or(0, |h| 1 + h),
+                st.obs.len() as u64,
+            ]
+            .into_iter()
+            .chain(
+                st.obs
+                    .iter()
+                    .flat_map(|&(s, t, w)| [s as u64, t as u64, w.map_or(0, |w| 1 + w as u64)]),
+            )
+            .chain(std::iter::once(st.silent.len() as u64))
+            .chain(st.silent.iter().map(|&x| x as u64))
+            .chain(std::iter::once(st.spawn.len() as u64))
+            .chain(st.spawn.iter().flat_map(|&(f, t)| [f as u64, t as u64]))
+        });
+        head.into_iter().chain(symbols).chain(states)
+    }
+
+    /// A hash of [`Tables::shape`] (FNV-1a over its numbers).
+    fn shape_hash(c: &Component) -> u64 {
+        Self::shape(c).fold(0xcbf2_9ce4_8422_2325, |h, v| {
+            (h ^ v).wrapping_mul(0x0100_0000_01b3)
+        })
     }
 
     fn new(c: &Component) -> Self {
@@ -271,22 +294,16 @@ impl Tables {
                 }
             }
         }
-        let nsym = c.symbols.len();
-        let mut obs_at = Vec::with_capacity(n * nsym + 1);
+        let mut obs_at = Vec::with_capacity(n + 1);
         let mut obs = Vec::new();
         for st in &c.g {
             // `st.obs` is sorted by symbol.
-            let mut k = 0;
-            for sym in 0..nsym {
-                obs_at.push(obs.len() as u32);
-                while k < st.obs.len() && st.obs[k].0 <= sym {
-                    if st.obs[k].0 == sym {
-                        let (_, tq, w) = st.obs[k];
-                        obs.push((tq as u32, w.map_or(NO_WINDOW, |w| w as u32)));
-                    }
-                    k += 1;
-                }
-            }
+            obs_at.push(obs.len() as u32);
+            obs.extend(
+                st.obs.iter().map(|&(sym, tq, w)| {
+                    (sym as u32, tq as u32, w.map_or(NO_WINDOW, |w| w as u32))
+                }),
+            );
         }
         obs_at.push(obs.len() as u32);
         let info =
@@ -303,7 +320,6 @@ impl Tables {
             closure_at,
             timeout_sym,
             by_edge,
-            nsym,
             obs_at,
             obs,
             info,
@@ -832,24 +848,31 @@ impl Diagnosers {
 
 /// The components' tables; with `share`, components of the same shape share theirs.
 fn share_tables(compiled: &Compiled, share: bool) -> Vec<std::sync::Arc<Tables>> {
-    let mut shared: std::collections::HashMap<Vec<u64>, std::sync::Arc<Tables>> =
+    // By the shape's hash: the components already built with that hash, compared number
+    // by number before their tables are shared (a collision builds its own).
+    let mut shared: std::collections::HashMap<u64, Vec<(usize, std::sync::Arc<Tables>)>> =
         std::collections::HashMap::new();
-    compiled
-        .components
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let key = if share {
-                Tables::shape(c)
-            } else {
-                vec![i as u64]
-            };
-            shared
-                .entry(key)
-                .or_insert_with(|| std::sync::Arc::new(Tables::new(c)))
-                .clone()
-        })
-        .collect()
+    let mut out = Vec::with_capacity(compiled.components.len());
+    for (i, c) in compiled.components.iter().enumerate() {
+        if !share {
+            out.push(std::sync::Arc::new(Tables::new(c)));
+            continue;
+        }
+        let same = shared.entry(Tables::shape_hash(c)).or_default();
+        let found = same
+            .iter()
+            .find(|(j, _)| Tables::shape(&compiled.components[*j]).eq(Tables::shape(c)));
+        let tables = match found {
+            Some((_, t)) => t.clone(),
+            None => {
+                let t = std::sync::Arc::new(Tables::new(c));
+                same.push((i, t.clone()));
+                t
+            }
+        };
+        out.push(tables);
+    }
+    out
 }
 
 /// For each component, the partitions of the others whose sensors it assumes
@@ -1190,9 +1213,7 @@ fn step(
     let is_edge = c.symbols[sym].edge.is_some();
     for &(q, since) in cl {
         let phase = tab.info[q as usize].phase;
-        let at = q as usize * tab.nsym + sym;
-        let range = tab.obs_at[at] as usize..tab.obs_at[at + 1] as usize;
-        for &(tq, w) in &tab.obs[range] {
+        for (tq, w) in tab.observed(q as usize, sym) {
             let tq = tq as usize;
             let w = (w != NO_WINDOW).then_some(w as usize);
             if timed && phase == Phase::Timed && !window_ok(c, r, w, t, margin) {
@@ -1552,11 +1573,9 @@ mod tests {
                 let got: BTreeSet<(u32, bool)> = tab.closure[range].iter().copied().collect();
                 assert_eq!(got, want, "{} state {}", c.id, c.g[q].name);
                 for sym in 0..c.symbols.len() {
-                    let at = q * tab.nsym + sym;
-                    let got: Vec<(usize, Option<usize>)> = tab.obs
-                        [tab.obs_at[at] as usize..tab.obs_at[at + 1] as usize]
-                        .iter()
-                        .map(|&(t, w)| (t as usize, (w != NO_WINDOW).then_some(w as usize)))
+                    let got: Vec<(usize, Option<usize>)> = tab
+                        .observed(q, sym)
+                        .map(|(t, w)| (t as usize, (w != NO_WINDOW).then_some(w as usize)))
                         .collect();
                     let want: Vec<(usize, Option<usize>)> = c.g[q]
                         .obs
@@ -1566,6 +1585,38 @@ mod tests {
                         .collect();
                     assert_eq!(got, want, "{} state {} symbol {sym}", c.id, c.g[q].name);
                 }
+            }
+        }
+    }
+
+    /// The run-time index of a derived model (the drilling station's head: 149,930
+    /// states, 342 symbols, 48 million observable transitions) holds each transition
+    /// once, indexed by state; and components of one shape share their tables, a
+    /// different shape never does. Finding the shared ones no longer stores each
+    /// model's shape (1 GB for this one: the console took 3.3 GB on this plant).
+    #[test]
+    fn a_derived_models_tables_hold_each_transition_once() {
+        let dir =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/drilling-station");
+        let (db, _) = crate::pop::load(&dir).expect("the drilling station's diagnosers");
+        let c = &db.compiled.components[0];
+        let tab = Tables::new(c);
+        let transitions: usize = c.g.iter().map(|st| st.obs.len()).sum();
+        assert_eq!(tab.obs.len(), transitions);
+        assert_eq!(tab.obs_at.len(), c.g.len() + 1);
+        // Sharing: the station's models of one shape get one table, the others their own.
+        let station = super::super::tests::station();
+        let shared = share_tables(&station.compiled, true);
+        for (i, a) in station.compiled.components.iter().enumerate() {
+            for (j, b) in station.compiled.components.iter().enumerate() {
+                let same = Tables::shape(a).eq(Tables::shape(b));
+                assert_eq!(
+                    std::sync::Arc::ptr_eq(&shared[i], &shared[j]),
+                    same,
+                    "{} and {}",
+                    a.id,
+                    b.id
+                );
             }
         }
     }
