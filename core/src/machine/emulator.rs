@@ -785,10 +785,13 @@ impl ComponentPlant {
 }
 
 #[cfg(test)]
+#[path = "emulator/tests/conveyor.rs"]
 mod conveyor_tests;
 #[cfg(test)]
+#[path = "emulator/tests/device.rs"]
 mod device_tests;
 #[cfg(test)]
+#[path = "emulator/tests/station.rs"]
 mod station_tests;
 #[cfg(test)]
 mod tests;
