@@ -74,11 +74,11 @@ fn physical(
     let found = desc.check_signals(&bundle.plant);
     let broken = found.iter().any(Problem::is_error);
     problems.extend(found);
-    if let (Description::Components(c), false) = (&desc, broken) {
+    let Description::Components(c) = &desc;
+    if !broken {
         problems.extend(vigie_core::machine::safe_state::check(c, &bundle.plant));
         problems.extend(c.warnings());
     }
-    let Description::Components(c) = &desc;
     // A legacy layout.ron is read as the components it describes: the report names
     // the file it came from.
     let file = if c.file.file_name() == Some(std::ffi::OsStr::new(physical::LAYOUT_FILE)) {
@@ -91,17 +91,13 @@ fn physical(
         .iter()
         .map(|c| format!("{} ({})", c.id, c.kind.label()))
         .collect();
-    let floor = match &desc {
-        Description::Components(c) if c.components.iter().any(|k| k.at.is_some()) => {
-            Some(match vigie_core::emulator::Layout::cell_of(c) {
-                Ok(_) => "a turntable cell: the console draws its top view and `vigie verify` \
-                          searches the cell's model"
-                    .to_string(),
-                Err(why) => format!("drawn as a schematic, not a turntable cell: {why}"),
-            })
-        }
-        _ => None,
-    };
+    let placed = c.components.iter().any(|k| k.at.is_some());
+    let floor = placed.then(|| match vigie_core::emulator::Layout::cell_of(c) {
+        Ok(_) => "a turntable cell: the console draws its top view and `vigie verify` \
+                  searches the cell's model"
+            .to_string(),
+        Err(why) => format!("drawn as a schematic, not a turntable cell: {why}"),
+    });
     let mut report = Physical {
         file,
         components,
@@ -109,13 +105,12 @@ fn physical(
         actions_from: "components",
         floor,
     };
-    let derived = match (&desc, broken) {
-        (Description::Components(c), false) => {
-            vigie_core::machine::ComponentPlant::new(c, &bundle.plant, 0)
-                .map(|p| p.derived_actions())
-                .unwrap_or_default()
-        }
-        _ => Vec::new(),
+    let derived = if broken {
+        Vec::new()
+    } else {
+        vigie_core::machine::ComponentPlant::new(c, &bundle.plant, 0)
+            .map(|p| p.derived_actions())
+            .unwrap_or_default()
     };
     let path = dir.join(ACTIONS_FILE);
     if path.exists() {

@@ -142,10 +142,7 @@ fn run_components(
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&[p])))?;
     let secs = t0.elapsed().as_secs_f64();
     let unsafe_parts = report.unsafe_parts();
-    let unverified = report
-        .parts
-        .iter()
-        .any(|p| p.skipped.is_some() || p.truncated);
+    let unverified = report.unproved();
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
@@ -226,12 +223,7 @@ fn print_part(p: &verify::components::SubReport) {
         p.transitions,
         if p.truncated { " (TRUNCATED)" } else { "" },
         {
-            let v: Vec<String> = p
-                .with_filter
-                .iter()
-                .filter(|r| !p.uncontrollable.contains(&r.hazard))
-                .map(|r| r.hazard.to_string())
-                .collect();
+            let v: Vec<String> = p.violated().map(|r| r.hazard.to_string()).collect();
             if !v.is_empty() {
                 format!("VIOLATED: {}", v.join(", "))
             } else if p.truncated {
@@ -248,11 +240,7 @@ fn print_part(p: &verify::components::SubReport) {
             v.join(", ")
         );
     }
-    for r in p
-        .with_filter
-        .iter()
-        .filter(|r| !p.uncontrollable.contains(&r.hazard))
-    {
+    for r in p.violated() {
         for s in r.trace.iter().rev().take(4).rev() {
             println!(
                 "    at {}  in[{}] commanded[{}] applied[{}]",

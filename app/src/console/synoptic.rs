@@ -575,23 +575,14 @@ pub fn synoptic_ui(
         scale: fit * view.zoom,
     };
     let painter = painter.with_clip_rect(rect);
-    // An overview, or a schematic drawn so small that its symbols would cover each
-    // other (an area in the maintenance view, beside the program): symbols without
-    // their names, which the tooltip gives. The top view keeps its short names.
-    let lamp = (55.0 * xf.scale).clamp(5.0, 14.0);
-    let compact =
-        !geom.frames.is_empty() || (!geom.has_table && nearest_symbols(geom, &xf) < 2.4 * lamp);
+    let (lamp_r, compact) = lamps(geom, &xf);
     let cv = Canvas {
         painter: &painter,
         xf,
         pal,
         values: pic.values,
         rect,
-        lamp_r: if compact {
-            compact_lamp(geom, &xf)
-        } else {
-            lamp
-        },
+        lamp_r,
         compact,
         claimed: std::cell::RefCell::new(Vec::new()),
         symbols: std::cell::RefCell::new(Vec::new()),
@@ -669,6 +660,25 @@ pub fn synoptic_ui(
     response
 }
 
+/// The lamps' radius, and whether the view is compact: an overview, or a schematic
+/// drawn so small that its symbols would cover each other (an area in the maintenance
+/// view, beside the program), drawn with symbols but without their names, which the
+/// tooltip gives. The top view keeps its short names, and is never searched.
+fn lamps(geom: &Geometry, xf: &Xf) -> (f32, bool) {
+    let lamp = (55.0 * xf.scale).clamp(5.0, 14.0);
+    let overview = !geom.frames.is_empty();
+    if geom.has_table && !overview {
+        return (lamp, false);
+    }
+    // Searched once a frame, for both the choice and the overview's lamp size.
+    let near = nearest_symbols(geom, xf);
+    if overview || near < 2.4 * lamp {
+        (compact_lamp(lamp, near), true)
+    } else {
+        (lamp, false)
+    }
+}
+
 /// The smallest Chebyshev distance between two symbols' centres (lamps and actuators),
 /// px: squares of that side do not overlap.
 fn nearest_symbols(geom: &Geometry, xf: &Xf) -> f32 {
@@ -687,16 +697,12 @@ fn nearest_symbols(geom: &Geometry, xf: &Xf) -> f32 {
     near
 }
 
-/// The lamps' radius in an overview: as in any view, but small enough that no two
-/// symbols (a lamp's square of `2 r + 2`, an actuator's of `2.4 r`) cover each other
-/// however small the blocks are drawn (stacked beams, a cylinder's outputs).
-fn compact_lamp(geom: &Geometry, xf: &Xf) -> f32 {
-    let near = nearest_symbols(geom, xf);
-    (55.0 * xf.scale)
-        .clamp(5.0, 14.0)
-        .min(near / 2.4)
-        .min((near - 2.0) / 2.0)
-        .max(1.5)
+/// The lamps' radius in an overview: `lamp`, the one of any view, but small enough that
+/// no two symbols (a lamp's square of `2 r + 2`, an actuator's of `2.4 r`) cover each
+/// other however small the blocks are drawn (stacked beams, a cylinder's outputs);
+/// `near` is [`nearest_symbols`].
+fn compact_lamp(lamp: f32, near: f32) -> f32 {
+    lamp.min(near / 2.4).min((near - 2.0) / 2.0).max(1.5)
 }
 
 /// What the synoptic's painters share: the clipped painter, the transform, the palette,

@@ -346,9 +346,7 @@ fn deliveries_ui(i18n: &crate::i18n::I18n, ui: &mut egui::Ui, r: &VerifyReport) 
 /// Whether no modelled sub-plant reaches a hazard with the filter (the environment's
 /// own hazards aside), and whether some sub-plant was not verified or not to the end.
 fn parts_verdict(r: &ComponentsReport) -> (bool, bool) {
-    let safe = r.unsafe_parts().is_empty();
-    let unproved = r.parts.iter().any(|p| p.skipped.is_some() || p.truncated);
-    (safe, unproved)
+    (r.unsafe_parts().is_empty(), r.unproved())
 }
 
 /// The word `say-verified-parts` selects on.
@@ -383,13 +381,7 @@ fn part_verdict(i18n: &crate::i18n::I18n, p: &SubReport) -> (String, bool) {
     if let Some(why) = &p.skipped {
         return (i18n.ta("verif-part-skipped", &[("why", why.into())]), true);
     }
-    let violated = hazards(
-        &mut p
-            .with_filter
-            .iter()
-            .map(|r| &r.hazard)
-            .filter(|h| !p.uncontrollable.contains(h)),
-    );
+    let violated = hazards(&mut p.violated().map(|r| &r.hazard));
     let mut text = if !violated.is_empty() {
         i18n.ta("verif-part-violated", &[("hazards", (&violated).into())])
     } else if p.truncated {

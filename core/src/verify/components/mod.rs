@@ -169,18 +169,33 @@ pub struct ComponentsReport {
     pub assumptions: Vec<String>,
 }
 
+impl SubReport {
+    /// The hazards reachable with the filter that a constraint could prevent: those the
+    /// environment makes alone (`uncontrollable`) aside.
+    pub fn violated(&self) -> impl Iterator<Item = &Reached> {
+        self.with_filter
+            .iter()
+            .filter(|r| !self.uncontrollable.contains(&r.hazard))
+    }
+
+    /// Not verified, or not to the end (the search stopped at its limit).
+    pub fn unproved(&self) -> bool {
+        self.skipped.is_some() || self.truncated
+    }
+}
+
 impl ComponentsReport {
     /// Every hazard reachable with the filter: the constraint set does not protect.
     pub fn unsafe_parts(&self) -> Vec<(&str, &Reached)> {
         self.parts
             .iter()
-            .flat_map(|p| {
-                p.with_filter
-                    .iter()
-                    .filter(|r| !p.uncontrollable.contains(&r.hazard))
-                    .map(move |r| (p.component.as_str(), r))
-            })
+            .flat_map(|p| p.violated().map(move |r| (p.component.as_str(), r)))
             .collect()
+    }
+
+    /// Some sub-plant was not verified, or not to the end.
+    pub fn unproved(&self) -> bool {
+        self.parts.iter().any(SubReport::unproved)
     }
 }
 
