@@ -249,22 +249,6 @@ pub fn subject_of(dir: &std::path::Path) -> Result<Subject, Vec<Problem>> {
     })
 }
 
-/// The turntable cell of a plant folder (see [`subject_of`]); a plant of components
-/// that is not one is V0501, saying that it is searched per sub-plant.
-pub fn layout_of(dir: &std::path::Path) -> Result<Layout, Vec<Problem>> {
-    match subject_of(dir)? {
-        Subject::Cell(l) => Ok(*l),
-        Subject::Parts(c) => Err(vec![Problem::error(
-            codes::VERIFY_UNSUPPORTED.id,
-            "this plant of components is not a turntable cell placed on the floor: \
-             its abstract model is searched per sub-plant (`vigie verify` on the \
-             command line)"
-                .to_string(),
-            Some(c.location_of(&c.name)),
-        )]),
-    }
-}
-
 /// Hazard name as the emulator serialises it.
 pub fn hazard_name(k: HazardKind) -> &'static str {
     match k {
