@@ -36,6 +36,7 @@ pub mod machine;
 pub mod observers;
 pub mod plant;
 pub mod plausibility;
+pub mod plcopen;
 pub mod pop;
 pub mod sim;
 pub mod symbols;

@@ -427,6 +427,10 @@ impl CompiledProgram {
     /// Loads and compiles a program file.
     pub fn load(path: &Path, plant: &Plant) -> Result<Self, Vec<Problem>> {
         let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
+        if crate::plcopen::is_plcopen(path) {
+            let program = crate::plcopen::import(&text, path, plant)?;
+            return Self::new(&program, plant, &Origin::new(path, ""));
+        }
         let program = Program::from_ron(&text, path)?;
         Self::new(&program, plant, &Origin::new(path, &text))
     }

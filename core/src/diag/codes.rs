@@ -19,6 +19,7 @@
 //! | V09xx | control programs and the control-error library |
 //! | V10xx | the compiled filter |
 //! | V11xx | the machine's elementary actions (`actions.ron`) and their monitor |
+//! | V12xx | PLCopen XML control programs (`vigie program import`, `export`) |
 //!
 //! Loaders write `Problem::error(codes::TRACE_EMPTY.id, …)`; no other source file
 //! spells a `V` code (a test checks it). [`explain`] returns the page of a code.
@@ -196,6 +197,14 @@ registry! {
     MACHINE_ACTION_NOT_ELEMENTARY = "V1107", "an action the decomposition rules cannot make elementary";
     MACHINE_ACTIONS_MERGED = "V1108", "actions merged into one with several final states: safety is reduced";
     MACHINE_CYCLE_TOO_LONG = "V1109", "the monitor's cycle too long for an action's timing (T_D < ΔT_min, (II.4))";
+    // V12xx: PLCopen XML programs (import and export)
+    PLCOPEN_XML_INVALID = "V1201", "a PLCopen file that is not well-formed XML or not a TC6 project";
+    PLCOPEN_UNSUPPORTED = "V1202", "a PLCopen construct that Vigie does not run";
+    PLCOPEN_ST_INVALID = "V1203", "Structured Text that does not parse";
+    PLCOPEN_UNKNOWN_NAME = "V1204", "a name that the PLCopen program does not declare";
+    PLCOPEN_BINDING = "V1205", "a PLCopen variable that cannot be bound to the plant";
+    PLCOPEN_SFC_GRAPH = "V1206", "a malformed SFC or LD network (dangling connection, transition without step)";
+    PLCOPEN_EXPORT = "V1207", "a program that cannot be written as PLCopen XML";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";

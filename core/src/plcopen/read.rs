@@ -1,0 +1,1566 @@
+//! PLCopen XML → [`Program`]: the project's structure, the variables and their binding
+//! to the plant, and the symbolic execution of the bodies (see the module docs).
+
+use super::st::{self, BinOp, Pos, StExpr, Stmt};
+use super::{ADD_DATA, ld, sfc};
+use crate::control::{Action, Chart, Program, Qualifier, Step, Transition};
+use crate::diag::codes::{self, Code};
+use crate::diag::{Location, Problem};
+use crate::expr::{Expr, LeafKind, Span};
+use crate::plant::{Address, Plant};
+use roxmltree::{Document, Node};
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+/// What a declared name is, for Vigie.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(super) enum Kind {
+    Input,
+    Output,
+    Panel,
+    Memory,
+    Trig {
+        rising: bool,
+    },
+    /// A declared variable of a type Vigie does not run: an error where it is used.
+    Unsupported(String),
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct VarDecl {
+    /// The name in the Vigie program (the plant's id for a bound signal).
+    pub(super) name: String,
+    pub(super) kind: Kind,
+}
+
+/// The reading context: the file, its document and the problems found.
+pub(super) struct Ctx<'a, 'input> {
+    pub(super) file: &'a Path,
+    pub(super) doc: &'a Document<'input>,
+    pub(super) problems: Vec<Problem>,
+}
+
+impl Ctx<'_, '_> {
+    pub(super) fn at(&self, node: Node<'_, '_>) -> Location {
+        let p = self.doc.text_pos_at(node.range().start);
+        Location::new(self.file, p.row as usize, p.col as usize)
+    }
+
+    pub(super) fn error(&mut self, code: Code, node: Node<'_, '_>, message: impl Into<String>) {
+        let at = self.at(node);
+        self.problems
+            .push(Problem::error(code.id, message, Some(at)));
+    }
+
+    pub(super) fn error_at(&mut self, code: Code, at: Location, message: impl Into<String>) {
+        self.problems
+            .push(Problem::error(code.id, message, Some(at)));
+    }
+}
+
+/// ST text found in the file, with the file position of its first character.
+#[derive(Clone, Debug)]
+pub(super) struct StText {
+    pub(super) text: String,
+    pub(super) line: usize,
+    pub(super) column: usize,
+}
+
+impl StText {
+    /// The file location of a position in the text.
+    pub(super) fn locate(&self, file: &Path, pos: Pos) -> Location {
+        if pos.line <= 1 {
+            Location::new(file, self.line, self.column + pos.column.saturating_sub(1))
+        } else {
+            Location::new(file, self.line + pos.line - 1, pos.column)
+        }
+    }
+}
+
+/// The child elements of `node` with this local name.
+pub(super) fn children<'a, 'i>(
+    node: Node<'a, 'i>,
+    name: &'a str,
+) -> impl Iterator<Item = Node<'a, 'i>> {
+    node.children()
+        .filter(move |c| c.is_element() && c.tag_name().name() == name)
+}
+
+/// The first child element with this local name.
+pub(super) fn child<'a, 'i>(node: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+    node.children()
+        .find(|c| c.is_element() && c.tag_name().name() == name)
+}
+
+/// The text of an `<ST>` (or any) element: its descendant text, with the file position
+/// of the first text node (inside a CDATA section when there is one).
+pub(super) fn st_text(ctx: &Ctx<'_, '_>, node: Node<'_, '_>) -> StText {
+    let mut text = String::new();
+    let mut first = None;
+    for d in node.descendants().filter(Node::is_text) {
+        let t = d.text().unwrap_or("");
+        if first.is_none() && !t.trim().is_empty() {
+            let r = d.range();
+            let src = ctx.doc.input_text().get(r.clone()).unwrap_or("");
+            let skip = if src.starts_with("<![CDATA[") { 9 } else { 0 };
+            first = Some(r.start + skip);
+        }
+        text.push_str(t);
+    }
+    let (line, column) = match first {
+        Some(off) => {
+            let p = ctx.doc.text_pos_at(off);
+            (p.row as usize, p.col as usize)
+        }
+        None => {
+            let p = ctx.doc.text_pos_at(node.range().start);
+            (p.row as usize, p.col as usize)
+        }
+    };
+    StText { text, line, column }
+}
+
+/// The program POUs of the project in the order the PLC runs them.
+fn program_pous<'a, 'i>(ctx: &mut Ctx<'a, 'i>, project: Node<'a, 'i>) -> Vec<Node<'a, 'i>> {
+    let pous: Vec<Node<'a, 'i>> = child(project, "types")
+        .and_then(|t| child(t, "pous"))
+        .map(|p| children(p, "pou").collect())
+        .unwrap_or_default();
+    let programs: Vec<Node<'a, 'i>> = pous
+        .iter()
+        .copied()
+        .filter(|p| p.attribute("pouType") == Some("program"))
+        .collect();
+    // Task order: every pouInstance of every resource, tasks by priority (IEC: a lower
+    // number runs first), then the resource's own instances.
+    let mut called: Vec<(i64, Node<'a, 'i>, String)> = Vec::new();
+    for res in project
+        .descendants()
+        .filter(|n| n.is_element() && n.tag_name().name() == "resource")
+    {
+        for task in children(res, "task") {
+            let prio = task
+                .attribute("priority")
+                .and_then(|p| p.parse::<i64>().ok())
+                .unwrap_or(0);
+            for inst in children(task, "pouInstance") {
+                called.push((prio, inst, inst.attribute("typeName").unwrap_or("").into()));
+            }
+        }
+        for inst in children(res, "pouInstance") {
+            called.push((
+                i64::MAX,
+                inst,
+                inst.attribute("typeName").unwrap_or("").into(),
+            ));
+        }
+    }
+    if called.is_empty() {
+        return programs;
+    }
+    called.sort_by_key(|c| c.0);
+    let mut out = Vec::new();
+    for (_, inst, ty) in called {
+        match programs
+            .iter()
+            .find(|p| p.attribute("name") == Some(ty.as_str()))
+        {
+            Some(p) if out.contains(p) => ctx.error(
+                codes::PLCOPEN_UNSUPPORTED,
+                inst,
+                format!(
+                    "the program `{ty}` is instantiated twice: one instance per program is run"
+                ),
+            ),
+            Some(p) => out.push(*p),
+            None => ctx.error(
+                codes::PLCOPEN_UNKNOWN_NAME,
+                inst,
+                format!("the task calls `{ty}`, which is not a POU of type program in this file"),
+            ),
+        }
+    }
+    out
+}
+
+/// `%IX1.2` → ('I', 10); `%QX0.0` → ('Q', 0); `%MX3` → ('M', 3).
+fn parse_address(a: &str) -> Option<(char, u16)> {
+    let rest = a.strip_prefix('%')?;
+    let mut chars = rest.chars();
+    let area = chars.next()?.to_ascii_uppercase();
+    let rest = chars.as_str();
+    let rest = rest
+        .strip_prefix('X')
+        .or_else(|| rest.strip_prefix('x'))
+        .unwrap_or(rest);
+    if !rest.chars().next()?.is_ascii_digit() {
+        return None;
+    }
+    let bit = match rest.split_once('.') {
+        Some((byte, bit)) => {
+            let byte: u16 = byte.parse().ok()?;
+            let bit: u16 = bit.parse().ok()?;
+            if bit > 7 {
+                return None;
+            }
+            byte.checked_mul(8)?.checked_add(bit)?
+        }
+        None => rest.parse().ok()?,
+    };
+    matches!(area, 'I' | 'Q' | 'M').then_some((area, bit))
+}
+
+/// The variable sections of an interface, with their kind of section.
+const SECTIONS: &[(&str, bool)] = &[
+    ("inputVars", true),
+    ("outputVars", false),
+    ("inOutVars", false),
+    ("localVars", false),
+    ("tempVars", false),
+    ("externalVars", false),
+    ("globalVars", false),
+    ("accessVars", false),
+];
+
+pub(super) struct Declarations {
+    /// By lower-case IEC name.
+    pub(super) vars: BTreeMap<String, VarDecl>,
+    /// Panel inputs and memories, in declaration order (Vigie names).
+    pub(super) panel: Vec<String>,
+    pub(super) memories: Vec<String>,
+}
+
+impl Declarations {
+    fn declare(&mut self, ctx: &mut Ctx<'_, '_>, node: Node<'_, '_>, iec: &str, decl: VarDecl) {
+        let key = iec.to_ascii_lowercase();
+        if let Some(old) = self.vars.get(&key) {
+            if old.name != decl.name || old.kind != decl.kind {
+                ctx.error(
+                    codes::PLCOPEN_BINDING,
+                    node,
+                    format!(
+                        "`{iec}` is declared twice with two bindings ({} and {})",
+                        describe(old),
+                        describe(&decl)
+                    ),
+                );
+            }
+            return;
+        }
+        match decl.kind {
+            Kind::Panel if !self.panel.contains(&decl.name) => self.panel.push(decl.name.clone()),
+            Kind::Memory if !self.memories.contains(&decl.name) => {
+                self.memories.push(decl.name.clone());
+            }
+            _ => {}
+        }
+        self.vars.insert(key, decl);
+    }
+}
+
+fn describe(d: &VarDecl) -> String {
+    match &d.kind {
+        Kind::Input => format!("plant input {}", d.name),
+        Kind::Output => format!("plant output {}", d.name),
+        Kind::Panel => "operator button".into(),
+        Kind::Memory => "memory".into(),
+        Kind::Trig { rising: true } => "R_TRIG".into(),
+        Kind::Trig { rising: false } => "F_TRIG".into(),
+        Kind::Unsupported(t) => t.clone(),
+    }
+}
+
+fn type_of(var: Node<'_, '_>) -> String {
+    let Some(ty) = child(var, "type") else {
+        return "?".into();
+    };
+    match ty.children().find(Node::is_element) {
+        Some(t) if t.tag_name().name() == "derived" => t.attribute("name").unwrap_or("?").into(),
+        Some(t) => t.tag_name().name().to_string(),
+        None => "?".into(),
+    }
+}
+
+fn bind_bool(
+    ctx: &mut Ctx<'_, '_>,
+    plant: &Plant,
+    var: Node<'_, '_>,
+    name: &str,
+    input_section: bool,
+) -> Option<VarDecl> {
+    if let Some(addr) = var.attribute("address") {
+        let Some((area, bit)) = parse_address(addr) else {
+            ctx.error(
+                codes::PLCOPEN_BINDING,
+                var,
+                format!("variable `{name}` at {addr}: only %IX, %QX and %MX bit addresses are mapped to the plant"),
+            );
+            return None;
+        };
+        return match area {
+            'I' => match plant
+                .inputs
+                .iter()
+                .find(|s| s.address == Some(Address::DiscreteInput(bit)))
+            {
+                Some(s) => Some(VarDecl {
+                    name: s.id.clone(),
+                    kind: Kind::Input,
+                }),
+                None => {
+                    ctx.error(
+                        codes::PLCOPEN_BINDING,
+                        var,
+                        format!("variable `{name}` at {addr}: no sensor of the plant at discrete input {bit}"),
+                    );
+                    None
+                }
+            },
+            'Q' => {
+                match plant
+                    .outputs
+                    .iter()
+                    .find(|s| s.address == Some(Address::Coil(bit)))
+                {
+                    Some(s) => Some(VarDecl {
+                        name: s.id.clone(),
+                        kind: Kind::Output,
+                    }),
+                    None => {
+                        ctx.error(
+                        codes::PLCOPEN_BINDING,
+                        var,
+                        format!("variable `{name}` at {addr}: no actuator of the plant at coil {bit}"),
+                    );
+                        None
+                    }
+                }
+            }
+            _ => Some(VarDecl {
+                name: name.to_string(),
+                kind: Kind::Memory,
+            }),
+        };
+    }
+    let find = |list: &[crate::plant::Signal]| {
+        list.iter()
+            .find(|s| s.id.eq_ignore_ascii_case(name))
+            .map(|s| s.id.clone())
+    };
+    if let Some(id) = find(&plant.inputs) {
+        return Some(VarDecl {
+            name: id,
+            kind: Kind::Input,
+        });
+    }
+    if let Some(id) = find(&plant.outputs) {
+        return Some(VarDecl {
+            name: id,
+            kind: Kind::Output,
+        });
+    }
+    if let Some(init) = child(var, "initialValue").and_then(|i| child(i, "simpleValue")) {
+        let v = init.attribute("value").unwrap_or("").to_ascii_uppercase();
+        if !(v == "FALSE" || v == "0" || v == "BOOL#FALSE") {
+            ctx.error(
+                codes::PLCOPEN_UNSUPPORTED,
+                init,
+                format!(
+                    "variable `{name}` starts at {v}: Vigie's memories and buttons start at FALSE"
+                ),
+            );
+        }
+    }
+    Some(VarDecl {
+        name: name.to_string(),
+        kind: if input_section {
+            Kind::Panel
+        } else {
+            Kind::Memory
+        },
+    })
+}
+
+fn declare_interface(
+    ctx: &mut Ctx<'_, '_>,
+    plant: &Plant,
+    scope: Node<'_, '_>,
+    decls: &mut Declarations,
+) {
+    for (section, is_input) in SECTIONS {
+        for sec in children(scope, section) {
+            for var in children(sec, "variable") {
+                let name = var.attribute("name").unwrap_or("");
+                let ty = type_of(var);
+                let decl = match ty.to_ascii_uppercase().as_str() {
+                    "BOOL" => bind_bool(ctx, plant, var, name, *is_input),
+                    "R_TRIG" | "F_TRIG" => Some(VarDecl {
+                        name: name.to_string(),
+                        kind: Kind::Trig {
+                            rising: ty.eq_ignore_ascii_case("R_TRIG"),
+                        },
+                    }),
+                    _ => Some(VarDecl {
+                        name: name.to_string(),
+                        kind: Kind::Unsupported(ty.clone()),
+                    }),
+                };
+                if let Some(d) = decl {
+                    decls.declare(ctx, var, name, d);
+                }
+            }
+        }
+    }
+}
+
+/// The symbolic state of one scan, in task order (see the module docs).
+pub(super) struct Machine {
+    /// The value of each variable written so far in the scan.
+    env: BTreeMap<String, Expr>,
+    /// Variables in the order of their first write.
+    order: Vec<String>,
+    /// Variables written by ST or LD anywhere in the program, with their number of
+    /// assignment statements.
+    written: BTreeMap<String, usize>,
+    /// Targets of SFC actions, and those whose chart has already run in this scan.
+    pub(super) action_targets: BTreeSet<String>,
+    pub(super) charts_done: BTreeSet<String>,
+    /// `R_TRIG`/`F_TRIG` outputs after their call.
+    trig: BTreeMap<String, Expr>,
+    /// Step timers created by `S.T` comparisons: (name, step, ms).
+    pub(super) timers: Vec<(String, String, u64)>,
+    /// Steps of the POU whose conditions are being read.
+    pub(super) visible_steps: BTreeSet<String>,
+    /// When each variable was last written (equations follow that order).
+    last: BTreeMap<String, usize>,
+    writes: usize,
+    /// Intermediate values held in memories of their own, so that an expression read
+    /// after many writes stays small: name → value.
+    pub(super) hidden: BTreeMap<String, Expr>,
+    hidden_order: Vec<String>,
+    /// Names taken by the program (variables, steps), for the hidden memories.
+    taken: BTreeSet<String>,
+}
+
+/// Values that expand to more product terms than this (or whose negation does) are held
+/// in a memory of their own.
+const HIDDEN_ABOVE: usize = 64;
+/// A value read again, or used twice by an operator, is held in a memory above this.
+const HIDDEN_READ_ABOVE: usize = 16;
+
+/// The number of product terms of `e` and of its negation once expanded to a sum of
+/// products (an upper bound, before simplification), saturating.
+fn terms(e: &Expr) -> (usize, usize) {
+    match e {
+        Expr::Const(_) | Expr::Leaf { .. } => (1, 1),
+        Expr::Not(x) => {
+            let (p, n) = terms(x);
+            (n, p)
+        }
+        Expr::And(xs) => xs.iter().map(terms).fold((1, 0), |(p, n), (xp, xn)| {
+            (p.saturating_mul(xp), n.saturating_add(xn))
+        }),
+        Expr::Or(xs) => xs.iter().map(terms).fold((0, 1), |(p, n), (xp, xn)| {
+            (p.saturating_add(xp), n.saturating_mul(xn))
+        }),
+    }
+}
+
+/// The larger expansion of `e` or of its negation.
+fn size(e: &Expr) -> usize {
+    let (p, n) = terms(e);
+    p.max(n)
+}
+
+/// Where an expression is evaluated.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Mode {
+    /// An SFC transition condition, before the evolution.
+    Condition,
+    /// An ST or LD body.
+    Body,
+}
+
+pub(super) fn leaf(name: &str, kind: LeafKind, span: Span) -> Expr {
+    Expr::Leaf {
+        name: name.to_string(),
+        kind,
+        span,
+    }
+}
+
+pub(super) fn not(e: Expr) -> Expr {
+    match e {
+        Expr::Const(b) => Expr::Const(!b),
+        Expr::Not(inner) => *inner,
+        e => Expr::Not(Box::new(e)),
+    }
+}
+
+pub(super) fn and(a: Expr, b: Expr) -> Expr {
+    match (a, b) {
+        (Expr::Const(false), _) | (_, Expr::Const(false)) => Expr::Const(false),
+        (Expr::Const(true), e) | (e, Expr::Const(true)) => e,
+        (Expr::And(mut x), Expr::And(y)) => {
+            x.extend(y);
+            Expr::And(x)
+        }
+        (Expr::And(mut x), e) => {
+            x.push(e);
+            Expr::And(x)
+        }
+        (e, Expr::And(mut y)) => {
+            y.insert(0, e);
+            Expr::And(y)
+        }
+        (a, b) => Expr::And(vec![a, b]),
+    }
+}
+
+pub(super) fn or(a: Expr, b: Expr) -> Expr {
+    match (a, b) {
+        (Expr::Const(true), _) | (_, Expr::Const(true)) => Expr::Const(true),
+        (Expr::Const(false), e) | (e, Expr::Const(false)) => e,
+        (Expr::Or(mut x), Expr::Or(y)) => {
+            x.extend(y);
+            Expr::Or(x)
+        }
+        (Expr::Or(mut x), e) => {
+            x.push(e);
+            Expr::Or(x)
+        }
+        (e, Expr::Or(mut y)) => {
+            y.insert(0, e);
+            Expr::Or(y)
+        }
+        (a, b) => Expr::Or(vec![a, b]),
+    }
+}
+
+fn xor(a: Expr, b: Expr) -> Expr {
+    or(and(a.clone(), not(b.clone())), and(not(a), b))
+}
+
+/// An expression failed: the message and where, for the caller to place.
+pub(super) struct Failure {
+    pub(super) code: Code,
+    pub(super) message: String,
+    pub(super) at: Pos,
+}
+
+fn fail<T>(code: Code, at: Pos, message: impl Into<String>) -> Result<T, Failure> {
+    Err(Failure {
+        code,
+        message: message.into(),
+        at,
+    })
+}
+
+impl Machine {
+    pub(super) fn new(
+        written: BTreeMap<String, usize>,
+        action_targets: BTreeSet<String>,
+        taken: BTreeSet<String>,
+    ) -> Self {
+        Self {
+            last: BTreeMap::new(),
+            writes: 0,
+            hidden: BTreeMap::new(),
+            hidden_order: Vec::new(),
+            taken,
+            env: BTreeMap::new(),
+            order: Vec::new(),
+            written,
+            action_targets,
+            charts_done: BTreeSet::new(),
+            trig: BTreeMap::new(),
+            timers: Vec::new(),
+            visible_steps: BTreeSet::new(),
+        }
+    }
+
+    /// The value of a variable at this point of the scan.
+    fn read(&mut self, d: &VarDecl, mode: Mode, span: Span) -> Expr {
+        if let Some(e) = self.env.get(&d.name) {
+            // Before the evolution, a hidden memory still holds the last scan's value:
+            // a condition reads the value itself.
+            if mode == Mode::Condition {
+                return self.expand(e);
+            }
+            if self.action_targets.contains(&d.name) {
+                return e.clone();
+            }
+            // Written once: its equation, before this one, holds the value.
+            if self.written.get(&d.name) == Some(&1) {
+                return leaf(&d.name, LeafKind::Now, span);
+            }
+            if size(e) > HIDDEN_READ_ABOVE {
+                let e = e.clone();
+                let h = self.hide(e);
+                self.writes += 1;
+                self.last.insert(d.name.clone(), self.writes);
+                let l = leaf(&h, LeafKind::Now, span);
+                self.env.insert(d.name.clone(), l.clone());
+                return l;
+            }
+            return e.clone();
+        }
+        let kind = match (&d.kind, mode) {
+            (_, Mode::Condition) | (Kind::Input | Kind::Panel, _) => LeafKind::Now,
+            _ if self.action_targets.contains(&d.name) => {
+                if self.charts_done.contains(&d.name) {
+                    LeafKind::Now
+                } else {
+                    LeafKind::Prev
+                }
+            }
+            _ if self.written.contains_key(&d.name) => LeafKind::Prev,
+            _ => LeafKind::Now,
+        };
+        leaf(&d.name, kind, span)
+    }
+
+    fn expand(&self, e: &Expr) -> Expr {
+        match e {
+            Expr::Leaf {
+                name,
+                kind: LeafKind::Now,
+                ..
+            } if self.hidden.contains_key(name) => self.expand(&self.hidden[name]),
+            Expr::Not(x) => not(self.expand(x)),
+            Expr::And(xs) => xs
+                .iter()
+                .map(|x| self.expand(x))
+                .fold(Expr::Const(true), and),
+            Expr::Or(xs) => xs
+                .iter()
+                .map(|x| self.expand(x))
+                .fold(Expr::Const(false), or),
+            e => e.clone(),
+        }
+    }
+
+    /// A fresh memory name for an intermediate value of `var`.
+    fn hidden_name(&mut self, var: &str) -> String {
+        let mut n = self.hidden.len() + 1;
+        loop {
+            let name = format!("{var}_{n}");
+            if !self.taken.contains(&name.to_ascii_lowercase()) && !self.hidden.contains_key(&name)
+            {
+                return name;
+            }
+            n += 1;
+        }
+    }
+
+    /// `e`, or a hidden memory holding it when it is large and used twice (XOR, IF).
+    fn small(&mut self, e: Expr, mode: Mode, span: Span) -> Expr {
+        if mode == Mode::Body && size(&e) > HIDDEN_READ_ABOVE {
+            let h = self.hide(e);
+            leaf(&h, LeafKind::Now, span)
+        } else {
+            e
+        }
+    }
+
+    /// Holds `value` in a new hidden memory; its name.
+    fn hide(&mut self, value: Expr) -> String {
+        let h = self.hidden_name("V");
+        self.writes += 1;
+        self.last.insert(h.clone(), self.writes);
+        self.order.push(h.clone());
+        self.hidden_order.push(h.clone());
+        self.hidden.insert(h.clone(), value.clone());
+        self.env.insert(h.clone(), value);
+        h
+    }
+
+    /// The hidden memories, in the order they were made.
+    pub(super) fn hidden_memories(&self) -> Vec<String> {
+        self.hidden_order.clone()
+    }
+
+    fn timer(&mut self, step: &str, ms: u64, span: Span) -> Expr {
+        let name = format!("{step}_T{ms}");
+        if !self.timers.iter().any(|t| t.0 == name) {
+            self.timers.push((name.clone(), step.to_string(), ms));
+        }
+        leaf(&name, LeafKind::Now, span)
+    }
+
+    /// `S.T op ms` as a step timer, or `None` when neither side is a step time.
+    fn step_time(
+        &mut self,
+        op: BinOp,
+        a: &StExpr,
+        b: &StExpr,
+        mode: Mode,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<Option<Expr>, Failure> {
+        let step_of = |e: &StExpr| match e {
+            StExpr::Var { path, at } if path.len() == 2 && path[1].eq_ignore_ascii_case("T") => {
+                Some((path[0].clone(), *at))
+            }
+            _ => None,
+        };
+        let (step, at, ms, op) = match (step_of(a), b, step_of(b), a) {
+            (Some((s, at)), StExpr::Time(ms), _, _) => (s, at, *ms, op),
+            (_, _, Some((s, at)), StExpr::Time(ms)) => {
+                let flipped = match op {
+                    BinOp::Lt => BinOp::Gt,
+                    BinOp::Le => BinOp::Ge,
+                    BinOp::Gt => BinOp::Lt,
+                    BinOp::Ge => BinOp::Le,
+                    o => o,
+                };
+                (s, at, *ms, flipped)
+            }
+            (Some((_, at)), ..) | (_, _, Some((_, at)), _) => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    "a step time `S.T` is compared with a `T#…` literal only",
+                );
+            }
+            _ => return Ok(None),
+        };
+        let Some(step) = self.visible_step(&step) else {
+            return fail(
+                codes::PLCOPEN_UNKNOWN_NAME,
+                at,
+                format!("`{step}.T`: `{step}` is not a step of this POU's SFC"),
+            );
+        };
+        if mode != Mode::Condition {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                "a step time is read in a transition condition only",
+            );
+        }
+        let span = loc(at);
+        Ok(Some(match op {
+            BinOp::Ge => self.timer(&step, ms, span),
+            BinOp::Gt => self.timer(&step, ms + 1, span),
+            BinOp::Lt => not(self.timer(&step, ms, span)),
+            BinOp::Le => not(self.timer(&step, ms + 1, span)),
+            _ => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    "a step time is compared with `>=`, `>`, `<` or `<=` (equality with a time is never exact on a scan)",
+                );
+            }
+        }))
+    }
+
+    fn visible_step(&self, name: &str) -> Option<String> {
+        self.visible_steps
+            .iter()
+            .find(|s| s.eq_ignore_ascii_case(name))
+            .cloned()
+    }
+
+    /// Converts an ST expression into Vigie's logic at this point of the scan.
+    pub(super) fn expr(
+        &mut self,
+        e: &StExpr,
+        decls: &Declarations,
+        mode: Mode,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<Expr, Failure> {
+        match e {
+            StExpr::Bool(b) => Ok(Expr::Const(*b)),
+            StExpr::Int(_) | StExpr::Time(_) => fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                Pos::default(),
+                "a number where a Boolean is expected",
+            ),
+            StExpr::Not(x) => Ok(not(self.expr(x, decls, mode, loc)?)),
+            StExpr::Bin(op, a, b) => {
+                if let Some(t) = self.step_time(*op, a, b, mode, loc)? {
+                    return Ok(t);
+                }
+                let x = self.expr(a, decls, mode, loc)?;
+                let y = self.expr(b, decls, mode, loc)?;
+                let (x, y) = if matches!(op, BinOp::Xor | BinOp::Ne | BinOp::Eq) {
+                    let span = Span { line: 0, column: 0 };
+                    (self.small(x, mode, span), self.small(y, mode, span))
+                } else {
+                    (x, y)
+                };
+                match op {
+                    BinOp::And => Ok(and(x, y)),
+                    BinOp::Or => Ok(or(x, y)),
+                    BinOp::Xor | BinOp::Ne => Ok(xor(x, y)),
+                    BinOp::Eq => Ok(not(xor(x, y))),
+                    _ => fail(
+                        codes::PLCOPEN_UNSUPPORTED,
+                        Pos::default(),
+                        "an order comparison between Booleans",
+                    ),
+                }
+            }
+            StExpr::Edge { rising, path, at } => {
+                let x = self.var(path, *at, decls, mode, loc)?;
+                match x {
+                    Expr::Leaf {
+                        name,
+                        kind: LeafKind::Now,
+                        span,
+                    } => Ok(leaf(
+                        &name,
+                        if *rising {
+                            LeafKind::Rise
+                        } else {
+                            LeafKind::Fall
+                        },
+                        span,
+                    )),
+                    _ => fail(
+                        codes::PLCOPEN_UNSUPPORTED,
+                        *at,
+                        format!(
+                            "an edge contact on `{}`, which is written earlier in the scan: edges are read on inputs, buttons, steps and variables not yet written",
+                            path.join(".")
+                        ),
+                    ),
+                }
+            }
+            StExpr::Var { path, at } => self.var(path, *at, decls, mode, loc),
+        }
+    }
+
+    fn var(
+        &mut self,
+        path: &[String],
+        at: Pos,
+        decls: &Declarations,
+        mode: Mode,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<Expr, Failure> {
+        let span = loc(at);
+        let shown = path.join(".");
+        if path.len() == 2
+            && let Some(step) = self.visible_step(&path[0])
+        {
+            {
+                return if path[1].eq_ignore_ascii_case("X") {
+                    if mode == Mode::Condition {
+                        Ok(leaf(&step, LeafKind::Now, span))
+                    } else {
+                        fail(
+                            codes::PLCOPEN_UNSUPPORTED,
+                            at,
+                            format!(
+                                "`{shown}`: a step flag is read in its chart's conditions only"
+                            ),
+                        )
+                    }
+                } else {
+                    fail(
+                        codes::PLCOPEN_UNSUPPORTED,
+                        at,
+                        format!(
+                            "`{shown}`: a step has `.X` (active) and `.T` (compared with a time)"
+                        ),
+                    )
+                };
+            }
+        }
+        let Some(d) = decls.vars.get(&path[0].to_ascii_lowercase()) else {
+            return fail(
+                codes::PLCOPEN_UNKNOWN_NAME,
+                at,
+                format!("`{}` is not declared", path[0]),
+            );
+        };
+        match (&d.kind, path.len()) {
+            (Kind::Trig { .. }, 2) if path[1].eq_ignore_ascii_case("Q") => {
+                match self.trig.get(&d.name) {
+                    Some(q) => Ok(q.clone()),
+                    None => fail(
+                        codes::PLCOPEN_UNSUPPORTED,
+                        at,
+                        format!(
+                            "`{shown}` is read before `{}` is called in the scan",
+                            d.name
+                        ),
+                    ),
+                }
+            }
+            (Kind::Trig { .. }, _) => fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{shown}`: an edge detector is read as `.Q`"),
+            ),
+            (Kind::Unsupported(t), _) => fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!(
+                    "`{}` is of type {t}: only BOOL variables, R_TRIG and F_TRIG are run",
+                    path[0]
+                ),
+            ),
+            (_, 1) => Ok(self.read(d, mode, span)),
+            _ => fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{shown}`: a Boolean variable has no members"),
+            ),
+        }
+    }
+
+    /// Runs statements under `guard`.
+    pub(super) fn run(
+        &mut self,
+        stmts: &[Stmt],
+        guard: &Expr,
+        decls: &Declarations,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<(), Failure> {
+        for s in stmts {
+            match s {
+                Stmt::Assign { target, value, at } => {
+                    let v = self.expr(value, decls, Mode::Body, loc)?;
+                    self.assign(target, *at, v, guard, decls, loc)?;
+                }
+                Stmt::If {
+                    branches,
+                    otherwise,
+                } => {
+                    let mut conds = Vec::new();
+                    for (c, _) in branches {
+                        let e = self.expr(c, decls, Mode::Body, loc)?;
+                        conds.push(self.small(e, Mode::Body, Span { line: 0, column: 0 }));
+                    }
+                    let mut none_before = Expr::Const(true);
+                    for ((_, body), c) in branches.iter().zip(conds) {
+                        let g = and(guard.clone(), and(none_before.clone(), c.clone()));
+                        self.run(body, &g, decls, loc)?;
+                        none_before = and(none_before, not(c));
+                    }
+                    let g = and(guard.clone(), none_before);
+                    self.run(otherwise, &g, decls, loc)?;
+                }
+                Stmt::Call { instance, args, at } => {
+                    self.call(instance, args, *at, guard, decls, loc)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn assign(
+        &mut self,
+        target: &[String],
+        at: Pos,
+        value: Expr,
+        guard: &Expr,
+        decls: &Declarations,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<(), Failure> {
+        let shown = target.join(".");
+        let Some(d) = decls.vars.get(&target[0].to_ascii_lowercase()) else {
+            return fail(
+                codes::PLCOPEN_UNKNOWN_NAME,
+                at,
+                format!("`{shown}` is not declared"),
+            );
+        };
+        match (&d.kind, target.len()) {
+            (Kind::Output | Kind::Memory, 1) => {}
+            (Kind::Input, _) => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    format!("`{shown}` is a plant input: the program cannot write it"),
+                );
+            }
+            (Kind::Panel, _) => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    format!(
+                        "`{shown}` is an input of the program (an operator button): the program cannot write it"
+                    ),
+                );
+            }
+            (Kind::Unsupported(t), _) => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    format!("`{shown}` is of type {t}: only BOOL variables are run"),
+                );
+            }
+            _ => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    format!("`{shown}` cannot be assigned"),
+                );
+            }
+        }
+        let name = d.name.clone();
+        let new = if *guard == Expr::Const(true) {
+            value
+        } else {
+            let old = self.read(d, Mode::Body, loc(at));
+            let g = self.small(guard.clone(), Mode::Body, loc(at));
+            let value = self.small(value, Mode::Body, loc(at));
+            or(and(g.clone(), value), and(not(g), old))
+        };
+        let new = if size(&new) > HIDDEN_ABOVE && !self.action_targets.contains(&name) {
+            let h = self.hide(new);
+            leaf(&h, LeafKind::Now, loc(at))
+        } else {
+            new
+        };
+        if !self.env.contains_key(&name) {
+            self.order.push(name.clone());
+        }
+        self.writes += 1;
+        self.last.insert(name.clone(), self.writes);
+        self.env.insert(name, new);
+        Ok(())
+    }
+
+    fn call(
+        &mut self,
+        instance: &str,
+        args: &[(String, StExpr)],
+        at: Pos,
+        guard: &Expr,
+        decls: &Declarations,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<(), Failure> {
+        let Some(d) = decls.vars.get(&instance.to_ascii_lowercase()) else {
+            return fail(
+                codes::PLCOPEN_UNKNOWN_NAME,
+                at,
+                format!("`{instance}` is not declared"),
+            );
+        };
+        let Kind::Trig { rising } = d.kind else {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!(
+                    "`{instance}` is called but is not an R_TRIG or F_TRIG instance: only these function blocks are run"
+                ),
+            );
+        };
+        if *guard != Expr::Const(true) {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!(
+                    "`{instance}` is called under a condition: call edge detectors once per scan, outside IF"
+                ),
+            );
+        }
+        if self.trig.contains_key(&d.name) {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{instance}` is called twice in the scan"),
+            );
+        }
+        let [(input, clk)] = args else {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{instance}` takes one input, CLK"),
+            );
+        };
+        if !input.eq_ignore_ascii_case("CLK") {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{instance}` has no input `{input}` (it takes CLK)"),
+            );
+        }
+        let clk = match clk {
+            StExpr::Var { path, at } => StExpr::Edge {
+                rising,
+                path: path.clone(),
+                at: *at,
+            },
+            _ => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    format!(
+                        "`{instance}`: CLK is an expression; give it a variable (edges are taken on one signal)"
+                    ),
+                );
+            }
+        };
+        let q = self.expr(&clk, decls, Mode::Body, loc)?;
+        self.trig.insert(d.name.clone(), q);
+        Ok(())
+    }
+
+    /// The equations, in Vigie's order: the variables written by ST or LD only, then
+    /// those also written by an SFC action (`x := x OR g` becomes the equation `g`).
+    pub(super) fn equations(&self) -> Result<Vec<(String, Expr)>, String> {
+        let mut plain = Vec::new();
+        let mut with_actions = Vec::new();
+        // By last write: an equation reads the hidden memories made before it.
+        let mut order = self.order.clone();
+        order.sort_by_key(|n| self.last.get(n).copied().unwrap_or(0));
+        for name in &order {
+            let e = self.env.get(name).cloned().unwrap_or(Expr::Const(false));
+            if !self.action_targets.contains(name) {
+                plain.push((name.clone(), e));
+                continue;
+            }
+            let is_self = |x: &Expr| matches!(x, Expr::Leaf { name: n, kind: LeafKind::Now, .. } if n == name);
+            let rest = match e {
+                Expr::Or(terms) if terms.iter().any(is_self) => terms
+                    .into_iter()
+                    .filter(|t| !is_self(t))
+                    .fold(Expr::Const(false), or),
+                e if is_self(&e) => continue,
+                _ => {
+                    return Err(format!(
+                        "`{name}` is driven by an SFC action and written by ST or LD: write it `{name} := {name} OR …` (a coil in parallel with the action), since the actions and the equation are ORed"
+                    ));
+                }
+            };
+            with_actions.push((name.clone(), rest));
+        }
+        // An equation of the second group reading another of that group would see
+        // its value after that equation: refused.
+        let late: BTreeSet<&str> = with_actions.iter().map(|(n, _)| n.as_str()).collect();
+        for (n, e) in &with_actions {
+            for (name, kind, _) in e.leaves() {
+                if kind != LeafKind::Prev && name != n && late.contains(name) {
+                    return Err(format!(
+                        "the equation of `{n}` reads `{name}`, both driven by SFC actions and written by ST or LD: write one of them as a plain coil"
+                    ));
+                }
+            }
+        }
+        plain.extend(with_actions);
+        Ok(plain)
+    }
+
+    /// Variables written so far (to know which reads are previous values).
+    pub(super) fn finish_chart(&mut self, targets: &BTreeSet<String>) {
+        self.charts_done.extend(targets.iter().cloned());
+    }
+}
+
+/// Renders an expression in Vigie's notation (`a . /b + RE(c)`).
+pub(super) fn render(e: &Expr) -> String {
+    fn go(e: &Expr, parent: u8, out: &mut String) {
+        match e {
+            Expr::Const(b) => out.push(if *b { '1' } else { '0' }),
+            Expr::Leaf { name, kind, .. } => match kind {
+                LeafKind::Now => out.push_str(name),
+                LeafKind::Prev => {
+                    out.push_str(name);
+                    out.push('*');
+                }
+                LeafKind::Rise => out.push_str(&format!("RE({name})")),
+                LeafKind::Fall => out.push_str(&format!("FE({name})")),
+                LeafKind::Estimate => out.push_str(&format!("EST({name})")),
+            },
+            Expr::Not(x) => {
+                out.push('/');
+                go(x, 3, out);
+            }
+            Expr::And(xs) => {
+                if parent > 2 {
+                    out.push('(');
+                }
+                for (i, x) in xs.iter().enumerate() {
+                    if i > 0 {
+                        out.push_str(" . ");
+                    }
+                    go(x, 2, out);
+                }
+                if parent > 2 {
+                    out.push(')');
+                }
+            }
+            Expr::Or(xs) => {
+                if parent > 1 {
+                    out.push('(');
+                }
+                for (i, x) in xs.iter().enumerate() {
+                    if i > 0 {
+                        out.push_str(" + ");
+                    }
+                    go(x, 1, out);
+                }
+                if parent > 1 {
+                    out.push(')');
+                }
+            }
+        }
+    }
+    let mut out = String::new();
+    go(e, 0, &mut out);
+    out
+}
+
+/// Vigie's own block: start and stop buttons, description and chart names.
+#[derive(Default)]
+pub(super) struct VigieData {
+    pub(super) start: Option<String>,
+    pub(super) stop: Option<String>,
+    pub(super) description: Option<String>,
+    /// Chart name by step name.
+    pub(super) charts: BTreeMap<String, String>,
+    pub(super) chart_order: Vec<String>,
+}
+
+fn vigie_data(project: Node<'_, '_>) -> VigieData {
+    let mut out = VigieData::default();
+    let Some(block) = project.descendants().find(|n| {
+        n.is_element() && n.tag_name().name() == "data" && n.attribute("name") == Some(ADD_DATA)
+    }) else {
+        return out;
+    };
+    let Some(p) = child(block, "program") else {
+        return out;
+    };
+    out.start = p.attribute("start").map(str::to_string);
+    out.stop = p.attribute("stop").map(str::to_string);
+    out.description = p.attribute("description").map(str::to_string);
+    for c in children(p, "chart") {
+        let name = c.attribute("name").unwrap_or("").to_string();
+        for s in c.attribute("steps").unwrap_or("").split_whitespace() {
+            out.charts.insert(s.to_string(), name.clone());
+        }
+        out.chart_order.push(name);
+    }
+    out
+}
+
+/// Imports a PLCopen XML project as a Vigie program for `plant`. `file` places the
+/// problems. Every problem found is returned; the program only when there is none.
+pub fn import(text: &str, file: &Path, plant: &Plant) -> Result<Program, Vec<Problem>> {
+    let doc = Document::parse(text).map_err(|e| {
+        let p = e.pos();
+        vec![Problem::error(
+            codes::PLCOPEN_XML_INVALID.id,
+            format!("not well-formed XML: {e}"),
+            Some(Location::new(file, p.row as usize, p.col as usize)),
+        )]
+    })?;
+    let mut ctx = Ctx {
+        file,
+        doc: &doc,
+        problems: Vec::new(),
+    };
+    let project = doc.root_element();
+    if project.tag_name().name() != "project" {
+        ctx.error(
+            codes::PLCOPEN_XML_INVALID,
+            project,
+            format!(
+                "the root element is `{}`, not a PLCopen `project`",
+                project.tag_name().name()
+            ),
+        );
+        return Err(ctx.problems);
+    }
+    let pous = program_pous(&mut ctx, project);
+    if pous.is_empty() && ctx.problems.is_empty() {
+        ctx.error(
+            codes::PLCOPEN_XML_INVALID,
+            project,
+            "the project has no POU of type program",
+        );
+    }
+    let program = build(&mut ctx, plant, project, &pous);
+    if ctx.problems.is_empty() {
+        Ok(program)
+    } else {
+        Err(ctx.problems)
+    }
+}
+
+/// One program POU's body, read.
+enum Body {
+    Sfc(sfc::Chart),
+    Stmts(Vec<Stmt>, StText),
+}
+
+fn build(
+    ctx: &mut Ctx<'_, '_>,
+    plant: &Plant,
+    project: Node<'_, '_>,
+    pous: &[Node<'_, '_>],
+) -> Program {
+    let vigie = vigie_data(project);
+    let mut decls = Declarations {
+        vars: BTreeMap::new(),
+        panel: Vec::new(),
+        memories: Vec::new(),
+    };
+    for globals in project
+        .descendants()
+        .filter(|n| n.is_element() && matches!(n.tag_name().name(), "configuration" | "resource"))
+    {
+        declare_interface(ctx, plant, globals, &mut decls);
+    }
+    for pou in pous {
+        if let Some(i) = child(*pou, "interface") {
+            declare_interface(ctx, plant, i, &mut decls);
+        }
+    }
+    let bodies = read_bodies(ctx, pous, &decls);
+    if !ctx.problems.is_empty() {
+        return empty_program();
+    }
+    let step_names = check_step_names(ctx, &bodies, &decls);
+    let written = written_vars(&bodies, &decls);
+    let action_targets: BTreeSet<String> = bodies
+        .iter()
+        .filter_map(|(_, b)| match b {
+            Body::Sfc(c) => Some(c.action_targets()),
+            Body::Stmts(..) => None,
+        })
+        .flatten()
+        .collect();
+    let mut taken: BTreeSet<String> = decls.vars.keys().cloned().collect();
+    taken.extend(step_names.keys().cloned());
+    let mut m = Machine::new(written, action_targets, taken);
+    let mut charts = Vec::new();
+    for (pou, body) in &bodies {
+        match body {
+            Body::Sfc(c) => {
+                m.visible_steps = c.steps.iter().map(|s| s.name.clone()).collect();
+                charts.extend(sfc::lower(ctx, pou, c, &mut m, &decls, &vigie));
+                m.finish_chart(&c.action_targets());
+                m.visible_steps.clear();
+            }
+            Body::Stmts(stmts, text) => {
+                let file = ctx.file.to_path_buf();
+                let loc = |p: Pos| {
+                    let l = text.locate(&file, p);
+                    Span {
+                        line: l.line,
+                        column: l.column,
+                    }
+                };
+                if let Err(f) = m.run(stmts, &Expr::Const(true), &decls, &loc) {
+                    let at = text.locate(ctx.file, f.at);
+                    ctx.error_at(f.code, at, format!("POU `{pou}`: {}", f.message));
+                }
+            }
+        }
+    }
+    let equations = match m.equations() {
+        Ok(e) => e,
+        Err(message) => {
+            let at = Location::new(ctx.file, 1, 1);
+            ctx.error_at(codes::PLCOPEN_UNSUPPORTED, at, message);
+            Vec::new()
+        }
+    };
+    let name = child(project, "contentHeader")
+        .and_then(|h| h.attribute("name"))
+        .or_else(|| pous.first().and_then(|p| p.attribute("name")))
+        .unwrap_or("PLCopen program")
+        .to_string();
+    let check_button = |b: &Option<String>| {
+        b.as_ref().and_then(|n| {
+            decls
+                .vars
+                .get(&n.to_ascii_lowercase())
+                .filter(|d| matches!(d.kind, Kind::Panel | Kind::Input))
+                .map(|d| d.name.clone())
+        })
+    };
+    Program {
+        name,
+        description: vigie.description.clone().unwrap_or_default(),
+        panel: decls.panel.clone(),
+        start: check_button(&vigie.start),
+        stop: check_button(&vigie.stop),
+        memories: decls
+            .memories
+            .iter()
+            .cloned()
+            .chain(m.hidden_memories())
+            .collect(),
+        timers: m.timers.clone(),
+        charts,
+        equations: equations
+            .iter()
+            .map(|(n, e)| (n.clone(), render(e)))
+            .collect(),
+    }
+}
+
+/// Reads each program POU's body (SFC, ST or LD).
+fn read_bodies(
+    ctx: &mut Ctx<'_, '_>,
+    pous: &[Node<'_, '_>],
+    decls: &Declarations,
+) -> Vec<(String, Body)> {
+    let mut bodies = Vec::new();
+    for pou in pous {
+        let name = pou.attribute("name").unwrap_or("?").to_string();
+        let Some(body) = child(*pou, "body") else {
+            ctx.error(
+                codes::PLCOPEN_UNSUPPORTED,
+                *pou,
+                format!("POU `{name}` has no body"),
+            );
+            continue;
+        };
+        let Some(lang) = body.children().find(Node::is_element) else {
+            ctx.error(
+                codes::PLCOPEN_UNSUPPORTED,
+                body,
+                format!("POU `{name}` has an empty body"),
+            );
+            continue;
+        };
+        match lang.tag_name().name() {
+            "SFC" => {
+                if let Some(c) = sfc::read(ctx, *pou, lang, decls) {
+                    bodies.push((name, Body::Sfc(c)));
+                }
+            }
+            "ST" => {
+                let text = st_text(ctx, lang);
+                match st::parse_statements(&text.text) {
+                    Ok(s) => bodies.push((name, Body::Stmts(s, text))),
+                    Err(e) => {
+                        let at = text.locate(ctx.file, e.at);
+                        ctx.error_at(
+                            codes::PLCOPEN_ST_INVALID,
+                            at,
+                            format!("POU `{name}`: {}", e.message),
+                        );
+                    }
+                }
+            }
+            "LD" => {
+                if let Some((stmts, text)) = ld::read_body(ctx, &name, lang) {
+                    bodies.push((name, Body::Stmts(stmts, text)));
+                }
+            }
+            other => ctx.error(
+                codes::PLCOPEN_UNSUPPORTED,
+                lang,
+                format!("POU `{name}` is written in {other}: Vigie runs SFC, ST and LD bodies"),
+            ),
+        }
+    }
+    bodies
+}
+
+/// Steps share one namespace with the variables: their names by lower case, with
+/// their POU.
+fn check_step_names(
+    ctx: &mut Ctx<'_, '_>,
+    bodies: &[(String, Body)],
+    decls: &Declarations,
+) -> BTreeMap<String, String> {
+    let mut step_names: BTreeMap<String, String> = BTreeMap::new();
+    for (pou, body) in bodies {
+        if let Body::Sfc(c) = body {
+            for s in &c.steps {
+                let key = s.name.to_ascii_lowercase();
+                if decls.vars.contains_key(&key) || step_names.insert(key, pou.clone()).is_some() {
+                    ctx.error_at(
+                        codes::PLCOPEN_UNSUPPORTED,
+                        s.at.clone(),
+                        format!("step `{}` of POU `{pou}`: the name is also a variable or a step of another POU (Vigie's steps share one namespace)", s.name),
+                    );
+                }
+            }
+        }
+    }
+    step_names
+}
+
+fn empty_program() -> Program {
+    Program {
+        name: String::new(),
+        description: String::new(),
+        panel: Vec::new(),
+        start: None,
+        stop: None,
+        memories: Vec::new(),
+        timers: Vec::new(),
+        charts: Vec::new(),
+        equations: Vec::new(),
+    }
+}
+
+/// The Vigie names of the variables that some ST or LD body writes.
+fn written_vars(bodies: &[(String, Body)], decls: &Declarations) -> BTreeMap<String, usize> {
+    fn walk(stmts: &[Stmt], decls: &Declarations, out: &mut BTreeMap<String, usize>) {
+        for s in stmts {
+            match s {
+                Stmt::Assign { target, .. } => {
+                    if let Some(d) = decls.vars.get(&target[0].to_ascii_lowercase()) {
+                        *out.entry(d.name.clone()).or_default() += 1;
+                    }
+                }
+                Stmt::If {
+                    branches,
+                    otherwise,
+                } => {
+                    for (_, b) in branches {
+                        walk(b, decls, out);
+                    }
+                    walk(otherwise, decls, out);
+                }
+                Stmt::Call { .. } => {}
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    for (_, b) in bodies {
+        if let Body::Stmts(s, _) = b {
+            walk(s, decls, &mut out);
+        }
+    }
+    out
+}
+
+/// Builds a chart's Vigie steps from the read SFC (used by [`sfc::lower`]).
+pub(super) fn vigie_step(name: &str, initial: bool, actions: Vec<(Qualifier, String)>) -> Step {
+    Step {
+        id: name.to_string(),
+        initial,
+        actions: actions
+            .into_iter()
+            .map(|(qualifier, target)| Action { qualifier, target })
+            .collect(),
+    }
+}
+
+/// A Vigie transition.
+pub(super) fn vigie_transition(
+    id: &str,
+    from: Vec<String>,
+    to: Vec<String>,
+    condition: &Expr,
+) -> Transition {
+    Transition {
+        id: id.to_string(),
+        from,
+        to,
+        condition: render(condition),
+    }
+}
+
+/// A Vigie chart.
+pub(super) fn vigie_chart(name: String, steps: Vec<Step>, transitions: Vec<Transition>) -> Chart {
+    Chart {
+        name,
+        steps,
+        transitions,
+    }
+}

@@ -1,0 +1,251 @@
+//! PLCopen import and export: every plant's programs written and read back, the
+//! station's runs from the PLCopen file identical to its runs from RON, and the IEC
+//! 61131-3 semantics of the SFC and the action qualifiers on worked examples.
+
+use super::*;
+use crate::control::{CompiledProgram, ErrorLibrary, Origin, Program};
+use crate::diag::{Problem, render};
+use crate::engine::FilterMode;
+use crate::plant::Plant;
+use crate::sim::{Options, ProgramChoice, Scenario, Simulation};
+use crate::time::Millis;
+use std::path::{Path, PathBuf};
+
+mod conformance;
+
+fn layouts() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts")
+}
+
+fn plant_dirs() -> Vec<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(layouts())
+        .expect("layouts")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.join("programs/reference.ron").exists())
+        .collect();
+    dirs.sort();
+    assert!(dirs.len() >= 7, "{dirs:?}");
+    dirs
+}
+
+fn shown(p: &[Problem]) -> String {
+    render(p)
+}
+
+fn write(program: &Program, plant: &Plant) -> String {
+    export(program, plant, Path::new("program.ron"))
+        .unwrap_or_else(|p| panic!("{}: {}", program.name, shown(&p)))
+}
+
+fn read(xml: &str, plant: &Plant) -> Program {
+    import(xml, Path::new("program.xml"), plant).unwrap_or_else(|p| panic!("{}\n{xml}", shown(&p)))
+}
+
+/// Every program of every plant: the reference and each variant of its error library.
+fn every_program() -> Vec<(String, Plant, Program)> {
+    let mut out = Vec::new();
+    for dir in plant_dirs() {
+        let plant = Plant::load(&dir.join("plant.ron")).expect("plant");
+        let lib = ErrorLibrary::load(&dir.join("programs/errors.ron"), &plant).expect("library");
+        let name = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        out.push((
+            format!("{name}/reference"),
+            plant.clone(),
+            lib.reference.clone(),
+        ));
+        for v in lib.variants {
+            out.push((format!("{name}/{}", v.def.id), plant.clone(), v.program));
+        }
+    }
+    assert!(out.len() > 40, "{}", out.len());
+    out
+}
+
+/// Import, export, import gives the same program, and writing it again the same
+/// file, for every program of every plant.
+#[test]
+fn every_program_of_every_plant_reads_back_the_same_after_export_and_import() {
+    for (name, plant, p0) in every_program() {
+        let xml1 = write(&p0, &plant);
+        let p1 = read(&xml1, &plant);
+        CompiledProgram::new(&p1, &plant, &Origin::default())
+            .unwrap_or_else(|p| panic!("{name}: {}\n{xml1}", shown(&p)));
+        let xml2 = write(&p1, &plant);
+        let p2 = read(&xml2, &plant);
+        assert_eq!(p1, p2, "{name}: import, export, import differs\n{xml2}");
+        assert_eq!(
+            xml2,
+            write(&p2, &plant),
+            "{name}: the second export differs"
+        );
+        // What the original says survives: steps, transitions, actions, buttons.
+        assert_eq!(p1.panel, p0.panel, "{name}");
+        assert_eq!(
+            (p1.start.clone(), p1.stop.clone()),
+            (p0.start.clone(), p0.stop.clone()),
+            "{name}"
+        );
+        let ids = |p: &Program| {
+            let mut v: Vec<String> = p.transitions().map(|(_, t)| t.id.clone()).collect();
+            v.sort();
+            v
+        };
+        assert_eq!(ids(&p1), ids(&p0), "{name}");
+        let charts = |p: &Program| p.charts.iter().map(|c| c.name.clone()).collect::<Vec<_>>();
+        assert_eq!(charts(&p1), charts(&p0), "{name}");
+    }
+}
+
+/// A scratch folder removed at the end of the test.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(tag: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("vigie-plcopen-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("scratch");
+        Self(dir)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Runs `scenario` and the same with its program read from `xml`; the commanded
+/// outputs and the sensors must be equal at every cycle.
+fn same_runs(name: &str, scenario: &Scenario, path: &Path, xml_file: &Path, until: u64) {
+    let options = Options {
+        history_cycles: 10,
+        explain: false,
+    };
+    let mut a = Simulation::from_scenario(scenario, path, options.clone()).expect("starts");
+    let mut s = scenario.clone();
+    s.program = ProgramChoice::File(xml_file.to_string_lossy().into_owned());
+    let mut b = Simulation::from_scenario(&s, path, options)
+        .unwrap_or_else(|p| panic!("{name}: {}", shown(&p)));
+    let mut cycles = 0u64;
+    while a.now() < Millis(until) {
+        a.cycle();
+        b.cycle();
+        cycles += 1;
+        assert_eq!(
+            a.engine.commanded(),
+            b.engine.commanded(),
+            "{name}: the PLCopen program commands differently at {} ms (cycle {cycles})",
+            a.now().0
+        );
+        assert_eq!(
+            a.emulator.sensors(),
+            b.emulator.sensors(),
+            "{name}: sensors at {} ms",
+            a.now().0
+        );
+    }
+    assert!(cycles > 100, "{name}: {cycles} cycles");
+    assert_eq!(a.emulator.hazards(), b.emulator.hazards(), "{name}");
+}
+
+/// The station's reference program and every variant of its error library, written as
+/// PLCopen XML and loaded from that file, run every scenario of the station (the
+/// reference) and a busy minute with and without the filter (each variant) exactly as
+/// the RON programs do, cycle by cycle.
+#[test]
+fn the_station_runs_the_same_from_its_plcopen_export() {
+    let station = layouts().join("sorting-station");
+    let plant = Plant::load(&station.join("plant.ron")).expect("plant");
+    let lib = ErrorLibrary::load(&station.join("programs/errors.ron"), &plant).expect("library");
+    let scratch = Scratch::new("station");
+    let reference = scratch.0.join("reference.xml");
+    std::fs::write(&reference, write(&lib.reference, &plant)).expect("writes");
+    let mut names: Vec<PathBuf> = std::fs::read_dir(station.join("scenarios"))
+        .expect("scenarios")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    names.sort();
+    for path in names {
+        let scenario = Scenario::load(&path).expect("scenario");
+        if scenario.program != ProgramChoice::Reference {
+            continue;
+        }
+        let until = scenario.duration_ms.min(600_000);
+        same_runs(
+            &path.display().to_string(),
+            &scenario,
+            &path,
+            &reference,
+            until,
+        );
+    }
+    let base = Scenario::load(&station.join("scenarios/cs10-paper.ron")).expect("scenario");
+    for v in &lib.variants {
+        let file = scratch.0.join(format!("{}.xml", v.def.id));
+        std::fs::write(&file, write(&v.program, &plant)).expect("writes");
+        for filter in [FilterMode::Off, FilterMode::Enforce] {
+            let mut s = base.clone();
+            s.program = ProgramChoice::Error(v.def.id.clone());
+            s.filter = filter;
+            let path = station.join("scenarios/cs10-paper.ron");
+            same_runs(
+                &format!("{} {filter:?}", v.def.id),
+                &s,
+                &path,
+                &file,
+                60_000,
+            );
+        }
+    }
+}
+
+/// Every other plant's reference program runs its scenarios the same from PLCopen.
+#[test]
+fn every_plants_reference_runs_the_same_from_its_plcopen_export() {
+    let scratch = Scratch::new("plants");
+    for dir in plant_dirs() {
+        let plant = Plant::load(&dir.join("plant.ron")).expect("plant");
+        let program = Program::from_ron(
+            &std::fs::read_to_string(dir.join("programs/reference.ron")).expect("reads"),
+            Path::new("reference.ron"),
+        )
+        .expect("parses");
+        let name = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let file = scratch.0.join(format!("{name}.xml"));
+        std::fs::write(&file, write(&program, &plant)).expect("writes");
+        let mut paths: Vec<PathBuf> = std::fs::read_dir(dir.join("scenarios"))
+            .map(|rd| rd.map(|e| e.expect("entry").path()).collect())
+            .unwrap_or_default();
+        paths.sort();
+        let mut ran = 0;
+        for path in paths
+            .iter()
+            .filter(|p| p.extension().is_some_and(|e| e == "ron"))
+        {
+            let Ok(scenario) = Scenario::load(path) else {
+                continue;
+            };
+            if scenario.program != ProgramChoice::Reference {
+                continue;
+            }
+            same_runs(
+                &path.display().to_string(),
+                &scenario,
+                path,
+                &file,
+                scenario.duration_ms.min(300_000),
+            );
+            ran += 1;
+        }
+        assert!(
+            ran > 0 || name == "production-line",
+            "{name}: no scenario on the reference"
+        );
+    }
+}
