@@ -9,6 +9,7 @@ mod export_st;
 mod filter;
 mod gateway;
 mod learn;
+mod program;
 mod run;
 mod verify;
 
@@ -219,6 +220,12 @@ pub(crate) enum Command {
         /// Write to this file instead of the standard output.
         #[arg(long, short)]
         out: Option<PathBuf>,
+    },
+    /// The PLC's own program in PLCopen TC6 XML: write a control program for the PLC's
+    /// tool, or read one (SFC, ST, LD) and check it against the plant.
+    Program {
+        #[command(subcommand)]
+        action: program::ProgramCmd,
     },
     /// Measure the console: CPU time per frame at 1x (headless egui, no GPU) and memory
     /// over a simulated hour at 100x.
@@ -433,6 +440,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::BenchHistorian { plant, args } => bench_historian::run(&plant.plant, &args),
         Command::BenchLine(args) => bench_line::run(&args),
         Command::ExportSt { plant, out } => export_st::run(&plant.plant, out.as_deref()),
+        Command::Program { action } => program::run(action),
         Command::BenchConsole {
             plant,
             frames,

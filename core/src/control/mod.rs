@@ -21,7 +21,9 @@ pub mod runtime;
 
 pub use library::{Consequence, ErrorLibrary, Patch, Variant, differences};
 pub use mutation::{Mutation, mutations};
-pub use program::{Action, Chart, CompiledProgram, Origin, Program, Qualifier, Step, Transition};
+pub use program::{
+    Action, Chart, CompiledProgram, Delay, DelayKind, Origin, Program, Qualifier, Step, Transition,
+};
 pub use runtime::{Driver, Evolution, ProgramRuntime, UnknownPanel};
 
 #[cfg(test)]

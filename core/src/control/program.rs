@@ -65,6 +65,31 @@ pub struct Step {
     pub actions: Vec<Action>,
 }
 
+/// Which standard timer (IEC 61131-3) a [`Delay`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DelayKind {
+    /// `TON`: Q rises when IN has been true for the time, falls with IN.
+    On,
+    /// `TOF`: Q is true while IN is, and for the time after IN falls.
+    Off,
+    /// `TP`: a rising edge of IN, when no pulse runs, starts a pulse of the time.
+    Pulse,
+}
+
+/// A standard timer on an expression: the equation whose target is `id` is its input
+/// IN, evaluated in the equations' order; `id` reads its output Q (the last scan's
+/// before that equation).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Delay {
+    /// Name, also the name of its output.
+    pub id: String,
+    /// TON, TOF or TP.
+    pub kind: DelayKind,
+    /// Its time PT, in ms.
+    pub ms: u64,
+}
+
 /// One GRAFCET transition.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -116,6 +141,14 @@ pub struct Program {
     /// Step timers `(id, step, ms)`: `id` is true while `step` has been active ≥ `ms`.
     #[serde(default)]
     pub timers: Vec<(String, String, u64)>,
+    /// Outputs and memories true before the first scan (an IEC variable's initial
+    /// value TRUE): their previous value at the first scan, and the stored value of the
+    /// targets of `S` and `R` actions.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub initial: Vec<String>,
+    /// Standard timers on expressions (TON, TOF, TP; see [`Delay`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub delays: Vec<Delay>,
     /// GRAFCET charts.
     pub charts: Vec<Chart>,
     /// Ladder-like equations `(target, expression)`, evaluated top-down after the
@@ -281,6 +314,14 @@ pub(crate) struct TimerInfo {
     pub(crate) aux: u32,
 }
 
+/// A compiled standard timer.
+#[derive(Clone, Debug)]
+pub(crate) struct DelayInfo {
+    pub(crate) kind: DelayKind,
+    pub(crate) ms: u64,
+    pub(crate) aux: u32,
+}
+
 /// A compiled equation.
 #[derive(Clone, Debug)]
 pub(crate) struct EquationInfo {
@@ -302,6 +343,9 @@ pub struct CompiledProgram {
     pub(crate) transitions: Vec<TransitionInfo>,
     pub(crate) actions: Vec<ActionInfo>,
     pub(crate) timers: Vec<TimerInfo>,
+    pub(crate) delays: Vec<DelayInfo>,
+    /// Slots (outputs, then memories) true before the first scan.
+    pub(crate) initial: Vec<usize>,
     pub(crate) memory_aux: Vec<u32>,
     pub(crate) panel_aux: Vec<u32>,
     pub(crate) equations: Vec<EquationInfo>,
@@ -319,7 +363,6 @@ impl CompiledProgram {
         let mut problems = Vec::new();
         let mut symbols = plant.symbols();
         let n_outputs = plant.outputs.len();
-        let at_id = |id: &str| Some(origin.location(origin.find_id(id)));
 
         // Declarations: steps, memories, timers, panel.
         let (step_index, steps) = declare_steps(program, origin, &mut problems, &mut symbols);
@@ -329,6 +372,7 @@ impl CompiledProgram {
             timers,
             panel_aux,
         } = declare_others(program, origin, &step_index, &mut problems, &mut symbols);
+        let (delays, delay_index) = declare_delays(program, origin, &mut problems, &mut symbols);
 
         let target_slot = |name: &str| -> Option<usize> {
             if let Some(o) = plant.output(name) {
@@ -336,31 +380,14 @@ impl CompiledProgram {
             }
             memory_index.get(name).map(|&m| n_outputs + m as usize)
         };
+        // An equation may also give a standard timer its input.
+        let n_memories = memory_aux.len();
+        let equation_slot = |name: &str| -> Option<usize> {
+            target_slot(name).or_else(|| delay_index.get(name).map(|&d| n_outputs + n_memories + d))
+        };
 
-        // Actions.
-        let mut actions = Vec::new();
-        for (chart, step) in program.steps() {
-            let Some(&si) = step_index.get(&step.id) else {
-                continue;
-            };
-            for a in &step.actions {
-                match target_slot(&a.target) {
-                    Some(slot) => actions.push(ActionInfo {
-                        step: si,
-                        qualifier: a.qualifier,
-                        slot,
-                    }),
-                    None => problems.push(Problem::error(
-                        codes::PROGRAM_ACTION_TARGET.id,
-                        format!(
-                            "chart `{chart}`, step `{}`: action target `{}` is neither an actuator nor a memory",
-                            step.id, a.target
-                        ),
-                        at_id(&step.id),
-                    )),
-                }
-            }
-        }
+        let actions = compile_actions(program, origin, &step_index, &target_slot, &mut problems);
+        let initial = resolve_initial(program, origin, &target_slot, &mut problems);
 
         // Expressions.
         let compile_expr =
@@ -380,10 +407,10 @@ impl CompiledProgram {
         for (target, text) in &program.equations {
             let what = format!("equation `{target}`");
             let start = origin.equation_start(target);
-            let Some(slot) = target_slot(target) else {
+            let Some(slot) = equation_slot(target) else {
                 problems.push(Problem::error(
                     codes::PROGRAM_EQUATION_TARGET.id,
-                    format!("{what}: `{target}` is neither an actuator nor a memory"),
+                    format!("{what}: `{target}` is neither an actuator, a memory nor a timer"),
                     Some(origin.location(start)),
                 ));
                 continue;
@@ -418,6 +445,8 @@ impl CompiledProgram {
             transitions,
             actions,
             timers,
+            delays,
+            initial,
             memory_aux,
             panel_aux,
             equations,
@@ -553,6 +582,85 @@ struct Others {
     memory_index: BTreeMap<String, u32>,
     timers: Vec<TimerInfo>,
     panel_aux: Vec<u32>,
+}
+
+/// The step actions, each on an actuator or a memory.
+fn compile_actions(
+    program: &Program,
+    origin: &Origin,
+    step_index: &BTreeMap<String, u16>,
+    target_slot: &dyn Fn(&str) -> Option<usize>,
+    problems: &mut Vec<Problem>,
+) -> Vec<ActionInfo> {
+    let at_id = |id: &str| Some(origin.location(origin.find_id(id)));
+    let mut actions = Vec::new();
+    for (chart, step) in program.steps() {
+        let Some(&si) = step_index.get(&step.id) else {
+            continue;
+        };
+        for a in &step.actions {
+            match target_slot(&a.target) {
+                Some(slot) => actions.push(ActionInfo {
+                    step: si,
+                    qualifier: a.qualifier,
+                    slot,
+                }),
+                None => problems.push(Problem::error(
+                    codes::PROGRAM_ACTION_TARGET.id,
+                    format!(
+                        "chart `{chart}`, step `{}`: action target `{}` is neither an actuator nor a memory",
+                        step.id, a.target
+                    ),
+                    at_id(&step.id),
+                )),
+            }
+        }
+    }
+    actions
+}
+
+/// The slots of the outputs and memories true before the first scan.
+fn resolve_initial(
+    program: &Program,
+    origin: &Origin,
+    target_slot: &dyn Fn(&str) -> Option<usize>,
+    problems: &mut Vec<Problem>,
+) -> Vec<usize> {
+    let mut out = Vec::new();
+    for name in &program.initial {
+        match target_slot(name) {
+            Some(slot) => out.push(slot),
+            None => problems.push(Problem::error(
+                codes::PROGRAM_EQUATION_TARGET.id,
+                format!("initial value of `{name}`: neither an actuator nor a memory"),
+                Some(origin.location(origin.find_quoted(name, 0))),
+            )),
+        }
+    }
+    out
+}
+
+/// Declares the standard timers on expressions; their index by name.
+fn declare_delays(
+    program: &Program,
+    origin: &Origin,
+    problems: &mut Vec<Problem>,
+    symbols: &mut Symbols,
+) -> (Vec<DelayInfo>, BTreeMap<String, usize>) {
+    let mut delays = Vec::new();
+    let mut index = BTreeMap::new();
+    for d in &program.delays {
+        let loc = Some(origin.location(origin.find_quoted(&d.id, 0)));
+        if let Some(aux) = declare(&d.id, "timer", loc, problems, symbols) {
+            index.insert(d.id.clone(), delays.len());
+            delays.push(DelayInfo {
+                kind: d.kind,
+                ms: d.ms,
+                aux,
+            });
+        }
+    }
+    (delays, index)
 }
 
 /// Declares memories, timers and panel inputs, and checks the start and stop buttons.

@@ -1,6 +1,6 @@
 //! The scan-cycle runtime: one PLC scan per engine cycle.
 
-use super::program::{CompiledProgram, Qualifier};
+use super::program::{CompiledProgram, DelayKind, Qualifier};
 use crate::bits::Bits;
 use crate::engine::Control;
 use crate::frame::Frame;
@@ -56,6 +56,52 @@ pub enum Driver {
 #[error("the program has no panel input `{0}`")]
 pub struct UnknownPanel(pub String);
 
+/// The state of a standard timer: when its time started, its input at the last scan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct DelayState {
+    since: Option<Millis>,
+    prev_in: bool,
+}
+
+impl DelayState {
+    /// One call with input `input` at `now`: the output Q (IEC 61131-3 TON, TOF, TP).
+    fn call(&mut self, kind: DelayKind, ms: u64, input: bool, now: Millis) -> bool {
+        let elapsed = |s: Millis| now.saturating_sub(s).0;
+        let q = match kind {
+            DelayKind::On => {
+                if input {
+                    let s = *self.since.get_or_insert(now);
+                    elapsed(s) >= ms
+                } else {
+                    self.since = None;
+                    false
+                }
+            }
+            DelayKind::Off => {
+                if input {
+                    self.since = None;
+                    true
+                } else {
+                    if self.prev_in {
+                        self.since = Some(now);
+                    }
+                    self.since.is_some_and(|s| elapsed(s) < ms)
+                }
+            }
+            DelayKind::Pulse => {
+                match self.since {
+                    None if input && !self.prev_in => self.since = Some(now),
+                    Some(s) if elapsed(s) >= ms && !input => self.since = None,
+                    _ => {}
+                }
+                self.since.is_some_and(|s| elapsed(s) < ms)
+            }
+        };
+        self.prev_in = input;
+        q
+    }
+}
+
 /// A running program: the compiled program (shared) and its state.
 ///
 /// # Scan semantics
@@ -95,6 +141,7 @@ pub struct ProgramRuntime {
     ring_len: usize,
     pulses: Bits,
     switches: Bits,
+    delays: Vec<DelayState>,
     scans: u64,
     now: Millis,
     /// The state words (t and t-1) before the evolution of the last evaluated scan.
@@ -133,12 +180,14 @@ impl ProgramRuntime {
             ring_len: 0,
             pulses: Bits::zeros(n_panel),
             switches: Bits::zeros(n_panel),
+            delays: vec![DelayState::default(); program.delays.len()],
             scans: 0,
             now: Millis::ZERO,
             last_pre: vec![0; 2 * program.layout.half],
             last_stored: Bits::zeros(n_slots),
             stable: false,
             time_free: program.timers.is_empty()
+                && program.delays.is_empty()
                 && program
                     .actions
                     .iter()
@@ -170,6 +219,7 @@ impl ProgramRuntime {
         self.fired.clone_from(&other.fired);
         self.pulses.copy_from(&other.pulses);
         self.switches.copy_from(&other.switches);
+        self.delays.clone_from(&other.delays);
         self.scans = other.scans;
         self.now = other.now;
         self.last_pre.copy_from_slice(&other.last_pre);
@@ -196,6 +246,24 @@ impl ProgramRuntime {
         self.stored.clear();
         self.values.clear();
         self.pulses.clear();
+        self.delays
+            .iter_mut()
+            .for_each(|d| *d = DelayState::default());
+        let n_out = program.n_outputs;
+        for &slot in &program.initial {
+            if slot < n_out {
+                self.set(Space::Output, slot, true);
+            } else if let Some(&aux) = program.memory_aux.get(slot - n_out) {
+                self.set(Space::Aux, aux as usize, true);
+            }
+            if program
+                .actions
+                .iter()
+                .any(|a| a.slot == slot && matches!(a.qualifier, Qualifier::S | Qualifier::R))
+            {
+                self.stored.set(slot, true);
+            }
+        }
         self.ring_len = 0;
         self.ring_head = 0;
         self.stable = false;
@@ -559,8 +627,30 @@ impl ProgramRuntime {
             let v = self.values.get(n_out + m);
             self.set(Space::Aux, a as usize, v);
         }
-        // Equations, top-down.
+        self.run_equations(p, now);
+        let half = p.layout.half;
+        self.stable = self.fired.is_empty()
+            && self.just_activated.count_ones() == 0
+            && self.stored == self.last_stored
+            && self.state[..half] == self.last_pre[..half];
+    }
+
+    /// The equations, top-down: each target becomes its actions' value OR its
+    /// equation; a standard timer's equation is its input, and the timer is called.
+    fn run_equations(&mut self, p: &CompiledProgram, now: Millis) {
+        let n_out = p.n_outputs;
+        let n_slots = self.values.len();
         for eq in &p.equations {
+            if eq.slot >= n_slots {
+                // A standard timer's input: the timer is called here.
+                let d = eq.slot - n_slots;
+                let input = p.conds.eval(eq.cond, &self.state);
+                if let (Some(info), Some(st)) = (p.delays.get(d), self.delays.get_mut(d)) {
+                    let q = st.call(info.kind, info.ms, input, now);
+                    self.set(Space::Aux, info.aux as usize, q);
+                }
+                continue;
+            }
             let v = self.values.get(eq.slot) || p.conds.eval(eq.cond, &self.state);
             if eq.slot < n_out {
                 self.set(Space::Output, eq.slot, v);
@@ -568,11 +658,6 @@ impl ProgramRuntime {
                 self.set(Space::Aux, a as usize, v);
             }
         }
-        let half = p.layout.half;
-        self.stable = self.fired.is_empty()
-            && self.just_activated.count_ones() == 0
-            && self.stored == self.last_stored
-            && self.state[..half] == self.last_pre[..half];
     }
 }
 

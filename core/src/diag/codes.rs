@@ -203,7 +203,7 @@ registry! {
     PLCOPEN_ST_INVALID = "V1203", "Structured Text that does not parse";
     PLCOPEN_UNKNOWN_NAME = "V1204", "a name that the PLCopen program does not declare";
     PLCOPEN_BINDING = "V1205", "a PLCopen variable that cannot be bound to the plant";
-    PLCOPEN_SFC_GRAPH = "V1206", "a malformed SFC or LD network (dangling connection, transition without step)";
+    PLCOPEN_SFC_GRAPH = "V1206", "a malformed SFC or LD network";
     PLCOPEN_EXPORT = "V1207", "a program that cannot be written as PLCopen XML";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";

@@ -1,14 +1,14 @@
-//! [`Program`] → PLCopen XML: the charts as one SFC POU, the equations as an ST POU run
+//! [`Program`](crate::control::Program) → PLCopen XML: the charts as one SFC POU, the equations as an ST POU run
 //! after it, every variable global (plant signals at their located address), and
 //! Vigie's block with the start and stop buttons and the chart names.
 //!
 //! Vigie's notation has forms that IEC 61131-3 writes differently:
-//! - a previous value `C3*`, and the edges `RE(C3)` and `FE(C3)` built on it, read a
-//!   variable `C3_PRE` that the last statement of the scan sets (`C3_PRE := C3;`);
-//! - a step timer `(T1, X11, 300)` is the condition `X11.T >= T#300ms`;
-//! - an equation reading a step reads a memory `X11_X` driven by an N action of the step
-//!   (steps are visible in their own POU only);
-//! - an equation whose target an SFC action also drives is `A1 := A1 OR (…);`.
+//! - a previous value `x*`, and the edges `RE(x)` and `FE(x)` built on it, read a
+//!   variable `x_PRE` that the last statement of the scan sets (`x_PRE := x;`);
+//! - a step timer `(t, S, 300)` is the condition `S.T >= T#300ms`;
+//! - an equation reading a step `S` reads a memory `S_X` driven by an N action of the
+//!   step (steps are visible in their own POU only);
+//! - an equation whose target `y` an SFC action also drives is `y := y OR (…);`.
 //!
 //! Reading the file back gives a program that runs exactly as the original (the
 //! station's reference and every variant of its error library are checked scan by
@@ -49,6 +49,8 @@ enum Role {
     Memory,
     Step,
     Timer,
+    /// A standard timer on an expression (TON, TOF, TP).
+    Delay,
 }
 
 struct Writer<'a> {
@@ -94,6 +96,7 @@ impl Writer<'_> {
     fn cond_leaf(&mut self, name: &str, kind: LeafKind) -> String {
         let role = self.roles.get(name).copied();
         match (kind, role) {
+            (LeafKind::Now | LeafKind::Prev, Some(Role::Delay)) => format!("{name}.Q"),
             (LeafKind::Now, Some(Role::Step)) => format!("{name}.X"),
             (LeafKind::Now, Some(Role::Timer)) => {
                 let (step, ms) = self.timers[name].clone();
@@ -136,6 +139,8 @@ impl Writer<'_> {
         let later = index.is_some_and(|i| i >= k);
         let driven = self.action_targets.contains(name);
         match (kind, role) {
+            (LeafKind::Now, Some(Role::Delay)) => format!("{name}.Q"),
+            (LeafKind::Prev, Some(Role::Delay)) if later => format!("{name}.Q"),
             (LeafKind::Now, Some(Role::Step)) => {
                 self.mirrors.insert(name.to_string());
                 format!("{name}_X")
@@ -210,6 +215,11 @@ impl Writer<'_> {
     fn rung(&mut self, k: usize, targets: &[String]) -> String {
         let (target, text) = self.program.equations[k].clone();
         let e = self.parse(&text, &format!("equation of `{target}`"));
+        if let Some(d) = self.program.delays.iter().find(|d| d.id == target) {
+            let ms = d.ms;
+            let input = self.st(&e, 0, &mut |w, n, kind| w.rung_leaf(n, kind, k, targets));
+            return format!("{target}(IN := {input}, PT := {});", write_duration(ms));
+        }
         let body = self.st(&e, 1, &mut |w, n, kind| w.rung_leaf(n, kind, k, targets));
         if self.action_targets.contains(&target) {
             format!("{target} := {target} OR {body};")
@@ -244,6 +254,9 @@ pub fn export(program: &Program, plant: &Plant, file: &Path) -> Result<String, V
         roles.insert(id.clone(), Role::Timer);
         timers.insert(id.clone(), (step.clone(), *ms));
     }
+    for d in &program.delays {
+        roles.insert(d.id.clone(), Role::Delay);
+    }
     let action_targets = program
         .steps()
         .flat_map(|(_, s)| s.actions.iter().map(|a| a.target.clone()))
@@ -271,7 +284,11 @@ pub fn export(program: &Program, plant: &Plant, file: &Path) -> Result<String, V
         rungs.push(w.rung(k, &targets));
     }
     for v in w.pre.clone() {
-        rungs.push(format!("{v}_PRE := {v};"));
+        if w.roles.get(&v) == Some(&Role::Delay) {
+            rungs.push(format!("{v}_PRE := {v}.Q;"));
+        } else {
+            rungs.push(format!("{v}_PRE := {v};"));
+        }
     }
     // Every name written must be an IEC identifier and the generated ones new.
     let mut used: BTreeSet<String> = BTreeSet::new();
@@ -365,12 +382,16 @@ fn address(plant: &Plant, name: &str) -> Option<String> {
 }
 
 fn var(out: &mut String, indent: &str, name: &str, addr: Option<String>) {
+    typed_var(out, indent, name, addr, "<BOOL/>");
+}
+
+fn typed_var(out: &mut String, indent: &str, name: &str, addr: Option<String>, ty: &str) {
     let addr = addr
         .map(|a| format!(" address=\"{a}\""))
         .unwrap_or_default();
     let _ = writeln!(
         out,
-        "{indent}<variable name=\"{}\"{addr}><type><BOOL/></type></variable>",
+        "{indent}<variable name=\"{}\"{addr}><type>{ty}</type></variable>",
         esc(name)
     );
 }
@@ -399,33 +420,7 @@ fn write_project(
     out.push_str("  <types>\n    <dataTypes/>\n    <pous>\n");
     write_sfc_pou(&mut out, w, pou, conditions);
     if !rungs.is_empty() {
-        let _ = writeln!(out, "      <pou name=\"{pou}_rungs\" pouType=\"program\">");
-        out.push_str("        <interface>\n");
-        let panel: Vec<&String> = p
-            .panel
-            .iter()
-            .filter(|b| rungs.iter().any(|r| mentions(r, b)))
-            .collect();
-        if !panel.is_empty() {
-            out.push_str("          <inputVars>\n");
-            for b in panel {
-                var(&mut out, "            ", b, None);
-            }
-            out.push_str("          </inputVars>\n");
-        }
-        out.push_str("          <externalVars>\n");
-        for g in globals(w, used) {
-            if rungs.iter().any(|r| mentions(r, &g)) {
-                var(&mut out, "            ", &g, None);
-            }
-        }
-        out.push_str("          </externalVars>\n        </interface>\n");
-        out.push_str("        <body>\n          <ST>\n            <xhtml:p><![CDATA[");
-        for r in rungs {
-            out.push('\n');
-            out.push_str(r);
-        }
-        out.push_str("\n]]></xhtml:p>\n          </ST>\n        </body>\n      </pou>\n");
+        write_rungs_pou(&mut out, w, pou, rungs, used);
     }
     out.push_str("    </pous>\n  </types>\n");
     out.push_str("  <instances>\n    <configurations>\n      <configuration name=\"Config0\">\n        <resource name=\"Res0\">\n          <task name=\"Main\" interval=\"T#10ms\" priority=\"0\">\n");
@@ -442,7 +437,16 @@ fn write_project(
     out.push_str("          </task>\n        </resource>\n        <globalVars>\n");
     for g in globals(w, used) {
         let a = address(w.plant, &g);
-        var(&mut out, "          ", &g, a);
+        if w.program.initial.contains(&g) {
+            let a = a.map(|a| format!(" address=\"{a}\"")).unwrap_or_default();
+            let _ = writeln!(
+                out,
+                "          <variable name=\"{}\"{a}><type><BOOL/></type><initialValue><simpleValue value=\"TRUE\"/></initialValue></variable>",
+                esc(&g)
+            );
+            continue;
+        }
+        typed_var(&mut out, "          ", &g, a, type_xml(w, &g));
     }
     out.push_str(
         "        </globalVars>\n      </configuration>\n    </configurations>\n  </instances>\n",
@@ -478,6 +482,44 @@ fn write_project(
     out
 }
 
+/// The ST POU of the equations, run after the chart.
+fn write_rungs_pou(
+    out: &mut String,
+    w: &Writer<'_>,
+    pou: &str,
+    rungs: &[String],
+    used: &BTreeSet<String>,
+) {
+    let p = w.program;
+    let _ = writeln!(out, "      <pou name=\"{pou}_rungs\" pouType=\"program\">");
+    out.push_str("        <interface>\n");
+    let panel: Vec<&String> = p
+        .panel
+        .iter()
+        .filter(|b| rungs.iter().any(|r| mentions(r, b)))
+        .collect();
+    if !panel.is_empty() {
+        out.push_str("          <inputVars>\n");
+        for b in panel {
+            var(out, "            ", b, None);
+        }
+        out.push_str("          </inputVars>\n");
+    }
+    out.push_str("          <externalVars>\n");
+    for g in globals(w, used) {
+        if rungs.iter().any(|r| mentions(r, &g)) {
+            typed_var(out, "            ", &g, None, type_xml(w, &g));
+        }
+    }
+    out.push_str("          </externalVars>\n        </interface>\n");
+    out.push_str("        <body>\n          <ST>\n            <xhtml:p><![CDATA[");
+    for r in rungs {
+        out.push('\n');
+        out.push_str(r);
+    }
+    out.push_str("\n]]></xhtml:p>\n          </ST>\n        </body>\n      </pou>\n");
+}
+
 /// True when `text` names `name` as a whole word.
 fn mentions(text: &str, name: &str) -> bool {
     text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
@@ -494,9 +536,26 @@ fn globals(w: &Writer<'_>, used: &BTreeSet<String>) -> Vec<String> {
         }
     }
     out.extend(p.memories.iter().cloned());
+    out.extend(p.delays.iter().map(|d| d.id.clone()));
     out.extend(w.pre.iter().map(|v| format!("{v}_PRE")));
     out.extend(w.mirrors.iter().map(|s| format!("{s}_X")));
     out
+}
+
+/// The PLCopen type of a global.
+fn type_xml(w: &Writer<'_>, name: &str) -> &'static str {
+    match w
+        .program
+        .delays
+        .iter()
+        .find(|d| d.id == name)
+        .map(|d| d.kind)
+    {
+        Some(crate::control::DelayKind::On) => "<derived name=\"TON\"/>",
+        Some(crate::control::DelayKind::Off) => "<derived name=\"TOF\"/>",
+        Some(crate::control::DelayKind::Pulse) => "<derived name=\"TP\"/>",
+        None => "<BOOL/>",
+    }
 }
 
 /// The SFC POU: steps, actions, transitions, divergences and convergences.
@@ -541,7 +600,7 @@ fn write_sfc_pou(out: &mut String, w: &Writer<'_>, pou: &str, conditions: &[(Str
     if !ext.is_empty() {
         out.push_str("          <externalVars>\n");
         for g in &ext {
-            var(out, "            ", g, None);
+            typed_var(out, "            ", g, None, type_xml(w, g));
         }
         out.push_str("          </externalVars>\n");
     }

@@ -1,5 +1,5 @@
 //! PLCopen TC6 XML (v2.01) control programs: the PLC's own program, read into Vigie's
-//! program model ([`Program`]) so that the emulator, the campaigns, training,
+//! program model ([`Program`](crate::control::Program)) so that the emulator, the campaigns, training,
 //! verification and the explanations run it as they run a `programs/*.ron` file, and
 //! written back after an edit so that it returns to the PLC's tool (CODESYS, TwinCAT,
 //! Beremiz, OpenPLC Editor).
@@ -23,13 +23,13 @@
 //! column in the file ([`crate::diag::codes::PLCOPEN_UNSUPPORTED`]); nothing is skipped.
 //!
 //! # Semantics
-//! The runtime runs a [`Program`] one scan per cycle: SFC evolution, then the actions,
+//! The runtime runs a [`Program`](crate::control::Program) one scan per cycle: SFC evolution, then the actions,
 //! then the equations top-down (see [`crate::control::ProgramRuntime`]). The import
 //! executes the ST and LD bodies symbolically, in task order, into one equation per
 //! assigned variable, so that each variable ends every scan with the value the PLC would
 //! give it: a variable read before it is written in the scan reads its previous value
 //! (`x*`), an `IF` becomes the choice between the new and the old value, an `R_TRIG`
-//! called on `C0` reads `RE(C0)` after its call. A variable written both by an SFC action
+//! called on `x` reads `RE(x)` after its call. A variable written both by an SFC action
 //! and by ST or LD must be written `x := x OR …` (a coil in parallel with the action), as
 //! Vigie's equations OR their value with the actions'.
 

@@ -3,7 +3,7 @@
 
 use super::st::{self, BinOp, Pos, StExpr, Stmt};
 use super::{ADD_DATA, ld, sfc};
-use crate::control::{Action, Chart, Program, Qualifier, Step, Transition};
+use crate::control::{Action, Chart, Delay, DelayKind, Program, Qualifier, Step, Transition};
 use crate::diag::codes::{self, Code};
 use crate::diag::{Location, Problem};
 use crate::expr::{Expr, LeafKind, Span};
@@ -22,6 +22,10 @@ pub(super) enum Kind {
     Trig {
         rising: bool,
     },
+    /// A `TON`, `TOF` or `TP` instance.
+    Timer(DelayKind),
+    /// A `TIME` variable with a constant initial value, never written: its ms.
+    Duration(u64),
     /// A declared variable of a type Vigie does not run: an error where it is used.
     Unsupported(String),
 }
@@ -228,6 +232,8 @@ pub(super) struct Declarations {
     /// Panel inputs and memories, in declaration order (Vigie names).
     pub(super) panel: Vec<String>,
     pub(super) memories: Vec<String>,
+    /// Outputs and memories whose initial value is TRUE.
+    pub(super) initial: Vec<String>,
 }
 
 impl Declarations {
@@ -266,6 +272,10 @@ fn describe(d: &VarDecl) -> String {
         Kind::Memory => "memory".into(),
         Kind::Trig { rising: true } => "R_TRIG".into(),
         Kind::Trig { rising: false } => "F_TRIG".into(),
+        Kind::Timer(DelayKind::On) => "TON".into(),
+        Kind::Timer(DelayKind::Off) => "TOF".into(),
+        Kind::Timer(DelayKind::Pulse) => "TP".into(),
+        Kind::Duration(ms) => format!("TIME {ms} ms"),
         Kind::Unsupported(t) => t.clone(),
     }
 }
@@ -279,6 +289,47 @@ fn type_of(var: Node<'_, '_>) -> String {
         Some(t) => t.tag_name().name().to_string(),
         None => "?".into(),
     }
+}
+
+/// Records a BOOL variable's initial value TRUE (outputs and memories only).
+fn bool_initial(ctx: &mut Ctx<'_, '_>, var: Node<'_, '_>, d: &VarDecl, initial: &mut Vec<String>) {
+    let Some(init) = child(var, "initialValue").and_then(|i| child(i, "simpleValue")) else {
+        return;
+    };
+    let v = init
+        .attribute("value")
+        .unwrap_or("")
+        .trim()
+        .to_ascii_uppercase();
+    match v.as_str() {
+        "FALSE" | "0" | "BOOL#FALSE" | "BOOL#0" => {}
+        "TRUE" | "1" | "BOOL#TRUE" | "BOOL#1" => match d.kind {
+            Kind::Output | Kind::Memory => {
+                if !initial.contains(&d.name) {
+                    initial.push(d.name.clone());
+                }
+            }
+            _ => ctx.error(
+                codes::PLCOPEN_UNSUPPORTED,
+                init,
+                format!("`{}` is an input: its value comes from the plant or the operator, not from an initial value", d.name),
+            ),
+        },
+        other => ctx.error(
+            codes::PLCOPEN_UNSUPPORTED,
+            init,
+            format!("`{}` starts at `{other}`, which is not a BOOL value", d.name),
+        ),
+    }
+}
+
+/// The constant initial value of a `TIME` variable, in ms.
+fn time_initial(var: Node<'_, '_>) -> Option<u64> {
+    let v = child(var, "initialValue")
+        .and_then(|i| child(i, "simpleValue"))
+        .and_then(|s| s.attribute("value"))?;
+    let (_, body) = v.split_once('#')?;
+    st::parse_duration(body)
 }
 
 fn bind_bool(
@@ -359,18 +410,6 @@ fn bind_bool(
             kind: Kind::Output,
         });
     }
-    if let Some(init) = child(var, "initialValue").and_then(|i| child(i, "simpleValue")) {
-        let v = init.attribute("value").unwrap_or("").to_ascii_uppercase();
-        if !(v == "FALSE" || v == "0" || v == "BOOL#FALSE") {
-            ctx.error(
-                codes::PLCOPEN_UNSUPPORTED,
-                init,
-                format!(
-                    "variable `{name}` starts at {v}: Vigie's memories and buttons start at FALSE"
-                ),
-            );
-        }
-    }
     Some(VarDecl {
         name: name.to_string(),
         kind: if input_section {
@@ -393,12 +432,27 @@ fn declare_interface(
                 let name = var.attribute("name").unwrap_or("");
                 let ty = type_of(var);
                 let decl = match ty.to_ascii_uppercase().as_str() {
-                    "BOOL" => bind_bool(ctx, plant, var, name, *is_input),
+                    "BOOL" => bind_bool(ctx, plant, var, name, *is_input).inspect(|d| {
+                        bool_initial(ctx, var, d, &mut decls.initial);
+                    }),
                     "R_TRIG" | "F_TRIG" => Some(VarDecl {
                         name: name.to_string(),
                         kind: Kind::Trig {
                             rising: ty.eq_ignore_ascii_case("R_TRIG"),
                         },
+                    }),
+                    "TON" | "TOF" | "TP" => Some(VarDecl {
+                        name: name.to_string(),
+                        kind: Kind::Timer(match ty.to_ascii_uppercase().as_str() {
+                            "TON" => DelayKind::On,
+                            "TOF" => DelayKind::Off,
+                            _ => DelayKind::Pulse,
+                        }),
+                    }),
+                    "TIME" => Some(VarDecl {
+                        name: name.to_string(),
+                        kind: time_initial(var)
+                            .map_or_else(|| Kind::Unsupported("TIME".into()), Kind::Duration),
                     }),
                     _ => Some(VarDecl {
                         name: name.to_string(),
@@ -427,6 +481,9 @@ pub(super) struct Machine {
     pub(super) charts_done: BTreeSet<String>,
     /// `R_TRIG`/`F_TRIG` outputs after their call.
     trig: BTreeMap<String, Expr>,
+    /// `TON`/`TOF`/`TP` instances called, in call order, and their input IN.
+    pub(super) delays: Vec<Delay>,
+    timer_in: BTreeMap<String, Expr>,
     /// Step timers created by `S.T` comparisons: (name, step, ms).
     pub(super) timers: Vec<(String, String, u64)>,
     /// Steps of the POU whose conditions are being read.
@@ -574,6 +631,8 @@ impl Machine {
             action_targets,
             charts_done: BTreeSet::new(),
             trig: BTreeMap::new(),
+            delays: Vec::new(),
+            timer_in: BTreeMap::new(),
             timers: Vec::new(),
             visible_steps: BTreeSet::new(),
         }
@@ -803,32 +862,56 @@ impl Machine {
             }
             StExpr::Edge { rising, path, at } => {
                 let x = self.var(path, *at, decls, mode, loc)?;
-                match x {
-                    Expr::Leaf {
-                        name,
-                        kind: LeafKind::Now,
-                        span,
-                    } => Ok(leaf(
-                        &name,
-                        if *rising {
-                            LeafKind::Rise
-                        } else {
-                            LeafKind::Fall
-                        },
-                        span,
-                    )),
-                    _ => fail(
-                        codes::PLCOPEN_UNSUPPORTED,
-                        *at,
-                        format!(
-                            "an edge contact on `{}`, which is written earlier in the scan: edges are read on inputs, buttons, steps and variables not yet written",
-                            path.join(".")
-                        ),
-                    ),
-                }
+                self.edge_of(x, *rising, mode, *at, &path.join("."), loc)
             }
             StExpr::Var { path, at } => self.var(path, *at, decls, mode, loc),
         }
+    }
+
+    /// The rising or falling edge of `v`: `RE(x)`/`FE(x)` on a variable read as it is
+    /// now; for any other value (a variable written earlier in the scan, or read before
+    /// its write, an expression), a hidden memory keeps the value for the next scan and
+    /// the edge compares with it.
+    fn edge_of(
+        &mut self,
+        v: Expr,
+        rising: bool,
+        mode: Mode,
+        at: Pos,
+        what: &str,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<Expr, Failure> {
+        if let Expr::Leaf {
+            name,
+            kind: LeafKind::Now,
+            span,
+        } = &v
+        {
+            let kind = if rising {
+                LeafKind::Rise
+            } else {
+                LeafKind::Fall
+            };
+            return Ok(leaf(name, kind, *span));
+        }
+        if mode == Mode::Condition {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!(
+                    "an edge of `{what}` in a transition: take it in a body (R_TRIG/F_TRIG) and read the result"
+                ),
+            );
+        }
+        let span = loc(at);
+        let v = self.small(v, Mode::Body, span);
+        let h = self.hide(v.clone());
+        let before = leaf(&h, LeafKind::Prev, span);
+        Ok(if rising {
+            and(v, not(before))
+        } else {
+            and(not(v), before)
+        })
     }
 
     fn var(
@@ -893,6 +976,32 @@ impl Machine {
                 codes::PLCOPEN_UNSUPPORTED,
                 at,
                 format!("`{shown}`: an edge detector is read as `.Q`"),
+            ),
+            (Kind::Timer(_), 2) if path[1].eq_ignore_ascii_case("Q") => {
+                let called = self.timer_in.contains_key(&d.name);
+                match (mode, called) {
+                    (Mode::Body, true) | (Mode::Condition, false) => {
+                        Ok(leaf(&d.name, LeafKind::Now, span))
+                    }
+                    (Mode::Body, false) => Ok(leaf(&d.name, LeafKind::Prev, span)),
+                    (Mode::Condition, true) => fail(
+                        codes::PLCOPEN_UNSUPPORTED,
+                        at,
+                        format!(
+                            "`{shown}` is read by a chart after its call in the same scan: call the timer in a POU after the chart"
+                        ),
+                    ),
+                }
+            }
+            (Kind::Timer(_), _) => fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{shown}`: a timer is read as `.Q` (its elapsed time `.ET` is not run)"),
+            ),
+            (Kind::Duration(_), _) => fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{shown}` is a TIME where a Boolean is expected"),
             ),
             (Kind::Unsupported(t), _) => fail(
                 codes::PLCOPEN_UNSUPPORTED,
@@ -1010,7 +1119,9 @@ impl Machine {
             let value = self.small(value, Mode::Body, loc(at));
             or(and(g.clone(), value), and(not(g), old))
         };
-        let new = if size(&new) > HIDDEN_ABOVE && !self.action_targets.contains(&name) {
+        // A variable written once holds its value in its own equation.
+        let once = self.written.get(&name) == Some(&1);
+        let new = if size(&new) > HIDDEN_ABOVE && !once && !self.action_targets.contains(&name) {
             let h = self.hide(new);
             leaf(&h, LeafKind::Now, loc(at))
         } else {
@@ -1041,12 +1152,15 @@ impl Machine {
                 format!("`{instance}` is not declared"),
             );
         };
+        if let Kind::Timer(kind) = d.kind {
+            return self.call_timer(d.name.clone(), kind, args, at, guard, decls, loc);
+        }
         let Kind::Trig { rising } = d.kind else {
             return fail(
                 codes::PLCOPEN_UNSUPPORTED,
                 at,
                 format!(
-                    "`{instance}` is called but is not an R_TRIG or F_TRIG instance: only these function blocks are run"
+                    "`{instance}` is called but is not an instance of R_TRIG, F_TRIG, TON, TOF or TP: only these function blocks are run"
                 ),
             );
         };
@@ -1080,24 +1194,95 @@ impl Machine {
                 format!("`{instance}` has no input `{input}` (it takes CLK)"),
             );
         }
-        let clk = match clk {
-            StExpr::Var { path, at } => StExpr::Edge {
-                rising,
-                path: path.clone(),
-                at: *at,
-            },
-            _ => {
+        let clk = self.expr(clk, decls, Mode::Body, loc)?;
+        let q = self.edge_of(clk, rising, Mode::Body, at, instance, loc)?;
+        self.trig.insert(d.name.clone(), q);
+        Ok(())
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn call_timer(
+        &mut self,
+        name: String,
+        kind: DelayKind,
+        args: &[(String, StExpr)],
+        at: Pos,
+        guard: &Expr,
+        decls: &Declarations,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<(), Failure> {
+        if *guard != Expr::Const(true) {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!(
+                    "`{name}` is called under a condition: call timers once per scan, outside IF"
+                ),
+            );
+        }
+        if self.timer_in.contains_key(&name) {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{name}` is called twice in the scan"),
+            );
+        }
+        let mut input = None;
+        let mut ms = None;
+        for (arg, value) in args {
+            if arg.eq_ignore_ascii_case("IN") {
+                input = Some(self.expr(value, decls, Mode::Body, loc)?);
+            } else if arg.eq_ignore_ascii_case("PT") {
+                ms = Some(match value {
+                    StExpr::Time(ms) => *ms,
+                    StExpr::Var { path, at } if path.len() == 1 => {
+                        match decls
+                            .vars
+                            .get(&path[0].to_ascii_lowercase())
+                            .map(|d| &d.kind)
+                        {
+                            Some(Kind::Duration(ms)) => *ms,
+                            _ => {
+                                return fail(
+                                    codes::PLCOPEN_UNSUPPORTED,
+                                    *at,
+                                    format!(
+                                        "`{name}`: PT is `{}`, not a constant time (a T#… literal or a TIME variable with an initial value, never written)",
+                                        path[0]
+                                    ),
+                                );
+                            }
+                        }
+                    }
+                    _ => {
+                        return fail(
+                            codes::PLCOPEN_UNSUPPORTED,
+                            at,
+                            format!("`{name}`: PT is not a constant time"),
+                        );
+                    }
+                });
+            } else {
                 return fail(
                     codes::PLCOPEN_UNSUPPORTED,
                     at,
-                    format!(
-                        "`{instance}`: CLK is an expression; give it a variable (edges are taken on one signal)"
-                    ),
+                    format!("`{name}` has no input `{arg}` run by Vigie (IN and PT)"),
                 );
             }
+        }
+        let (Some(input), Some(ms)) = (input, ms) else {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{name}` is called without IN or PT: both are needed"),
+            );
         };
-        let q = self.expr(&clk, decls, Mode::Body, loc)?;
-        self.trig.insert(d.name.clone(), q);
+        let input = self.small(input, Mode::Body, loc(at));
+        self.writes += 1;
+        self.last.insert(name.clone(), self.writes);
+        self.order.push(name.clone());
+        self.timer_in.insert(name.clone(), input);
+        self.delays.push(Delay { id: name, kind, ms });
         Ok(())
     }
 
@@ -1110,6 +1295,10 @@ impl Machine {
         let mut order = self.order.clone();
         order.sort_by_key(|n| self.last.get(n).copied().unwrap_or(0));
         for name in &order {
+            if let Some(input) = self.timer_in.get(name) {
+                plain.push((name.clone(), input.clone()));
+                continue;
+            }
             let e = self.env.get(name).cloned().unwrap_or(Expr::Const(false));
             if !self.action_targets.contains(name) {
                 plain.push((name.clone(), e));
@@ -1301,6 +1490,7 @@ fn build(
         vars: BTreeMap::new(),
         panel: Vec::new(),
         memories: Vec::new(),
+        initial: Vec::new(),
     };
     for globals in project
         .descendants()
@@ -1368,34 +1558,7 @@ fn build(
         .or_else(|| pous.first().and_then(|p| p.attribute("name")))
         .unwrap_or("PLCopen program")
         .to_string();
-    let check_button = |b: &Option<String>| {
-        b.as_ref().and_then(|n| {
-            decls
-                .vars
-                .get(&n.to_ascii_lowercase())
-                .filter(|d| matches!(d.kind, Kind::Panel | Kind::Input))
-                .map(|d| d.name.clone())
-        })
-    };
-    Program {
-        name,
-        description: vigie.description.clone().unwrap_or_default(),
-        panel: decls.panel.clone(),
-        start: check_button(&vigie.start),
-        stop: check_button(&vigie.stop),
-        memories: decls
-            .memories
-            .iter()
-            .cloned()
-            .chain(m.hidden_memories())
-            .collect(),
-        timers: m.timers.clone(),
-        charts,
-        equations: equations
-            .iter()
-            .map(|(n, e)| (n.clone(), render(e)))
-            .collect(),
-    }
+    assemble(&decls, &m, &vigie, name, charts, &equations)
 }
 
 /// Reads each program POU's body (SFC, ST or LD).
@@ -1443,7 +1606,7 @@ fn read_bodies(
                     }
                 }
             }
-            "LD" => {
+            "LD" | "FBD" => {
                 if let Some((stmts, text)) = ld::read_body(ctx, &name, lang) {
                     bodies.push((name, Body::Stmts(stmts, text)));
                 }
@@ -1483,6 +1646,47 @@ fn check_step_names(
     step_names
 }
 
+/// The program read: the declarations, the scan's equations and the charts.
+fn assemble(
+    decls: &Declarations,
+    m: &Machine,
+    vigie: &VigieData,
+    name: String,
+    charts: Vec<Chart>,
+    equations: &[(String, Expr)],
+) -> Program {
+    let check_button = |b: &Option<String>| {
+        b.as_ref().and_then(|n| {
+            decls
+                .vars
+                .get(&n.to_ascii_lowercase())
+                .filter(|d| matches!(d.kind, Kind::Panel | Kind::Input))
+                .map(|d| d.name.clone())
+        })
+    };
+    Program {
+        name,
+        description: vigie.description.clone().unwrap_or_default(),
+        panel: decls.panel.clone(),
+        start: check_button(&vigie.start),
+        stop: check_button(&vigie.stop),
+        memories: decls
+            .memories
+            .iter()
+            .cloned()
+            .chain(m.hidden_memories())
+            .collect(),
+        timers: m.timers.clone(),
+        initial: decls.initial.clone(),
+        delays: m.delays.clone(),
+        charts,
+        equations: equations
+            .iter()
+            .map(|(n, e)| (n.clone(), render(e)))
+            .collect(),
+    }
+}
+
 fn empty_program() -> Program {
     Program {
         name: String::new(),
@@ -1492,6 +1696,8 @@ fn empty_program() -> Program {
         stop: None,
         memories: Vec::new(),
         timers: Vec::new(),
+        delays: Vec::new(),
+        initial: Vec::new(),
         charts: Vec::new(),
         equations: Vec::new(),
     }

@@ -279,7 +279,11 @@ fn read_condition(
             }
         };
     }
-    match net.input(ctx, cond, &mut Vec::new()) {
+    let mut em = super::ld::Emitted {
+        pure: true,
+        ..Default::default()
+    };
+    match net.input(ctx, cond, &mut Vec::new(), &mut em) {
         Ok(e) => Some((Condition::Network(e), None)),
         Err(e) => {
             ctx.error_at(e.code, e.at, format!("POU `{pou_name}`: {}", e.message));

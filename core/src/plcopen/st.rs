@@ -2,7 +2,7 @@
 //! for the statements and expressions that a Boolean control program uses.
 //!
 //! Statements: `x := e;`, `IF … THEN … ELSIF … ELSE … END_IF;` and function-block calls
-//! with named inputs (`trig(CLK := C0);`). Expressions: `OR`, `XOR`, `AND` (`&`), `NOT`,
+//! with named inputs (`trig(CLK := x);`). Expressions: `OR`, `XOR`, `AND` (`&`), `NOT`,
 //! comparisons, parentheses, `TRUE`/`FALSE`, integer and `T#…` time literals, variables
 //! and `a.b` members. `(* *)` and `//` comments and `{ }` pragmas are skipped.
 //! Anything else (`CASE`, loops, arithmetic) is refused with its line and column, never

@@ -12,6 +12,7 @@ use crate::time::Millis;
 use std::path::{Path, PathBuf};
 
 mod conformance;
+mod fixtures;
 
 fn layouts() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts")

@@ -624,3 +624,63 @@ mod st_against_interp {
         }
     }
 }
+
+/// `W` over the scans of `inputs` for an ST body calling a standard timer `t` of `ty`.
+fn timer_trace(ty: &str, inputs: &[&[&str]]) -> Vec<bool> {
+    let xml = project(&format!(
+        r#"<pou name="main" pouType="program"><interface><localVars>{VARS}
+<variable name="t"><type><derived name="{ty}"/></type></variable></localVars></interface>
+<body><ST><xhtml:p><![CDATA[t(IN := a, PT := T#30ms);
+W := t.Q;]]></xhtml:p></ST></body></pou>"#
+    ));
+    trace(&xml, inputs, "W")
+}
+
+#[test]
+fn ton_rises_after_its_time_and_falls_with_its_input() {
+    let got = timer_trace(
+        "TON",
+        &[&["a"], &["a"], &["a"], &["a"], &["a"], &[], &["a"], &["a"]],
+    );
+    // Input from 10 ms: Q at 40 ms (30 ms later); input off at 60 ms: Q off; on again
+    // at 70 ms: the time starts again.
+    assert_eq!(got, [false, false, false, true, true, false, false, false]);
+}
+
+#[test]
+fn tof_holds_its_time_after_its_input_falls() {
+    // Input at 20 ms only: Q from 20 ms, and 30 ms after the fall at 30 ms (30, 40,
+    // 50 ms), off at 60 ms.
+    let got = timer_trace(
+        "TOF",
+        &[&[], &["a"], &[], &[], &[], &[], &["a"], &[], &["a"]],
+    );
+    assert_eq!(
+        got,
+        [false, true, true, true, true, false, true, true, true]
+    );
+}
+
+#[test]
+fn tp_gives_one_pulse_per_rising_edge_of_its_time() {
+    // A rising edge starts a pulse of 30 ms whatever the input does; a new pulse needs
+    // a new rising edge after the pulse.
+    let got = timer_trace(
+        "TP",
+        &[
+            &["a"],
+            &[],
+            &["a"],
+            &["a"],
+            &["a"],
+            &["a"],
+            &[],
+            &["a"],
+            &["a"],
+        ],
+    );
+    assert_eq!(
+        got,
+        [true, true, true, false, false, false, false, true, true]
+    );
+}
