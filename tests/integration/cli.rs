@@ -231,3 +231,88 @@ fn explain_prints_a_codes_page() {
         text(&out)
     );
 }
+
+/// The PLC's program leaves as PLCopen XML and comes back: `vigie program export` writes
+/// the paper's erroneous variant E01, a scenario runs it from that file with the same
+/// trips, boxes and hazards as from the error library, `vigie program import` reads it
+/// back, and a broken file is refused with its line and column.
+#[test]
+fn a_program_exported_as_plcopen_runs_back_the_same() {
+    let dir = TempDir::new("plcopen");
+    let xml = dir.0.join("e01.xml");
+    let out = vigie(&[
+        "program",
+        "export",
+        "layouts/sorting-station",
+        "--variant",
+        "E01",
+        "--out",
+        xml.to_str().expect("utf-8"),
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    let written = std::fs::read_to_string(&xml).expect("written");
+    assert!(
+        written.contains("<SFC>") && written.contains("tc6_0201"),
+        "{written}"
+    );
+    // The same scenario, its program read from the PLCopen file.
+    let original = repo().join("layouts/sorting-station/scenarios/cs10-paper.ron");
+    let text_of = std::fs::read_to_string(&original).expect("scenario");
+    let plant = repo().join("layouts/sorting-station");
+    let copy = text_of
+        .replace(
+            "Scenario(\n",
+            &format!("Scenario(\n    plant: {:?},\n", plant.display().to_string()),
+        )
+        .replace("program: Error(\"E01\")", "program: File(\"e01.xml\")");
+    assert_ne!(copy, text_of);
+    let scenario = dir.0.join("cs10-from-plcopen.ron");
+    std::fs::write(&scenario, copy).expect("writes");
+    let report = |path: &std::path::Path| -> serde_json::Value {
+        let out = vigie(&[
+            "run",
+            path.to_str().expect("utf-8"),
+            "--headless",
+            "--no-timing",
+        ]);
+        assert!(out.status.success(), "{}", text(&out));
+        serde_json::from_slice(&out.stdout).expect("JSON report")
+    };
+    let (a, b) = (report(&original), report(&scenario));
+    for key in ["trips", "boxes", "hazards", "cycles"] {
+        assert_eq!(a[key], b[key], "{key}");
+    }
+    assert_eq!(a["trips"][0]["constraints"][0], "CSs10");
+    // Read back: the summary names the program's charts.
+    let out = vigie(&[
+        "program",
+        "import",
+        "layouts/sorting-station",
+        "--file",
+        xml.to_str().expect("utf-8"),
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(text(&out).contains("3 charts"), "{}", text(&out));
+    // A connection to an element that does not exist: refused, with where.
+    let broken = dir.0.join("broken.xml");
+    let mangled = written.replacen("refLocalId=\"1\"", "refLocalId=\"999\"", 1);
+    std::fs::write(&broken, &mangled).expect("writes");
+    let out = vigie(&[
+        "program",
+        "import",
+        "layouts/sorting-station",
+        "--file",
+        broken.to_str().expect("utf-8"),
+    ]);
+    assert!(!out.status.success());
+    let line = mangled
+        .lines()
+        .position(|l| l.contains("refLocalId=\"999\""))
+        .expect("mangled")
+        + 1;
+    let said = text(&out);
+    assert!(
+        said.contains(&format!("broken.xml:{line}:")) && said.contains("V1206"),
+        "{said}"
+    );
+}

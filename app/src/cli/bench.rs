@@ -141,6 +141,9 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
             plant_dir.display()
         )?,
     }
+    if let Some(p) = &files.production {
+        plcopen_scan(&mut out, &plant_dir.join(p))?;
+    }
     task_monitors(&mut out)?;
     if let Some(trip) = &files.trip
         && let Some((ms, worst)) = explanations_ms(&plant_dir.join(trip), 21)?
@@ -160,6 +163,71 @@ pub(crate) fn run(plant_dir: &Path, iterations: u32) -> anyhow::Result<ExitCode>
         "live link (10 ms cycle, jitter, sensor -> filtered output): `vigie gateway-bench` (needs the pymodbus venv)"
     )?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// The plant's reference program scanned on the sensors of a minute of its `production`
+/// scenario, as written in RON and as read back from its PLCopen XML export (the
+/// import adds memories for previous values and step flags): ns per scan, medians of
+/// 11 replays each.
+fn plcopen_scan(out: &mut impl std::io::Write, path: &Path) -> anyhow::Result<()> {
+    use std::sync::Arc;
+    use vigie_core::control::{CompiledProgram, Origin, ProgramRuntime};
+    use vigie_core::engine::Control as _;
+    use vigie_core::sim::{Options, Simulation};
+    let render =
+        |p: Vec<vigie_core::diag::Problem>| anyhow::anyhow!("{}", vigie_core::diag::render(&p));
+    let scenario = load_scenario(path)?;
+    let mut sim = Simulation::from_scenario(&scenario, path, Options::default()).map_err(render)?;
+    let mut sensors = Vec::new();
+    while sim.now() < vigie_core::Millis(60_000) {
+        sim.cycle();
+        sensors.push(sim.emulator.sensors().clone());
+    }
+    let plant = sim.bundle.plant.clone();
+    let native = Arc::clone(sim.program.program());
+    let xml = vigie_core::plcopen::export(&native.program, &plant, path).map_err(render)?;
+    let read =
+        vigie_core::plcopen::import(&xml, Path::new("reference.xml"), &plant).map_err(render)?;
+    let imported =
+        Arc::new(CompiledProgram::new(&read, &plant, &Origin::default()).map_err(render)?);
+    let replay = |program: &Arc<CompiledProgram>| {
+        let mut times = Vec::new();
+        for _ in 0..11 {
+            let mut rt = ProgramRuntime::new(Arc::clone(program));
+            if let Some(b) = &program.program.start {
+                let _ = rt.press(b);
+            }
+            let mut frame = Frame::new([plant.inputs.len(), plant.outputs.len(), 0, 0]);
+            let mut outs = vigie_core::Bits::zeros(plant.outputs.len());
+            let start = Instant::now();
+            for (k, s) in sensors.iter().enumerate() {
+                frame.shift();
+                frame.now_mut(Space::Input).copy_from(s);
+                rt.scan(vigie_core::Millis(10 * (k as u64 + 1)), &frame, &mut outs);
+                black_box(&outs);
+            }
+            times.push(start.elapsed().as_nanos() as f64 / sensors.len() as f64);
+        }
+        times.sort_by(f64::total_cmp);
+        times[times.len() / 2]
+    };
+    let (a, b) = (replay(&native), replay(&imported));
+    writeln!(
+        out,
+        "PLCopen: the reference program's scan, {} scans of {}:",
+        sensors.len(),
+        path.file_name().unwrap_or_default().to_string_lossy()
+    )?;
+    writeln!(
+        out,
+        "  as written (RON):                              {a:>10.0} ns"
+    )?;
+    writeln!(
+        out,
+        "  read from its PLCopen export:                  {b:>10.0} ns   {:.2}x, goal <= 2x",
+        b / a
+    )?;
+    Ok(())
 }
 
 /// Measures the plant's filter cycle on the frames of its `trip` scenario: the frame

@@ -70,6 +70,17 @@ fn preds(n: Node<'_, '_>) -> Vec<u64> {
         .collect()
 }
 
+/// The `connection` of `n` to `id` (to place a problem on its line).
+fn connection_to<'a, 'i>(n: Node<'a, 'i>, id: u64) -> Option<Node<'a, 'i>> {
+    children(n, "connectionPointIn")
+        .flat_map(|c| children(c, "connection"))
+        .find(|c| {
+            c.attribute("refLocalId")
+                .and_then(|v| v.parse::<u64>().ok())
+                == Some(id)
+        })
+}
+
 struct Graph<'a, 'i> {
     nodes: BTreeMap<u64, Node<'a, 'i>>,
     succs: BTreeMap<u64, Vec<u64>>,
@@ -104,7 +115,7 @@ impl<'a, 'i> Graph<'a, 'i> {
             let Some(&pn) = self.nodes.get(&p) else {
                 ctx.error(
                     codes::PLCOPEN_SFC_GRAPH,
-                    n,
+                    connection_to(n, p).unwrap_or(n),
                     format!("a connection to localId {p}, which no element has"),
                 );
                 return false;
