@@ -554,44 +554,34 @@ pub(super) fn not(e: Expr) -> Expr {
     }
 }
 
-pub(super) fn and(a: Expr, b: Expr) -> Expr {
-    match (a, b) {
-        (Expr::Const(false), _) | (_, Expr::Const(false)) => Expr::Const(false),
-        (Expr::Const(true), e) | (e, Expr::Const(true)) => e,
-        (Expr::And(mut x), Expr::And(y)) => {
-            x.extend(y);
-            Expr::And(x)
-        }
-        (Expr::And(mut x), e) => {
-            x.push(e);
-            Expr::And(x)
-        }
-        (e, Expr::And(mut y)) => {
-            y.insert(0, e);
-            Expr::And(y)
-        }
-        (a, b) => Expr::And(vec![a, b]),
+/// `a . b` (`conj`) or `a + b`, constants folded and nested lists flattened.
+fn combine(a: Expr, b: Expr, conj: bool) -> Expr {
+    let (absorbing, neutral) = (Expr::Const(!conj), Expr::Const(conj));
+    if a == absorbing || b == absorbing {
+        return absorbing;
     }
+    if a == neutral {
+        return b;
+    }
+    if b == neutral {
+        return a;
+    }
+    let parts = |e: Expr| match e {
+        Expr::And(v) if conj => v,
+        Expr::Or(v) if !conj => v,
+        e => vec![e],
+    };
+    let mut v = parts(a);
+    v.extend(parts(b));
+    if conj { Expr::And(v) } else { Expr::Or(v) }
+}
+
+pub(super) fn and(a: Expr, b: Expr) -> Expr {
+    combine(a, b, true)
 }
 
 pub(super) fn or(a: Expr, b: Expr) -> Expr {
-    match (a, b) {
-        (Expr::Const(true), _) | (_, Expr::Const(true)) => Expr::Const(true),
-        (Expr::Const(false), e) | (e, Expr::Const(false)) => e,
-        (Expr::Or(mut x), Expr::Or(y)) => {
-            x.extend(y);
-            Expr::Or(x)
-        }
-        (Expr::Or(mut x), e) => {
-            x.push(e);
-            Expr::Or(x)
-        }
-        (e, Expr::Or(mut y)) => {
-            y.insert(0, e);
-            Expr::Or(y)
-        }
-        (a, b) => Expr::Or(vec![a, b]),
-    }
+    combine(a, b, false)
 }
 
 fn xor(a: Expr, b: Expr) -> Expr {

@@ -14,6 +14,64 @@ use std::path::{Path, PathBuf};
 mod conformance;
 mod fixtures;
 
+/// A program alone on a plant, one scan every 10 ms, inputs given by name.
+pub(super) struct Open {
+    rt: crate::control::ProgramRuntime,
+    plant: Plant,
+    frame: crate::frame::Frame,
+    out: crate::bits::Bits,
+    t: u64,
+}
+
+impl Open {
+    /// `program` read from PLCopen `xml` (`file` in messages) and compiled for `plant`.
+    pub(super) fn new(xml: &str, file: &Path, plant: Plant) -> Self {
+        let program = import(xml, file, &plant).unwrap_or_else(|p| panic!("{}\n{xml}", shown(&p)));
+        let compiled = CompiledProgram::new(&program, &plant, &Origin::default())
+            .unwrap_or_else(|p| panic!("{}\n{program:#?}", shown(&p)));
+        Self {
+            rt: crate::control::ProgramRuntime::new(std::sync::Arc::new(compiled)),
+            frame: crate::frame::Frame::new([plant.inputs.len(), plant.outputs.len(), 0, 0]),
+            out: crate::bits::Bits::zeros(plant.outputs.len()),
+            plant,
+            t: 0,
+        }
+    }
+
+    /// One scan with these inputs on.
+    pub(super) fn scan(&mut self, inputs: &[&str]) -> &mut Self {
+        use crate::engine::Control as _;
+        use crate::symbols::Space;
+        self.frame.shift();
+        self.frame.now_mut(Space::Input).clear();
+        for i in inputs {
+            let k = self.plant.input(i).expect("an input of the plant");
+            self.frame.now_mut(Space::Input).set(k, true);
+        }
+        self.t += 10;
+        self.rt.scan(Millis(self.t), &self.frame, &mut self.out);
+        self
+    }
+
+    /// A name's value after the last scan.
+    pub(super) fn v(&self, name: &str) -> bool {
+        self.rt.value(name).unwrap_or_else(|| panic!("no `{name}`"))
+    }
+
+    /// The active steps.
+    pub(super) fn active(&self) -> Vec<&str> {
+        self.rt.active_steps()
+    }
+
+    /// The outputs on after the last scan.
+    pub(super) fn outputs(&self) -> Vec<String> {
+        self.out
+            .ones()
+            .map(|k| self.plant.outputs[k].id.clone())
+            .collect()
+    }
+}
+
 fn layouts() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts")
 }

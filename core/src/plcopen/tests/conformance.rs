@@ -4,16 +4,10 @@
 //! evolution rules, LD rungs, and ST bodies against the project's ST interpreter.
 
 use super::super::import;
-use crate::bits::Bits;
-use crate::control::{CompiledProgram, Origin, ProgramRuntime};
+use super::Open;
 use crate::diag::codes;
-use crate::engine::Control;
-use crate::frame::Frame;
 use crate::plant::Plant;
-use crate::symbols::Space;
-use crate::time::Millis;
 use std::path::Path;
-use std::sync::Arc;
 
 /// Inputs a, b, d of the single conveyor, outputs P and CV.
 fn plant() -> Plant {
@@ -89,51 +83,8 @@ fn actions(id: u32, step: u32, list: &[(&str, Option<&str>, &str)]) -> String {
     )
 }
 
-/// The program alone, one scan every 10 ms, inputs by name.
-struct Open {
-    rt: ProgramRuntime,
-    plant: Plant,
-    frame: Frame,
-    out: Bits,
-    t: u64,
-}
-
-impl Open {
-    fn new(xml: &str) -> Self {
-        let plant = plant();
-        let program = import(xml, Path::new("t.xml"), &plant)
-            .unwrap_or_else(|p| panic!("{}\n{xml}", crate::diag::render(&p)));
-        let compiled = CompiledProgram::new(&program, &plant, &Origin::default())
-            .unwrap_or_else(|p| panic!("{}\n{program:#?}", crate::diag::render(&p)));
-        let sizes = [plant.inputs.len(), plant.outputs.len(), 0, 0];
-        Self {
-            rt: ProgramRuntime::new(Arc::new(compiled)),
-            frame: Frame::new(sizes),
-            out: Bits::zeros(plant.outputs.len()),
-            plant,
-            t: 0,
-        }
-    }
-
-    fn scan(&mut self, inputs: &[&str]) -> &mut Self {
-        self.frame.shift();
-        self.frame.now_mut(Space::Input).clear();
-        for i in inputs {
-            let k = self.plant.input(i).expect("an input");
-            self.frame.now_mut(Space::Input).set(k, true);
-        }
-        self.t += 10;
-        self.rt.scan(Millis(self.t), &self.frame, &mut self.out);
-        self
-    }
-
-    fn v(&self, name: &str) -> bool {
-        self.rt.value(name).unwrap_or_else(|| panic!("no `{name}`"))
-    }
-
-    fn active(&self) -> Vec<&str> {
-        self.rt.active_steps()
-    }
+fn open(xml: &str) -> Open {
+    Open::new(xml, Path::new("t.xml"), plant())
 }
 
 /// A two-step loop S0 -(a)-> S1 -(b)-> S0, with `acts` on S1.
@@ -150,7 +101,7 @@ fn loop_with(acts: &[(&str, Option<&str>, &str)]) -> String {
 
 /// W over the scans of `inputs`.
 fn trace(xml: &str, inputs: &[&[&str]], var: &str) -> Vec<bool> {
-    let mut o = Open::new(xml);
+    let mut o = open(xml);
     inputs.iter().map(|i| o.scan(i).v(var)).collect()
 }
 
@@ -275,7 +226,7 @@ fn selection_divergence_fires_the_leftmost_true_branch_only() {
     ]
     .concat();
     let xml = sfc(&body);
-    let mut o = Open::new(&xml);
+    let mut o = open(&xml);
     assert_eq!(
         o.scan(&["a", "b"]).active(),
         ["L"],
@@ -307,7 +258,7 @@ fn simultaneous_divergence_and_convergence() {
         step(10, "S1", false, &[9]),
     ]
     .concat();
-    let mut o = Open::new(&sfc(&body));
+    let mut o = open(&sfc(&body));
     assert_eq!(o.scan(&["a"]).active(), ["L1", "R1"]);
     assert_eq!(
         o.scan(&["d"]).active(),
@@ -328,7 +279,7 @@ fn a_jump_returns_to_its_target_step() {
         r#"<jumpStep localId="5" targetName="S0"><position x="0" y="50"/><connectionPointIn><connection refLocalId="4"/></connectionPointIn></jumpStep>"#.to_string(),
     ]
     .concat();
-    let mut o = Open::new(&sfc(&body));
+    let mut o = open(&sfc(&body));
     assert_eq!(o.scan(&["a"]).active(), ["S1"]);
     assert_eq!(o.scan(&["b"]).active(), ["S0"]);
 }
@@ -345,7 +296,7 @@ fn one_evolution_per_scan() {
         step(5, "S2", false, &[4]),
     ]
     .concat();
-    let mut o = Open::new(&sfc(&body));
+    let mut o = open(&sfc(&body));
     assert_eq!(o.scan(&["a"]).active(), ["S1"]);
     assert_eq!(o.scan(&["a"]).active(), ["S2"]);
 }
@@ -362,7 +313,7 @@ fn step_time_and_previous_scan_values_in_conditions() {
         trans(4, 3, "S1.T >= T#30ms AND W"),
     ]
     .concat();
-    let mut o = Open::new(&sfc(&body));
+    let mut o = open(&sfc(&body));
     o.scan(&["a"]);
     assert_eq!(o.scan(&[]).active(), ["S1"]);
     assert_eq!(o.scan(&[]).active(), ["S1"]);
@@ -375,7 +326,7 @@ fn step_time_and_previous_scan_values_in_conditions() {
         trans(4, 3, "S1.T > T#30ms"),
     ]
     .concat());
-    let mut o = Open::new(&xml);
+    let mut o = open(&xml);
     o.scan(&["a"]);
     let n = (0..10)
         .take_while(|_| o.scan(&[]).active() == ["S1"])
@@ -432,7 +383,7 @@ fn ladder_rungs_as_a_plc_scans_them() {
         coil(33, &[32], "K", r#" storage="reset""#, 70),
     ]
     .concat();
-    let mut o = Open::new(&ld(&body));
+    let mut o = open(&ld(&body));
     let mut step = |i: &[&str]| {
         o.scan(i);
         (o.v("W"), o.v("CV"), o.v("K"))
@@ -608,7 +559,7 @@ mod st_against_interp {
             );
             let unit = interp::parse(&text).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
             let mut reference = interp::Machine::new(unit, "MAIN").map_err(|e| TestCaseError::fail(e.to_string()))?;
-            let mut o = Open::new(&xml);
+            let mut o = open(&xml);
             for inputs in &scans {
                 let on: Vec<&str> = INPUTS.iter().zip(inputs).filter(|(_, v)| **v).map(|(n, _)| *n).collect();
                 for (n, v) in INPUTS.iter().zip(inputs) {

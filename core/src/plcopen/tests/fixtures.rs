@@ -4,15 +4,10 @@
 //! the same after export and import.
 
 use super::super::{export, import};
-use crate::bits::Bits;
-use crate::control::{CompiledProgram, Origin, Program, ProgramRuntime};
-use crate::engine::Control;
-use crate::frame::Frame;
+use super::Open;
+use crate::control::Program;
 use crate::plant::Plant;
-use crate::symbols::Space;
-use crate::time::Millis;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 fn folder(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -31,42 +26,20 @@ fn load(name: &str) -> (Plant, Program) {
 }
 
 /// The program alone on its bench, one scan every 10 ms.
-struct Bench {
-    rt: ProgramRuntime,
-    plant: Plant,
-    frame: Frame,
-    out: Bits,
-    t: u64,
-}
+struct Bench(Open);
 
 impl Bench {
     fn new(name: &str) -> Self {
-        let (plant, program) = load(name);
-        let compiled = CompiledProgram::new(&program, &plant, &Origin::default())
-            .unwrap_or_else(|p| panic!("{name}: {}", crate::diag::render(&p)));
-        Self {
-            rt: ProgramRuntime::new(Arc::new(compiled)),
-            frame: Frame::new([plant.inputs.len(), plant.outputs.len(), 0, 0]),
-            out: Bits::zeros(plant.outputs.len()),
-            plant,
-            t: 0,
-        }
+        let dir = folder(name);
+        let plant = Plant::load(&dir.join("plant.ron")).expect("the bench's plant");
+        let file = dir.join("plc.xml");
+        let text = std::fs::read_to_string(&file).expect("reads");
+        Self(Open::new(&text, &file, plant))
     }
 
     /// One scan with these inputs on; the outputs on after it.
     fn scan(&mut self, inputs: &[&str]) -> Vec<String> {
-        self.frame.shift();
-        self.frame.now_mut(Space::Input).clear();
-        for i in inputs {
-            let k = self.plant.input(i).expect("an input of the bench");
-            self.frame.now_mut(Space::Input).set(k, true);
-        }
-        self.t += 10;
-        self.rt.scan(Millis(self.t), &self.frame, &mut self.out);
-        self.out
-            .ones()
-            .map(|k| self.plant.outputs[k].id.clone())
-            .collect()
+        self.0.scan(inputs).outputs()
     }
 
     /// Runs `ms` with `inputs` held; the outputs after each scan.
