@@ -571,6 +571,7 @@ kind-live-link = live link
 kind-specification-error = specification error
 kind-hazard = hazard
 kind-implausible-sensor = implausible sensor
+kind-program-divergence = program divergence
 syn-elevator-left = Left elevator
 syn-elevator-right = Right elevator
 

@@ -102,6 +102,7 @@ explain-X419 = { $state ->
 
 ## Alarmes (le texte du cœur reste l'enregistrement ; en français, à partir du code et
 ## des champs de l'alarme)
+alarm-program-divergence = l'automate n'exécute pas le programme donné ({ $name }, version { $version }) : { $output } est à { $plc } dans l'automate, à { $program } dans le programme
 alarm-plausibility-suspect = { $sensor } ({ $description }) suspect : { $edge ->
     [rise] montée
    *[fall] retombée

@@ -602,6 +602,7 @@ kind-live-link = liaison
 kind-specification-error = erreur de spécification
 kind-hazard = danger
 kind-implausible-sensor = capteur invraisemblable
+kind-program-divergence = programme divergent
 syn-elevator-left = Élévateur gauche
 syn-elevator-right = Élévateur droit
 

@@ -106,11 +106,13 @@ pub enum AlarmKind {
     Hazard,
     /// A sensor's edge the plant's physics does not allow was held (a suspect sensor).
     Plausibility,
+    /// The live PLC's outputs left every run of the program it should be running.
+    Program,
 }
 
 impl AlarmKind {
     /// Every kind, in declaration order.
-    pub const ALL: [AlarmKind; 7] = [
+    pub const ALL: [AlarmKind; 8] = [
         Self::FilterTrip,
         Self::Diagnosis,
         Self::Task,
@@ -118,6 +120,7 @@ impl AlarmKind {
         Self::Specification,
         Self::Hazard,
         Self::Plausibility,
+        Self::Program,
     ];
 
     /// Its name in texts.
@@ -130,6 +133,7 @@ impl AlarmKind {
             Self::Specification => "specification error",
             Self::Hazard => "hazard",
             Self::Plausibility => "implausible sensor",
+            Self::Program => "program divergence",
         }
     }
 
@@ -137,7 +141,9 @@ impl AlarmKind {
     pub fn priority(self) -> AlarmPriority {
         match self {
             Self::FilterTrip | Self::Hazard => AlarmPriority::Urgent,
-            Self::Specification | Self::Link | Self::Diagnosis => AlarmPriority::High,
+            Self::Specification | Self::Link | Self::Diagnosis | Self::Program => {
+                AlarmPriority::High
+            }
             Self::Task | Self::Plausibility => AlarmPriority::Medium,
         }
     }

@@ -255,6 +255,11 @@ impl Drop for TempDir {
 
 impl Gateway {
     fn start(config_body: &str) -> Self {
+        Self::start_with(config_body, &[])
+    }
+
+    /// `vigie gateway` with these arguments after the configuration.
+    fn start_with(config_body: &str, args: &[&str]) -> Self {
         let dir = TempDir::new("gw");
         let station = repo()
             .join("layouts/sorting-station")
@@ -291,7 +296,7 @@ impl Gateway {
         let path = dir.0.join("gateway.ron");
         std::fs::write(&path, text).unwrap();
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_vigie"));
-        cmd.args(["gateway", "--log", "warn"]).arg(&path);
+        cmd.args(["gateway", "--log", "warn"]).arg(&path).args(args);
         Self {
             peer: Peer::spawn("vigie gateway", cmd),
             events: Vec::new(),
@@ -1179,4 +1184,226 @@ fn kill_9_of_the_console_during_a_burst_loses_no_committed_entry() {
         &seen[..],
         "the committed entries are intact"
     );
+}
+
+/// A PLC stand-in: a control program scanned every 5 ms on the sensors the test sets,
+/// its outputs written to the pymodbus plant's coils, as a PLC drives its own bus.
+struct StandIn {
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// The operator's START, pressed at the next scan once set.
+    start: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// Scans run so far.
+    scans: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    inputs: std::sync::Arc<std::sync::Mutex<vigie_core::Bits>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    plant: std::sync::Arc<std::sync::Mutex<Plant>>,
+}
+
+impl StandIn {
+    /// Runs `program` (the station's) against `plant`; START waits for [`Self::press_start`].
+    fn start(plant: Plant, program: vigie_core::control::Program) -> Self {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        use std::sync::{Arc, Mutex};
+        use vigie_core::engine::Control as _;
+        let station =
+            vigie_core::plant::Plant::load(&repo().join("layouts/sorting-station/plant.ron"))
+                .unwrap_or_else(|p| panic!("{p:?}"));
+        let compiled = vigie_core::control::CompiledProgram::new(
+            &program,
+            &station,
+            &vigie_core::control::Origin::default(),
+        )
+        .unwrap_or_else(|p| panic!("{}", vigie_core::diag::render(&p)));
+        let stop = Arc::new(AtomicBool::new(false));
+        let inputs = Arc::new(Mutex::new(vigie_core::Bits::zeros(station.inputs.len())));
+        let plant = Arc::new(Mutex::new(plant));
+        let start_button = Arc::new(AtomicBool::new(false));
+        let (s, i, p) = (Arc::clone(&stop), Arc::clone(&inputs), Arc::clone(&plant));
+        let go = Arc::clone(&start_button);
+        let scans = Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let counter = Arc::clone(&scans);
+        let thread = std::thread::Builder::new()
+            .name("plc-stand-in".into())
+            .spawn(move || {
+                let mut rt = vigie_core::control::ProgramRuntime::new(Arc::new(compiled));
+                let n_out = station.outputs.len();
+                let mut frame = vigie_core::frame::Frame::new([station.inputs.len(), n_out, 0, 0]);
+                let mut out = vigie_core::Bits::zeros(n_out);
+                let mut written: Option<vigie_core::Bits> = None;
+                let start = Instant::now();
+                // Bounded: a stand-in left running stops after two minutes.
+                let mut pressed = false;
+                while !s.load(Ordering::Relaxed) && start.elapsed() < Duration::from_secs(120) {
+                    if !pressed && go.load(Ordering::Relaxed) {
+                        rt.press("START").expect("the station's START");
+                        pressed = true;
+                    }
+                    frame.shift();
+                    frame
+                        .now_mut(vigie_core::symbols::Space::Input)
+                        .copy_from(&i.lock().expect("inputs"));
+                    let now = u64::try_from(start.elapsed().as_millis()).unwrap_or(u64::MAX);
+                    rt.scan(vigie_core::Millis(now), &frame, &mut out);
+                    let mut plant = p.lock().expect("plant");
+                    for k in 0..n_out {
+                        if written.as_ref().is_none_or(|w| w.get(k) != out.get(k)) {
+                            let reply = plant.peer.ask(&format!("co {k} {}", u8::from(out.get(k))));
+                            assert_eq!(reply, "ok");
+                        }
+                    }
+                    drop(plant);
+                    written = Some(out.clone());
+                    counter.fetch_add(1, Ordering::Relaxed);
+                    // The PLC's own scan period.
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+            })
+            .expect("the stand-in's thread starts");
+        Self {
+            stop,
+            start: start_button,
+            scans,
+            inputs,
+            thread: Some(thread),
+            plant,
+        }
+    }
+
+    /// Waits until the stand-in has scanned `n` times more: a state held that long
+    /// (20 scans, 100 ms) is seen by the monitor for several of its cycles, more than
+    /// the follower's tolerance.
+    fn scans(&self, n: u64) {
+        use std::sync::atomic::Ordering;
+        let from = self.scans.load(Ordering::Relaxed);
+        wait_until("scans of the PLC", || {
+            self.scans.load(Ordering::Relaxed) >= from + n
+        });
+    }
+
+    /// The operator presses START.
+    fn press_start(&self) {
+        self.start.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Sets sensors at the plant and in the stand-in's next scan.
+    fn set(&self, bits: &[(u16, bool)]) {
+        let mut i = self.inputs.lock().expect("inputs");
+        for &(a, v) in bits {
+            i.set(usize::from(a), v);
+        }
+        self.plant.lock().expect("plant").set_inputs(bits);
+    }
+
+    /// The plant's coils as the stand-in wrote them.
+    fn coils(&self) -> String {
+        self.plant.lock().expect("plant").coils()
+    }
+}
+
+impl Drop for StandIn {
+    fn drop(&mut self) {
+        self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// A box through the station's feed, as the sensors see it: it reaches C0, is pushed
+/// (C0 falls), travels to C3, with the turntable at the loading position (C4).
+fn feed_one_box(plc: &StandIn) {
+    plc.set(&[(C4, true)]);
+    wait_until("the feed conveyor A0 to run after START", || {
+        plc.coils().starts_with('1')
+    });
+    plc.set(&[(0, true)]);
+    wait_until("the push (A1 on)", || plc.coils().as_bytes()[1] == b'1');
+    plc.scans(20);
+    plc.set(&[(0, false)]);
+    plc.scans(20);
+    plc.set(&[(C3, true)]);
+}
+
+/// `vigie gateway --program FILE` in monitor mode follows the PLC with the program it
+/// should run (here the station's reference, given as PLCopen XML): no alarm while the
+/// PLC stand-in runs that program; with a stand-in running a mutated program (the
+/// intermediate conveyor's step left on the rise of C3 instead of its fall) the
+/// `program_divergence` event and alarm name the first output that differs, A1.
+#[test]
+fn monitor_follows_the_given_program_and_names_the_first_diverging_output() {
+    let station = repo().join("layouts/sorting-station");
+    let plant_ron = vigie_core::plant::Plant::load(&station.join("plant.ron"))
+        .unwrap_or_else(|p| panic!("{p:?}"));
+    let reference = vigie_core::control::CompiledProgram::load(
+        &station.join("programs/reference.ron"),
+        &plant_ron,
+    )
+    .unwrap_or_else(|p| panic!("{p:?}"))
+    .program;
+    let dir = TempDir::new("follow");
+    let xml = dir.0.join("reference.xml");
+    std::fs::write(
+        &xml,
+        vigie_core::plcopen::export(&reference, &plant_ron, Path::new("reference.ron"))
+            .expect("exports"),
+    )
+    .expect("writes");
+    let body = |port: u16| {
+        format!(
+            "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
+             client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)"
+        )
+    };
+    let run = |program: vigie_core::control::Program| {
+        let plant = Plant::start(None);
+        let port = plant.port;
+        let plc = StandIn::start(plant, program);
+        let mut gw = Gateway::start_with(&body(port), &["--program", xml.to_str().expect("utf-8")]);
+        let m = gw.event("monitoring", Gateway::kind("monitoring"));
+        assert!(
+            m["program"]
+                .as_str()
+                .is_some_and(|p| p.contains("reference")),
+            "{m}"
+        );
+        // The PLC's program is at rest when the following starts; then START.
+        gw.event("following", Gateway::kind("program_following"));
+        plc.press_start();
+        feed_one_box(&plc);
+        (gw, plc)
+    };
+    // The program given: followed without an alarm.
+    let (mut gw, plc) = run(reference.clone());
+    wait_until("the table to take the box (A2 on)", || {
+        plc.coils().as_bytes()[2] == b'1'
+    });
+    let end = gw.stop();
+    assert!(
+        !gw.events.iter().any(|e| e["event"] == "program_divergence"),
+        "{:#?}",
+        gw.events
+    );
+    assert!(end.is_object());
+    drop(plc);
+    // A mutated program in the PLC.
+    let mut mutant = reference;
+    for c in &mut mutant.charts {
+        for t in &mut c.transitions {
+            if t.condition == "FE(C3)" && t.from == ["X12"] {
+                t.condition = "RE(C3)".into();
+            }
+        }
+    }
+    let (mut gw, _plc) = run(mutant);
+    let d = gw.event("the divergence", Gateway::kind("program_divergence"));
+    assert_eq!(d["output"], "A1", "{d}");
+    assert_eq!(
+        (d["plc"].as_bool(), d["program"].as_bool()),
+        (Some(false), Some(true)),
+        "{d}"
+    );
+    gw.event("its alarm", |e| {
+        e["event"] == "alarm" && e["key"] == "program:divergence"
+    });
+    gw.stop();
 }

@@ -17,6 +17,11 @@ use vigie_app::live::sink::{EventSink, LiveHistory, SinkHistorian};
 pub(crate) struct GatewayArgs {
     /// The gateway configuration (RON), e.g. layouts/sorting-station/gateway-monitor.ron.
     pub(crate) config: PathBuf,
+    /// Monitor mode: the program the PLC should run (RON or PLCopen XML), followed
+    /// beside it; a `program_divergence` event and alarm when the PLC's outputs leave
+    /// its runs. Start it with the PLC's program in its initial situation.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) program: Option<PathBuf>,
     /// Log level.
     #[arg(long, value_enum, default_value_t = LogLevel::Info)]
     pub(crate) log: LogLevel,
@@ -79,6 +84,9 @@ pub(crate) fn run(args: &GatewayArgs) -> anyhow::Result<ExitCode> {
         .build()?;
     let stop = stop_signal(&rt);
     let mut setup = runtime::load(&args.config)?;
+    if let Some(p) = &args.program {
+        setup.follow_program(p)?;
+    }
     let signals = vigie_app::historian::writer::signal_names(&setup.bundle.symbols);
     let plant = setup.bundle.dir.display().to_string();
     let (sink, thread) = EventSink::start(Some(SinkHistorian {

@@ -108,6 +108,10 @@ pub(crate) struct ConsoleArgs {
     /// layouts/sorting-station/gateway-monitor.ron) instead of the emulator.
     #[arg(long, value_name = "CONFIG")]
     pub(crate) link: Option<PathBuf>,
+    /// With `--link` in monitor mode: the program the PLC should run (RON or PLCopen
+    /// XML), followed beside it; an alarm when the PLC's outputs leave its runs.
+    #[arg(long, value_name = "FILE", requires = "link")]
+    pub(crate) program: Option<PathBuf>,
     /// Language shown first (default: VIGIE_LANG, else the system locale; switched at
     /// run time from the toolbar).
     #[arg(long, value_enum)]
@@ -133,6 +137,7 @@ fn open_console(
     opts.start = args.start;
     opts.variant.clone_from(&args.variant);
     opts.link.clone_from(&args.link);
+    opts.program.clone_from(&args.program);
     opts.open_files = true;
     if let Some(l) = args.lang {
         opts.lang = match l {

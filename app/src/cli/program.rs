@@ -12,8 +12,7 @@ use vigie_core::plant::Plant;
 #[derive(clap::Subcommand, Debug)]
 pub(crate) enum ProgramCmd {
     /// Write a control program as PLCopen XML, for the PLC's own tool: the plant's
-    /// reference, a program file (`--file`), or a variant of its error library
-    /// (`--variant E01`).
+    /// reference, a program file, or a variant of its error library.
     Export {
         #[command(flatten)]
         plant: super::PlantArg,

@@ -68,8 +68,11 @@ pub(crate) fn runs_plausibility(config: &Path) -> Result<bool, String> {
 
 impl LinkSession {
     /// Loads `config` and starts its run on a thread of its own.
-    pub fn start(config: &Path) -> Result<Self, String> {
-        let setup = runtime::load(config).map_err(|e| format!("{e:#}"))?;
+    pub fn start(config: &Path, program: Option<&Path>) -> Result<Self, String> {
+        let mut setup = runtime::load(config).map_err(|e| format!("{e:#}"))?;
+        if let Some(p) = program {
+            setup.follow_program(p).map_err(|e| format!("{e:#}"))?;
+        }
         let mode = setup.config.mode;
         let tap = Tap::new(mode);
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
@@ -255,7 +258,7 @@ impl Console {
         let Some(config) = &opts.link else {
             return Ok(());
         };
-        let session = LinkSession::start(config)?;
+        let session = LinkSession::start(config, opts.program.as_deref())?;
         self.sim.follow_link(session.filter_mode());
         self.journal.push(
             0,

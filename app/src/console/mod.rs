@@ -225,6 +225,8 @@ pub struct ConsoleOptions {
     pub variant: Option<String>,
     /// Follow the live link of this configuration instead of the emulator.
     pub link: Option<PathBuf>,
+    /// With `link` in monitor mode: the program the PLC should run, followed beside it.
+    pub program: Option<PathBuf>,
     /// The language shown first (default: the system's, [`Lang::from_env`]).
     pub lang: Lang,
     /// Open a printed document in the desktop's browser (off by default: tests and
@@ -248,6 +250,7 @@ impl ConsoleOptions {
             start: false,
             variant: None,
             link: None,
+            program: None,
             lang: Lang::from_env(),
             open_files: false,
         }

@@ -318,6 +318,7 @@ fn gateway_setup(
         diagnosers,
         state_dir: state.clone(),
         history: None,
+        program: None,
     };
     Ok((setup, state))
 }

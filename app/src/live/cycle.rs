@@ -497,6 +497,11 @@ struct MonitorCycle {
     tap: Option<Tap>,
     /// The process history (`vigie gateway`).
     history: Option<LiveHistory>,
+    /// The program the PLC should run, followed beside it (`--program`); dropped when
+    /// the peer is lost (the cycles missed would make a false divergence).
+    follower: Option<vigie_core::live::follow::Follower>,
+    /// The first cycle followed was announced (`program_following`).
+    following: bool,
 }
 
 impl Cycle for MonitorCycle {
@@ -519,6 +524,7 @@ impl Cycle for MonitorCycle {
             &mut self.last_spec,
         );
         let usable = self.heard.is_some() && !self.dog.is_lost();
+        self.follow(now, usable);
         let reset_asked = self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset);
         let diagnosers = match &mut self.diagnosers {
             Some(d) => d.step(
@@ -596,6 +602,49 @@ impl Cycle for MonitorCycle {
 }
 
 impl MonitorCycle {
+    /// One cycle of the program's follower: a divergence is a `program_divergence`
+    /// event and the `program:divergence` alarm; a lost peer ends the following.
+    fn follow(&mut self, now: Millis, usable: bool) {
+        let Some(f) = &mut self.follower else {
+            return;
+        };
+        if !usable {
+            if self.heard.is_some() {
+                (self.emit)(json!({
+                    "event": "program_follow_stopped",
+                    "reason": "the peer was lost: the cycles missed cannot be followed",
+                    "time_ms": now.0,
+                }));
+                self.follower = None;
+            }
+            return;
+        }
+        if !self.following {
+            // From this cycle on, the PLC's program should be in its initial situation.
+            (self.emit)(json!({"event": "program_following", "time_ms": now.0}));
+            self.following = true;
+        }
+        if let Some(d) = f.step(now, self.inputs.values(), self.outputs.values()) {
+            tracing::error!("{}", d.message());
+            (self.emit)(json!({
+                "event": "program_divergence",
+                "output": d.output,
+                "plc": d.plc,
+                "program": d.program,
+                "program_name": d.program_name,
+                "version": d.version,
+                "time_ms": now.0,
+            }));
+            self.board.raise(
+                &mut *self.emit,
+                now,
+                "program:divergence",
+                AlarmKind::Program,
+                d.alarm_text(),
+            );
+        }
+    }
+
     /// Takes the peer's latest values and watches its liveness (attaching the engine
     /// when it is first heard); returns the client's status.
     fn listen(&mut self, now: Millis) -> super::client::ClientStatus {
@@ -639,6 +688,7 @@ pub(crate) async fn monitor(
         diagnosers,
         state_dir: _,
         history,
+        program,
     } = setup;
     let client = config
         .client
@@ -661,6 +711,7 @@ pub(crate) async fn monitor(
     }
     emit(json!({
         "event": "monitoring", "peer": peer.to_string(), "diagnosers": diagnosers.is_some(),
+        "program": program.as_ref().map(|p| format!("{} (version {})", p.program.name, p.program.version())),
     }));
     let stop = Arc::new(AtomicBool::new(false));
     let cycle = MonitorCycle {
@@ -711,6 +762,11 @@ pub(crate) async fn monitor(
         emit: event_sender(tx),
         tap: tap.clone(),
         history,
+        follower: program.map(|p| {
+            // The link reads the PLC a poll late: a difference may last two cycles.
+            vigie_core::live::follow::Follower::new(p, &bundle.plant, 2)
+        }),
+        following: false,
         bundle,
     };
     let done = spawn_cycles(clock.0, period, priority, Arc::clone(&stop), cycle)?;
@@ -1037,6 +1093,7 @@ pub(crate) async fn gateway(
         diagnosers,
         state_dir,
         history,
+        ..
     } = setup;
     let client = config
         .client
@@ -1065,8 +1122,7 @@ pub(crate) async fn gateway(
         &state_dir,
         restored.as_ref(),
     );
-    let plant_peer = client.address;
-    let liveness = Liveness::of(&config, client.timeout_ms);
+    let (plant_peer, liveness) = (client.address, Liveness::of(&config, client.timeout_ms));
     let (out_tx, out_rx) = watch::channel(None);
     let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
     let writer = PeerClient::Plant(Writer::new(client, map.clone()));

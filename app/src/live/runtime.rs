@@ -107,6 +107,27 @@ pub struct Setup {
     /// Where the monitor and gateway cycles record the process history (`vigie
     /// gateway` sets it; the console following a link keeps its own).
     pub history: Option<super::sink::LiveHistory>,
+    /// The program the PLC should be running (`--program`): the monitor follows it
+    /// beside the PLC and alarms when the PLC's outputs leave its runs
+    /// ([`vigie_core::live::follow`]).
+    pub program: Option<std::sync::Arc<vigie_core::control::CompiledProgram>>,
+}
+
+impl Setup {
+    /// Follows `file` (RON or PLCopen XML) beside the PLC; monitor mode only (a
+    /// gateway's PLC is served by Vigie, an emulator run has no PLC to follow).
+    pub fn follow_program(&mut self, file: &std::path::Path) -> anyhow::Result<()> {
+        if self.config.mode != Mode::Monitor {
+            anyhow::bail!(
+                "--program follows the PLC in monitor mode; {} is not a monitor configuration",
+                file.display()
+            );
+        }
+        let compiled = vigie_core::control::CompiledProgram::load(file, &self.bundle.plant)
+            .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+        self.program = Some(std::sync::Arc::new(compiled));
+        Ok(())
+    }
 }
 
 /// The state folder of the configuration at `path`: its `state_dir`, else the data
@@ -140,6 +161,7 @@ pub fn load(path: &std::path::Path) -> anyhow::Result<Setup> {
         map,
         diagnosers,
         history: None,
+        program: None,
     })
 }
 
@@ -351,6 +373,7 @@ async fn emulator(
         diagnosers: _,
         state_dir: _,
         history: _,
+        program: _,
     } = setup;
     let server_config = config
         .server

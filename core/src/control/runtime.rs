@@ -228,6 +228,42 @@ impl ProgramRuntime {
         self.time_free = other.time_free;
     }
 
+    /// True when `other` is in the same situation: the same steps, step times,
+    /// values (now and at the previous scan), stored values and timers, leaving out the
+    /// state bits `ignore` lists as (word, mask); the scan count and the history of
+    /// evolutions are not part of it.
+    pub fn same_situation(&self, other: &Self, ignore: &[(usize, u64)]) -> bool {
+        Arc::ptr_eq(&self.program, &other.program)
+            && self.state.len() == other.state.len()
+            && self
+                .state
+                .iter()
+                .zip(&other.state)
+                .enumerate()
+                .all(|(w, (a, b))| {
+                    let skip = ignore
+                        .iter()
+                        .filter(|(iw, _)| *iw == w)
+                        .fold(0u64, |m, (_, bit)| m | bit);
+                    a & !skip == b & !skip
+                })
+            && self.stored == other.stored
+            && self.delays == other.delays
+            && self.just_activated == other.just_activated
+            && self.program.steps.iter().enumerate().all(|(i, s)| {
+                !self.step_active(s.aux) || self.activated_at[i] == other.activated_at[i]
+            })
+    }
+
+    /// The state bits (word, mask) of the panel's values, now and at the previous scan.
+    pub fn panel_bits(&self) -> Vec<(usize, u64)> {
+        let p = &self.program;
+        p.panel_aux
+            .iter()
+            .flat_map(|&a| [false, true].map(|prev| p.layout.locate(Space::Aux, a as usize, prev)))
+            .collect()
+    }
+
     /// Evaluates every scan, even when the quiescence rule would skip it (for tests
     /// comparing both behaviours).
     #[cfg(test)]

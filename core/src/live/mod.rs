@@ -8,11 +8,13 @@
 //! - [`age`]: data age (refreshment and promptness), the link watchdog, the backoff.
 //! - [`stale`]: how the filter treats stale inputs (existential quantification).
 //! - [`config`]: the gateway configuration file.
+//! - [`follow`]: the program the PLC should run, followed beside it (`--program`).
 //!
 //! Time enters only as [`crate::Millis`] parameters.
 
 pub mod age;
 pub mod config;
+pub mod follow;
 pub mod image;
 pub mod iomap;
 pub mod stale;
