@@ -166,6 +166,53 @@ fn maintenance_fix_of_e01_passes_verification() {
     assert!(h.state().score().summary().contains("Fixed"));
 }
 
+/// The corrected program goes back to the PLC's tool: the maintenance panel's "Export
+/// PLCopen XML…" writes the program on screen (the fix of E01), which reads back with
+/// the fixed receptivity; a program on screen that does not compile is not exported.
+#[test]
+fn maintenance_exports_the_fixed_program_as_plcopen() {
+    let mut h = harness(options(None));
+    h.run_steps(2);
+    h.get_by_label("Maintenance").click();
+    h.run_steps(2);
+    edit_t24(&mut h, "FE(C7)");
+    h.get_by_label("Export PLCopen XML…");
+    let dir = std::env::temp_dir().join(format!("vigie-console-plcopen-{}", std::process::id()));
+    let file = dir.join("fixed.xml");
+    h.state_mut().apply(Command::ExportProgram(file.clone()));
+    h.run_steps(2);
+    assert!(
+        h.state().status.contains("exported as PLCopen XML"),
+        "{}",
+        h.state().status
+    );
+    let xml = std::fs::read_to_string(&file).expect("written");
+    let t24 = xml
+        .lines()
+        .find(|l| l.contains("<transition name=\"t24\">"))
+        .expect("t24");
+    assert!(t24.contains("(C7_PRE AND NOT C7)"), "{t24}");
+    let plant = vigie_core::plant::Plant::load(
+        &crate::live::repo().join("layouts/sorting-station/plant.ron"),
+    )
+    .expect("plant");
+    let read = vigie_core::plcopen::import(&xml, &file, &plant).expect("reads back");
+    let running = h.state().sim.program.program().program.clone();
+    assert_eq!(read.name, running.name);
+    // A program on screen that does not compile: nothing written.
+    edit_t24(&mut h, "FE(C7");
+    let broken = dir.join("broken.xml");
+    h.state_mut().apply(Command::ExportProgram(broken.clone()));
+    h.run_steps(2);
+    assert!(!broken.exists());
+    assert!(
+        h.state().status.contains("does not compile"),
+        "{}",
+        h.state().status
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Replaces t24's receptivity as a technician does: click the field, select all, type.
 fn edit_t24(h: &mut Harness<'_, Console>, text: &str) {
     reveal(h, "Receptivity t24");

@@ -229,6 +229,44 @@ impl Console {
         self.compiled_edit.clone()
     }
 
+    /// Writes the program on screen (the edits compiled) as PLCopen XML to `path`, for
+    /// the PLC's own tool; says and journals what was written, or why not.
+    pub(super) fn export_program(&mut self, path: &std::path::Path, now: u64) {
+        let Some(program) = self.compile_on_screen() else {
+            self.say(
+                None,
+                "say-program-export-refused",
+                &[("problems", self.problems.len().to_string())],
+            );
+            return;
+        };
+        let p = &program.program;
+        let written = vigie_core::plcopen::export(p, &self.sim.bundle.plant, path)
+            .map_err(|e| vigie_core::diag::render(&e))
+            .and_then(|xml| {
+                if let Some(dir) = path.parent() {
+                    std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+                }
+                std::fs::write(path, xml).map_err(|e| e.to_string())
+            });
+        match written {
+            Ok(()) => self.say(
+                Some(("maintenance", now)),
+                "say-program-exported",
+                &[
+                    ("name", p.name.clone()),
+                    ("version", p.version()),
+                    ("path", path.display().to_string()),
+                ],
+            ),
+            Err(e) => self.say(
+                None,
+                "say-program-export-failed",
+                &[("path", path.display().to_string()), ("error", e)],
+            ),
+        }
+    }
+
     /// Re-runs the scenario with the text on screen, scores it and keeps what ran.
     pub(super) fn verify(&mut self) {
         let base: Program = self.sim.program.program().program.clone();

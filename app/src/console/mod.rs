@@ -136,6 +136,8 @@ pub enum Command {
     SetLanguage(Lang),
     /// Export the incident report (Markdown + one PNG per level) into a folder.
     ExportReport(PathBuf),
+    /// Maintenance: write the program on screen as PLCopen XML (for the PLC's tool).
+    ExportProgram(PathBuf),
     /// Maintenance: recompile the edited program.
     Recompile,
     /// Maintenance: restart the scenario with the compiled edit.
@@ -1080,21 +1082,10 @@ impl Console {
             Command::PrintAlarms(path) => self.print_alarms(&path, now),
             Command::ExportTrend(path) => self.export_trend(&path),
             Command::SetLanguage(lang) => self.set_language(lang, now),
-            Command::SaveAs(what) => {
-                let dir = self.export_path(Path::new(""));
-                if !self.save.ask(what, &dir) {
-                    self.status = "a save dialog is already open".into();
-                }
-            }
-            Command::ExportCsv(path) => {
-                let path = self.export_path(&path);
-                self.status = match self.journal.export_csv(&path) {
-                    Ok(()) => format!("journal exported to {}", path.display()),
-                    Err(e) => format!("export failed: {e}"),
-                };
-                self.journal.push(now, "operator", &self.status.clone());
-            }
+            Command::SaveAs(what) => self.save_as(what),
+            Command::ExportCsv(path) => self.export_csv(&path, now),
             Command::ExportReport(dir) => self.start_report(self.export_path(&dir)),
+            Command::ExportProgram(path) => self.export_program(&self.export_path(&path), now),
             Command::Recompile => self.recompile(),
             Command::RestartWithEdit => {
                 if let Some(p) = self.compile_on_screen() {
@@ -1124,6 +1115,24 @@ impl Console {
         }
     }
 
+    /// Opens the save dialog of `what` in the exports' folder.
+    fn save_as(&mut self, what: save::Export) {
+        let dir = self.export_path(Path::new(""));
+        if !self.save.ask(what, &dir) {
+            self.status = "a save dialog is already open".into();
+        }
+    }
+
+    /// Writes the journal as CSV to `path` (under the data folder when relative).
+    fn export_csv(&mut self, path: &Path, now: u64) {
+        let path = self.export_path(path);
+        self.status = match self.journal.export_csv(&path) {
+            Ok(()) => format!("journal exported to {}", path.display()),
+            Err(e) => format!("export failed: {e}"),
+        };
+        self.journal.push(now, "operator", &self.status.clone());
+    }
+
     /// Whether the role may give `cmd`: the permission it needs, if any, checked.
     fn permitted(&mut self, cmd: &Command) -> bool {
         let needs = match cmd {
@@ -1131,6 +1140,7 @@ impl Console {
             | Command::ShowInProgram(_)
             | Command::Recompile
             | Command::RestartWithEdit
+            | Command::ExportProgram(_)
             | Command::EditDraft(_) => Some(Permission::EditProgram),
             Command::Plant(OperatorAction::Filter(_)) => Some(Permission::ChangeFilterMode),
             Command::Plant(OperatorAction::Bypass { .. }) => Some(Permission::BypassConstraint),

@@ -21,6 +21,8 @@ pub enum Export {
     AlarmsPrint,
     /// The incident report: a folder (report.md, one PNG per level, the chronogram).
     Report,
+    /// The program on screen as PLCopen XML, for the PLC's own tool.
+    Program,
 }
 
 impl Export {
@@ -32,6 +34,7 @@ impl Export {
             Self::Trend => "vigie-trend.csv",
             Self::AlarmsPrint => "vigie-alarms.html",
             Self::Report => "incident-report",
+            Self::Program => "program.xml",
         }
     }
 
@@ -39,6 +42,7 @@ impl Export {
     fn filter(self) -> (&'static str, &'static str) {
         match self {
             Self::AlarmsPrint => ("HTML", "html"),
+            Self::Program => ("PLCopen XML", "xml"),
             _ => ("CSV", "csv"),
         }
     }
@@ -51,6 +55,7 @@ impl Export {
             Self::Trend => Command::ExportTrend(path),
             Self::AlarmsPrint => Command::PrintAlarms(path),
             Self::Report => Command::ExportReport(path),
+            Self::Program => Command::ExportProgram(path),
         }
     }
 }

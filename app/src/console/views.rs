@@ -2313,6 +2313,13 @@ fn maintenance_header_ui(
         {
             out.push(Command::VerifyFix);
         }
+        if ui
+            .button(i18n.t("maint-export-plcopen"))
+            .on_hover_text(i18n.t("maint-export-plcopen-hover"))
+            .clicked()
+        {
+            out.push(Command::SaveAs(super::save::Export::Program));
+        }
     });
 }
 
