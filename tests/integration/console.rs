@@ -176,7 +176,23 @@ fn maintenance_exports_the_fixed_program_as_plcopen() {
     h.get_by_label("Maintenance").click();
     h.run_steps(2);
     edit_t24(&mut h, "FE(C7)");
-    h.get_by_label("Export PLCopen XML…");
+    h.get_by_label("Save PLCopen XML as…");
+    // The button writes it under the data folder, named after the program's version.
+    h.get_by_label("Export PLCopen XML").click();
+    h.run_steps(2);
+    let status = h.state().status.clone();
+    assert!(status.contains("exported as PLCopen XML to"), "{status}");
+    let written = status
+        .rsplit(" to ")
+        .next()
+        .expect("a path")
+        .trim()
+        .to_string();
+    assert!(
+        written.ends_with(".xml") && std::path::Path::new(&written).exists(),
+        "{written}"
+    );
+    let _ = std::fs::remove_file(&written);
     let dir = std::env::temp_dir().join(format!("vigie-console-plcopen-{}", std::process::id()));
     let file = dir.join("fixed.xml");
     h.state_mut().apply(Command::ExportProgram(file.clone()));

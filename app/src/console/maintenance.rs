@@ -229,8 +229,9 @@ impl Console {
         self.compiled_edit.clone()
     }
 
-    /// Writes the program on screen (the edits compiled) as PLCopen XML to `path`, for
-    /// the PLC's own tool; says and journals what was written, or why not.
+    /// Writes the program on screen (the edits compiled) as PLCopen XML to `path` (an
+    /// empty path: `<program>-<version>.xml`; relative: under the data folder), for the
+    /// PLC's own tool; says and journals what was written, or why not.
     pub(super) fn export_program(&mut self, path: &std::path::Path, now: u64) {
         let Some(program) = self.compile_on_screen() else {
             self.say(
@@ -241,6 +242,17 @@ impl Console {
             return;
         };
         let p = &program.program;
+        let path = if path.as_os_str().is_empty() {
+            let slug: String = p
+                .name
+                .chars()
+                .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+                .collect();
+            self.export_path(std::path::Path::new(&format!("{slug}-{}.xml", p.version())))
+        } else {
+            self.export_path(path)
+        };
+        let path = path.as_path();
         let written = vigie_core::plcopen::export(p, &self.sim.bundle.plant, path)
             .map_err(|e| vigie_core::diag::render(&e))
             .and_then(|xml| {

@@ -136,7 +136,8 @@ pub enum Command {
     SetLanguage(Lang),
     /// Export the incident report (Markdown + one PNG per level) into a folder.
     ExportReport(PathBuf),
-    /// Maintenance: write the program on screen as PLCopen XML (for the PLC's tool).
+    /// Maintenance: write the program on screen as PLCopen XML (for the PLC's tool);
+    /// an empty path writes `<program>-<version>.xml` under the data folder.
     ExportProgram(PathBuf),
     /// Maintenance: recompile the edited program.
     Recompile,
@@ -1085,7 +1086,7 @@ impl Console {
             Command::SaveAs(what) => self.save_as(what),
             Command::ExportCsv(path) => self.export_csv(&path, now),
             Command::ExportReport(dir) => self.start_report(self.export_path(&dir)),
-            Command::ExportProgram(path) => self.export_program(&self.export_path(&path), now),
+            Command::ExportProgram(path) => self.export_program(&path, now),
             Command::Recompile => self.recompile(),
             Command::RestartWithEdit => {
                 if let Some(p) = self.compile_on_screen() {

@@ -2318,6 +2318,13 @@ fn maintenance_header_ui(
             .on_hover_text(i18n.t("maint-export-plcopen-hover"))
             .clicked()
         {
+            out.push(Command::ExportProgram(std::path::PathBuf::new()));
+        }
+        if ui
+            .button(i18n.t("maint-export-plcopen-as"))
+            .on_hover_text(i18n.t("maint-export-plcopen-hover"))
+            .clicked()
+        {
             out.push(Command::SaveAs(super::save::Export::Program));
         }
     });
