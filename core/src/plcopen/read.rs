@@ -1350,34 +1350,24 @@ pub(super) fn render(e: &Expr) -> String {
                 out.push('/');
                 go(x, 3, out);
             }
-            Expr::And(xs) => {
-                if parent > 2 {
-                    out.push('(');
-                }
-                for (i, x) in xs.iter().enumerate() {
-                    if i > 0 {
-                        out.push_str(" . ");
-                    }
-                    go(x, 2, out);
-                }
-                if parent > 2 {
-                    out.push(')');
-                }
+            Expr::And(xs) => list(xs, " . ", 2, parent, out),
+            Expr::Or(xs) => list(xs, " + ", 1, parent, out),
+        }
+    }
+    /// The terms of an AND (level 2) or an OR (level 1), in parentheses inside a
+    /// tighter operator.
+    fn list(xs: &[Expr], sep: &str, level: u8, parent: u8, out: &mut String) {
+        if parent > level {
+            out.push('(');
+        }
+        for (i, x) in xs.iter().enumerate() {
+            if i > 0 {
+                out.push_str(sep);
             }
-            Expr::Or(xs) => {
-                if parent > 1 {
-                    out.push('(');
-                }
-                for (i, x) in xs.iter().enumerate() {
-                    if i > 0 {
-                        out.push_str(" + ");
-                    }
-                    go(x, 1, out);
-                }
-                if parent > 1 {
-                    out.push(')');
-                }
-            }
+            go(x, level, out);
+        }
+        if parent > level {
+            out.push(')');
         }
     }
     let mut out = String::new();
