@@ -129,9 +129,12 @@ pub fn parse_actions(text: &str) -> Result<Vec<vigie_core::control::Action>, Str
             "P" => Qualifier::P,
             q if q.starts_with("L(") => Qualifier::L(num(&q[2..])?),
             q if q.starts_with("D(") => Qualifier::D(num(&q[2..])?),
+            q if q.starts_with("SD(") => Qualifier::SD(num(&q[3..])?),
+            q if q.starts_with("DS(") => Qualifier::DS(num(&q[3..])?),
+            q if q.starts_with("SL(") => Qualifier::SL(num(&q[3..])?),
             q => {
                 return Err(format!(
-                    "`{q}`: unknown qualifier (N, S, R, P, L(ms), D(ms))"
+                    "`{q}`: unknown qualifier (N, S, R, P, L(ms), D(ms), SD(ms), DS(ms), SL(ms))"
                 ));
             }
         };

@@ -299,6 +299,9 @@ fn qualifier_alternatives(q: Qualifier) -> Vec<Qualifier> {
         Qualifier::R => vec![Qualifier::S, Qualifier::N],
         Qualifier::L(_) | Qualifier::D(_) => vec![Qualifier::N],
         Qualifier::P => vec![Qualifier::N],
+        Qualifier::SD(ms) | Qualifier::DS(ms) | Qualifier::SL(ms) => {
+            vec![Qualifier::N, Qualifier::D(ms), Qualifier::L(ms)]
+        }
     }
 }
 

@@ -26,6 +26,26 @@ pub enum Qualifier {
     D(u64),
     /// Pulse: true during the single scan in which the step is activated.
     P,
+    /// Stored and delayed: the step's activation starts the time; once it has run, the
+    /// target is set (stored) even if the step ended meanwhile, until an `R` (which also
+    /// cancels a time running).
+    SD(u64),
+    /// Delayed and stored: set (stored) if the step is still active when the time has
+    /// run, until an `R`.
+    DS(u64),
+    /// Stored and limited: true from the step's activation for the time, even if the
+    /// step ends meanwhile, unless an `R` ends it sooner.
+    SL(u64),
+}
+
+impl Qualifier {
+    /// True for the qualifiers whose value depends on time (L, D, SD, DS, SL).
+    pub fn is_timed(self) -> bool {
+        matches!(
+            self,
+            Self::L(_) | Self::D(_) | Self::SD(_) | Self::DS(_) | Self::SL(_)
+        )
+    }
 }
 
 impl std::fmt::Display for Qualifier {
@@ -37,6 +57,9 @@ impl std::fmt::Display for Qualifier {
             Qualifier::L(ms) => write!(f, "L({ms})"),
             Qualifier::D(ms) => write!(f, "D({ms})"),
             Qualifier::P => f.write_str("P"),
+            Qualifier::SD(ms) => write!(f, "SD({ms})"),
+            Qualifier::DS(ms) => write!(f, "DS({ms})"),
+            Qualifier::SL(ms) => write!(f, "SL({ms})"),
         }
     }
 }

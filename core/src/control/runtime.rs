@@ -142,6 +142,8 @@ pub struct ProgramRuntime {
     pulses: Bits,
     switches: Bits,
     delays: Vec<DelayState>,
+    /// Per action, when its own time started (SD and SL run on after their step).
+    timed: Vec<Option<Millis>>,
     scans: u64,
     now: Millis,
     /// The state words (t and t-1) before the evolution of the last evaluated scan.
@@ -181,6 +183,7 @@ impl ProgramRuntime {
             pulses: Bits::zeros(n_panel),
             switches: Bits::zeros(n_panel),
             delays: vec![DelayState::default(); program.delays.len()],
+            timed: vec![None; program.actions.len()],
             scans: 0,
             now: Millis::ZERO,
             last_pre: vec![0; 2 * program.layout.half],
@@ -188,10 +191,7 @@ impl ProgramRuntime {
             stable: false,
             time_free: program.timers.is_empty()
                 && program.delays.is_empty()
-                && program
-                    .actions
-                    .iter()
-                    .all(|a| !matches!(a.qualifier, Qualifier::L(_) | Qualifier::D(_))),
+                && program.actions.iter().all(|a| !a.qualifier.is_timed()),
             program,
         };
         rt.reset();
@@ -220,6 +220,7 @@ impl ProgramRuntime {
         self.pulses.copy_from(&other.pulses);
         self.switches.copy_from(&other.switches);
         self.delays.clone_from(&other.delays);
+        self.timed.clone_from(&other.timed);
         self.scans = other.scans;
         self.now = other.now;
         self.last_pre.copy_from_slice(&other.last_pre);
@@ -249,6 +250,7 @@ impl ProgramRuntime {
                 })
             && self.stored == other.stored
             && self.delays == other.delays
+            && self.timed == other.timed
             && self.just_activated == other.just_activated
             && self.program.steps.iter().enumerate().all(|(i, s)| {
                 !self.step_active(s.aux) || self.activated_at[i] == other.activated_at[i]
@@ -285,6 +287,7 @@ impl ProgramRuntime {
         self.delays
             .iter_mut()
             .for_each(|d| *d = DelayState::default());
+        self.timed.iter_mut().for_each(|t| *t = None);
         let n_out = program.n_outputs;
         for &slot in &program.initial {
             if slot < n_out {
@@ -463,8 +466,18 @@ impl ProgramRuntime {
         let slot = self.slot_of(target)?;
         let p = &*self.program;
         let mut out = Vec::new();
-        for a in p.actions.iter().filter(|a| a.slot == slot) {
+        for (i, a) in p.actions.iter().enumerate().filter(|(_, a)| a.slot == slot) {
             let step = &p.steps[a.step as usize];
+            // A time-limited stored action runs on after its step.
+            if let (Qualifier::SL(ms), Some(t0)) = (a.qualifier, self.timed[i])
+                && self.now.saturating_sub(t0).0 < ms
+            {
+                out.push(Driver::Action {
+                    step: step.id.clone(),
+                    qualifier: a.qualifier,
+                });
+                continue;
+            }
             if !self.step_active(step.aux) {
                 continue;
             }
@@ -482,7 +495,13 @@ impl ProgramRuntime {
                 set_by: p
                     .actions
                     .iter()
-                    .filter(|a| a.slot == slot && a.qualifier == Qualifier::S)
+                    .filter(|a| {
+                        a.slot == slot
+                            && matches!(
+                                a.qualifier,
+                                Qualifier::S | Qualifier::SD(_) | Qualifier::DS(_)
+                            )
+                    })
                     .map(|a| p.steps[a.step as usize].id.clone())
                     .collect(),
             });
@@ -507,7 +526,8 @@ impl ProgramRuntime {
         let elapsed = self.now.saturating_sub(self.activated_at[step]).0;
         match q {
             Qualifier::N | Qualifier::S => true,
-            Qualifier::R => false,
+            // Stored, or running on their own time: see `stored_actions`.
+            Qualifier::R | Qualifier::SD(_) | Qualifier::DS(_) | Qualifier::SL(_) => false,
             Qualifier::L(ms) => elapsed < ms,
             Qualifier::D(ms) => elapsed >= ms,
             Qualifier::P => self.just_activated.get(step),
@@ -526,6 +546,49 @@ impl ProgramRuntime {
             let (w, m) = program.layout.locate(Space::Aux, t.aux as usize, false);
             if let Some(x) = self.state.get_mut(w) {
                 if on { *x |= m } else { *x &= !m }
+            }
+        }
+    }
+
+    /// The stored values of the new situation: `SD` and `SL` start their time at their
+    /// step's activation; `S`, `DS` (active long enough) and `SD` (its time run) set;
+    /// then `R` resets (reset wins) and cancels the times of `SD` and `SL` on its target.
+    fn stored_actions(&mut self, p: &CompiledProgram, now: Millis) {
+        for (i, a) in p.actions.iter().enumerate() {
+            let s = a.step as usize;
+            let active = self.get(Space::Aux, p.steps[s].aux as usize, false);
+            let elapsed = now.saturating_sub(self.activated_at[s]).0;
+            if matches!(a.qualifier, Qualifier::SD(_) | Qualifier::SL(_))
+                && self.just_activated.get(s)
+            {
+                self.timed[i] = Some(now);
+            }
+            let set = match a.qualifier {
+                Qualifier::S => active,
+                Qualifier::DS(ms) => active && elapsed >= ms,
+                Qualifier::SD(ms) => match self.timed[i] {
+                    Some(t0) if now.saturating_sub(t0).0 >= ms => {
+                        self.timed[i] = None;
+                        true
+                    }
+                    _ => false,
+                },
+                _ => false,
+            };
+            if set {
+                self.stored.set(a.slot, true);
+            }
+        }
+        for a in p.actions.iter().filter(|a| a.qualifier == Qualifier::R) {
+            if self.get(Space::Aux, p.steps[a.step as usize].aux as usize, false) {
+                self.stored.set(a.slot, false);
+                for (j, b) in p.actions.iter().enumerate() {
+                    if b.slot == a.slot
+                        && matches!(b.qualifier, Qualifier::SD(_) | Qualifier::SL(_))
+                    {
+                        self.timed[j] = None;
+                    }
+                }
             }
         }
     }
@@ -635,16 +698,21 @@ impl ProgramRuntime {
         }
 
         // Actions of the new situation.
-        for pass in [Qualifier::S, Qualifier::R] {
-            for a in p.actions.iter().filter(|a| a.qualifier == pass) {
-                if self.get(Space::Aux, p.steps[a.step as usize].aux as usize, false) {
-                    self.stored.set(a.slot, pass == Qualifier::S);
-                }
-            }
-        }
+        self.stored_actions(p, now);
         self.values.copy_from(&self.stored);
-        for a in &p.actions {
-            if matches!(a.qualifier, Qualifier::S | Qualifier::R) {
+        for (i, a) in p.actions.iter().enumerate() {
+            if let Qualifier::SL(ms) = a.qualifier {
+                match self.timed[i] {
+                    Some(t0) if now.saturating_sub(t0).0 < ms => self.values.set(a.slot, true),
+                    Some(_) => self.timed[i] = None,
+                    None => {}
+                }
+                continue;
+            }
+            if matches!(
+                a.qualifier,
+                Qualifier::S | Qualifier::R | Qualifier::SD(_) | Qualifier::DS(_)
+            ) {
                 continue;
             }
             let s = a.step as usize;

@@ -829,6 +829,9 @@ fn write_actions(
             Qualifier::S => ("S", None),
             Qualifier::R => ("R", None),
             Qualifier::P => ("P", None),
+            Qualifier::SD(ms) => ("SD", Some(ms)),
+            Qualifier::DS(ms) => ("DS", Some(ms)),
+            Qualifier::SL(ms) => ("SL", Some(ms)),
         };
         let d = d
             .map(|ms| format!(" duration=\"{}\"", write_duration(ms)))

@@ -15,7 +15,7 @@
 //!   memory. `R_TRIG` and `F_TRIG` instances.
 //! - SFC bodies (steps, initial steps, transitions with ST, referenced or LD
 //!   conditions, selection and simultaneous divergences and convergences, jumps, action
-//!   blocks on Boolean variables with the qualifiers N, S, R, P, L, D and the step time
+//!   blocks on Boolean variables with the qualifiers N, S, R, P, L, D, SD, DS, SL and the step time
 //!   `S.T`), ST bodies (assignments, IF, function-block calls) and LD bodies (contacts,
 //!   negated and edge contacts, coils, negated, set and reset coils).
 //!

@@ -193,11 +193,16 @@ fn qualifier(ctx: &mut Ctx<'_, '_>, a: Node<'_, '_>) -> Option<Qualifier> {
         "P" => Some(Qualifier::P),
         "L" => timed(ctx, Qualifier::L),
         "D" => timed(ctx, Qualifier::D),
+        "SD" => timed(ctx, Qualifier::SD),
+        "DS" => timed(ctx, Qualifier::DS),
+        "SL" => timed(ctx, Qualifier::SL),
         other => {
             ctx.error(
                 codes::PLCOPEN_UNSUPPORTED,
                 a,
-                format!("action qualifier {other} is not run yet (N, S, R, P, L and D are)"),
+                format!(
+                    "action qualifier {other} is not run (N, S, R, P, L, D, SD, DS and SL are)"
+                ),
             );
             None
         }

@@ -185,7 +185,7 @@ fn qualifier_d_waits_for_its_duration_and_never_comes_if_the_step_ends_first() {
 
 #[test]
 fn qualifiers_not_run_yet_are_refused_where_they_are() {
-    for q in ["SD", "DS", "SL", "P1", "P0"] {
+    for q in ["P1", "P0"] {
         let xml = loop_with(&[(q, Some("T#30ms"), "W")]);
         let err = import(&xml, Path::new("t.xml"), &plant()).expect_err(q);
         assert_eq!(
@@ -207,6 +207,57 @@ fn qualifiers_not_run_yet_are_refused_where_they_are() {
             err[0]
         );
     }
+}
+
+/// S0 resets W; S0 -(a)-> S1 with `acts` -(b)-> S0.
+fn loop_resetting(acts: &[(&str, Option<&str>, &str)]) -> String {
+    sfc(&[
+        step(1, "S0", true, &[4]),
+        actions(6, 1, &[("R", None, "W")]),
+        trans(2, 1, "a"),
+        step(3, "S1", false, &[2]),
+        trans(4, 3, "b"),
+        actions(5, 3, acts),
+    ]
+    .concat())
+}
+
+#[test]
+fn qualifier_sd_sets_after_its_time_even_when_the_step_ended_unless_reset() {
+    // Activated at 10 ms: set at 40 ms, although S1 ended at 20 ms.
+    let xml = loop_with(&[("SD", Some("T#30ms"), "W")]);
+    let got = trace(&xml, &[&["a"], &["b"], &[], &[], &[], &[]], "W");
+    assert_eq!(got, [false, false, false, true, true, true]);
+    // An R while the time runs cancels it.
+    let xml = loop_resetting(&[("SD", Some("T#30ms"), "W")]);
+    let got = trace(&xml, &[&["a"], &["b"], &[], &[], &[]], "W");
+    assert_eq!(got, [false; 5]);
+    // Set while S1 lasts, reset when S0 comes back.
+    let got = trace(&xml, &[&["a"], &[], &[], &[], &["b"], &[]], "W");
+    assert_eq!(got, [false, false, false, true, false, false]);
+}
+
+#[test]
+fn qualifier_ds_sets_only_if_the_step_lasts_its_time() {
+    let xml = loop_with(&[("DS", Some("T#30ms"), "W")]);
+    let got = trace(&xml, &[&["a"], &[], &[], &[], &["b"], &[]], "W");
+    assert_eq!(
+        got,
+        [false, false, false, true, true, true],
+        "stored after S1"
+    );
+    let got = trace(&xml, &[&["a"], &["b"], &[], &[], &[]], "W");
+    assert_eq!(got, [false; 5], "S1 too short");
+}
+
+#[test]
+fn qualifier_sl_lasts_its_time_even_when_the_step_ended_unless_reset() {
+    let xml = loop_with(&[("SL", Some("T#30ms"), "W")]);
+    let got = trace(&xml, &[&["a"], &["b"], &[], &[], &[]], "W");
+    assert_eq!(got, [true, true, true, false, false]);
+    let xml = loop_resetting(&[("SL", Some("T#30ms"), "W")]);
+    let got = trace(&xml, &[&["a"], &["b"], &[], &[], &[]], "W");
+    assert_eq!(got, [true, false, false, false, false], "S0's R ends it");
 }
 
 /// Selection divergence: of the transitions leaving a step, only the leftmost true one
