@@ -555,6 +555,12 @@ impl ProgramRuntime {
     /// then `R` resets (reset wins) and cancels the times of `SD` and `SL` on its target.
     fn stored_actions(&mut self, p: &CompiledProgram, now: Millis) {
         for (i, a) in p.actions.iter().enumerate() {
+            if !matches!(
+                a.qualifier,
+                Qualifier::S | Qualifier::SD(_) | Qualifier::DS(_) | Qualifier::SL(_)
+            ) {
+                continue;
+            }
             let s = a.step as usize;
             let active = self.get(Space::Aux, p.steps[s].aux as usize, false);
             let elapsed = now.saturating_sub(self.activated_at[s]).0;
