@@ -348,45 +348,39 @@ fn bind_bool(
             );
             return None;
         };
-        return match area {
-            'I' => match plant
-                .inputs
-                .iter()
-                .find(|s| s.address == Some(Address::DiscreteInput(bit)))
-            {
-                Some(s) => Some(VarDecl {
-                    name: s.id.clone(),
-                    kind: Kind::Input,
-                }),
-                None => {
-                    ctx.error(
-                        codes::PLCOPEN_BINDING,
-                        var,
-                        format!("variable `{name}` at {addr}: no sensor of the plant at discrete input {bit}"),
-                    );
-                    None
-                }
-            },
-            'Q' => {
-                match plant
-                    .outputs
-                    .iter()
-                    .find(|s| s.address == Some(Address::Coil(bit)))
-                {
-                    Some(s) => Some(VarDecl {
-                        name: s.id.clone(),
-                        kind: Kind::Output,
-                    }),
-                    None => {
-                        ctx.error(
-                        codes::PLCOPEN_BINDING,
-                        var,
-                        format!("variable `{name}` at {addr}: no actuator of the plant at coil {bit}"),
-                    );
-                        None
-                    }
-                }
+        let located = |ctx: &mut Ctx<'_, '_>,
+                       list: &[crate::plant::Signal],
+                       at: Address,
+                       kind: Kind,
+                       what: &str| {
+            let found = list.iter().find(|s| s.address == Some(at));
+            if found.is_none() {
+                ctx.error(
+                    codes::PLCOPEN_BINDING,
+                    var,
+                    format!("variable `{name}` at {addr}: no {what} {bit}"),
+                );
             }
+            found.map(|s| VarDecl {
+                name: s.id.clone(),
+                kind,
+            })
+        };
+        return match area {
+            'I' => located(
+                ctx,
+                &plant.inputs,
+                Address::DiscreteInput(bit),
+                Kind::Input,
+                "sensor of the plant at discrete input",
+            ),
+            'Q' => located(
+                ctx,
+                &plant.outputs,
+                Address::Coil(bit),
+                Kind::Output,
+                "actuator of the plant at coil",
+            ),
             _ => Some(VarDecl {
                 name: name.to_string(),
                 kind: Kind::Memory,
