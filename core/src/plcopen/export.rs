@@ -220,11 +220,14 @@ impl Writer<'_> {
             let input = self.st(&e, 0, &mut |w, n, kind| w.rung_leaf(n, kind, k, targets));
             return format!("{target}(IN := {input}, PT := {});", write_duration(ms));
         }
-        let body = self.st(&e, 1, &mut |w, n, kind| w.rung_leaf(n, kind, k, targets));
-        if self.action_targets.contains(&target) {
+        // ORed with the actions' value, the body is an operand of OR.
+        let driven = self.action_targets.contains(&target);
+        let body = self.st(&e, u8::from(driven), &mut |w, n, kind| {
+            w.rung_leaf(n, kind, k, targets)
+        });
+        if driven {
             format!("{target} := {target} OR {body};")
         } else {
-            let body = self.st(&e, 0, &mut |w, n, kind| w.rung_leaf(n, kind, k, targets));
             format!("{target} := {body};")
         }
     }

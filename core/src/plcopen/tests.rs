@@ -308,3 +308,20 @@ fn every_plants_reference_runs_the_same_from_its_plcopen_export() {
         );
     }
 }
+
+/// An equation reading a step timer has no PLCopen form: the export says so once, with
+/// the timer's name.
+#[test]
+fn an_equation_reading_a_step_timer_is_refused_once() {
+    let plant = Plant::load(&layouts().join("single-conveyor/plant.ron")).expect("plant");
+    let program = Program::from_ron(
+        r#"Program(name: "t", timers: [("T1", "S0", 100)],
+            charts: [Chart(name: "g", steps: [Step(id: "S0", initial: true)], transitions: [])],
+            equations: [("CV", "T1")])"#,
+        Path::new("t.ron"),
+    )
+    .expect("parses");
+    let err = export(&program, &plant, Path::new("t.ron")).expect_err("refused");
+    assert_eq!(err.len(), 1, "{}", shown(&err));
+    assert!(err[0].message.contains("T1"), "{}", err[0]);
+}
