@@ -1136,33 +1136,38 @@ impl Machine {
                 format!("`{instance}` is not declared"),
             );
         };
-        if let Kind::Timer(kind) = d.kind {
-            return self.call_timer(d.name.clone(), kind, args, at, guard, decls, loc);
-        }
-        let Kind::Trig { rising } = d.kind else {
-            return fail(
-                codes::PLCOPEN_UNSUPPORTED,
-                at,
-                format!(
-                    "`{instance}` is called but is not an instance of R_TRIG, F_TRIG, TON, TOF or TP: only these function blocks are run"
-                ),
-            );
+        let (what, timer, rising) = match d.kind {
+            Kind::Timer(kind) => ("timers", Some(kind), false),
+            Kind::Trig { rising } => ("edge detectors", None, rising),
+            _ => {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    format!(
+                        "`{instance}` is called but is not an instance of R_TRIG, F_TRIG, TON, TOF or TP: only these function blocks are run"
+                    ),
+                );
+            }
         };
+        // Both keep a state from call to call: one call per scan, always.
         if *guard != Expr::Const(true) {
             return fail(
                 codes::PLCOPEN_UNSUPPORTED,
                 at,
                 format!(
-                    "`{instance}` is called under a condition: call edge detectors once per scan, outside IF"
+                    "`{instance}` is called under a condition: call {what} once per scan, outside IF"
                 ),
             );
         }
-        if self.trig.contains_key(&d.name) {
+        if self.trig.contains_key(&d.name) || self.timer_in.contains_key(&d.name) {
             return fail(
                 codes::PLCOPEN_UNSUPPORTED,
                 at,
                 format!("`{instance}` is called twice in the scan"),
             );
+        }
+        if let Some(kind) = timer {
+            return self.call_timer(d.name.clone(), kind, args, at, decls, loc);
         }
         let [(input, clk)] = args else {
             return fail(
@@ -1184,33 +1189,17 @@ impl Machine {
         Ok(())
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// A `TON`, `TOF` or `TP` call (checked by [`Self::call`]): its input becomes the
+    /// timer's equation, here in the scan.
     fn call_timer(
         &mut self,
         name: String,
         kind: DelayKind,
         args: &[(String, StExpr)],
         at: Pos,
-        guard: &Expr,
         decls: &Declarations,
         loc: &dyn Fn(Pos) -> Span,
     ) -> Result<(), Failure> {
-        if *guard != Expr::Const(true) {
-            return fail(
-                codes::PLCOPEN_UNSUPPORTED,
-                at,
-                format!(
-                    "`{name}` is called under a condition: call timers once per scan, outside IF"
-                ),
-            );
-        }
-        if self.timer_in.contains_key(&name) {
-            return fail(
-                codes::PLCOPEN_UNSUPPORTED,
-                at,
-                format!("`{name}` is called twice in the scan"),
-            );
-        }
         let mut input = None;
         let mut ms = None;
         for (arg, value) in args {
@@ -1319,7 +1308,8 @@ impl Machine {
         Ok(plain)
     }
 
-    /// Variables written so far (to know which reads are previous values).
+    /// Records that the chart driving `targets` has run in this scan: from here on, a
+    /// body reads their actions' value now, not their previous value.
     pub(super) fn finish_chart(&mut self, targets: &BTreeSet<String>) {
         self.charts_done.extend(targets.iter().cloned());
     }
