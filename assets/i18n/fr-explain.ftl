@@ -99,6 +99,11 @@ explain-X419 = { $state ->
     [welded] Matériel d'abord : { $actuator } a été relâché et son contact miroir { $mirror } le lit toujours fermé ({ $constraint }) : son contacteur est soudé. Vérifiez le contacteur de { $actuator } sur la machine ; le programme l'a relâché.
    *[dead] Matériel d'abord : { $actuator } a été commandé et son contact miroir { $mirror } le lit ouvert ({ $constraint }) : il ne s'est pas fermé (bobine, fusible, câblage ou contacteur). Vérifiez { $actuator } sur la machine ; le programme l'a commandé.
 }
+explain-X420 = { $kind ->
+    [step] L'étape { $element } est dans la POU { $pou } de { $file }, ligne { $line }, colonne { $column }.
+    [transition] La transition { $element } est dans la POU { $pou } de { $file }, ligne { $line }, colonne { $column }.
+   *[other] { $element } est écrit dans la POU { $pou } ({ $kind }) de { $file }, ligne { $line }, colonne { $column }.
+}
 
 ## Alarmes (le texte du cœur reste l'enregistrement ; en français, à partir du code et
 ## des champs de l'alarme)

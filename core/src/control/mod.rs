@@ -22,7 +22,8 @@ pub mod runtime;
 pub use library::{Consequence, ErrorLibrary, Patch, Variant, differences};
 pub use mutation::{Mutation, mutations};
 pub use program::{
-    Action, Chart, CompiledProgram, Delay, DelayKind, Origin, Program, Qualifier, Step, Transition,
+    Action, Chart, CompiledProgram, Delay, DelayKind, Origin, Program, Qualifier, SourcePlace,
+    Step, Transition,
 };
 pub use runtime::{Driver, Evolution, ProgramRuntime, UnknownPanel};
 

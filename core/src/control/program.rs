@@ -178,6 +178,27 @@ pub struct Program {
     /// actions; a target is the OR of its actions and its equation.
     #[serde(default)]
     pub equations: Vec<(String, String)>,
+    /// Where each element of a program imported from PLCopen XML is in its file (by
+    /// step, transition or written variable): the hypothesis names them. Not part of
+    /// the RON format nor of the version (a program's behaviour, not its layout).
+    #[serde(skip)]
+    pub places: BTreeMap<String, Vec<SourcePlace>>,
+}
+
+/// The place of a program element in the PLCopen file it was imported from.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+pub struct SourcePlace {
+    /// The file's name.
+    pub file: String,
+    /// The POU.
+    pub pou: String,
+    /// What the element is there: `step`, `transition`, or the language of the body
+    /// that writes a variable (`ST`, `LD`, `FBD`).
+    pub kind: String,
+    /// 1-based line and column in the file.
+    pub line: usize,
+    /// See `line`.
+    pub column: usize,
 }
 
 impl Program {

@@ -241,6 +241,7 @@ registry! {
     X_MISPLACED_ACTION = "X417", "a step's action drives the actuator where the step's place in its chart forbids it";
     X_UNEXPECTED_EDGE = "X418", "a sensor of the fired term changed where the plant's physics did not expect it";
     X_CONTACTOR_DISAGREES = "X419", "hardware first: a mirror contact of the fired term disagrees with its output (welded or dead)";
+    X_SOURCE_PLACE = "X420", "where a suspected program element is in the PLCopen file it was imported from";
     // T: task alarms (`tasks::explain::AlarmCode`)
     T_TOLERANCE_USED_UP = "T001", "interruption tolerance used up: the task can no longer finish before γ";
     T_SLOWDOWN = "T002", "slowdown: effective running time beyond β without the end event";

@@ -28,6 +28,9 @@
 //!   actuator from the first scan. The action is then in the wrong step (written one
 //!   step early, in the other branch, …): it comes before the X408 (or X409) of the same
 //!   action, which stays as the alternative.
+//! - `X420`: after each of them, for a program imported from PLCopen XML, where the
+//!   steps, transitions and equations it suspects are in that file (POU, kind, line,
+//!   column), so that the fix is made in the PLC's own tool.
 //!
 //! Every item has the fields `output`, `chart`, and as they apply `transition`,
 //! `receptivity`, `step`, `activated`, `qualifier`, `equation`, `expression`, `steps`,
@@ -38,6 +41,7 @@
 //! `X407`-`X409`, `X412`, `X410`, `X411`).
 
 use super::{Explanation, Highlight, Item, Mark};
+use crate::control::SourcePlace;
 use crate::control::{Driver, ProgramRuntime, Qualifier};
 use crate::diag::codes::{self, Code};
 use crate::engine::{FiredConstraint, Trip};
@@ -388,13 +392,62 @@ pub fn add_program_hypothesis(
         })
         .count();
     items.extend(level.items.drain(..sensors));
+    let places = &after.program().program.places;
     for (item, highlights) in suspects {
         highlights.into_iter().for_each(|h| level.highlight(h));
+        let placed = place_items(&item, places);
         items.push(item);
+        items.extend(placed);
     }
     items.append(&mut level.items);
     super::merge_identical(&mut items);
     level.items = items;
+}
+
+/// The fields of a suspect that name the elements it suspects (not those it cites as
+/// context, such as the steps an equation reads).
+const SUSPECTED: [&str; 5] = ["step", "transition", "activated_by", "exits", "equation"];
+
+/// X420: where the elements `item` suspects are in the PLCopen file the program was
+/// imported from (none for a program written in Vigie's own format).
+fn place_items(
+    item: &Item,
+    places: &std::collections::BTreeMap<String, Vec<SourcePlace>>,
+) -> Vec<Item> {
+    let mut out: Vec<Item> = Vec::new();
+    for key in SUSPECTED {
+        let Some(names) = item.fields.get(key) else {
+            continue;
+        };
+        for name in names.split(',').map(str::trim) {
+            for p in places.get(name).into_iter().flatten() {
+                let what = match p.kind.as_str() {
+                    "step" => format!("Step {name} is"),
+                    "transition" => format!("Transition {name} is"),
+                    lang => format!("{name} is written ({lang})"),
+                };
+                let placed = Item::new(
+                    codes::X_SOURCE_PLACE,
+                    format!(
+                        "{what} in POU {} of {}, line {}, column {}.",
+                        p.pou, p.file, p.line, p.column
+                    ),
+                    &[
+                        ("element", name.to_string()),
+                        ("file", p.file.clone()),
+                        ("pou", p.pou.clone()),
+                        ("kind", p.kind.clone()),
+                        ("line", p.line.to_string()),
+                        ("column", p.column.to_string()),
+                    ],
+                );
+                if !out.contains(&placed) {
+                    out.push(placed);
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The actuator is commanded ON and must not be (`was`: commanded ON in the cycle

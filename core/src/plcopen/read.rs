@@ -3,7 +3,9 @@
 
 use super::st::{self, BinOp, Pos, StExpr, Stmt};
 use super::{ADD_DATA, ld, sfc};
-use crate::control::{Action, Chart, Delay, DelayKind, Program, Qualifier, Step, Transition};
+use crate::control::{
+    Action, Chart, Delay, DelayKind, Program, Qualifier, SourcePlace, Step, Transition,
+};
 use crate::diag::codes::{self, Code};
 use crate::diag::{Location, Problem};
 use crate::expr::{Expr, LeafKind, Span};
@@ -103,7 +105,12 @@ pub(super) fn st_text(ctx: &Ctx<'_, '_>, node: Node<'_, '_>) -> StText {
     let mut first = None;
     for d in node.descendants().filter(Node::is_text) {
         let t = d.text().unwrap_or("");
-        if first.is_none() && !t.trim().is_empty() {
+        if first.is_none() {
+            // The layout between the element and its text (`<ST>` then `<xhtml:p>` on
+            // the next line) is not the text: its lines would shift every position.
+            if t.trim().is_empty() {
+                continue;
+            }
             let r = d.range();
             let src = ctx.doc.input_text().get(r.clone()).unwrap_or("");
             let skip = if src.starts_with("<![CDATA[") { 9 } else { 0 };
@@ -491,6 +498,12 @@ pub(super) struct Machine {
     hidden_order: Vec<String>,
     /// Names taken by the program (variables, steps), for the hidden memories.
     taken: BTreeSet<String>,
+    /// The POU and the language of the body being run, for the places of its writes.
+    pub(super) body: (String, &'static str),
+    /// The file's name, for the places.
+    pub(super) file: String,
+    /// Where each step, transition and written variable is in the file.
+    pub(super) places: BTreeMap<String, Vec<SourcePlace>>,
 }
 
 /// Values that expand to more product terms than this (or whose negation does) are held
@@ -619,6 +632,24 @@ impl Machine {
             timer_in: BTreeMap::new(),
             timers: Vec::new(),
             visible_steps: BTreeSet::new(),
+            body: (String::new(), "ST"),
+            file: String::new(),
+            places: BTreeMap::new(),
+        }
+    }
+
+    /// Records that `name` is at `line`:`column` of the POU being read, as a `kind`.
+    pub(super) fn place(&mut self, name: &str, kind: &str, line: usize, column: usize) {
+        let place = SourcePlace {
+            file: self.file.clone(),
+            pou: self.body.0.clone(),
+            kind: kind.to_string(),
+            line,
+            column,
+        };
+        let places = self.places.entry(name.to_string()).or_default();
+        if !places.contains(&place) {
+            places.push(place);
         }
     }
 
@@ -1095,6 +1126,8 @@ impl Machine {
             }
         }
         let name = d.name.clone();
+        let span = loc(at);
+        self.place(&name, self.body.1, span.line, span.column);
         let new = if *guard == Expr::Const(true) {
             value
         } else {
@@ -1440,7 +1473,8 @@ pub fn import(text: &str, file: &Path, plant: &Plant) -> Result<Program, Vec<Pro
 /// One program POU's body, read.
 enum Body {
     Sfc(sfc::Chart),
-    Stmts(Vec<Stmt>, StText),
+    /// Statements, their text, and the body's language (`ST`, `LD`, `FBD`).
+    Stmts(Vec<Stmt>, StText, &'static str),
 }
 
 fn build(
@@ -1484,8 +1518,19 @@ fn build(
     let mut taken: BTreeSet<String> = decls.vars.keys().cloned().collect();
     taken.extend(step_names.keys().cloned());
     let mut m = Machine::new(written, action_targets, taken);
+    m.file = ctx.file.file_name().map_or_else(
+        || ctx.file.display().to_string(),
+        |f| f.to_string_lossy().into_owned(),
+    );
     let mut charts = Vec::new();
     for (pou, body) in &bodies {
+        m.body = (
+            pou.clone(),
+            match body {
+                Body::Sfc(_) => "SFC",
+                Body::Stmts(_, _, lang) => lang,
+            },
+        );
         match body {
             Body::Sfc(c) => {
                 m.visible_steps = c.steps.iter().map(|s| s.name.clone()).collect();
@@ -1493,7 +1538,7 @@ fn build(
                 m.finish_chart(&c.action_targets());
                 m.visible_steps.clear();
             }
-            Body::Stmts(stmts, text) => {
+            Body::Stmts(stmts, text, _) => {
                 let file = ctx.file.to_path_buf();
                 let loc = |p: Pos| {
                     let l = text.locate(&file, p);
@@ -1559,7 +1604,7 @@ fn read_bodies(
             "ST" => {
                 let text = st_text(ctx, lang);
                 match st::parse_statements(&text.text) {
-                    Ok(s) => bodies.push((name, Body::Stmts(s, text))),
+                    Ok(s) => bodies.push((name, Body::Stmts(s, text, "ST"))),
                     Err(e) => {
                         let at = text.locate(ctx.file, e.at);
                         ctx.error_at(
@@ -1571,8 +1616,13 @@ fn read_bodies(
                 }
             }
             "LD" | "FBD" => {
+                let language = if lang.tag_name().name() == "LD" {
+                    "LD"
+                } else {
+                    "FBD"
+                };
                 if let Some((stmts, text)) = ld::read_body(ctx, &name, lang) {
-                    bodies.push((name, Body::Stmts(stmts, text)));
+                    bodies.push((name, Body::Stmts(stmts, text, language)));
                 }
             }
             other => ctx.error(
@@ -1648,6 +1698,7 @@ fn assemble(
             .iter()
             .map(|(n, e)| (n.clone(), render(e)))
             .collect(),
+        places: m.places.clone(),
     }
 }
 
@@ -1664,6 +1715,7 @@ fn empty_program() -> Program {
         initial: Vec::new(),
         charts: Vec::new(),
         equations: Vec::new(),
+        places: BTreeMap::new(),
     }
 }
 
@@ -1692,7 +1744,7 @@ fn written_vars(bodies: &[(String, Body)], decls: &Declarations) -> BTreeMap<Str
     }
     let mut out = BTreeMap::new();
     for (_, b) in bodies {
-        if let Body::Stmts(s, _) = b {
+        if let Body::Stmts(s, _, _) = b {
             walk(s, decls, &mut out);
         }
     }

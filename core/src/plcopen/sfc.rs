@@ -520,6 +520,7 @@ pub(super) fn lower(
             .iter()
             .map(|&i| {
                 let s = &chart.steps[i];
+                m.place(&s.name, "step", s.at.line, s.at.column);
                 vigie_step(&s.name, s.initial, s.actions.clone())
             })
             .collect();
@@ -531,6 +532,7 @@ pub(super) fn lower(
         };
         let mut transitions = Vec::new();
         for t in chart.transitions.iter().filter(in_group) {
+            m.place(&t.id, "transition", t.at.line, t.at.column);
             match condition(&file, t, m, decls) {
                 Ok(c) => transitions.push((t, c)),
                 Err((code, at, message)) => ctx.error_at(

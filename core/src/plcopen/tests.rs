@@ -134,7 +134,21 @@ fn every_program_of_every_plant_reads_back_the_same_after_export_and_import() {
             .unwrap_or_else(|p| panic!("{name}: {}\n{xml1}", shown(&p)));
         let xml2 = write(&p1, &plant);
         let p2 = read(&xml2, &plant);
-        assert_eq!(p1, p2, "{name}: import, export, import differs\n{xml2}");
+        // The places are those of each file; the elements placed are the same.
+        assert_eq!(
+            p1.places.keys().collect::<Vec<_>>(),
+            p2.places.keys().collect::<Vec<_>>(),
+            "{name}: places"
+        );
+        let unplaced = |p: &Program| Program {
+            places: std::collections::BTreeMap::new(),
+            ..p.clone()
+        };
+        assert_eq!(
+            unplaced(&p1),
+            unplaced(&p2),
+            "{name}: import, export, import differs\n{xml2}"
+        );
         assert_eq!(
             xml2,
             write(&p2, &plant),
@@ -259,6 +273,101 @@ fn the_station_runs_the_same_from_its_plcopen_export() {
             );
         }
     }
+}
+
+/// The text of `xml` from 1-based `line` and `column` on.
+fn at(xml: &str, line: usize, column: usize) -> String {
+    xml.lines()
+        .nth(line - 1)
+        .map(|l| l.chars().skip(column - 1).collect())
+        .unwrap_or_default()
+}
+
+/// Every variant of the station's error library, run from its PLCopen export with the
+/// filter: each trip's hypothesis is the one the RON program gives, with after each
+/// program suspect the places (X420) of the steps, transitions and equations it names,
+/// and each place is where that element is written in the file.
+#[test]
+fn the_hypothesis_places_the_suspected_elements_in_the_plcopen_file() {
+    let station = layouts().join("sorting-station");
+    let plant = Plant::load(&station.join("plant.ron")).expect("plant");
+    let lib = ErrorLibrary::load(&station.join("programs/errors.ron"), &plant).expect("library");
+    let scratch = Scratch::new("places");
+    let path = station.join("scenarios/cs10-paper.ron");
+    let base = Scenario::load(&path).expect("scenario");
+    let (mut placed, mut kinds) = (0, std::collections::BTreeSet::new());
+    for v in &lib.variants {
+        let file = scratch.0.join(format!("{}.xml", v.def.id));
+        let xml = write(&v.program, &plant);
+        std::fs::write(&file, &xml).expect("writes");
+        let mut s = base.clone();
+        s.program = ProgramChoice::Error(v.def.id.clone());
+        s.filter = FilterMode::Enforce;
+        let steps: Vec<&str> = v.program.steps().map(|(_, st)| st.id.as_str()).collect();
+        let reads_step = v.program.equations.iter().any(|(_, e)| {
+            crate::expr::parse_str(e)
+                .is_ok_and(|e| e.leaves().iter().any(|(n, _, _)| steps.contains(n)))
+        });
+        let mut a = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+        s.program = ProgramChoice::File(file.to_string_lossy().into_owned());
+        let mut b = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+        a.run_until(Millis(60_000));
+        b.run_until(Millis(60_000));
+        assert_eq!(a.explanations.len(), b.explanations.len(), "{}", v.def.id);
+        for (ea, eb) in a.explanations.values().zip(b.explanations.values()) {
+            let (places, rest): (Vec<_>, Vec<_>) =
+                eb.hypothesis.items.iter().partition(|i| i.code == "X420");
+            // The same suspects (a receptivity reads as its IEC form: `C7 . /C7_PRE`
+            // for `RE(C7)`).
+            let shape = |i: &crate::explain::Item| {
+                let mut f = i.fields.clone();
+                for k in ["receptivity", "signals", "expression", "condition"] {
+                    f.remove(k);
+                }
+                (i.code, f)
+            };
+            // An equation that reads a step is exported reading an `S_X` memory its
+            // step drives (IEC steps are local to their POU): the import sees a memory,
+            // so the suspects that go from the equation to the step (X413) differ.
+            if !reads_step {
+                assert_eq!(
+                    rest.iter().map(|i| shape(i)).collect::<Vec<_>>(),
+                    ea.hypothesis.items.iter().map(shape).collect::<Vec<_>>(),
+                    "{}: the same suspects",
+                    v.def.id
+                );
+            }
+            for p in places {
+                let f = |k: &str| p.fields.get(k).cloned().unwrap_or_default();
+                let (line, column) = (
+                    f("line").parse().expect("line"),
+                    f("column").parse().expect("column"),
+                );
+                let text = at(&xml, line, column);
+                let element = f("element");
+                let ok = match f("kind").as_str() {
+                    "step" => {
+                        text.starts_with("<step localId=")
+                            && text.contains(&format!("name=\"{element}\""))
+                    }
+                    "transition" => text.starts_with("<transition"),
+                    _ => text
+                        .to_ascii_lowercase()
+                        .starts_with(&element.to_ascii_lowercase()),
+                };
+                assert!(
+                    ok,
+                    "{}: {} placed at {line}:{column}: `{text}`",
+                    v.def.id, p.text
+                );
+                assert_eq!(f("file"), format!("{}.xml", v.def.id));
+                kinds.insert(f("kind"));
+                placed += 1;
+            }
+        }
+    }
+    assert!(placed > 10, "{placed} places");
+    assert!(kinds.len() >= 2, "{kinds:?}");
 }
 
 /// Every other plant's reference program runs its scenarios the same from PLCopen.

@@ -67,6 +67,7 @@ pub fn program(trace: &Trace, plant: &Plant, step_us: i64) -> Program {
         actions: Vec::new(),
     });
     Program {
+        places: std::collections::BTreeMap::new(),
         delays: Vec::new(),
         initial: Vec::new(),
         name: "Verification counterexample".into(),

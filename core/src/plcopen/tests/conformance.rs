@@ -504,6 +504,21 @@ fn unsupported_and_malformed_elements_are_named_with_their_line() {
 IF n THEN K := b; END_IF;]]></xhtml:p></ST></body></pou>"#
     ));
     check(&xml, codes::PLCOPEN_UNSUPPORTED.id, "type INT", "IF n THEN");
+    // The same laid out as the tools write it (`<xhtml:p>` on a line of its own, the
+    // text from the line after the CDATA): the layout before the text shifts no line.
+    let xml = project(&format!(
+        r#"<pou name="main" pouType="program"><interface><localVars>{VARS}
+<variable name="n"><type><INT/></type></variable></localVars></interface>
+<body>
+  <ST>
+    <xhtml:p><![CDATA[
+W := a;
+IF n THEN K := b; END_IF;
+]]></xhtml:p>
+  </ST>
+</body></pou>"#
+    ));
+    check(&xml, codes::PLCOPEN_UNSUPPORTED.id, "type INT", "IF n THEN");
     // An IL body.
     let xml = project(
         r#"<pou name="main" pouType="program"><interface/>

@@ -224,3 +224,55 @@ fn every_fixture_round_trips_and_the_others_are_refused_precisely() {
         );
     }
 }
+/// Every write of a real project is placed at the element that writes it (an LD coil,
+/// an FBD output variable), with the variable's name in that element: what the
+/// hypothesis's X420 gives the technician.
+#[test]
+fn every_write_of_the_real_projects_is_placed_at_its_element() {
+    let mut n = 0;
+    for name in [
+        "openplc-blink",
+        "dancinglights-ld",
+        "openplc-traffic-light-fbd",
+        "spemmcra-dnp3-ld",
+    ] {
+        let (_, p) = load(name);
+        let text = std::fs::read_to_string(folder(name).join("plc.xml")).expect("reads");
+        let lines: Vec<&str> = text.lines().collect();
+        for (element, places) in &p.places {
+            for place in places {
+                let from: String = lines[place.line - 1]
+                    .chars()
+                    .skip(place.column - 1)
+                    .collect();
+                let tag = match place.kind.as_str() {
+                    "LD" => "<coil",
+                    "FBD" => "<outVariable",
+                    other => panic!("{name}: {element} placed as {other}"),
+                };
+                assert!(
+                    from.starts_with(tag),
+                    "{name}: {element} at {}:{}: {from}",
+                    place.line,
+                    place.column
+                );
+                // The element names the variable before it ends.
+                let end = lines[place.line - 1..]
+                    .iter()
+                    .position(|l| l.contains(&tag.replace('<', "</")))
+                    .expect("closed");
+                let inside = lines[place.line - 1..place.line + end]
+                    .join(" ")
+                    .to_ascii_lowercase();
+                assert!(
+                    inside.contains(&element.to_ascii_lowercase()),
+                    "{name}: {element} at {}",
+                    place.line
+                );
+                assert_eq!(place.file, "plc.xml");
+                n += 1;
+            }
+        }
+    }
+    assert!(n > 20, "{n} places");
+}
