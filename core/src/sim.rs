@@ -418,6 +418,9 @@ pub struct Simulation {
     pub tasks: Option<TaskMonitors>,
     /// Fed from a live link (see `observed.rs`): the time of the last observed cycle.
     live_now: Option<Millis>,
+    /// Fed from a live link with the PLC's program given (`--program`): the program
+    /// followed beside it, as the link follows it (see `observed.rs`).
+    follower: Option<crate::live::follow::Follower>,
     /// The diagnosers, when enabled ([`Simulation::enable_diagnosers`]).
     pub diagnosers: Option<crate::pop::Diagnosers>,
     /// The elementary-action monitor (seed 003), on a plant that has actions.
@@ -610,6 +613,7 @@ impl Simulation {
             name: String::new(),
             tasks,
             live_now: None,
+            follower: None,
             diagnosers: None,
             action_monitor: None,
             action_stop: None,
@@ -1824,21 +1828,34 @@ impl Simulation {
     }
 }
 
+/// The program followed beside a live PLC (`--program`), in its closest situation before
+/// the tripping scan and after it ([`crate::live::follow::Follower::program`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Followed<'a> {
+    /// The program before its tripping scan.
+    pub before: &'a ProgramRuntime,
+    /// The program after it.
+    pub after: &'a ProgramRuntime,
+}
+
 /// The explanation of a trip seen on a live plant: levels 0, 2, 3 and 4 from the
 /// recorder, and level 1 from an emulator initialised from the observed inputs and
 /// observers of the tripping cycle (boxes placed where sensors and observers see them,
-/// the table angle from its position sensors), run forward for `horizon` with the
-/// outputs the PLC commanded in that cycle held (its program is not known). Without a
+/// the table angle from its position sensors), run forward for `horizon`. When the
+/// program the PLC runs is known (`program`, followed beside it), its elements lead the
+/// hypothesis as in emulator mode, and the projection runs it on the projected plant;
+/// otherwise the outputs the PLC commanded in the tripping cycle are held. Without a
 /// layout, level 1 stays empty.
 pub fn explain_live(
     engine: &Engine,
     bundle: &PlantBundle,
     layout: Option<&Layout>,
     index: usize,
-    horizon: Millis,
-    cycle: Millis,
+    (horizon, cycle): (Millis, Millis),
+    program: Option<Followed<'_>>,
 ) -> Option<Explanation> {
-    explain_live_projected(engine, bundle, layout, index, horizon, cycle).map(|(ex, _)| ex)
+    explain_live_projected(engine, bundle, layout, index, (horizon, cycle), program)
+        .map(|(ex, _)| ex)
 }
 
 /// [`explain_live`] with the projected plant (`None` without a layout or when the
@@ -1848,11 +1865,21 @@ pub fn explain_live_projected(
     bundle: &PlantBundle,
     layout: Option<&Layout>,
     index: usize,
-    horizon: Millis,
-    cycle: Millis,
+    (horizon, cycle): (Millis, Millis),
+    program: Option<Followed<'_>>,
 ) -> Option<(Explanation, Option<ProjectedPlant>)> {
     let mut ex = explain::explain(engine, index)?;
-    let (Some(layout), Some(trip)) = (layout, engine.trips.get(index)) else {
+    let trip = engine.trips.get(index)?;
+    // A stop by the diagnosers alone is no program error: no program suspects.
+    if let Some(p) = program
+        && !trip
+            .constraints
+            .iter()
+            .all(|c| crate::pop::coop::is_diagnoser_stop(&c.id))
+    {
+        explain::add_program_hypothesis(&mut ex, trip, p.before, p.after);
+    }
+    let Some(layout) = layout else {
         return Some((ex, None));
     };
     let Some(record) = engine.history.iter().find(|r| r.time.0 == trip.time_ms) else {
@@ -1866,16 +1893,38 @@ pub fn explain_live_projected(
     let start = emu.now();
     let known = emu.hazards().len();
     let step = Millis(cycle.0.max(1));
+    let shift = |t: u64| trip.time_ms + t.saturating_sub(start.0);
+    // The PLC's outputs of the tripping cycle; then its program's, scan after scan,
+    // on the projected plant's sensors (the program's clock is the link's). The
+    // outputs the program does not drive (the safety contactors, which the PLC's safety
+    // function holds) keep the PLC's values.
+    let mut outputs = record.commanded.clone();
+    let mut frame = engine.frame().clone();
+    let mut rt = program.map(|p| p.after.clone());
+    let driven = rt.as_ref().map_or_else(Vec::new, |rt| {
+        crate::live::follow::driven_outputs(&rt.program().program, &bundle.plant)
+    });
+    let mut scan = |emu: &Physical, outputs: &mut Bits| {
+        if let Some(rt) = rt.as_mut() {
+            frame.shift();
+            frame.now_mut(Space::Input).copy_from(emu.sensors());
+            rt.scan(Millis(shift(emu.now().0)), &frame, outputs);
+            for k in (0..outputs.len()).filter(|k| !driven.contains(k)) {
+                outputs.set(k, record.commanded.get(k));
+            }
+        }
+    };
     while emu.now() < start + horizon {
-        emu.step(step, &record.commanded);
+        emu.step(step, &outputs);
+        scan(&emu, &mut outputs);
         if emu.hazards().len() > known {
             for _ in 0..(500 / step.0).max(1) {
-                emu.step(step, &record.commanded);
+                emu.step(step, &outputs);
+                scan(&emu, &mut outputs);
             }
             break;
         }
     }
-    let shift = |t: u64| trip.time_ms + t.saturating_sub(start.0);
     let projected = ProjectedPlant {
         at_ms: shift(emu.now().0),
         boxes: emu.boxes().to_vec(),

@@ -1407,3 +1407,80 @@ fn monitor_follows_the_given_program_and_names_the_first_diverging_output() {
     });
     gw.stop();
 }
+
+/// A PLC runs the station's error E11 (the feed conveyor A0 not stopped when a box
+/// reaches C0), and `--program` is given that same program as PLCopen XML: the PLC is
+/// followed without a divergence, and the violation of CSc1 is explained by the
+/// program: its equation of A0 (X410) leads the hypothesis, placed in the file (X420).
+#[test]
+fn monitor_explains_a_violation_with_the_program_given() {
+    let station = repo().join("layouts/sorting-station");
+    let plant_ron = vigie_core::plant::Plant::load(&station.join("plant.ron"))
+        .unwrap_or_else(|p| panic!("{p:?}"));
+    let lib =
+        vigie_core::control::ErrorLibrary::load(&station.join("programs/errors.ron"), &plant_ron)
+            .unwrap_or_else(|p| panic!("{p:?}"));
+    let e11 = lib
+        .variants
+        .into_iter()
+        .find(|v| v.def.id == "E11")
+        .expect("E11")
+        .program;
+    let dir = TempDir::new("follow-explain");
+    let xml = dir.0.join("e11.xml");
+    std::fs::write(
+        &xml,
+        vigie_core::plcopen::export(&e11, &plant_ron, Path::new("e11.ron")).expect("exports"),
+    )
+    .expect("writes");
+    let plant = Plant::start(None);
+    let port = plant.port;
+    let plc = StandIn::start(plant, e11);
+    let mut gw = Gateway::start_with(
+        &format!(
+            "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
+             client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)"
+        ),
+        &["--program", xml.to_str().expect("utf-8")],
+    );
+    gw.event("following", Gateway::kind("program_following"));
+    plc.press_start();
+    plc.set(&[(C4, true)]);
+    wait_until("the feed conveyor A0 to run after START", || {
+        plc.coils().starts_with('1')
+    });
+    // A box at C0: the reference stops A0 (or pushes with A1); E11 keeps feeding.
+    plc.set(&[(0, true)]);
+    let v = gw.event("the violation of CSc1", |e| {
+        e["event"] == "violation"
+            && e["record"]["constraints"]
+                .as_array()
+                .is_some_and(|c| c.iter().any(|c| c["id"] == "CSc1"))
+    });
+    let items = v["explanation"]["hypothesis"]["items"]
+        .as_array()
+        .unwrap_or_else(|| panic!("no hypothesis: {v}"))
+        .clone();
+    let codes: Vec<&str> = items.iter().filter_map(|i| i["code"].as_str()).collect();
+    let first_program = codes
+        .iter()
+        .position(|c| ("X407".."X418").contains(c))
+        .unwrap_or_else(|| panic!("no program suspect: {codes:?}"));
+    assert_eq!(
+        codes.get(first_program + 1),
+        Some(&"X420"),
+        "the suspect placed in the file: {codes:?}"
+    );
+    assert!(
+        items.iter().any(|i| i["code"] == "X420"
+            && i["fields"]["file"] == "e11.xml"
+            && i["fields"]["element"] == "A0"),
+        "{items:#?}"
+    );
+    assert!(
+        !gw.events.iter().any(|e| e["event"] == "program_divergence"),
+        "{:#?}",
+        gw.events
+    );
+    gw.stop();
+}

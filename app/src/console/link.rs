@@ -36,6 +36,9 @@ pub struct LinkSession {
     pub state: LinkState,
     /// Cycles the console could not take in time (dropped by the run's queue).
     pub dropped: u64,
+    /// The program the PLC should run, followed by the run (`--program`); the
+    /// console's mirror follows it too.
+    pub program: Option<std::sync::Arc<vigie_core::control::CompiledProgram>>,
     stop: Option<tokio::sync::oneshot::Sender<()>>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
@@ -74,6 +77,7 @@ impl LinkSession {
             setup.follow_program(p).map_err(|e| format!("{e:#}"))?;
         }
         let mode = setup.config.mode;
+        let program = setup.program.clone();
         let tap = Tap::new(mode);
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
         let run_tap = tap.clone();
@@ -131,6 +135,7 @@ impl LinkSession {
             state: tap.state(),
             tap,
             dropped: 0,
+            program,
             stop: Some(stop_tx),
             thread: Some(thread),
         })
@@ -260,6 +265,9 @@ impl Console {
         };
         let session = LinkSession::start(config, opts.program.as_deref())?;
         self.sim.follow_link(session.filter_mode());
+        if let Some(p) = &session.program {
+            self.sim.follow_program(std::sync::Arc::clone(p));
+        }
         self.journal.push(
             0,
             "session",

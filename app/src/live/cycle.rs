@@ -29,6 +29,7 @@ use vigie_core::alarms::{AlarmKind, AlarmList};
 use vigie_core::bundle::PlantBundle;
 use vigie_core::engine::{Commanded, Engine, FilterMode};
 use vigie_core::live::age::{AgedBits, Watchdog};
+use vigie_core::live::follow::{self, Follower};
 use vigie_core::live::image::ServerImage;
 use vigie_core::live::stale::StaleGuard;
 use vigie_core::pop::Diagnosers;
@@ -499,7 +500,7 @@ struct MonitorCycle {
     history: Option<LiveHistory>,
     /// The program the PLC should run, followed beside it (`--program`); dropped when
     /// the peer is lost (the cycles missed would make a false divergence).
-    follower: Option<vigie_core::live::follow::Follower>,
+    follower: Option<Follower>,
     /// The first cycle followed was announced (`program_following`).
     following: bool,
 }
@@ -513,9 +514,17 @@ impl Cycle for MonitorCycle {
         self.control.0.copy_from(self.outputs.values());
         self.engine
             .cycle(now, self.inputs.values(), &mut self.control);
+        // The program follows this cycle before its trips are explained: they read it.
+        let usable = self.heard.is_some() && !self.dog.is_lost();
+        let followed = self.follow(now, usable);
         let explainer = Explainer {
             bundle: &self.bundle,
             layout: self.layout.as_ref(),
+            program: self
+                .follower
+                .as_ref()
+                .and_then(Follower::program)
+                .map(|(before, after)| vigie_core::sim::Followed { before, after }),
         };
         emit_engine_events(
             &mut self.engine,
@@ -523,8 +532,6 @@ impl Cycle for MonitorCycle {
             Some(&explainer),
             &mut self.last_spec,
         );
-        let usable = self.heard.is_some() && !self.dog.is_lost();
-        self.follow(now, usable);
         let reset_asked = self.tap.as_ref().is_some_and(Tap::take_diagnosers_reset);
         let diagnosers = match &mut self.diagnosers {
             Some(d) => d.step(
@@ -582,6 +589,7 @@ impl Cycle for MonitorCycle {
                     diagnosers,
                     attach: std::mem::take(&mut self.attached_now),
                     restored: None,
+                    followed,
                 },
                 |st| {
                     st.client = status;
@@ -604,9 +612,10 @@ impl Cycle for MonitorCycle {
 impl MonitorCycle {
     /// One cycle of the program's follower: a divergence is a `program_divergence`
     /// event and the `program:divergence` alarm; a lost peer ends the following.
-    fn follow(&mut self, now: Millis, usable: bool) {
+    /// True when the follower stepped (the console's mirror steps its own then).
+    fn follow(&mut self, now: Millis, usable: bool) -> bool {
         let Some(f) = &mut self.follower else {
-            return;
+            return false;
         };
         if !usable {
             if self.heard.is_some() {
@@ -617,7 +626,7 @@ impl MonitorCycle {
                 }));
                 self.follower = None;
             }
-            return;
+            return false;
         }
         if !self.following {
             // From this cycle on, the PLC's program should be in its initial situation.
@@ -643,6 +652,7 @@ impl MonitorCycle {
                 d.alarm_text(),
             );
         }
+        true
     }
 
     /// Takes the peer's latest values and watches its liveness (attaching the engine
@@ -762,10 +772,7 @@ pub(crate) async fn monitor(
         emit: event_sender(tx),
         tap: tap.clone(),
         history,
-        follower: program.map(|p| {
-            // The link reads the PLC a poll late: a difference may last two cycles.
-            vigie_core::live::follow::Follower::new(p, &bundle.plant, 2)
-        }),
+        follower: program.map(|p| Follower::new(p, &bundle.plant, follow::TOLERANCE)),
         following: false,
         bundle,
     };
@@ -1051,6 +1058,8 @@ impl Cycle for GatewayCycle {
                     diagnosers,
                     attach: std::mem::take(&mut self.attached_now),
                     restored: self.restored.take(),
+                    // The follower runs in monitor mode only.
+                    followed: false,
                 },
                 |st| {
                     st.client = status;

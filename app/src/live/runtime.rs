@@ -303,6 +303,8 @@ impl AlarmBoard {
 pub(crate) struct Explainer<'a> {
     pub(crate) bundle: &'a PlantBundle,
     pub(crate) layout: Option<&'a vigie_core::emulator::Layout>,
+    /// The PLC's program followed beside it (`--program`), in its closest situation.
+    pub(crate) program: Option<vigie_core::sim::Followed<'a>>,
 }
 
 /// Reports the engine's events; a specification error is reported when it changes only
@@ -350,8 +352,8 @@ pub(crate) fn emit_engine_events(
                 x.bundle,
                 x.layout,
                 index,
-                vigie_core::Millis(10_000),
-                vigie_core::Millis(10),
+                (vigie_core::Millis(10_000), vigie_core::Millis(10)),
+                x.program,
             )
         {
             line["explanation"] = serde_json::to_value(ex).unwrap_or_default();

@@ -24,6 +24,10 @@ use crate::time::Millis;
 use serde::Serialize;
 use std::sync::Arc;
 
+/// Consecutive cycles of difference a run is kept through: the link reads the PLC's
+/// outputs up to two cycles late.
+pub const TOLERANCE: u32 = 2;
+
 /// Largest number of situations kept (the closest ones first).
 pub const MAX_SITUATIONS: usize = 64;
 
@@ -85,6 +89,8 @@ struct Situation {
     /// situations, the one fewer presses explain comes first.
     panel: u32,
     changes: u32,
+    /// The situation of the cycle before it came from (an index into `previous`).
+    parent: usize,
 }
 
 /// True when a condition or an equation reads a panel button's edge or previous value.
@@ -101,10 +107,26 @@ fn reads_panel_history(program: &CompiledProgram) -> bool {
         })
 }
 
+/// The outputs (indices in plant order) `program` drives: an action's or an equation's
+/// target. The others (a safety contactor the safety function holds) are not the
+/// program's.
+pub fn driven_outputs(program: &crate::control::Program, plant: &Plant) -> Vec<usize> {
+    let targets: Vec<&str> = program
+        .steps()
+        .flat_map(|(_, s)| s.actions.iter().map(|a| a.target.as_str()))
+        .chain(program.equations.iter().map(|e| e.0.as_str()))
+        .collect();
+    (0..plant.outputs.len())
+        .filter(|&k| targets.contains(&plant.outputs[k].id.as_str()))
+        .collect()
+}
+
 /// A program followed beside a live PLC (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct Follower {
     situations: Vec<Situation>,
+    /// The situations of the cycle before (the program before its last scan).
+    previous: Vec<Situation>,
     panel: Vec<String>,
     outputs: Vec<String>,
     frame: Frame,
@@ -129,15 +151,7 @@ impl Follower {
         let name = program.program.name.clone();
         let version = program.program.version();
         let n_out = plant.outputs.len();
-        let p = &program.program;
-        let targets: Vec<&str> = p
-            .steps()
-            .flat_map(|(_, s)| s.actions.iter().map(|a| a.target.as_str()))
-            .chain(p.equations.iter().map(|e| e.0.as_str()))
-            .collect();
-        let driven = (0..n_out)
-            .filter(|&k| targets.contains(&plant.outputs[k].id.as_str()))
-            .collect();
+        let driven = driven_outputs(&program.program, plant);
         let rt = ProgramRuntime::new(Arc::clone(&program));
         let ignore = if reads_panel_history(&program) {
             Vec::new()
@@ -151,7 +165,9 @@ impl Follower {
                 out: Bits::zeros(n_out),
                 panel: 0,
                 changes: 0,
+                parent: 0,
             }],
+            previous: Vec::new(),
             panel,
             outputs: plant.outputs.iter().map(|s| s.id.clone()).collect(),
             frame: Frame::new([plant.inputs.len(), n_out, 0, 0]),
@@ -167,6 +183,11 @@ impl Follower {
     /// The divergence found, if any (it stays: the follower stops there).
     pub fn divergence(&self) -> Option<&Divergence> {
         self.divergence.as_ref()
+    }
+
+    /// True once a cycle has been followed.
+    pub fn started(&self) -> bool {
+        !self.previous.is_empty() || self.divergence.is_some()
     }
 
     /// Number of situations the program may be in.
@@ -187,7 +208,7 @@ impl Follower {
         }
         let combos = 1u32 << self.panel.len().min(8);
         let mut next: Vec<Situation> = Vec::new();
-        for s in &self.situations {
+        for (parent, s) in self.situations.iter().enumerate() {
             for mask in 0..combos {
                 let mut rt = s.rt.clone();
                 for (i, b) in self.panel.iter().enumerate() {
@@ -206,7 +227,7 @@ impl Follower {
                     .find(|n| n.rt.same_situation(&rt, &self.ignore))
                 {
                     Some(n) if (streak, changes) < (n.streak, n.changes) => {
-                        (n.streak, n.changes, n.panel) = (streak, changes, mask);
+                        (n.streak, n.changes, n.panel, n.parent) = (streak, changes, mask, parent);
                     }
                     Some(_) => {}
                     None => next.push(Situation {
@@ -215,6 +236,7 @@ impl Follower {
                         out,
                         panel: mask,
                         changes,
+                        parent,
                     }),
                 }
             }
@@ -226,8 +248,21 @@ impl Follower {
         }
         next.sort_by_key(|s| (s.streak, s.changes));
         next.truncate(MAX_SITUATIONS);
-        self.situations = next;
+        self.previous = std::mem::replace(&mut self.situations, next);
         None
+    }
+
+    /// The program in the closest situation (the PLC's outputs the longest, the fewest
+    /// presses), before its last scan and after it: what the explanations of a trip in
+    /// the cycle just followed read. `None` before the first cycle followed and once the
+    /// PLC diverged (it is not running this program).
+    pub fn program(&self) -> Option<(&ProgramRuntime, &ProgramRuntime)> {
+        if self.divergence.is_some() {
+            return None;
+        }
+        let closest = self.situations.first()?;
+        let before = self.previous.get(closest.parent)?;
+        Some((&before.rt, &closest.rt))
     }
 
     /// The divergence from the closest situation (lowest streak) of the last cycle.

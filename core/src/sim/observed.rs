@@ -42,6 +42,9 @@ pub struct ObservedCycle {
     /// A trip latched before the link restarted, restored by its engine before this
     /// cycle (the mirror restores it too).
     pub restored: Option<crate::engine::Trip>,
+    /// The link's follower of the PLC's program (`--program`) stepped this cycle (the
+    /// mirror's steps too; once it stops, the mirror's stops for good).
+    pub followed: bool,
 }
 
 impl Simulation {
@@ -58,6 +61,25 @@ impl Simulation {
         }
         self.emulator.set_arrivals(ArrivalPlan::List(Vec::new()));
         self.log("link", format!("following a live link, filter {mode:?}"));
+    }
+
+    /// Follows `program` beside the live PLC as the link does (`--program`): the
+    /// program shown is that one, and the explanations of a trip read its situation
+    /// (the hypothesis names its elements, the projection runs it).
+    pub fn follow_program(&mut self, program: std::sync::Arc<crate::control::CompiledProgram>) {
+        self.follower = Some(crate::live::follow::Follower::new(
+            std::sync::Arc::clone(&program),
+            &self.bundle.plant,
+            crate::live::follow::TOLERANCE,
+        ));
+        let name = format!(
+            "{} (version {})",
+            program.program.name,
+            program.program.version()
+        );
+        self.program = crate::control::ProgramRuntime::new(program);
+        self.program_before = self.program.clone();
+        self.log("link", format!("following the PLC with the program {name}"));
     }
 
     /// True when fed from a live link.
@@ -92,6 +114,14 @@ impl Simulation {
         }
         let mut control = Commanded(cycle.commanded.clone());
         self.engine.cycle(now, &cycle.inputs, &mut control);
+        match (&mut self.follower, cycle.followed) {
+            (Some(f), true) => {
+                let _ = f.step(now, &cycle.inputs, &cycle.commanded);
+            }
+            // The link stopped following (its peer was lost): so does the mirror.
+            (Some(f), false) if f.started() => self.follower = None,
+            _ => {}
+        }
         // What the plant really received (gateway: safe outputs for a lost PLC or stale
         // inputs), as the link's engine records it for the next cycle.
         self.engine.set_applied(&cycle.applied);
@@ -118,8 +148,11 @@ impl Simulation {
                 &self.bundle,
                 self.layout.as_ref(),
                 index,
-                self.projection,
-                self.cycle,
+                (self.projection, self.cycle),
+                self.follower
+                    .as_ref()
+                    .and_then(|f| f.program())
+                    .map(|(before, after)| super::Followed { before, after }),
             )
         {
             if let Some(p) = projected {

@@ -454,6 +454,7 @@ fn observed(time: u64, inputs: &str, commanded: &str, applied: &str, reset: bool
         diagnosers: diagnosis::LinkStep::Skipped,
         attach: false,
         restored: None,
+        followed: false,
     }
 }
 
@@ -1583,4 +1584,90 @@ fn with_device_monitoring_no_welded_or_dead_drive_damages_a_box() {
         paper_hazards > 0,
         "the paper's station cannot stop a welded or dead drive"
     );
+}
+
+/// A live PLC runs each error of the station's library, monitored with that program
+/// given (`--program`): the mirror's explanation of the violation has the same
+/// hypothesis as the emulator's run of the program (the program's elements first);
+/// without the program it has none of them. The projection runs the program on: for
+/// some error it ends elsewhere than with the PLC's last outputs held.
+#[test]
+fn a_monitored_plc_with_its_program_given_is_explained_by_its_program() {
+    let path = station_dir().join("scenarios/cs10-paper.ron");
+    let lib = crate::control::ErrorLibrary::load(
+        &station_dir().join("programs/errors.ron"),
+        &crate::plant::Plant::load(&station_dir().join("plant.ron")).expect("plant"),
+    )
+    .expect("library");
+    let (mut explained, mut projected_apart) = (0, 0);
+    for v in lib.variants {
+        let mut s = Scenario::load(&path).expect("scenario");
+        s.program = ProgramChoice::Error(v.def.id.clone());
+        s.filter = FilterMode::ReportOnly;
+        s.plausibility = false;
+        let mut plc = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+        let mut cycles = Vec::new();
+        while plc.engine.trips.is_empty() && plc.now() < Millis(60_000) {
+            plc.cycle();
+            cycles.push((
+                plc.engine.history.last().expect("recorded").time,
+                plc.engine.frame().now(Space::Input).clone(),
+                plc.engine.commanded().clone(),
+            ));
+        }
+        let Some(emulated) = plc.explanations.get(&0) else {
+            continue;
+        };
+        let program = std::sync::Arc::new(v.compiled);
+        let monitor = |given: bool| {
+            let mut sim = Simulation::from_scenario(&s, &path, Options::default()).expect("starts");
+            sim.follow_link(FilterMode::ReportOnly);
+            if given {
+                sim.follow_program(std::sync::Arc::clone(&program));
+            }
+            for (k, (time, inputs, commanded)) in cycles.iter().enumerate() {
+                sim.observe(&ObservedCycle {
+                    time: *time,
+                    inputs: inputs.clone(),
+                    commanded: commanded.clone(),
+                    applied: commanded.clone(),
+                    reset: false,
+                    diagnosers: diagnosis::LinkStep::Skipped,
+                    attach: k == 0,
+                    restored: None,
+                    followed: true,
+                });
+            }
+            sim
+        };
+        let codes = |ex: &Explanation| -> Vec<String> {
+            ex.hypothesis
+                .items
+                .iter()
+                .map(|i| i.code.to_string())
+                .collect()
+        };
+        let is_program = |c: &String| ("X407".."X414").contains(&c.as_str()) || c == "X417";
+        let live = monitor(true);
+        let id = &v.def.id;
+        let followed = live.explanations.get(&0).expect("explained");
+        assert_eq!(followed.hypothesis, emulated.hypothesis, "{id}");
+        assert!(
+            codes(followed).iter().any(is_program),
+            "{id}: {:?}",
+            codes(followed)
+        );
+        let blind = monitor(false);
+        let unknown = blind.explanations.get(&0).expect("explained");
+        assert!(
+            !codes(unknown).iter().any(is_program),
+            "{id}: {:?}",
+            codes(unknown)
+        );
+        let at = |sim: &Simulation| sim.projections.get(&0).map(|p| p.boxes.clone());
+        projected_apart += usize::from(at(&live) != at(&blind));
+        explained += 1;
+    }
+    assert!(explained >= 10, "{explained} errors explained");
+    assert!(projected_apart >= 1);
 }
