@@ -22,8 +22,8 @@ pub mod runtime;
 pub use library::{Consequence, ErrorLibrary, Patch, Variant, differences};
 pub use mutation::{Mutation, mutations};
 pub use program::{
-    Action, Chart, CompiledProgram, Delay, DelayKind, Origin, Program, Qualifier, SourcePlace,
-    Step, Transition,
+    Action, Chart, CompiledProgram, Counter, CounterKind, Delay, DelayKind, Origin, Program,
+    Qualifier, SourcePlace, Step, Transition,
 };
 pub use runtime::{Driver, Evolution, ProgramRuntime, UnknownPanel};
 

@@ -113,6 +113,33 @@ pub struct Delay {
     pub ms: u64,
 }
 
+/// Which standard counter (IEC 61131-3) a [`Counter`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum CounterKind {
+    /// `CTU`: a rising edge of CU adds one to CV (up to 32767), R sets CV to 0; Q is
+    /// CV >= PV.
+    Up,
+    /// `CTD`: a rising edge of CD takes one from CV (down to -32768), LD sets CV to PV;
+    /// Q is CV <= 0.
+    Down,
+}
+
+/// A standard counter: the equation whose target is `id` is its count input (CU or
+/// CD), `reset` its R (CTU) or LD (CTD), both evaluated there in the equations' order;
+/// `id` reads its output Q (the last scan's before that equation). CV starts at 0.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Counter {
+    /// Name, also the name of its output.
+    pub id: String,
+    /// CTU or CTD.
+    pub kind: CounterKind,
+    /// PV.
+    pub preset: i16,
+    /// R or LD, an expression.
+    pub reset: String,
+}
+
 /// One GRAFCET transition.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -172,6 +199,9 @@ pub struct Program {
     /// Standard timers on expressions (TON, TOF, TP; see [`Delay`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub delays: Vec<Delay>,
+    /// Standard counters (CTU, CTD; see [`Counter`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub counters: Vec<Counter>,
     /// GRAFCET charts.
     pub charts: Vec<Chart>,
     /// Ladder-like equations `(target, expression)`, evaluated top-down after the
@@ -366,10 +396,20 @@ pub(crate) struct DelayInfo {
     pub(crate) aux: u32,
 }
 
+/// A compiled standard counter.
+#[derive(Clone, Debug)]
+pub(crate) struct CounterInfo {
+    pub(crate) kind: CounterKind,
+    pub(crate) preset: i16,
+    pub(crate) aux: u32,
+}
+
 /// A compiled equation.
 #[derive(Clone, Debug)]
 pub(crate) struct EquationInfo {
     pub(crate) slot: usize,
+    /// Its place in the program's `equations` (a counter's reset: its count input's).
+    pub(crate) index: usize,
     pub(crate) dnf: Dnf,
     pub(crate) cond: Cond,
 }
@@ -388,6 +428,7 @@ pub struct CompiledProgram {
     pub(crate) actions: Vec<ActionInfo>,
     pub(crate) timers: Vec<TimerInfo>,
     pub(crate) delays: Vec<DelayInfo>,
+    pub(crate) counters: Vec<CounterInfo>,
     /// Slots (outputs, then memories) true before the first scan.
     pub(crate) initial: Vec<usize>,
     pub(crate) memory_aux: Vec<u32>,
@@ -417,6 +458,8 @@ impl CompiledProgram {
             panel_aux,
         } = declare_others(program, origin, &step_index, &mut problems, &mut symbols);
         let (delays, delay_index) = declare_delays(program, origin, &mut problems, &mut symbols);
+        let (counters, counter_index) =
+            declare_counters(program, origin, &mut problems, &mut symbols);
 
         let target_slot = |name: &str| -> Option<usize> {
             if let Some(o) = plant.output(name) {
@@ -426,8 +469,17 @@ impl CompiledProgram {
         };
         // An equation may also give a standard timer its input.
         let n_memories = memory_aux.len();
+        // Then a standard counter its count input (CU, CD), after its reset (R, LD).
+        let n_delays = delays.len();
+        let n_counters = counters.len();
         let equation_slot = |name: &str| -> Option<usize> {
-            target_slot(name).or_else(|| delay_index.get(name).map(|&d| n_outputs + n_memories + d))
+            target_slot(name)
+                .or_else(|| delay_index.get(name).map(|&d| n_outputs + n_memories + d))
+                .or_else(|| {
+                    counter_index
+                        .get(name)
+                        .map(|&c| n_outputs + n_memories + n_delays + c)
+                })
         };
 
         let actions = compile_actions(program, origin, &step_index, &target_slot, &mut problems);
@@ -446,34 +498,17 @@ impl CompiledProgram {
             &steps,
             &mut problems,
         );
-        let mut equations = Vec::new();
-        let mut eq_targets = BTreeMap::new();
-        for (target, text) in &program.equations {
-            let what = format!("equation `{target}`");
-            let start = origin.equation_start(target);
-            let Some(slot) = equation_slot(target) else {
-                problems.push(Problem::error(
-                    codes::PROGRAM_EQUATION_TARGET.id,
-                    format!("{what}: `{target}` is neither an actuator, a memory nor a timer"),
-                    Some(origin.location(start)),
-                ));
-                continue;
-            };
-            if eq_targets.insert(slot, ()).is_some() {
-                problems.push(Problem::error(
-                    codes::PROGRAM_EQUATION_TWICE.id,
-                    format!("{what}: `{target}` has two equations"),
-                    Some(origin.location(start)),
-                ));
-            }
-            if let Some(dnf) = compile_expr(text, start, &what, &mut problems) {
-                equations.push(EquationInfo {
-                    slot,
-                    dnf,
-                    cond: Cond::default(),
-                });
-            }
-        }
+        let mut equations = compile_equations(
+            program,
+            origin,
+            &equation_slot,
+            (
+                &counter_index,
+                n_outputs + n_memories + n_delays + n_counters,
+            ),
+            &compile_expr,
+            &mut problems,
+        );
         if !problems.is_empty() {
             return Err(problems);
         }
@@ -490,6 +525,7 @@ impl CompiledProgram {
             actions,
             timers,
             delays,
+            counters,
             initial,
             memory_aux,
             panel_aux,
@@ -705,6 +741,108 @@ fn declare_delays(
         }
     }
     (delays, index)
+}
+
+/// Compiles an expression's text (from `start` in the file) for `what`, its problems
+/// added.
+type ExprCompiler<'a> = dyn Fn(&str, Option<usize>, &str, &mut Vec<Problem>) -> Option<Dnf> + 'a;
+
+/// The equations, in the program's order; a counter's reset just before its count
+/// input, in the slot `resets` + its index.
+fn compile_equations(
+    program: &Program,
+    origin: &Origin,
+    equation_slot: &dyn Fn(&str) -> Option<usize>,
+    (counter_index, resets): (&BTreeMap<String, usize>, usize),
+    compile_expr: &ExprCompiler<'_>,
+    problems: &mut Vec<Problem>,
+) -> Vec<EquationInfo> {
+    let mut equations = Vec::new();
+    let mut eq_targets = BTreeMap::new();
+    for (index, (target, text)) in program.equations.iter().enumerate() {
+        let what = format!("equation `{target}`");
+        let start = origin.equation_start(target);
+        let Some(slot) = equation_slot(target) else {
+            problems.push(Problem::error(
+                codes::PROGRAM_EQUATION_TARGET.id,
+                format!("{what}: `{target}` is neither an actuator, a memory nor a timer"),
+                Some(origin.location(start)),
+            ));
+            continue;
+        };
+        if eq_targets.insert(slot, ()).is_some() {
+            problems.push(Problem::error(
+                codes::PROGRAM_EQUATION_TWICE.id,
+                format!("{what}: `{target}` has two equations"),
+                Some(origin.location(start)),
+            ));
+        }
+        // A counter's reset comes just before its count input, in a slot of its
+        // own after the counters'.
+        if let Some(&c) = counter_index.get(target.as_str()) {
+            let what = format!("counter `{target}`, its reset");
+            let reset = &program.counters[c].reset;
+            let start = reset_start(origin, &program.counters[c]);
+            if let Some(dnf) = compile_expr(reset, start, &what, problems) {
+                equations.push(EquationInfo {
+                    slot: resets + c,
+                    index,
+                    dnf,
+                    cond: Cond::default(),
+                });
+            }
+        }
+        if let Some(dnf) = compile_expr(text, start, &what, problems) {
+            equations.push(EquationInfo {
+                slot,
+                index,
+                dnf,
+                cond: Cond::default(),
+            });
+        }
+    }
+    for counter in &program.counters {
+        if !program.equations.iter().any(|(t, _)| *t == counter.id) {
+            problems.push(Problem::error(
+                codes::PROGRAM_EQUATION_TARGET.id,
+                format!(
+                    "counter `{}` has no equation: its count input is missing",
+                    counter.id
+                ),
+                Some(origin.location(origin.find_quoted(&counter.id, 0))),
+            ));
+        }
+    }
+    equations
+}
+
+/// Declares the standard counters; their index by name.
+fn declare_counters(
+    program: &Program,
+    origin: &Origin,
+    problems: &mut Vec<Problem>,
+    symbols: &mut Symbols,
+) -> (Vec<CounterInfo>, BTreeMap<String, usize>) {
+    let mut counters = Vec::new();
+    let mut index = BTreeMap::new();
+    for c in &program.counters {
+        let loc = Some(origin.location(origin.find_quoted(&c.id, 0)));
+        if let Some(aux) = declare(&c.id, "counter", loc, problems, symbols) {
+            index.insert(c.id.clone(), counters.len());
+            counters.push(CounterInfo {
+                kind: c.kind,
+                preset: c.preset,
+                aux,
+            });
+        }
+    }
+    (counters, index)
+}
+
+/// Where the reset expression of counter `c` starts in the program's text.
+fn reset_start(origin: &Origin, c: &Counter) -> Option<usize> {
+    let id = origin.find_quoted(&c.id, 0)?;
+    origin.find_quoted(&c.reset, id).map(|p| p + 1)
 }
 
 /// Declares memories, timers and panel inputs, and checks the start and stop buttons.

@@ -1,6 +1,6 @@
 //! The scan-cycle runtime: one PLC scan per engine cycle.
 
-use super::program::{CompiledProgram, DelayKind, Qualifier};
+use super::program::{CompiledProgram, CounterKind, DelayKind, Qualifier};
 use crate::bits::Bits;
 use crate::engine::Control;
 use crate::frame::Frame;
@@ -102,6 +102,41 @@ impl DelayState {
     }
 }
 
+/// The state of a standard counter: its value CV and its count input at the last scan
+/// (the counter counts the input's rising edges).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct CounterState {
+    cv: i16,
+    prev: bool,
+}
+
+impl CounterState {
+    /// One call with count input `input` and reset (R of a CTU, LD of a CTD) `reset`:
+    /// the output Q (IEC 61131-3 CTU, CTD).
+    fn call(&mut self, kind: CounterKind, preset: i16, input: bool, reset: bool) -> bool {
+        let rose = input && !self.prev;
+        self.prev = input;
+        match kind {
+            CounterKind::Up => {
+                if reset {
+                    self.cv = 0;
+                } else if rose {
+                    self.cv = self.cv.saturating_add(1);
+                }
+                self.cv >= preset
+            }
+            CounterKind::Down => {
+                if reset {
+                    self.cv = preset;
+                } else if rose {
+                    self.cv = self.cv.saturating_sub(1);
+                }
+                self.cv <= 0
+            }
+        }
+    }
+}
+
 /// A running program: the compiled program (shared) and its state.
 ///
 /// # Scan semantics
@@ -142,6 +177,7 @@ pub struct ProgramRuntime {
     pulses: Bits,
     switches: Bits,
     delays: Vec<DelayState>,
+    counters: Vec<CounterState>,
     /// Per action, when its own time started (SD and SL run on after their step).
     timed: Vec<Option<Millis>>,
     scans: u64,
@@ -183,14 +219,17 @@ impl ProgramRuntime {
             pulses: Bits::zeros(n_panel),
             switches: Bits::zeros(n_panel),
             delays: vec![DelayState::default(); program.delays.len()],
+            counters: vec![CounterState::default(); program.counters.len()],
             timed: vec![None; program.actions.len()],
             scans: 0,
             now: Millis::ZERO,
             last_pre: vec![0; 2 * program.layout.half],
             last_stored: Bits::zeros(n_slots),
             stable: false,
+            // A counter's state is not in the state words: every scan is evaluated.
             time_free: program.timers.is_empty()
                 && program.delays.is_empty()
+                && program.counters.is_empty()
                 && program.actions.iter().all(|a| !a.qualifier.is_timed()),
             program,
         };
@@ -220,6 +259,7 @@ impl ProgramRuntime {
         self.pulses.copy_from(&other.pulses);
         self.switches.copy_from(&other.switches);
         self.delays.clone_from(&other.delays);
+        self.counters.clone_from(&other.counters);
         self.timed.clone_from(&other.timed);
         self.scans = other.scans;
         self.now = other.now;
@@ -250,6 +290,7 @@ impl ProgramRuntime {
                 })
             && self.stored == other.stored
             && self.delays == other.delays
+            && self.counters == other.counters
             && self.timed == other.timed
             && self.just_activated == other.just_activated
             && self.program.steps.iter().enumerate().all(|(i, s)| {
@@ -287,6 +328,9 @@ impl ProgramRuntime {
         self.delays
             .iter_mut()
             .for_each(|d| *d = DelayState::default());
+        self.counters
+            .iter_mut()
+            .for_each(|c| *c = CounterState::default());
         self.timed.iter_mut().for_each(|t| *t = None);
         let n_out = program.n_outputs;
         for &slot in &program.initial {
@@ -506,13 +550,13 @@ impl ProgramRuntime {
                     .collect(),
             });
         }
-        for (k, eq) in p.equations.iter().enumerate() {
+        for eq in &p.equations {
             if eq.slot == slot && p.conds.eval(eq.cond, &self.state) {
                 out.push(Driver::Equation {
                     expression: p
                         .program
                         .equations
-                        .get(k)
+                        .get(eq.index)
                         .map(|e| e.1.clone())
                         .unwrap_or_default(),
                 });
@@ -746,18 +790,34 @@ impl ProgramRuntime {
     }
 
     /// The equations, top-down: each target becomes its actions' value OR its
-    /// equation; a standard timer's equation is its input, and the timer is called.
+    /// equation; a standard timer's equation is its input, and the timer is called; a
+    /// counter's reset, then its count input, and the counter is called.
     fn run_equations(&mut self, p: &CompiledProgram, now: Millis) {
         let n_out = p.n_outputs;
         let n_slots = self.values.len();
+        let n_delays = p.delays.len();
+        let n_counters = p.counters.len();
+        let mut reset = false;
         for eq in &p.equations {
             if eq.slot >= n_slots {
-                // A standard timer's input: the timer is called here.
-                let d = eq.slot - n_slots;
                 let input = p.conds.eval(eq.cond, &self.state);
-                if let (Some(info), Some(st)) = (p.delays.get(d), self.delays.get_mut(d)) {
-                    let q = st.call(info.kind, info.ms, input, now);
-                    self.set(Space::Aux, info.aux as usize, q);
+                let d = eq.slot - n_slots;
+                if d < n_delays {
+                    // A standard timer's input: the timer is called here.
+                    if let (Some(info), Some(st)) = (p.delays.get(d), self.delays.get_mut(d)) {
+                        let q = st.call(info.kind, info.ms, input, now);
+                        self.set(Space::Aux, info.aux as usize, q);
+                    }
+                } else if d - n_delays >= n_counters {
+                    // A counter's reset, just before its count input.
+                    reset = input;
+                } else {
+                    let c = d - n_delays;
+                    if let (Some(info), Some(st)) = (p.counters.get(c), self.counters.get_mut(c)) {
+                        let q = st.call(info.kind, info.preset, input, reset);
+                        self.set(Space::Aux, info.aux as usize, q);
+                    }
+                    reset = false;
                 }
                 continue;
             }

@@ -758,3 +758,46 @@ fn a_program_version_changes_with_any_edit_and_only_then() {
     step.actions.pop();
     assert_ne!(edited.version(), v, "an action removed");
 }
+
+/// A counter in Vigie's own format: its equation is the count input, `reset` beside it;
+/// A0 reads Q after the third box at C0 (rising edges), until C1 resets it. A reset
+/// that reads an unknown name, or a counter without its equation, is a problem placed
+/// in the file.
+#[test]
+fn a_ron_counter_counts_edges_of_its_equation_and_its_reset_clears_it() {
+    let text = r#"(
+        name: "count", charts: [],
+        counters: [(id: "n3", kind: Up, preset: 3, reset: "C1")],
+        equations: [("n3", "C0"), ("A0", "n3")],
+    )"#;
+    let mut o = Open::new(text);
+    let on: Vec<bool> = [
+        &["C0"][..],
+        &[],
+        &["C0"],
+        &["C0"],
+        &[],
+        &["C0"],
+        &[],
+        &["C1", "C0"],
+        &["C0"],
+    ]
+    .iter()
+    .map(|i| o.scan(i).contains(&"A0".to_string()))
+    .collect();
+    assert_eq!(
+        on,
+        [false, false, false, false, false, true, true, false, false]
+    );
+    let unknown = compile(&text.replace("reset: \"C1\"", "reset: \"C1 . Z9\"")).expect_err("Z9");
+    assert!(unknown[0].message.contains("Z9"), "{}", unknown[0]);
+    let at = unknown[0].location.as_ref().expect("placed");
+    assert_eq!(at.line, 3, "{}", unknown[0]);
+    let missing = compile(&text.replace("(\"n3\", \"C0\"), ", "")).expect_err("no input");
+    assert!(
+        missing
+            .iter()
+            .any(|p| p.message.contains("counter `n3` has no equation")),
+        "{missing:?}"
+    );
+}

@@ -250,7 +250,7 @@ impl View<'_> {
             k,
             p.program
                 .equations
-                .get(k)
+                .get(p.equations[k].index)
                 .map(|e| e.1.clone())
                 .unwrap_or_default(),
         ))

@@ -99,6 +99,7 @@ fn reads_panel_history(program: &CompiledProgram) -> bool {
     p.transitions()
         .map(|(_, t)| t.condition.as_str())
         .chain(p.equations.iter().map(|e| e.1.as_str()))
+        .chain(p.counters.iter().map(|c| c.reset.as_str()))
         .filter_map(|text| crate::expr::parse_str(text).ok())
         .any(|e| {
             e.leaves().iter().any(|(name, kind, _)| {

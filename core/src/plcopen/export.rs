@@ -220,6 +220,19 @@ impl Writer<'_> {
             let input = self.st(&e, 0, &mut |w, n, kind| w.rung_leaf(n, kind, k, targets));
             return format!("{target}(IN := {input}, PT := {});", write_duration(ms));
         }
+        if let Some(c) = self.program.counters.iter().find(|c| c.id == target) {
+            let (count, reset) = match c.kind {
+                crate::control::CounterKind::Up => ("CU", "R"),
+                crate::control::CounterKind::Down => ("CD", "LD"),
+            };
+            let preset = c.preset;
+            let cleared = self.parse(&c.reset, &format!("reset of counter `{target}`"));
+            let cleared = self.st(&cleared, 0, &mut |w, n, kind| {
+                w.rung_leaf(n, kind, k, targets)
+            });
+            let input = self.st(&e, 0, &mut |w, n, kind| w.rung_leaf(n, kind, k, targets));
+            return format!("{target}({count} := {input}, {reset} := {cleared}, PV := {preset});");
+        }
         // ORed with the actions' value, the body is an operand of OR.
         let driven = self.action_targets.contains(&target);
         let body = self.st(&e, u8::from(driven), &mut |w, n, kind| {
@@ -257,8 +270,12 @@ pub fn export(program: &Program, plant: &Plant, file: &Path) -> Result<String, V
         roles.insert(id.clone(), Role::Timer);
         timers.insert(id.clone(), (step.clone(), *ms));
     }
+    // A timer's or a counter's output is read as `.Q`.
     for d in &program.delays {
         roles.insert(d.id.clone(), Role::Delay);
+    }
+    for c in &program.counters {
+        roles.insert(c.id.clone(), Role::Delay);
     }
     let action_targets = program
         .steps()
@@ -343,6 +360,7 @@ fn collect_names(program: &Program, w: &Writer<'_>, used: &mut BTreeSet<String>)
         .map(|(_, t)| t.condition.as_str())
         .collect();
     texts.extend(program.equations.iter().map(|e| e.1.as_str()));
+    texts.extend(program.counters.iter().map(|c| c.reset.as_str()));
     for t in texts {
         if let Ok(e) = expr::parse_str(t) {
             for (name, _, _) in e.leaves() {
@@ -540,6 +558,7 @@ fn globals(w: &Writer<'_>, used: &BTreeSet<String>) -> Vec<String> {
     }
     out.extend(p.memories.iter().cloned());
     out.extend(p.delays.iter().map(|d| d.id.clone()));
+    out.extend(p.counters.iter().map(|c| c.id.clone()));
     out.extend(w.pre.iter().map(|v| format!("{v}_PRE")));
     out.extend(w.mirrors.iter().map(|s| format!("{s}_X")));
     out
@@ -557,7 +576,17 @@ fn type_xml(w: &Writer<'_>, name: &str) -> &'static str {
         Some(crate::control::DelayKind::On) => "<derived name=\"TON\"/>",
         Some(crate::control::DelayKind::Off) => "<derived name=\"TOF\"/>",
         Some(crate::control::DelayKind::Pulse) => "<derived name=\"TP\"/>",
-        None => "<BOOL/>",
+        None => match w
+            .program
+            .counters
+            .iter()
+            .find(|c| c.id == name)
+            .map(|c| c.kind)
+        {
+            Some(crate::control::CounterKind::Up) => "<derived name=\"CTU\"/>",
+            Some(crate::control::CounterKind::Down) => "<derived name=\"CTD\"/>",
+            None => "<BOOL/>",
+        },
     }
 }
 

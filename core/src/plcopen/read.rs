@@ -4,7 +4,8 @@
 use super::st::{self, BinOp, Pos, StExpr, Stmt};
 use super::{ADD_DATA, ld, sfc};
 use crate::control::{
-    Action, Chart, Delay, DelayKind, Program, Qualifier, SourcePlace, Step, Transition,
+    Action, Chart, Counter, CounterKind, Delay, DelayKind, Program, Qualifier, SourcePlace, Step,
+    Transition,
 };
 use crate::diag::codes::{self, Code};
 use crate::diag::{Location, Problem};
@@ -26,6 +27,10 @@ pub(super) enum Kind {
     },
     /// A `TON`, `TOF` or `TP` instance.
     Timer(DelayKind),
+    /// A `CTU` or `CTD` instance.
+    Counter(CounterKind),
+    /// An `INT` variable with a constant initial value, never written: its value.
+    Integer(i64),
     /// A `TIME` variable with a constant initial value, never written: its ms.
     Duration(u64),
     /// A declared variable of a type Vigie does not run: an error where it is used.
@@ -283,6 +288,9 @@ fn describe(d: &VarDecl) -> String {
         Kind::Timer(DelayKind::Off) => "TOF".into(),
         Kind::Timer(DelayKind::Pulse) => "TP".into(),
         Kind::Duration(ms) => format!("TIME {ms} ms"),
+        Kind::Counter(CounterKind::Up) => "CTU".into(),
+        Kind::Counter(CounterKind::Down) => "CTD".into(),
+        Kind::Integer(v) => format!("INT {v}"),
         Kind::Unsupported(t) => t.clone(),
     }
 }
@@ -328,6 +336,98 @@ fn bool_initial(ctx: &mut Ctx<'_, '_>, var: Node<'_, '_>, d: &VarDecl, initial: 
             format!("`{}` starts at `{other}`, which is not a BOOL value", d.name),
         ),
     }
+}
+
+/// The failure for reading `shown` (its first part `first`) as a Boolean when it is
+/// not one: a timer's or a counter's other members, an INT, a TIME, a type not run.
+fn not_boolean(kind: &Kind, shown: &str, first: &str, at: Pos) -> Result<Expr, Failure> {
+    match kind {
+        Kind::Timer(_) => fail(
+            codes::PLCOPEN_UNSUPPORTED,
+            at,
+            format!("`{shown}`: a timer is read as `.Q` (its elapsed time `.ET` is not run)"),
+        ),
+        Kind::Counter(_) => fail(
+            codes::PLCOPEN_UNSUPPORTED,
+            at,
+            format!(
+                "`{shown}`: a counter is read as `.Q` (its value `.CV` is an INT, which Vigie does not run)"
+            ),
+        ),
+        Kind::Integer(_) => fail(
+            codes::PLCOPEN_UNSUPPORTED,
+            at,
+            format!("`{shown}` is an INT where a Boolean is expected"),
+        ),
+        Kind::Duration(_) => fail(
+            codes::PLCOPEN_UNSUPPORTED,
+            at,
+            format!("`{shown}` is a TIME where a Boolean is expected"),
+        ),
+        Kind::Unsupported(t) => fail(
+            codes::PLCOPEN_UNSUPPORTED,
+            at,
+            format!(
+                "`{}` is of type {t}: only BOOL variables, R_TRIG and F_TRIG are run",
+                first
+            ),
+        ),
+        _ => fail(
+            codes::PLCOPEN_UNSUPPORTED,
+            at,
+            format!("`{shown}` cannot be read"),
+        ),
+    }
+}
+
+/// A counter's PV: an integer literal or a constant `INT` variable, within INT's range.
+fn constant_int(name: &str, value: &StExpr, at: Pos, decls: &Declarations) -> Result<i16, Failure> {
+    let v = match value {
+        StExpr::Int(v) => *v,
+        StExpr::Var { path, at } if path.len() == 1 => {
+            match decls
+                .vars
+                .get(&path[0].to_ascii_lowercase())
+                .map(|d| &d.kind)
+            {
+                Some(Kind::Integer(v)) => *v,
+                _ => {
+                    return fail(
+                        codes::PLCOPEN_UNSUPPORTED,
+                        *at,
+                        format!(
+                            "`{name}`: PV is `{}`, not a constant (an integer or an INT variable with an initial value, never written)",
+                            path[0]
+                        ),
+                    );
+                }
+            }
+        }
+        _ => {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{name}`: PV is not a constant integer"),
+            );
+        }
+    };
+    i16::try_from(v).or_else(|_| {
+        fail(
+            codes::PLCOPEN_UNSUPPORTED,
+            at,
+            format!("`{name}`: PV {v} is outside INT (-32768..32767)"),
+        )
+    })
+}
+
+/// The constant initial value of an `INT` variable.
+fn int_initial(var: Node<'_, '_>) -> Option<i64> {
+    child(var, "initialValue")
+        .and_then(|i| child(i, "simpleValue"))
+        .and_then(|s| s.attribute("value"))?
+        .trim()
+        .parse()
+        .ok()
 }
 
 /// The constant initial value of a `TIME` variable, in ms.
@@ -450,6 +550,19 @@ fn declare_interface(
                             _ => DelayKind::Pulse,
                         }),
                     }),
+                    "CTU" | "CTD" => Some(VarDecl {
+                        name: name.to_string(),
+                        kind: Kind::Counter(if ty.eq_ignore_ascii_case("CTU") {
+                            CounterKind::Up
+                        } else {
+                            CounterKind::Down
+                        }),
+                    }),
+                    "INT" => Some(VarDecl {
+                        name: name.to_string(),
+                        kind: int_initial(var)
+                            .map_or_else(|| Kind::Unsupported("INT".into()), Kind::Integer),
+                    }),
                     "TIME" => Some(VarDecl {
                         name: name.to_string(),
                         kind: time_initial(var)
@@ -484,6 +597,8 @@ pub(super) struct Machine {
     trig: BTreeMap<String, Expr>,
     /// `TON`/`TOF`/`TP` instances called, in call order, and their input IN.
     pub(super) delays: Vec<Delay>,
+    /// `CTU`/`CTD` instances called, in call order (their count input in `timer_in`).
+    pub(super) counters: Vec<Counter>,
     timer_in: BTreeMap<String, Expr>,
     /// Step timers created by `S.T` comparisons: (name, step, ms).
     pub(super) timers: Vec<(String, String, u64)>,
@@ -629,6 +744,7 @@ impl Machine {
             charts_done: BTreeSet::new(),
             trig: BTreeMap::new(),
             delays: Vec::new(),
+            counters: Vec::new(),
             timer_in: BTreeMap::new(),
             timers: Vec::new(),
             visible_steps: BTreeSet::new(),
@@ -992,7 +1108,7 @@ impl Machine {
                 at,
                 format!("`{shown}`: an edge detector is read as `.Q`"),
             ),
-            (Kind::Timer(_), 2) if path[1].eq_ignore_ascii_case("Q") => {
+            (Kind::Timer(_) | Kind::Counter(_), 2) if path[1].eq_ignore_ascii_case("Q") => {
                 let called = self.timer_in.contains_key(&d.name);
                 match (mode, called) {
                     (Mode::Body, true) | (Mode::Condition, false) => {
@@ -1008,24 +1124,14 @@ impl Machine {
                     ),
                 }
             }
-            (Kind::Timer(_), _) => fail(
-                codes::PLCOPEN_UNSUPPORTED,
-                at,
-                format!("`{shown}`: a timer is read as `.Q` (its elapsed time `.ET` is not run)"),
-            ),
-            (Kind::Duration(_), _) => fail(
-                codes::PLCOPEN_UNSUPPORTED,
-                at,
-                format!("`{shown}` is a TIME where a Boolean is expected"),
-            ),
-            (Kind::Unsupported(t), _) => fail(
-                codes::PLCOPEN_UNSUPPORTED,
-                at,
-                format!(
-                    "`{}` is of type {t}: only BOOL variables, R_TRIG and F_TRIG are run",
-                    path[0]
-                ),
-            ),
+            (
+                Kind::Timer(_)
+                | Kind::Counter(_)
+                | Kind::Integer(_)
+                | Kind::Duration(_)
+                | Kind::Unsupported(_),
+                _,
+            ) => not_boolean(&d.kind, &shown, &path[0], at),
             (_, 1) => Ok(self.read(d, mode, span)),
             _ => fail(
                 codes::PLCOPEN_UNSUPPORTED,
@@ -1171,13 +1277,14 @@ impl Machine {
         };
         let (what, timer, rising) = match d.kind {
             Kind::Timer(kind) => ("timers", Some(kind), false),
+            Kind::Counter(_) => ("counters", None, false),
             Kind::Trig { rising } => ("edge detectors", None, rising),
             _ => {
                 return fail(
                     codes::PLCOPEN_UNSUPPORTED,
                     at,
                     format!(
-                        "`{instance}` is called but is not an instance of R_TRIG, F_TRIG, TON, TOF or TP: only these function blocks are run"
+                        "`{instance}` is called but is not an instance of R_TRIG, F_TRIG, TON, TOF, TP, CTU or CTD: only these function blocks are run"
                     ),
                 );
             }
@@ -1201,6 +1308,9 @@ impl Machine {
         }
         if let Some(kind) = timer {
             return self.call_timer(d.name.clone(), kind, args, at, decls, loc);
+        }
+        if let Kind::Counter(kind) = d.kind {
+            return self.call_counter(d.name.clone(), kind, args, at, decls, loc);
         }
         let [(input, clk)] = args else {
             return fail(
@@ -1289,6 +1399,60 @@ impl Machine {
         self.order.push(name.clone());
         self.timer_in.insert(name.clone(), input);
         self.delays.push(Delay { id: name, kind, ms });
+        Ok(())
+    }
+
+    /// A `CTU` or `CTD` call (checked by [`Self::call`]): its count input becomes the
+    /// counter's equation, here in the scan, with its reset beside it.
+    fn call_counter(
+        &mut self,
+        name: String,
+        kind: CounterKind,
+        args: &[(String, StExpr)],
+        at: Pos,
+        decls: &Declarations,
+        loc: &dyn Fn(Pos) -> Span,
+    ) -> Result<(), Failure> {
+        let (count, reset) = match kind {
+            CounterKind::Up => ("CU", "R"),
+            CounterKind::Down => ("CD", "LD"),
+        };
+        let (mut input, mut cleared, mut preset) = (None, None, None);
+        for (arg, value) in args {
+            if arg.eq_ignore_ascii_case(count) {
+                input = Some(self.expr(value, decls, Mode::Body, loc)?);
+            } else if arg.eq_ignore_ascii_case(reset) {
+                cleared = Some(self.expr(value, decls, Mode::Body, loc)?);
+            } else if arg.eq_ignore_ascii_case("PV") {
+                preset = Some(constant_int(&name, value, at, decls)?);
+            } else {
+                return fail(
+                    codes::PLCOPEN_UNSUPPORTED,
+                    at,
+                    format!("`{name}` has no input `{arg}` run by Vigie ({count}, {reset} and PV)"),
+                );
+            }
+        }
+        let (Some(input), Some(preset)) = (input, preset) else {
+            return fail(
+                codes::PLCOPEN_UNSUPPORTED,
+                at,
+                format!("`{name}` is called without {count} or PV: both are needed"),
+            );
+        };
+        // An input left open is FALSE.
+        let cleared = self.small(cleared.unwrap_or(Expr::Const(false)), Mode::Body, loc(at));
+        let input = self.small(input, Mode::Body, loc(at));
+        self.writes += 1;
+        self.last.insert(name.clone(), self.writes);
+        self.order.push(name.clone());
+        self.timer_in.insert(name.clone(), input);
+        self.counters.push(Counter {
+            id: name,
+            kind,
+            preset,
+            reset: render(&cleared),
+        });
         Ok(())
     }
 
@@ -1693,6 +1857,7 @@ fn assemble(
         timers: m.timers.clone(),
         initial: decls.initial.clone(),
         delays: m.delays.clone(),
+        counters: m.counters.clone(),
         charts,
         equations: equations
             .iter()
@@ -1712,6 +1877,7 @@ fn empty_program() -> Program {
         memories: Vec::new(),
         timers: Vec::new(),
         delays: Vec::new(),
+        counters: Vec::new(),
         initial: Vec::new(),
         charts: Vec::new(),
         equations: Vec::new(),

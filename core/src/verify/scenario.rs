@@ -69,6 +69,7 @@ pub fn program(trace: &Trace, plant: &Plant, step_us: i64) -> Program {
     Program {
         places: std::collections::BTreeMap::new(),
         delays: Vec::new(),
+        counters: Vec::new(),
         initial: Vec::new(),
         name: "Verification counterexample".into(),
         description: format!(

@@ -701,3 +701,150 @@ fn tp_gives_one_pulse_per_rising_edge_of_its_time() {
         [true, true, true, false, false, false, false, true, true]
     );
 }
+
+/// An ST body calling a standard counter `c` of `ty` (`CU`/`R` or `CD`/`LD` from `a`
+/// and `b`, PV `pv`), `W` its Q.
+fn counter_xml(ty: &str, pv: &str, extra: &str) -> String {
+    let (count, reset) = if ty == "CTU" {
+        ("CU", "R")
+    } else {
+        ("CD", "LD")
+    };
+    project(&format!(
+        r#"<pou name="main" pouType="program"><interface><localVars>{VARS}
+<variable name="c"><type><derived name="{ty}"/></type></variable>{extra}</localVars></interface>
+<body><ST><xhtml:p><![CDATA[c({count} := a, {reset} := b, PV := {pv});
+W := c.Q;]]></xhtml:p></ST></body></pou>"#
+    ))
+}
+
+#[test]
+fn ctu_counts_rising_edges_up_to_its_preset_and_r_clears_it() {
+    let xml = counter_xml("CTU", "3", "");
+    // Edges at scans 1, 3 (held over 4: one edge), 6: Q from the third. R at scan 8
+    // clears (and wins over the edge of the same scan); three new edges are needed.
+    let got = trace(
+        &xml,
+        &[
+            &["a"],
+            &[],
+            &["a"],
+            &["a"],
+            &[],
+            &["a"],
+            &[],
+            &["a", "b"],
+            &[],
+            &["a"],
+            &[],
+            &["a"],
+            &[],
+            &["a"],
+        ],
+        "W",
+    );
+    let want = [
+        false, false, false, false, false, true, true, false, false, false, false, false, false,
+        true,
+    ];
+    assert_eq!(got, want);
+}
+
+#[test]
+fn ctd_counts_down_from_its_loaded_preset_and_is_true_at_zero() {
+    // CV starts at 0: Q is true from the first call. LD loads PV = 2; two edges of
+    // CD bring it back to 0.
+    let xml = counter_xml(
+        "CTD",
+        "N",
+        r#"<variable name="N"><type><INT/></type><initialValue><simpleValue value="2"/></initialValue></variable>"#,
+    );
+    let got = trace(
+        &xml,
+        &[&[], &["b"], &[], &["a"], &[], &["a"], &["a"], &[]],
+        "W",
+    );
+    assert_eq!(got, [true, false, false, false, false, true, true, true]);
+}
+
+/// A program with counters reads back the same after export and import, and runs the
+/// same, scan by scan.
+#[test]
+fn counters_read_back_the_same_after_export_and_import() {
+    let plant = plant();
+    for ty in ["CTU", "CTD"] {
+        let xml = counter_xml(ty, "2", "");
+        let p1 = import(&xml, Path::new("t.xml"), &plant).expect("imports");
+        assert_eq!(p1.counters.len(), 1, "{p1:?}");
+        let xml2 = crate::plcopen::export(&p1, &plant, Path::new("t.ron")).expect("exports");
+        assert!(
+            xml2.contains(&format!("<derived name=\"{ty}\"/>")),
+            "{xml2}"
+        );
+        let p2 = import(&xml2, Path::new("t2.xml"), &plant).expect("imports again");
+        let unplaced = |p: &crate::control::Program| crate::control::Program {
+            places: std::collections::BTreeMap::new(),
+            ..p.clone()
+        };
+        assert_eq!(unplaced(&p1), unplaced(&p2), "{xml2}");
+        let scans: &[&[&str]] = &[
+            &["a"],
+            &[],
+            &["b"],
+            &["a"],
+            &[],
+            &["a"],
+            &["a", "b"],
+            &["a"],
+            &[],
+            &["a"],
+        ];
+        assert_eq!(trace(&xml, scans, "W"), trace(&xml2, scans, "W"), "{ty}");
+    }
+}
+
+#[test]
+fn counters_refuse_what_they_cannot_run_where_it_is() {
+    let plant = plant();
+    let check = |xml: &str, needle: &str, marker: &str| {
+        let err = import(xml, Path::new("t.xml"), &plant).expect_err(needle);
+        let p = err
+            .iter()
+            .find(|p| p.message.contains(needle))
+            .unwrap_or_else(|| panic!("{needle}: {}", crate::diag::render(&err)));
+        assert_eq!(p.code, codes::PLCOPEN_UNSUPPORTED.id, "{p}");
+        let line = xml
+            .lines()
+            .position(|l| l.contains(marker))
+            .expect("marker")
+            + 1;
+        assert_eq!(p.location.as_ref().map(|l| l.line), Some(line), "{p}");
+    };
+    // CV is an INT.
+    let xml = project(&format!(
+        r#"<pou name="main" pouType="program"><interface><localVars>{VARS}
+<variable name="c"><type><derived name="CTU"/></type></variable></localVars></interface>
+<body><ST><xhtml:p><![CDATA[c(CU := a, PV := 2);
+W := c.CV;]]></xhtml:p></ST></body></pou>"#
+    ));
+    check(&xml, "`.CV` is an INT", "W := c.CV");
+    // PV from an INT without a constant value.
+    let xml = counter_xml(
+        "CTU",
+        "n",
+        r#"<variable name="n"><type><INT/></type></variable>"#,
+    );
+    check(&xml, "PV is `n`, not a constant", "c(CU");
+    // PV outside INT.
+    let xml = counter_xml("CTU", "40000", "");
+    check(&xml, "outside INT", "c(CU");
+    // A counter called under IF.
+    let xml = project(&format!(
+        r#"<pou name="main" pouType="program"><interface><localVars>{VARS}
+<variable name="c"><type><derived name="CTD"/></type></variable></localVars></interface>
+<body><ST><xhtml:p><![CDATA[IF b THEN
+c(CD := a, PV := 2); END_IF;
+W := c.Q;]]></xhtml:p></ST></body></pou>"#
+    ));
+    check(&xml, "called under a condition", "c(CD");
+}
