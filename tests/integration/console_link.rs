@@ -6,13 +6,16 @@
 //!   filter's output, the console shows the trip; the operator's reset is refused while
 //!   the constraint holds and goes through the gateway once it does not;
 //! - a monitor run with the plant's diagnosers: C4 dies at rest, the diagnoser panel
-//!   shows the certain diagnosis the mirror makes from the run's cycles.
+//!   shows the certain diagnosis the mirror makes from the run's cycles;
+//! - a monitor run with the PLC's program given as PLCopen XML (`--program`): the
+//!   program shown is that one, and the hypothesis names its equation, placed in the
+//!   file.
 //!
 //! No fixed sleeps: every wait polls the console with a deadline.
 
 #![allow(clippy::unwrap_used)] // a failure is a test failure
 
-use crate::live::{Plant, Plc, TempDir, repo, wait_until};
+use crate::live::{Plant, Plc, StandIn, TempDir, repo, wait_until};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use std::time::{Duration, Instant};
@@ -308,4 +311,62 @@ fn console_shows_the_diagnosers_of_a_monitor_link() {
             .filter(|a| a.key == "diag:table:C4")
             .all(|a| a.cleared.is_some())
     );
+}
+
+/// `vigie --link CONFIG --program e11.xml`: a PLC stand-in runs the station's error E11
+/// (A0 not stopped at C0), and the technician gives that program. The console shows the
+/// program followed, and the violation's hypothesis names A0's equation and where it is
+/// written in the file.
+#[test]
+fn console_explains_a_monitored_violation_with_the_program_given() {
+    let station = repo().join("layouts/sorting-station");
+    let plant_ron = vigie_core::plant::Plant::load(&station.join("plant.ron")).unwrap();
+    let lib =
+        vigie_core::control::ErrorLibrary::load(&station.join("programs/errors.ron"), &plant_ron)
+            .unwrap();
+    let e11 = lib
+        .variants
+        .into_iter()
+        .find(|v| v.def.id == "E11")
+        .unwrap()
+        .program;
+    let dir = TempDir::new("console-follow");
+    let xml = dir.0.join("e11.xml");
+    std::fs::write(
+        &xml,
+        vigie_core::plcopen::export(&e11, &plant_ron, std::path::Path::new("e11.ron")).unwrap(),
+    )
+    .unwrap();
+    let given = vigie_core::control::CompiledProgram::load(&xml, &plant_ron).unwrap();
+    let plant = Plant::start(None);
+    let port = plant.port;
+    let plc = StandIn::start(plant, e11);
+    let mut opts = ConsoleOptions::new(&station);
+    opts.link = Some(monitor_config(
+        &dir,
+        port,
+        "diagnosers: false, plausibility: false",
+    ));
+    opts.program = Some(xml.clone());
+    opts.data_dir = None;
+    let mut h = harness(opts);
+    wait_for_label(&mut h, &format!("Link: connected to 127.0.0.1:{port}"));
+    // The program on screen is the one given.
+    assert_eq!(
+        h.state().sim.program.program().program.version(),
+        given.program.version()
+    );
+    plc.press_start();
+    plc.set(&[(4, true)]);
+    wait_until("the feed conveyor A0 to run after START", || {
+        plc.coils().starts_with('1')
+    });
+    plc.set(&[(0, true)]);
+    wait_for_label(&mut h, "Violation at");
+    h.get_by_label("4 Hypothesis").click_accesskit();
+    wait_for_label(&mut h, "A0 is written (ST) in POU");
+    wait_for_label(&mut h, "of e11.xml, line");
+    let trip = h.state().latest_trip().unwrap();
+    let items = &h.state().sim.explanations[&trip].hypothesis.items;
+    assert!(items.iter().any(|i| i.code == "X410"), "{items:#?}");
 }

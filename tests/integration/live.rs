@@ -1188,7 +1188,7 @@ fn kill_9_of_the_console_during_a_burst_loses_no_committed_entry() {
 
 /// A PLC stand-in: a control program scanned every 5 ms on the sensors the test sets,
 /// its outputs written to the pymodbus plant's coils, as a PLC drives its own bus.
-struct StandIn {
+pub(crate) struct StandIn {
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
     /// The operator's START, pressed at the next scan once set.
     start: std::sync::Arc<std::sync::atomic::AtomicBool>,
@@ -1201,7 +1201,7 @@ struct StandIn {
 
 impl StandIn {
     /// Runs `program` (the station's) against `plant`; START waits for [`Self::press_start`].
-    fn start(plant: Plant, program: vigie_core::control::Program) -> Self {
+    pub(crate) fn start(plant: Plant, program: vigie_core::control::Program) -> Self {
         use std::sync::atomic::{AtomicBool, Ordering};
         use std::sync::{Arc, Mutex};
         use vigie_core::engine::Control as _;
@@ -1281,12 +1281,12 @@ impl StandIn {
     }
 
     /// The operator presses START.
-    fn press_start(&self) {
+    pub(crate) fn press_start(&self) {
         self.start.store(true, std::sync::atomic::Ordering::Relaxed);
     }
 
     /// Sets sensors at the plant and in the stand-in's next scan.
-    fn set(&self, bits: &[(u16, bool)]) {
+    pub(crate) fn set(&self, bits: &[(u16, bool)]) {
         let mut i = self.inputs.lock().expect("inputs");
         for &(a, v) in bits {
             i.set(usize::from(a), v);
@@ -1295,7 +1295,7 @@ impl StandIn {
     }
 
     /// The plant's coils as the stand-in wrote them.
-    fn coils(&self) -> String {
+    pub(crate) fn coils(&self) -> String {
         self.plant.lock().expect("plant").coils()
     }
 }
