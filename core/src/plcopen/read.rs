@@ -380,37 +380,60 @@ fn not_boolean(kind: &Kind, shown: &str, first: &str, at: Pos) -> Result<Expr, F
     }
 }
 
-/// A counter's PV: an integer literal or a constant `INT` variable, within INT's range.
-fn constant_int(name: &str, value: &StExpr, at: Pos, decls: &Declarations) -> Result<i16, Failure> {
-    let v = match value {
-        StExpr::Int(v) => *v,
+/// The constant a function block's input `input` of instance `name` is given: a literal
+/// (`literal`), or a variable declared constant (`declared`: an initial value, never
+/// written); `what` says which constants are accepted.
+fn constant_input<T>(
+    (name, input, what): (&str, &str, &str),
+    value: &StExpr,
+    at: Pos,
+    decls: &Declarations,
+    literal: impl Fn(&StExpr) -> Option<T>,
+    declared: impl Fn(&Kind) -> Option<T>,
+) -> Result<T, Failure> {
+    if let Some(v) = literal(value) {
+        return Ok(v);
+    }
+    let (shown, at) = match value {
         StExpr::Var { path, at } if path.len() == 1 => {
-            match decls
+            let kind = decls
                 .vars
                 .get(&path[0].to_ascii_lowercase())
-                .map(|d| &d.kind)
-            {
-                Some(Kind::Integer(v)) => *v,
-                _ => {
-                    return fail(
-                        codes::PLCOPEN_UNSUPPORTED,
-                        *at,
-                        format!(
-                            "`{name}`: PV is `{}`, not a constant (an integer or an INT variable with an initial value, never written)",
-                            path[0]
-                        ),
-                    );
-                }
+                .map(|d| &d.kind);
+            if let Some(v) = kind.and_then(&declared) {
+                return Ok(v);
             }
+            (format!("`{}`", path[0]), *at)
         }
-        _ => {
-            return fail(
-                codes::PLCOPEN_UNSUPPORTED,
-                at,
-                format!("`{name}`: PV is not a constant integer"),
-            );
-        }
+        _ => ("an expression".to_string(), at),
     };
+    fail(
+        codes::PLCOPEN_UNSUPPORTED,
+        at,
+        format!("`{name}`: {input} is {shown}, not a constant ({what})"),
+    )
+}
+
+/// A counter's PV: an integer literal or a constant `INT` variable, within INT's range.
+fn constant_int(name: &str, value: &StExpr, at: Pos, decls: &Declarations) -> Result<i16, Failure> {
+    let v = constant_input(
+        (
+            name,
+            "PV",
+            "an integer or an INT variable with an initial value, never written",
+        ),
+        value,
+        at,
+        decls,
+        |e| match e {
+            StExpr::Int(v) => Some(*v),
+            _ => None,
+        },
+        |k| match k {
+            Kind::Integer(v) => Some(*v),
+            _ => None,
+        },
+    )?;
     i16::try_from(v).or_else(|_| {
         fail(
             codes::PLCOPEN_UNSUPPORTED,
@@ -1349,35 +1372,24 @@ impl Machine {
             if arg.eq_ignore_ascii_case("IN") {
                 input = Some(self.expr(value, decls, Mode::Body, loc)?);
             } else if arg.eq_ignore_ascii_case("PT") {
-                ms = Some(match value {
-                    StExpr::Time(ms) => *ms,
-                    StExpr::Var { path, at } if path.len() == 1 => {
-                        match decls
-                            .vars
-                            .get(&path[0].to_ascii_lowercase())
-                            .map(|d| &d.kind)
-                        {
-                            Some(Kind::Duration(ms)) => *ms,
-                            _ => {
-                                return fail(
-                                    codes::PLCOPEN_UNSUPPORTED,
-                                    *at,
-                                    format!(
-                                        "`{name}`: PT is `{}`, not a constant time (a T#… literal or a TIME variable with an initial value, never written)",
-                                        path[0]
-                                    ),
-                                );
-                            }
-                        }
-                    }
-                    _ => {
-                        return fail(
-                            codes::PLCOPEN_UNSUPPORTED,
-                            at,
-                            format!("`{name}`: PT is not a constant time"),
-                        );
-                    }
-                });
+                ms = Some(constant_input(
+                    (
+                        &name,
+                        "PT",
+                        "a T#… literal or a TIME variable with an initial value, never written",
+                    ),
+                    value,
+                    at,
+                    decls,
+                    |e| match e {
+                        StExpr::Time(ms) => Some(*ms),
+                        _ => None,
+                    },
+                    |k| match k {
+                        Kind::Duration(ms) => Some(*ms),
+                        _ => None,
+                    },
+                )?);
             } else {
                 return fail(
                     codes::PLCOPEN_UNSUPPORTED,

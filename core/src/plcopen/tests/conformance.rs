@@ -452,23 +452,27 @@ fn ladder_rungs_as_a_plc_scans_them() {
     assert_eq!(step(&["d"]), (false, false, false), "d held: no new edge");
 }
 
+/// `xml` is refused with a problem of `code` whose message contains `needle`, placed
+/// on the first line that contains `marker`.
+fn refused_at(xml: &str, code: &str, needle: &str, marker: &str) {
+    let err = import(xml, Path::new("t.xml"), &plant()).expect_err(needle);
+    let p = err
+        .iter()
+        .find(|p| p.message.contains(needle))
+        .unwrap_or_else(|| panic!("{needle}: {}", crate::diag::render(&err)));
+    assert_eq!(p.code, code, "{p}");
+    let line = xml
+        .lines()
+        .position(|l| l.contains(marker))
+        .expect("marker")
+        + 1;
+    assert_eq!(p.location.as_ref().map(|l| l.line), Some(line), "{p}");
+}
+
 #[test]
 fn unsupported_and_malformed_elements_are_named_with_their_line() {
     let plant = plant();
-    let check = |xml: &str, code: &str, needle: &str, marker: &str| {
-        let err = import(xml, Path::new("t.xml"), &plant).expect_err(needle);
-        let p = err
-            .iter()
-            .find(|p| p.message.contains(needle))
-            .unwrap_or_else(|| panic!("{needle}: {}", crate::diag::render(&err)));
-        assert_eq!(p.code, code, "{p}");
-        let line = xml
-            .lines()
-            .position(|l| l.contains(marker))
-            .expect("marker")
-            + 1;
-        assert_eq!(p.location.as_ref().map(|l| l.line), Some(line), "{p}");
-    };
+    let check = refused_at;
     // An inline action body.
     let xml = sfc(&[
         step(1, "S0", true, &[]),
@@ -805,20 +809,8 @@ fn counters_read_back_the_same_after_export_and_import() {
 
 #[test]
 fn counters_refuse_what_they_cannot_run_where_it_is() {
-    let plant = plant();
     let check = |xml: &str, needle: &str, marker: &str| {
-        let err = import(xml, Path::new("t.xml"), &plant).expect_err(needle);
-        let p = err
-            .iter()
-            .find(|p| p.message.contains(needle))
-            .unwrap_or_else(|| panic!("{needle}: {}", crate::diag::render(&err)));
-        assert_eq!(p.code, codes::PLCOPEN_UNSUPPORTED.id, "{p}");
-        let line = xml
-            .lines()
-            .position(|l| l.contains(marker))
-            .expect("marker")
-            + 1;
-        assert_eq!(p.location.as_ref().map(|l| l.line), Some(line), "{p}");
+        refused_at(xml, codes::PLCOPEN_UNSUPPORTED.id, needle, marker);
     };
     // CV is an INT.
     let xml = project(&format!(
