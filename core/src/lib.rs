@@ -28,6 +28,7 @@ pub mod engine;
 pub mod explain;
 pub mod export;
 pub mod expr;
+pub mod fieldbus;
 pub mod filter;
 pub mod frame;
 pub mod history;

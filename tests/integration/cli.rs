@@ -316,3 +316,36 @@ fn a_program_exported_as_plcopen_runs_back_the_same() {
         "{said}"
     );
 }
+
+/// `vigie bus FILE`: the substation's FIP bus (Table 3.2) reported, with what the
+/// deadlines leave the live link; a bus that cannot keep a deadline fails, naming the
+/// file and line.
+#[test]
+fn the_bus_command_reports_the_scan_table_and_refuses_a_deadline_it_cannot_keep() {
+    let out = vigie(&["bus", "layouts/substation/bus.ron"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let report = text(&out);
+    for line in [
+        "µC 25000 µs, macro-cycle 50000 µs (2 µC), TMAC 1000 ns",
+        "DefDep_D1: every 50000 µs (phase 0), TE 178.000 µs, age 77.000..50077.000 µs, deadline 100000 µs; 49 ms of its deadline left for def1_D2 on the link",
+    ] {
+        assert!(report.contains(line), "{line}\n{report}");
+    }
+    let json = vigie(&["bus", "layouts/substation/bus.ron", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).expect("JSON");
+    assert_eq!(v["variables"][1]["worst_age_ns"], 50_077_000);
+    let dir = TempDir::new("bus-cli");
+    let tight = dir.0.join("bus.ron");
+    std::fs::write(
+        &tight,
+        "Bus(bit_rate: 1000000, turnaround_us: 20, variables: [\n  (name: \"v\", period_us: 50000, bytes: 2, deadline_us: 50000, signals: [\"def1_D2\"]),\n])",
+    )
+    .expect("writes");
+    let out = vigie(&["bus", tight.to_str().expect("utf-8")]);
+    assert!(!out.status.success());
+    let says = text(&out);
+    assert!(
+        says.contains("bus.ron:2:") && says.contains("V1305"),
+        "{says}"
+    );
+}

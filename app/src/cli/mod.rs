@@ -3,6 +3,7 @@
 mod bench;
 mod bench_historian;
 mod bench_line;
+mod bus;
 mod campaign;
 mod check;
 mod export_st;
@@ -226,6 +227,16 @@ pub(crate) enum Command {
         #[arg(long, short)]
         out: Option<PathBuf>,
     },
+    /// A FIP-like fieldbus (`bus.ron`): its scan table, the load of each elementary
+    /// cycle, and each variable's transaction time and best and worst age at its
+    /// consumers, with what its deadline leaves the live link.
+    Bus {
+        /// The bus file.
+        file: PathBuf,
+        /// Print the analysis as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// The PLC's own program in PLCopen TC6 XML: write a control program for the PLC's
     /// tool, or read one (SFC, ST, LD) and check it against the plant.
     Program {
@@ -446,6 +457,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::BenchLine(args) => bench_line::run(&args),
         Command::ExportSt { plant, out } => export_st::run(&plant.plant, out.as_deref()),
         Command::Program { action } => program::run(action),
+        Command::Bus { file, json } => bus::run(&file, json),
         Command::BenchConsole {
             plant,
             frames,

@@ -205,6 +205,12 @@ registry! {
     PLCOPEN_BINDING = "V1205", "a PLCopen variable that cannot be bound to the plant";
     PLCOPEN_SFC_GRAPH = "V1206", "a malformed SFC or LD network";
     PLCOPEN_EXPORT = "V1207", "a program that cannot be written as PLCopen XML";
+    // V13xx: fieldbus timing (`bus.ron`)
+    BUS_INVALID = "V1301", "a bus file with an impossible bit rate, turnaround, period or phase";
+    BUS_OVERLOAD = "V1302", "a µC whose periodic transactions do not fit in it";
+    BUS_LOAD_HIGH = "V1303", "a µC loaded above the bus's limit";
+    BUS_PERIOD_DEADLINE = "V1304", "a variable polled less often than its deadline divided by r";
+    BUS_DEADLINE = "V1305", "a variable delivering plant inputs whose deadline the bus cannot keep";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";

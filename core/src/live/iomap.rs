@@ -147,6 +147,11 @@ pub struct IoMapFile {
     pub max_age_ms: Option<u64>,
     /// One entry per plant signal.
     pub signals: Vec<MapEntry>,
+    /// A fieldbus between the plant and the PLC (`bus.ron`, relative to the map): the
+    /// inputs its variables deliver are stale when older than what their deadline leaves
+    /// once the bus has taken its worst case ([`crate::fieldbus`]), if that is sooner.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bus: Option<String>,
 }
 
 /// A signal placed on the bus.
@@ -175,7 +180,54 @@ impl IoMap {
     pub fn load(path: &Path, plant: &Plant) -> Result<(Self, Vec<Problem>), Vec<Problem>> {
         let text = crate::diag::read_text(path)
             .map_err(|p| vec![Problem::error(codes::IO_MAP_UNREADABLE.id, p.message, None)])?;
-        Self::from_ron(&text, path, plant)
+        let parsed: IoMapFile = ron_options()
+            .from_str(&text)
+            .map_err(|e| vec![ron_problem(path, &e)])?;
+        let (mut map, mut warnings) = Self::from_file(&parsed, plant, &text, path)?;
+        if let Some(bus) = &parsed.bus {
+            let bus_path = path.parent().unwrap_or(Path::new(".")).join(bus);
+            warnings.extend(map.follow_bus(&bus_path, plant)?);
+        }
+        Ok((map, warnings))
+    }
+
+    /// Bounds the staleness of the inputs the variables of the bus at `path` deliver
+    /// (see [`IoMapFile::bus`]); its warnings.
+    pub fn follow_bus(&mut self, path: &Path, plant: &Plant) -> Result<Vec<Problem>, Vec<Problem>> {
+        let (bus, text) = crate::fieldbus::BusFile::load(path)?;
+        let analysis = bus.analyse(path, &text)?;
+        let bounds = analysis.input_bounds(path, &text)?;
+        let mut errors = Vec::new();
+        let mut warnings = analysis.warnings.clone();
+        for (signal, ms) in bounds {
+            let Some(m) = plant.input(&signal).and_then(|i| self.inputs.get_mut(i)) else {
+                errors.push(Problem::error(
+                    codes::IO_MAP_UNKNOWN_SIGNAL.id,
+                    format!(
+                        "the bus delivers `{signal}`, which is not an input of plant `{}`",
+                        plant.name
+                    ),
+                    Some(Location::of_nth(path, &text, &format!("\"{signal}\""), 0)),
+                ));
+                continue;
+            };
+            m.max_age = m.max_age.min(Millis(ms));
+            if m.max_age < m.poll {
+                warnings.push(Problem::warning(
+                    codes::IO_MAP_MAX_AGE.id,
+                    format!(
+                        "`{signal}`: the bus leaves {ms} ms of its deadline, below the poll period {} ms: the value will be stale between polls",
+                        m.poll.0
+                    ),
+                    Some(Location::of_nth(path, &text, &format!("\"{signal}\""), 0)),
+                ));
+            }
+        }
+        if errors.is_empty() {
+            Ok(warnings)
+        } else {
+            Err(errors)
+        }
     }
 
     /// Parses and validates map text; `file` is used in messages only.
@@ -218,6 +270,7 @@ impl IoMap {
             poll_ms,
             max_age_ms: None,
             signals,
+            bus: None,
         };
         Self::from_file(&file, plant, "", Path::new("plant.ron")).map(|(m, _)| m)
     }

@@ -640,3 +640,64 @@ fn config_errors_say_where() {
     .unwrap();
     assert_eq!(c.server.unwrap().bind.to_string(), "127.0.0.1:1502");
 }
+
+/// The substation's feeders read each other's fault state (`def1_D2`, `def2_D1`) over
+/// its FIP bus (`bus.ron`): such an input is stale once older than what the deadline
+/// leaves after the bus's worst case, when that is sooner than the map's own bound. A
+/// bus that leaves no room, or that delivers an unknown input, stops the link at load.
+#[test]
+fn a_fieldbus_bounds_the_staleness_of_the_inputs_it_delivers() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../layouts/substation");
+    let plant = Plant::load(&dir.join("plant.ron")).unwrap();
+    let (map, warnings) = IoMap::load(&dir.join("io-map.ron"), &plant).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let bound = |map: &IoMap, s: &str| map.inputs[plant.input(s).unwrap()].max_age;
+    // Table 3.2's bus leaves 100 − 50.077 ms: 49 ms, later than the map's 30 ms.
+    assert_eq!(bound(&map, "def1_D2"), Millis(30));
+    let scratch = std::env::temp_dir().join(format!("vigie-bus-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).unwrap();
+    let bus = |name: &str, period: u64, deadline: u64, signal: &str| {
+        let path = scratch.join(name);
+        std::fs::write(
+            &path,
+            format!(
+                "Bus(bit_rate: 1000000, turnaround_us: 20, variables: [\n  (name: \"DefDep_D1\", period_us: {period}, bytes: 2, deadline_us: {deadline}, signals: [\"{signal}\"]),\n])"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    // DefDep every 100 ms with a 120 ms deadline leaves 19 ms: the bus bounds def1_D2,
+    // and a value read 20 ms ago is stale, where it was fresh on the map's bound alone.
+    // (100 ms is also above Δ/r = 60 ms: warned.)
+    let mut slow = map.clone();
+    let w = slow
+        .follow_bus(&bus("slow.ron", 100_000, 120_000, "def1_D2"), &plant)
+        .unwrap();
+    let codes: Vec<&str> = w.iter().map(|p| p.code).collect();
+    assert_eq!(codes, [crate::diag::codes::BUS_PERIOD_DEADLINE.id], "{w:?}");
+    assert_eq!(bound(&slow, "def1_D2"), Millis(19));
+    assert_eq!(bound(&slow, "def2_D1"), Millis(30), "not on this bus");
+    let k = plant.input("def1_D2").unwrap();
+    let mut v = AgedBits::new(plant.inputs.len());
+    v.set(k, true, Millis(100));
+    assert!(!v.stale(Millis(120), &map.input_bounds()).get(k));
+    assert!(v.stale(Millis(120), &slow.input_bounds()).get(k));
+    // A bus that leaves less than 1 ms, or delivers a signal the plant does not have.
+    let mut m = map.clone();
+    let err = m
+        .follow_bus(&bus("tight.ron", 100_000, 100_500, "def1_D2"), &plant)
+        .unwrap_err();
+    assert_eq!(
+        err[0].code,
+        crate::diag::codes::BUS_DEADLINE.id,
+        "{}",
+        err[0]
+    );
+    assert_eq!(err[0].location.as_ref().map(|l| l.line), Some(2));
+    let err = m
+        .follow_bus(&bus("unknown.ron", 50_000, 100_000, "defX"), &plant)
+        .unwrap_err();
+    assert!(err[0].message.contains("`defX`"), "{}", err[0]);
+    let _ = std::fs::remove_dir_all(&scratch);
+}
