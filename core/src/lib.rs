@@ -40,6 +40,7 @@ pub mod plausibility;
 pub mod plcopen;
 pub mod pop;
 pub mod sim;
+pub mod stpn;
 pub mod symbols;
 pub mod synthetic;
 pub mod tasks;

@@ -349,3 +349,23 @@ fn the_bus_command_reports_the_scan_table_and_refuses_a_deadline_it_cannot_keep(
         "{says}"
     );
 }
+
+/// `vigie stpn NET --failed PLACE`: the producer's write loss of seed 002's chapter 4
+/// (p = 0.005 per 500 Ut cycle), its mean time to the first loss exact; an unknown
+/// failure place is refused.
+#[test]
+fn the_stpn_command_gives_the_exact_mttf_of_the_write_loss() {
+    let net = "layouts/substation/nets/producer-write-loss.ron";
+    let out = vigie(&["stpn", net, "--failed", "lost"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let report = text(&out);
+    assert!(report.contains("5 states, 6 arcs"), "{report}");
+    assert!(report.contains("MTFF to `lost`: 99580"), "{report}");
+    let out = vigie(&["stpn", net, "--failed", "nowhere"]);
+    assert!(!out.status.success());
+    assert!(
+        text(&out).contains("`nowhere` is not a place"),
+        "{}",
+        text(&out)
+    );
+}

@@ -12,6 +12,7 @@ mod gateway;
 mod learn;
 mod program;
 mod run;
+mod stpn;
 mod verify;
 
 use std::path::PathBuf;
@@ -237,6 +238,19 @@ pub(crate) enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// A stochastic timed Petri net (seed 002): its probabilistic state graph, its
+    /// terminal components and steady state, and with `--failed PLACE` the mean time to
+    /// a first failure (exact rationals).
+    Stpn {
+        /// The net file.
+        file: PathBuf,
+        /// A place whose marking is a failure: report the MTFF to it.
+        #[arg(long)]
+        failed: Option<String>,
+        /// Print the state graph as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// The PLC's own program in PLCopen TC6 XML: write a control program for the PLC's
     /// tool, or read one (SFC, ST, LD) and check it against the plant.
     Program {
@@ -458,6 +472,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::ExportSt { plant, out } => export_st::run(&plant.plant, out.as_deref()),
         Command::Program { action } => program::run(action),
         Command::Bus { file, json } => bus::run(&file, json),
+        Command::Stpn { file, failed, json } => stpn::run(&file, failed.as_deref(), json),
         Command::BenchConsole {
             plant,
             frames,

@@ -211,6 +211,8 @@ registry! {
     BUS_LOAD_HIGH = "V1303", "a µC loaded above the bus's limit";
     BUS_PERIOD_DEADLINE = "V1304", "a variable polled less often than its deadline divided by r";
     BUS_DEADLINE = "V1305", "a variable delivering plant inputs whose deadline the bus cannot keep";
+    // V14xx: stochastic timed Petri nets (`vigie stpn`)
+    STPN_INVALID = "V1401", "a stochastic Petri net naming an unknown place or with delay probabilities that do not sum to 1";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";
