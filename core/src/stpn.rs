@@ -557,6 +557,84 @@ impl StateGraph {
         )
     }
 
+    /// The quantitative abstract view on the observable states `observable` ([AJ95], the
+    /// thesis's views): from each observable state `o` to each observable state `o'`
+    /// reached first (through unobservable states only), the probability `F(o, o')` and
+    /// the mean time `T = G/F`, with `F(o,o') = Σ_v p_ov h_v(o')` and
+    /// `G(o,o') = Σ_v p_ov (θ_ov h_v(o') + [v ∉ O] g_v(o'))`. Arcs of probability 0 are
+    /// left out. `None` when a system is singular (unobservable states that loop forever).
+    pub fn abstract_view(&self, observable: &[usize]) -> Option<Vec<(usize, usize, Q, Q)>> {
+        let mut out = Vec::new();
+        for &target in observable {
+            // h and g over the unobservable states, for this target: the target counts
+            // as reached, the other observable states stop the path.
+            let stops: Vec<usize> = observable.to_vec();
+            let fp = self.first_passage_to(target, &stops)?;
+            for &o in observable {
+                let (mut f, mut g) = (Q::zero(), Q::zero());
+                for arc in self.arcs.iter().filter(|a| a.from == o) {
+                    let (h, gv) = if arc.to == target {
+                        (Q::one(), Q::zero())
+                    } else if observable.contains(&arc.to) {
+                        (Q::zero(), Q::zero())
+                    } else {
+                        fp[arc.to].clone()
+                    };
+                    g += &arc.p * (Q::from_integer(arc.theta.into()) * &h + gv);
+                    f += &arc.p * h;
+                }
+                if !f.is_zero() {
+                    let t = &g / &f;
+                    out.push((o, target, f, t));
+                }
+            }
+        }
+        out.sort_by_key(|a| (a.0, a.1));
+        Some(out)
+    }
+
+    /// For each state, `(h, g)`: the probability of reaching `target` before any other
+    /// state of `stops` (`h = 1` at the target, 0 at the others), and the time-weighted
+    /// probability `g = Σ_v p_uv (θ_uv h_v + [v ∉ stops] g_v)` (0 on `stops`).
+    fn first_passage_to(&self, target: usize, stops: &[usize]) -> Option<Vec<(Q, Q)>> {
+        let n = self.states.len();
+        let stop = |s: usize| s == target || stops.contains(&s);
+        let mut a = vec![vec![Q::zero(); n]; n];
+        let mut bh = vec![Q::zero(); n];
+        for (i, row) in a.iter_mut().enumerate() {
+            row[i] = Q::one();
+        }
+        bh[target] = Q::one();
+        for arc in self.arcs.iter().filter(|a| !stop(a.from)) {
+            if arc.to == target {
+                bh[arc.from] += arc.p.clone();
+            } else if !stop(arc.to) {
+                a[arc.from][arc.to] -= arc.p.clone();
+            }
+        }
+        let h = solve(a.clone(), bh)?;
+        let mut bg = vec![Q::zero(); n];
+        for arc in self.arcs.iter().filter(|a| !stop(a.from)) {
+            bg[arc.from] += &arc.p * Q::from_integer(arc.theta.into()) * &h[arc.to];
+        }
+        let g = solve(a, bg)?;
+        Some(
+            h.into_iter()
+                .zip(g)
+                .enumerate()
+                .map(|(s, (h, g))| {
+                    if stop(s) && s != target {
+                        (Q::zero(), Q::zero())
+                    } else if s == target {
+                        (Q::one(), Q::zero())
+                    } else {
+                        (h, g)
+                    }
+                })
+                .collect(),
+        )
+    }
+
     /// The mean time to a first failure from the initial distribution: the mean time to
     /// reach a state of `failed`, which must be reached with probability 1.
     pub fn mttf(&self, failed: &[usize]) -> Option<Q> {

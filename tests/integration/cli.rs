@@ -361,6 +361,10 @@ fn the_stpn_command_gives_the_exact_mttf_of_the_write_loss() {
     let report = text(&out);
     assert!(report.contains("5 states, 6 arcs"), "{report}");
     assert!(report.contains("MTFF to `lost`: 99580"), "{report}");
+    // The abstract view on the computing states and the loss: the early draw (state 0)
+    // loses the tie half the time, 80 Ut into the cycle.
+    let out = vigie(&["stpn", net, "--observe", "calcul,lost"]);
+    assert!(text(&out).contains("0 -> 3: [80, 1/2 (0.500000)]"), "{}", text(&out));
     let out = vigie(&["stpn", net, "--failed", "nowhere"]);
     assert!(!out.status.success());
     assert!(

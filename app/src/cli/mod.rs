@@ -247,6 +247,10 @@ pub(crate) enum Command {
         /// A place whose marking is a failure: report the MTFF to it.
         #[arg(long)]
         failed: Option<String>,
+        /// Places whose marking is observed: report the abstract view on those states
+        /// (`[mean time, probability]` from each to the next one reached).
+        #[arg(long, value_delimiter = ',')]
+        observe: Vec<String>,
         /// Print the state graph as JSON.
         #[arg(long)]
         json: bool,
@@ -472,7 +476,12 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::ExportSt { plant, out } => export_st::run(&plant.plant, out.as_deref()),
         Command::Program { action } => program::run(action),
         Command::Bus { file, json } => bus::run(&file, json),
-        Command::Stpn { file, failed, json } => stpn::run(&file, failed.as_deref(), json),
+        Command::Stpn {
+            file,
+            failed,
+            observe,
+            json,
+        } => stpn::run(&file, failed.as_deref(), &observe, json),
         Command::BenchConsole {
             plant,
             frames,

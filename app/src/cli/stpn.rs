@@ -16,7 +16,12 @@ fn shown(q: &Q) -> String {
     }
 }
 
-pub(crate) fn run(file: &Path, failed: Option<&str>, json: bool) -> anyhow::Result<ExitCode> {
+pub(crate) fn run(
+    file: &Path,
+    failed: Option<&str>,
+    observe: &[String],
+    json: bool,
+) -> anyhow::Result<ExitCode> {
     let render = |p: &[vigie_core::diag::Problem]| vigie_core::diag::render(p);
     let (net, text) = NetFile::load(file).map_err(|p| anyhow::anyhow!("{}", render(&p)))?;
     let net = net
@@ -59,6 +64,28 @@ pub(crate) fn run(file: &Path, failed: Option<&str>, json: bool) -> anyhow::Resu
                 .map(|(i, _)| net.places[i].as_str())
                 .collect();
             println!("  state {s} ({}): {}", marked.join(", "), shown(p));
+        }
+    }
+    if !observe.is_empty() {
+        let mut states = Vec::new();
+        for place in observe {
+            let Some(k) = net.places.iter().position(|p| p == place) else {
+                anyhow::bail!("{}: `{place}` is not a place of the net", file.display());
+            };
+            states.extend(g.marked(k));
+        }
+        states.sort_unstable();
+        states.dedup();
+        let view = g.abstract_view(&states).ok_or_else(|| {
+            anyhow::anyhow!("the unobservable states loop forever: no abstract view")
+        })?;
+        println!(
+            "abstract view on {} states ({}):",
+            states.len(),
+            observe.join(", ")
+        );
+        for (o, to, f, t) in &view {
+            println!("  {o} -> {to}: [{}, {}]", shown(t), shown(f));
         }
     }
     if let Some(place) = failed {

@@ -108,6 +108,64 @@ fn the_write_loss_of_chapter_4_has_p_0_005_and_its_mttf_in_closed_form() {
     assert_eq!(g.mttf(&lost), Some(q(99_580, 1)));
 }
 
+/// The abstract view on the computing states of the producer with its write loss: from
+/// computing to computing again, 199/200 in 500; to the loss, 1/200 in 80. Without the
+/// loss, the view on its computing state is the cycle: 1 in 500.
+#[test]
+fn the_abstract_view_on_the_computing_states() {
+    let text = PRODUCER.replace(
+        "LOSS",
+        r#"(name: "t4", pre: ["calcul"], post: ["lost"], delay: Discrete([(80, "0.01"), (81, "99/100")])),"#,
+    );
+    let g = net(&text).state_graph().expect("graph");
+    let mut observed = g.marked(0);
+    observed.extend(g.marked(3));
+    observed.sort_unstable();
+    let view = g.abstract_view(&observed).expect("view");
+    let lost = g.marked(3)[0];
+    // From the initial state where t4 drew 80 (p = 1/100): the tie, 1/2 and 1/2.
+    let (drew_80, _) = g
+        .initial
+        .iter()
+        .find(|(_, p)| *p == q(1, 100))
+        .expect("the early draw");
+    let from: Vec<(usize, Q, Q)> = view
+        .iter()
+        .filter(|(o, _, _, _)| o == drew_80)
+        .map(|(_, to, f, t)| (*to, f.clone(), t.clone()))
+        .collect();
+    let to_lost = from
+        .iter()
+        .find(|(to, _, _)| *to == lost)
+        .expect("to the loss");
+    assert_eq!((to_lost.1.clone(), to_lost.2.clone()), (q(1, 2), q(80, 1)));
+    let again: Q = from
+        .iter()
+        .filter(|(to, _, _)| *to != lost)
+        .map(|(_, f, _)| f.clone())
+        .sum();
+    assert_eq!(again, q(1, 2));
+    assert!(
+        from.iter()
+            .filter(|(to, _, _)| *to != lost)
+            .all(|(_, _, t)| *t == q(500, 1))
+    );
+    // Every observable state leaves with probability 1 in the view, but the loss.
+    for &o in observed.iter().filter(|&&o| o != lost) {
+        let f: Q = view
+            .iter()
+            .filter(|(x, ..)| *x == o)
+            .map(|(_, _, f, _)| f.clone())
+            .sum();
+        assert_eq!(f, Q::one(), "from {o}");
+    }
+    let cycle = net(&PRODUCER.replace("LOSS", ""))
+        .state_graph()
+        .expect("graph");
+    let view = cycle.abstract_view(&cycle.marked(0)).expect("view");
+    assert_eq!(view, [(0, 0, Q::one(), q(500, 1))]);
+}
+
 /// Two transitions of equal delay from one place tie: each fires with 1/2.
 #[test]
 fn a_tie_is_shared_equally() {
