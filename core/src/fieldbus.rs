@@ -34,7 +34,7 @@
 //! ([`Analysis::input_bounds`]).
 
 use crate::diag::codes;
-use crate::diag::{Location, Problem, ron_problem};
+use crate::diag::{Location, Problem};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -148,11 +148,7 @@ pub fn transaction_ns(bytes: u64, tmac_ns: u64, turnaround_ns: u64) -> u64 {
 impl BusFile {
     /// Loads a bus file.
     pub fn load(path: &Path) -> Result<(Self, String), Vec<Problem>> {
-        let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
-        let file = crate::live::ron_options()
-            .from_str(&text)
-            .map_err(|e| vec![ron_problem(path, &e)])?;
-        Ok((file, text))
+        crate::live::load_ron(path)
     }
 
     /// The analysis of this bus; `path` and `text` place the problems.

@@ -29,7 +29,7 @@
 //! ```
 
 use crate::diag::codes;
-use crate::diag::{Location, Problem, ron_problem};
+use crate::diag::{Location, Problem};
 use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Zero};
@@ -175,11 +175,7 @@ fn parse_q(text: &str) -> Option<Q> {
 impl NetFile {
     /// Loads a net file.
     pub fn load(path: &Path) -> Result<(Self, String), Vec<Problem>> {
-        let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
-        let file = crate::live::ron_options()
-            .from_str(&text)
-            .map_err(|e| vec![ron_problem(path, &e)])?;
-        Ok((file, text))
+        crate::live::load_ron(path)
     }
 
     /// Checks the net: every place known, probabilities that sum to 1.
@@ -521,31 +517,7 @@ impl StateGraph {
     /// `f_u = Σ_v p_uv h_v`, `g_u = Σ_v p_uv (θ_uv h_v + [v ∉ T] g_v)` with `h_v = 1` on
     /// the target; the target's own states are 1 and 0.
     pub fn first_passage(&self, target: &[usize]) -> Option<Vec<(Q, Q)>> {
-        let n = self.states.len();
-        let in_t = |s: usize| target.contains(&s);
-        // f: (I − P_UU) f = P_UT 1.
-        let mut a = vec![vec![Q::zero(); n]; n];
-        let mut bf = vec![Q::zero(); n];
-        for (i, row) in a.iter_mut().enumerate() {
-            row[i] = Q::one();
-            if in_t(i) {
-                bf[i] = Q::one();
-            }
-        }
-        for arc in self.arcs.iter().filter(|a| !in_t(a.from)) {
-            if in_t(arc.to) {
-                bf[arc.from] += arc.p.clone();
-            } else {
-                a[arc.from][arc.to] -= arc.p.clone();
-            }
-        }
-        let f = solve(a.clone(), bf)?;
-        // g: (I − P_UU) g = Σ_v p_uv θ_uv f_v (f_v = 1 on the target).
-        let mut bg = vec![Q::zero(); n];
-        for arc in self.arcs.iter().filter(|a| !in_t(a.from)) {
-            bg[arc.from] += &arc.p * Q::from_integer(arc.theta.into()) * &f[arc.to];
-        }
-        let g = solve(a, bg)?;
+        let (f, g) = self.passage(&|s| target.contains(&s), &|_| false)?;
         Some(
             f.into_iter()
                 .zip(g)
@@ -555,6 +527,40 @@ impl StateGraph {
                 })
                 .collect(),
         )
+    }
+
+    /// The first-passage equations: `h_u = Σ_v p_uv h_v` and
+    /// `g_u = Σ_v p_uv (θ_uv h_v + g_v)` on the states neither `reached` nor `stopped`;
+    /// `h` is 1 on the reached states and 0 on the stopped ones, `g` 0 on both.
+    fn passage(
+        &self,
+        reached: &dyn Fn(usize) -> bool,
+        stopped: &dyn Fn(usize) -> bool,
+    ) -> Option<(Vec<Q>, Vec<Q>)> {
+        let n = self.states.len();
+        let end = |s: usize| reached(s) || stopped(s);
+        let mut a = vec![vec![Q::zero(); n]; n];
+        let mut bh = vec![Q::zero(); n];
+        for (i, row) in a.iter_mut().enumerate() {
+            row[i] = Q::one();
+            if reached(i) {
+                bh[i] = Q::one();
+            }
+        }
+        for arc in self.arcs.iter().filter(|a| !end(a.from)) {
+            if reached(arc.to) {
+                bh[arc.from] += arc.p.clone();
+            } else if !stopped(arc.to) {
+                a[arc.from][arc.to] -= arc.p.clone();
+            }
+        }
+        let h = solve(a.clone(), bh)?;
+        let mut bg = vec![Q::zero(); n];
+        for arc in self.arcs.iter().filter(|a| !end(a.from)) {
+            bg[arc.from] += &arc.p * Q::from_integer(arc.theta.into()) * &h[arc.to];
+        }
+        let g = solve(a, bg)?;
+        Some((h, g))
     }
 
     /// The quantitative abstract view on the observable states `observable` ([AJ95], the
@@ -568,71 +574,24 @@ impl StateGraph {
         for &target in observable {
             // h and g over the unobservable states, for this target: the target counts
             // as reached, the other observable states stop the path.
-            let stops: Vec<usize> = observable.to_vec();
-            let fp = self.first_passage_to(target, &stops)?;
+            let (h, g) = self.passage(&|s| s == target, &|s| {
+                s != target && observable.contains(&s)
+            })?;
             for &o in observable {
-                let (mut f, mut g) = (Q::zero(), Q::zero());
+                let (mut f, mut gg) = (Q::zero(), Q::zero());
                 for arc in self.arcs.iter().filter(|a| a.from == o) {
-                    let (h, gv) = if arc.to == target {
-                        (Q::one(), Q::zero())
-                    } else if observable.contains(&arc.to) {
-                        (Q::zero(), Q::zero())
-                    } else {
-                        fp[arc.to].clone()
-                    };
-                    g += &arc.p * (Q::from_integer(arc.theta.into()) * &h + gv);
+                    let (h, gv) = (&h[arc.to], &g[arc.to]);
+                    gg += &arc.p * (Q::from_integer(arc.theta.into()) * h + gv);
                     f += &arc.p * h;
                 }
                 if !f.is_zero() {
-                    let t = &g / &f;
+                    let t = &gg / &f;
                     out.push((o, target, f, t));
                 }
             }
         }
         out.sort_by_key(|a| (a.0, a.1));
         Some(out)
-    }
-
-    /// For each state, `(h, g)`: the probability of reaching `target` before any other
-    /// state of `stops` (`h = 1` at the target, 0 at the others), and the time-weighted
-    /// probability `g = Σ_v p_uv (θ_uv h_v + [v ∉ stops] g_v)` (0 on `stops`).
-    fn first_passage_to(&self, target: usize, stops: &[usize]) -> Option<Vec<(Q, Q)>> {
-        let n = self.states.len();
-        let stop = |s: usize| s == target || stops.contains(&s);
-        let mut a = vec![vec![Q::zero(); n]; n];
-        let mut bh = vec![Q::zero(); n];
-        for (i, row) in a.iter_mut().enumerate() {
-            row[i] = Q::one();
-        }
-        bh[target] = Q::one();
-        for arc in self.arcs.iter().filter(|a| !stop(a.from)) {
-            if arc.to == target {
-                bh[arc.from] += arc.p.clone();
-            } else if !stop(arc.to) {
-                a[arc.from][arc.to] -= arc.p.clone();
-            }
-        }
-        let h = solve(a.clone(), bh)?;
-        let mut bg = vec![Q::zero(); n];
-        for arc in self.arcs.iter().filter(|a| !stop(a.from)) {
-            bg[arc.from] += &arc.p * Q::from_integer(arc.theta.into()) * &h[arc.to];
-        }
-        let g = solve(a, bg)?;
-        Some(
-            h.into_iter()
-                .zip(g)
-                .enumerate()
-                .map(|(s, (h, g))| {
-                    if stop(s) && s != target {
-                        (Q::zero(), Q::zero())
-                    } else if s == target {
-                        (Q::one(), Q::zero())
-                    } else {
-                        (h, g)
-                    }
-                })
-                .collect(),
-        )
     }
 
     /// The mean time to a first failure from the initial distribution: the mean time to

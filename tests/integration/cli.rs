@@ -364,7 +364,11 @@ fn the_stpn_command_gives_the_exact_mttf_of_the_write_loss() {
     // The abstract view on the computing states and the loss: the early draw (state 0)
     // loses the tie half the time, 80 Ut into the cycle.
     let out = vigie(&["stpn", net, "--observe", "calcul,lost"]);
-    assert!(text(&out).contains("0 -> 3: [80, 1/2 (0.500000)]"), "{}", text(&out));
+    assert!(
+        text(&out).contains("0 -> 3: [80, 1/2 (0.500000)]"),
+        "{}",
+        text(&out)
+    );
     let out = vigie(&["stpn", net, "--failed", "nowhere"]);
     assert!(!out.status.success());
     assert!(

@@ -24,5 +24,16 @@ pub(crate) fn ron_options() -> ron::Options {
     ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
 }
 
+/// Reads a RON file with [`ron_options`]: the value and its text (to place problems).
+pub(crate) fn load_ron<T: serde::de::DeserializeOwned>(
+    path: &std::path::Path,
+) -> Result<(T, String), Vec<crate::diag::Problem>> {
+    let text = crate::diag::read_text(path).map_err(|p| vec![p])?;
+    let value = ron_options()
+        .from_str(&text)
+        .map_err(|e| vec![crate::diag::ron_problem(path, &e)])?;
+    Ok((value, text))
+}
+
 #[cfg(test)]
 mod tests;
