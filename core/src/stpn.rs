@@ -563,7 +563,7 @@ impl StateGraph {
         Some((h, g))
     }
 
-    /// The quantitative abstract view on the observable states `observable` ([AJ95], the
+    /// The quantitative abstract view on the observable states `observable` (AJ95 in the thesis, the
     /// thesis's views): from each observable state `o` to each observable state `o'`
     /// reached first (through unobservable states only), the probability `F(o, o')` and
     /// the mean time `T = G/F`, with `F(o,o') = Σ_v p_ov h_v(o')` and
