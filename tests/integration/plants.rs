@@ -1218,3 +1218,34 @@ fn a_legacy_layout_folder_runs_on_the_components_as_the_station_does() {
     assert_eq!(ours.0, serde_json::Value::Bool(true));
     assert_eq!(ours, theirs);
 }
+
+/// `vigie check` validates the plant's I/O map and the fieldbus it names: the
+/// substation's signals and constraints with a bus that cannot keep DefDep's deadline
+/// fail the check, naming the bus file and its line (V1305); with the shipped bus they
+/// pass.
+#[test]
+fn check_validates_the_io_map_and_its_fieldbus() {
+    let tmp = TempDir::new("check-bus");
+    let dir = tmp.0.join("plant");
+    std::fs::create_dir_all(&dir).unwrap();
+    let substation = repo().join("layouts/substation");
+    for f in ["plant.ron", "constraints.txt", "io-map.ron", "bus.ron"] {
+        std::fs::copy(substation.join(f), dir.join(f)).unwrap();
+    }
+    let d = dir.to_str().unwrap();
+    let out = vigie(&["check", d]);
+    assert!(out.status.success(), "{}", text(&out));
+    let bus = std::fs::read_to_string(dir.join("bus.ron")).unwrap();
+    std::fs::write(
+        dir.join("bus.ron"),
+        bus.replace(
+            "(name: \"DefDep_D1\", period_us: 50000",
+            "(name: \"DefDep_D1\", period_us: 100000",
+        ),
+    )
+    .unwrap();
+    let out = vigie(&["check", d]);
+    assert!(!out.status.success());
+    let t = text(&out);
+    assert!(t.contains("bus.ron:12:") && t.contains("V1305"), "{t}");
+}

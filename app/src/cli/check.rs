@@ -163,6 +163,14 @@ pub(crate) fn run(dir: &Path, json: bool) -> anyhow::Result<ExitCode> {
     };
     let mut problems = problems;
     let physical = physical(dir, &bundle, &mut problems);
+    // The live link's I/O map, and the fieldbus it names, when the plant has one.
+    let map = dir.join("io-map.ron");
+    if map.exists() {
+        match vigie_core::live::iomap::IoMap::load(&map, &bundle.plant) {
+            Ok((_, warnings)) => problems.extend(warnings),
+            Err(p) => problems.extend(p),
+        }
+    }
     let symbols = &bundle.symbols;
     let rows: Vec<ConstraintRow<'_>> = bundle
         .constraints
