@@ -1711,12 +1711,7 @@ impl Simulation {
     ) -> Option<(Explanation, ProjectedPlant)> {
         let mut ex = explain::explain(&self.engine, index)?;
         // Beyond the paper: the program is known, so its elements lead the hypothesis.
-        // A stop by the diagnosers alone is no program error: no program suspects.
-        if let Some(trip) = self.engine.trips.get(index).filter(|t| {
-            !t.constraints
-                .iter()
-                .all(|c| crate::pop::coop::is_diagnoser_stop(&c.id))
-        }) {
+        if let Some(trip) = self.engine.trips.get(index) {
             explain::add_program_hypothesis(&mut ex, trip, &before, after);
         }
         // Hardware before program: a component the diagnosers hold faulty comes first.
@@ -1828,15 +1823,7 @@ impl Simulation {
     }
 }
 
-/// The program followed beside a live PLC (`--program`), in its closest situation before
-/// the tripping scan and after it ([`crate::live::follow::Follower::program`]).
-#[derive(Clone, Copy, Debug)]
-pub struct Followed<'a> {
-    /// The program before its tripping scan.
-    pub before: &'a ProgramRuntime,
-    /// The program after it.
-    pub after: &'a ProgramRuntime,
-}
+pub use crate::live::follow::Followed;
 
 /// The explanation of a trip seen on a live plant: levels 0, 2, 3 and 4 from the
 /// recorder, and level 1 from an emulator initialised from the observed inputs and
@@ -1870,13 +1857,7 @@ pub fn explain_live_projected(
 ) -> Option<(Explanation, Option<ProjectedPlant>)> {
     let mut ex = explain::explain(engine, index)?;
     let trip = engine.trips.get(index)?;
-    // A stop by the diagnosers alone is no program error: no program suspects.
-    if let Some(p) = program
-        && !trip
-            .constraints
-            .iter()
-            .all(|c| crate::pop::coop::is_diagnoser_stop(&c.id))
-    {
+    if let Some(p) = program {
         explain::add_program_hypothesis(&mut ex, trip, p.before, p.after);
     }
     let Some(layout) = layout else {
@@ -1901,9 +1882,7 @@ pub fn explain_live_projected(
     let mut outputs = record.commanded.clone();
     let mut frame = engine.frame().clone();
     let mut rt = program.map(|p| p.after.clone());
-    let driven = rt.as_ref().map_or_else(Vec::new, |rt| {
-        crate::live::follow::driven_outputs(&rt.program().program, &bundle.plant)
-    });
+    let driven = program.map_or(&[][..], |p| p.driven);
     let mut scan = |emu: &Physical, outputs: &mut Bits| {
         if let Some(rt) = rt.as_mut() {
             frame.shift();

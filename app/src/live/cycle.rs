@@ -520,11 +520,7 @@ impl Cycle for MonitorCycle {
         let explainer = Explainer {
             bundle: &self.bundle,
             layout: self.layout.as_ref(),
-            program: self
-                .follower
-                .as_ref()
-                .and_then(Follower::program)
-                .map(|(before, after)| vigie_core::sim::Followed { before, after }),
+            program: self.follower.as_ref().and_then(Follower::program),
         };
         emit_engine_events(
             &mut self.engine,

@@ -372,13 +372,21 @@ pub fn program_suspects(
 
 /// Inserts the program suspects at the head of the hypothesis level of `ex` (after a
 /// suspect sensor, X414, before the paper's (a)/(b)/(d) suspects): the first suspect is
-/// then the most specific one.
+/// then the most specific one. A stop by the diagnosers alone has none.
 pub fn add_program_hypothesis(
     ex: &mut Explanation,
     trip: &Trip,
     before: &ProgramRuntime,
     after: &ProgramRuntime,
 ) {
+    // A stop by the diagnosers alone is no program error: no program suspects.
+    if trip
+        .constraints
+        .iter()
+        .all(|c| crate::pop::coop::is_diagnoser_stop(&c.id))
+    {
+        return;
+    }
     let suspects = program_suspects(trip, before, after);
     let level = &mut ex.hypothesis;
     let mut items = Vec::with_capacity(suspects.len() + level.items.len());

@@ -108,10 +108,22 @@ fn reads_panel_history(program: &CompiledProgram) -> bool {
         })
 }
 
+/// The program followed beside a live PLC, in its closest situation before the last scan
+/// and after it ([`Follower::program`]): what the explanations of a trip read.
+#[derive(Clone, Copy, Debug)]
+pub struct Followed<'a> {
+    /// The program before its last scan.
+    pub before: &'a ProgramRuntime,
+    /// The program after it.
+    pub after: &'a ProgramRuntime,
+    /// The outputs it drives (indices in plant order); the others are not the program's.
+    pub driven: &'a [usize],
+}
+
 /// The outputs (indices in plant order) `program` drives: an action's or an equation's
 /// target. The others (a safety contactor the safety function holds) are not the
 /// program's.
-pub fn driven_outputs(program: &crate::control::Program, plant: &Plant) -> Vec<usize> {
+fn driven_outputs(program: &crate::control::Program, plant: &Plant) -> Vec<usize> {
     let targets: Vec<&str> = program
         .steps()
         .flat_map(|(_, s)| s.actions.iter().map(|a| a.target.as_str()))
@@ -257,13 +269,17 @@ impl Follower {
     /// presses), before its last scan and after it: what the explanations of a trip in
     /// the cycle just followed read. `None` before the first cycle followed and once the
     /// PLC diverged (it is not running this program).
-    pub fn program(&self) -> Option<(&ProgramRuntime, &ProgramRuntime)> {
+    pub fn program(&self) -> Option<Followed<'_>> {
         if self.divergence.is_some() {
             return None;
         }
         let closest = self.situations.first()?;
         let before = self.previous.get(closest.parent)?;
-        Some((&before.rt, &closest.rt))
+        Some(Followed {
+            before: &before.rt,
+            after: &closest.rt,
+            driven: &self.driven,
+        })
     }
 
     /// The divergence from the closest situation (lowest streak) of the last cycle.

@@ -151,8 +151,7 @@ impl Simulation {
                 (self.projection, self.cycle),
                 self.follower
                     .as_ref()
-                    .and_then(|f| f.program())
-                    .map(|(before, after)| super::Followed { before, after }),
+                    .and_then(crate::live::follow::Follower::program),
             )
         {
             if let Some(p) = projected {
