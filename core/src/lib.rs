@@ -41,6 +41,7 @@ pub mod plcopen;
 pub mod pop;
 pub mod sim;
 pub mod stpn;
+pub mod swa;
 pub mod symbols;
 pub mod synthetic;
 pub mod tasks;

@@ -16,9 +16,11 @@
 //!
 //! Time is [`crate::Millis`]; the thesis's fixtures use 1 u.t. = 1000 ms.
 //!
-//! Not implemented: the offline synthesis of the full product region `E*` (this module
-//! uses the per-task closed form, which is sound but may detect later than `E*` when
-//! cross-task constraints apply; such constraints can be given to the coordinator).
+//! This module runs the per-task closed form, which is sound but may detect later than
+//! the product region `E*` when cross-task constraints apply; such constraints can be
+//! given to the coordinator. [`crate::swa`] synthesises `E*` (`vigie synthesize`) and
+//! runs it ([`crate::swa::regions::RegionMonitor`]); the plant's monitor does not run it
+//! yet.
 
 pub mod events;
 pub mod explain;

@@ -15,6 +15,7 @@ mod filter_trace;
 mod fuzz_loaders;
 mod live;
 mod plants;
+mod polyhedra;
 mod transients;
 
 #[path = "../../core/src/test_support/paper.rs"]

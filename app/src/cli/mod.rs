@@ -13,6 +13,7 @@ mod learn;
 mod program;
 mod run;
 mod stpn;
+mod synthesize;
 mod verify;
 
 use std::path::PathBuf;
@@ -255,11 +256,40 @@ pub(crate) enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The monitoring regions E* of timed tasks (seed 000): the stopwatch automata of a
+    /// `tasks.ron` (or a `*.swa.ron`), their product, and per location the valuations
+    /// from which every task in progress can still finish acceptably. Writes
+    /// `regions.ron` beside a `tasks.ron` (`X.regions.ron` beside `X.swa.ron`), which
+    /// the plant's task monitor then runs.
+    Synthesize {
+        /// `tasks.ron` or `*.swa.ron`.
+        file: PathBuf,
+        /// Write the regions here instead.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write nothing; fail when the regions file is not what the automata give.
+        #[arg(long)]
+        check: bool,
+        /// Bound of each fixed point, in polyhedra processed (V1502 beyond).
+        #[arg(long, default_value_t = 20_000)]
+        limit: usize,
+    },
     /// The PLC's own program in PLCopen TC6 XML: write a control program for the PLC's
     /// tool, or read one (SFC, ST, LD) and check it against the plant.
     Program {
         #[command(subcommand)]
         action: program::ProgramCmd,
+    },
+    /// Measure the stopwatch synthesis: time and product size against the number of
+    /// interruptible tasks (1 to N, independent, α = 3 s, β = 4 s, γ = 5 s); a size is
+    /// not run once the one before took longer than the budget.
+    BenchSynthesis {
+        /// Largest number of tasks.
+        #[arg(long, default_value_t = 8)]
+        max_tasks: usize,
+        /// Seconds a size may take before the larger ones are skipped.
+        #[arg(long, default_value_t = 60.0)]
+        budget: f64,
     },
     /// Measure the console: CPU time per frame at 1x (headless egui, no GPU) and memory
     /// over a simulated hour at 100x.
@@ -482,6 +512,16 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             observe,
             json,
         } => stpn::run(&file, failed.as_deref(), &observe, json),
+        Command::Synthesize {
+            file,
+            out,
+            check,
+            limit,
+        } => synthesize::run(&file, out.as_deref(), check, limit),
+        Command::BenchSynthesis { max_tasks, budget } => {
+            synthesize::bench(max_tasks, budget);
+            Ok(ExitCode::SUCCESS)
+        }
         Command::BenchConsole {
             plant,
             frames,

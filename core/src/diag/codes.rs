@@ -213,6 +213,10 @@ registry! {
     BUS_DEADLINE = "V1305", "a variable delivering plant inputs whose deadline the bus cannot keep";
     // V14xx: stochastic timed Petri nets (`vigie stpn`)
     STPN_INVALID = "V1401", "a stochastic Petri net naming an unknown place or with delay probabilities that do not sum to 1";
+    // V15xx: stopwatch automata and their synthesis (`vigie synthesize`)
+    SWA_INVALID = "V1501", "a stopwatch automaton naming an unknown clock or location, or with a constraint that does not parse";
+    SWA_LIMIT = "V1502", "a synthesis that did not converge within its iteration limit";
+    REGIONS_STALE = "V1503", "a regions file synthesised from other tasks than the ones it is run with";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";
