@@ -417,7 +417,140 @@ fn cut(p: &Poly, fwd: &[Poly]) -> Vec<Poly> {
 }
 
 /// `E*` of every location.
+///
+/// Components that share no event (directly or through others) form independent groups;
+/// each group is synthesised alone and the location's region is the conjunction of its
+/// groups' regions. Time still passes for all groups at once in the product, so the
+/// product's own forward set can be smaller (a group's invariant can lock time): the
+/// decomposition over-approximates it, and every location is then reported in
+/// [`Synthesis::approximate`] when there is more than one group.
 pub fn synthesize(swa: &Swa, limits: Limits) -> Result<Synthesis, SynthError> {
+    let groups = independent_groups(swa);
+    if groups.len() > 1 {
+        return synthesize_groups(swa, &groups, limits);
+    }
+    synthesize_product(swa, limits)
+}
+
+/// The components grouped by shared events (connected components), in order.
+pub fn independent_groups(swa: &Swa) -> Vec<Vec<usize>> {
+    let n = swa.components.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(parent: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while parent[r] != r {
+            r = parent[r];
+        }
+        parent[x] = r;
+        r
+    }
+    for a in 0..n {
+        for b in a + 1..n {
+            let shared = swa.components[a]
+                .def
+                .edges
+                .iter()
+                .any(|e| swa.components[b].knows(&e.event));
+            if shared {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut index: Vec<Option<usize>> = vec![None; n];
+    for c in 0..n {
+        let r = find(&mut parent, c);
+        match index[r] {
+            Some(g) => groups[g].push(c),
+            None => {
+                index[r] = Some(groups.len());
+                groups.push(vec![c]);
+            }
+        }
+    }
+    groups
+}
+
+/// `p` of a group's clock space, in the product's clock space.
+fn lift_group(p: &Poly, map: &[usize], dim: usize) -> Poly {
+    if p.trivially_empty() {
+        return Poly::empty(dim);
+    }
+    let mut out = Poly::universe(dim);
+    for h in p.half_spaces() {
+        let mut a = vec![Q::zero(); dim];
+        for (k, c) in h.a.into_iter().enumerate() {
+            a[map[k]] = c;
+        }
+        out.add(HalfSpace {
+            a,
+            b: h.b,
+            strict: h.strict,
+        });
+    }
+    out
+}
+
+fn synthesize_groups(
+    swa: &Swa,
+    groups: &[Vec<usize>],
+    limits: Limits,
+) -> Result<Synthesis, SynthError> {
+    let dim = swa.clocks.len();
+    let n = swa.locations.len();
+    let mut forward_sets: Vec<Union> = vec![vec![Poly::universe(dim)]; n];
+    let mut backward_sets: Vec<Vec<Union>> = vec![vec![Vec::new(); n]; swa.components.len()];
+    let mut regions: Vec<Union> = vec![vec![Poly::universe(dim)]; n];
+    for group in groups {
+        let file = super::automaton::SwaFile {
+            components: group
+                .iter()
+                .map(|&c| swa.components[c].def.clone())
+                .collect(),
+        };
+        // The group's components were compiled once already: this cannot fail.
+        let Ok(sub) = file.compile(std::path::Path::new("<group>"), "") else {
+            continue;
+        };
+        let map: Vec<usize> = sub
+            .clocks
+            .iter()
+            .map(|k| swa.clocks.iter().position(|x| x == k).unwrap_or_default())
+            .collect();
+        let s = synthesize_product(&sub, limits)?;
+        let index: std::collections::BTreeMap<Vec<usize>, usize> = sub
+            .locations
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (l.parts.clone(), i))
+            .collect();
+        for l in 0..n {
+            let parts: Vec<usize> = group.iter().map(|&c| swa.locations[l].parts[c]).collect();
+            let Some(&gl) = index.get(&parts) else {
+                // Not reachable in the group: not reachable in the product.
+                forward_sets[l].clear();
+                regions[l].clear();
+                continue;
+            };
+            let lift =
+                |u: &Union| -> Union { u.iter().map(|p| lift_group(p, &map, dim)).collect() };
+            forward_sets[l] = intersect_unions(&forward_sets[l], &lift(&s.forward[gl]));
+            regions[l] = intersect_unions(&regions[l], &lift(&s.regions[gl]));
+            for (gi, &c) in group.iter().enumerate() {
+                backward_sets[c][l] = lift(&s.backward[gi][gl]);
+            }
+        }
+    }
+    Ok(Synthesis {
+        forward: forward_sets,
+        backward: backward_sets,
+        regions,
+        approximate: (0..n).collect(),
+    })
+}
+
+fn synthesize_product(swa: &Swa, limits: Limits) -> Result<Synthesis, SynthError> {
     let (fwd, mut approximate) = forward(swa, limits)?;
     let mut backward_sets = Vec::new();
     for c in 0..swa.components.len() {

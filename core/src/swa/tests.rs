@@ -305,3 +305,34 @@ proptest::proptest! {
         proptest::prop_assert!(e.is_subset(&fwd.elapse(&r, false)));
     }
 }
+
+#[test]
+fn independent_tasks_are_synthesised_apart_and_give_the_conjunction_of_closed_forms() {
+    let set = crate::tasks::synthetic(3);
+    let swa = from_tasks::automata(&set)
+        .compile(Path::new("<synthetic>"), "")
+        .unwrap();
+    assert_eq!(synth::independent_groups(&swa).len(), 3);
+    assert_eq!(synth::independent_groups(&task_swa(WORKSHOP)).len(), 1);
+    let s = synthesize(&swa, Limits::default()).unwrap();
+    assert_eq!(s.regions.len(), 27);
+    assert_eq!(s.approximate.len(), 27, "the decomposition is reported");
+    // Every task in progress: 0 <= x - y < 2 s, x < 5 s, y <= 4 s; every idle task at 0.
+    for (l, loc) in swa.locations.iter().enumerate() {
+        let mut want = Vec::new();
+        for (i, part) in loc.parts.iter().enumerate() {
+            let t = format!("t{i}");
+            want.push(if *part == 0 {
+                format!("{t}.x == 0 && {t}.y == 0")
+            } else {
+                format!("0 <= {t}.x - {t}.y < 2000 && {t}.x < 5000 && 0 <= {t}.y <= 4000")
+            });
+        }
+        let want = p(&want.join(" && "), &swa.clocks);
+        assert!(
+            synth::same_union(&s.regions[l], std::slice::from_ref(&want)),
+            "{}",
+            loc.name
+        );
+    }
+}
