@@ -224,22 +224,8 @@ fn problem(src: Src<'_>, needle: &str, msg: String) -> Problem {
 }
 
 fn lift(p: &Poly, offset: usize, dim: usize) -> Poly {
-    if p.trivially_empty() {
-        return Poly::empty(dim);
-    }
-    let mut out = Poly::universe(dim);
-    for h in p.half_spaces() {
-        let mut a = vec![Q::zero(); dim];
-        for (k, c) in h.a.into_iter().enumerate() {
-            a[offset + k] = c;
-        }
-        out.add(HalfSpace {
-            a,
-            b: h.b,
-            strict: h.strict,
-        });
-    }
-    out
+    let map: Vec<usize> = (offset..offset + p.dim()).collect();
+    p.embed(&map, dim)
 }
 
 impl SwaFile {

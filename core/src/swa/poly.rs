@@ -83,14 +83,7 @@ fn dot(a: &[Q], v: &[Q]) -> Q {
         .fold(Q::zero(), |s, t| s + t)
 }
 
-fn int_gcd(mut a: i128, mut b: i128) -> i128 {
-    a = a.abs();
-    b = b.abs();
-    while b != 0 {
-        (a, b) = (b, a % b);
-    }
-    a
-}
+use super::rat::gcd as int_gcd;
 
 /// A convex polyhedron of dimension `dim`.
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -138,6 +131,27 @@ impl Poly {
             empty: true,
             dirs: BTreeMap::new(),
         }
+    }
+
+    /// This polyhedron in a space of dimension `dim`, its variable `k` becoming
+    /// `map[k]` (a component's clocks in the product, a group's in the whole).
+    pub fn embed(&self, map: &[usize], dim: usize) -> Poly {
+        if self.empty {
+            return Poly::empty(dim);
+        }
+        let mut out = Poly::universe(dim);
+        for h in self.half_spaces() {
+            let mut a = vec![Q::zero(); dim];
+            for (k, c) in h.a.into_iter().enumerate() {
+                a[map[k]] = c;
+            }
+            out.add(HalfSpace {
+                a,
+                b: h.b,
+                strict: h.strict,
+            });
+        }
+        out
     }
 
     /// The dimension.

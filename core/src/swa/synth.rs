@@ -472,26 +472,6 @@ pub fn independent_groups(swa: &Swa) -> Vec<Vec<usize>> {
     groups
 }
 
-/// `p` of a group's clock space, in the product's clock space.
-fn lift_group(p: &Poly, map: &[usize], dim: usize) -> Poly {
-    if p.trivially_empty() {
-        return Poly::empty(dim);
-    }
-    let mut out = Poly::universe(dim);
-    for h in p.half_spaces() {
-        let mut a = vec![Q::zero(); dim];
-        for (k, c) in h.a.into_iter().enumerate() {
-            a[map[k]] = c;
-        }
-        out.add(HalfSpace {
-            a,
-            b: h.b,
-            strict: h.strict,
-        });
-    }
-    out
-}
-
 fn synthesize_groups(
     swa: &Swa,
     groups: &[Vec<usize>],
@@ -533,8 +513,7 @@ fn synthesize_groups(
                 regions[l].clear();
                 continue;
             };
-            let lift =
-                |u: &Union| -> Union { u.iter().map(|p| lift_group(p, &map, dim)).collect() };
+            let lift = |u: &Union| -> Union { u.iter().map(|p| p.embed(&map, dim)).collect() };
             forward_sets[l] = intersect_unions(&forward_sets[l], &lift(&s.forward[gl]));
             regions[l] = intersect_unions(&regions[l], &lift(&s.regions[gl]));
             for (gi, &c) in group.iter().enumerate() {
