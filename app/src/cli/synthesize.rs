@@ -5,6 +5,7 @@ use anyhow::{Context, anyhow};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
+use vigie_core::diag::codes;
 use vigie_core::swa::regions::RegionsFile;
 use vigie_core::swa::{Limits, SwaFile, from_tasks, synthesize};
 use vigie_core::tasks::TaskSet;
@@ -49,8 +50,8 @@ pub(crate) fn run(
         iterations: limit,
         ..Limits::default()
     };
-    let s =
-        synthesize(&swa, limits).map_err(|e| anyhow!("{}: error[V1502]: {e}", file.display()))?;
+    let s = synthesize(&swa, limits)
+        .map_err(|e| anyhow!("{}: error[{}]: {e}", file.display(), codes::SWA_LIMIT.id))?;
     let elapsed = t0.elapsed();
     let source = file.display().to_string();
     let regions = RegionsFile::new(&source, &parsed, &swa, &s);
@@ -84,8 +85,9 @@ pub(crate) fn run(
             return Ok(ExitCode::SUCCESS);
         }
         eprintln!(
-            "{}: error[V1503]: not the regions these automata give; run `vigie synthesize {}`",
+            "{}: error[{}]: not the regions these automata give; run `vigie synthesize {}`",
             out.display(),
+            codes::REGIONS_STALE.id,
             file.display()
         );
         return Ok(ExitCode::FAILURE);
