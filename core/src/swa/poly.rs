@@ -507,34 +507,6 @@ impl Poly {
         }
         p
     }
-
-    /// The interval of `t ≥ 0` over which `v + t·r` stays inside, as `(end, closed)`
-    /// when it starts inside (`end = None`: forever); `None` when `v` is outside.
-    pub fn stay(&self, v: &[Q], rates: &[Q]) -> Option<(Option<Q>, bool)> {
-        if !self.contains(v) {
-            return None;
-        }
-        let mut end: Option<(Q, bool)> = None;
-        for h in self.half_spaces() {
-            let slope = dot(&h.a, rates);
-            if !slope.is_positive() {
-                continue;
-            }
-            let t = (h.b - dot(&h.a, v)) / slope;
-            let closed = !h.strict;
-            let tighter = match &end {
-                None => true,
-                Some((e, c)) => t < *e || (t == *e && *c && !closed),
-            };
-            if tighter {
-                end = Some((t, closed));
-            }
-        }
-        Some(match end {
-            None => (None, true),
-            Some((t, c)) => (Some(t), c),
-        })
-    }
 }
 
 fn tighter_hi(new: &Bound, old: &Bound) -> bool {

@@ -385,16 +385,36 @@ impl RegionMonitor {
 
     /// The next instant the valuation leaves the region, if it ever does.
     pub fn next_deadline(&self) -> Option<Deadline> {
+        self.next_exit().map(|(d, ..)| d)
+    }
+
+    /// The next exit: its instant, and `(t, closed, member)` of [`exit`].
+    fn next_exit(&self) -> Option<(Deadline, Q, bool, usize)> {
         if self.alarm.is_some() {
             return None;
         }
         let rates = &self.swa.locations[self.loc].rates;
-        let (t, closed, _) = exit(&self.regions[self.loc].all, &self.v, rates)??;
+        let (t, closed, member) = exit(&self.regions[self.loc].all, &self.v, rates)??;
         let at = self.since.0 + u64::try_from(t.ceil()).unwrap_or(u64::MAX / 2);
-        Some(Deadline {
+        let deadline = Deadline {
             at: Millis(at),
             after: closed && t.is_integer(),
-        })
+        };
+        Some((deadline, t, closed, member))
+    }
+
+    /// Latches an alarm raised by an event (or a valuation outside) at `t`.
+    fn raise(&mut self, t: Millis, kind: RegionAlarmKind, components: Vec<String>, detail: String) {
+        self.alarm = Some(RegionAlarm {
+            at: Deadline {
+                at: t,
+                after: false,
+            },
+            kind,
+            location: self.location().to_string(),
+            components,
+            detail,
+        });
     }
 
     /// Lets time run to `t`; returns the alarm raised on the way.
@@ -402,13 +422,10 @@ impl RegionMonitor {
         if self.alarm.is_some() {
             return None;
         }
-        if let Some(d) = self.next_deadline()
+        if let Some((d, te, closed, member)) = self.next_exit()
             && d.violated_by(t)
         {
             let rates = self.swa.locations[self.loc].rates.clone();
-            let (te, closed, member) = exit(&self.regions[self.loc].all, &self.v, &rates)
-                .flatten()
-                .unwrap_or((Q::zero(), false, 0));
             let at_exit: Vec<Q> = self.v.iter().zip(&rates).map(|(x, r)| x + te * r).collect();
             let (mut components, detail) = self.violated(member, &at_exit, &rates, closed);
             // The components whose own set the valuation leaves at the same instant.
@@ -496,30 +513,23 @@ impl RegionMonitor {
         } else {
             outside
         };
-        self.alarm = Some(RegionAlarm {
-            at: Deadline {
-                at: t,
-                after: false,
-            },
-            kind: RegionAlarmKind::Outside,
-            location: self.location().to_string(),
-            components: comps
-                .iter()
-                .map(|&c| self.swa.components[c].def.name.clone())
-                .collect(),
-            detail: region
-                .all
-                .iter()
-                .map(|p| {
-                    Display {
-                        poly: p,
-                        names: &self.swa.clocks,
-                    }
-                    .to_string()
-                })
-                .collect::<Vec<_>>()
-                .join(" || "),
-        });
+        let components = comps
+            .iter()
+            .map(|&c| self.swa.components[c].def.name.clone())
+            .collect();
+        let detail = region
+            .all
+            .iter()
+            .map(|p| {
+                Display {
+                    poly: p,
+                    names: &self.swa.clocks,
+                }
+                .to_string()
+            })
+            .collect::<Vec<_>>()
+            .join(" || ");
+        self.raise(t, RegionAlarmKind::Outside, components, detail);
     }
 
     /// An observed event at `t`: follows its edge, or raises an alarm. Returns the alarm
@@ -547,16 +557,7 @@ impl RegionMonitor {
             if blocked.is_empty() || !self.options.unexpected {
                 return None; // not observed, or ignored by the policy
             }
-            self.alarm = Some(RegionAlarm {
-                at: Deadline {
-                    at: t,
-                    after: false,
-                },
-                kind: RegionAlarmKind::Unexpected,
-                location: self.location().to_string(),
-                components: blocked,
-                detail: event.to_string(),
-            });
+            self.raise(t, RegionAlarmKind::Unexpected, blocked, event.to_string());
             return self.alarm.as_ref();
         }
         let inside = |e: usize| self.swa.edges[e].guard.contains(&self.v);
@@ -571,16 +572,7 @@ impl RegionMonitor {
                     .filter(|&&(ci, ce)| !self.swa.components[ci].guard(ce).contains(&self.v))
                     .map(|&(ci, _)| self.swa.components[ci].def.name.clone())
                     .collect();
-                self.alarm = Some(RegionAlarm {
-                    at: Deadline {
-                        at: t,
-                        after: false,
-                    },
-                    kind: RegionAlarmKind::Guard,
-                    location: self.location().to_string(),
-                    components: failing,
-                    detail: event.to_string(),
-                });
+                self.raise(t, RegionAlarmKind::Guard, failing, event.to_string());
                 return self.alarm.as_ref();
             }
             None => candidates[0],

@@ -242,6 +242,25 @@ fn absorb(list: &mut Union, p: Poly, max: usize, hulled: &mut bool) -> Option<Po
     Some(p)
 }
 
+/// One step of a fixed point: `p` joins location `l`'s union; what was added (the merged
+/// polyhedron, or the hull) waits to be propagated, and a hull marks `l` approximate.
+fn grow(
+    sets: &mut [Union],
+    l: usize,
+    p: Poly,
+    limits: Limits,
+    approx: &mut BTreeSet<usize>,
+    waiting: &mut VecDeque<(usize, Poly)>,
+) {
+    let mut hulled = false;
+    if let Some(added) = absorb(&mut sets[l], p, limits.members, &mut hulled) {
+        waiting.push_back((l, added));
+    }
+    if hulled {
+        approx.insert(l);
+    }
+}
+
 /// Sets per location, and the locations whose union was replaced by its hull.
 pub type Reached = (Vec<Union>, BTreeSet<usize>);
 
@@ -318,14 +337,7 @@ pub fn forward(swa: &Swa, limits: Limits) -> Result<Reached, SynthError> {
                 continue;
             }
             let grown = succ_t(swa, to, &next).minimize();
-            let mut hulled = false;
-            let added = absorb(&mut reach[to], grown, limits.members, &mut hulled);
-            if hulled {
-                approx.insert(to);
-            }
-            if let Some(added) = added {
-                waiting.push_back((to, added));
-            }
+            grow(&mut reach, to, grown, limits, &mut approx, &mut waiting);
         }
     }
     Ok((reach, approx))
@@ -359,14 +371,7 @@ pub fn backward(swa: &Swa, c: usize, fwd: &[Union], limits: Limits) -> Result<Re
                 .intersect(&swa.locations[e.to].invariant.exists_all(&e.resets));
             let seed = pre_t(swa, e.from, &seed);
             for piece in cut(&seed, &fwd[e.from]) {
-                let mut hulled = false;
-                let added = absorb(&mut back[e.from], piece, limits.members, &mut hulled);
-                if hulled {
-                    approx.insert(e.from);
-                }
-                if let Some(added) = added {
-                    waiting.push_back((e.from, added));
-                }
+                grow(&mut back, e.from, piece, limits, &mut approx, &mut waiting);
             }
         }
     }
@@ -393,14 +398,7 @@ pub fn backward(swa: &Swa, c: usize, fwd: &[Union], limits: Limits) -> Result<Re
             }
             let grown = pre_t(swa, from, &prev);
             for piece in cut(&grown, &fwd[from]) {
-                let mut hulled = false;
-                let added = absorb(&mut back[from], piece, limits.members, &mut hulled);
-                if hulled {
-                    approx.insert(from);
-                }
-                if let Some(added) = added {
-                    waiting.push_back((from, added));
-                }
+                grow(&mut back, from, piece, limits, &mut approx, &mut waiting);
             }
         }
     }
@@ -574,72 +572,6 @@ pub fn intersect_unions(a: &[Poly], b: &[Poly]) -> Union {
             if !r.is_empty() {
                 out.push(r);
             }
-        }
-    }
-    out
-}
-
-/// The hypercube over-approximation of a region: per clock, its bounds over the union
-/// (the classical watchdog's box; conservative, detects later, never falsely).
-pub fn hypercube(region: &[Poly], dim: usize) -> Poly {
-    let mut out = Poly::universe(dim);
-    if region.is_empty() {
-        return Poly::empty(dim);
-    }
-    for k in 0..dim {
-        let others: Vec<usize> = (0..dim).filter(|&j| j != k).collect();
-        let mut lo: Option<(Q, bool)> = None;
-        let mut hi: Option<(Q, bool)> = None;
-        let mut unbounded_hi = false;
-        let mut unbounded_lo = false;
-        for p in region {
-            let proj = p.exists_all(&others);
-            let (mut plo, mut phi) = (None, None);
-            for h in proj.half_spaces() {
-                if h.a[k].is_positive() {
-                    phi = Some((h.b / h.a[k], h.strict));
-                } else if h.a[k].is_negative() {
-                    plo = Some((h.b / h.a[k], h.strict));
-                }
-            }
-            match phi {
-                None => unbounded_hi = true,
-                Some((v, s)) => {
-                    if hi
-                        .as_ref()
-                        .is_none_or(|(h, hs)| v > *h || (v == *h && *hs && !s))
-                    {
-                        hi = Some((v, s));
-                    }
-                }
-            }
-            match plo {
-                None => unbounded_lo = true,
-                Some((v, s)) => {
-                    if lo
-                        .as_ref()
-                        .is_none_or(|(l, ls)| v < *l || (v == *l && *ls && !s))
-                    {
-                        lo = Some((v, s));
-                    }
-                }
-            }
-        }
-        let mut unit = vec![Q::zero(); dim];
-        unit[k] = Q::one();
-        if let (Some((v, s)), false) = (hi, unbounded_hi) {
-            out.add(HalfSpace {
-                a: unit.clone(),
-                b: v,
-                strict: s,
-            });
-        }
-        if let (Some((v, s)), false) = (lo, unbounded_lo) {
-            out.add(HalfSpace {
-                a: unit.iter().map(|c| -c).collect(),
-                b: -v,
-                strict: s,
-            });
         }
     }
     out
