@@ -39,13 +39,14 @@ pub struct PlantBundle {
 
 /// The files of a plant folder its loaders may read (besides `programs/*.ron`), each
 /// checked against [`crate::diag::MAX_FILE_BYTES`] before anything is read.
-pub const FOLDER_FILES: [&str; 11] = [
+pub const FOLDER_FILES: [&str; 12] = [
     "plant.ron",
     "components.ron",
     "observers.ron",
     "constraints.txt",
     "invariants.txt",
     "tasks.ron",
+    "regions.ron",
     "layout.ron",
     "diagnosers.ron",
     "faults.ron",

@@ -8,19 +8,26 @@
 //! `0 ≤ x − y < γ − α ∧ x < γ ∧ y ≤ β` — earlier than the classical watchdog at start + γ.
 //!
 //! - [`spec`]: `tasks.ron` (tasks, controller windows, cross-task constraints) and checks.
-//! - [`monitor`]: the decentralized monitor (one [`monitor::TaskMonitor`] per task plus
-//!   a [`monitor::Coordinator`]) with exact crossing-time prediction.
-//! - [`explain`]: alarms, stable codes `T001`…`T008`, operator texts, watchdog comparison.
+//! - [`monitor`]: the monitor (one [`monitor::TaskMonitor`] per task plus a
+//!   [`monitor::Coordinator`]) with exact crossing-time prediction, timed by the
+//!   closed form or by the synthesised regions.
+//! - [`explain`]: alarms, stable codes `T001`…`T009`, operator texts, watchdog comparison.
 //! - [`events`]: events as expressions over a PLC frame, and the task outputs published
 //!   as auxiliary variables (`turn_out:infeasible`) for the safety filter.
 //!
 //! Time is [`crate::Millis`]; the thesis's fixtures use 1 u.t. = 1000 ms.
 //!
-//! This module runs the per-task closed form, which is sound but may detect later than
-//! the product region `E*` when cross-task constraints apply; such constraints can be
-//! given to the coordinator. [`crate::swa`] synthesises `E*` (`vigie synthesize`) and
-//! runs it ([`crate::swa::regions::RegionMonitor`]); the plant's monitor does not run it
-//! yet.
+//! The monitor has two timing back-ends behind one seam ([`monitor`]): the per-task
+//! closed form (sound, but it may detect later than the product region `E*` when tasks
+//! are coupled, which hand-written cross-task constraints of the coordinator can
+//! partly make up for), and the synthesised regions `E*` of the tasks' product
+//! automaton ([`crate::swa`]: `vigie synthesize` writes them as `regions.ron` beside
+//! `tasks.ron`). When a plant folder has a `regions.ron`, the layout loader
+//! ([`TaskSet::load_optional`]) checks it against the tasks (a stale one is refused,
+//! V1503) and the plant's monitor, which the emulator, the live link and the console
+//! run, raises its alarms from the regions ([`crate::swa::regions::RegionMonitor`]);
+//! without one it runs the closed form. The alarms (codes, texts), the operator's
+//! panel and the published variables are the same either way.
 
 pub mod events;
 pub mod explain;
@@ -57,6 +64,7 @@ pub fn synthetic(n: usize) -> TaskSet {
         repair: Some("m".into()),
         check_end: true,
         file: std::path::PathBuf::from("<synthetic>"),
+        regions: None,
     }
 }
 

@@ -16,6 +16,7 @@ mod fuzz_loaders;
 mod live;
 mod plants;
 mod polyhedra;
+mod regions;
 mod transients;
 
 #[path = "../../core/src/test_support/paper.rs"]

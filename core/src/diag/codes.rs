@@ -217,6 +217,7 @@ registry! {
     SWA_INVALID = "V1501", "a stopwatch automaton naming an unknown clock or location, or with a constraint that does not parse";
     SWA_LIMIT = "V1502", "a synthesis that did not converge within its iteration limit";
     REGIONS_STALE = "V1503", "a regions file synthesised from other tasks than the ones it is run with";
+    TASK_CROSS_BESIDE_REGIONS = "V1504", "a cross-task constraint not run, the tasks running their synthesised regions";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";
@@ -263,6 +264,7 @@ registry! {
     T_CONTROLLER_WINDOW = "T006", "controller timing window violated";
     T_UNEXPECTED_EVENT = "T007", "unexpected event for the task's state";
     T_CROSS_TASK = "T008", "cross-task constraint of the coordinator violated";
+    T_REGION_LEFT = "T009", "synthesised region left: with the other tasks, it can no longer finish in time";
 }
 
 /// The registry entry of `code` (`"V0301"`, `"x001"`: case and surrounding spaces do

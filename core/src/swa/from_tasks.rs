@@ -10,12 +10,19 @@
 //!   resets them at the entry of `idle`, so that an idle task's clocks read 0).
 //! - Non-interruptible task: `idle` and `run` only, `x = y ≤ γ`, end `α ≤ x < γ`
 //!   (Remark 3: one window, no β).
+//! - An interrupt or resume event that another component observes too (the same
+//!   expression, `/DPV`, for two tasks driven by one actuator) is a level each task
+//!   reads on its own, as the frame adapter applies it ([`crate::tasks::FrameTasks`]:
+//!   an interrupt to a running task only, a resume to an interrupted one): a task
+//!   where it does not apply ignores it (a self-loop), so that the product does not
+//!   wait for every task to take it.
 //! - Window, clock `w`: `closed` (0) and `open` (1, `w ≤ max`); an opening event resets
 //!   `w`; a closing event is the desired space `min ≤ w ≤ max` (and is accepted, without
 //!   a guard, while the window is closed).
 
 use super::automaton::{ComponentDef, EdgeDef, LocationDef, SwaFile};
 use crate::tasks::spec::{Slowdown, TaskSet, TaskSpec, WindowDef};
+use std::collections::BTreeSet;
 
 fn loc(name: &str, label: &str, running: &[&str], invariant: String) -> LocationDef {
     LocationDef {
@@ -37,7 +44,7 @@ fn edge(from: &str, to: &str, event: &str, guard: String, reset: &[&str], goal: 
     }
 }
 
-fn task(t: &TaskSpec) -> ComponentDef {
+fn task(t: &TaskSpec, shared: &BTreeSet<&str>) -> ComponentDef {
     let (a, b, g) = (t.alpha, t.beta, t.gamma);
     let y_max = match t.slowdown {
         Slowdown::Strict => b,
@@ -68,6 +75,13 @@ fn task(t: &TaskSpec) -> ComponentDef {
             progress.push("int".into());
             edges.push(edge("run", "int", i, format!("x < {g}"), &[], false));
             edges.push(edge("int", "run", r, format!("x < {g}"), &[], false));
+            for (event, elsewhere) in [(i, ["idle", "int"]), (r, ["idle", "run"])] {
+                if shared.contains(event.as_str()) {
+                    for l in elsewhere {
+                        edges.push(edge(l, l, event, "true".into(), &[], false));
+                    }
+                }
+            }
             edges.push(edge(
                 "run",
                 "idle",
@@ -130,11 +144,35 @@ fn window(w: &WindowDef) -> ComponentDef {
 
 /// The components of a task set: its tasks, then its windows.
 pub fn automata(set: &TaskSet) -> SwaFile {
+    // The events each component observes, and those observed by more than one.
+    let alphabets: Vec<BTreeSet<&str>> = set
+        .tasks
+        .iter()
+        .map(|t| {
+            let mut a = BTreeSet::from([t.start.as_str(), t.end.as_str()]);
+            if let Some((i, r)) = &t.interruption {
+                a.extend([i.as_str(), r.as_str()]);
+            }
+            a
+        })
+        .chain(
+            set.windows
+                .iter()
+                .map(|w| w.open.iter().chain(&w.close).map(String::as_str).collect()),
+        )
+        .collect();
+    let mut seen = BTreeSet::new();
+    let mut shared = BTreeSet::new();
+    for e in alphabets.iter().flatten() {
+        if !seen.insert(*e) {
+            shared.insert(*e);
+        }
+    }
     SwaFile {
         components: set
             .tasks
             .iter()
-            .map(task)
+            .map(|t| task(t, &shared))
             .chain(set.windows.iter().map(window))
             .collect(),
     }

@@ -14,10 +14,12 @@ use super::synth::{Synthesis, Union};
 use crate::Millis;
 use crate::diag::codes;
 use crate::diag::{Location as At, Problem};
+use crate::tasks::TaskSet;
 use crate::tasks::monitor::Deadline;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A location's region as written.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -113,25 +115,24 @@ impl RegionsFile {
 
     /// Reads `path` and checks it against the automata `file` (compiled as `swa`).
     pub fn load(path: &Path, file: &SwaFile, swa: &Swa) -> Result<Vec<Region>, Problem> {
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            Problem::error(
-                codes::REGIONS_STALE.id,
-                format!("cannot read: {e}"),
-                Some(At::new(path, 1, 1)),
-            )
-        })?;
+        let text = crate::diag::read_text(path)?;
         let parsed: RegionsFile =
             ron::from_str(&text).map_err(|e| crate::diag::ron_problem(path, &e))?;
-        parsed.check(path, &text, file, swa)
+        parsed.check(path, &text, file, swa, None)
     }
 
+    /// Checks the regions against the automata `file` (compiled as `swa`). `source`,
+    /// when given, is the file to synthesise again in the stale message (otherwise the
+    /// file the regions record).
     fn check(
         &self,
         path: &Path,
         text: &str,
         file: &SwaFile,
         swa: &Swa,
+        source: Option<&Path>,
     ) -> Result<Vec<Region>, Problem> {
+        let source = source.map_or_else(|| self.source.clone(), |p| p.display().to_string());
         let want = fingerprint(file);
         let at = |needle: &str| At::of_nth(path, text, needle, 0);
         if self.fingerprint != want || self.clocks != swa.clocks {
@@ -139,8 +140,8 @@ impl RegionsFile {
                 codes::REGIONS_STALE.id,
                 format!(
                     "these regions were synthesised from other automata (fingerprint {}, \
-                     the automata now give {want}); run `vigie synthesize {}` again",
-                    self.fingerprint, self.source
+                     the automata now give {want}); run `vigie synthesize {source}` again",
+                    self.fingerprint
                 ),
                 Some(at(&self.fingerprint)),
             ));
@@ -149,7 +150,7 @@ impl RegionsFile {
             return Err(Problem::error(
                 codes::REGIONS_STALE.id,
                 format!(
-                    "{} locations, the automata have {}",
+                    "{} locations, the automata have {}; run `vigie synthesize {source}` again",
                     self.locations.len(),
                     swa.locations.len()
                 ),
@@ -162,7 +163,7 @@ impl RegionsFile {
                 return Err(Problem::error(
                     codes::REGIONS_STALE.id,
                     format!(
-                        "location `{}` where the automata have `{}`",
+                        "location `{}` where the automata have `{}`; run `vigie synthesize {source}` again",
                         entry.location, loc.name
                     ),
                     Some(at(&entry.location)),
@@ -187,7 +188,10 @@ impl RegionsFile {
                 let c = swa.component(name).ok_or_else(|| {
                     Problem::error(
                         codes::REGIONS_STALE.id,
-                        format!("`{}`: no component `{name}`", entry.location),
+                        format!(
+                            "`{}`: no component `{name}`; run `vigie synthesize {source}` again",
+                            entry.location
+                        ),
                         Some(at(name)),
                     )
                 })?;
@@ -199,6 +203,59 @@ impl RegionsFile {
             });
         }
         Ok(out)
+    }
+}
+
+/// The file of a plant's synthesised regions, beside its `tasks.ron`.
+pub const TASK_REGIONS_FILE: &str = "regions.ron";
+
+/// The synthesised regions of a plant's tasks, loaded beside its `tasks.ron` by the
+/// layout loader ([`crate::tasks::TaskSet::load_optional`]) and checked against the
+/// tasks' automata; the plant's task monitor runs them ([`crate::tasks::Monitor`]).
+/// Shared, so cheap to clone. Two are equal when they come from the same file and
+/// the same automata.
+#[derive(Clone, Debug)]
+pub struct TaskRegions {
+    /// The regions file.
+    pub path: PathBuf,
+    /// The fingerprint of the automata ([`fingerprint`]).
+    pub fingerprint: String,
+    /// The product of the tasks' automata ([`super::from_tasks::automata`]).
+    pub swa: Arc<Swa>,
+    /// `E*` and the components' own sets, per product location.
+    pub regions: Arc<Vec<Region>>,
+}
+
+impl PartialEq for TaskRegions {
+    fn eq(&self, other: &Self) -> bool {
+        self.path == other.path && self.fingerprint == other.fingerprint
+    }
+}
+
+impl Eq for TaskRegions {}
+
+impl TaskRegions {
+    /// The regions beside `set`'s file (`regions.ron` in its folder), checked against
+    /// the set's automata: `None` when there is none; a regions file synthesised from
+    /// other tasks is refused (V1503), naming the file and the command that makes it
+    /// again.
+    pub fn beside(set: &TaskSet) -> Result<Option<Self>, Problem> {
+        let path = set.file.with_file_name(TASK_REGIONS_FILE);
+        if std::fs::symlink_metadata(&path).is_err() {
+            return Ok(None);
+        }
+        let file = super::from_tasks::automata(set);
+        let swa = file.compile(&set.file, "")?;
+        let text = crate::diag::read_text(&path)?;
+        let parsed: RegionsFile =
+            ron::from_str(&text).map_err(|e| crate::diag::ron_problem(&path, &e))?;
+        let regions = parsed.check(&path, &text, &file, &swa, Some(&set.file))?;
+        Ok(Some(TaskRegions {
+            path,
+            fingerprint: parsed.fingerprint,
+            swa: Arc::new(swa),
+            regions: Arc::new(regions),
+        }))
     }
 }
 
@@ -321,10 +378,13 @@ pub struct RegionAlarm {
 /// The monitor `A*`: it follows the product location on events and raises an alarm
 /// as soon as the valuation leaves the synthesised region. After an alarm it freezes
 /// (the thesis's SFC2) until [`RegionMonitor::repair`].
+///
+/// The automata and the regions are shared ([`Arc`]): a clone of the monitor (a
+/// simulation's snapshot) copies only its location and clocks.
 #[derive(Clone, Debug)]
 pub struct RegionMonitor {
-    swa: Swa,
-    regions: Vec<Region>,
+    swa: Arc<Swa>,
+    regions: Arc<Vec<Region>>,
     loc: usize,
     v: Vec<Q>,
     since: Millis,
@@ -342,9 +402,32 @@ pub struct Options {
     pub unexpected: bool,
 }
 
+/// What an event did to the region monitor ([`RegionMonitor::take`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Taken {
+    /// No component observes the event, or an alarm is latched: nothing changed.
+    Ignored,
+    /// A component observes it but cannot take it where it is: nothing changed.
+    Blocked(Vec<String>),
+    /// The edge was taken, its guard holding.
+    Edge,
+    /// The edge was taken although its guard failed, for these components.
+    OutsideGuard(Vec<String>),
+}
+
 impl RegionMonitor {
     /// A monitor of `regions` (one union per location of `swa`) started at `start`.
     pub fn new(swa: Swa, regions: Vec<Region>, start: Millis, options: Options) -> Self {
+        Self::shared(Arc::new(swa), Arc::new(regions), start, options)
+    }
+
+    /// As [`Self::new`], with automata and regions shared with other monitors.
+    pub fn shared(
+        swa: Arc<Swa>,
+        regions: Arc<Vec<Region>>,
+        start: Millis,
+        options: Options,
+    ) -> Self {
         let mut m = RegionMonitor {
             v: swa.zero(),
             swa,
@@ -388,6 +471,17 @@ impl RegionMonitor {
         self.next_exit().map(|(d, ..)| d)
     }
 
+    /// The instant of [`Self::pending`]'s alarm, without building it.
+    pub fn due(&self) -> Option<Deadline> {
+        if self.alarm.is_none() && !self.inside() {
+            return Some(Deadline {
+                at: self.since,
+                after: false,
+            });
+        }
+        self.next_deadline()
+    }
+
     /// The next exit: its instant, and `(t, closed, member)` of [`exit`].
     fn next_exit(&self) -> Option<(Deadline, Q, bool, usize)> {
         if self.alarm.is_some() {
@@ -401,6 +495,47 @@ impl RegionMonitor {
             after: closed && t.is_integer(),
         };
         Some((deadline, t, closed, member))
+    }
+
+    /// The alarm due if no event comes: at the last instant when the valuation is
+    /// outside the region of its location already, at the exit instant when it leaves
+    /// it later; `None` when it stays inside for ever or an alarm is latched.
+    pub fn pending(&self) -> Option<RegionAlarm> {
+        if self.alarm.is_some() {
+            return None;
+        }
+        if !self.inside() {
+            return Some(self.outside_now(self.since));
+        }
+        let (d, te, closed, member) = self.next_exit()?;
+        let rates = &self.swa.locations[self.loc].rates;
+        let at_exit: Vec<Q> = self.v.iter().zip(rates).map(|(x, r)| x + te * r).collect();
+        let (crossed, detail) = self.violated(member, &at_exit, rates, closed);
+        // The components whose own set the valuation leaves at the same instant (a
+        // component's own set is cut to the reachable valuations: it is left too when
+        // the clocks leave what is reachable, an open window's bound say).
+        let own: Vec<String> = self.regions[self.loc]
+            .finish
+            .iter()
+            .filter(|(_, u)| {
+                exit(u, &self.v, rates).flatten().map(|(t, c, _)| (t, c)) == Some((te, closed))
+            })
+            .map(|(c, _)| self.swa.components[*c].def.name.clone())
+            .collect();
+        let components = if own.is_empty() { crossed } else { own };
+        Some(RegionAlarm {
+            at: d,
+            kind: RegionAlarmKind::Outside,
+            location: self.location().to_string(),
+            components,
+            detail,
+        })
+    }
+
+    /// Latches `alarm` (one [`Self::pending`] returned): the monitor freezes until
+    /// [`Self::repair`].
+    pub fn latch(&mut self, alarm: RegionAlarm) {
+        self.alarm = Some(alarm);
     }
 
     /// Latches an alarm raised by an event (or a valuation outside) at `t`.
@@ -419,39 +554,22 @@ impl RegionMonitor {
 
     /// Lets time run to `t`; returns the alarm raised on the way.
     pub fn advance(&mut self, t: Millis) -> Option<&RegionAlarm> {
-        if self.alarm.is_some() {
-            return None;
-        }
-        if let Some((d, te, closed, member)) = self.next_exit()
-            && d.violated_by(t)
+        if let Some(alarm) = self.pending()
+            && alarm.at.violated_by(t)
         {
-            let rates = self.swa.locations[self.loc].rates.clone();
-            let at_exit: Vec<Q> = self.v.iter().zip(&rates).map(|(x, r)| x + te * r).collect();
-            let (mut components, detail) = self.violated(member, &at_exit, &rates, closed);
-            // The components whose own set the valuation leaves at the same instant.
-            let own: Vec<String> = self.regions[self.loc]
-                .finish
-                .iter()
-                .filter(|(_, u)| {
-                    exit(u, &self.v, &rates).flatten().map(|(t, c, _)| (t, c)) == Some((te, closed))
-                })
-                .map(|(c, _)| self.swa.components[*c].def.name.clone())
-                .collect();
-            if !own.is_empty() {
-                components = own;
-            }
-            self.alarm = Some(RegionAlarm {
-                at: d,
-                kind: RegionAlarmKind::Outside,
-                location: self.location().to_string(),
-                components,
-                detail,
-            });
+            self.alarm = Some(alarm);
             return self.alarm.as_ref();
         }
-        self.v = self.clocks(t);
-        self.since = t;
+        self.flow(t);
         None
+    }
+
+    /// Moves the valuation to `t` (no check).
+    fn flow(&mut self, t: Millis) {
+        if t > self.since {
+            self.v = self.clocks(t);
+            self.since = t;
+        }
     }
 
     /// The constraints of region member `m` that the valuation `u` crosses along `r`.
@@ -494,14 +612,17 @@ impl RegionMonitor {
         (comps, texts.join(" && "))
     }
 
-    fn check_inside(&mut self, t: Millis) {
-        if self.alarm.is_some() {
-            return;
-        }
+    /// True when the valuation is in the region of the location.
+    fn inside(&self) -> bool {
+        self.regions[self.loc]
+            .all
+            .iter()
+            .any(|p| p.contains(&self.v))
+    }
+
+    /// The alarm of a valuation outside the region of its location at `t`.
+    fn outside_now(&self, t: Millis) -> RegionAlarm {
         let region = &self.regions[self.loc];
-        if region.all.iter().any(|p| p.contains(&self.v)) {
-            return;
-        }
         let outside: Vec<usize> = region
             .finish
             .iter()
@@ -529,18 +650,32 @@ impl RegionMonitor {
             })
             .collect::<Vec<_>>()
             .join(" || ");
-        self.raise(t, RegionAlarmKind::Outside, components, detail);
+        RegionAlarm {
+            at: Deadline {
+                at: t,
+                after: false,
+            },
+            kind: RegionAlarmKind::Outside,
+            location: self.location().to_string(),
+            components,
+            detail,
+        }
     }
 
-    /// An observed event at `t`: follows its edge, or raises an alarm. Returns the alarm
-    /// raised (by the time that passed or by the event).
-    pub fn on_event(&mut self, t: Millis, event: &str) -> Option<&RegionAlarm> {
+    fn check_inside(&mut self, t: Millis) {
+        if self.alarm.is_none() && !self.inside() {
+            self.alarm = Some(self.outside_now(t));
+        }
+    }
+
+    /// Lets time run to `t` and takes the edge of `event`, without checking the region
+    /// nor raising any alarm: the caller decides ([`Self::pending`] tells whether the
+    /// new valuation is outside). An edge whose guard holds is preferred.
+    pub fn take(&mut self, t: Millis, event: &str) -> Taken {
         if self.alarm.is_some() {
-            return None;
+            return Taken::Ignored;
         }
-        if self.advance(t).is_some() {
-            return self.alarm.as_ref();
-        }
+        self.flow(t);
         let candidates: Vec<usize> = (0..self.swa.edges.len())
             .filter(|&e| self.swa.edges[e].from == self.loc && self.swa.edges[e].event == event)
             .collect();
@@ -554,17 +689,16 @@ impl RegionMonitor {
                 .filter(|(ci, c)| c.knows(event) && !c.accepts(parts[*ci], event))
                 .map(|(_, c)| c.def.name.clone())
                 .collect();
-            if blocked.is_empty() || !self.options.unexpected {
-                return None; // not observed, or ignored by the policy
-            }
-            self.raise(t, RegionAlarmKind::Unexpected, blocked, event.to_string());
-            return self.alarm.as_ref();
+            return if blocked.is_empty() {
+                Taken::Ignored
+            } else {
+                Taken::Blocked(blocked)
+            };
         }
         let inside = |e: usize| self.swa.edges[e].guard.contains(&self.v);
-        let chosen = candidates.iter().copied().find(|&e| inside(e));
-        let e = match chosen {
-            Some(e) => e,
-            None if self.options.check_guards => {
+        let (e, taken) = match candidates.iter().copied().find(|&e| inside(e)) {
+            Some(e) => (e, Taken::Edge),
+            None => {
                 let edge = &self.swa.edges[candidates[0]];
                 let failing: Vec<String> = edge
                     .moves
@@ -572,16 +706,46 @@ impl RegionMonitor {
                     .filter(|&&(ci, ce)| !self.swa.components[ci].guard(ce).contains(&self.v))
                     .map(|&(ci, _)| self.swa.components[ci].def.name.clone())
                     .collect();
-                self.raise(t, RegionAlarmKind::Guard, failing, event.to_string());
-                return self.alarm.as_ref();
+                (candidates[0], Taken::OutsideGuard(failing))
             }
-            None => candidates[0],
         };
         let edge = &self.swa.edges[e];
         for &r in &edge.resets {
             self.v[r] = Q::zero();
         }
         self.loc = edge.to;
+        taken
+    }
+
+    /// An observed event at `t`: follows its edge, or raises an alarm. Returns the alarm
+    /// raised (by the time that passed or by the event).
+    pub fn on_event(&mut self, t: Millis, event: &str) -> Option<&RegionAlarm> {
+        if self.alarm.is_some() {
+            return None;
+        }
+        if self.advance(t).is_some() {
+            return self.alarm.as_ref();
+        }
+        let before = self.location().to_string();
+        match self.take(t, event) {
+            Taken::Ignored | Taken::Edge => {}
+            Taken::Blocked(blocked) => {
+                if self.options.unexpected {
+                    self.raise(t, RegionAlarmKind::Unexpected, blocked, event.to_string());
+                    return self.alarm.as_ref();
+                }
+            }
+            Taken::OutsideGuard(failing) => {
+                if self.options.check_guards {
+                    // The alarm names the location the event came in.
+                    self.raise(t, RegionAlarmKind::Guard, failing, event.to_string());
+                    if let Some(a) = self.alarm.as_mut() {
+                        a.location = before;
+                    }
+                    return self.alarm.as_ref();
+                }
+            }
+        }
         self.check_inside(t);
         self.alarm.as_ref()
     }

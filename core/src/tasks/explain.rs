@@ -11,10 +11,12 @@
 //! | T006 | controller timing window violated |
 //! | T007 | unexpected event for the task's state |
 //! | T008 | cross-task constraint of the coordinator violated |
+//! | T009 | synthesised region left before the task's (or window's) own bounds |
 
 use super::monitor::{Role, TaskMonitor, TaskState};
 use super::spec::{Cmp, CrossDef, TaskSpec, WindowDef};
 use crate::diag::codes;
+use crate::swa::regions::RegionAlarm;
 use crate::time::Millis;
 use serde::Serialize;
 
@@ -39,6 +41,8 @@ pub enum AlarmCode {
     T007,
     /// Cross-task constraint violated.
     T008,
+    /// Synthesised region left before the subject's own bounds.
+    T009,
 }
 
 impl AlarmCode {
@@ -53,6 +57,7 @@ impl AlarmCode {
             AlarmCode::T006 => codes::T_CONTROLLER_WINDOW.id,
             AlarmCode::T007 => codes::T_UNEXPECTED_EVENT.id,
             AlarmCode::T008 => codes::T_CROSS_TASK.id,
+            AlarmCode::T009 => codes::T_REGION_LEFT.id,
         }
     }
 
@@ -67,6 +72,7 @@ impl AlarmCode {
             AlarmCode::T006 => "the controller missed its time window",
             AlarmCode::T007 => "an event came when none was expected",
             AlarmCode::T008 => "two tasks out of step",
+            AlarmCode::T009 => "can no longer finish in time with the tasks it depends on",
         }
     }
 }
@@ -284,6 +290,56 @@ impl Alarm {
                 value
             ),
         )
+    }
+
+    /// A T009 alarm: the synthesised region `region` was left at `time` before the
+    /// subject's own bounds; `own` is when they would alarm (if they would). `task`:
+    /// the subject is this task, with its clocks at `time`; otherwise a window.
+    pub(crate) fn region_left(
+        time: Millis,
+        subject: &str,
+        own: Option<Millis>,
+        region: &RegionAlarm,
+        task: Option<(&TaskSpec, &TaskMonitor, u64, u64)>,
+    ) -> Self {
+        let own_text = match own {
+            Some(o) => format!(
+                "its own bound alone would alarm at {}, {} later",
+                fmt_ms(o.0),
+                fmt_ms(o.0.saturating_sub(time.0))
+            ),
+            None => "its own bound alone would not alarm yet".to_string(),
+        };
+        let why = format!(
+            "in {} the clocks left the synthesised region ({}); {own_text}",
+            region.location, region.detail
+        );
+        let Some((spec, tm, x, y)) = task else {
+            return Self::bare(
+                AlarmCode::T009,
+                Severity::Alarm,
+                time,
+                subject,
+                format!(
+                    "Controller window {subject} can no longer close in time with the tasks it shares events with: {why}."
+                ),
+            );
+        };
+        let mut alarm = Self::task(AlarmCode::T009, time, spec, tm, x, y);
+        let tail = match (alarm.watchdog, alarm.earlier_by_ms) {
+            (Some(w), Some(e)) => format!(
+                " Detected {} before the watchdog (start + γ = {}).",
+                fmt_ms(e),
+                fmt_ms(w.0)
+            ),
+            _ => String::new(),
+        };
+        alarm.text = format!(
+            "Task {subject} can no longer finish within its acceptable time together with the tasks it shares events with (x = {}, y = {}): {why}.{tail}",
+            fmt_ms(x),
+            fmt_ms(y)
+        );
+        alarm
     }
 
     pub(crate) fn unexpected(

@@ -1,6 +1,23 @@
-//! The decentralized stopwatch monitor: one [`TaskMonitor`] per task (the closed form of
-//! the synthesized region for one interruptible task) plus a [`Coordinator`] for
-//! controller windows and cross-task constraints.
+//! The stopwatch monitor of a plant's tasks: one [`TaskMonitor`] per task (its state
+//! and clocks, its end check, its unexpected events) and a [`Coordinator`] (controller
+//! windows, cross-task constraints), with one of two timing back-ends:
+//!
+//! - the closed form (decentralized): each task's synthesised region for one
+//!   interruptible task, `0 ≤ x − y < γ − α ∧ x < γ ∧ y ≤ β`, each window's bound and
+//!   the hand-written cross-task constraints;
+//! - the synthesised regions, when the task set has them ([`TaskSet::regions`], the
+//!   `regions.ron` that `vigie synthesize` writes beside `tasks.ron`): the thesis's
+//!   `A*`, one [`RegionMonitor`] over the product of the tasks' and windows' automata,
+//!   an alarm as soon as the clocks leave `E*` of the current product location, at the
+//!   exact crossing instant. Its alarm is the task's own code when it falls at one of
+//!   the task's (or window's) own bounds, T009 when it comes before them (a coupling
+//!   with other tasks). The cross-task constraints are not run (the regions hold the
+//!   coupling, V1504). After its alarm the product monitor latches (the thesis's SFC2);
+//!   with [`Latch::PerTask`] the tasks and windows not in fault keep their own bounds
+//!   until the repair event, so that a second fault is still reported.
+//!
+//! Either way the alarms, the task states published for the safety filter and the
+//! operator's panel are the same types.
 //!
 //! ## Semantics
 //! - Each constraint is linear in time with slope `Σ cᵢ·rateᵢ`, so its crossing instant is
@@ -19,6 +36,7 @@
 
 use super::explain::{Alarm, AlarmCode, Severity};
 use super::spec::{Clock, Cmp, Latch, Slowdown, TaskSet, TaskSpec, Unexpected};
+use crate::swa::regions::{Options as RegionOptions, RegionMonitor, Taken};
 use crate::time::Millis;
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
@@ -299,6 +317,29 @@ enum Slot {
     Task(usize),
     Window(usize),
     Cross(usize),
+    /// The product monitor of the synthesised regions.
+    Region,
+}
+
+/// Where the alarm instants come from: the seam between the two timing back-ends.
+/// The rest (the tasks' states and clocks, end checks, unexpected events, windows'
+/// early closes, latches, alarms) is the monitor's own, whichever runs.
+#[derive(Clone, Debug)]
+enum Timing {
+    /// Each task's closed form, each window's bound, the cross-task constraints.
+    ClosedForm,
+    /// The synthesised regions of the tasks' product automaton.
+    Regions(Box<Product>),
+}
+
+/// The region back-end's state.
+#[derive(Clone, Debug)]
+struct Product {
+    monitor: RegionMonitor,
+    /// The events the product took at `fed.0`: the frame adapter applies an expression
+    /// shared by several tasks once per task ([`Monitor::apply`]), the product takes it
+    /// once.
+    fed: (Millis, BTreeSet<String>),
 }
 
 /// The whole monitor: task monitors, coordinator, deadline queue and alarm log.
@@ -315,6 +356,7 @@ pub struct Monitor {
     keys: BTreeMap<Slot, Deadline>,
     now: Millis,
     frozen: bool,
+    timing: Timing,
     /// Every alarm and warning so far, in order.
     pub alarms: Vec<Alarm>,
 }
@@ -328,7 +370,8 @@ enum Route {
 }
 
 impl Monitor {
-    /// A monitor at time `start`, every task idle.
+    /// A monitor at time `start`, every task idle; it runs the set's synthesised
+    /// regions when it has them ([`TaskSet::regions`]), the closed form otherwise.
     pub fn new(set: &TaskSet, start: Millis) -> Self {
         let mut routes: BTreeMap<String, Vec<Route>> = BTreeMap::new();
         for (i, t) in set.tasks.iter().enumerate() {
@@ -389,10 +432,36 @@ impl Monitor {
             keys: BTreeMap::new(),
             now: start,
             frozen: false,
+            timing: match &set.regions {
+                Some(r) => Timing::Regions(Box::new(Product {
+                    monitor: RegionMonitor::shared(
+                        r.swa.clone(),
+                        r.regions.clone(),
+                        start,
+                        RegionOptions::default(),
+                    ),
+                    fed: (start, BTreeSet::new()),
+                })),
+                None => Timing::ClosedForm,
+            },
             alarms: Vec::new(),
         };
         m.reset_all(start);
         m
+    }
+
+    /// The product monitor of the synthesised regions, when the monitor runs them.
+    pub fn regions(&self) -> Option<&RegionMonitor> {
+        match &self.timing {
+            Timing::Regions(p) => Some(&p.monitor),
+            Timing::ClosedForm => None,
+        }
+    }
+
+    /// True while the synthesised regions time the tasks (they run and have not
+    /// latched an alarm).
+    fn regions_live(&self) -> bool {
+        self.regions().is_some_and(|r| r.alarm().is_none())
     }
 
     fn reset_all(&mut self, t: Millis) {
@@ -413,6 +482,11 @@ impl Monitor {
             .cross_latched
             .iter_mut()
             .for_each(|c| *c = false);
+        if let Timing::Regions(p) = &mut self.timing {
+            p.monitor.repair(t);
+            p.fed = (t, BTreeSet::new());
+        }
+        self.reschedule(Slot::Region);
     }
 
     /// The specification.
@@ -437,6 +511,9 @@ impl Monitor {
 
     fn deadline_of(&self, slot: Slot) -> Option<Deadline> {
         match slot {
+            Slot::Region => self.regions().and_then(RegionMonitor::due),
+            Slot::Task(_) | Slot::Window(_) if self.regions_live() => None,
+            Slot::Cross(_) if self.regions().is_some() => None,
             Slot::Task(i) => self.tasks[i]
                 .next_deadline(&self.set.tasks[i])
                 .map(|(_, d)| d),
@@ -544,6 +621,122 @@ impl Monitor {
                 let alarm = Alarm::cross(d.at, &self.set.cross[k], value);
                 self.latch(alarm);
             }
+            Slot::Region => self.fire_region(d),
+        }
+    }
+
+    /// The product monitor left its region at `d`: it latches, and each component it
+    /// names (whose own set the clocks left, or whose clocks the crossed constraint
+    /// reads) raises its alarm: its own bound's code when the crossing is that bound,
+    /// T009 when it comes before. The tasks and windows not in fault keep their own
+    /// bounds from now on, until the repair.
+    fn fire_region(&mut self, d: Deadline) {
+        let Timing::Regions(p) = &mut self.timing else {
+            return;
+        };
+        let Some(region) = p.monitor.pending() else {
+            return;
+        };
+        p.monitor.latch(region.clone());
+        let mut subjects: Vec<&str> = region.components.iter().map(String::as_str).collect();
+        // The components the clocks leave the region for can be more than the one at
+        // fault: in the product, an invariant (an open window's `w <= max`) stops time
+        // for every component, so the others' goals become unreachable with it. The
+        // one at fault is the one whose own bounds come first (at this instant: it
+        // reached one of them).
+        let first = subjects.iter().filter_map(|s| self.own_deadline(s)).min();
+        if first.is_some() {
+            subjects.retain(|s| self.own_deadline(s) == first);
+        }
+        if subjects.is_empty() {
+            subjects.push(&region.location);
+        }
+        for subject in subjects {
+            if self.frozen {
+                break;
+            }
+            if let Some(i) = self.set.task(subject) {
+                if self.tasks[i].state == TaskState::Fault {
+                    continue;
+                }
+                let spec = &self.set.tasks[i];
+                let tm = &self.tasks[i];
+                let (x, y) = tm.clocks(d.at);
+                let own = tm.next_deadline(spec);
+                let alarm = match own {
+                    Some((bound, o)) if o == d => {
+                        let code = match bound {
+                            TaskBound::Tolerance => AlarmCode::T001,
+                            TaskBound::Effective => AlarmCode::T002,
+                            TaskBound::Total => AlarmCode::T003,
+                        };
+                        Alarm::task(code, d.at, spec, tm, x, y)
+                    }
+                    _ => Alarm::region_left(
+                        d.at,
+                        subject,
+                        own.map(|(_, o)| o.at),
+                        &region,
+                        Some((spec, tm, x, y)),
+                    ),
+                };
+                self.tasks[i].freeze_at(d.at);
+                self.latch(alarm);
+            } else if let Some(j) = self.set.windows.iter().position(|w| w.id == subject) {
+                let w = &self.set.windows[j];
+                let opened = self.coordinator.windows[j].opened.take();
+                let own = opened.and_then(|o| crossing(0, 1, to_i(w.max_ms), false, o));
+                let alarm = match (own, opened) {
+                    (Some(o), Some(opened)) if o == d => Alarm::window_late(d.at, w, opened),
+                    _ => Alarm::region_left(d.at, subject, own.map(|o| o.at), &region, None),
+                };
+                self.latch(alarm);
+            } else {
+                let alarm = Alarm::region_left(d.at, subject, None, &region, None);
+                self.latch(alarm);
+            }
+        }
+        for i in 0..self.tasks.len() {
+            self.reschedule(Slot::Task(i));
+        }
+        for j in 0..self.set.windows.len() {
+            self.reschedule(Slot::Window(j));
+        }
+    }
+
+    /// The next violation of task or window `id`'s own bounds (its closed form).
+    fn own_deadline(&self, id: &str) -> Option<Deadline> {
+        if let Some(i) = self.set.task(id) {
+            return self.tasks[i]
+                .next_deadline(&self.set.tasks[i])
+                .map(|(_, d)| d);
+        }
+        let j = self.set.windows.iter().position(|w| w.id == id)?;
+        let opened = self.coordinator.windows[j].opened?;
+        crossing(0, 1, to_i(self.set.windows[j].max_ms), false, opened)
+    }
+
+    /// Gives `event` at `t` to the product of the synthesised regions, if it runs
+    /// them; `once`: not again if it took it at `t` already (the frame adapter's
+    /// per-task calls).
+    fn feed(&mut self, t: Millis, event: &str, once: bool) {
+        if self.frozen {
+            return;
+        }
+        let Timing::Regions(p) = &mut self.timing else {
+            return;
+        };
+        if p.fed.0 != t {
+            p.fed = (t, BTreeSet::new());
+        }
+        let fresh = p.fed.1.insert(event.to_string());
+        if once && !fresh {
+            return;
+        }
+        // A blocked event (a component that cannot take it where it is) leaves the
+        // product where it is; the task's own policy reports it (T007).
+        if !matches!(p.monitor.take(t, event), Taken::Ignored | Taken::Blocked(_)) {
+            self.reschedule(Slot::Region);
         }
     }
 
@@ -594,12 +787,15 @@ impl Monitor {
             return &self.alarms[before..];
         }
         let routes = self.routes.get(event).cloned().unwrap_or_default();
+        if !routes.contains(&Route::Repair) {
+            self.feed(t, event, false);
+        }
         for r in routes {
             match r {
                 Route::Repair => {
                     self.repair(t);
                 }
-                Route::Task(i, role) => self.apply(t, i, role, event),
+                Route::Task(i, role) => self.apply_role(t, i, role, event),
                 Route::Open(j) => {
                     if !self.frozen {
                         self.coordinator.windows[j].opened = Some(t);
@@ -624,8 +820,20 @@ impl Monitor {
     }
 
     /// Applies `role` to task `i` at `t` (the frame adapter's entry point; [`Self::on_event`]
-    /// resolves names to this). `event` is the name used in messages.
+    /// resolves names to this). `event` is the event's name (its expression in frame
+    /// mode): the product of the synthesised regions takes it once per instant however
+    /// many tasks it is applied to.
     pub fn apply(&mut self, t: Millis, i: usize, role: Role, event: &str) {
+        if self.frozen || i >= self.tasks.len() {
+            return;
+        }
+        let t = t.max(self.now);
+        self.feed(t, event, true);
+        self.apply_role(t, i, role, event);
+    }
+
+    /// [`Self::apply`] without giving the event to the product.
+    fn apply_role(&mut self, t: Millis, i: usize, role: Role, event: &str) {
         if self.frozen || i >= self.tasks.len() {
             return;
         }
@@ -704,6 +912,12 @@ impl Monitor {
     /// Live data of every task at `t` (`t` should be `>= now`; the alarm-free
     /// extrapolation is used, so call [`Self::advance`] first).
     pub fn status(&self, t: Millis) -> Vec<TaskStatus> {
+        // An interrupted task's alarm, if nothing happens, is the regions' next one
+        // when it names the task (it may come before the task's own bounds).
+        let region = self
+            .regions()
+            .filter(|_| !self.frozen)
+            .and_then(RegionMonitor::pending);
         self.set
             .tasks
             .iter()
@@ -722,7 +936,16 @@ impl Monitor {
                     } else {
                         to_gamma
                     };
-                    Millis(t.0.saturating_add(u64::try_from(d.max(0)).unwrap_or(0)))
+                    let own = Millis(t.0.saturating_add(u64::try_from(d.max(0)).unwrap_or(0)));
+                    match &region {
+                        Some(r)
+                            if tm.state == TaskState::Interrupted
+                                && r.components.contains(&spec.id) =>
+                        {
+                            own.min(r.at.first_violating_ms().max(t))
+                        }
+                        _ => own,
+                    }
                 });
                 TaskStatus {
                     id: spec.id.clone(),

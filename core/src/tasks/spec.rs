@@ -6,6 +6,7 @@
 
 use crate::diag::codes;
 use crate::diag::{Location, Problem, ron_problem};
+use crate::swa::regions::TaskRegions;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -216,8 +217,13 @@ pub struct TaskSet {
     pub repair: Option<String>,
     /// Strict end check.
     pub check_end: bool,
-    /// Where it was loaded from (messages only).
+    /// Where it was loaded from (messages, and the folder of its regions).
     pub file: PathBuf,
+    /// The synthesised regions beside the file (`regions.ron`), checked against the
+    /// tasks: the monitor runs them in place of the closed form ([`super::Monitor`]).
+    /// Only the layout loader ([`Self::load_optional`]) reads them.
+    #[serde(skip)]
+    pub regions: Option<TaskRegions>,
 }
 
 /// Auxiliary outputs published per task, in this order (see [`TaskSet::aux_names`]).
@@ -230,17 +236,46 @@ impl TaskSet {
         Self::from_file(parsed, file, Some(text))
     }
 
-    /// Loads the optional `tasks.ron` of a plant folder: `None` without problems when
-    /// the folder has none, `None` with the problems when it cannot be used.
+    /// Loads the optional `tasks.ron` of a plant folder with its synthesised regions
+    /// (`regions.ron` beside it, if any): `None` without problems when the folder has
+    /// no tasks, `None` with the problems when they cannot be used, a regions file
+    /// synthesised from other tasks included (V1503: it is refused, never run and
+    /// never replaced by the closed form). With regions, the coordinator's cross-task
+    /// constraints are not run (a V1504 warning each): the regions hold the coupling.
     pub fn load_optional(dir: &Path) -> (Option<Self>, Vec<Problem>) {
         let path = dir.join("tasks.ron");
         if !path.exists() {
             return (None, Vec::new());
         }
-        match Self::load(&path) {
-            Ok(t) => (Some(t), Vec::new()),
-            Err(p) => (None, p),
+        let text = match crate::diag::read_text(&path) {
+            Ok(text) => text,
+            Err(p) => return (None, vec![p]),
+        };
+        let mut set = match Self::from_ron(&text, &path) {
+            Ok(set) => set,
+            Err(p) => return (None, p),
+        };
+        match TaskRegions::beside(&set) {
+            Ok(regions) => set.regions = regions,
+            Err(p) => return (None, vec![p]),
         }
+        let mut problems = Vec::new();
+        if let Some(regions) = &set.regions {
+            for c in &set.cross {
+                problems.push(Problem::warning(
+                    codes::TASK_CROSS_BESIDE_REGIONS.id,
+                    format!(
+                        "cross-task constraint `{}` is not run: the tasks run the regions of {}, \
+                         which hold the coupling their automata imply (add it to the automata, \
+                         or remove the regions file to run the closed form and the constraint)",
+                        c.id,
+                        regions.path.display()
+                    ),
+                    Some(locate(&path, Some(&text), &c.id)),
+                ));
+            }
+        }
+        (Some(set), problems)
     }
 
     /// Loads `tasks.ron` from disk.
@@ -346,6 +381,7 @@ impl TaskSet {
             repair: f.repair,
             check_end: f.check_end,
             file: file.to_path_buf(),
+            regions: None,
         })
     }
 

@@ -24,14 +24,7 @@ struct Case {
     events: Vec<(u64, String)>,
     until_ms: u64,
     /// (time, code, subject, x, y, watchdog)
-    alarms: Vec<(
-        u64,
-        AlarmCode,
-        String,
-        Option<u64>,
-        Option<u64>,
-        Option<u64>,
-    )>,
+    alarms: Vec<AlarmRow>,
     #[serde(default)]
     texts: Vec<(usize, String)>,
     /// (at, task, state, x, y, interruptions, slack, predicted alarm)
@@ -51,62 +44,78 @@ fn spec_of(f: &Fixtures, name: &str) -> TaskSet {
     TaskSet::from_file(file.clone(), Path::new(name), None).unwrap()
 }
 
+/// An alarm as the fixtures write it: (time, code, subject, x, y, watchdog).
+type AlarmRow = (
+    u64,
+    AlarmCode,
+    String,
+    Option<u64>,
+    Option<u64>,
+    Option<u64>,
+);
+
+fn row(a: &Alarm) -> AlarmRow {
+    (
+        a.time.0,
+        a.code,
+        a.subject.clone(),
+        a.x_ms,
+        a.y_ms,
+        a.watchdog.map(|w| w.0),
+    )
+}
+
+/// Replays `case` through the plant's monitor of `set` (the closed form, or the
+/// synthesised regions when `set` has them); checks the live panel at the case's
+/// times and returns the monitor.
+fn replay(case: &Case, set: &TaskSet) -> Monitor {
+    let mut m = Monitor::new(set, Millis::ZERO);
+    let mut statuses = Vec::new();
+    let mut checks = case.status.iter().peekable();
+    for (t, e) in &case.events {
+        while let Some(c) = checks.next_if(|c| c.0 < *t) {
+            m.advance(Millis(c.0));
+            statuses.push((c, m.status(Millis(c.0))));
+        }
+        m.on_event(Millis(*t), e);
+    }
+    for c in checks {
+        m.advance(Millis(c.0));
+        statuses.push((c, m.status(Millis(c.0))));
+    }
+    m.advance(Millis(case.until_ms));
+    for (c, st) in statuses {
+        let s = st.iter().find(|s| s.id == c.1).unwrap();
+        let got = (
+            s.state,
+            s.x_ms,
+            s.y_ms,
+            s.interruptions,
+            s.slack_ms,
+            s.predicted_alarm.map(|p| p.0),
+        );
+        assert_eq!(
+            got,
+            (c.2, c.3, c.4, c.5, c.6, c.7),
+            "case `{}` status at {}",
+            case.name,
+            c.0
+        );
+    }
+    m
+}
+
 #[test]
 fn thesis_fixtures() {
     let f = load_fixtures();
     assert!(f.cases.len() >= 20);
     for case in &f.cases {
         let set = spec_of(&f, &case.spec);
-        let mut m = Monitor::new(&set, Millis::ZERO);
-        let mut statuses = Vec::new();
-        let mut checks = case.status.iter().peekable();
-        for (t, e) in &case.events {
-            while let Some(c) = checks.next_if(|c| c.0 < *t) {
-                m.advance(Millis(c.0));
-                statuses.push((c, m.status(Millis(c.0))));
-            }
-            m.on_event(Millis(*t), e);
-        }
-        for c in checks {
-            m.advance(Millis(c.0));
-            statuses.push((c, m.status(Millis(c.0))));
-        }
-        m.advance(Millis(case.until_ms));
-        let got: Vec<_> = m
-            .alarms
-            .iter()
-            .map(|a| {
-                (
-                    a.time.0,
-                    a.code,
-                    a.subject.clone(),
-                    a.x_ms,
-                    a.y_ms,
-                    a.watchdog.map(|w| w.0),
-                )
-            })
-            .collect();
+        let m = replay(case, &set);
+        let got: Vec<AlarmRow> = m.alarms.iter().map(row).collect();
         assert_eq!(got, case.alarms, "case `{}`: {:#?}", case.name, m.alarms);
         for (i, text) in &case.texts {
             assert_eq!(&m.alarms[*i].text, text, "case `{}`", case.name);
-        }
-        for (c, st) in statuses {
-            let s = st.iter().find(|s| s.id == c.1).unwrap();
-            let got = (
-                s.state,
-                s.x_ms,
-                s.y_ms,
-                s.interruptions,
-                s.slack_ms,
-                s.predicted_alarm.map(|p| p.0),
-            );
-            assert_eq!(
-                got,
-                (c.2, c.3, c.4, c.5, c.6, c.7),
-                "case `{}` status at {}",
-                case.name,
-                c.0
-            );
         }
     }
 }
@@ -355,4 +364,149 @@ fn thesis_fixtures_from_synthesised_regions() {
         }
     }
     assert_eq!(replayed, 20, "the conveyor and workshop cases");
+}
+
+/// The task set of a fixture with its regions synthesised (what `vigie synthesize`
+/// writes and the layout loader reads), so that [`Monitor::new`] runs them.
+fn with_regions(set: &TaskSet) -> TaskSet {
+    use crate::swa::regions::{TaskRegions, fingerprint};
+    use crate::swa::{Limits, from_tasks, synthesize};
+    let file = from_tasks::automata(set);
+    let swa = file.compile(&set.file, "").unwrap();
+    let s = synthesize(&swa, Limits::default()).unwrap();
+    let regions = s.monitor_regions(&swa);
+    TaskSet {
+        regions: Some(TaskRegions {
+            path: set.file.with_file_name("regions.ron"),
+            fingerprint: fingerprint(&file),
+            swa: std::sync::Arc::new(swa),
+            regions: std::sync::Arc::new(regions),
+        }),
+        ..set.clone()
+    }
+}
+
+/// The conveyor and workshop fixtures through the PLANT's monitor running the
+/// synthesised regions (as the emulator and the live link run it when `regions.ron`
+/// is beside `tasks.ron`): the alarms are the fixture's, code, subject, clocks and
+/// watchdog included, and so is the live panel; the one difference is the
+/// coordinator's hand-written cross-task constraint, which is not run beside regions
+/// (its case's first alarm, the window's, is the same). The liquid supply's four
+/// dependent tasks take minutes to synthesise: left out.
+#[test]
+fn thesis_fixtures_through_the_plant_monitor_with_regions() {
+    let f = load_fixtures();
+    let mut cache: BTreeMap<String, TaskSet> = BTreeMap::new();
+    let mut replayed = 0;
+    for case in f.cases.iter().filter(|c| !c.spec.starts_with("liquid")) {
+        replayed += 1;
+        let set = cache
+            .entry(case.spec.clone())
+            .or_insert_with(|| with_regions(&spec_of(&f, &case.spec)))
+            .clone();
+        let m = replay(case, &set);
+        assert!(m.regions().is_some(), "{}: the regions run", case.name);
+        let got: Vec<AlarmRow> = m.alarms.iter().map(row).collect();
+        if set.cross.is_empty() {
+            assert_eq!(got, case.alarms, "case `{}`: {:#?}", case.name, m.alarms);
+            for (i, text) in &case.texts {
+                assert_eq!(&m.alarms[*i].text, text, "case `{}`", case.name);
+            }
+        } else {
+            assert_eq!(got.first(), case.alarms.first(), "case `{}`", case.name);
+        }
+    }
+    assert_eq!(replayed, 20, "the conveyor and workshop cases");
+}
+
+/// A coupling the per-task closed form cannot see, with numbers. The thesis's
+/// workshop: the window `d_window` (opened by `e`, the robot's start) must be closed by
+/// `d` within 2 s, and `d` is the conveyor's start, so the conveyor must end first
+/// (or the robot end and a new `e` open the window again). `d` at 0 starts the
+/// conveyor (α = 3 s) and closes the window; `e` at 1.5 s starts the robot (α = 2 s)
+/// and opens the window: the conveyor has 1.5 s to go, the window 2 s. At 2 s the
+/// cell stops (`s_c`, `s_R`): the conveyor has 1 s to go, the window 1.5 s left, so
+/// after 0.5 s stopped the conveyor cannot end, and `d` come, within the window, and
+/// the robot, stopped too, cannot end and open it again in time. The regions alarm
+/// just after 2.5 s, for the window (T009); the closed form waits for the window's
+/// own bound (just after 3.5 s) and the tasks' tolerances (x − y = 2 s at 4 s).
+#[test]
+fn regions_detect_a_coupling_before_the_closed_form() {
+    let f = load_fixtures();
+    let set = spec_of(&f, "workshop");
+    let events = [(0, "d"), (1500, "e"), (2000, "s_c"), (2000, "s_R")];
+    let run = |set: &TaskSet| {
+        let mut m = Monitor::new(set, Millis::ZERO);
+        for (t, e) in events {
+            m.on_event(Millis(t), e);
+        }
+        m.advance(Millis(4000));
+        m.alarms.iter().map(row).collect::<Vec<_>>()
+    };
+    let conveyor = (
+        4000,
+        AlarmCode::T001,
+        "conveyor".to_string(),
+        Some(4000),
+        Some(2000),
+        Some(5000),
+    );
+    let robot = (
+        4000,
+        AlarmCode::T001,
+        "robot".to_string(),
+        Some(2500),
+        Some(500),
+        Some(5500),
+    );
+    assert_eq!(
+        run(&set),
+        vec![
+            (3500, AlarmCode::T006, "d_window".into(), None, None, None),
+            conveyor.clone(),
+            robot.clone(),
+        ]
+    );
+    let regions = with_regions(&set);
+    let mut m = Monitor::new(&regions, Millis::ZERO);
+    for (t, e) in events {
+        m.on_event(Millis(t), e);
+    }
+    // Known at 2 s already: just after 2.5 s.
+    assert_eq!(
+        m.next_deadline(),
+        Some(Deadline {
+            at: Millis(2500),
+            after: true
+        })
+    );
+    assert!(m.advance(Millis(2500)).is_empty());
+    let raised = m.advance(Millis(2501)).to_vec();
+    assert_eq!(
+        raised.iter().map(row).collect::<Vec<_>>(),
+        vec![(2500, AlarmCode::T009, "d_window".into(), None, None, None)]
+    );
+    assert!(
+        raised[0]
+            .text
+            .starts_with("Controller window d_window can no longer close in time"),
+        "{}",
+        raised[0].text
+    );
+    assert!(
+        raised[0]
+            .text
+            .ends_with("its own bound alone would alarm at 3.5 s, 1 s later."),
+        "{}",
+        raised[0].text
+    );
+    // The tasks keep their own bounds after the regions' alarm (per-task latch).
+    assert_eq!(
+        run(&regions),
+        vec![
+            (2500, AlarmCode::T009, "d_window".into(), None, None, None),
+            conveyor,
+            robot,
+        ]
+    );
 }
