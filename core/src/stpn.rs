@@ -68,6 +68,13 @@ pub struct TransitionDef {
     pub inhibit: Vec<String>,
     /// Its delay.
     pub delay: DelayDef,
+    /// What it does, for the reports (`"!a_writeloc.rq(var,val)"`).
+    #[serde(default)]
+    pub label: String,
+    /// A flag of the net: the transition exists only when the flag is set (`"write_loss"`),
+    /// or only when it is not (`"!write_loss"`).
+    #[serde(default)]
+    pub when: Option<String>,
 }
 
 fn default_max_states() -> usize {
@@ -88,6 +95,82 @@ pub struct NetFile {
     /// The state graph is refused beyond this many states.
     #[serde(default = "default_max_states")]
     pub max_states: usize,
+    /// The unit the reports give times in (`"Ut"`).
+    #[serde(default = "default_unit")]
+    pub unit: String,
+    /// Delays are written in ticks; this many ticks make one unit (10: a tick of 0.1 Ut).
+    #[serde(default = "one")]
+    pub ticks_per_unit: u64,
+    /// The variants' flags (`"write_loss"`), set with `vigie stpn --with FLAG`.
+    #[serde(default)]
+    pub flags: Vec<String>,
+    /// The analyses `vigie stpn` reports.
+    #[serde(default)]
+    pub queries: Vec<QueryDef>,
+    /// An analysis horizon (in ticks): past it, no timed transition fires, so the state
+    /// graph is finite and ends (the thesis's global clock transition δ(H)).
+    #[serde(default)]
+    pub horizon: Option<u64>,
+}
+
+/// The name of the horizon's place and transition.
+pub const HORIZON: &str = "(horizon)";
+
+fn default_unit() -> String {
+    "Ut".into()
+}
+
+fn one() -> u64 {
+    1
+}
+
+/// An analysis of the state graph, as written. Events are transition names: an event
+/// happens when its transition fires.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum QueryDef {
+    /// The quantitative abstract view on these events: from each event to each one that
+    /// comes first after it, `[mean time, probability]`, the sources weighted by how
+    /// often the chain is in them (its steady state, or its visits when it ends).
+    View {
+        /// What it shows.
+        name: String,
+        /// The observed events.
+        events: Vec<String>,
+    },
+    /// The first passage to one of the events `to`: its probability and its mean time,
+    /// from one of the events `from` (weighted as a view's sources) or, `from` empty,
+    /// from the initial marking. The other events are passed through: from a write
+    /// request to the first erroneous read, this is the thesis's MTFF.
+    Passage {
+        /// What it measures.
+        name: String,
+        /// Where it starts (empty: the initial marking).
+        #[serde(default)]
+        from: Vec<String>,
+        /// Where it ends.
+        to: Vec<String>,
+    },
+    /// The dates of the events along the runs of an acyclic graph (one with a horizon):
+    /// each date an event happens at, with its probability.
+    Timeline {
+        /// What it shows.
+        name: String,
+        /// The events listed.
+        events: Vec<String>,
+    },
+    /// The markings with every place of `marked` marked and every place of `empty`
+    /// empty: the probability of reaching one, the mean time to the first, and the mean
+    /// time the net stays in them once there.
+    Reach {
+        /// What the markings mean (`"double fault"`).
+        name: String,
+        /// Places that hold a token.
+        #[serde(default)]
+        marked: Vec<String>,
+        /// Places that hold none.
+        #[serde(default)]
+        empty: Vec<String>,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -111,6 +194,14 @@ pub struct Net {
     pub places: Vec<String>,
     /// Transition names.
     pub transitions: Vec<String>,
+    /// The transitions' labels.
+    pub labels: Vec<String>,
+    /// The unit of the reports.
+    pub unit: String,
+    /// Ticks per unit.
+    pub ticks_per_unit: u64,
+    /// The analyses to report.
+    pub queries: Vec<QueryDef>,
     m0: Vec<u32>,
     trans: Vec<Trans>,
     max_states: usize,
@@ -141,6 +232,15 @@ pub struct Arc {
     pub p: Q,
 }
 
+fn ser_initial<S: serde::Serializer>(v: &[(usize, Q)], s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeSeq;
+    let mut seq = s.serialize_seq(Some(v.len()))?;
+    for (state, p) in v {
+        seq.serialize_element(&(state, p.to_string()))?;
+    }
+    seq.end()
+}
+
 fn ser_q<S: serde::Serializer>(q: &Q, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(&q.to_string())
 }
@@ -151,7 +251,7 @@ pub struct StateGraph {
     /// The states, the initial ones first.
     pub states: Vec<State>,
     /// The initial distribution (state, probability).
-    #[serde(skip)]
+    #[serde(serialize_with = "ser_initial")]
     pub initial: Vec<(usize, Q)>,
     /// The arcs, by source state.
     pub arcs: Vec<Arc>,
@@ -178,8 +278,109 @@ impl NetFile {
         crate::live::load_ron(path)
     }
 
+    /// The flags set, the transitions' names and flags, the queries' events and places.
+    fn check_names(
+        &self,
+        path: &Path,
+        text: &str,
+        flags: &[String],
+        index: &BTreeMap<&str, usize>,
+    ) -> Vec<Problem> {
+        let at = |needle: &str| Some(Location::of_nth(path, text, needle, 0));
+        let mut errors = Vec::new();
+        for f in flags {
+            if !self.flags.contains(f) {
+                errors.push(Problem::error(
+                    codes::STPN_INVALID.id,
+                    format!(
+                        "{}: `{f}` is not a flag of the net (its flags: {})",
+                        path.display(),
+                        if self.flags.is_empty() {
+                            "none".to_string()
+                        } else {
+                            self.flags.join(", ")
+                        }
+                    ),
+                    None,
+                ));
+            }
+        }
+        if self.ticks_per_unit == 0 {
+            errors.push(Problem::error(
+                codes::STPN_INVALID.id,
+                "ticks_per_unit must be at least 1".to_string(),
+                at("ticks_per_unit"),
+            ));
+        }
+        let transition_names: Vec<&str> =
+            self.transitions.iter().map(|t| t.name.as_str()).collect();
+        for (i, t) in self.transitions.iter().enumerate() {
+            if transition_names[..i].contains(&t.name.as_str()) {
+                errors.push(Problem::error(
+                    codes::STPN_INVALID.id,
+                    format!("two transitions are named `{}`", t.name),
+                    Some(Location::of_nth(path, text, &format!("\"{}\"", t.name), 1)),
+                ));
+            }
+            if let Some(w) = &t.when
+                && !self.flags.contains(&w.trim_start_matches('!').to_string())
+            {
+                errors.push(Problem::error(
+                    codes::STPN_INVALID.id,
+                    format!(
+                        "transition `{}`: `when: \"{w}\"` names no flag of the net",
+                        t.name
+                    ),
+                    at(&format!("\"{w}\"")),
+                ));
+            }
+        }
+        for q in &self.queries {
+            let (name, events, places) = match q {
+                QueryDef::View { name, events } | QueryDef::Timeline { name, events } => {
+                    (name, events.clone(), Vec::new())
+                }
+                QueryDef::Passage { name, from, to } => {
+                    (name, from.iter().chain(to).cloned().collect(), Vec::new())
+                }
+                QueryDef::Reach {
+                    name,
+                    marked,
+                    empty,
+                } => (
+                    name,
+                    Vec::new(),
+                    marked.iter().chain(empty).cloned().collect(),
+                ),
+            };
+            for e in events
+                .iter()
+                .filter(|e| !transition_names.contains(&e.as_str()))
+            {
+                errors.push(Problem::error(
+                    codes::STPN_INVALID.id,
+                    format!("query `{name}`: `{e}` is not a transition of the net"),
+                    at(&format!("\"{name}\"")),
+                ));
+            }
+            for p in places.iter().filter(|p| !index.contains_key(p.as_str())) {
+                errors.push(Problem::error(
+                    codes::STPN_INVALID.id,
+                    format!("query `{name}`: `{p}` is not a place of the net"),
+                    at(&format!("\"{name}\"")),
+                ));
+            }
+        }
+        errors
+    }
+
     /// Checks the net: every place known, probabilities that sum to 1.
     pub fn check(&self, path: &Path, text: &str) -> Result<Net, Vec<Problem>> {
+        self.variant(path, text, &[])
+    }
+
+    /// Checks the net and keeps the transitions of the variant with these flags set.
+    pub fn variant(&self, path: &Path, text: &str, flags: &[String]) -> Result<Net, Vec<Problem>> {
         let at = |needle: &str| Some(Location::of_nth(path, text, needle, 0));
         let mut errors = Vec::new();
         let index: BTreeMap<&str, usize> = self
@@ -203,8 +404,16 @@ impl NetFile {
             }
             w
         };
+        errors.extend(self.check_names(path, text, flags, &index));
+        let kept = |t: &TransitionDef| match t.when.as_deref() {
+            None => true,
+            Some(w) => match w.strip_prefix('!') {
+                Some(f) => !flags.iter().any(|x| x == f),
+                None => flags.iter().any(|x| x == w),
+            },
+        };
         let mut trans = Vec::new();
-        for t in &self.transitions {
+        for t in self.transitions.iter().filter(|t| kept(t)) {
             let pre = weights(&t.pre, "input", &t.name, &mut errors);
             let post = weights(&t.post, "output", &t.name, &mut errors);
             let inhibit = weights(&t.inhibit, "inhibitor", &t.name, &mut errors)
@@ -213,32 +422,17 @@ impl NetFile {
                 .filter(|(_, w)| **w > 0)
                 .map(|(i, _)| i)
                 .collect();
-            let delay = match &t.delay {
-                DelayDef::Immediate => Delay::Fixed(0),
-                DelayDef::Dirac(d) => Delay::Fixed(*d),
-                DelayDef::Discrete(atoms) => {
-                    let parsed: Vec<Option<(u64, Q)>> = atoms
-                        .iter()
-                        .map(|(d, p)| parse_q(p).map(|q| (*d, q)))
-                        .collect();
-                    let ok: Vec<(u64, Q)> = parsed.iter().flatten().cloned().collect();
-                    let sum: Q = ok.iter().map(|(_, p)| p.clone()).sum();
-                    if ok.len() != atoms.len()
-                        || ok.iter().any(|(_, p)| *p <= Q::zero())
-                        || !sum.is_one()
-                    {
-                        errors.push(Problem::error(
-                            codes::STPN_INVALID.id,
-                            format!(
-                                "transition `{}`: the probabilities of its delay must be positive fractions summing to 1 (they sum to {sum})",
-                                t.name
-                            ),
-                            at(&format!("\"{}\"", t.name)),
-                        ));
-                    }
-                    Delay::Discrete(ok)
-                }
-            };
+            let delay = delay_of(&t.delay).unwrap_or_else(|sum| {
+                errors.push(Problem::error(
+                    codes::STPN_INVALID.id,
+                    format!(
+                        "transition `{}`: the probabilities of its delay must be positive fractions summing to 1 (they sum to {sum})",
+                        t.name
+                    ),
+                    at(&format!("\"{}\"", t.name)),
+                ));
+                Delay::Fixed(0)
+            });
             trans.push(Trans {
                 pre,
                 post,
@@ -260,14 +454,77 @@ impl NetFile {
         if !errors.is_empty() {
             return Err(errors);
         }
+        let mut places = self.places.clone();
+        let (mut names, mut labels): (Vec<String>, Vec<String>) = self
+            .transitions
+            .iter()
+            .filter(|t| kept(t))
+            .map(|t| (t.name.clone(), t.label.clone()))
+            .unzip();
+        if let Some(h) = self.horizon {
+            add_horizon(h, &mut places, &mut m0, &mut trans);
+            names.push(HORIZON.into());
+            labels.push("the analysis horizon".into());
+        }
         Ok(Net {
-            places: self.places.clone(),
-            transitions: self.transitions.iter().map(|t| t.name.clone()).collect(),
+            places,
+            transitions: names,
+            labels,
+            unit: self.unit.clone(),
+            ticks_per_unit: self.ticks_per_unit,
+            queries: self.queries.clone(),
             m0,
             trans,
             max_states: self.max_states,
         })
     }
+}
+
+/// A delay as written, checked; `Err` with the sum of its probabilities when they are
+/// not positive fractions summing to 1.
+fn delay_of(d: &DelayDef) -> Result<Delay, Q> {
+    Ok(match d {
+        DelayDef::Immediate => Delay::Fixed(0),
+        DelayDef::Dirac(d) => Delay::Fixed(*d),
+        DelayDef::Discrete(atoms) => {
+            let ok: Vec<(u64, Q)> = atoms
+                .iter()
+                .filter_map(|(d, p)| parse_q(p).map(|q| (*d, q)))
+                .collect();
+            let sum: Q = ok.iter().map(|(_, p)| p.clone()).sum();
+            if ok.len() != atoms.len() || ok.iter().any(|(_, p)| *p <= Q::zero()) || !sum.is_one() {
+                return Err(sum);
+            }
+            Delay::Discrete(ok)
+        }
+    })
+}
+
+/// The thesis's analysis horizon: a clock transition δ(H), appended last, whose firing
+/// disables every timed transition, so that the graph ends.
+fn add_horizon(h: u64, places: &mut Vec<String>, m0: &mut Vec<u32>, trans: &mut Vec<Trans>) {
+    // The thesis's analysis horizon: a clock transition δ(H) whose firing
+    // disables every timed transition, so that the graph ends.
+    let (running, over) = (places.len(), places.len() + 1);
+    places.extend([HORIZON.to_string(), format!("{HORIZON} over")]);
+    m0.extend([1, 0]);
+    for t in trans.iter_mut() {
+        t.pre.extend([0, 0]);
+        t.post.extend([0, 0]);
+        if !matches!(t.delay, Delay::Fixed(0)) {
+            t.inhibit.push(over);
+        }
+    }
+    let mut pre = vec![0; places.len()];
+    pre[running] = 1;
+    let mut post = vec![0; places.len()];
+    post[over] = 1;
+    trans.push(Trans {
+        pre,
+        post,
+        inhibit: Vec::new(),
+        delay: Delay::Fixed(h),
+    });
 }
 
 impl Net {
@@ -404,33 +661,6 @@ impl Net {
     }
 }
 
-/// Solves `a·x = b` over the rationals (Gauss-Jordan); `None` when singular.
-fn solve(mut a: Vec<Vec<Q>>, mut b: Vec<Q>) -> Option<Vec<Q>> {
-    let n = b.len();
-    for c in 0..n {
-        let r = (c..n).find(|&r| !a[r][c].is_zero())?;
-        a.swap(c, r);
-        b.swap(c, r);
-        let pivot = a[c][c].clone();
-        for x in &mut a[c][c..] {
-            *x = &*x / &pivot;
-        }
-        b[c] = &b[c] / &pivot;
-        let row = a[c].clone();
-        for (r, line) in a.iter_mut().enumerate() {
-            if r != c && !line[c].is_zero() {
-                let f = line[c].clone();
-                for (x, y) in line[c..].iter_mut().zip(&row[c..]) {
-                    *x -= &f * y;
-                }
-                let v = &f * &b[c];
-                b[r] -= v;
-            }
-        }
-    }
-    Some(b)
-}
-
 impl StateGraph {
     /// States with no successor.
     pub fn sinks(&self) -> Vec<usize> {
@@ -478,22 +708,7 @@ impl StateGraph {
     /// (`π_i = η_i γ_i / Σ η_k γ_k`, `γ` the embedded chain's stationary vector), and the
     /// mean time between two visits of its first state.
     pub fn steady_state(&self, c: &[usize]) -> Option<(Vec<(usize, Q)>, Q)> {
-        let n = c.len();
-        let pos = |s: usize| c.binary_search(&s).ok();
-        // γ (P − I) = 0 with Σγ = 1: the transposed system, its last row replaced.
-        let mut a = vec![vec![Q::zero(); n]; n];
-        for arc in &self.arcs {
-            if let (Some(i), Some(j)) = (pos(arc.from), pos(arc.to)) {
-                a[j][i] += arc.p.clone();
-            }
-        }
-        for (i, row) in a.iter_mut().enumerate() {
-            row[i] -= Q::one();
-        }
-        a[n - 1] = vec![Q::one(); n];
-        let mut b = vec![Q::zero(); n];
-        b[n - 1] = Q::one();
-        let gamma = solve(a, b)?;
+        let gamma = self.stationary(c)?;
         let weighted: Vec<Q> = c
             .iter()
             .zip(&gamma)
@@ -510,6 +725,27 @@ impl StateGraph {
             .collect();
         let cycle = &total / &gamma[0];
         Some((pi, cycle))
+    }
+
+    /// The stationary vector `γ` of the embedded chain on the terminal component `c`:
+    /// `γ (P − I) = 0`, `Σγ = 1`.
+    pub fn stationary(&self, c: &[usize]) -> Option<Vec<Q>> {
+        let n = c.len();
+        let pos = |s: usize| c.binary_search(&s).ok();
+        // The transposed system, its last row replaced by Σγ = 1.
+        let mut a = vec![solve::Row::new(); n];
+        for arc in &self.arcs {
+            if let (Some(i), Some(j)) = (pos(arc.from), pos(arc.to)) {
+                solve::add(&mut a[j], i, arc.p.clone());
+            }
+        }
+        for (i, row) in a.iter_mut().enumerate() {
+            solve::add(row, i, -Q::one());
+        }
+        a[n - 1] = (0..n).map(|i| (i, Q::one())).collect();
+        let mut b = vec![Q::zero(); n];
+        b[n - 1] = Q::one();
+        solve::solve(a, b)
     }
 
     /// From each state, the probability of reaching `target` and the mean time to it
@@ -532,17 +768,34 @@ impl StateGraph {
     /// The first-passage equations: `h_u = Σ_v p_uv h_v` and
     /// `g_u = Σ_v p_uv (θ_uv h_v + g_v)` on the states neither `reached` nor `stopped`;
     /// `h` is 1 on the reached states and 0 on the stopped ones, `g` 0 on both.
-    fn passage(
+    pub(crate) fn passage(
         &self,
         reached: &dyn Fn(usize) -> bool,
         stopped: &dyn Fn(usize) -> bool,
     ) -> Option<(Vec<Q>, Vec<Q>)> {
         let n = self.states.len();
+        // The states that cannot reach the target count as stopped (h = 0): without
+        // them, a closed class that never reaches it would make the system singular.
+        let mut into: Vec<Vec<usize>> = vec![Vec::new(); n];
+        for arc in &self.arcs {
+            into[arc.to].push(arc.from);
+        }
+        let mut can: Vec<bool> = (0..n).map(reached).collect();
+        let mut queue: Vec<usize> = (0..n).filter(|&s| can[s]).collect();
+        while let Some(v) = queue.pop() {
+            for &u in &into[v] {
+                if !can[u] && !stopped(u) {
+                    can[u] = true;
+                    queue.push(u);
+                }
+            }
+        }
+        let stopped = |s: usize| stopped(s) || !can[s];
         let end = |s: usize| reached(s) || stopped(s);
-        let mut a = vec![vec![Q::zero(); n]; n];
+        let mut a = vec![solve::Row::new(); n];
         let mut bh = vec![Q::zero(); n];
         for (i, row) in a.iter_mut().enumerate() {
-            row[i] = Q::one();
+            row.insert(i, Q::one());
             if reached(i) {
                 bh[i] = Q::one();
             }
@@ -551,15 +804,15 @@ impl StateGraph {
             if reached(arc.to) {
                 bh[arc.from] += arc.p.clone();
             } else if !stopped(arc.to) {
-                a[arc.from][arc.to] -= arc.p.clone();
+                solve::add(&mut a[arc.from], arc.to, -arc.p.clone());
             }
         }
-        let h = solve(a.clone(), bh)?;
+        let h = solve::solve(a.clone(), bh)?;
         let mut bg = vec![Q::zero(); n];
         for arc in self.arcs.iter().filter(|a| !end(a.from)) {
             bg[arc.from] += &arc.p * Q::from_integer(arc.theta.into()) * &h[arc.to];
         }
-        let g = solve(a, bg)?;
+        let g = solve::solve(a, bg)?;
         Some((h, g))
     }
 
@@ -615,6 +868,11 @@ impl StateGraph {
             .collect()
     }
 }
+
+mod query;
+mod solve;
+
+pub use query::{Dated, Outcome, ViewArc};
 
 #[cfg(test)]
 mod tests;

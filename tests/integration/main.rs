@@ -17,6 +17,7 @@ mod live;
 mod plants;
 mod polyhedra;
 mod regions;
+mod stpn;
 mod transients;
 
 #[path = "../../core/src/test_support/paper.rs"]

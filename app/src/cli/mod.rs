@@ -245,6 +245,9 @@ pub(crate) enum Command {
     Stpn {
         /// The net file.
         file: PathBuf,
+        /// The variant: flags of the net to set (`--with write_loss,sync_loss`).
+        #[arg(long, value_delimiter = ',')]
+        with: Vec<String>,
         /// A place whose marking is a failure: report the MTFF to it.
         #[arg(long)]
         failed: Option<String>,
@@ -279,6 +282,15 @@ pub(crate) enum Command {
     Program {
         #[command(subcommand)]
         action: program::ProgramCmd,
+    },
+    /// Measure the stochastic Petri nets (seed 002): per net and variant, the state
+    /// graph's size, the median time to build it and the time of its analyses.
+    BenchStpn {
+        /// The net files (by default those of `layouts/substation/nets/`).
+        nets: Vec<PathBuf>,
+        /// Builds per variant; the median is reported.
+        #[arg(long, default_value_t = 5)]
+        repeat: usize,
     },
     /// Measure the stopwatch synthesis: time and product size against the number of
     /// interruptible tasks (1 to N, independent, α = 3 s, β = 4 s, γ = 5 s); a size is
@@ -508,16 +520,18 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::Bus { file, json } => bus::run(&file, json),
         Command::Stpn {
             file,
+            with,
             failed,
             observe,
             json,
-        } => stpn::run(&file, failed.as_deref(), &observe, json),
+        } => stpn::run(&file, &with, failed.as_deref(), &observe, json),
         Command::Synthesize {
             file,
             out,
             check,
             limit,
         } => synthesize::run(&file, out.as_deref(), check, limit),
+        Command::BenchStpn { nets, repeat } => stpn::bench(&nets, repeat),
         Command::BenchSynthesis { max_tasks, budget } => {
             synthesize::bench(max_tasks, budget);
             Ok(ExitCode::SUCCESS)
