@@ -8,6 +8,8 @@
 //! - [`from_tasks`]: the automata of a `tasks.ron`.
 //! - [`regions`]: the synthesised regions as a file (`vigie synthesize`) and the monitor
 //!   that runs them.
+//! - [`sfc`]: the region monitor as an IEC 61131-3 program (SFC in PLCopen XML, and an
+//!   ST function block).
 
 pub mod automaton;
 pub mod from_tasks;
@@ -16,6 +18,7 @@ pub mod lp;
 pub mod poly;
 pub mod rat;
 pub mod regions;
+pub mod sfc;
 pub mod synth;
 
 pub use automaton::{Swa, SwaFile};

@@ -10,6 +10,7 @@ mod cli;
 mod console;
 mod console_link;
 mod diagnoser;
+mod export_sfc;
 mod export_st;
 mod filter_trace;
 mod fuzz_loaders;

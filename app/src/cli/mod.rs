@@ -6,6 +6,7 @@ mod bench_line;
 mod bus;
 mod campaign;
 mod check;
+mod export_sfc;
 mod export_st;
 mod filter;
 mod gateway;
@@ -227,6 +228,16 @@ pub(crate) enum Command {
         plant: PlantArg,
         /// Write to this file instead of the standard output.
         #[arg(long, short)]
+        out: Option<PathBuf>,
+    },
+    /// Write the region monitor of stopwatch automata (`*.swa.ron`) or of a plant's
+    /// `tasks.ron`, from its committed regions, as IEC 61131-3: SFC in PLCopen XML
+    /// (`X.sfc.xml`) and an ST function block (`X.monitor.st`).
+    ExportSfc {
+        /// `tasks.ron` or `*.swa.ron` (its regions file beside it).
+        file: PathBuf,
+        /// Write the two files in this folder instead of beside FILE.
+        #[arg(long)]
         out: Option<PathBuf>,
     },
     /// A FIP-like fieldbus (`bus.ron`): its scan table, the load of each elementary
@@ -516,6 +527,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
         Command::BenchHistorian { plant, args } => bench_historian::run(&plant.plant, &args),
         Command::BenchLine(args) => bench_line::run(&args),
         Command::ExportSt { plant, out } => export_st::run(&plant.plant, out.as_deref()),
+        Command::ExportSfc { file, out } => export_sfc::run(&file, out.as_deref()),
         Command::Program { action } => program::run(action),
         Command::Bus { file, json } => bus::run(&file, json),
         Command::Stpn {

@@ -218,6 +218,7 @@ registry! {
     SWA_LIMIT = "V1502", "a synthesis that did not converge within its iteration limit";
     REGIONS_STALE = "V1503", "a regions file synthesised from other tasks than the ones it is run with";
     TASK_CROSS_BESIDE_REGIONS = "V1504", "a cross-task constraint not run, the tasks running their synthesised regions";
+    SFC_EXPORT = "V1505", "a region monitor that cannot be written as an SFC program (`vigie export-sfc`)";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";
