@@ -6,6 +6,7 @@
 //! - [`automaton`]: stopwatch automata as data and their synchronous product.
 //! - [`synth`]: the region operators and `E* = E ∩ ⋂ Pre*(D_c)`.
 //! - [`from_tasks`]: the automata of a `tasks.ron`.
+//! - [`swpn`]: stopwatch Petri nets (chapter 5), translated into an automaton.
 //! - [`regions`]: the synthesised regions as a file (`vigie synthesize`) and the monitor
 //!   that runs them.
 //! - [`sfc`]: the region monitor as an IEC 61131-3 program (SFC in PLCopen XML, and an
@@ -19,6 +20,7 @@ pub mod poly;
 pub mod rat;
 pub mod regions;
 pub mod sfc;
+pub mod swpn;
 pub mod synth;
 
 pub use automaton::{Swa, SwaFile};

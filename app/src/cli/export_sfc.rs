@@ -1,4 +1,4 @@
-//! `vigie export-sfc FILE`: the region monitor of a `*.swa.ron` or a `tasks.ron` (its
+//! `vigie export-sfc FILE`: the region monitor of a `*.swa.ron`, a `*.swpn.ron` or a `tasks.ron` (its
 //! committed regions, checked against the automata) as an IEC 61131-3 program: SFC in
 //! PLCopen XML and one Structured Text function block (`core/src/swa/sfc.rs`).
 
@@ -21,6 +21,7 @@ pub(crate) fn run(file: &Path, out: Option<&Path>) -> anyhow::Result<ExitCode> {
         .unwrap_or("monitor");
     let stem = name
         .strip_suffix(".swa.ron")
+        .or_else(|| name.strip_suffix(".swpn.ron"))
         .or_else(|| name.strip_suffix(".ron"))
         .unwrap_or(name);
     let dir = out.map_or_else(

@@ -276,7 +276,7 @@ pub(crate) enum Command {
     /// `regions.ron` beside a `tasks.ron` (`X.regions.ron` beside `X.swa.ron`), which
     /// the plant's task monitor then runs.
     Synthesize {
-        /// `tasks.ron` or `*.swa.ron`.
+        /// `tasks.ron`, `*.swa.ron` or a stopwatch Petri net `*.swpn.ron`.
         file: PathBuf,
         /// Write the regions here instead.
         #[arg(long)]
@@ -287,6 +287,10 @@ pub(crate) enum Command {
         /// Bound of each fixed point, in polyhedra processed (V1502 beyond).
         #[arg(long, default_value_t = 20_000)]
         limit: usize,
+        /// Polyhedra kept per location before its union is replaced by a template hull
+        /// (an over-approximation); `--check` needs the value the file was written with.
+        #[arg(long, default_value_t = 4)]
+        members: usize,
     },
     /// The PLC's own program in PLCopen TC6 XML: write a control program for the PLC's
     /// tool, or read one (SFC, ST, LD) and check it against the plant.
@@ -542,7 +546,8 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
             out,
             check,
             limit,
-        } => synthesize::run(&file, out.as_deref(), check, limit),
+            members,
+        } => synthesize::run(&file, out.as_deref(), check, limit, members),
         Command::BenchStpn { nets, repeat } => stpn::bench(&nets, repeat),
         Command::BenchSynthesis { max_tasks, budget } => {
             synthesize::bench(max_tasks, budget);

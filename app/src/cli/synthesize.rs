@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 use vigie_core::diag::codes;
 use vigie_core::swa::regions::RegionsFile;
+use vigie_core::swa::swpn::SwpnFile;
 use vigie_core::swa::{Limits, SwaFile, from_tasks, synthesize};
 use vigie_core::tasks::TaskSet;
 
@@ -14,6 +15,17 @@ use vigie_core::tasks::TaskSet;
 fn automata(file: &Path) -> anyhow::Result<(SwaFile, String, PathBuf)> {
     let render = |p: &[vigie_core::diag::Problem]| vigie_core::diag::render(p);
     let name = file.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    if let Some(stem) = name.strip_suffix(".swpn.ron") {
+        let (net, text) = SwpnFile::load(file).map_err(|p| anyhow!("{}", render(&p)))?;
+        let t = net
+            .translate(file, &text)
+            .map_err(|p| anyhow!("{}", render(&p)))?;
+        return Ok((
+            t.automaton,
+            String::new(),
+            file.with_file_name(format!("{stem}.regions.ron")),
+        ));
+    }
     if let Some(stem) = name.strip_suffix(".swa.ron") {
         let text = std::fs::read_to_string(file)
             .with_context(|| format!("cannot read {}", file.display()))?;
@@ -39,6 +51,7 @@ pub(crate) fn run(
     out: Option<&Path>,
     check: bool,
     limit: usize,
+    members: usize,
 ) -> anyhow::Result<ExitCode> {
     let render = |p: &[vigie_core::diag::Problem]| vigie_core::diag::render(p);
     let (parsed, text, default_out) = automata(file)?;
@@ -48,7 +61,7 @@ pub(crate) fn run(
     let t0 = Instant::now();
     let limits = Limits {
         iterations: limit,
-        ..Limits::default()
+        members,
     };
     let s = synthesize(&swa, limits)
         .map_err(|e| anyhow!("{}: error[{}]: {e}", file.display(), codes::SWA_LIMIT.id))?;
@@ -85,7 +98,7 @@ pub(crate) fn run(
             return Ok(ExitCode::SUCCESS);
         }
         eprintln!(
-            "{}: error[{}]: not the regions these automata give; run `vigie synthesize {}`",
+            "{}: error[{}]: not the regions these automata give; run `vigie synthesize {}` (with the `--members` it was written with, if not the default)",
             out.display(),
             codes::REGIONS_STALE.id,
             file.display()

@@ -1190,13 +1190,21 @@ fn write_graph(
     }
 }
 
-/// The automata of `input` (a `*.swa.ron`, or a plant's `tasks.ron`) and their
+/// The automata of `input` (a `*.swa.ron`, a stopwatch Petri net `*.swpn.ron`, or a
+/// plant's `tasks.ron`) and their
 /// committed regions (`X.regions.ron`, `regions.ron` beside it), checked against them
 /// as `vigie synthesize --check` does (V1503 when they were synthesised from other
 /// automata): `(product, regions, the regions file)`.
 pub fn load_monitor(input: &Path) -> Result<(Swa, Vec<Region>, std::path::PathBuf), Vec<Problem>> {
     let name = input.file_name().and_then(|n| n.to_str()).unwrap_or("");
-    let (file, text, regions_path) = if let Some(stem) = name.strip_suffix(".swa.ron") {
+    let (file, text, regions_path) = if let Some(stem) = name.strip_suffix(".swpn.ron") {
+        let (net, text) = super::swpn::SwpnFile::load(input)?;
+        (
+            net.translate(input, &text)?.automaton,
+            String::new(),
+            input.with_file_name(format!("{stem}.regions.ron")),
+        )
+    } else if let Some(stem) = name.strip_suffix(".swa.ron") {
         let text = crate::diag::read_text(input).map_err(|p| vec![p])?;
         let file: super::SwaFile =
             ron::from_str(&text).map_err(|e| vec![crate::diag::ron_problem(input, &e)])?;
