@@ -5,10 +5,11 @@
 
 #![allow(clippy::unwrap_used)] // test helpers: a failure is a test failure
 
+use crate::vigie;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::time::{Duration, Instant};
 use vigie_app::{Console, ConsoleOptions};
 
@@ -30,14 +31,6 @@ pub(crate) fn station_copy(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     crate::paper::copy_dir(&station(), &dir);
     dir
-}
-
-fn vigie(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vigie"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .unwrap()
 }
 
 fn text(out: &[u8]) -> String {

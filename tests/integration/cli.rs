@@ -3,15 +3,8 @@
 //! console.
 
 use crate::live::{TempDir, Xvfb, repo, wait_until};
+use crate::vigie;
 use std::process::{Command, Output, Stdio};
-
-fn vigie(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vigie"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("vigie runs")
-}
 
 fn text(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr)

@@ -13,6 +13,7 @@
 //!   parses the function block and every ST body of the XML; the XML, read back with
 //!   the XML parser, has the expected steps and transitions.
 
+use crate::export_st::blark_parse;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -432,39 +433,6 @@ fn plant_task_monitors_export_and_agree_with_their_regions() {
 }
 
 // ---- blark and the XML ----
-
-fn blark() -> PathBuf {
-    let venv = std::env::var_os("VIGIE_VENV").map_or_else(|| repo().join(".venv"), PathBuf::from);
-    let exe = venv.join("bin").join("blark");
-    assert!(
-        exe.is_file(),
-        "\n\nblark is missing: {} does not exist. Create the test tools with:\n\n    python3 -m venv {venv}\n    {venv}/bin/pip install -r {req}\n\n(or point VIGIE_VENV at a venv that has them).\n",
-        exe.display(),
-        venv = venv.display(),
-        req = repo().join("requirements-test.txt").display()
-    );
-    exe
-}
-
-fn blark_parse(name: &str, text: &str) -> (bool, String) {
-    let dir = std::env::temp_dir().join(format!("vigie-export-sfc-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join(name);
-    std::fs::write(&file, text).unwrap();
-    let out = Command::new(blark())
-        .arg("parse")
-        .arg("--summary")
-        .arg(&file)
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run blark: {e}"));
-    let _ = std::fs::remove_file(&file);
-    let log = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    (out.status.success(), log)
-}
 
 #[test]
 fn blark_parses_the_function_block_and_every_body_of_the_xml() {

@@ -34,7 +34,8 @@ fn station_st() -> String {
     vigie_core::export::st::generate(&bundle, Some(&tasks)).unwrap()
 }
 
-fn blark_parse(name: &str, text: &str) -> (bool, String) {
+/// Parses `text` (saved as `name`) with blark: whether it parsed, and what blark said.
+pub(crate) fn blark_parse(name: &str, text: &str) -> (bool, String) {
     let dir = std::env::temp_dir().join(format!("vigie-export-st-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join(name);

@@ -24,6 +24,15 @@ mod transients;
 #[path = "../../core/src/test_support/paper.rs"]
 mod paper;
 
+/// Runs the `vigie` binary from the repository root and waits for it.
+pub(crate) fn vigie(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_vigie"))
+        .args(args)
+        .current_dir(live::repo())
+        .output()
+        .expect("vigie runs")
+}
+
 /// The paper's sorting station (no device monitoring), copied to `dir` (created): for
 /// the tests that count its eleven sensors and seven coils, such as the link's
 /// hardening against misbehaving peers.

@@ -6,18 +6,11 @@
 //! library is caught by the monitor or the filter.
 
 use crate::live::{TempDir, repo};
+use crate::vigie;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use vigie_core::machine::monitor::ActionEventKind;
 use vigie_core::sim::{OperatorAction, Options, Scenario, Simulation, TimedAction};
-
-fn vigie(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_vigie"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("vigie runs")
-}
 
 fn text(out: &Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr)

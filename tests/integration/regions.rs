@@ -4,19 +4,11 @@
 //! emulator's task alarms come from the regions.
 
 use crate::live::{TempDir, repo};
+use crate::vigie;
 use std::path::Path;
-use std::process::Command;
 use vigie_core::diag::codes;
 use vigie_core::sim::{Options, Scenario, Simulation};
 use vigie_core::tasks::{Alarm, AlarmCode};
-
-fn vigie(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_vigie"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .unwrap()
-}
 
 /// A copy of a layout folder (files and sub-folders) in `to`.
 fn copy_layout(from: &Path, to: &Path) {

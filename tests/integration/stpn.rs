@@ -4,16 +4,9 @@
 //! passages, the double fault's reachability, each variant of each net.
 
 use crate::live::{python, repo};
+use crate::vigie;
 use std::io::Write;
 use std::process::{Command, Stdio};
-
-fn vigie(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_vigie"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .unwrap()
-}
 
 fn said(out: &std::process::Output) -> String {
     format!(
