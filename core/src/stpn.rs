@@ -665,7 +665,7 @@ impl StateGraph {
     /// States with no successor.
     pub fn sinks(&self) -> Vec<usize> {
         (0..self.states.len())
-            .filter(|&i| !self.arcs.iter().any(|a| a.from == i))
+            .filter(|&i| self.out(i).is_empty())
             .collect()
     }
 
@@ -696,9 +696,8 @@ impl StateGraph {
 
     /// The mean time spent in a state before leaving it, `η_i = Σ_j p_ij θ_ij`.
     fn sojourn(&self, i: usize) -> Q {
-        self.arcs
+        self.out(i)
             .iter()
-            .filter(|a| a.from == i)
             .map(|a| &a.p * Q::from_integer(a.theta.into()))
             .sum()
     }
@@ -832,7 +831,7 @@ impl StateGraph {
             })?;
             for &o in observable {
                 let (mut f, mut gg) = (Q::zero(), Q::zero());
-                for arc in self.arcs.iter().filter(|a| a.from == o) {
+                for arc in self.out(o) {
                     let (h, gv) = (&h[arc.to], &g[arc.to]);
                     gg += &arc.p * (Q::from_integer(arc.theta.into()) * h + gv);
                     f += &arc.p * h;

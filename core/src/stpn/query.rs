@@ -108,10 +108,28 @@ struct Split {
 
 impl StateGraph {
     /// The arcs leaving state `i` (the arcs are sorted by source).
-    fn out(&self, i: usize) -> &[Arc] {
+    pub(crate) fn out(&self, i: usize) -> &[Arc] {
         let lo = self.arcs.partition_point(|a| a.from < i);
         let hi = self.arcs.partition_point(|a| a.from <= i);
         &self.arcs[lo..hi]
+    }
+
+    /// The expected visits of each state from the initial distribution, the states of
+    /// `absorbing` entered but never left: `x_j − Σ_{i not absorbing} p_ij x_i = init_j`.
+    fn visits(&self, absorbing: &dyn Fn(usize) -> bool) -> Option<Vec<Q>> {
+        let n = self.states.len();
+        let mut a = vec![solve::Row::new(); n];
+        for (j, row) in a.iter_mut().enumerate() {
+            row.insert(j, Q::one());
+        }
+        for arc in self.arcs.iter().filter(|a| !absorbing(a.from)) {
+            solve::add(&mut a[arc.to], arc.from, -arc.p.clone());
+        }
+        let mut b = vec![Q::zero(); n];
+        for (s, p) in &self.initial {
+            b[*s] += p.clone();
+        }
+        solve::solve(a, b)
     }
 
     /// The graph with a node per (event, state) reached by an arc of one of `events`.
@@ -181,21 +199,9 @@ impl StateGraph {
                 }
                 Ok(w)
             }
-            [] => {
-                // x_j − Σ_i p_ij x_i = init_j over every state.
-                let mut a = vec![solve::Row::new(); n];
-                for (j, row) in a.iter_mut().enumerate() {
-                    row.insert(j, Q::one());
-                }
-                for arc in &self.arcs {
-                    solve::add(&mut a[arc.to], arc.from, -arc.p.clone());
-                }
-                let mut b = vec![Q::zero(); n];
-                for (s, p) in &self.initial {
-                    b[*s] += p.clone();
-                }
-                solve::solve(a, b).ok_or_else(|| "the visits' equations are singular".into())
-            }
+            [] => self
+                .visits(&|_| false)
+                .ok_or_else(|| "the visits' equations are singular".into()),
             _ => Err(format!(
                 "{} cyclic terminal components: the chain has no single steady state",
                 cyclic.len()
@@ -429,20 +435,11 @@ impl Net {
             });
         }
         let first = Some(self.in_units(&time / &p));
-        // Where the net enters: x_j = init_j + Σ_{i outside} x_i p_ij, outside.
+        // Where the net enters: the visits with the markings inside absorbing.
         let n = g.states.len();
-        let mut a = vec![solve::Row::new(); n];
-        let mut b = vec![Q::zero(); n];
-        for (j, row) in a.iter_mut().enumerate() {
-            row.insert(j, Q::one());
-        }
-        for arc in g.arcs.iter().filter(|a| !inside(a.from)) {
-            solve::add(&mut a[arc.to], arc.from, -arc.p.clone());
-        }
-        for (s, w) in &g.initial {
-            b[*s] += w.clone();
-        }
-        let x = solve::solve(a, b).ok_or("the entry equations are singular")?;
+        let x = g
+            .visits(&inside)
+            .ok_or("the entry equations are singular")?;
         let (lh, lg) = g
             .passage(&|s| !inside(s), &|_| false)
             .ok_or("the leaving equations are singular")?;
