@@ -58,7 +58,7 @@ fn monitor_config(dir: &TempDir, port: u16, extra: &str) -> std::path::PathBuf {
         .unwrap();
     let text = format!(
         "Gateway(mode: Monitor, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 5, \
-         client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 50, backoff_max_ms: 400), {extra})",
+         client: Modbus(address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 50, backoff_max_ms: 400), {extra})",
         station.display().to_string()
     );
     let path = dir.0.join("monitor.ron");
@@ -159,8 +159,8 @@ fn gateway_config(dir: &TempDir, port: u16) -> std::path::PathBuf {
         .unwrap();
     let text = format!(
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 50, \
-         client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
-         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), \
+         client: Modbus(address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
+         server: Modbus(bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), \
          diagnosers: false, plausibility: false, state_dir: {:?})", // the table moves in milliseconds: a fault for its diagnoser, edges the physics does not allow
         station.display().to_string(),
         dir.0.join("state").display().to_string()
@@ -193,9 +193,17 @@ fn console_follows_a_gateway_link_and_resets_through_it() {
     h.get_by_label("Mode: gateway (filter enforced between PLC and plant)");
     wait_for_label(&mut h, &format!("Link: connected to 127.0.0.1:{port}"));
     wait_for_label(&mut h, "PLC: silent");
-    let server = h.state().link.as_ref().unwrap().state.listening.unwrap();
+    let server = h
+        .state()
+        .link
+        .as_ref()
+        .unwrap()
+        .state
+        .listening
+        .clone()
+        .unwrap();
     wait_for_label(&mut h, &format!("PLC server: {server}"));
-    let mut plc = Plc::start(server, Some("127.0.0.2"));
+    let mut plc = Plc::start(server.parse().unwrap(), Some("127.0.0.2"));
     plc.command("0000000");
     wait_for_label(&mut h, "PLC: heard");
 

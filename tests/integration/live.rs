@@ -368,8 +368,8 @@ impl Gateway {
 fn gateway_config(plant_port: u16, extra: &str) -> String {
     format!(
         "mode: Gateway, cycle_ms: 10, link_timeout_cycles: 50, auto_reset: true, \
-         client: (address: \"127.0.0.1:{plant_port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
-         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), {extra}"
+         client: Modbus(address: \"127.0.0.1:{plant_port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200), \
+         server: Modbus(bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"), {extra}"
     )
 }
 
@@ -725,7 +725,7 @@ fn monitor_reports_with_explanations_and_never_writes() {
     let mut plant = Plant::start(None);
     let body = format!(
         "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 10, \
-         client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
+         client: Modbus(address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
         plant.port
     );
     // The PLC (here the pymodbus server exposing sensors and commanded coils) lets A4
@@ -902,7 +902,7 @@ fn monitor_reports_a_diagnosis_and_the_diagnosers_can_be_switched_off() {
         }
         let body = format!(
             "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 10, diagnosers: {on}, \
-             client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
+             client: Modbus(address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
             plant.port
         );
         let mut gw = Gateway::start(&body);
@@ -958,7 +958,7 @@ fn mbpoll_run(args: &[&str]) -> String {
 fn emulator_served_to_pymodbus_and_mbpoll() {
     let mut gw = Gateway::start(
         "mode: Emulator, cycle_ms: 10, seed: 1, \
-         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\")",
+         server: Modbus(bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\")",
     );
     let server = gw.listening();
     let port = server.port().to_string();
@@ -1004,7 +1004,7 @@ fn kill_9_of_the_gateway_during_a_burst_loses_no_committed_entry() {
     let mut plant = Plant::start(None);
     let body = format!(
         "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
-         client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
+         client: Modbus(address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)",
         plant.port
     );
     // A box at C7 with the table at C5: every release of A4 is a violation of CSs10.
@@ -1140,7 +1140,7 @@ fn kill_9_of_the_console_during_a_burst_loses_no_committed_entry() {
         &config,
         format!(
             "Gateway(mode: Monitor, plant: {:?}, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
-             state_dir: {:?}, client: (address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200))",
+             state_dir: {:?}, client: Modbus(address: \"127.0.0.1:{}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200))",
             station.display().to_string(),
             dir.0.join("link-state").display().to_string(),
             plant.port
@@ -1351,7 +1351,7 @@ fn monitor_follows_the_given_program_and_names_the_first_diverging_output() {
     let body = |port: u16| {
         format!(
             "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
-             client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)"
+             client: Modbus(address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)"
         )
     };
     let run = |program: vigie_core::control::Program| {
@@ -1439,7 +1439,7 @@ fn monitor_explains_a_violation_with_the_program_given() {
     let mut gw = Gateway::start_with(
         &format!(
             "mode: Monitor, cycle_ms: 10, link_timeout_cycles: 50, {NO_DIAGNOSERS}, \
-             client: (address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)"
+             client: Modbus(address: \"127.0.0.1:{port}\", timeout_ms: 200, backoff_initial_ms: 20, backoff_max_ms: 200)"
         ),
         &["--program", xml.to_str().expect("utf-8")],
     );

@@ -56,10 +56,24 @@ pub(crate) fn init_tracing(level: LogLevel) -> tracing_appender::non_blocking::W
         .lossy(true)
         .thread_name("vigie-log")
         .finish(std::io::stderr());
+    // async-opcua reports every endpoint and handshake at info: its own lines show
+    // from warnings up unless the run asks for debug.
+    let opcua = if level >= tracing::Level::DEBUG {
+        level
+    } else {
+        level.min(tracing::Level::WARN)
+    };
+    let targets = tracing_subscriber::filter::Targets::new()
+        .with_default(level)
+        .with_target("opcua", opcua);
+    use tracing_subscriber::layer::SubscriberExt as _;
+    use tracing_subscriber::util::SubscriberInitExt as _;
     let _ = tracing_subscriber::fmt()
         .with_max_level(level)
         .with_writer(writer)
         .with_ansi(false)
+        .finish()
+        .with(targets)
         .try_init();
     guard
 }
@@ -179,6 +193,67 @@ pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result
         );
         for a in &f.false_alarms {
             println!("    {a}");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `vigie opcua …`.
+#[derive(clap::Subcommand, Debug)]
+pub(crate) enum OpcuaAction {
+    /// Vigie's application certificate for the run of CONFIG (created on first use, in
+    /// the state folder's `pki/own/cert.der`): its path and thumbprint, to give to the
+    /// peer's administrator, who must trust it.
+    Cert {
+        /// The gateway configuration.
+        config: PathBuf,
+    },
+    /// Trusts a peer's certificate (DER or PEM) for the run of CONFIG: copied to the
+    /// PKI's `trusted/` folder (and out of `rejected/`).
+    Trust {
+        /// The gateway configuration.
+        config: PathBuf,
+        /// The peer's certificate.
+        cert: PathBuf,
+    },
+    /// Reads a password on stdin and prints its argon2id hash, for `users` in an
+    /// `OpcUa` server section.
+    HashPassword,
+}
+
+pub(crate) fn opcua(action: OpcuaAction) -> anyhow::Result<ExitCode> {
+    let pki = |config: &std::path::Path| -> anyhow::Result<PathBuf> {
+        let c = vigie_core::live::config::GatewayConfig::load(config)
+            .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+        Ok(vigie_app::live::opcua_pki(&runtime::state_dir(&c, config)))
+    };
+    match action {
+        OpcuaAction::Cert { config } => {
+            let dir = pki(&config)?;
+            let (path, thumbprint) = vigie_app::live::opcua_certificate(&dir)?;
+            println!("certificate {}", path.display());
+            println!("thumbprint {thumbprint}");
+            println!("trusted {}", dir.join("trusted").display());
+            println!("rejected {}", dir.join("rejected").display());
+        }
+        OpcuaAction::Trust { config, cert } => {
+            let dir = pki(&config)?;
+            let path = vigie_app::live::opcua_trust(&dir, &cert)?;
+            println!("trusted {}", path.display());
+        }
+        OpcuaAction::HashPassword => {
+            use argon2::password_hash::{PasswordHasher as _, SaltString, rand_core::OsRng};
+            let mut password = String::new();
+            std::io::stdin().read_line(&mut password)?;
+            let password = password.trim_end_matches(['\n', '\r']);
+            if password.is_empty() {
+                anyhow::bail!("empty password: type it on stdin");
+            }
+            let salt = SaltString::generate(&mut OsRng);
+            let hash = argon2::Argon2::default()
+                .hash_password(password.as_bytes(), &salt)
+                .map_err(|e| anyhow::anyhow!("cannot hash the password: {e}"))?;
+            println!("{hash}");
         }
     }
     Ok(ExitCode::SUCCESS)

@@ -343,6 +343,12 @@ pub(crate) enum Command {
         #[command(subcommand)]
         action: DiagnoseCmd,
     },
+    /// OPC UA: Vigie's certificate, the peers' certificates it trusts, password hashes
+    /// for the users of its server.
+    Opcua {
+        #[command(subcommand)]
+        action: gateway::OpcuaAction,
+    },
     /// The console's user accounts (roles, argon2id password hashes in
     /// `users.ron` of the data folder).
     User {
@@ -506,6 +512,7 @@ pub(crate) fn run(cli: Cli) -> anyhow::Result<ExitCode> {
     match command {
         Command::Console(c) => open_console(&c.plant.plant, None, &c.console),
         Command::User { action } => user(action),
+        Command::Opcua { action } => gateway::opcua(action),
         Command::Check { plant, json } => check::run(&plant.plant, json),
         Command::Filter {
             plant,

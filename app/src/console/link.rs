@@ -357,7 +357,7 @@ impl Console {
 
 /// One line of text for the connection, in the language shown.
 pub fn connection_text(i18n: &I18n, s: &LinkState) -> String {
-    let peer = s.peer.map(|p| p.to_string()).unwrap_or_default();
+    let peer = s.peer.clone().unwrap_or_default();
     if let Some(e) = &s.error {
         return i18n.ta("linkp-stopped-error", &[("error", e.into())]);
     }
@@ -445,7 +445,7 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
             ("connections", s.client.connections.into()),
         ],
     ));
-    if let Some(addr) = s.listening {
+    if let Some(addr) = &s.listening {
         ui.label(i.ta(
             "linkp-plc-server",
             &[("address", (&addr.to_string()).into())],

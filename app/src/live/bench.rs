@@ -21,7 +21,6 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use tokio_modbus::client::{Reader as _, Writer as _};
 use vigie_core::live::config::GatewayConfig;
-use vigie_core::live::iomap::IoMap;
 
 /// Figures of one run.
 #[derive(Debug, serde::Serialize)]
@@ -298,7 +297,7 @@ fn gateway_setup(
     let _ = std::fs::remove_dir_all(&state);
     let text = format!(
         "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
-         client: (address: \"{plant_addr}\"), server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
+         client: Modbus(address: \"{plant_addr}\"), server: Modbus(bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
          cycle_priority: {}, realtime: {}, state_dir: {:?})",
         plant_dir.display().to_string(),
         cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})")),
@@ -309,12 +308,12 @@ fn gateway_setup(
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     // The gateway as configured by default: with the plant's diagnosers.
     let (bundle, diagnosers) = runtime::load_plant(&config)?;
-    let (map, _) = IoMap::load(&config.io_map_path(), &bundle.plant)
-        .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+    let (client_map, server_map) = runtime::load_maps(&config, &bundle.plant)?;
     let setup = Setup {
         config,
         bundle,
-        map,
+        client_map,
+        server_map,
         diagnosers,
         state_dir: state.clone(),
         history: None,

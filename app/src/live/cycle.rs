@@ -9,13 +9,13 @@
 //! stamped with their read time) and writes the outputs the cycle hands it as soon as
 //! it gets them. Events go back to the async side through a bounded channel.
 
-use super::client::{Reader, Writer};
 use super::io::{Heartbeat, PeerClient, PeerIo, PeerSide};
 use super::latch::LatchStore;
+use super::link::{Reader, ServerHandle, Writer, serve_plc};
+use super::modbus::server::SharedImage;
 use super::runtime::{
     AlarmBoard, Clock, CycleStats, Emit, Explainer, Setup, bits_text, emit_engine_events, names,
 };
-use super::server::{self, Shared, SharedImage};
 use super::sink::LiveHistory;
 use super::tap::Tap;
 use anyhow::Context as _;
@@ -30,7 +30,6 @@ use vigie_core::bundle::PlantBundle;
 use vigie_core::engine::{Commanded, Engine, FilterMode};
 use vigie_core::live::age::{AgedBits, Watchdog};
 use vigie_core::live::follow::{self, Follower};
-use vigie_core::live::image::ServerImage;
 use vigie_core::live::stale::StaleGuard;
 use vigie_core::pop::Diagnosers;
 use vigie_core::pop::build::Compiled;
@@ -110,6 +109,16 @@ impl Priority {
             }),
             (None, false) => None,
         }
+    }
+
+    /// The cycle thread's priority of `config`, the I/O runtime's thread (the
+    /// caller's) raised one step below it.
+    pub(crate) fn raise_io(config: &vigie_core::live::config::GatewayConfig) -> Option<Self> {
+        let priority = Self::of(config);
+        if let Some(p) = priority {
+            raise_priority(p.below(), "I/O runtime thread");
+        }
+        priority
     }
 
     /// One step below, for the I/O runtime's thread.
@@ -475,7 +484,7 @@ struct MonitorCycle {
     attach: bool,
     /// The engine attaches in this cycle (for the console's mirror).
     attached_now: bool,
-    peer: std::net::SocketAddr,
+    peer: String,
     side: Arc<Mutex<PeerSide>>,
     beat: Heartbeat,
     liveness: Liveness,
@@ -653,7 +662,7 @@ impl MonitorCycle {
 
     /// Takes the peer's latest values and watches its liveness (attaching the engine
     /// when it is first heard); returns the client's status.
-    fn listen(&mut self, now: Millis) -> super::client::ClientStatus {
+    fn listen(&mut self, now: Millis) -> super::link::ClientStatus {
         let (heard, failed, status) = {
             let s = lock(&self.side);
             self.inputs.clone_from(&s.inputs);
@@ -690,33 +699,33 @@ pub(crate) async fn monitor(
     let Setup {
         config,
         bundle,
-        map,
+        client_map,
+        server_map: _,
         diagnosers,
-        state_dir: _,
+        state_dir,
         history,
         program,
     } = setup;
-    let client = config
+    let (client, map) = config
         .client
         .clone()
+        .zip(client_map)
         .context("monitor mode needs a client section")?;
     let clock = Clock(Instant::now());
     let period = Duration::from_millis(config.cycle_ms.max(1));
-    let priority = Priority::of(&config);
-    if let Some(p) = priority {
-        raise_priority(p.below(), "I/O runtime thread");
-    }
-    let peer = client.address;
-    let liveness = Liveness::of(&config, client.timeout_ms);
+    let priority = Priority::raise_io(&config);
+    let peer = client.peer();
+    let liveness = Liveness::of(&config, client.timeout_ms());
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
     let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
-    let reader = PeerClient::Monitor(Reader::new(client, map.clone(), true));
+    let pki = super::opcua::pki::folder(&state_dir);
+    let reader = PeerClient::Monitor(Reader::new(client, map.clone(), true, &pki, clock.0)?);
     let io = PeerIo::start(reader, (n_in, n_out), None, tx.clone(), clock, period);
     if let Some(t) = &tap {
-        t.update(|s| s.peer = Some(peer));
+        t.update(|s| s.peer = Some(peer.clone()));
     }
     emit(json!({
-        "event": "monitoring", "peer": peer.to_string(), "diagnosers": diagnosers.is_some(),
+        "event": "monitoring", "peer": peer.clone(), "diagnosers": diagnosers.is_some(),
         "program": program.as_ref().map(|p| format!("{} (version {})", p.program.name, p.program.version())),
     }));
     let stop = Arc::new(AtomicBool::new(false));
@@ -793,7 +802,7 @@ struct GatewayCycle {
     attach: bool,
     /// The engine attaches in this cycle (for the console's mirror).
     attached_now: bool,
-    plant_peer: std::net::SocketAddr,
+    plant_peer: String,
     side: Arc<Mutex<PeerSide>>,
     beat: Heartbeat,
     liveness: Liveness,
@@ -859,7 +868,7 @@ impl GatewayCycle {
 
     /// Step 1: the plant's inputs as last polled, its liveness watched (attaching the
     /// engine when it is first heard); returns the client's status.
-    fn listen_plant(&mut self, now: Millis) -> super::client::ClientStatus {
+    fn listen_plant(&mut self, now: Millis) -> super::link::ClientStatus {
         let (heard, failed, status) = {
             let s = lock(&self.side);
             self.inputs.clone_from(&s.inputs);
@@ -1094,43 +1103,40 @@ pub(crate) async fn gateway(
     let Setup {
         config,
         bundle,
-        map,
+        client_map,
+        server_map,
         diagnosers,
         state_dir,
         history,
         ..
     } = setup;
-    let client = config
+    let pki = super::opcua::pki::folder(&state_dir);
+    let ((client, map), server_config) = config
         .client
         .clone()
-        .context("gateway mode needs a client section")?;
-    let server_config = config
-        .server
-        .clone()
-        .context("gateway mode needs a server section")?;
+        .zip(client_map)
+        .zip(config.server.clone())
+        .context("gateway mode needs a client and a server section")?;
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
     let clock = Clock(Instant::now());
     let period = Duration::from_millis(config.cycle_ms.max(1));
-    let priority = Priority::of(&config);
-    if let Some(p) = priority {
-        raise_priority(p.below(), "I/O runtime thread");
-    }
+    let priority = Priority::raise_io(&config);
     // A trip latched by an earlier run (a crash, a kill) holds from the first cycle.
     let (engine, restored) = restored_engine(&bundle, diagnosers.as_ref(), &config, &state_dir)?;
-    let (shared, server) = serve_plc(&server_config, &map, &config, Bits::zeros(n_in)).await?;
-    announce(
-        emit,
-        tap.as_ref(),
-        server.local,
-        client.address,
-        diagnosers.is_some(),
-        &state_dir,
-        restored.as_ref(),
-    );
-    let (plant_peer, liveness) = (client.address, Liveness::of(&config, client.timeout_ms));
+    let serve = super::link::Serve {
+        config: &config,
+        server: &server_config,
+        map: server_map.as_ref(),
+        plant: &bundle.plant,
+        pki: &pki,
+    };
+    let (shared, server) = serve_plc(&serve, Bits::zeros(n_in)).await?;
+    let announced = (diagnosers.is_some(), state_dir.as_path(), restored.as_ref());
+    announce(emit, tap.as_ref(), &server, &client.peer(), announced);
+    let (plant_peer, liveness) = (client.peer(), Liveness::of(&config, client.timeout_ms()));
     let (out_tx, out_rx) = watch::channel(None);
     let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
-    let writer = PeerClient::Plant(Writer::new(client, map.clone()));
+    let writer = PeerClient::Plant(Writer::new(client, map.clone(), &pki, clock.0)?);
     let io = PeerIo::start(writer, (n_in, 0), Some(out_rx), tx.clone(), clock, period);
     let latch_tx = tx.clone();
     let latch = LatchStore::start(state_dir, move |e| {
@@ -1214,52 +1220,26 @@ fn restored_engine(
     Ok((engine, restored))
 }
 
-/// Starts the Modbus server the PLC talks to, over a fresh shared image whose inputs
-/// are `inputs` and whose outputs are zeros (one per output of the map, which maps
-/// every output of the plant).
-pub(super) async fn serve_plc(
-    server_config: &vigie_core::live::config::ServerConfig,
-    map: &vigie_core::live::iomap::IoMap,
-    config: &vigie_core::live::config::GatewayConfig,
-    inputs: Bits,
-) -> anyhow::Result<(SharedImage, server::ServerHandle)> {
-    let shared: SharedImage = Arc::new(Mutex::new(Shared {
-        inputs,
-        outputs: Bits::zeros(map.outputs.len()),
-        ..Shared::default()
-    }));
-    let server = server::start(
-        server_config,
-        ServerImage::new(map, server_config.unit),
-        Arc::clone(&shared),
-        Duration::from_millis(config.link_timeout().0),
-    )
-    .await
-    .with_context(|| format!("cannot listen on {}", server_config.bind))?;
-    Ok((shared, server))
-}
-
 /// Announces the gateway: where it serves the PLC and reaches the plant (log, tap,
 /// `listening` event), and a trip restored from an earlier run.
 fn announce(
     emit: Emit<'_>,
     tap: Option<&Tap>,
-    local: std::net::SocketAddr,
-    plant: std::net::SocketAddr,
-    diagnosers: bool,
-    state_dir: &std::path::Path,
-    restored: Option<&vigie_core::engine::Trip>,
+    server: &ServerHandle,
+    plant: &str,
+    (diagnosers, state_dir, restored): (bool, &std::path::Path, Option<&vigie_core::engine::Trip>),
 ) {
-    tracing::info!("serving the PLC on {}, plant at {}", local, plant);
+    let served = server.address();
+    tracing::info!("serving the PLC on {served}, plant at {plant}");
     if let Some(t) = tap {
         t.update(|s| {
-            s.peer = Some(plant);
-            s.listening = Some(local);
+            s.peer = Some(plant.to_string());
+            s.listening = Some(served.clone());
         });
     }
     emit(json!({
-        "event": "listening", "address": local.to_string(),
-        "plant": plant.to_string(), "diagnosers": diagnosers,
+        "event": "listening", "address": server.local().to_string(), "endpoint": served,
+        "plant": plant, "diagnosers": diagnosers,
         "state_dir": state_dir.display().to_string(),
     }));
     if let Some(trip) = restored {

@@ -13,7 +13,7 @@
 //! late (a loaded machine), a peer's silence is not held against it (see
 //! [`vigie_core::live::age::Watchdog::check_seen`]).
 
-use super::client::{ClientStatus, Reader, Writer};
+use super::link::{ClientStatus, Reader, Writer};
 use super::runtime::{Clock, bits_text};
 use serde_json::json;
 use std::sync::atomic::{AtomicU64, Ordering};

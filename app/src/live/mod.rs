@@ -1,8 +1,12 @@
-//! The networked half of the live link (Modbus TCP over tokio-modbus): the pure parts
-//! (I/O map, register image, data age, stale inputs) are in `vigie_core::live`.
+//! The networked half of the live link (Modbus TCP over tokio-modbus, OPC UA over
+//! async-opcua): the pure parts (I/O and node maps, register image, data age, stale
+//! inputs) are in `vigie_core::live`.
 //!
-//! - `client`: polls the plant (or the monitored PLC), reconnects with backoff.
-//! - `server`: serves an image to a PLC, with allow-list and writer checks.
+//! - `link`: the protocol-neutral client (`Reader`, `Writer`) and server start the
+//!   cycles use; one adapter per protocol:
+//! - `modbus`: the client (polls the plant or the monitored PLC, reconnects with
+//!   backoff) and the server (serves an image to a PLC, allow-list, writer checks);
+//! - `opcua`: the same over OPC UA, with the certificates (`opcua::pki`).
 //! - `backend`: what a server can serve (the emulator, a memory image).
 //! - [`runtime`]: loads a configuration and runs its mode (the emulator loop is here).
 //! - `cycle`: the monitor and gateway cycles on their own thread at absolute
@@ -19,17 +23,36 @@
 
 pub(crate) mod backend;
 pub mod bench;
-pub(crate) mod client;
 pub(crate) mod cycle;
 pub(crate) mod io;
 pub(crate) mod latch;
+pub(crate) mod link;
+pub(crate) mod modbus;
+pub(crate) mod opcua;
 pub mod runtime;
-pub(crate) mod server;
 pub mod sink;
 pub mod tap;
 
 #[cfg(test)]
 mod tests;
+
+/// The OPC UA PKI folder of a run whose state folder is `state_dir`.
+pub fn opcua_pki(state_dir: &std::path::Path) -> std::path::PathBuf {
+    opcua::pki::folder(state_dir)
+}
+
+/// Vigie's OPC UA certificate in `pki`, created when absent: its path and thumbprint.
+pub fn opcua_certificate(pki: &std::path::Path) -> anyhow::Result<(std::path::PathBuf, String)> {
+    opcua::pki::own_certificate(pki)
+}
+
+/// Trusts a peer's certificate in `pki`; the path of the trusted copy.
+pub fn opcua_trust(
+    pki: &std::path::Path,
+    cert: &std::path::Path,
+) -> anyhow::Result<std::path::PathBuf> {
+    opcua::pki::trust(pki, cert)
+}
 
 /// Resolves on SIGINT or SIGTERM (on other systems: Ctrl-C), for the headless gateway
 /// and the console on a link. Call it inside a Tokio runtime: the handlers are installed

@@ -45,6 +45,7 @@ use tokio::time::MissedTickBehavior;
 use vigie_core::alarms::{AlarmKind, AlarmList, AlarmText};
 use vigie_core::bundle::PlantBundle;
 use vigie_core::engine::{Engine, Event};
+use vigie_core::live::LinkMap;
 use vigie_core::live::age::Transition;
 use vigie_core::live::config::{GatewayConfig, Mode};
 use vigie_core::live::iomap::IoMap;
@@ -96,8 +97,12 @@ pub struct Setup {
     /// The plant (with the diagnosers: auxiliaries declared, constraints rewritten for
     /// the cooperation).
     pub bundle: PlantBundle,
-    /// The I/O map.
-    pub map: IoMap,
+    /// Where the client finds the signals (monitor, gateway): the I/O map (Modbus) or
+    /// the node map (OPC UA).
+    pub client_map: Option<LinkMap>,
+    /// Where the server serves them (gateway, emulator): the I/O map (Modbus); `None`
+    /// for OPC UA, whose server publishes the plant's own address space.
+    pub server_map: Option<LinkMap>,
     /// The compiled diagnosers, when the run steps them
     /// ([`GatewayConfig::runs_diagnosers`]).
     pub diagnosers: Option<Compiled>,
@@ -149,20 +154,64 @@ pub fn load(path: &std::path::Path) -> anyhow::Result<Setup> {
     let render = vigie_core::diag::render;
     let config = GatewayConfig::load(path).map_err(|p| anyhow::anyhow!("{}", render(&p)))?;
     let (bundle, diagnosers) = load_plant(&config)?;
-    let (map, warnings) = IoMap::load(&config.io_map_path(), &bundle.plant)
-        .map_err(|p| anyhow::anyhow!("{}", render(&p)))?;
-    for w in &warnings {
+    for w in &config.warnings {
         tracing::warn!("{w}");
     }
+    let (client_map, server_map) = load_maps(&config, &bundle.plant)?;
     Ok(Setup {
         state_dir: state_dir(&config, path),
         config,
         bundle,
-        map,
+        client_map,
+        server_map,
         diagnosers,
         history: None,
         program: None,
     })
+}
+
+/// The maps of the client and of the server: the I/O map for a Modbus side (loaded
+/// once), the node map for an OPC UA client (`node_map`, else the plant folder's
+/// `node-map.ron`, else the address space Vigie serves for the plant).
+pub fn load_maps(
+    config: &GatewayConfig,
+    plant: &vigie_core::plant::Plant,
+) -> anyhow::Result<(Option<LinkMap>, Option<LinkMap>)> {
+    use vigie_core::live::config::{ClientLink, ServerLink};
+    use vigie_core::live::nodemap::{NodeMap, plant_namespace};
+    let render = vigie_core::diag::render;
+    let modbus = matches!(config.client, Some(ClientLink::Modbus(_)))
+        || matches!(config.server, Some(ServerLink::Modbus(_)));
+    let io = if modbus {
+        let (map, warnings) = IoMap::load(&config.io_map_path(), plant)
+            .map_err(|p| anyhow::anyhow!("{}", render(&p)))?;
+        for w in &warnings {
+            tracing::warn!("{w}");
+        }
+        Some(map)
+    } else {
+        None
+    };
+    let client = match &config.client {
+        Some(ClientLink::Modbus(_)) => io.clone().map(LinkMap::Modbus),
+        Some(ClientLink::OpcUa(_)) => Some(LinkMap::OpcUa(match config.node_map_path() {
+            Some(path) => {
+                let (map, warnings) =
+                    NodeMap::load(&path, plant).map_err(|p| anyhow::anyhow!("{}", render(&p)))?;
+                for w in &warnings {
+                    tracing::warn!("{w}");
+                }
+                map
+            }
+            None => NodeMap::from_plant(plant, &plant_namespace(&config.plant), config.cycle_ms),
+        })),
+        None => None,
+    };
+    let server = match &config.server {
+        Some(ServerLink::Modbus(_)) => io.map(LinkMap::Modbus),
+        _ => None,
+    };
+    Ok((client, server))
 }
 
 /// The plant folder of `config`: with its diagnosers (`diagnosers.ron`, the constraints
@@ -371,9 +420,10 @@ async fn emulator(
     let Setup {
         config,
         bundle,
-        map,
+        client_map: _,
+        server_map,
         diagnosers: _,
-        state_dir: _,
+        state_dir,
         history: _,
         program: _,
     } = setup;
@@ -386,34 +436,33 @@ async fn emulator(
         .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
     let emulator = vigie_core::machine::Physical::new(&description, &bundle.plant, config.seed)
         .map_err(|p| anyhow::anyhow!("{p}"))?;
-    serve_backend(
-        &config,
-        &server_config,
-        &map,
-        EmulatorBackend(emulator),
-        shutdown,
-        emit,
-        stats,
-    )
-    .await
+    let pki = super::opcua::pki::folder(&state_dir);
+    let serve = super::link::Serve {
+        config: &config,
+        server: &server_config,
+        map: server_map.as_ref(),
+        plant: &bundle.plant,
+        pki: &pki,
+    };
+    serve_backend(&serve, EmulatorBackend(emulator), shutdown, emit, stats).await
 }
 
 /// Serves any backend: every cycle the outputs the PLC wrote go to the backend and the
 /// backend's sensors to the image.
 pub(crate) async fn serve_backend(
-    config: &GatewayConfig,
-    server_config: &vigie_core::live::config::ServerConfig,
-    map: &IoMap,
+    serve: &super::link::Serve<'_>,
     mut backend: impl IoBackend,
     shutdown: impl Future<Output = ()>,
     emit: Emit<'_>,
     stats: &mut CycleStats,
 ) -> anyhow::Result<()> {
-    let n_out = map.outputs.len();
-    let (shared, server) =
-        super::cycle::serve_plc(server_config, map, config, backend.read_inputs().clone()).await?;
-    tracing::info!("serving on {}", server.local);
-    emit(json!({"event": "listening", "address": server.local.to_string()}));
+    let n_out = serve.plant.outputs.len();
+    let config = serve.config;
+    let (shared, server) = super::link::serve_plc(serve, backend.read_inputs().clone()).await?;
+    tracing::info!("serving on {}", server.address());
+    emit(json!({
+        "event": "listening", "address": server.local().to_string(), "endpoint": server.address(),
+    }));
     let clock = Clock(Instant::now());
     let mut last = Millis::ZERO;
     let mut outputs = Bits::zeros(n_out);

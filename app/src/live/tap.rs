@@ -3,9 +3,8 @@
 //! back to the run. The cycle thread never waits for the console: the queue is bounded
 //! and the oldest cycles are dropped (and counted) when the console does not keep up.
 
-pub use super::client::ClientStatus;
+pub use super::link::ClientStatus;
 use std::collections::VecDeque;
-use std::net::SocketAddr;
 use std::sync::{Arc, Mutex};
 use vigie_core::Millis;
 use vigie_core::live::config::Mode;
@@ -17,9 +16,9 @@ pub struct LinkState {
     /// Monitor or gateway.
     pub mode: Mode,
     /// The polled peer (monitor: the PLC or plant; gateway: the plant).
-    pub peer: Option<SocketAddr>,
+    pub peer: Option<String>,
     /// Where the server towards the PLC listens (gateway).
-    pub listening: Option<SocketAddr>,
+    pub listening: Option<String>,
     /// The client's connection state and counters.
     pub client: ClientStatus,
     /// Gateway: the PLC was heard within the link timeout (`None` in monitor mode).

@@ -21,7 +21,7 @@ fn memory_backend_served_round_trip_and_exceptions() {
     let plant = Plant::load(&station().join("plant.ron")).unwrap();
     let (map, _) = IoMap::load(&station().join("io-map.ron"), &plant).unwrap();
     let text = format!(
-        "Gateway(mode: Emulator, plant: {:?}, cycle_ms: 5, server: (bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"))",
+        "Gateway(mode: Emulator, plant: {:?}, cycle_ms: 5, server: Modbus(bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"))",
         station().display().to_string()
     );
     let config = GatewayConfig::from_ron(&text, Path::new("t.ron")).unwrap();
@@ -35,6 +35,7 @@ fn memory_backend_served_round_trip_and_exceptions() {
         },
         outputs: vigie_core::Bits::zeros(plant.outputs.len()),
     };
+    let plant_for_server = plant.clone();
     let rt = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -52,10 +53,18 @@ fn memory_backend_served_round_trip_and_exceptions() {
                 }
             };
             let mut stats = CycleStats::default();
+            let map = vigie_core::live::LinkMap::Modbus(map);
+            let plant = plant_for_server;
+            let pki = std::env::temp_dir().join("vigie-unit-pki");
+            let serve = super::link::Serve {
+                config: &config,
+                server: &server_config,
+                map: Some(&map),
+                plant: &plant,
+                pki: &pki,
+            };
             serve_backend(
-                &config,
-                &server_config,
-                &map,
+                &serve,
                 backend,
                 async {
                     let _ = stop_rx.await;
@@ -132,7 +141,7 @@ fn the_run_loads_the_diagnosers_unless_switched_off() {
     }
     // Switched off: the plant's constraints as written.
     let text = format!(
-        "Gateway(mode: Monitor, plant: {:?}, client: (address: \"127.0.0.1:1502\"), diagnosers: false)",
+        "Gateway(mode: Monitor, plant: {:?}, client: Modbus(address: \"127.0.0.1:1502\"), diagnosers: false)",
         station().display().to_string()
     );
     let config = GatewayConfig::from_ron(&text, Path::new("t.ron")).unwrap();
@@ -149,7 +158,7 @@ fn the_run_loads_the_diagnosers_unless_switched_off() {
     );
     // Emulator mode never runs them.
     let text = format!(
-        "Gateway(mode: Emulator, plant: {:?}, server: (bind: \"127.0.0.1:0\"))",
+        "Gateway(mode: Emulator, plant: {:?}, server: Modbus(bind: \"127.0.0.1:0\"))",
         station().display().to_string()
     );
     let config = GatewayConfig::from_ron(&text, Path::new("t.ron")).unwrap();

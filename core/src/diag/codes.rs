@@ -20,6 +20,7 @@
 //! | V10xx | the compiled filter |
 //! | V11xx | the machine's elementary actions (`actions.ron`) and their monitor |
 //! | V12xx | PLCopen XML control programs (`vigie program import`, `export`) |
+//! | V16xx | OPC UA: node map, security, the server's address space |
 //!
 //! Loaders write `Problem::error(codes::TRACE_EMPTY.id, …)`; no other source file
 //! spells a `V` code (a test checks it). [`explain`] returns the page of a code.
@@ -219,6 +220,12 @@ registry! {
     REGIONS_STALE = "V1503", "a regions file synthesised from other tasks than the ones it is run with";
     TASK_CROSS_BESIDE_REGIONS = "V1504", "a cross-task constraint not run, the tasks running their synthesised regions";
     SFC_EXPORT = "V1505", "a region monitor that cannot be written as an SFC program (`vigie export-sfc`)";
+    // V16xx: OPC UA (node map, security, the server's address space)
+    OPCUA_NODE_INVALID = "V1601", "an OPC UA node id or browse path that does not parse";
+    OPCUA_NODE_SHARED = "V1602", "two signals on the same OPC UA node";
+    OPCUA_NODE_UNKNOWN = "V1603", "an OPC UA node the server does not have, or not a Boolean";
+    OPCUA_SECURITY_NONE = "V1604", "an OPC UA endpoint without security";
+    OPCUA_CONFIG = "V1605", "an OPC UA section with an impossible security, user or certificate setting";
     // X: explanation items (`core/src/explain/codes.md` lists their fields)
     X_FILTER_STOPPED = "X001", "the safety filter stopped the plant";
     X_ACTUATOR_KEPT_ON = "X002", "an actuator kept ON after the stop";

@@ -166,6 +166,70 @@ pub struct ClientConfig {
     pub backoff_max_ms: u64,
 }
 
+/// The client Vigie is to the plant (gateway) or to the monitored PLC (monitor):
+/// `Modbus(address: …)` or `OpcUa(endpoint: …)`. The cycle is the same for both.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ClientLink {
+    /// Modbus TCP, through the I/O map (`io_map`).
+    Modbus(ClientConfig),
+    /// OPC UA, through the node map.
+    OpcUa(super::opcua::OpcUaClientConfig),
+}
+
+/// The server Vigie is to a PLC (gateway) or to a soft-PLC (emulator):
+/// `Modbus(bind: …)` or `OpcUa(bind: …)`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ServerLink {
+    /// Modbus TCP, serving the I/O map's addresses.
+    Modbus(ServerConfig),
+    /// OPC UA, serving the plant's signals as Boolean nodes.
+    OpcUa(super::opcua::OpcUaServerConfig),
+}
+
+impl ClientLink {
+    /// The peer, as the link-state panel names it (an address or an endpoint URL).
+    pub fn peer(&self) -> String {
+        match self {
+            Self::Modbus(c) => c.address.to_string(),
+            Self::OpcUa(c) => c.endpoint.clone(),
+        }
+    }
+
+    /// The protocol's name.
+    pub fn protocol(&self) -> &'static str {
+        match self {
+            Self::Modbus(_) => "Modbus TCP",
+            Self::OpcUa(_) => "OPC UA",
+        }
+    }
+
+    /// Time allowed for one request.
+    pub fn timeout_ms(&self) -> u64 {
+        match self {
+            Self::Modbus(c) => c.timeout_ms,
+            Self::OpcUa(c) => c.timeout_ms,
+        }
+    }
+}
+
+impl ServerLink {
+    /// The protocol's name.
+    pub fn protocol(&self) -> &'static str {
+        match self {
+            Self::Modbus(_) => "Modbus TCP",
+            Self::OpcUa(_) => "OPC UA",
+        }
+    }
+
+    /// The address it listens on.
+    pub fn bind(&self) -> SocketAddr {
+        match self {
+            Self::Modbus(s) => s.bind,
+            Self::OpcUa(s) => s.bind,
+        }
+    }
+}
+
 /// The configuration file.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename = "Gateway")]
@@ -187,10 +251,10 @@ pub struct GatewayConfig {
     pub link_timeout_cycles: u32,
     /// The plant (gateway) or the polled PLC or plant (monitor).
     #[serde(default)]
-    pub client: Option<ClientConfig>,
+    pub client: Option<ClientLink>,
     /// The server towards the PLC (gateway, emulator).
     #[serde(default)]
-    pub server: Option<ServerConfig>,
+    pub server: Option<ServerLink>,
     /// Reset a latched trip as soon as the PLC's commands comply again (headless
     /// service with no operator); by default a trip latches until restart.
     #[serde(default)]
@@ -236,6 +300,9 @@ pub struct GatewayConfig {
     /// journal_days: 366)` by default.
     #[serde(default)]
     pub retention: Retention,
+    /// The warnings found at load (security None on loopback), for the log.
+    #[serde(skip)]
+    pub warnings: Vec<Problem>,
 }
 
 /// How long the historian keeps its rows (the console's and the gateway's).
@@ -301,6 +368,14 @@ impl GatewayConfig {
             *d = base.join(&*d);
         }
         let mut problems = Vec::new();
+        if let Some(ClientLink::OpcUa(c)) = config.client.as_mut() {
+            c.resolve(base);
+            c.check(file, text, &mut problems);
+        }
+        if let Some(ServerLink::OpcUa(s)) = config.server.as_mut() {
+            s.resolve(base);
+            s.check(file, text, &mut problems);
+        }
         let at = |n: &str| Some(crate::diag::Location::of_nth(file, text, n, 0));
         if config.cycle_ms == 0 {
             problems.push(Problem::error(
@@ -330,20 +405,26 @@ impl GatewayConfig {
             Mode::Monitor | Mode::Gateway if config.client.is_none() => {
                 problems.push(Problem::error(
                     codes::GATEWAY_NO_CLIENT.id,
-                    format!("{:?} mode needs `client: (address: …)`", config.mode),
+                    format!(
+                        "{:?} mode needs `client: Modbus(address: …)` or `client: OpcUa(endpoint: …)`",
+                        config.mode
+                    ),
                     at("mode"),
                 ))
             }
             Mode::Gateway | Mode::Emulator if config.server.is_none() => {
                 problems.push(Problem::error(
                     codes::GATEWAY_NO_SERVER.id,
-                    format!("{:?} mode needs `server: (…)`", config.mode),
+                    format!(
+                        "{:?} mode needs `server: Modbus(…)` or `server: OpcUa(…)`",
+                        config.mode
+                    ),
                     at("mode"),
                 ))
             }
             _ => {}
         }
-        if let Some((s, plc)) = config.server.as_ref().and_then(|s| s.plc.map(|p| (s, p)))
+        if let Some((s, plc)) = config.modbus_server().and_then(|s| s.plc.map(|p| (s, p)))
             && !s.allow.contains(&plc.ip)
         {
             {
@@ -355,17 +436,21 @@ impl GatewayConfig {
             }
         }
         config.check_server(&mut problems, text, file);
-        if problems.is_empty() {
+        let (warnings, errors): (Vec<Problem>, Vec<Problem>) = problems
+            .into_iter()
+            .partition(|p| p.severity == crate::diag::Severity::Warning);
+        config.warnings = warnings;
+        if errors.is_empty() {
             Ok(config)
         } else {
-            Err(problems)
+            Err(errors)
         }
     }
 
     /// Checks the server section's unit id, connection limit and idle timeout.
     fn check_server(&self, problems: &mut Vec<Problem>, text: &str, file: &Path) {
         let at = |n: &str| Some(crate::diag::Location::of_nth(file, text, n, 0));
-        let Some(s) = &self.server else {
+        let Some(s) = self.modbus_server() else {
             return;
         };
         if !(1..=247).contains(&s.unit) {
@@ -408,6 +493,23 @@ impl GatewayConfig {
             )]
         })?;
         Self::from_ron(&text, path)
+    }
+
+    /// The Modbus server section, when the server is a Modbus one.
+    pub fn modbus_server(&self) -> Option<&ServerConfig> {
+        match &self.server {
+            Some(ServerLink::Modbus(s)) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// The node map path given to the OPC UA client, else the plant folder's
+    /// `node-map.ron` when it has one; `None`: the address space Vigie serves.
+    pub fn node_map_path(&self) -> Option<PathBuf> {
+        match &self.client {
+            Some(ClientLink::OpcUa(c)) if c.node_map.is_some() => c.node_map.clone(),
+            _ => Some(self.plant.join("node-map.ron")).filter(|p| p.is_file()),
+        }
     }
 
     /// The I/O map path.

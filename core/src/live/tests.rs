@@ -438,7 +438,7 @@ fn server_units_connection_caps_and_idle_timeouts_are_validated() {
         ("idle_timeout_ms: 20", "V0628"),
     ] {
         let text = format!(
-            "Gateway(mode: Emulator, plant: \".\", cycle_ms: 10, link_timeout_cycles: 2,\n server: (plc: \"127.0.0.1\", {body}))"
+            "Gateway(mode: Emulator, plant: \".\", cycle_ms: 10, link_timeout_cycles: 2,\n server: Modbus(plc: \"127.0.0.1\", {body}))"
         );
         let problems = GatewayConfig::from_ron(&text, path).unwrap_err();
         assert!(
@@ -448,9 +448,9 @@ fn server_units_connection_caps_and_idle_timeouts_are_validated() {
             "{body}: {problems:?}"
         );
     }
-    let ok = "Gateway(mode: Emulator, plant: \".\", server: (plc: \"127.0.0.2:5020\", allow: [\"127.0.0.2\"], unit: 247))";
+    let ok = "Gateway(mode: Emulator, plant: \".\", server: Modbus(plc: \"127.0.0.2:5020\", allow: [\"127.0.0.2\"], unit: 247))";
     let c = GatewayConfig::from_ron(ok, path).unwrap();
-    assert_eq!(c.server.unwrap().plc.unwrap().port, Some(5020));
+    assert_eq!(c.modbus_server().unwrap().plc.unwrap().port, Some(5020));
 }
 
 fn bundle() -> PlantBundle {
@@ -601,7 +601,7 @@ fn example_configs_load() {
         assert_eq!(c.link_timeout(), Millis(20));
         assert!(c.io_map_path().ends_with("io-map.ron"));
         if let Some(s) = &c.server {
-            assert!(s.bind.ip().is_loopback());
+            assert!(s.bind().ip().is_loopback());
         }
     }
 }
@@ -609,13 +609,13 @@ fn example_configs_load() {
 #[test]
 fn config_errors_say_where() {
     let p = GatewayConfig::from_ron(
-        "Gateway(mode: Gateway, plant: \".\",\n client: Some((address: \"127.0.0.1:1\")))",
+        "Gateway(mode: Gateway, plant: \".\",\n client: Some(Modbus(address: \"127.0.0.1:1\")))",
         Path::new("g.ron"),
     )
     .unwrap_err();
     assert_eq!(p[0].code, "V0623");
     let p = GatewayConfig::from_ron(
-        "Gateway(mode: Emulator, plant: \".\",\n server: Some((allow: [\"127.0.0.1\"], plc: Some(\"127.0.0.2\"))))",
+        "Gateway(mode: Emulator, plant: \".\",\n server: Some(Modbus(allow: [\"127.0.0.1\"], plc: Some(\"127.0.0.2\"))))",
         Path::new("g.ron"),
     )
     .unwrap_err();
@@ -624,7 +624,7 @@ fn config_errors_say_where() {
         ("V0624", 2)
     );
     let p = GatewayConfig::from_ron(
-        "Gateway(mode: Emulator, plant: \".\",\n cycle_priority: 0, server: Some(()))",
+        "Gateway(mode: Emulator, plant: \".\",\n cycle_priority: 0, server: Some(Modbus()))",
         Path::new("g.ron"),
     )
     .unwrap_err();
@@ -634,11 +634,11 @@ fn config_errors_say_where() {
     );
     // Defaults: loopback bind.
     let c = GatewayConfig::from_ron(
-        "Gateway(mode: Emulator, plant: \".\", server: Some(()))",
+        "Gateway(mode: Emulator, plant: \".\", server: Some(Modbus()))",
         Path::new("g.ron"),
     )
     .unwrap();
-    assert_eq!(c.server.unwrap().bind.to_string(), "127.0.0.1:1502");
+    assert_eq!(c.server.unwrap().bind().to_string(), "127.0.0.1:1502");
 }
 
 /// The substation's feeders read each other's fault state (`def1_D2`, `def2_D1`) over

@@ -67,8 +67,8 @@ fn config_text(plant: SocketAddr, cfg: &Cfg, state: &Path, station: &Path) -> St
     format!(
         "Gateway(plant: {station:?}, mode: Gateway, cycle_ms: 10, link_timeout_cycles: 10, \
          auto_reset: {auto_reset}, \
-         client: (address: \"{plant}\", timeout_ms: 50, backoff_initial_ms: 20, backoff_max_ms: 200), \
-         server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: {plc:?}, unit: 1, \
+         client: Modbus(address: \"{plant}\", timeout_ms: 50, backoff_initial_ms: 20, backoff_max_ms: 200), \
+         server: Modbus(bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: {plc:?}, unit: 1, \
          max_connections: {max}, idle_timeout_ms: {idle}), \
          state_dir: {state:?}, diagnosers: false)",
         auto_reset = cfg.auto_reset,

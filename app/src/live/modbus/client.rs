@@ -3,9 +3,10 @@
 //! was read, reconnects with backoff, and never fails the caller: exceptions, timeouts
 //! and refused connections are logged with the peer address and the values age.
 //!
-//! [`Reader`] can only read; [`Writer`] can also write outputs. Monitor mode gets a
-//! [`Reader`], so it cannot write by construction.
+//! The cycle reaches it through the protocol-neutral `Reader` and `Writer` of
+//! `super::super::link`.
 
+use super::super::link::ClientStatus;
 use std::time::Duration;
 use tokio_modbus::Slave;
 use tokio_modbus::client::{Context, Reader as _, Writer as _};
@@ -57,29 +58,8 @@ pub(crate) enum LinkError {
     },
 }
 
-/// What the link-state panel shows of a client.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct ClientStatus {
-    /// True while connected.
-    pub connected: bool,
-    /// Failed connection attempts since the last success (or since the link dropped).
-    pub failed_attempts: u32,
-    /// The delay before the next attempt (the current backoff) while disconnected.
-    pub backoff: Millis,
-    /// When the next connection attempt is due while disconnected.
-    pub next_attempt: Millis,
-    /// When every due block was last read successfully.
-    pub last_read: Option<Millis>,
-    /// Requests answered with a Modbus exception.
-    pub exceptions: u64,
-    /// Transport errors, timeouts and malformed answers (each drops the connection).
-    pub errors: u64,
-    /// Successful (re)connections.
-    pub connections: u64,
-}
-
 /// The connection and the poll schedule.
-struct Link {
+pub(crate) struct Link {
     config: ClientConfig,
     map: IoMap,
     blocks: Vec<ReadBlock>,
@@ -94,7 +74,7 @@ struct Link {
 }
 
 impl Link {
-    fn new(config: ClientConfig, map: IoMap, with_outputs: bool) -> Self {
+    pub(crate) fn new(config: ClientConfig, map: IoMap, with_outputs: bool) -> Self {
         let blocks = plan_reads(&map, with_outputs, 8);
         let n = blocks.len();
         Self {
@@ -114,7 +94,7 @@ impl Link {
         }
     }
 
-    fn peer(&self) -> std::net::SocketAddr {
+    pub(crate) fn peer(&self) -> std::net::SocketAddr {
         self.config.address
     }
 
@@ -122,7 +102,7 @@ impl Link {
         Duration::from_millis(self.config.timeout_ms)
     }
 
-    fn is_connected(&self) -> bool {
+    pub(crate) fn is_connected(&self) -> bool {
         self.ctx.is_some()
     }
 
@@ -189,7 +169,12 @@ impl Link {
     }
 
     /// Reads every block that is due; true when all of them were read.
-    async fn poll(&mut self, now: Millis, inputs: &mut AgedBits, outputs: &mut AgedBits) -> bool {
+    pub(crate) async fn poll(
+        &mut self,
+        now: Millis,
+        inputs: &mut AgedBits,
+        outputs: &mut AgedBits,
+    ) -> bool {
         if !self.ensure_connected(now).await {
             return false;
         }
@@ -291,7 +276,7 @@ impl Link {
 
     /// Writes every output (connecting first when the backoff allows); `Ok` when every
     /// write was acknowledged, else why not.
-    async fn write(&mut self, now: Millis, outputs: &Bits) -> Result<(), String> {
+    pub(crate) async fn write(&mut self, now: Millis, outputs: &Bits) -> Result<(), String> {
         if !self.ensure_connected(now).await {
             return Err(format!(
                 "{}: not connected (next attempt at {})",
@@ -427,65 +412,10 @@ fn describe_modbus(e: &tokio_modbus::Error) -> String {
     }
 }
 
-/// A read-only client (monitor mode): it has no way to write.
-pub(crate) struct Reader(Link);
-
-impl Reader {
-    /// A client reading the inputs and, with `with_outputs`, the outputs of `map`.
-    pub(crate) fn new(config: ClientConfig, map: IoMap, with_outputs: bool) -> Self {
-        Self(Link::new(config, map, with_outputs))
-    }
-
-    /// Reads what is due at `now`; true when every due block was read.
-    pub(crate) async fn poll(
-        &mut self,
-        now: Millis,
-        inputs: &mut AgedBits,
-        outputs: &mut AgedBits,
-    ) -> bool {
-        self.0.poll(now, inputs, outputs).await
-    }
-
+impl Link {
     /// The link state.
     pub(crate) fn status(&self) -> &ClientStatus {
-        &self.0.status
-    }
-}
-
-/// A client that reads the inputs and writes the outputs (gateway mode).
-pub(crate) struct Writer(Link);
-
-impl Writer {
-    /// A client for `map`: reads its inputs, writes its outputs.
-    pub(crate) fn new(config: ClientConfig, map: IoMap) -> Self {
-        Self(Link::new(config, map, false))
-    }
-
-    /// Reads what is due at `now`; true when every due block was read.
-    pub(crate) async fn poll(&mut self, now: Millis, inputs: &mut AgedBits) -> bool {
-        let mut none = AgedBits::new(0);
-        self.0.poll(now, inputs, &mut none).await
-    }
-
-    /// Writes every output, connecting first when the backoff allows; `Ok` when every
-    /// write was acknowledged, else why not.
-    pub(crate) async fn write(&mut self, now: Millis, outputs: &Bits) -> Result<(), String> {
-        self.0.write(now, outputs).await
-    }
-
-    /// Successful connections so far (a new connection needs the outputs again).
-    pub(crate) fn connection(&self) -> u64 {
-        self.0.status.connections
-    }
-
-    /// True while connected.
-    pub(crate) fn is_connected(&self) -> bool {
-        self.0.is_connected()
-    }
-
-    /// The link state.
-    pub(crate) fn status(&self) -> &ClientStatus {
-        &self.0.status
+        &self.status
     }
 }
 

@@ -55,7 +55,7 @@ pub(crate) struct Shared {
 /// A handle on the shared image.
 pub(crate) type SharedImage = Arc<Mutex<Shared>>;
 
-use super::cycle::lock;
+use super::super::cycle::lock;
 
 /// Counters of what the server refused (for the link-state panel and the tests).
 #[derive(Debug, Default)]
@@ -439,13 +439,14 @@ mod tests {
         let plant = Plant::load(&station().join("plant.ron")).unwrap();
         let (map, _) = IoMap::load(&station().join("io-map.ron"), &plant).unwrap();
         let text = format!(
-            "Gateway(mode: Emulator, plant: \".\", server: (bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"{extra}))"
+            "Gateway(mode: Emulator, plant: \".\", server: Modbus(bind: \"127.0.0.1:0\", allow: [\"127.0.0.1\", \"127.0.0.2\"], plc: \"127.0.0.2\"{extra}))"
         );
         let config =
             vigie_core::live::config::GatewayConfig::from_ron(&text, std::path::Path::new("t.ron"))
                 .unwrap()
-                .server
-                .unwrap();
+                .modbus_server()
+                .unwrap()
+                .clone();
         let shared: SharedImage = Arc::new(Mutex::new(Shared {
             inputs: Bits::zeros(11),
             outputs: Bits::zeros(7),
