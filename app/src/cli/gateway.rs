@@ -65,7 +65,9 @@ pub(crate) fn init_tracing(level: LogLevel) -> tracing_appender::non_blocking::W
     };
     let targets = tracing_subscriber::filter::Targets::new()
         .with_default(level)
-        .with_target("opcua", opcua);
+        .with_target("opcua", opcua)
+        // "Endpoint config contains no endpoints": Vigie names its endpoint per session.
+        .with_target("opcua_client::config", level.min(tracing::Level::ERROR));
     use tracing_subscriber::layer::SubscriberExt as _;
     use tracing_subscriber::util::SubscriberInitExt as _;
     let _ = tracing_subscriber::fmt()
@@ -144,58 +146,106 @@ pub(crate) struct BenchArgs {
     /// permitted: they stand for devices of their own that the load must not starve.
     #[arg(long)]
     pub(crate) rt_peers: bool,
+    /// The protocol of both sides of the gateway; `both` (the default) measures Modbus
+    /// TCP then OPC UA in the same run.
+    #[arg(long, value_enum, default_value_t = BenchProtocol::Both)]
+    pub(crate) protocol: BenchProtocol,
 }
 
-/// `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
+/// The protocols `vigie gateway-bench` measures.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BenchProtocol {
+    /// Modbus TCP against pymodbus.
+    Modbus,
+    /// OPC UA against asyncua.
+    Opcua,
+    /// Both, one after the other in the same run, and their comparison.
+    Both,
+}
+
+/// `vigie gateway-bench`: the gateway against a pymodbus plant (Modbus TCP) and an
+/// asyncua plant (OPC UA) on loopback.
 pub(crate) fn bench(plant: &std::path::Path, args: &BenchArgs) -> anyhow::Result<ExitCode> {
+    use vigie_app::live::bench::Protocol;
     let _log = init_tracing(LogLevel::Warn);
-    let f = vigie_app::live::bench::run(
-        plant,
-        vigie_app::live::bench::Options {
-            edges: args.edges,
-            seconds: args.seconds,
-            rt_priority: args.rt_priority,
-            load: args.load,
-            rt_peers: args.rt_peers,
-        },
-    )?;
-    if args.json {
-        println!("{}", serde_json::to_string(&f)?);
-    } else {
-        println!(
-            "gateway against pymodbus on loopback, 10 ms cycle, {} cycles over {:.0} s, {} busy background processes, cycle thread {}",
-            f.cycles,
-            f.seconds,
-            f.load,
-            args.rt_priority.map_or_else(
-                || "at normal priority".to_string(),
-                |p| format!("at real-time priority {p} (if granted, see the log)")
-            )
-        );
-        println!("  peers                 {} priority", f.peers);
-        println!("  cycle rate            {:.2} Hz", f.rate_hz);
-        println!(
-            "  period jitter (ms)    p50 {:.3}  p99 {:.3}  max {:.3}",
-            f.jitter_ms[0], f.jitter_ms[1], f.jitter_ms[2]
-        );
-        println!(
-            "  cycle work (ms)       p50 {:.3}  p99 {:.3}  max {:.3}",
-            f.busy_ms[0], f.busy_ms[1], f.busy_ms[2]
-        );
-        println!(
-            "  sensor -> output (ms) p50 {:.2}  p99 {:.2}  max {:.2}  ({} edges)",
-            f.latency_ms[0], f.latency_ms[1], f.latency_ms[2], f.edges
-        );
-        println!(
-            "  false link alarms     {}   (safe outputs for stale inputs: {})",
-            f.false_alarms.len(),
-            f.stale_holds
-        );
-        for a in &f.false_alarms {
-            println!("    {a}");
+    let protocols = match args.protocol {
+        BenchProtocol::Modbus => vec![Protocol::Modbus],
+        BenchProtocol::Opcua => vec![Protocol::OpcUa],
+        BenchProtocol::Both => vec![Protocol::Modbus, Protocol::OpcUa],
+    };
+    let mut all = Vec::new();
+    for protocol in protocols {
+        let f = vigie_app::live::bench::run(
+            plant,
+            vigie_app::live::bench::Options {
+                protocol,
+                edges: args.edges,
+                seconds: args.seconds,
+                rt_priority: args.rt_priority,
+                load: args.load,
+                rt_peers: args.rt_peers,
+            },
+        )?;
+        if args.json {
+            println!("{}", serde_json::to_string(&f)?);
+        } else {
+            print_figures(&f, args);
         }
+        all.push(f);
+    }
+    if let [m, o] = all.as_slice()
+        && !args.json
+    {
+        println!("OPC UA against Modbus TCP in this run (p50 / p99):");
+        println!(
+            "  period jitter (ms)    {:.3} / {:.3}  against  {:.3} / {:.3}",
+            o.jitter_ms[0], o.jitter_ms[1], m.jitter_ms[0], m.jitter_ms[1]
+        );
+        println!(
+            "  sensor -> output (ms) {:.2} / {:.2}  against  {:.2} / {:.2}",
+            o.latency_ms[0], o.latency_ms[1], m.latency_ms[0], m.latency_ms[1]
+        );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn print_figures(f: &vigie_app::live::bench::Figures, args: &BenchArgs) {
+    let peer = match f.protocol {
+        vigie_app::live::bench::Protocol::Modbus => "Modbus TCP, against pymodbus",
+        vigie_app::live::bench::Protocol::OpcUa => "OPC UA (security None), against asyncua",
+    };
+    println!(
+        "gateway {peer} on loopback, 10 ms cycle, {} cycles over {:.0} s, {} busy background processes, cycle thread {}",
+        f.cycles,
+        f.seconds,
+        f.load,
+        args.rt_priority.map_or_else(
+            || "at normal priority".to_string(),
+            |p| format!("at real-time priority {p} (if granted, see the log)")
+        )
+    );
+    println!("  peers                 {} priority", f.peers);
+    println!("  cycle rate            {:.2} Hz", f.rate_hz);
+    println!(
+        "  period jitter (ms)    p50 {:.3}  p99 {:.3}  max {:.3}",
+        f.jitter_ms[0], f.jitter_ms[1], f.jitter_ms[2]
+    );
+    println!(
+        "  cycle work (ms)       p50 {:.3}  p99 {:.3}  max {:.3}",
+        f.busy_ms[0], f.busy_ms[1], f.busy_ms[2]
+    );
+    println!(
+        "  sensor -> output (ms) p50 {:.2}  p99 {:.2}  max {:.2}  ({} edges)",
+        f.latency_ms[0], f.latency_ms[1], f.latency_ms[2], f.edges
+    );
+    println!(
+        "  false link alarms     {}   (safe outputs for stale inputs: {})",
+        f.false_alarms.len(),
+        f.stale_holds
+    );
+    for a in &f.false_alarms {
+        println!("    {a}");
+    }
 }
 
 /// `vigie opcua …`.

@@ -213,8 +213,8 @@ pub(crate) enum Command {
     /// Run the live link headless (monitor, gateway or emulator mode, from CONFIG; the
     /// configuration names its plant folder).
     Gateway(gateway::GatewayArgs),
-    /// Measure the gateway against a pymodbus plant on loopback (cycle rate, jitter,
-    /// sensor-to-output latency).
+    /// Measure the gateway on loopback, over Modbus TCP (pymodbus plant) and OPC UA
+    /// (asyncua plant) in the same run: cycle rate, jitter, sensor-to-output latency.
     GatewayBench {
         #[command(flatten)]
         plant: PlantOpt,

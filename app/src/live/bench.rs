@@ -1,4 +1,7 @@
-//! `vigie gateway-bench`: the gateway against a pymodbus plant on loopback.
+//! `vigie gateway-bench`: the gateway against a pymodbus plant on loopback, or over OPC
+//! UA against the asyncua plant (`Protocol::OpcUa`: the PLC and the probe are
+//! async-opcua clients, the gateway's client and server speak OPC UA, security None on
+//! loopback), so that the two protocols are measured in the same run.
 //!
 //! Measures the sustained cycle rate and period jitter of the gateway loop, and the
 //! latency from a sensor change at the plant to the filtered output at the plant: with
@@ -20,11 +23,14 @@ use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use tokio_modbus::client::{Reader as _, Writer as _};
+
 use vigie_core::live::config::GatewayConfig;
 
 /// Figures of one run.
 #[derive(Debug, serde::Serialize)]
 pub struct Figures {
+    /// The protocol measured.
+    pub protocol: Protocol,
     /// Cycles run.
     pub cycles: usize,
     /// Cycles per second over the run.
@@ -53,9 +59,20 @@ pub struct Figures {
     pub peers: String,
 }
 
+/// The protocol of both sides of the gateway.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Protocol {
+    /// Modbus TCP (pymodbus plant).
+    Modbus,
+    /// OPC UA (asyncua plant).
+    OpcUa,
+}
+
 /// What a run does.
 #[derive(Clone, Copy, Debug)]
 pub struct Options {
+    /// The protocol of the PLC's and the plant's sides.
+    pub protocol: Protocol,
     /// Edges to time (at least).
     pub edges: usize,
     /// Run at least this long.
@@ -135,6 +152,7 @@ fn repo_root() -> PathBuf {
 /// Runs the benchmark: `edges` timed sensor edges, then the cycle figures.
 pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures> {
     let Options {
+        protocol,
         edges,
         seconds,
         rt_priority: cycle_priority,
@@ -142,9 +160,10 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         rt_peers,
     } = opts;
     let _load = Load::start(load)?;
-    let (mut plant, mut plant_in, plant_addr, peers) = start_plant(rt_peers)?;
+    let signals = Signals::of(plant_dir)?;
+    let (mut plant, mut plant_in, plant_addr, peers) = start_plant(protocol, &signals, rt_peers)?;
 
-    let (setup, state) = gateway_setup(plant_dir, plant_addr, cycle_priority)?;
+    let (setup, state) = gateway_setup(plant_dir, protocol, plant_addr, cycle_priority)?;
     let measuring = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let alarms = std::sync::Arc::new(std::sync::Mutex::new(Vec::<String>::new()));
     let stale = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
@@ -179,8 +198,13 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         .enable_all()
         .build()?;
     let result = rt.block_on(measure(
-        server,
-        plant_addr,
+        Peers {
+            protocol,
+            server,
+            plant: plant_addr,
+            signals: &signals,
+            state: &state,
+        },
         &mut plant_in,
         &measuring,
         (edges, seconds),
@@ -212,6 +236,7 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
         .zip(stats.starts.first())
         .map_or(0.0, |(l, f)| (*l - *f).as_secs_f64());
     Ok(Figures {
+        protocol,
         cycles: stats.starts.len(),
         rate_hz: if total > 0.0 {
             (stats.starts.len() - 1) as f64 / total
@@ -234,6 +259,8 @@ pub fn run(plant_dir: &std::path::Path, opts: Options) -> anyhow::Result<Figures
 /// Starts the pymodbus plant of the venv (its peers at real-time priority if asked)
 /// and drains its answers; returns it, its stdin, its address and the peers' priority.
 fn start_plant(
+    protocol: Protocol,
+    signals: &Signals,
     rt_peers: bool,
 ) -> anyhow::Result<(
     std::process::Child,
@@ -249,8 +276,19 @@ fn start_plant(
         "{} not found: create the venv with `scripts/test.sh` (or python3 -m venv .venv && .venv/bin/pip install -r requirements-test.txt)",
         python.display()
     );
-    let mut plant = Command::new(&python)
-        .arg(root.join("tests/peers/plant.py"))
+    let mut command = Command::new(&python);
+    match protocol {
+        Protocol::Modbus => command.arg(root.join("tests/peers/plant.py")),
+        Protocol::OpcUa => command.arg(root.join("tests/peers/opcua_plant.py")).args([
+            "--namespace",
+            &signals.namespace,
+            "--inputs",
+            &signals.inputs.join(","),
+            "--outputs",
+            &signals.outputs.join(","),
+        ]),
+    };
+    let mut plant = command
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .spawn()
@@ -290,15 +328,27 @@ fn start_plant(
 /// state folder, returned too).
 fn gateway_setup(
     plant_dir: &std::path::Path,
+    protocol: Protocol,
     plant_addr: SocketAddr,
     cycle_priority: Option<u8>,
 ) -> anyhow::Result<(Setup, PathBuf)> {
-    let state = std::env::temp_dir().join(format!("vigie-gateway-bench-{}", std::process::id()));
+    let state = std::env::temp_dir().join(format!(
+        "vigie-gateway-bench-{}-{protocol:?}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&state);
+    let sides = match protocol {
+        Protocol::Modbus => format!(
+            "client: Modbus(address: \"{plant_addr}\"), server: Modbus(bind: \"127.0.0.1:0\", plc: \"127.0.0.1\")"
+        ),
+        Protocol::OpcUa => format!(
+            "client: OpcUa(endpoint: \"opc.tcp://{plant_addr}/\", security: None), \
+             server: OpcUa(bind: \"127.0.0.1:0\", security: [None], anonymous: true, plc_user: \"anonymous\")"
+        ),
+    };
     let text = format!(
-        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, \
-         client: Modbus(address: \"{plant_addr}\"), server: Modbus(bind: \"127.0.0.1:0\", plc: \"127.0.0.1\"), \
-         cycle_priority: {}, realtime: {}, state_dir: {:?})",
+        "Gateway(mode: Gateway, plant: {:?}, cycle_ms: 10, auto_reset: true, {sides}, \
+         plausibility: false, cycle_priority: {}, realtime: {}, state_dir: {:?})",
         plant_dir.display().to_string(),
         cycle_priority.map_or_else(|| "None".to_string(), |p| format!("Some({p})")),
         cycle_priority.is_some(),
@@ -376,45 +426,221 @@ fn spawn_gateway(
         })
 }
 
-/// Drives A1 on through the PLC, then times `edges` sensor edges (and at least
-/// `seconds`) from the plant to the filtered output; returns the latencies (ms) and
-/// the time measured (s).
-async fn measure(
+/// The plant's signals as the bench drives them: the sensor it moves and the output it
+/// watches are the ones at discrete input 3 and coil 1 of the plant's addresses (the
+/// sorting station's C3 and A1), by name for OPC UA.
+pub(crate) struct Signals {
+    namespace: String,
+    inputs: Vec<String>,
+    outputs: Vec<String>,
+    /// The moved sensor's index and name.
+    sensor: (usize, String),
+    /// The watched output's index and name.
+    output: (usize, String),
+}
+
+impl Signals {
+    fn of(plant_dir: &std::path::Path) -> anyhow::Result<Self> {
+        use vigie_core::plant::Address;
+        let plant = vigie_core::plant::Plant::load(&plant_dir.join("plant.ron"))
+            .map_err(|p| anyhow::anyhow!("{}", vigie_core::diag::render(&p)))?;
+        let find = |signals: &[vigie_core::plant::Signal], at: Address| {
+            signals
+                .iter()
+                .position(|s| s.address == Some(at))
+                .and_then(|k| signals.get(k).map(|s| (k, s.id.clone())))
+        };
+        Ok(Self {
+            namespace: vigie_core::live::nodemap::plant_namespace(plant_dir),
+            inputs: plant.inputs.iter().map(|s| s.id.clone()).collect(),
+            outputs: plant.outputs.iter().map(|s| s.id.clone()).collect(),
+            sensor: find(&plant.inputs, Address::DiscreteInput(3))
+                .context("the bench moves the sensor at discrete input 3; the plant has none")?,
+            output: find(&plant.outputs, Address::Coil(1))
+                .context("the bench watches the output at coil 1; the plant has none")?,
+        })
+    }
+}
+
+/// Where the bench's PLC and probe connect.
+struct Peers<'a> {
+    protocol: Protocol,
+    /// The gateway's server (the PLC's side).
     server: SocketAddr,
-    plant_addr: SocketAddr,
+    /// The plant.
+    plant: SocketAddr,
+    signals: &'a Signals,
+    /// A folder for the OPC UA clients' PKI.
+    state: &'a std::path::Path,
+}
+
+/// An OPC UA session on `endpoint` (security None), its event loop spawned.
+async fn opcua_session(
+    endpoint: &str,
+    pki: &std::path::Path,
+) -> anyhow::Result<std::sync::Arc<opcua::client::Session>> {
+    let mut client = opcua::client::ClientBuilder::new()
+        .application_name("vigie-bench")
+        .application_uri("urn:vigie:bench")
+        .pki_dir(pki)
+        .create_sample_keypair(true)
+        .trust_server_certs(true)
+        .session_retry_limit(0)
+        .client()
+        .map_err(|e| anyhow::anyhow!("OPC UA client: {}", e.join("; ")))?;
+    let (session, event_loop) = client
+        .connect_to_matching_endpoint(
+            (
+                endpoint,
+                opcua::crypto::SecurityPolicy::None.to_str(),
+                opcua::types::MessageSecurityMode::None,
+            ),
+            opcua::client::IdentityToken::Anonymous,
+        )
+        .await
+        .map_err(|e| anyhow::anyhow!("cannot connect to {endpoint}: {e}"))?;
+    event_loop.spawn();
+    tokio::time::timeout(Duration::from_secs(10), session.wait_for_connection())
+        .await
+        .map_err(|_| anyhow::anyhow!("no session on {endpoint} within 10 s"))?;
+    Ok(session)
+}
+
+/// The PLC (the watched output ON, every 5 ms) and the probe reading that output at
+/// the plant, in either protocol.
+enum Probe {
+    Modbus(tokio_modbus::client::Context),
+    OpcUa(std::sync::Arc<opcua::client::Session>, opcua::types::NodeId),
+}
+
+impl Probe {
+    /// Starts the PLC's task and connects the probe.
+    async fn start(p: &Peers<'_>) -> anyhow::Result<(Self, tokio::task::JoinHandle<()>)> {
+        let (k, name) = p.signals.output.clone();
+        let n_out = p.signals.outputs.len();
+        let commands: Vec<bool> = (0..n_out).map(|i| i == k).collect();
+        match p.protocol {
+            Protocol::Modbus => {
+                let mut plc =
+                    tokio_modbus::client::tcp::connect_slave(p.server, tokio_modbus::Slave(1))
+                        .await?;
+                let n_in = u16::try_from(p.signals.inputs.len()).unwrap_or(u16::MAX);
+                let plc_task = tokio::spawn(async move {
+                    loop {
+                        let _ = plc.read_discrete_inputs(0, n_in).await;
+                        let _ = plc.write_multiple_coils(0, &commands).await;
+                        tokio::time::sleep(Duration::from_millis(5)).await;
+                    }
+                });
+                let probe =
+                    tokio_modbus::client::tcp::connect_slave(p.plant, tokio_modbus::Slave(1))
+                        .await?;
+                Ok((Self::Modbus(probe), plc_task))
+            }
+            Protocol::OpcUa => {
+                let plc = opcua_session(
+                    &format!("opc.tcp://{}/", p.server),
+                    &p.state.join("plc-pki"),
+                )
+                .await?;
+                let ns = plc.get_namespace_index(&p.signals.namespace).await?;
+                let writes: Vec<opcua::types::WriteValue> = p
+                    .signals
+                    .outputs
+                    .iter()
+                    .zip(&commands)
+                    .map(|(id, v)| opcua::types::WriteValue {
+                        node_id: opcua::types::NodeId::new(ns, id.clone()),
+                        attribute_id: opcua::types::AttributeId::Value as u32,
+                        index_range: Default::default(),
+                        value: opcua::types::DataValue::value_only(opcua::types::Variant::Boolean(
+                            *v,
+                        )),
+                    })
+                    .collect();
+                let plc_task = tokio::spawn(async move {
+                    loop {
+                        let _ = plc.write(&writes).await;
+                        tokio::time::sleep(Duration::from_millis(5)).await;
+                    }
+                });
+                let probe = opcua_session(
+                    &format!("opc.tcp://{}/", p.plant),
+                    &p.state.join("probe-pki"),
+                )
+                .await?;
+                let ns = probe.get_namespace_index(&p.signals.namespace).await?;
+                Ok((
+                    Self::OpcUa(probe, opcua::types::NodeId::new(ns, name)),
+                    plc_task,
+                ))
+            }
+        }
+    }
+
+    /// The watched output at the plant (bounded: a plant that stops answering ends
+    /// the bench with an error instead of hanging it).
+    async fn read(&mut self, k: usize) -> anyhow::Result<bool> {
+        let limit = Duration::from_secs(5);
+        let late = || anyhow::anyhow!("the plant did not answer the probe within 5 s");
+        match self {
+            Self::Modbus(probe) => {
+                let at = u16::try_from(k).unwrap_or(u16::MAX);
+                Ok(tokio::time::timeout(limit, probe.read_coils(at, 1))
+                    .await
+                    .map_err(|_| late())???
+                    .first()
+                    .copied()
+                    .unwrap_or(false))
+            }
+            Self::OpcUa(session, node) => {
+                let v = tokio::time::timeout(
+                    limit,
+                    session.read(
+                        &[opcua::types::ReadValueId::from(node.clone())],
+                        opcua::types::TimestampsToReturn::Neither,
+                        0.0,
+                    ),
+                )
+                .await
+                .map_err(|_| late())??;
+                Ok(matches!(
+                    v.first().and_then(|d| d.value.as_ref()),
+                    Some(opcua::types::Variant::Boolean(true))
+                ))
+            }
+        }
+    }
+}
+
+/// The plant peer's command setting the moved sensor.
+fn set_sensor(p: &Peers<'_>, on: bool) -> String {
+    let (k, name) = &p.signals.sensor;
+    match p.protocol {
+        Protocol::Modbus => format!("di {k} {}", u8::from(on)),
+        Protocol::OpcUa => format!("set {name} {}", u8::from(on)),
+    }
+}
+
+/// Drives the watched output on through the PLC, then times `edges` sensor edges (and
+/// at least `seconds`) from the plant to the filtered output; returns the latencies
+/// (ms) and the time measured (s).
+async fn measure(
+    peers: Peers<'_>,
     plant_in: &mut std::process::ChildStdin,
     measuring: &std::sync::atomic::AtomicBool,
     (edges, seconds): (usize, u64),
     probe_pause: Duration,
 ) -> anyhow::Result<(Vec<f64>, f64)> {
-    let mut plc = tokio_modbus::client::tcp::connect_slave(server, tokio_modbus::Slave(1)).await?;
-    let plc_task = tokio::spawn(async move {
-        loop {
-            let _ = plc.read_discrete_inputs(0, 11).await;
-            let _ = plc
-                .write_multiple_coils(0, &[false, true, false, false, false, false, false])
-                .await;
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
-    });
-    let mut probe =
-        tokio_modbus::client::tcp::connect_slave(plant_addr, tokio_modbus::Slave(1)).await?;
-    // Every probe read is bounded: a plant that stops answering ends the bench
-    // with an error instead of hanging it.
-    let mut read_a1 = async move || -> anyhow::Result<bool> {
-        Ok(
-            tokio::time::timeout(Duration::from_secs(5), probe.read_coils(1, 1))
-                .await
-                .map_err(|_| anyhow::anyhow!("the plant did not answer the probe within 5 s"))???
-                .first()
-                .copied()
-                .unwrap_or(false),
-        )
-    };
-    // Wait for A1 at the plant.
+    let (mut probe, plc_task) = Probe::start(&peers).await?;
+    let watched = peers.signals.output.0;
+    // Wait for the output at the plant.
     let deadline = Instant::now() + Duration::from_secs(10);
-    while !read_a1().await? {
-        anyhow::ensure!(Instant::now() < deadline, "A1 never reached the plant");
+    while !probe.read(watched).await? {
+        anyhow::ensure!(
+            Instant::now() < deadline,
+            "the PLC's command never reached the plant"
+        );
         if !probe_pause.is_zero() {
             tokio::time::sleep(probe_pause).await;
         }
@@ -428,11 +654,11 @@ async fn measure(
         tokio::time::sleep(Duration::from_micros(3000 + (k as u64 * 7919) % 10_000)).await;
         let rising = k % 2 == 0;
         let t0 = Instant::now();
-        writeln!(plant_in, "di 3 {}", u8::from(rising))?;
+        writeln!(plant_in, "{}", set_sensor(&peers, rising))?;
         plant_in.flush()?;
         let deadline = t0 + Duration::from_secs(5);
         loop {
-            if read_a1().await? != rising {
+            if probe.read(watched).await? != rising {
                 break;
             }
             if !probe_pause.is_zero() {
