@@ -429,6 +429,9 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
             .color(Color32::WHITE)
             .background_color(state_color(c, s)),
     );
+    if let Some(p) = &s.protocol {
+        ui.label(i.ta("linkp-protocol", &[("protocol", p.into())]));
+    }
     ui.label(poll_text(i, s));
     let stale = RichText::new(stale_text(i, s));
     ui.label(if s.stale_inputs.is_empty() {
@@ -450,6 +453,9 @@ pub(crate) fn panel_ui(c: &Console, ui: &mut egui::Ui) {
             "linkp-plc-server",
             &[("address", (&addr.to_string()).into())],
         ));
+        if let Some(p) = &s.plc_protocol {
+            ui.label(i.ta("linkp-plc-protocol", &[("protocol", p.into())]));
+        }
         ui.label(i.t(match s.plc_connected {
             Some(true) => "linkp-plc-heard",
             _ => "linkp-plc-silent",

@@ -714,7 +714,7 @@ pub(crate) async fn monitor(
     let clock = Clock(Instant::now());
     let period = Duration::from_millis(config.cycle_ms.max(1));
     let priority = Priority::raise_io(&config);
-    let peer = client.peer();
+    let (peer, protocol) = (client.peer(), client.describe());
     let liveness = Liveness::of(&config, client.timeout_ms());
     let (n_in, n_out) = (bundle.plant.inputs.len(), bundle.plant.outputs.len());
     let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
@@ -722,7 +722,10 @@ pub(crate) async fn monitor(
     let reader = PeerClient::Monitor(Reader::new(client, map.clone(), true, &pki, clock.0)?);
     let io = PeerIo::start(reader, (n_in, n_out), None, tx.clone(), clock, period);
     if let Some(t) = &tap {
-        t.update(|s| s.peer = Some(peer.clone()));
+        t.update(|s| {
+            s.peer = Some(peer.clone());
+            s.protocol = Some(protocol);
+        });
     }
     emit(json!({
         "event": "monitoring", "peer": peer.clone(), "diagnosers": diagnosers.is_some(),
@@ -1132,7 +1135,8 @@ pub(crate) async fn gateway(
     };
     let (shared, server) = serve_plc(&serve, Bits::zeros(n_in)).await?;
     let announced = (diagnosers.is_some(), state_dir.as_path(), restored.as_ref());
-    announce(emit, tap.as_ref(), &server, &client.peer(), announced);
+    let sides = (&client, &server_config);
+    announce(emit, tap.as_ref(), &server, sides, announced);
     let (plant_peer, liveness) = (client.peer(), Liveness::of(&config, client.timeout_ms()));
     let (out_tx, out_rx) = watch::channel(None);
     let (tx, mut events) = mpsc::channel(EVENT_QUEUE);
@@ -1226,15 +1230,25 @@ fn announce(
     emit: Emit<'_>,
     tap: Option<&Tap>,
     server: &ServerHandle,
-    plant: &str,
+    (client, server_link): (
+        &vigie_core::live::config::ClientLink,
+        &vigie_core::live::config::ServerLink,
+    ),
     (diagnosers, state_dir, restored): (bool, &std::path::Path, Option<&vigie_core::engine::Trip>),
 ) {
     let served = server.address();
-    tracing::info!("serving the PLC on {served}, plant at {plant}");
+    let plant = client.peer();
+    tracing::info!(
+        "serving the PLC on {served} ({}), plant at {plant} ({})",
+        server_link.describe(),
+        client.describe()
+    );
     if let Some(t) = tap {
         t.update(|s| {
-            s.peer = Some(plant.to_string());
+            s.peer = Some(plant.clone());
             s.listening = Some(served.clone());
+            s.protocol = Some(client.describe());
+            s.plc_protocol = Some(server_link.describe());
         });
     }
     emit(json!({

@@ -19,6 +19,11 @@ pub struct LinkState {
     pub peer: Option<String>,
     /// Where the server towards the PLC listens (gateway).
     pub listening: Option<String>,
+    /// The client's protocol and security ("OPC UA, Basic256Sha256 SignAndEncrypt,
+    /// user vigie", "Modbus TCP").
+    pub protocol: Option<String>,
+    /// The server's protocol and security (gateway).
+    pub plc_protocol: Option<String>,
     /// The client's connection state and counters.
     pub client: ClientStatus,
     /// Gateway: the PLC was heard within the link timeout (`None` in monitor mode).
@@ -48,6 +53,8 @@ impl LinkState {
             mode,
             peer: None,
             listening: None,
+            protocol: None,
+            plc_protocol: None,
             client: ClientStatus::default(),
             plc_connected: None,
             now: Millis::ZERO,

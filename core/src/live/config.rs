@@ -203,6 +203,21 @@ impl ClientLink {
         }
     }
 
+    /// The protocol and its security, as the link-state panel shows them
+    /// ("OPC UA, Basic256Sha256 SignAndEncrypt, user vigie").
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Modbus(_) => "Modbus TCP".to_string(),
+            Self::OpcUa(c) => format!(
+                "OPC UA, {}, {}",
+                c.security,
+                c.user
+                    .as_ref()
+                    .map_or_else(|| "anonymous".to_string(), |u| format!("user {u}"))
+            ),
+        }
+    }
+
     /// Time allowed for one request.
     pub fn timeout_ms(&self) -> u64 {
         match self {
@@ -218,6 +233,21 @@ impl ServerLink {
         match self {
             Self::Modbus(_) => "Modbus TCP",
             Self::OpcUa(_) => "OPC UA",
+        }
+    }
+
+    /// The protocol and its security, as the link-state panel shows them.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Modbus(_) => "Modbus TCP".to_string(),
+            Self::OpcUa(s) => format!(
+                "OPC UA, {}",
+                s.security
+                    .iter()
+                    .map(ToString::to_string)
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+            ),
         }
     }
 
