@@ -701,3 +701,30 @@ fn a_fieldbus_bounds_the_staleness_of_the_inputs_it_delivers() {
     assert!(err[0].message.contains("`defX`"), "{}", err[0]);
     let _ = std::fs::remove_dir_all(&scratch);
 }
+
+#[test]
+fn example_opcua_configs_and_node_map_load() {
+    use super::config::{ClientLink, ServerLink};
+    for (name, mode) in [
+        ("gateway-opcua-monitor.ron", Mode::Monitor),
+        ("gateway-opcua-enforce.ron", Mode::Gateway),
+        ("gateway-opcua-emulator.ron", Mode::Emulator),
+    ] {
+        let c =
+            GatewayConfig::load(&station().join(name)).unwrap_or_else(|p| panic!("{name}: {p:?}"));
+        assert_eq!(c.mode, mode);
+        assert!(c.warnings.is_empty(), "{name}: {:?}", c.warnings);
+        if let Some(ServerLink::OpcUa(s)) = &c.server {
+            assert!(s.bind.ip().is_loopback(), "{name}");
+        }
+        if let Some(ClientLink::OpcUa(_)) = &c.client {
+            let path = c.node_map_path().unwrap();
+            let plant = crate::plant::Plant::load(&station().join("plant.ron")).unwrap();
+            let (map, warnings) = super::nodemap::NodeMap::load(&path, &plant)
+                .unwrap_or_else(|p| panic!("{}", crate::diag::render(&p)));
+            assert!(warnings.is_empty(), "{warnings:?}");
+            assert_eq!(map.inputs.len(), plant.inputs.len());
+            assert!(map.inputs.iter().all(|m| m.at.is_some()));
+        }
+    }
+}

@@ -160,6 +160,15 @@ pub(crate) async fn start(
     shared: SharedImage,
     pki_dir: &std::path::Path,
 ) -> anyhow::Result<ServerHandle> {
+    for u in &config.users {
+        argon2::password_hash::PasswordHash::new(&u.password_hash).map_err(|e| {
+            anyhow::anyhow!(
+                "error[{}]: user `{}`: `password_hash` is not an argon2 PHC string ({e}); make one with `vigie opcua hash-password`",
+                vigie_core::diag::codes::OPCUA_CONFIG.id,
+                u.name
+            )
+        })?;
+    }
     pki::own_certificate(pki_dir)?;
     for cert in &config.trusted_clients {
         pki::trust(pki_dir, cert)?;
