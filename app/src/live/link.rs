@@ -40,6 +40,77 @@ pub struct ClientStatus {
     pub connections: u64,
 }
 
+/// The connection bookkeeping every protocol's client shares: the backoff, when the
+/// next attempt is due, the status the panel shows, and logging a lost peer once.
+pub(crate) struct Reconnect {
+    backoff: vigie_core::live::age::Backoff,
+    /// When the next connection attempt is due.
+    pub(crate) next_attempt: Millis,
+    /// Whether the peer's loss was logged (to log transitions only).
+    down_logged: bool,
+    /// What the link-state panel shows.
+    pub(crate) status: ClientStatus,
+}
+
+impl Reconnect {
+    /// Retries from `initial_ms`, doubled after each failure up to `max_ms`.
+    pub(crate) fn new(initial_ms: u64, max_ms: u64) -> Self {
+        Self {
+            backoff: vigie_core::live::age::Backoff::new(Millis(initial_ms), Millis(max_ms)),
+            next_attempt: Millis::ZERO,
+            down_logged: false,
+            status: ClientStatus::default(),
+        }
+    }
+
+    /// True when a connection attempt is allowed at `now`.
+    pub(crate) fn may_try(&self, now: Millis) -> bool {
+        now >= self.next_attempt
+    }
+
+    /// A connection opened. The backoff is reset by the first answered request, not
+    /// here: a peer that accepts and then fails at once is retried ever more slowly.
+    pub(crate) fn connected(&mut self) {
+        self.down_logged = false;
+        self.status.connected = true;
+        self.status.failed_attempts = 0;
+        self.status.backoff = Millis::ZERO;
+        self.status.connections += 1;
+    }
+
+    /// A connection attempt failed at `now`: the next one after the backoff.
+    pub(crate) fn retry_later(&mut self, peer: &dyn std::fmt::Display, now: Millis, why: &str) {
+        let delay = self.backoff.failed();
+        self.next_attempt = now + delay;
+        self.status.failed_attempts = self.status.failed_attempts.saturating_add(1);
+        self.status.backoff = delay;
+        self.status.next_attempt = self.next_attempt;
+        if !self.down_logged {
+            tracing::warn!(peer = %peer, "{why}; retrying with backoff (next in {delay})");
+            self.down_logged = true;
+        } else {
+            tracing::debug!(peer = %peer, "{why}; next attempt in {delay}");
+        }
+    }
+
+    /// An open connection failed at `now` (the caller drops it).
+    pub(crate) fn dropped(&mut self, now: Millis) {
+        self.down_logged = true;
+        let delay = self.backoff.failed();
+        self.next_attempt = now + delay;
+        self.status.connected = false;
+        self.status.errors += 1;
+        self.status.backoff = delay;
+        self.status.next_attempt = self.next_attempt;
+    }
+
+    /// Everything due was read at `now`.
+    pub(crate) fn answered(&mut self, now: Millis) {
+        self.status.last_read = Some(now);
+        self.backoff.reset();
+    }
+}
+
 /// A client of one protocol.
 enum Transport {
     Modbus(modbus::client::Link),

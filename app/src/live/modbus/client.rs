@@ -6,12 +6,12 @@
 //! The cycle reaches it through the protocol-neutral `Reader` and `Writer` of
 //! `super::super::link`.
 
-use super::super::link::ClientStatus;
+use super::super::link::{ClientStatus, Reconnect};
 use std::time::Duration;
 use tokio_modbus::Slave;
 use tokio_modbus::client::{Context, Reader as _, Writer as _};
 use tokio_modbus::prelude::{SlaveContext as _, tcp};
-use vigie_core::live::age::{AgedBits, Backoff};
+use vigie_core::live::age::AgedBits;
 use vigie_core::live::config::ClientConfig;
 use vigie_core::live::image::{Raw, ReadBlock, WriteOp, plan_reads, plan_writes};
 use vigie_core::live::iomap::{Area, IoMap};
@@ -65,12 +65,8 @@ pub(crate) struct Link {
     blocks: Vec<ReadBlock>,
     last_poll: Vec<Option<Millis>>,
     ctx: Option<Context>,
-    backoff: Backoff,
-    next_attempt: Millis,
-    /// Whether the last connection attempt failed (to log transitions only).
-    down_logged: bool,
     failing_blocks: Vec<bool>,
-    status: ClientStatus,
+    link: Reconnect,
 }
 
 impl Link {
@@ -78,19 +74,13 @@ impl Link {
         let blocks = plan_reads(&map, with_outputs, 8);
         let n = blocks.len();
         Self {
-            backoff: Backoff::new(
-                Millis(config.backoff_initial_ms),
-                Millis(config.backoff_max_ms),
-            ),
+            link: Reconnect::new(config.backoff_initial_ms, config.backoff_max_ms),
             config,
             map,
             blocks,
             last_poll: vec![None; n],
             ctx: None,
-            next_attempt: Millis::ZERO,
-            down_logged: false,
             failing_blocks: vec![false; n],
-            status: ClientStatus::default(),
         }
     }
 
@@ -110,7 +100,7 @@ impl Link {
         if self.ctx.is_some() {
             return true;
         }
-        if now < self.next_attempt {
+        if !self.link.may_try(now) {
             return false;
         }
         let peer = self.peer();
@@ -118,14 +108,8 @@ impl Link {
             Ok(Ok(ctx)) => {
                 tracing::info!(%peer, "connected");
                 self.ctx = Some(ctx);
-                // The backoff is reset by the first answered request, not here: a peer
-                // that accepts and then fails at once is retried ever more slowly.
-                self.down_logged = false;
                 self.last_poll.iter_mut().for_each(|t| *t = None);
-                self.status.connected = true;
-                self.status.failed_attempts = 0;
-                self.status.backoff = Millis::ZERO;
-                self.status.connections += 1;
+                self.link.connected();
                 true
             }
             Ok(Err(e)) => {
@@ -143,29 +127,14 @@ impl Link {
     }
 
     fn retry_later(&mut self, now: Millis, why: &str) {
-        let delay = self.backoff.failed();
-        self.next_attempt = now + delay;
-        self.status.failed_attempts = self.status.failed_attempts.saturating_add(1);
-        self.status.backoff = delay;
-        self.status.next_attempt = self.next_attempt;
-        if !self.down_logged {
-            tracing::warn!(peer = %self.peer(), "{why}; retrying with backoff (next in {delay})");
-            self.down_logged = true;
-        } else {
-            tracing::debug!(peer = %self.peer(), "{why}; next attempt in {delay}");
-        }
+        let peer = self.peer();
+        self.link.retry_later(&peer, now, why);
     }
 
     fn drop_connection(&mut self, now: Millis, err: &LinkError) {
         tracing::warn!("{err}; connection dropped");
         self.ctx = None;
-        self.down_logged = true;
-        let delay = self.backoff.failed();
-        self.next_attempt = now + delay;
-        self.status.connected = false;
-        self.status.errors += 1;
-        self.status.backoff = delay;
-        self.status.next_attempt = self.next_attempt;
+        self.link.dropped(now);
     }
 
     /// Reads every block that is due; true when all of them were read.
@@ -205,7 +174,7 @@ impl Link {
                     };
                     if let Err(e) = decoded {
                         tracing::warn!(peer = %self.peer(), "{e}");
-                        self.status.errors += 1;
+                        self.link.status.errors += 1;
                         all_ok = false;
                     } else if self.failing_blocks.get(b).copied().unwrap_or(false) {
                         tracing::info!(peer = %self.peer(), "{} {} read again", block.area, block.start);
@@ -215,7 +184,7 @@ impl Link {
                     }
                 }
                 Err(e @ LinkError::Exception { .. }) => {
-                    self.status.exceptions += 1;
+                    self.link.status.exceptions += 1;
                     // The device answered: keep the connection, let the values age.
                     if let Some(f) = self.failing_blocks.get_mut(b)
                         && !*f
@@ -232,8 +201,7 @@ impl Link {
             }
         }
         if all_ok {
-            self.status.last_read = Some(now);
-            self.backoff.reset();
+            self.link.answered(now);
         }
         all_ok
     }
@@ -281,7 +249,7 @@ impl Link {
             return Err(format!(
                 "{}: not connected (next attempt at {})",
                 self.peer(),
-                self.next_attempt
+                self.link.next_attempt
             ));
         }
         let peer = self.peer();
@@ -330,7 +298,7 @@ impl Link {
             match result {
                 Ok(()) => {}
                 Err(e @ LinkError::Exception { .. }) => {
-                    self.status.exceptions += 1;
+                    self.link.status.exceptions += 1;
                     tracing::warn!("{e}");
                     return Err(e.to_string());
                 }
@@ -415,7 +383,7 @@ fn describe_modbus(e: &tokio_modbus::Error) -> String {
 impl Link {
     /// The link state.
     pub(crate) fn status(&self) -> &ClientStatus {
-        &self.status
+        &self.link.status
     }
 }
 

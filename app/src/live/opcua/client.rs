@@ -20,7 +20,7 @@
 //! - The session's own reconnection is off: a lost session is dropped and reopened
 //!   by the link's backoff, as a Modbus connection is.
 
-use super::super::link::ClientStatus;
+use super::super::link::{ClientStatus, Reconnect};
 use super::pki;
 use opcua::client::{ClientBuilder, IdentityToken, Session};
 use opcua::crypto::SecurityPolicy;
@@ -32,7 +32,7 @@ use opcua::types::{
 use std::sync::Arc;
 use std::time::Duration;
 use vigie_core::diag::codes;
-use vigie_core::live::age::{AgedBits, Backoff};
+use vigie_core::live::age::AgedBits;
 use vigie_core::live::nodemap::{Identifier, MappedNode, Namespace, NodeMap, NodeRef};
 use vigie_core::live::opcua::{OpcUaClientConfig, Security, Timestamps};
 use vigie_core::{Bits, Millis};
@@ -59,11 +59,8 @@ pub(crate) struct Link {
     pki: std::path::PathBuf,
     open: Option<Open>,
     last_poll: Option<Millis>,
-    backoff: Backoff,
-    next_attempt: Millis,
-    down_logged: bool,
     failing: Vec<bool>,
-    status: ClientStatus,
+    link: Reconnect,
     /// Vigie's clock (`Millis` since the run's start) against the wall clock of the
     /// timestamps: the wall time of `Millis::ZERO`, in 100 ns ticks.
     epoch_ticks: i64,
@@ -85,20 +82,14 @@ impl Link {
         let since = i64::try_from(clock.elapsed().as_nanos() / 100).unwrap_or(0);
         let n = map.inputs.len() + map.outputs.len();
         Self {
-            backoff: Backoff::new(
-                Millis(config.backoff_initial_ms),
-                Millis(config.backoff_max_ms),
-            ),
+            link: Reconnect::new(config.backoff_initial_ms, config.backoff_max_ms),
             config,
             map,
             with_outputs,
             pki,
             open: None,
             last_poll: None,
-            next_attempt: Millis::ZERO,
-            down_logged: false,
             failing: vec![false; n],
-            status: ClientStatus::default(),
             epoch_ticks: DateTime::now().ticks() - since,
             clock,
         }
@@ -109,7 +100,7 @@ impl Link {
     }
 
     pub(crate) fn status(&self) -> &ClientStatus {
-        &self.status
+        &self.link.status
     }
 
     pub(crate) fn is_connected(&self) -> bool {
@@ -125,7 +116,7 @@ impl Link {
         if self.open.is_some() {
             return true;
         }
-        if now < self.next_attempt {
+        if !self.link.may_try(now) {
             return false;
         }
         // A secure handshake (RSA) takes longer than one request.
@@ -134,12 +125,8 @@ impl Link {
             Ok(Ok(open)) => {
                 tracing::info!(peer = %self.peer(), "connected ({})", self.config.security);
                 self.open = Some(open);
-                self.down_logged = false;
                 self.last_poll = None;
-                self.status.connected = true;
-                self.status.failed_attempts = 0;
-                self.status.backoff = Millis::ZERO;
-                self.status.connections += 1;
+                self.link.connected();
                 true
             }
             Ok(Err(why)) => {
@@ -335,29 +322,14 @@ impl Link {
     }
 
     fn retry_later(&mut self, now: Millis, why: &str) {
-        let delay = self.backoff.failed();
-        self.next_attempt = now + delay;
-        self.status.failed_attempts = self.status.failed_attempts.saturating_add(1);
-        self.status.backoff = delay;
-        self.status.next_attempt = self.next_attempt;
-        if !self.down_logged {
-            tracing::warn!(peer = %self.peer(), "{why}; retrying with backoff (next in {delay})");
-            self.down_logged = true;
-        } else {
-            tracing::debug!(peer = %self.peer(), "{why}; next attempt in {delay}");
-        }
+        let peer = self.config.endpoint.clone();
+        self.link.retry_later(&peer, now, why);
     }
 
     fn drop_session(&mut self, now: Millis, why: &str) {
         tracing::warn!(peer = %self.peer(), "{why}; session dropped");
         self.open = None;
-        self.down_logged = true;
-        let delay = self.backoff.failed();
-        self.next_attempt = now + delay;
-        self.status.connected = false;
-        self.status.errors += 1;
-        self.status.backoff = delay;
-        self.status.next_attempt = self.next_attempt;
+        self.link.dropped(now);
     }
 
     /// The time on Vigie's clock of an OPC UA timestamp.
@@ -455,10 +427,9 @@ impl Link {
             all_ok &= taken;
         }
         if !all_ok {
-            self.status.exceptions += 1;
+            self.link.status.exceptions += 1;
         } else {
-            self.status.last_read = Some(now);
-            self.backoff.reset();
+            self.link.answered(now);
         }
         all_ok
     }
@@ -494,7 +465,7 @@ impl Link {
             return Err(format!(
                 "{}: not connected (next attempt at {})",
                 self.peer(),
-                self.next_attempt
+                self.link.next_attempt
             ));
         }
         let Some(open) = self.open.as_ref() else {
@@ -517,7 +488,7 @@ impl Link {
                 Ok(())
             }
             Ok(Ok(codes)) => {
-                self.status.exceptions += 1;
+                self.link.status.exceptions += 1;
                 let why = format!(
                     "{}: the server refused the outputs ({})",
                     self.peer(),
