@@ -177,7 +177,17 @@ pub(crate) async fn start(
         .await
         .map_err(|e| anyhow::anyhow!("cannot listen on {}: {e}", config.bind))?;
     let local = listener.local_addr()?;
-    let endpoint = format!("opc.tcp://{local}/");
+    // Bound to every interface, the endpoint names the machine (its certificate
+    // carries the host names); else the address bound.
+    let host = if local.ip().is_unspecified() {
+        opcua::crypto::X509Data::computer_hostnames()
+            .into_iter()
+            .next()
+            .unwrap_or_else(|| "localhost".to_string())
+    } else {
+        local.ip().to_string()
+    };
+    let endpoint = format!("opc.tcp://{host}:{}/", local.port());
     let mut token_ids: Vec<String> = config.users.iter().map(|u| u.name.clone()).collect();
     if config.anonymous {
         token_ids.push(ANONYMOUS_USER_TOKEN_ID.to_string());
@@ -190,7 +200,7 @@ pub(crate) async fn start(
         .pki_dir(pki_dir)
         .create_sample_keypair(true)
         .trust_client_certs(false)
-        .host(local.ip().to_string())
+        .host(host)
         .port(local.port())
         .discovery_urls(vec![endpoint.clone()])
         .with_node_manager(simple_node_manager(
