@@ -60,14 +60,14 @@ pub(crate) fn wait_until(what: &str, mut cond: impl FnMut() -> bool) {
 
 /// A child process driven by lines on stdin, answering lines on stdout.
 pub(crate) struct Peer {
-    name: String,
-    child: Child,
-    stdin: ChildStdin,
-    lines: Receiver<String>,
+    pub(crate) name: String,
+    pub(crate) child: Child,
+    pub(crate) stdin: ChildStdin,
+    pub(crate) lines: Receiver<String>,
 }
 
 impl Peer {
-    fn spawn(name: &str, mut cmd: Command) -> Self {
+    pub(crate) fn spawn(name: &str, mut cmd: Command) -> Self {
         let mut child = cmd
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
@@ -95,13 +95,13 @@ impl Peer {
         }
     }
 
-    fn line(&self) -> String {
+    pub(crate) fn line(&self) -> String {
         self.lines
             .recv_timeout(WAIT)
             .unwrap_or_else(|_| panic!("{}: no output within {WAIT:?}", self.name))
     }
 
-    fn ask(&mut self, command: &str) -> String {
+    pub(crate) fn ask(&mut self, command: &str) -> String {
         writeln!(self.stdin, "{command}").unwrap();
         self.stdin.flush().unwrap();
         self.line()
@@ -121,7 +121,7 @@ impl Drop for Peer {
 
 /// The pymodbus plant.
 pub(crate) struct Plant {
-    peer: Peer,
+    pub(crate) peer: Peer,
     pub(crate) port: u16,
 }
 
@@ -227,12 +227,12 @@ impl Plc {
 }
 
 /// `vigie gateway CONFIG` with its JSON events.
-struct Gateway {
-    peer: Peer,
-    events: Vec<serde_json::Value>,
+pub(crate) struct Gateway {
+    pub(crate) peer: Peer,
+    pub(crate) events: Vec<serde_json::Value>,
     /// Its state folder (the historian, the latch), unless the test named one.
-    state: PathBuf,
-    _dir: TempDir,
+    pub(crate) state: PathBuf,
+    pub(crate) _dir: TempDir,
 }
 
 pub(crate) struct TempDir(pub(crate) PathBuf);
@@ -306,7 +306,7 @@ impl Gateway {
     }
 
     /// Forgets the events seen so far (later waits see only new ones).
-    fn forget(&mut self) {
+    pub(crate) fn forget(&mut self) {
         while let Ok(line) = self.peer.lines.try_recv() {
             let _ = line;
         }
@@ -315,7 +315,7 @@ impl Gateway {
 
     /// Waits for an event matching `pred` (events seen before count too).
     #[track_caller]
-    fn event(
+    pub(crate) fn event(
         &mut self,
         what: &str,
         pred: impl Fn(&serde_json::Value) -> bool,
@@ -340,7 +340,7 @@ impl Gateway {
         );
     }
 
-    fn kind(kind: &'static str) -> impl Fn(&serde_json::Value) -> bool {
+    pub(crate) fn kind(kind: &'static str) -> impl Fn(&serde_json::Value) -> bool {
         move |e| e["event"] == kind
     }
 
@@ -350,7 +350,7 @@ impl Gateway {
     }
 
     /// SIGTERM, then the final event.
-    fn stop(&mut self) -> serde_json::Value {
+    pub(crate) fn stop(&mut self) -> serde_json::Value {
         let pid = self.peer.child.id().to_string();
         let status = Command::new("kill").args(["-TERM", &pid]).status().unwrap();
         assert!(status.success());

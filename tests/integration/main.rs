@@ -15,6 +15,7 @@ mod export_st;
 mod filter_trace;
 mod fuzz_loaders;
 mod live;
+mod opcua;
 mod plants;
 mod polyhedra;
 mod regions;
