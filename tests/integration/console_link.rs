@@ -9,7 +9,10 @@
 //!   shows the certain diagnosis the mirror makes from the run's cycles;
 //! - a monitor run with the PLC's program given as PLCopen XML (`--program`): the
 //!   program shown is that one, and the hypothesis names its equation, placed in the
-//!   file.
+//!   file;
+//! - a monitor run over OPC UA (the asyncua plant, Basic256Sha256 SignAndEncrypt, user
+//!   name): the panel names the protocol, a violation is explained, the peer killed and
+//!   back.
 //!
 //! No fixed sleeps: every wait polls the console with a deadline.
 
@@ -377,4 +380,50 @@ fn console_explains_a_monitored_violation_with_the_program_given() {
     let trip = h.state().latest_trip().unwrap();
     let items = &h.state().sim.explanations[&trip].hypothesis.items;
     assert!(items.iter().any(|i| i.code == "X410"), "{items:#?}");
+}
+
+#[test]
+fn console_follows_an_opcua_monitor_link_with_encryption() {
+    use crate::opcua::{NAMESPACE, Sec, Ua, UaPlant};
+    let ua = Ua::new(Sec::Encrypt, "console-opcua");
+    let mut plant = UaPlant::start(&ua, NAMESPACE, None);
+    let map = ua.relaxed_map();
+    let config = ua.config(&format!(
+        "mode: Monitor, diagnosers: false, plausibility: false, {}",
+        ua.client(
+            &plant.endpoint(),
+            &format!("node_map: {:?}", map.display().to_string())
+        )
+    ));
+    let mut opts = ConsoleOptions::new(&repo().join("layouts/sorting-station"));
+    opts.link = Some(config);
+    opts.data_dir = None;
+    let mut h = harness(opts);
+    h.get_by_label("Mode: monitor (read-only, filter reports)");
+    wait_for_label(&mut h, &format!("Link: connected to {}", plant.endpoint()));
+    h.get_by_label("Protocol: OPC UA, Basic256Sha256 SignAndEncrypt, user vigie");
+    wait_for_label(&mut h, "Stale inputs: none");
+
+    // A box at C7 with A4 off: CSs10 violated, explained from the observed cycles.
+    plant.set(&[("C7", true)]);
+    wait_for_label(&mut h, "Violation at");
+    h.get_by_label("2 Before stop").click_accesskit();
+    wait_for_label(
+        &mut h,
+        "CSs10 = C7 · A\u{305}4\u{305} became true: C7=1, A4=0.",
+    );
+
+    // The peer killed: reconnecting, stale inputs; back on its port: connected again.
+    let endpoint = plant.endpoint();
+    let port: u16 = endpoint
+        .trim_start_matches("opc.tcp://127.0.0.1:")
+        .trim_end_matches('/')
+        .parse()
+        .unwrap();
+    plant.kill();
+    wait_for_label(&mut h, &format!("Link: reconnecting to {endpoint}"));
+    wait_for_label(&mut h, "Stale inputs: C0");
+    let _plant = UaPlant::start(&ua, NAMESPACE, Some(port));
+    wait_for_label(&mut h, &format!("Link: connected to {endpoint}"));
+    assert!(h.state().link.as_ref().unwrap().state.client.connections >= 2);
 }

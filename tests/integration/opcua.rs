@@ -21,11 +21,11 @@ use std::sync::{Arc, Mutex};
 
 /// The namespace of the address space Vigie serves for the sorting station (and
 /// expects of a plant when no node map says otherwise).
-const NAMESPACE: &str = "urn:vigie:sorting-station";
+pub(crate) const NAMESPACE: &str = "urn:vigie:sorting-station";
 
 /// The security of a run: every OPC UA link of the test uses it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Sec {
+pub(crate) enum Sec {
     /// Security None, anonymous sessions (loopback only).
     None,
     /// Basic256Sha256 SignAndEncrypt, user names and passwords.
@@ -122,7 +122,7 @@ fn own_certificate(state: &Path) -> PathBuf {
 
 /// One test's OPC UA setting: its folder (configurations, certificates, passwords,
 /// Vigie's state), its security and the PLC's password hash.
-struct Ua {
+pub(crate) struct Ua {
     sec: Sec,
     dir: TempDir,
     plc_hash: String,
@@ -130,7 +130,7 @@ struct Ua {
 }
 
 impl Ua {
-    fn new(sec: Sec, tag: &str) -> Self {
+    pub(crate) fn new(sec: Sec, tag: &str) -> Self {
         let dir = TempDir::new(tag);
         std::fs::create_dir_all(dir.0.join("plant-trust")).unwrap();
         std::fs::write(
@@ -204,7 +204,7 @@ impl Ua {
     }
 
     /// Vigie's OPC UA client section towards `endpoint`; `extra` inside it (a node map).
-    fn client(&self, endpoint: &str, extra: &str) -> String {
+    pub(crate) fn client(&self, endpoint: &str, extra: &str) -> String {
         let security = match self.sec {
             Sec::None => "security: None".to_string(),
             Sec::Encrypt | Sec::Sign => format!(
@@ -251,7 +251,7 @@ impl Ua {
     /// I/O map with a staleness bound of 200 ms as `live.rs` uses it (for a Modbus
     /// side). With security, Vigie's certificate is made (`vigie opcua cert`) and
     /// given to the plant's trust list.
-    fn config(&self, body: &str) -> PathBuf {
+    pub(crate) fn config(&self, body: &str) -> PathBuf {
         self.config_in(&repo().join("layouts/sorting-station"), body)
     }
 
@@ -354,7 +354,7 @@ impl Ua {
 
     /// The station's own address space (`s=<signal>` in [`NAMESPACE`]) as a node map
     /// with the staleness bound of [`Self::node_map`].
-    fn relaxed_map(&self) -> PathBuf {
+    pub(crate) fn relaxed_map(&self) -> PathBuf {
         self.node_map("map", NAMESPACE, |id| format!("node: \"s={id}\""))
     }
 }
@@ -519,13 +519,13 @@ fn naming(event: &'static str, id: &'static str) -> impl Fn(&serde_json::Value) 
 
 /// The asyncua plant (`tests/peers/opcua_plant.py`): every signal of the station, the
 /// mirror contacts wired.
-struct UaPlant {
+pub(crate) struct UaPlant {
     peer: Peer,
     port: u16,
 }
 
 impl UaPlant {
-    fn start(ua: &Ua, namespace: &str, port: Option<u16>) -> Self {
+    pub(crate) fn start(ua: &Ua, namespace: &str, port: Option<u16>) -> Self {
         let s = station();
         let mut cmd = Command::new(python());
         cmd.arg(repo().join("tests/peers/opcua_plant.py")).args([
@@ -551,12 +551,17 @@ impl UaPlant {
         Self { peer, port }
     }
 
-    fn endpoint(&self) -> String {
+    pub(crate) fn endpoint(&self) -> String {
         format!("opc.tcp://127.0.0.1:{}/", self.port)
     }
 
+    /// Kills the plant process (the link loses its peer).
+    pub(crate) fn kill(&mut self) {
+        self.peer.kill();
+    }
+
     /// Sets signals, all in one step of the peer.
-    fn set(&mut self, values: &[(&str, bool)]) {
+    pub(crate) fn set(&mut self, values: &[(&str, bool)]) {
         let mut line = String::from("set");
         for &(n, v) in values {
             line.push_str(&format!(" {n} {}", u8::from(v)));
