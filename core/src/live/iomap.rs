@@ -165,6 +165,15 @@ pub struct Mapped {
     pub max_age: Millis,
 }
 
+impl super::Placed for Mapped {
+    fn poll(&self) -> Millis {
+        self.poll
+    }
+    fn max_age(&self) -> Millis {
+        self.max_age
+    }
+}
+
 /// A validated map: one [`Mapped`] per plant input and per plant output, in plant order.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct IoMap {
@@ -358,7 +367,7 @@ impl IoMap {
                 *slot = Some(mapped);
             }
         }
-        check_unmapped(plant, &inputs, &outputs, path, &mut errors);
+        errors.extend(super::unmapped(plant, &inputs, &outputs, path));
         if !errors.is_empty() {
             errors.extend(warnings);
             return Err(errors);
@@ -374,17 +383,12 @@ impl IoMap {
 
     /// The smallest poll period of the map.
     pub fn fastest_poll(&self) -> Millis {
-        self.inputs
-            .iter()
-            .chain(&self.outputs)
-            .map(|m| m.poll)
-            .min()
-            .unwrap_or(Millis(10))
+        super::fastest_poll(self.inputs.iter().chain(&self.outputs))
     }
 
     /// Staleness bounds of the inputs, in input order.
     pub fn input_bounds(&self) -> Vec<Millis> {
-        self.inputs.iter().map(|m| m.max_age).collect()
+        super::input_bounds(self.inputs.iter())
     }
 }
 
@@ -420,31 +424,6 @@ fn check_entry(
                 signal
             ),
             loc.clone(),
-        ));
-    }
-}
-
-/// Reports the plant's signals that the map leaves unmapped.
-fn check_unmapped(
-    plant: &Plant,
-    inputs: &[Option<Mapped>],
-    outputs: &[Option<Mapped>],
-    path: &Path,
-    errors: &mut Vec<Problem>,
-) {
-    let missing: Vec<&str> = plant
-        .inputs
-        .iter()
-        .zip(inputs)
-        .chain(plant.outputs.iter().zip(outputs))
-        .filter(|(_, m)| m.is_none())
-        .map(|(s, _)| s.id.as_str())
-        .collect();
-    if !missing.is_empty() {
-        errors.push(Problem::error(
-            codes::IO_MAP_UNMAPPED.id,
-            format!("signals not mapped: {}", missing.join(", ")),
-            Some(Location::new(path, 1, 1)),
         ));
     }
 }

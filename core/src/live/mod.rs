@@ -44,6 +44,53 @@ pub(crate) fn load_ron<T: serde::de::DeserializeOwned>(
 #[cfg(test)]
 mod tests;
 
+/// A signal placed on a link: how often it is read, how old it may get.
+pub(crate) trait Placed {
+    /// Its read period.
+    fn poll(&self) -> crate::Millis;
+    /// Its staleness bound.
+    fn max_age(&self) -> crate::Millis;
+}
+
+/// The smallest read period of a map's signals (10 ms for an empty map).
+pub(crate) fn fastest_poll<'a, T: Placed + 'a>(
+    signals: impl Iterator<Item = &'a T>,
+) -> crate::Millis {
+    signals.map(Placed::poll).min().unwrap_or(crate::Millis(10))
+}
+
+/// The staleness bounds of a map's inputs, in input order.
+pub(crate) fn input_bounds<'a, T: Placed + 'a>(
+    inputs: impl Iterator<Item = &'a T>,
+) -> Vec<crate::Millis> {
+    inputs.map(Placed::max_age).collect()
+}
+
+/// The plant's signals a map leaves unmapped (`inputs` and `outputs` indexed like the
+/// plant's), as one problem at the top of the map's file.
+pub(crate) fn unmapped<T>(
+    plant: &crate::plant::Plant,
+    inputs: &[Option<T>],
+    outputs: &[Option<T>],
+    path: &std::path::Path,
+) -> Option<crate::diag::Problem> {
+    let missing: Vec<&str> = plant
+        .inputs
+        .iter()
+        .zip(inputs)
+        .chain(plant.outputs.iter().zip(outputs))
+        .filter(|(_, m)| m.is_none())
+        .map(|(s, _)| s.id.as_str())
+        .collect();
+    (!missing.is_empty()).then(|| {
+        crate::diag::Problem::error(
+            crate::diag::codes::IO_MAP_UNMAPPED.id,
+            format!("signals not mapped: {}", missing.join(", ")),
+            Some(crate::diag::Location::new(path, 1, 1)),
+        )
+    })
+}
+
 /// Where one side of the link finds the plant's signals: the Modbus I/O map or the OPC
 /// UA node map. The cycle only reads the staleness bounds.
 #[derive(Clone, Debug, PartialEq, Eq)]

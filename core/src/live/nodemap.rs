@@ -257,6 +257,15 @@ pub struct MappedNode {
     pub at: Option<Location>,
 }
 
+impl super::Placed for MappedNode {
+    fn poll(&self) -> Millis {
+        self.poll
+    }
+    fn max_age(&self) -> Millis {
+        self.max_age
+    }
+}
+
 /// A validated node map: one [`MappedNode`] per plant input and output, in plant order.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NodeMap {
@@ -416,7 +425,7 @@ impl NodeMap {
                 });
             }
         }
-        errors.extend(unmapped(plant, &inputs, &outputs, path));
+        errors.extend(super::unmapped(plant, &inputs, &outputs, path));
         if !errors.is_empty() {
             errors.extend(warnings);
             return Err(errors);
@@ -433,42 +442,13 @@ impl NodeMap {
 
     /// The smallest read period of the map.
     pub fn fastest_poll(&self) -> Millis {
-        self.inputs
-            .iter()
-            .chain(&self.outputs)
-            .map(|m| m.poll)
-            .min()
-            .unwrap_or(Millis(10))
+        super::fastest_poll(self.inputs.iter().chain(&self.outputs))
     }
 
     /// Staleness bounds of the inputs, in input order.
     pub fn input_bounds(&self) -> Vec<Millis> {
-        self.inputs.iter().map(|m| m.max_age).collect()
+        super::input_bounds(self.inputs.iter())
     }
-}
-
-/// The plant's signals that the map leaves unmapped, as one problem.
-fn unmapped(
-    plant: &Plant,
-    inputs: &[Option<MappedNode>],
-    outputs: &[Option<MappedNode>],
-    path: &Path,
-) -> Option<Problem> {
-    let missing: Vec<&str> = plant
-        .inputs
-        .iter()
-        .zip(inputs)
-        .chain(plant.outputs.iter().zip(outputs))
-        .filter(|(_, m)| m.is_none())
-        .map(|(s, _)| s.id.as_str())
-        .collect();
-    (!missing.is_empty()).then(|| {
-        Problem::error(
-            codes::IO_MAP_UNMAPPED.id,
-            format!("signals not mapped: {}", missing.join(", ")),
-            Some(Location::new(path, 1, 1)),
-        )
-    })
 }
 
 fn entry_node(e: &NodeEntry, namespace: &str) -> Result<NodeRef, String> {
