@@ -32,10 +32,10 @@ fn default_timeout_cycles() -> u32 {
 fn default_request_timeout_ms() -> u64 {
     50
 }
-fn default_backoff_initial_ms() -> u64 {
+pub(super) fn default_backoff_initial_ms() -> u64 {
     100
 }
-fn default_backoff_max_ms() -> u64 {
+pub(super) fn default_backoff_max_ms() -> u64 {
     5000
 }
 fn default_bind() -> SocketAddr {

@@ -71,12 +71,6 @@ fn default_securities() -> Vec<Security> {
 fn default_timeout_ms() -> u64 {
     200
 }
-fn default_backoff_initial_ms() -> u64 {
-    100
-}
-fn default_backoff_max_ms() -> u64 {
-    5000
-}
 fn default_bind() -> SocketAddr {
     SocketAddr::new(IpAddr::V4(Ipv4Addr::LOCALHOST), 4840)
 }
@@ -114,10 +108,10 @@ pub struct OpcUaClientConfig {
     #[serde(default = "default_timeout_ms")]
     pub timeout_ms: u64,
     /// First reconnection delay, doubled after each failure.
-    #[serde(default = "default_backoff_initial_ms")]
+    #[serde(default = "super::config::default_backoff_initial_ms")]
     pub backoff_initial_ms: u64,
     /// Largest reconnection delay.
-    #[serde(default = "default_backoff_max_ms")]
+    #[serde(default = "super::config::default_backoff_max_ms")]
     pub backoff_max_ms: u64,
 }
 
