@@ -1184,3 +1184,60 @@ fn node_map_in_the_plant_folder_is_taken() {
     wait_until("the plant to receive A1", || plant.outputs() == "010000011");
     gw.stop();
 }
+
+/// An "OPC UA plant" that is not one: every connection gets `answer` (garbage bytes,
+/// or nothing at all) and stays open. The listener's thread ends with the test.
+fn fake_plant(answer: &'static [u8]) -> u16 {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    std::thread::spawn(move || {
+        let mut held = Vec::new();
+        for stream in listener.incoming().take(64) {
+            let Ok(mut stream) = stream else { continue };
+            let _ = std::io::Write::write_all(&mut stream, answer);
+            held.push(stream);
+        }
+    });
+    port
+}
+
+// 9. A plant that answers garbage, or accepts and never answers: the link is lost (the
+// alarm, the safe outputs held for the PLC), the gateway keeps serving the PLC and
+// stops cleanly; nothing hangs.
+#[test]
+fn a_plant_that_answers_garbage_or_nothing_is_lost_and_the_plc_still_served() {
+    for (what, answer) in [
+        (
+            "garbage",
+            &b"HELF\xff\xff\xff\x7f garbage that is no OPC UA message"[..],
+        ),
+        ("silence", &b""[..]),
+    ] {
+        let ua = Ua::new(Sec::None, "ua-fake-plant");
+        let s = station();
+        let port = fake_plant(answer);
+        let mut gw = ua.gateway(&format!(
+            "mode: Gateway, {}, {}",
+            ua.client(&format!("opc.tcp://127.0.0.1:{port}/"), ""),
+            ua.server()
+        ));
+        gw.event(&format!("{what}: link:plant"), keyed("alarm", "link:plant"));
+        gw.event(
+            &format!("{what}: safe outputs"),
+            Gateway::kind("safe_outputs"),
+        );
+        // The PLC's side is served all the same: it reads (stale, held) sensors.
+        let endpoint = gw.endpoint();
+        let mut plc = UaPlc::start(&ua, &endpoint, &s.sensors, &s.commands);
+        wait_until(&format!("{what}: the PLC served"), || plc.status().0 > 5);
+        let stopped = gw.stop();
+        assert_eq!(stopped["written"], false, "{what}: {stopped}");
+        assert!(
+            !gw.events
+                .iter()
+                .any(|e| e["event"] == "plant_write" && e["acknowledged"] == true),
+            "{what}: nothing acknowledged a write: {:#?}",
+            gw.events
+        );
+    }
+}
