@@ -1190,14 +1190,17 @@ fn node_map_in_the_plant_folder_is_taken() {
 fn fake_plant(answer: &'static [u8]) -> u16 {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let port = listener.local_addr().unwrap().port();
-    std::thread::spawn(move || {
-        let mut held = Vec::new();
-        for stream in listener.incoming().take(64) {
-            let Ok(mut stream) = stream else { continue };
-            let _ = std::io::Write::write_all(&mut stream, answer);
-            held.push(stream);
-        }
-    });
+    std::thread::Builder::new()
+        .name("fake-opcua-plant".into())
+        .spawn(move || {
+            let mut held = Vec::new();
+            for stream in listener.incoming().take(64) {
+                let Ok(mut stream) = stream else { continue };
+                let _ = std::io::Write::write_all(&mut stream, answer);
+                held.push(stream);
+            }
+        })
+        .unwrap();
     port
 }
 
