@@ -2,7 +2,6 @@
 //! `layouts/sorting-station/gateway-monitor.ron`. Relative paths are relative to the
 //! file's folder.
 
-use super::ron_options;
 use crate::diag::codes;
 use crate::diag::{Problem, ron_problem};
 use crate::time::Millis;
@@ -384,7 +383,7 @@ fn default_mode() -> Mode {
 impl GatewayConfig {
     /// Parses a configuration; `file` is used in messages and to resolve relative paths.
     pub fn from_ron(text: &str, file: &Path) -> Result<Self, Vec<Problem>> {
-        let mut config: Self = ron_options()
+        let mut config: Self = super::config_ron_options()
             .from_str(text)
             .map_err(|e| vec![ron_problem(file, &e)])?;
         let base = file.parent().unwrap_or(Path::new("."));

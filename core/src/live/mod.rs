@@ -24,7 +24,14 @@ pub mod stale;
 
 /// RON options of the live files: `Some(…)` may be left out around optional values.
 pub(crate) fn ron_options() -> ron::Options {
-    ron::Options::default().with_default_extension(
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+/// RON options of the gateway configuration: also `Modbus(address: …)` for the
+/// newtype variant `Modbus(ClientConfig)` (without doubled parentheses). Not for the
+/// other files: it reads `Some((0, 2000))` as a tuple variant's fields.
+pub(crate) fn config_ron_options() -> ron::Options {
+    ron_options().with_default_extension(
         ron::extensions::Extensions::IMPLICIT_SOME
             | ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES,
     )
