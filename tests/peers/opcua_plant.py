@@ -19,7 +19,6 @@ port (restart after a kill).
 import argparse
 import asyncio
 import contextlib
-import ipaddress
 import logging
 import socket
 import sys
@@ -28,11 +27,11 @@ from pathlib import Path
 from asyncua import Server, ua
 from asyncua.common.callback import CallbackType
 from asyncua.common.utils import ServiceError
-from asyncua.crypto.cert_gen import dump_private_key_as_pem, generate_private_key, generate_self_signed_app_certificate
 from asyncua.crypto.permission_rules import User, UserRole
 from cryptography import x509
 from cryptography.hazmat.primitives.serialization import Encoding
 from cryptography.x509.oid import ExtendedKeyUsageOID
+from opcua_certs import ensure_certificate
 
 APP_URI = "urn:vigie:test:plant"
 POLICIES = {
@@ -51,23 +50,6 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
-
-
-def ensure_certificate(cert: Path, key: Path, uri: str, use: x509.ObjectIdentifier) -> None:
-    """A self-signed application certificate (DER) and key (PEM), made once."""
-    if cert.is_file() and key.is_file():
-        return
-    cert.parent.mkdir(parents=True, exist_ok=True)
-    pkey = generate_private_key()
-    names = [
-        x509.UniformResourceIdentifier(uri),
-        x509.DNSName("localhost"),
-        x509.DNSName(socket.gethostname()),
-        x509.IPAddress(ipaddress.ip_address("127.0.0.1")),
-    ]
-    made = generate_self_signed_app_certificate(pkey, uri, {}, names, [use], days=3650)
-    key.write_bytes(dump_private_key_as_pem(pkey))
-    cert.write_bytes(made.public_bytes(Encoding.DER))
 
 
 class OneUser:

@@ -17,39 +17,18 @@ Prints "running" once started, before any connection.
 
 import argparse
 import asyncio
-import ipaddress
 import logging
-import socket
 import sys
 from pathlib import Path
 
 from asyncua import Client, ua
-from asyncua.crypto.cert_gen import dump_private_key_as_pem, generate_private_key, generate_self_signed_app_certificate
 from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 from asyncua.ua.status_codes import get_name_and_doc
-from cryptography import x509
-from cryptography.hazmat.primitives.serialization import Encoding
 from cryptography.x509.oid import ExtendedKeyUsageOID
+from opcua_certs import ensure_certificate
 
 APP_URI = "urn:vigie:test:plc"
 MODES = {"sign": ua.MessageSecurityMode.Sign, "encrypt": ua.MessageSecurityMode.SignAndEncrypt}
-
-
-def ensure_certificate(cert: Path, key: Path, uri: str, use: x509.ObjectIdentifier) -> None:
-    """A self-signed application certificate (DER) and key (PEM), made once."""
-    if cert.is_file() and key.is_file():
-        return
-    cert.parent.mkdir(parents=True, exist_ok=True)
-    pkey = generate_private_key()
-    names = [
-        x509.UniformResourceIdentifier(uri),
-        x509.DNSName("localhost"),
-        x509.DNSName(socket.gethostname()),
-        x509.IPAddress(ipaddress.ip_address("127.0.0.1")),
-    ]
-    made = generate_self_signed_app_certificate(pkey, uri, {}, names, [use], days=3650)
-    key.write_bytes(dump_private_key_as_pem(pkey))
-    cert.write_bytes(made.public_bytes(Encoding.DER))
 
 
 def describe(e: BaseException) -> str:
