@@ -206,7 +206,7 @@ impl ClientLink {
     /// ("OPC UA, Basic256Sha256 SignAndEncrypt, user vigie").
     pub fn describe(&self) -> String {
         match self {
-            Self::Modbus(_) => "Modbus TCP".to_string(),
+            Self::Modbus(_) => self.protocol().to_string(),
             Self::OpcUa(c) => format!(
                 "OPC UA, {}, {}",
                 c.security,
@@ -227,14 +227,6 @@ impl ClientLink {
 }
 
 impl ServerLink {
-    /// The protocol's name.
-    pub fn protocol(&self) -> &'static str {
-        match self {
-            Self::Modbus(_) => "Modbus TCP",
-            Self::OpcUa(_) => "OPC UA",
-        }
-    }
-
     /// The protocol and its security, as the link-state panel shows them.
     pub fn describe(&self) -> String {
         match self {
